@@ -1,0 +1,36 @@
+"""Forces of the single-valued effects in parallel: k0 x + k3 x^3 + c v.
+
+Each coefficient is a float, or ``None`` when the scene has no such effect.
+"""
+from .._jit import kernel
+
+
+@kernel
+def elastic_force(x, k0, k3):
+    """k0 x + k3 x^3 (N): the smooth springs."""
+    force = 0.0
+    if k0 is not None:
+        force += k0 * x
+    if k3 is not None:
+        force += k3 * x * x * x
+    return force
+
+
+@kernel
+def smooth_force(x, v, k0, k3, c):
+    """k0 x + k3 x^3 + c v (N): springs and dashpot."""
+    force = elastic_force(x, k0, k3)
+    if c is not None:
+        force += c * v
+    return force
+
+
+@kernel
+def elastic_energy(x, k0, k3):
+    """k0 x^2/2 + k3 x^4/4 (J)."""
+    energy = 0.0
+    if k0 is not None:
+        energy += 0.5 * k0 * x * x
+    if k3 is not None:
+        energy += 0.25 * k3 * x * x * x * x
+    return energy

@@ -1,0 +1,314 @@
+"""Scenes: TOML files that name the effects of an element and their coefficients.
+
+The format is the contract of ``shared/scene-format.md`` (summarised in the
+README). A scene is data: it is parsed with :mod:`tomllib` and checked key by
+key; nothing in it is ever evaluated. Every broken rule raises
+:class:`SceneError` with one line naming the file, the key and the rule.
+
+Additions to the contract (all optional):
+
+* ``[load]`` may be omitted: no external force, F(t) = 0;
+* ``[solver] stepper`` defaults to ``"projected"``.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+from typing import Any, Optional, Union
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .effects import Branches, CubicSpring, Damper, Mass, Spring
+from .loads import ConstantLoad, HarmonicLoad, TableLoad
+
+Load = Union[ConstantLoad, HarmonicLoad, TableLoad]
+
+
+class SceneError(ValueError):
+    """A scene (or an override of it) breaks a rule; the message is one line."""
+
+
+@dataclass(frozen=True)
+class Solver:
+    """Time discretisation: ``stepper`` name, internal ``step`` h (s), ``stop_time`` (s),
+    ``output_interval`` (s, a whole multiple of ``step``)."""
+
+    stepper: str
+    step: float
+    stop_time: float
+    output_interval: float
+
+    @property
+    def steps_per_output(self) -> int:
+        return int(round(self.output_interval / self.step))
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """An element: its effects (``None`` where absent), its load and its solver settings."""
+
+    name: str
+    mass: Optional[Mass]
+    spring: Optional[Spring]
+    cubic: Optional[CubicSpring]
+    damper: Optional[Damper]
+    branches: Optional[Branches]
+    load: Load
+    solver: Solver
+    source: str = "<scene>"
+
+    def with_solver(self, **overrides) -> "Scene":
+        """A copy with some solver settings replaced (``None`` values are ignored), checked."""
+        given = {k: v for k, v in overrides.items() if v is not None}
+        solver = replace(self.solver, **given)
+        _check_solver(solver, self.source, where="")
+        return replace(self, solver=solver)
+
+    @property
+    def effects(self) -> list[str]:
+        """Names of the tables present, in contract order."""
+        names = ["mass", "spring", "cubic", "damper", "branches"]
+        return [name for name in names if getattr(self, name) is not None]
+
+
+# ---------------------------------------------------------------- parsing
+
+_TOP_KEYS = {"name", "mass", "spring", "cubic", "damper", "branches", "load", "solver"}
+
+
+class _Reader:
+    """Reads one TOML table and names the culprit of any broken rule."""
+
+    def __init__(self, source: str, table: str, data: Any):
+        self.source, self.table = source, table
+        if not isinstance(data, dict):
+            self.fail(None, f"must be a table, got {_kind(data)}")
+        self.data = data
+
+    def fail(self, key, rule):
+        where = f"[{self.table}] {key}" if key else f"[{self.table}]"
+        raise SceneError(f"{self.source}: {where}: {rule}")
+
+    def only(self, allowed):
+        for key in self.data:
+            if key not in allowed:
+                self.fail(key, f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+
+    def number(self, key, default=None, *, minimum=None, positive=False):
+        if key not in self.data:
+            if default is None:
+                self.fail(key, "missing (required)")
+            return float(default)
+        return self._check_number(key, self.data[key], minimum, positive)
+
+    def _check_number(self, key, value, minimum, positive):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(key, f"must be a number, got {_kind(value)}")
+        value = float(value)
+        if not math.isfinite(value):
+            self.fail(key, f"must be finite, got {value}")
+        if positive and not value > 0:
+            self.fail(key, f"must be > 0, got {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(key, f"must be >= {minimum}, got {value!r}")
+        return value
+
+    def integer(self, key, *, minimum):
+        if key not in self.data:
+            self.fail(key, "missing (required)")
+        value = self.data[key]
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(key, f"must be an integer, got {_kind(value)}")
+        if value < minimum:
+            self.fail(key, f"must be >= {minimum}, got {value}")
+        return value
+
+    def numbers(self, key, *, minimum=None, positive=False, length=None):
+        if key not in self.data:
+            self.fail(key, "missing (required)")
+        values = self.data[key]
+        if not isinstance(values, list):
+            self.fail(key, f"must be a list of numbers, got {_kind(values)}")
+        if not values:
+            self.fail(key, "must not be empty")
+        if length is not None and len(values) != length:
+            self.fail(key, f"must have {length} values like the other lists, got {len(values)}")
+        checked = [self._check_number(f"{key}[{i + 1}]", v, minimum, positive) for i, v in enumerate(values)]
+        return np.array(checked, dtype=float)
+
+    def string(self, key, default=None, choices=None):
+        if key not in self.data:
+            if default is None:
+                self.fail(key, "missing (required)")
+            return default
+        value = self.data[key]
+        if not isinstance(value, str):
+            self.fail(key, f"must be a string, got {_kind(value)}")
+        if choices is not None and value not in choices:
+            self.fail(key, f"must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+        return value
+
+
+def _kind(value) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string",
+            list: "a list", dict: "a table"}.get(type(value), type(value).__name__)
+
+
+def load_scene(path: Union[str, os.PathLike]) -> Scene:
+    """Read and check a scene file; raise :class:`SceneError` on any broken rule."""
+    source = os.fspath(path)
+    try:
+        with open(source, "rb") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from None
+    return parse_scene(text, source)
+
+
+def parse_scene(text: Union[str, bytes], source: str = "<scene>") -> Scene:
+    """Parse scene TOML text; ``source`` names it in error messages."""
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise SceneError(f"{source}: not a UTF-8 text file") from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{source}: not valid TOML: {exc}") from None
+    for key in doc:
+        if key not in _TOP_KEYS:
+            raise SceneError(f"{source}: {key}: unknown key (allowed at top level: {', '.join(sorted(_TOP_KEYS))})")
+    name = doc.get("name", os.path.splitext(os.path.basename(source))[0])
+    if not isinstance(name, str):
+        raise SceneError(f"{source}: name: must be a string, got {_kind(name)}")
+
+    mass = _mass(source, doc["mass"]) if "mass" in doc else None
+    spring = cubic = damper = branches = None
+    if "spring" in doc:
+        r = _Reader(source, "spring", doc["spring"])
+        r.only({"k0"})
+        spring = Spring(r.number("k0", minimum=0.0))
+    if "cubic" in doc:
+        r = _Reader(source, "cubic", doc["cubic"])
+        r.only({"k3"})
+        cubic = CubicSpring(r.number("k3", minimum=0.0))
+    if "damper" in doc:
+        r = _Reader(source, "damper", doc["damper"])
+        r.only({"c"})
+        damper = Damper(r.number("c", minimum=0.0))
+    if "branches" in doc:
+        branches = _branches(source, doc["branches"])
+    load = _load(source, doc["load"]) if "load" in doc else ConstantLoad(0.0)
+    if "solver" not in doc:
+        raise SceneError(f"{source}: [solver]: missing (required: step, stop_time, output_interval)")
+    solver = _solver(source, doc["solver"])
+    if mass is None:
+        raise SceneError(
+            f"{source}: [mass]: missing; the massless (quasi-static) element is not supported yet, "
+            "add [mass] with m > 0"
+        )
+    return Scene(name, mass, spring, cubic, damper, branches, load, solver, source)
+
+
+def _mass(source, data) -> Mass:
+    r = _Reader(source, "mass", data)
+    r.only({"m", "x0", "v0"})
+    return Mass(m=r.number("m", positive=True), x0=r.number("x0", 0.0), v0=r.number("v0", 0.0))
+
+
+def _branches(source, data) -> Branches:
+    r = _Reader(source, "branches", data)
+    listed, sampled = {"k", "eta", "alpha", "u0"}, {"count", "k_total", "eta_range", "u0"}
+    if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
+        r.only(sampled)
+        n = r.integer("count", minimum=1)
+        k_total = r.number("k_total", positive=True)
+        ends = r.numbers("eta_range", minimum=0.0, length=None)
+        if len(ends) != 2:
+            r.fail("eta_range", f"must be [a, b] (two numbers), got {len(ends)} values")
+        s = np.arange(1, n + 1) / n  # right end points s_i = i / n, eq. (7.19)
+        stiffness = np.full(n, k_total / n)
+        eta = ends[0] + (ends[1] - ends[0]) * s
+    else:
+        r.only(listed)
+        stiffness = r.numbers("k", positive=True)
+        n = len(stiffness)
+        if "eta" in r.data and "alpha" in r.data:
+            r.fail("alpha", "give either eta or alpha, not both")
+        if "eta" in r.data:
+            eta = r.numbers("eta", minimum=0.0, length=n)
+        elif "alpha" in r.data:
+            eta = r.numbers("alpha", minimum=0.0, length=n) / stiffness
+            if not np.all(np.isfinite(eta)):
+                r.fail("alpha", "alpha / k overflows")
+        else:
+            r.fail("eta", "missing (give eta or alpha)")
+    u0 = r.numbers("u0", length=n) if "u0" in r.data else np.zeros(n)
+    bad = np.flatnonzero(np.abs(u0) > eta)
+    if bad.size:
+        i = int(bad[0])
+        r.fail(f"u0[{i + 1}]", f"|u0| must be <= eta = {eta[i]!r}, got {u0[i]!r}")
+    for array in (stiffness, eta, u0):
+        array.setflags(write=False)
+    return Branches(stiffness, eta, u0)
+
+
+def _load(source, data) -> Load:
+    r = _Reader(source, "load", data)
+    kind = r.string("kind", choices=("harmonic", "constant", "table"))
+    if kind == "harmonic":
+        r.only({"kind", "amplitude", "omega", "offset"})
+        return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset", 0.0))
+    if kind == "constant":
+        r.only({"kind", "value"})
+        return ConstantLoad(r.number("value"))
+    r.only({"kind", "time", "force"})
+    time = r.numbers("time", minimum=0.0)
+    force = r.numbers("force", length=len(time))
+    steps = np.diff(time)
+    if np.any(steps < 0):
+        i = int(np.flatnonzero(steps < 0)[0]) + 2
+        r.fail(f"time[{i}]", "times must be non-decreasing (a repeated time is a jump)")
+    if np.any((steps[1:] == 0) & (steps[:-1] == 0)):
+        r.fail("time", "a time may appear at most twice (one jump at a time)")
+    return TableLoad(time, force)
+
+
+def _solver(source, data) -> Solver:
+    from .steppers import STEPPERS
+
+    r = _Reader(source, "solver", data)
+    r.only({"stepper", "step", "stop_time", "output_interval"})
+    solver = Solver(
+        stepper=r.string("stepper", "projected", choices=tuple(STEPPERS)),
+        step=r.number("step", positive=True),
+        stop_time=r.number("stop_time", positive=True),
+        output_interval=r.number("output_interval", positive=True),
+    )
+    _check_solver(solver, source, where="[solver] ")
+    return solver
+
+
+def _check_solver(solver: Solver, source: str, where: str) -> None:
+    """Rules that tie solver settings together (also applied to CLI overrides)."""
+    from .steppers import STEPPERS
+
+    if solver.stepper not in STEPPERS:
+        raise SceneError(f"{source}: {where}stepper: must be one of {', '.join(STEPPERS)}, got {solver.stepper!r}")
+    for key in ("step", "stop_time", "output_interval"):
+        value = getattr(solver, key)
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise SceneError(f"{source}: {where}{key}: must be a finite number > 0, got {value!r}")
+    ratio = solver.output_interval / solver.step
+    if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise SceneError(
+            f"{source}: {where}output_interval: must be a whole multiple of step = {solver.step!r}, "
+            f"got {solver.output_interval!r} ({ratio:.6g} steps)"
+        )

@@ -1,0 +1,28 @@
+"""Time steppers: one module per scheme, and the registry of their names.
+
+A stepper module defines
+
+* ``step(model, load, t, h, x, v, s, u) -> (x, v, s)``: a compiled function that
+  advances the state from t to t + h. ``model = (m, k0, k3, c, k, eta)`` holds
+  the coefficients of the scene (``None`` for an absent effect), ``load`` the
+  compiled force history, ``u`` the branch elongations (updated in place) and
+  ``s = sum_i k_i u_i`` their force, carried from step to step;
+* ``ORDER``: the order of convergence in h;
+* a docstring with the update formula and the stability of the scheme.
+
+To add a scheme: write one such module and add it to ``STEPPERS`` below.
+"""
+from . import implicit, projected
+
+STEPPERS = {
+    "projected": projected,
+    "implicit": implicit,
+}
+
+
+def get_stepper(name: str):
+    """The stepper module registered under ``name``."""
+    try:
+        return STEPPERS[name]
+    except KeyError:
+        raise ValueError(f"unknown stepper {name!r} (known: {', '.join(STEPPERS)})") from None
