@@ -92,21 +92,24 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
 
     ``linear`` > 0. The returned w is exact to rounding.
     """
-    g, _, _ = residual(0.0, x, linear, offset, k0, k3, k, eta, u, 1.0)
+    direction = 1.0
+    g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
     if g == 0.0:
         return 0.0
-    direction = -1.0 if g > 0.0 else 1.0
+    if g > 0.0:
+        direction = -1.0
+        g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
     lo = 0.0  # direction * G(lo) < 0: the root lies beyond lo
     hi = direction * np.inf  # direction * G(hi) > 0
     n = 0 if k is None else k.shape[0]
     for _ in range(4 * n + 64):
-        g, sticking, room = residual(lo, x, linear, offset, k0, k3, k, eta, u, direction)
-        if g == 0.0:
+        if direction * g >= 0.0:  # zero, or past zero by rounding only
             return lo
-        end = lo + direction * room  # next kink (the smooth piece is [lo, end])
+        end = lo + direction * room  # next kink: the smooth piece is [lo, end]
         if end == lo:
             end = np.nextafter(lo, hi)
-        if direction * (end - hi) > 0.0:
+        last_piece = direction * (end - hi) >= 0.0  # the root is in this piece
+        if last_piece:
             end = hi
         # Root of the piece without the growth of the cubic term: the cubic
         # only adds a term of the sign of (w - lo), so the piece's root lies
@@ -116,24 +119,29 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
         if k3 is None:
             if direction * (tangent_root - end) <= 0.0:
                 return tangent_root
+            if last_piece:  # only rounding can put the tangent root beyond hi
+                return end
         else:
-            stop = end if direction * (end - tangent_root) < 0.0 else tangent_root
-            q_stop = g + slope_linear * (stop - lo) + _cubic_change(x, lo, stop, k3)
-            if direction * q_stop >= 0.0:
+            if direction * (tangent_root - end) <= 0.0 or last_piece:
+                stop = tangent_root if direction * (tangent_root - end) <= 0.0 else end
                 return _piece_root(x, lo, stop, g, slope_linear, k3)
+            q_end = g + slope_linear * (end - lo) + _cubic_change(x, lo, end, k3)
+            if direction * q_end >= 0.0:
+                return _piece_root(x, lo, end, g, slope_linear, k3)
         # The root lies beyond the kink at `end`. Jump over every kink up to
         # the Newton point if G is still short of zero there (always the case
         # without the cubic spring: G is concave in the direction of motion).
         jump = lo - g / (slope_linear + _cubic_stiffness(x + lo, k3))
         if direction * (jump - end) > 0.0 and direction * (jump - hi) < 0.0:
-            g_jump, _, _ = residual(jump, x, linear, offset, k0, k3, k, eta, u, direction)
+            g_jump, sticking_jump, room_jump = residual(jump, x, linear, offset, k0, k3, k, eta, u, direction)
             if g_jump == 0.0:
                 return jump
             if direction * g_jump < 0.0:
-                lo = jump
+                lo, g, sticking, room = jump, g_jump, sticking_jump, room_jump
                 continue
             hi = jump
         lo = end
+        g, sticking, room = residual(lo, x, linear, offset, k0, k3, k, eta, u, direction)
     raise RuntimeError("implicit step: the scalar solve did not terminate")
 
 
@@ -153,8 +161,8 @@ def _piece_root(x, lo, hi, g_lo, slope_linear, k3):
         trial = w - q / dq
         if not ((trial - a) * (trial - b) < 0.0):
             trial = 0.5 * (a + b)
-        if trial == w or trial == a or trial == b:
-            return trial
+        if abs(trial - w) <= 4.4e-16 * abs(trial) or trial == a or trial == b:
+            return trial  # Newton's step is at the rounding level: converged
         w = trial
         q = g_lo + slope_linear * (w - lo) + _cubic_change(x, lo, w, k3)
         if q == 0.0:

@@ -1,0 +1,72 @@
+"""Shared helpers: write scenes as TOML text from Python dicts."""
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import parse_scene
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SCENES = ROOT / "scenes"
+
+
+def _value(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    value = float(value)
+    if math.isnan(value):
+        return "nan"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return repr(value)
+
+
+def scene_text(tables: dict) -> str:
+    """TOML text for ``{"name": ..., "mass": {...}, ...}``; a table set to None is left out."""
+    lines = []
+    for key, value in tables.items():
+        if value is not None and not isinstance(value, dict):
+            lines.append(f"{key} = {_value(value)}")
+    for key, value in tables.items():
+        if isinstance(value, dict):
+            lines.append(f"\n[{key}]")
+            lines += [f"{k} = {_value(v)}" for k, v in value.items()]
+    return "\n".join(lines) + "\n"
+
+
+def base_tables(**changes) -> dict:
+    """A small scene with every effect present; ``changes`` replace or drop (None) tables."""
+    tables = {
+        "name": "test",
+        "mass": {"m": 1.0, "x0": 0.0, "v0": 0.0},
+        "spring": {"k0": 0.2},
+        "cubic": {"k3": 0.05},
+        "damper": {"c": 0.01},
+        "branches": {"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "u0": [0.05, -0.1, 0.0]},
+        "load": {"kind": "harmonic", "amplitude": 0.8, "omega": 0.7, "offset": 0.0},
+        "solver": {"stepper": "projected", "step": 1e-3, "stop_time": 20.0, "output_interval": 0.1},
+    }
+    for key, value in changes.items():
+        tables[key] = value
+    return {k: v for k, v in tables.items() if v is not None}
+
+
+def make_scene(**changes):
+    return parse_scene(scene_text(base_tables(**changes)), "test.toml")
+
+
+@pytest.fixture
+def write_scene(tmp_path):
+    def write(tables, name="scene.toml"):
+        path = tmp_path / name
+        path.write_text(scene_text(tables))
+        return path
+
+    return write
