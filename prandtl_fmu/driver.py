@@ -24,7 +24,7 @@ from ._jit import kernel
 from .kernels.play import branch_force
 from .kernels.smooth import smooth_force
 from .loads import held
-from .scene import Scene
+from .scene import Scene, with_coefficients
 from .steppers import get_stepper
 
 # How many branch updates one compiled call does at most, between two
@@ -197,6 +197,15 @@ class Element:
         self._out = np.empty((1, 3))
         self.reset()
 
+    def set_coefficients(self, **values) -> None:
+        """Change coefficients (m, k0, k3, c; x0 and v0 take effect at :meth:`reset`).
+
+        ValueError names the culprit and leaves the element unchanged.
+        """
+        self.scene = with_coefficients(self.scene, **values)
+        self.model = compile_model(self.scene)
+        self._out[0] = (self.x, self.v, self._reaction())
+
     def reset(self) -> None:
         """Back to the scene's initial state at time 0."""
         self.time = 0.0
@@ -227,11 +236,36 @@ class Element:
                                       self.time, duration, self.h, self._out, None)
             self.time += duration
 
+    def set_stepper(self, name: str) -> None:
+        """Use another stepper from the next step on (every stepper is one-step)."""
+        self._step = get_stepper(name).step
+        self.stepper = name
+
+    def set_step(self, step: float) -> None:
+        """Use another internal step h (s) from the next step on."""
+        if not (math.isfinite(step) and step > 0):
+            raise ValueError(f"step must be a finite number > 0, got {step!r}")
+        self.h = float(step)
+
+    def coefficients(self) -> dict:
+        """The coefficients of the effects present (see :data:`scene.COEFFICIENTS`)."""
+        scene, values = self.scene, {}
+        if scene.mass is not None:
+            values.update(m=scene.mass.m, x0=scene.mass.x0, v0=scene.mass.v0)
+        if scene.spring is not None:
+            values["k0"] = scene.spring.k0
+        if scene.cubic is not None:
+            values["k3"] = scene.cubic.k3
+        if scene.damper is not None:
+            values["c"] = scene.damper.c
+        return values
+
     def get_state(self) -> dict:
-        """The whole state as plain data (floats and lists of floats)."""
+        """Everything that determines the continuation, as plain data (numbers, strings, lists)."""
         return {
             "time": self.time, "x": self.x, "v": self.v, "force": self.force,
             "u": [] if self.u is None else self.u.tolist(),
+            "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
 
     def set_state(self, state: dict) -> None:
@@ -245,10 +279,27 @@ class Element:
             raise ValueError("state has a value that is not finite")
         if n and np.any(np.abs(u) > self.scene.branches.yield_displacement):
             raise ValueError("state has an elongation outside its elastic range")
+        scene = with_coefficients(self.scene, **state["coefficients"])
+        step = get_stepper(state["stepper"]).step
+        self.set_step(float(state["step"]))
+        self.scene, self.model = scene, compile_model(scene)
+        self._step, self.stepper = step, state["stepper"]
         self.time, self.x, self.v, self.force = values
         if n:
             self.u[:] = u
         self._out[0] = (self.x, self.v, self._reaction())
+
+    def checkpoint(self):
+        """A cheap copy of the dynamic state, for :meth:`rollback` (not plain data)."""
+        return (self.time, self.x, self.v, self.force, None if self.u is None else self.u.copy(),
+                self._out.copy())
+
+    def rollback(self, checkpoint) -> None:
+        """Return to a :meth:`checkpoint`, exactly."""
+        self.time, self.x, self.v, self.force, u, out = checkpoint
+        if u is not None:
+            self.u[:] = u
+        self._out[:] = out
 
 
 class _NoBar:

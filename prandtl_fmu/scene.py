@@ -77,6 +77,58 @@ class Scene:
         return [name for name in names if getattr(self, name) is not None]
 
 
+# Coefficients a running element may change (an FMU's parameters): the
+# table that holds each, and its rule. The same rules check the scene files.
+COEFFICIENTS = {
+    "m": ("mass", "> 0"),
+    "x0": ("mass", "finite"),
+    "v0": ("mass", "finite"),
+    "k0": ("spring", ">= 0"),
+    "k3": ("cubic", ">= 0"),
+    "c": ("damper", ">= 0"),
+}
+
+
+def coefficient_problem(name: str, value) -> Optional[str]:
+    """Why ``value`` is not a valid coefficient ``name`` (see COEFFICIENTS), or None."""
+    rule = COEFFICIENTS[name][1]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return f"must be a number, got {value!r}"
+    if not math.isfinite(value):
+        return f"must be finite, got {value!r}"
+    if rule == "> 0" and not value > 0:
+        return f"must be > 0, got {value!r}"
+    if rule == ">= 0" and value < 0:
+        return f"must be >= 0, got {value!r}"
+    return None
+
+
+def with_coefficients(scene: Scene, **values) -> Scene:
+    """A copy of ``scene`` with some coefficients replaced; ValueError names the culprit.
+
+    Only effects present in the scene can be changed: an absent effect has no coefficient.
+    """
+    for name, value in values.items():
+        if name not in COEFFICIENTS:
+            raise ValueError(f"{name}: not a coefficient (known: {', '.join(COEFFICIENTS)})")
+        table = COEFFICIENTS[name][0]
+        if getattr(scene, table) is None:
+            raise ValueError(f"{name}: the scene has no [{table}]")
+        problem = coefficient_problem(name, value)
+        if problem:
+            raise ValueError(f"{name}: {problem}")
+    mass, spring, cubic, damper = scene.mass, scene.spring, scene.cubic, scene.damper
+    if mass is not None:
+        mass = Mass(float(values.get("m", mass.m)), float(values.get("x0", mass.x0)), float(values.get("v0", mass.v0)))
+    if spring is not None:
+        spring = Spring(float(values.get("k0", spring.k0)))
+    if cubic is not None:
+        cubic = CubicSpring(float(values.get("k3", cubic.k3)))
+    if damper is not None:
+        damper = Damper(float(values.get("c", damper.c)))
+    return replace(scene, mass=mass, spring=spring, cubic=cubic, damper=damper)
+
+
 # ---------------------------------------------------------------- parsing
 
 _TOP_KEYS = {"name", "mass", "spring", "cubic", "damper", "branches", "load", "solver"}

@@ -1,0 +1,8 @@
+"""The FMI glue: an FMI 2.0 co-simulation FMU of a scene, built with PythonFMU.
+
+* ``slave.py``: the slave class (variables <-> :class:`prandtl_fmu.Element`);
+* ``entry.py``: the FMU's script: imports the bundled library, hands over the slave class;
+* ``description.py``: what PythonFMU leaves out of modelDescription.xml;
+* ``build.py``: :func:`build_fmu` (also ``python build_fmu.py``);
+* ``documentation.py``: the FMU's ``documentation/index.html``.
+"""

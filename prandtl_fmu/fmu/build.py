@@ -1,0 +1,87 @@
+"""Build the FMU of a scene: ``build_fmu(scene_path, out)``.
+
+The FMU holds, in ``resources/``: the slave script under a unique module name
+(``prandtl_slave_<digest>``, the digest of the scene and the library's
+sources), a copy of the library (``prandtl_fmu/``, the code the tests run)
+and the scene (``scene.toml``); ``documentation/index.html`` with the
+equations and the variables. The host needs Python with numpy and numba (and
+nothing else): PythonFMU FMUs run in the host's Python.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+from typing import Optional, Union
+
+from ..scene import load_scene
+
+LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
+MODEL_IDENTIFIER = "PrandtlElement"
+
+
+def _library_files():
+    for path in sorted(LIBRARY.rglob("*.py")):
+        if "__pycache__" not in path.parts:
+            yield path
+
+
+def _digest(scene_bytes: bytes) -> str:
+    sha = hashlib.sha256(scene_bytes)
+    for path in _library_files():
+        sha.update(str(path.relative_to(LIBRARY)).encode())
+        sha.update(path.read_bytes())
+    return sha.hexdigest()[:12]
+
+
+def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None) -> Path:
+    """Build the FMU of the scene at ``scene_path`` into ``out`` (default ``./<scene name>.fmu``).
+
+    The scene is checked first (:class:`SceneError` on any broken rule).
+    Returns the path of the FMU.
+    """
+    from pythonfmu import FmuBuilder
+
+    scene = load_scene(scene_path)
+    scene_bytes = Path(scene_path).read_bytes()
+    out = Path(out) if out is not None else Path.cwd() / f"{scene.name}.fmu"
+    if out.suffix != ".fmu":
+        raise ValueError(f"{out}: the FMU file name must end in .fmu")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    module = f"prandtl_slave_{_digest(scene_bytes)}"
+    with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
+        staging = Path(staging)
+        script = staging / f"{module}.py"
+        shutil.copyfile(LIBRARY / "fmu" / "entry.py", script)
+        (staging / "scene.toml").write_bytes(scene_bytes)
+        package = staging / "prandtl_fmu"
+        for path in _library_files():
+            target = package / path.relative_to(LIBRARY)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, target)
+        try:
+            FmuBuilder.build_FMU(script, dest=out, project_files=[package, staging / "scene.toml"],
+                                 canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+        finally:
+            # The builder imported the slave (and its private copy of the
+            # library) from the staging folder: forget them, so that the FMU,
+            # when loaded in this process, imports its own resources.
+            for name in [name for name in sys.modules if name == module or name.startswith(f"_{module}_lib")]:
+                del sys.modules[name]
+            if str(staging) in sys.path:
+                sys.path.remove(str(staging))
+    _add_documentation(out, scene)
+    return out
+
+
+def _add_documentation(fmu: Path, scene) -> None:
+    from .documentation import index_html
+
+    with zipfile.ZipFile(fmu) as archive:
+        model_description = archive.read("modelDescription.xml")
+    with zipfile.ZipFile(fmu, "a", compression=zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("documentation/index.html", index_html(model_description, scene))

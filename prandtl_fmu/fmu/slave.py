@@ -1,0 +1,185 @@
+"""The Prandtl element as an FMI 2.0 co-simulation slave (PythonFMU).
+
+Glue only: this class maps FMU variables to the library's :class:`Element`
+and back; every number is computed by the library. In an FMU this module is
+part of the library copy in ``resources/prandtl_fmu``, imported under a
+private name by the entry point (``entry.py``, see there).
+
+Stepping: ``do_step(t, H)`` advances by whole internal steps of ``step`` and,
+when H is not a multiple of it, one shorter last step for the remainder, with
+the input F held at the value set before the call.
+
+Refusals: a non-finite F, a parameter outside its range or a step that would
+leave a non-finite state is refused: a message naming the variable and the
+value is logged, ``do_step`` returns fmi2Discard, and the state is exactly
+what it was before. Setting a bad value is accepted as such (FMI setters have
+no way to say no); it is refused at the next step, until a good value is set.
+"""
+import math
+import os
+import sys
+
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, String
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Status
+
+from .. import __version__
+from ..driver import Element
+from ..scene import load_scene
+from ..steppers import STEPPERS
+from .description import RealVariable, complete
+
+DBL_MAX = sys.float_info.max
+
+# Parameters of the effects: (name, table of the scene, unit, min, variability, description).
+EFFECT_PARAMETERS = [
+    ("m", "mass", "kg", 0.0, Fmi2Variability.tunable, "mass of the point; must be > 0"),
+    ("x0", "mass", "m", -DBL_MAX, Fmi2Variability.fixed, "initial displacement"),
+    ("v0", "mass", "m/s", -DBL_MAX, Fmi2Variability.fixed, "initial velocity"),
+    ("k0", "spring", "N/m", 0.0, Fmi2Variability.tunable, "stiffness of the linear spring: force k0 x"),
+    ("k3", "cubic", "N/m3", 0.0, Fmi2Variability.tunable, "coefficient of the cubic spring: force k3 x^3"),
+    ("c", "damper", "N.s/m", 0.0, Fmi2Variability.tunable, "dashpot coefficient: force c v"),
+]
+
+
+class PrandtlElement(Fmi2Slave):
+    author = "prandtl_fmu"
+    description = ("Generalized Prandtl element (dry-friction hysteresis): a mass under a force F, held by "
+                   "springs, a dashpot and Prandtl branches (spring in series with a Coulomb slider)")
+    version = __version__
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
+        solver = self.scene.solver
+        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
+                                                    step_size=solver.output_interval)
+        self.element = Element(self.scene)
+        self.start_time = 0.0
+        # What the master set; checked and handed to the element at each step.
+        self.F = 0.0
+        self.stepper = self.element.stepper
+        self.step = self.element.h
+        self.parameters = dict(self.element.coefficients())
+        self.n = self.scene.branches.n if self.scene.branches is not None else 0
+        self._register()
+
+    # ------------------------------------------------------------ variables
+
+    def _register(self):
+        real = RealVariable
+        self.register_variable(real(
+            "F", unit="N", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
+            min=-DBL_MAX, max=DBL_MAX, start=0.0, description="external force on the element, held over each step",
+            getter=lambda: self.F, setter=lambda value: setattr(self, "F", value)))
+        outputs = [
+            ("x", "m", "displacement of the point", lambda: self.element.x),
+            ("v", "m/s", "velocity of the point", lambda: self.element.v),
+            ("reaction", "N", "force of the element on the point: k0 x + k3 x^3 + c v + sum k_i u_i (= F - m v')",
+             lambda: self.element.reaction),
+        ]
+        for name, unit, text, getter in outputs:
+            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
+                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
+        for name, table, unit, low, variability, text in EFFECT_PARAMETERS:
+            if getattr(self.scene, table) is None:
+                continue  # an absent effect has no parameter
+            self.register_variable(real(
+                name, unit=unit, causality=Fmi2Causality.parameter, variability=variability,
+                min=low, max=DBL_MAX, description=text,
+                getter=lambda name=name: self.parameters[name],
+                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
+        self.register_variable(real(
+            "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            min=0.0, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
+            getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
+        self.register_variable(String(
+            "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            description="time stepper: " + ", ".join(STEPPERS),
+            getter=lambda: self.stepper, setter=lambda value: setattr(self, "stepper", value)))
+        self.register_variable(Integer(
+            "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
+            description="number of Prandtl branches (from the scene)", getter=lambda: self.n))
+
+    def to_xml(self, model_options=dict()):
+        root = super().to_xml(model_options)
+        # No output depends directly on the input F: x, v and the branch
+        # elongations are states, and the reaction is a function of them.
+        return complete(root, list(self.vars.values()), output_dependencies={})
+
+    # ------------------------------------------------------------ stepping
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self.start_time = float(start_time)
+
+    def exit_initialization_mode(self):
+        if self._apply_settings():
+            self.element.reset()
+        self.element.time = self.start_time
+
+    def do_step(self, current_time, step_size):
+        if not self._apply_settings():
+            return False
+        force = self.F
+        if isinstance(force, bool) or not isinstance(force, (int, float)) or not math.isfinite(force):
+            return self._refuse(f"F = {force!r} refused: the force must be finite; step not taken")
+        if not (math.isfinite(step_size) and step_size >= 0):
+            return self._refuse(f"communication step {step_size!r} refused: it must be finite and >= 0")
+        element = self.element
+        saved = element.checkpoint()
+        element.time = current_time
+        try:
+            element.advance(step_size, force)
+        except Exception as exc:  # never fatal for the host: refuse the step
+            element.rollback(saved)
+            return self._refuse(f"step from t = {current_time!r} with F = {force!r} refused: {exc}")
+        if not (math.isfinite(element.x) and math.isfinite(element.v) and math.isfinite(element.reaction)):
+            element.rollback(saved)
+            return self._refuse(
+                f"step from t = {current_time!r} with F = {force!r} refused: it would leave a non-finite state "
+                f"(stepper {element.stepper!r} with step = {element.h!r} is unstable here; try 'implicit')")
+        return True
+
+    def _apply_settings(self) -> bool:
+        """Hand the parameters the master set to the element; False (logged) if one is refused."""
+        element = self.element
+        changed = {name: value for name, value in self.parameters.items()
+                   if value != element.coefficients()[name]}
+        if changed:
+            try:
+                element.set_coefficients(**changed)
+            except ValueError as exc:
+                return self._refuse(f"parameter {exc}; steps are refused until it is set right")
+        if self.stepper != element.stepper:
+            if self.stepper not in STEPPERS:
+                return self._refuse(f"parameter stepper = {self.stepper!r} refused: must be one of "
+                                    f"{', '.join(STEPPERS)}; steps are refused until it is set right")
+            element.set_stepper(self.stepper)
+        if self.step != element.h:
+            step = self.step
+            if isinstance(step, bool) or not isinstance(step, (int, float)) or not (math.isfinite(step) and step > 0):
+                return self._refuse(f"parameter step = {step!r} refused: must be finite and > 0; "
+                                    "steps are refused until it is set right")
+            element.set_step(step)
+        return True
+
+    def _refuse(self, message) -> bool:
+        self.log(message, Fmi2Status.discard)
+        return False
+
+    # ------------------------------------------------------------ FMU state
+
+    def _get_fmu_state(self):
+        """The whole state as plain data (PythonFMU serializes it as JSON: no code can hide in it)."""
+        return {
+            "element": self.element.get_state(),
+            "settings": {"F": self.F, "step": self.step, "stepper": self.stepper,
+                         "parameters": dict(self.parameters), "start_time": self.start_time},
+        }
+
+    def _set_fmu_state(self, state):
+        settings = state["settings"]
+        self.element.set_state(state["element"])
+        self.F, self.step, self.stepper = settings["F"], settings["step"], settings["stepper"]
+        self.parameters = dict(settings["parameters"])
+        self.start_time = settings["start_time"]

@@ -1,0 +1,265 @@
+"""The packaged FMU, driven by FMPy, against the library it bundles."""
+import html
+import json
+import xml.etree.ElementTree as ET
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from prandtl_fmu import Element, load_scene, parse_scene, simulate
+from prandtl_fmu.fmu.build import build_fmu
+
+from .conftest import SCENES, base_tables, scene_text
+from .fmu_tools import Slave, held_input, rss_bytes
+
+EFFECT_SETS = {
+    "paper": None,  # scenes/paper-section-8.toml: mass, spring (k0 = 0), 100 branches
+    "all-effects": base_tables(),
+    "damper-only": base_tables(spring=None, cubic=None, mass={"m": 2.0, "x0": 0.1, "v0": 0.0}),
+}
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """name -> (fmu path, scene path), built once for the module."""
+    folder = tmp_path_factory.mktemp("fmus")
+    built = {}
+    for name, tables in EFFECT_SETS.items():
+        if tables is None:
+            scene_path = SCENES / "paper-section-8.toml"
+        else:
+            scene_path = folder / f"{name}.toml"
+            scene_path.write_text(scene_text(tables))
+        built[name] = (build_fmu(scene_path, folder / f"{name}.fmu"), scene_path)
+    return built
+
+
+@pytest.mark.parametrize("name", list(EFFECT_SETS))
+def test_model_description_is_valid_and_complete(fmus, name):
+    fmu, scene_path = fmus[name]
+    assert validate_fmu(str(fmu)) == []
+    md = read_model_description(fmu)
+    scene = load_scene(scene_path)
+    variables = {v.name: v for v in md.modelVariables}
+    assert variables["F"].causality == "input" and variables["F"].unit == "N"
+    for out, unit in (("x", "m"), ("v", "m/s"), ("reaction", "N")):
+        assert variables[out].causality == "output" and variables[out].unit == unit
+    for v in md.modelVariables:
+        assert v.description
+        if v.type == "Real":
+            assert v.unit, v.name
+    # parameters only for the effects present
+    expected = {"m", "x0", "v0", "step", "stepper"}
+    expected |= {"k0"} if scene.spring else set()
+    expected |= {"k3"} if scene.cubic else set()
+    expected |= {"c"} if scene.damper else set()
+    assert {v.name for v in md.modelVariables if v.causality == "parameter"} == expected
+    assert variables["n"].variability == "constant" and int(variables["n"].start) == scene.branches.n
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert md.coSimulation.canHandleVariableCommunicationStepSize
+    assert md.defaultExperiment.stopTime == str(scene.solver.stop_time) or \
+        float(md.defaultExperiment.stopTime) == scene.solver.stop_time
+    with zipfile.ZipFile(fmu) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+        doc = html.unescape(archive.read("documentation/index.html").decode())
+        names = archive.namelist()
+    outputs = root.find("ModelStructure/Outputs")
+    assert all(u.get("dependencies") == "" for u in outputs)  # no direct feedthrough of F
+    assert len(root.find("ModelStructure/InitialUnknowns")) == 3
+    assert "m v' = F - k0 x - k3 x^3 - c v - sum_i k_i u_i" in doc and "reaction" in doc
+    assert "resources/scene.toml" in names and "resources/prandtl_fmu/steppers/projected.py" in names
+    slave_modules = [n for n in names if n.startswith("resources/prandtl_slave_") and n.endswith(".py")]
+    assert len(slave_modules) == 1
+
+
+def element_run(scene_path, stepper, times, forces):
+    element = Element(load_scene(scene_path), stepper=stepper)
+    rows = [(element.x, element.v, element.reaction)]
+    for k in range(len(times) - 1):
+        element.advance(times[k + 1] - times[k], forces[k])
+        rows.append((element.x, element.v, element.reaction))
+    return np.array(rows)
+
+
+@pytest.mark.parametrize("stepper", ["projected", "implicit"])
+@pytest.mark.parametrize("name", list(EFFECT_SETS))
+def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
+    fmu, scene_path = fmus[name]
+    dt, stop = 0.05, 20.0
+    times = np.round(np.arange(0, stop + dt / 2, dt), 12)
+    forces = 0.6 * np.cos(0.7 * times) + 0.2 * np.sin(2.3 * times)
+    result = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, input=held_input(times, forces),
+                          start_values={"stepper": stepper}, output=["x", "v", "reaction"])
+    expected = element_run(scene_path, stepper, times, forces)
+    assert len(result) == len(times)
+    got = np.column_stack([result["x"], result["v"], result["reaction"]])
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+    assert np.abs(expected[:, 0]).max() > 1e-2  # it moved
+
+
+def test_held_input_of_the_library_equals_a_constant_load_scene():
+    """Element.advance under a held force is simulate() with a constant load."""
+    tables = base_tables(load={"kind": "constant", "value": 0.9})
+    scene = parse_scene(scene_text(tables), "const.toml")
+    for stepper in ("projected", "implicit"):
+        expected = simulate(scene.with_solver(stop_time=5.0, output_interval=0.1), stepper)
+        element = Element(scene, stepper=stepper)
+        xs = [element.x]
+        for _ in range(50):
+            element.advance(0.1, 0.9)
+            xs.append(element.x)
+        np.testing.assert_array_equal(xs, expected.x)
+
+
+@pytest.mark.parametrize("stepper", ["projected", "implicit"])
+def test_hand_stepped_variable_steps_agree_with_the_library(fmus, stepper):
+    fmu, scene_path = fmus["all-effects"]
+    rng = np.random.default_rng(3)
+    # multiples of h, non-multiples, tiny, zero and very large steps
+    sizes = np.concatenate([[1e-3, 2.5e-3, 0.0, 1e-7, 0.3337, 7.0], rng.uniform(1e-4, 0.2, 60)])
+    forces = rng.uniform(-2, 2, len(sizes))
+    slave = Slave(fmu, start_values={"stepper": stepper})
+    element = Element(load_scene(scene_path), stepper=stepper)
+    try:
+        for size, force in zip(sizes, forces):
+            slave.step(size, force)
+            element.advance(size, force)
+            np.testing.assert_allclose(slave.get("x", "v", "reaction"),
+                                       [element.x, element.v, element.reaction], rtol=0, atol=1e-12)
+    finally:
+        slave.close()
+
+
+def test_outputs_are_consistent_after_initialization(fmus):
+    fmu, scene_path = fmus["all-effects"]
+    slave = Slave(fmu, start_values={"x0": 0.3, "v0": -0.5, "k0": 2.0})
+    try:
+        x, v, reaction = slave.get("x", "v", "reaction")
+        scene = load_scene(scene_path)
+        u0 = scene.branches.u0
+        expected = 2.0 * 0.3 + 0.05 * 0.3**3 + 0.01 * -0.5 + scene.branches.stiffness @ u0
+        assert (x, v) == (0.3, -0.5)
+        assert reaction == pytest.approx(expected, rel=1e-15)
+    finally:
+        slave.close()
+
+
+def test_state_rollback_and_serialization_give_identical_continuations(fmus):
+    fmu, _ = fmus["paper"]
+    slave = Slave(fmu, start_values={"stepper": "implicit"})
+    other = Slave(fmu, unzipdir=slave.unzipdir, name="other")
+    try:
+        for k in range(40):
+            slave.step(0.25, 0.45 * np.cos(0.5 * slave.time))
+        slave.set("step", 2e-3)  # settings are part of the state too
+        state = slave.fmu.getFMUstate()
+        blob = slave.fmu.serializeFMUstate(state)
+        data = json.loads(bytes(blob))  # plain JSON: nothing in it can run
+        assert len(data["element"]["u"]) == 100 and data["settings"]["step"] == 2e-3
+
+        def continuation(s):
+            out = []
+            for k in range(30):
+                s.step(0.3, 0.6 * np.sin(0.9 * k))
+                out.append(s.get("x", "v", "reaction"))
+            return np.array(out)
+
+        start = slave.time
+        first = continuation(slave)
+        slave.fmu.setFMUstate(state)
+        slave.time = start
+        second = continuation(slave)
+        np.testing.assert_array_equal(first, second)
+        # another instance, restored from the serialized bytes
+        restored = other.fmu.deSerializeFMUstate(blob)
+        other.fmu.setFMUstate(restored)
+        other.time = start
+        np.testing.assert_array_equal(continuation(other), first)
+        slave.fmu.freeFMUstate(state)
+        other.fmu.freeFMUstate(restored)
+    finally:
+        slave.close()
+        other.close()
+
+
+@pytest.mark.parametrize("name, value, culprit", [
+    ("F", float("nan"), "F = nan"),
+    ("F", float("inf"), "F = inf"),
+    ("m", 0.0, "m: must be > 0, got 0.0"),
+    ("m", -1.0, "m: must be > 0, got -1.0"),
+    ("k0", -3.0, "k0: must be >= 0, got -3.0"),
+    ("c", float("nan"), "c: must be finite, got nan"),
+    ("step", 0.0, "step = 0.0"),
+    ("stepper", "rk4", "stepper = 'rk4'"),
+])
+def test_bad_values_are_refused_and_the_state_is_unchanged(fmus, name, value, culprit):
+    fmu, _ = fmus["all-effects"]
+    slave = Slave(fmu)
+    try:
+        for _ in range(10):
+            slave.step(0.1, 0.8)
+        before = slave.fmu.serializeFMUstate(slave.fmu.getFMUstate())
+        outputs = slave.get("x", "v", "reaction")
+        slave.set(name, value)
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.doStep(slave.time, 0.1)
+        assert refused.value.status == 2  # fmi2Discard, not fatal
+        assert any(culprit in message for _, message in slave.messages), slave.messages
+        assert slave.get("x", "v", "reaction") == outputs
+        after = json.loads(bytes(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate())))
+        assert after["element"] == json.loads(bytes(before))["element"]
+        # a good value again, and the element goes on
+        good = {"F": 0.8, "m": 1.0, "k0": 0.2, "c": 0.01, "step": 1e-3, "stepper": "projected"}[name]
+        slave.set(name, good)
+        slave.step(0.1)
+        assert slave.get("x") != outputs[0]
+    finally:
+        slave.close()
+
+
+def test_instances_are_independent_and_reset_works(fmus):
+    fmu, scene_path = fmus["all-effects"]
+    first = Slave(fmu, name="first")
+    second = Slave(fmu, unzipdir=first.unzipdir, name="second", start_values={"stepper": "implicit"})
+    one, two = Element(load_scene(scene_path)), Element(load_scene(scene_path), stepper="implicit")
+    try:
+        for k in range(50):
+            first.step(0.1, 1.5)
+            second.step(0.1, -0.7)
+            one.advance(0.1, 1.5)
+            two.advance(0.1, -0.7)
+        assert first.get("x") == pytest.approx(one.x, abs=1e-12)
+        assert second.get("x") == pytest.approx(two.x, abs=1e-12)
+        first.fmu.reset()
+        first.fmu.setupExperiment(startTime=0.0)
+        first.fmu.enterInitializationMode()
+        first.fmu.exitInitializationMode()
+        first.time = 0.0
+        assert first.get("x", "v") == [0.0, 0.0]
+        assert second.get("x") == pytest.approx(two.x, abs=1e-12)
+    finally:
+        first.close()
+        second.close()
+
+
+def test_a_thousand_instantiate_free_cycles_do_not_grow_memory(fmus):
+    fmu, _ = fmus["paper"]
+    first = Slave(fmu)
+    unzipdir = first.unzipdir
+    first.close()
+
+    def cycles(count):
+        for _ in range(count):
+            slave = Slave(fmu, unzipdir=unzipdir)
+            slave.step(0.01, 0.1)
+            slave.close()
+
+    cycles(100)  # warm up: allocator pools, compiled kernels
+    before = rss_bytes()
+    cycles(1000)
+    grown = rss_bytes() - before
+    assert grown < 4 * 2**20, f"grew by {grown / 2**20:.1f} MiB over 1000 cycles"
