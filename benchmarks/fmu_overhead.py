@@ -1,0 +1,95 @@
+"""What the FMU costs on top of the library, per communication step.
+
+Problem: the paper's section 8 scene (n = 100, h = 1e-3), force held at
+0.3 N. For each stepper, the same sequence of communication steps is run
+
+* by the library: ``Element.advance(H, F)``;
+* by the FMU, built by build_fmu.py and driven by FMPy's FMU2Slave
+  (``setReal(F)`` + ``doStep``), which adds ctypes, PythonFMU's C++ and the
+  slave's checks;
+
+with H = 1000 h (the target: the FMU within 1.2x of the library) and H = h
+(one internal step: the fixed overhead per doStep). Repeats are interleaved
+and the median per communication step is reported, with the ratio measured in
+the same run.
+
+    python benchmarks/fmu_overhead.py [--repeat 7] [--out out/fmu_overhead.csv]
+"""
+import argparse
+import csv
+import os
+import platform
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.join(ROOT, "tests"))
+
+from prandtl_fmu import Element, load_scene  # noqa: E402
+from prandtl_fmu.fmu.build import build_fmu  # noqa: E402
+from fmu_tools import Slave  # noqa: E402
+
+SCENE = os.path.join(ROOT, "scenes", "paper-section-8.toml")
+
+
+def library_run(stepper, size, count):
+    element = Element(load_scene(SCENE), stepper=stepper)
+    element.advance(size, 0.3)  # compile
+    start = time.perf_counter()
+    for _ in range(count):
+        element.advance(size, 0.3)
+    return (time.perf_counter() - start) / count
+
+
+def fmu_run(slave, size, count):
+    fmu, vr = slave.fmu, [slave.vr["F"]]
+    t = slave.time
+    start = time.perf_counter()
+    for _ in range(count):
+        fmu.setReal(vr, [0.3])
+        fmu.doStep(t, size)
+        t += size
+    slave.time = t
+    return (time.perf_counter() - start) / count
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--out", default=os.path.join(ROOT, "out", "fmu_overhead.csv"))
+    args = parser.parse_args()
+    h = load_scene(SCENE).solver.step
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        fmu = build_fmu(SCENE, os.path.join(folder, "element.fmu"))
+        print(f"machine: {platform.machine()}, python {platform.python_version()}, n = 100, h = {h}")
+        for stepper in ("projected", "implicit"):
+            slave = Slave(fmu, start_values={"stepper": stepper})
+            slave.step(h, 0.3)  # compile inside the FMU
+            for internal, count in ((1000, 200), (1, 5000)):
+                size = internal * h
+                lib, ours = [], []
+                for _ in range(args.repeat):
+                    lib.append(library_run(stepper, size, count))
+                    ours.append(fmu_run(slave, size, count))
+                lib_s, fmu_s = np.median(lib), np.median(ours)
+                rows.append({"stepper": stepper, "internal_steps": internal,
+                             "library_us": f"{lib_s * 1e6:.2f}", "fmu_us": f"{fmu_s * 1e6:.2f}",
+                             "overhead_us": f"{(fmu_s - lib_s) * 1e6:.2f}", "ratio": f"{fmu_s / lib_s:.3f}"})
+                print(f"{stepper:9s} H = {internal:4d} h: library {lib_s * 1e6:9.2f} us, FMU {fmu_s * 1e6:9.2f} us"
+                      f"  (x{fmu_s / lib_s:.3f}, +{(fmu_s - lib_s) * 1e6:.1f} us per doStep)")
+            slave.close()
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+    with open(args.out, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    print(f"written: {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,48 @@
+"""The FMU in a real co-simulation master: libcosim (libcosimpy), against FMPy."""
+import importlib.util
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from .conftest import ROOT
+from .fmu_tools import held_input
+
+spec = importlib.util.spec_from_file_location("run_cosim", ROOT / "examples" / "cosim" / "run_cosim.py")
+run_cosim = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(run_cosim)
+
+
+def test_libcosim_run_of_the_shipped_example_agrees_with_fmpy(tmp_path):
+    structure = run_cosim.build(tmp_path)
+    stop = 10.0
+    cosim = {name: np.array(values) for name, values in run_cosim.run(structure, stop).items()}
+    dt = 0.01
+    assert len(cosim["time"]) == 1000 and cosim["time"][-1] == stop
+    # libcosim hands the element, for the step from t_k, the source's output at t_k.
+    np.testing.assert_allclose(cosim["F"], 0.45 * np.cos(0.5 * cosim["time"]), rtol=0, atol=1e-15)
+    times = np.round(np.arange(0, stop + dt / 2, dt), 12)
+    forces = np.concatenate([[0.45], cosim["F"]])  # F(0) = 0.45: the source's initial output
+    result = simulate_fmu(str(tmp_path / "PrandtlElement.fmu"), stop_time=stop, output_interval=dt,
+                          input=held_input(times, forces), start_values={"stepper": "implicit"},
+                          output=["x", "v", "reaction"])
+    for name in ("x", "v", "reaction"):
+        np.testing.assert_allclose(cosim[name], result[name][1:], rtol=0, atol=1e-12)
+    assert np.abs(cosim["x"]).max() > 0.5  # the branches yielded: x reaches the plastic range
+
+
+def test_fmpy_example_script_runs_the_fmu_as_the_library(tmp_path):
+    from prandtl_fmu import Element, load_scene
+    from prandtl_fmu.fmu.build import build_fmu
+
+    spec = importlib.util.spec_from_file_location("run_fmu", ROOT / "examples" / "run_fmu.py")
+    run_fmu = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(run_fmu)
+    scene = ROOT / "scenes" / "paper-section-8.toml"
+    fmu = build_fmu(scene, tmp_path / "element.fmu")
+    result = run_fmu.run(str(fmu), stop_time=30.0)
+    assert len(result) == 301  # the DefaultExperiment's step: the scene's output_interval 0.1
+    element = Element(load_scene(scene))
+    for k in range(300):
+        element.advance(0.1, 0.45 * np.cos(0.5 * k * 0.1))
+    assert result["x"][-1] == pytest.approx(element.x, abs=1e-12)
