@@ -1,14 +1,20 @@
 """Command line: ``python -m prandtl_fmu run SCENE.toml [options]``.
 
-Exit status 0 on success, 2 on a bad scene or bad option (one line on
-stderr, no traceback).
+Exit status 0 on success; 2 on a bad scene or option, or when the element
+cannot be advanced (plastic collapse of a massless element, a non-finite
+state): one line on stderr, no traceback. A step beyond the stability limit
+of the stepper prints one ``warning:`` line on stderr and runs.
 """
 from __future__ import annotations
 
 import argparse
 import sys
 
+import warnings
+
+from .driver import ENERGY_COLUMNS, ElementError
 from .scene import SceneError, load_scene
+from .stability import StabilityWarning
 from .steppers import STEPPERS
 
 
@@ -28,6 +34,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--output-interval", type=float, help="time between output rows (s), a multiple of the step")
     run.add_argument("--out", help="CSV file to write (default: standard output)")
     run.add_argument("--states", action="store_true", help="add the columns u[1]..u[n]")
+    run.add_argument("--energy", action="store_true",
+                     help="add the energy account: " + ", ".join(ENERGY_COLUMNS))
     run.add_argument("--plot", help="PNG file: hysteresis loop (reaction against x) and x(t)")
     return parser
 
@@ -50,7 +58,20 @@ def _run(args) -> int:
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    result = simulate(scene, states=args.states)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", StabilityWarning)
+        try:
+            result = simulate(scene, states=args.states, energy=args.energy)
+        except ElementError as exc:
+            error = exc
+        else:
+            error = None
+    for warning in caught:
+        if issubclass(warning.category, StabilityWarning):
+            print(f"warning: {warning.message}", file=sys.stderr)
+    if error is not None:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     if args.out:
         with open(args.out, "w", newline="") as fh:
             result.write_csv(fh)

@@ -15,25 +15,36 @@ from __future__ import annotations
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
 
 from ._jit import kernel
-from .kernels.play import branch_force
-from .kernels.smooth import smooth_force
-from .loads import held
+from .kernels.energy import kinetic, stored
+from .kernels.increment import solve_increment
+from .kernels.play import branch_force, shift
+from .kernels.smooth import elastic_force, smooth_force
+from .loads import force_at, held
 from .scene import Scene, with_coefficients
+from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
 # How many branch updates one compiled call does at most, between two
 # progress-bar updates (about 10 ms).
 _CHUNK_WORK = 20_000_000
 
+ENERGY_COLUMNS = ("kinetic", "stored", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
+
+
+class ElementError(RuntimeError):
+    """The element cannot be advanced: plastic collapse, or a non-finite state. One line."""
+
 
 def compile_model(scene: Scene):
     """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta)``, ``None`` where absent."""
+    m = float(scene.mass.m) if scene.mass is not None else None
     k0 = scene.spring.k0 if scene.spring is not None else None
     k3 = scene.cubic.k3 if scene.cubic is not None else None
     c = scene.damper.c if scene.damper is not None else None
@@ -42,30 +53,87 @@ def compile_model(scene: Scene):
         eta = np.ascontiguousarray(scene.branches.yield_displacement, dtype=float)
     else:
         k = eta = None
-    return (float(scene.mass.m), k0, k3, c, k, eta)
+    return (m, k0, k3, c, k, eta)
+
+
+def compile_step(scene: Scene, stepper: str):
+    """The compiled step of ``stepper`` for ``scene``; ValueError if the scheme does not apply."""
+    return get_stepper(stepper).step_for(scene)
 
 
 @kernel
-def integrate(step, model, load, x, v, u, t0, h, steps_per_row, n_rows, out, out_u):
+def integrate(step, model, load, x, v, u, t0, h, steps_per_row, n_rows, out, out_u, energy, out_energy):
     """Advance ``n_rows * steps_per_row`` steps of size ``h`` from time ``t0``.
 
     After every ``steps_per_row`` steps, row j of ``out`` (shape (n_rows, 3))
-    receives x, v and the reaction, and row j of ``out_u`` (shape (n_rows, n),
-    or ``None``) the elongations. ``u`` is updated in place; returns (x, v).
+    receives x, v and the reaction, row j of ``out_u`` (shape (n_rows, n), or
+    ``None``) the elongations and row j of ``out_energy`` (shape (n_rows, 5),
+    or ``None``) the kinetic and stored energy and the account ``energy``
+    (work, dissipated by the sliders, by the dashpot). ``u`` and ``energy``
+    are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
+    of steps taken, fewer than asked if a step failed (non-finite result; the
+    state returned is the one before that step).
     """
     m, k0, k3, c, k, eta = model
     s = branch_force(k, u)
     p = 0
     for j in range(n_rows):
         for _ in range(steps_per_row):
-            x, v, s = step(model, load, t0 + p * h, h, x, v, s, u)
+            x1, v1, s1 = step(model, load, t0 + p * h, h, x, v, s, u, energy)
+            if not (abs(x1) < np.inf and abs(v1) < np.inf):
+                return x, v, p
+            x, v, s = x1, v1, s1
             p += 1
         out[j, 0] = x
         out[j, 1] = v
         out[j, 2] = smooth_force(x, v, k0, k3, c) + s
         if out_u is not None:
             out_u[j, :] = u
-    return x, v
+        if out_energy is not None:
+            out_energy[j, 0] = kinetic(m, v)
+            out_energy[j, 1] = stored(x, k0, k3, k, u)
+            out_energy[j, 2] = energy[0]
+            out_energy[j, 3] = energy[1]
+            out_energy[j, 4] = energy[2]
+    return x, v, p
+
+
+def initial_state(scene: Scene, model, load):
+    """(x, v, u) at t = 0, u a fresh array (or None).
+
+    With inertia: the scene's x0, v0, u0. Massless: x = 0 and u0; with a
+    dashpot v is the rate (F(0) - k0 x - k3 x^3 - sum k_i u_i) / c; without,
+    the element jumps at t = 0 to the equilibrium with F(0) (the play
+    operator moves the branches) and v = 0. ElementError if none exists.
+    """
+    m, k0, k3, c, k, eta = model
+    u = np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None
+    if scene.mass is not None:
+        return scene.mass.x0, scene.mass.v0, u
+    force = force_at(load, 0.0)
+    if c is not None:
+        return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / c, u
+    w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, u)
+    if not math.isfinite(w):
+        raise ElementError(_collapse_message(scene, 0.0, force))
+    shift(k, eta, u, w)
+    return w, 0.0, u
+
+
+def _collapse_message(scene: Scene, time: float, force: float) -> str:
+    strength = scene.branches.strength if scene.branches is not None else 0.0
+    return (f"{scene.source}: plastic collapse at t = {time!r} s: the load F = {force!r} N exceeds the strength "
+            f"sum alpha_i = {strength!r} N of a massless element with no hardening spring: no equilibrium exists")
+
+
+def _failure(scene: Scene, stepper: str, load, time: float, h: float) -> ElementError:
+    """The error for a step from ``time`` that could not be taken."""
+    if scene.mass is None and scene.damper is None:
+        return ElementError(_collapse_message(scene, time + h, force_at(load, time + h)))
+    problem = stability_problem(scene, stepper, h)
+    hint = f" ({problem})" if problem else ""
+    return ElementError(f"{scene.source}: the state became non-finite in the step from t = {time!r} s with "
+                        f"stepper {stepper!r} and h = {h!r}{hint}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +141,9 @@ class Result:
     """Output of :func:`simulate` on the grid t = 0, dt, 2 dt, ..., stop_time.
 
     ``time``, ``x`` (m), ``v`` (m/s), ``reaction`` (N): shape (rows,);
-    ``u`` (m): shape (rows, n), or ``None`` unless states were asked for.
+    ``u`` (m): shape (rows, n), or ``None`` unless states were asked for;
+    ``energy``: column name -> array (J) (see :data:`ENERGY_COLUMNS`), or
+    ``None`` unless asked for.
     """
 
     time: np.ndarray
@@ -81,19 +151,22 @@ class Result:
     v: np.ndarray
     reaction: np.ndarray
     u: Optional[np.ndarray]
+    energy: Optional[dict]
     stepper: str
     scene: Scene
 
     def columns(self) -> dict:
-        """Column name -> array, in the order of the CSV contract."""
+        """Column name -> array, in the order of the CSV contract (then the additions)."""
         cols = {"time": self.time, "x": self.x, "v": self.v, "reaction": self.reaction}
         if self.u is not None:
             for i in range(self.u.shape[1]):
                 cols[f"u[{i + 1}]"] = self.u[:, i]
+        if self.energy is not None:
+            cols.update(self.energy)
         return cols
 
     def write_csv(self, file) -> None:
-        """Write ``time,x,v,reaction[,u[1]..u[n]]``, every float in full precision (repr)."""
+        """Write ``time,x,v,reaction[,u[1]..u[n]][,energy columns]``, every float in full precision (repr)."""
         cols = self.columns()
         file.write(",".join(cols) + "\n")
         table = np.column_stack(list(cols.values()))
@@ -115,130 +188,184 @@ def output_grid(stop_time: float, interval: float) -> np.ndarray:
     return times
 
 
-def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = False,
+def _energy_columns(initial_energy: float, table: np.ndarray) -> dict:
+    kinetic_, stored_, work, sliders, damper = table.T
+    residual = work - sliders - damper - (kinetic_ + stored_ - initial_energy)
+    return dict(zip(ENERGY_COLUMNS, (kinetic_, stored_, work, sliders, damper, residual)))
+
+
+def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = False, energy: bool = False,
              progress: Optional[bool] = None) -> Result:
     """Simulate ``scene`` with its solver settings (``stepper`` overrides the scene's).
 
-    ``states`` also returns the branch elongations. ``progress`` shows a
-    progress bar on stderr; by default only on a terminal and not under CI.
+    ``states`` also returns the branch elongations, ``energy`` the energy
+    account. ``progress`` shows a progress bar on stderr; by default only on
+    a terminal and not under CI. Warns (:class:`StabilityWarning`) when the
+    step is beyond the stability limit of an explicit stepper; raises
+    :class:`ElementError` when a step cannot be taken (plastic collapse of a
+    massless element, non-finite state) and ValueError when the stepper does
+    not apply to the scene.
     """
     solver = scene.solver
     name = stepper or solver.stepper
-    step = get_stepper(name).step
+    step = compile_step(scene, name)
+    h = solver.step
+    problem = stability_problem(scene, name, h)
+    if problem:
+        warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=2)
     model = compile_model(scene)
     load = scene.load.compile()
-    h = solver.step
     times = output_grid(solver.stop_time, solver.output_interval)
     rows = len(times)
     out = np.empty((rows, 3))
     n = scene.branches.n if scene.branches is not None else 0
     out_u = np.empty((rows, n)) if (states and n) else None
-    u = np.array(scene.branches.u0, dtype=float) if n else None
-    x, v = scene.mass.x0, scene.mass.v0
-    out[0] = (x, v, smooth_force(x, v, model[1], model[2], model[3]) + branch_force(model[4], u))
+    account = np.zeros(3) if energy else None
+    out_energy = np.zeros((rows, 5)) if energy else None
+    x, v, u = initial_state(scene, model, load)
+    m, k0, k3, c, k, eta = model
+    out[0] = (x, v, smooth_force(x, v, k0, k3, c) + branch_force(k, u))
     if out_u is not None:
         out_u[0] = u
+    if out_energy is not None:
+        out_energy[0, :2] = (kinetic(m, v), stored(x, k0, k3, k, u))
+
+    def view(array, first, count):
+        return None if array is None else array[first:first + count]
 
     per_row = solver.steps_per_output
     last_is_short = rows > 1 and times[-1] - times[-2] < solver.output_interval * (1 - 1e-9)
     full_rows = rows - 1 - last_is_short  # row 0 is the initial state
     chunk = max(1, _CHUNK_WORK // max(1, per_row * max(n, 8)))
     bar = _progress_bar(progress, total=rows - 1, label=f"{scene.name} [{name}]")
-    j = 0
-    while j < full_rows:
-        count = min(chunk, full_rows - j)
-        x, v = integrate(step, model, load, x, v, u, times[j], h, per_row, count,
-                         out[1 + j:1 + j + count], None if out_u is None else out_u[1 + j:1 + j + count])
-        j += count
-        bar.update(count)
-    if last_is_short:  # a last, shorter output interval up to stop_time
-        x, v = _advance(step, model, load, x, v, u, times[-2], times[-1] - times[-2], h,
-                        out[-1:], None if out_u is None else out_u[-1:])
-        bar.update(1)
-    bar.close()
-    return Result(times, out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(),
-                  out_u, name, scene)
+    try:
+        j = 0
+        while j < full_rows:
+            count = min(chunk, full_rows - j)
+            x, v, taken = integrate(step, model, load, x, v, u, times[j], h, per_row, count,
+                                    view(out, 1 + j, count), view(out_u, 1 + j, count),
+                                    account, view(out_energy, 1 + j, count))
+            if taken < per_row * count:
+                raise _failure(scene, name, load, times[j] + taken * h, h)
+            j += count
+            bar.update(count)
+        if last_is_short:  # a last, shorter output interval up to stop_time
+            x, v, failed_at = _advance(step, model, load, x, v, u, times[-2], times[-1] - times[-2], h,
+                                       out[-1:], view(out_u, rows - 1, 1), account, view(out_energy, rows - 1, 1))
+            if failed_at is not None:
+                raise _failure(scene, name, load, failed_at, h)
+            bar.update(1)
+    finally:
+        bar.close()
+    energy_columns = _energy_columns(out_energy[0, 0] + out_energy[0, 1], out_energy) if energy else None
+    return Result(times, out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out_u, energy_columns, name, scene)
 
 
-def _advance(step, model, load, x, v, u, t0, duration, h, out, out_u):
+def _advance(step, model, load, x, v, u, t0, duration, h, out, out_u, account, out_energy):
     """Advance by ``duration``: whole steps of h, then one shorter step for the remainder.
 
     The remainder is dropped when it is below 1e-9 h (rounding of the
-    duration), so a duration that is a whole multiple of h takes whole steps only.
+    duration), so a duration that is a whole multiple of h takes whole steps
+    only. Returns ``(x, v, failed_at)``: the start time of a step that could
+    not be taken, or None.
     """
     whole = math.floor(duration / h * (1 + 1e-12))
     rest = duration - whole * h
     if rest <= 1e-9 * h:
         rest = 0.0
     if whole:
-        x, v = integrate(step, model, load, x, v, u, t0, h, whole, 1, out, out_u)
+        x, v, taken = integrate(step, model, load, x, v, u, t0, h, whole, 1, out, out_u, account, out_energy)
+        if taken < whole:
+            return x, v, t0 + taken * h
     if rest:
-        x, v = integrate(step, model, load, x, v, u, t0 + whole * h, rest, 1, 1, out, out_u)
-    return x, v
+        x, v, taken = integrate(step, model, load, x, v, u, t0 + whole * h, rest, 1, 1, out, out_u,
+                                account, out_energy)
+        if taken < 1:
+            return x, v, t0 + whole * h
+    return x, v, None
 
 
 class Element:
     """The element of a scene as a stateful object, advanced under a held force.
 
     ``advance(duration, force)`` takes whole internal steps of ``step`` and one
-    shorter last step for any remainder, with the force held constant.
-    The state (``time``, ``x``, ``v``, ``u``) is saved and restored as plain
-    data by :meth:`get_state` and :meth:`set_state`.
+    shorter last step for any remainder, with the force held constant. The
+    energy account is always kept (:meth:`energy`). The state is saved and
+    restored as plain data by :meth:`get_state` and :meth:`set_state`.
     """
 
     def __init__(self, scene: Scene, stepper: Optional[str] = None, step: Optional[float] = None):
         self.scene = scene
         self.stepper = stepper or scene.solver.stepper
-        self._step = get_stepper(self.stepper).step
+        self._step = compile_step(scene, self.stepper)
         self.h = float(step if step is not None else scene.solver.step)
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
         self.model = compile_model(scene)
         self._out = np.empty((1, 3))
+        self._energy_row = np.empty((1, 5))
+        self.account = np.zeros(3)
         self.reset()
 
-    def set_coefficients(self, **values) -> None:
-        """Change coefficients (m, k0, k3, c; x0 and v0 take effect at :meth:`reset`).
-
-        ValueError names the culprit and leaves the element unchanged.
-        """
-        self.scene = with_coefficients(self.scene, **values)
-        self.model = compile_model(self.scene)
-        self._out[0] = (self.x, self.v, self._reaction())
-
-    def reset(self) -> None:
-        """Back to the scene's initial state at time 0."""
+    def reset(self, force: float = 0.0) -> None:
+        """Back to the scene's initial state at time 0 under the held ``force`` (massless: see
+        :func:`initial_state`); the energy account restarts."""
         self.time = 0.0
-        self.x, self.v = self.scene.mass.x0, self.scene.mass.v0
-        branches = self.scene.branches
-        self.u = np.array(branches.u0, dtype=float) if branches is not None else None
-        self.force = 0.0
-        self._out[0] = (self.x, self.v, self._reaction())
+        self.force = float(force)
+        self.x, self.v, self.u = initial_state(self.scene, self.model, held(self.force))
+        self.account[:] = 0.0
+        self._record()
+        self.initial_energy = float(self._energy_row[0, 0] + self._energy_row[0, 1])
 
-    def _reaction(self) -> float:
+    def _record(self) -> None:
         m, k0, k3, c, k, eta = self.model
-        return smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)
+        self._out[0] = (self.x, self.v, smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u))
+        self._energy_row[0] = (kinetic(m, self.v), stored(self.x, k0, k3, k, self.u), *self.account)
 
     @property
     def reaction(self) -> float:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N)."""
         return float(self._out[0, 2])
 
+    def energy(self) -> dict:
+        """The energy account (J): see :data:`ENERGY_COLUMNS`."""
+        columns = _energy_columns(self.initial_energy, self._energy_row)
+        return {name: float(values[0]) for name, values in columns.items()}
+
     def advance(self, duration: float, force: float) -> None:
-        """Advance by ``duration`` (s) with the force held at ``force`` (N)."""
+        """Advance by ``duration`` (s) with the force held at ``force`` (N).
+
+        ElementError (state unchanged) when a step cannot be taken.
+        """
         if not (math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be finite and >= 0, got {duration!r}")
         if not math.isfinite(force):
             raise ValueError(f"force must be finite, got {force!r}")
+        if duration == 0:
+            return
+        saved = self.checkpoint()
+        load = held(force)
         self.force = float(force)
-        if duration > 0:
-            self.x, self.v = _advance(self._step, self.model, held(force), self.x, self.v, self.u,
-                                      self.time, duration, self.h, self._out, None)
-            self.time += duration
+        x, v, failed_at = _advance(self._step, self.model, load, self.x, self.v, self.u, self.time,
+                                   duration, self.h, self._out, None, self.account, self._energy_row)
+        if failed_at is not None:
+            self.rollback(saved)
+            raise _failure(self.scene, self.stepper, load, failed_at, self.h)
+        self.x, self.v = x, v
+        self.time += duration
+
+    def set_coefficients(self, **values) -> None:
+        """Change coefficients (m, k0, k3, c; x0 and v0 take effect at :meth:`reset`).
+
+        ValueError names the culprit and leaves the element unchanged.
+        """
+        scene = with_coefficients(self.scene, **values)
+        self.scene, self.model = scene, compile_model(scene)
+        self._record()
 
     def set_stepper(self, name: str) -> None:
         """Use another stepper from the next step on (every stepper is one-step)."""
-        self._step = get_stepper(name).step
+        self._step = compile_step(self.scene, name)
         self.stepper = name
 
     def set_step(self, step: float) -> None:
@@ -246,6 +373,10 @@ class Element:
         if not (math.isfinite(step) and step > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
         self.h = float(step)
+
+    def stability_problem(self) -> Optional[str]:
+        """Why the current stepper and step are unstable for this element, or None."""
+        return stability_problem(self.scene, self.stepper, self.h, x=self.x)
 
     def coefficients(self) -> dict:
         """The coefficients of the effects present (see :data:`scene.COEFFICIENTS`)."""
@@ -265,41 +396,47 @@ class Element:
         return {
             "time": self.time, "x": self.x, "v": self.v, "force": self.force,
             "u": [] if self.u is None else self.u.tolist(),
+            "energy_account": self.account.tolist(), "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
 
     def set_state(self, state: dict) -> None:
         """Restore a state from :meth:`get_state`; checks it fully before changing anything."""
         n = 0 if self.u is None else self.u.shape[0]
-        values = [float(state[key]) for key in ("time", "x", "v", "force")]
+        values = [float(state[key]) for key in ("time", "x", "v", "force", "initial_energy")]
         u = np.array(state["u"], dtype=float).reshape(-1)
-        if u.shape[0] != n:
+        account = np.array(state["energy_account"], dtype=float).reshape(-1)
+        if u.shape[0] != n or account.shape[0] != 3:
             raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {n}")
-        if not all(math.isfinite(value) for value in values) or not np.all(np.isfinite(u)):
+        finite = all(math.isfinite(value) for value in values)
+        if not finite or not np.all(np.isfinite(u)) or not np.all(np.isfinite(account)):
             raise ValueError("state has a value that is not finite")
         if n and np.any(np.abs(u) > self.scene.branches.yield_displacement):
             raise ValueError("state has an elongation outside its elastic range")
         scene = with_coefficients(self.scene, **state["coefficients"])
-        step = get_stepper(state["stepper"]).step
+        step = compile_step(scene, state["stepper"])
         self.set_step(float(state["step"]))
         self.scene, self.model = scene, compile_model(scene)
         self._step, self.stepper = step, state["stepper"]
-        self.time, self.x, self.v, self.force = values
+        self.time, self.x, self.v, self.force, self.initial_energy = values
         if n:
             self.u[:] = u
-        self._out[0] = (self.x, self.v, self._reaction())
+        self.account[:] = account
+        self._record()
 
     def checkpoint(self):
         """A cheap copy of the dynamic state, for :meth:`rollback` (not plain data)."""
         return (self.time, self.x, self.v, self.force, None if self.u is None else self.u.copy(),
-                self._out.copy())
+                self.account.copy(), self._out.copy(), self._energy_row.copy())
 
     def rollback(self, checkpoint) -> None:
         """Return to a :meth:`checkpoint`, exactly."""
-        self.time, self.x, self.v, self.force, u, out = checkpoint
+        self.time, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
         if u is not None:
             self.u[:] = u
+        self.account[:] = account
         self._out[:] = out
+        self._energy_row[:] = energy_row
 
 
 class _NoBar:

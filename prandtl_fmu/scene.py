@@ -8,7 +8,9 @@ key; nothing in it is ever evaluated. Every broken rule raises
 Additions to the contract (all optional):
 
 * ``[load]`` may be omitted: no external force, F(t) = 0;
-* ``[solver] stepper`` defaults to ``"projected"``.
+* ``[solver] stepper`` defaults to ``"projected"``;
+* a scene without ``[mass]`` is the massless element: x(0) = 0, and without
+  a dashpot the quasi-static element (see :func:`driver.initial_state`).
 """
 from __future__ import annotations
 
@@ -68,7 +70,9 @@ class Scene:
         given = {k: v for k, v in overrides.items() if v is not None}
         solver = replace(self.solver, **given)
         _check_solver(solver, self.source, where="")
-        return replace(self, solver=solver)
+        scene = replace(self, solver=solver)
+        _check_stepper_applies(scene, where="")
+        return scene
 
     @property
     def effects(self) -> list[str]:
@@ -261,12 +265,9 @@ def parse_scene(text: Union[str, bytes], source: str = "<scene>") -> Scene:
     if "solver" not in doc:
         raise SceneError(f"{source}: [solver]: missing (required: step, stop_time, output_interval)")
     solver = _solver(source, doc["solver"])
-    if mass is None:
-        raise SceneError(
-            f"{source}: [mass]: missing; the massless (quasi-static) element is not supported yet, "
-            "add [mass] with m > 0"
-        )
-    return Scene(name, mass, spring, cubic, damper, branches, load, solver, source)
+    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source)
+    _check_stepper_applies(scene, where="[solver] ")
+    return scene
 
 
 def _mass(source, data) -> Mass:
@@ -346,6 +347,15 @@ def _solver(source, data) -> Solver:
     )
     _check_solver(solver, source, where="[solver] ")
     return solver
+
+
+def _check_stepper_applies(scene: Scene, where: str) -> None:
+    from .steppers import get_stepper
+
+    try:
+        get_stepper(scene.solver.stepper).step_for(scene)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {where}stepper: {exc}") from None
 
 
 def _check_solver(solver: Solver, source: str, where: str) -> None:

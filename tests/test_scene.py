@@ -113,7 +113,8 @@ BAD = {
     "output below step": (lambda t: t["solver"].update(output_interval=0.0005), "[solver] output_interval",
                           "whole multiple"),
     "unknown stepper": (lambda t: t["solver"].update(stepper="rk4"), "[solver] stepper", "one of"),
-    "massless": (lambda t: t.pop("mass"), "[mass]", "massless"),
+    "massless projected without dashpot": (lambda t: (t.pop("mass"), t.pop("damper")), "[solver] stepper",
+                                           "needs [mass] or [damper]"),
     "name not string": (lambda t: t.update(name=3), "name", "string"),
 }
 

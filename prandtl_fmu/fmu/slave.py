@@ -24,7 +24,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from .. import __version__
-from ..driver import Element
+from ..driver import Element, ElementError
 from ..scene import load_scene
 from ..steppers import STEPPERS
 from .description import RealVariable, complete
@@ -40,6 +40,10 @@ EFFECT_PARAMETERS = [
     ("k3", "cubic", "N/m3", 0.0, Fmi2Variability.tunable, "coefficient of the cubic spring: force k3 x^3"),
     ("c", "damper", "N.s/m", 0.0, Fmi2Variability.tunable, "dashpot coefficient: force c v"),
 ]
+
+
+def _is_finite_number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
 class PrandtlElement(Fmi2Slave):
@@ -78,6 +82,19 @@ class PrandtlElement(Fmi2Slave):
             ("reaction", "N", "force of the element on the point: k0 x + k3 x^3 + c v + sum k_i u_i (= F - m v')",
              lambda: self.element.reaction),
         ]
+        energy = [  # the energy account, for the effects present
+            ("kinetic_energy", "kinetic", "mass", "kinetic energy m v^2/2"),
+            ("stored_energy", "stored", None, "elastic energy k0 x^2/2 + k3 x^4/4 + sum k_i u_i^2/2"),
+            ("work", "work", None, "work done by F since the start (as the stepper books it)"),
+            ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
+            ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
+            ("energy_residual", "energy_residual", None,
+             "work - dissipated - change of kinetic and stored energy: dissipated (> 0) or created (< 0) by the "
+             "scheme itself"),
+        ]
+        for name, key, table, text in energy:
+            if table is None or getattr(self.scene, table) is not None:
+                outputs.append((name, "J", text, lambda key=key: self.element.energy()[key]))
         for name, unit, text, getter in outputs:
             self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous, description=text, getter=getter))
@@ -114,14 +131,20 @@ class PrandtlElement(Fmi2Slave):
 
     def exit_initialization_mode(self):
         if self._apply_settings():
-            self.element.reset()
+            force = self.F if _is_finite_number(self.F) else 0.0
+            try:  # a massless element starts in equilibrium with the input F
+                self.element.reset(force)
+            except ElementError as exc:
+                self.log(f"{exc}; starting from F = 0 instead", Fmi2Status.error)
+                self.element.reset(0.0)
         self.element.time = self.start_time
+        self._warn_if_unstable()
 
     def do_step(self, current_time, step_size):
         if not self._apply_settings():
             return False
         force = self.F
-        if isinstance(force, bool) or not isinstance(force, (int, float)) or not math.isfinite(force):
+        if not _is_finite_number(force):
             return self._refuse(f"F = {force!r} refused: the force must be finite; step not taken")
         if not (math.isfinite(step_size) and step_size >= 0):
             return self._refuse(f"communication step {step_size!r} refused: it must be finite and >= 0")
@@ -130,7 +153,7 @@ class PrandtlElement(Fmi2Slave):
         element.time = current_time
         try:
             element.advance(step_size, force)
-        except Exception as exc:  # never fatal for the host: refuse the step
+        except Exception as exc:  # never fatal for the host: refuse the step (ElementError: already rolled back)
             element.rollback(saved)
             return self._refuse(f"step from t = {current_time!r} with F = {force!r} refused: {exc}")
         if not (math.isfinite(element.x) and math.isfinite(element.v) and math.isfinite(element.reaction)):
@@ -143,6 +166,19 @@ class PrandtlElement(Fmi2Slave):
     def _apply_settings(self) -> bool:
         """Hand the parameters the master set to the element; False (logged) if one is refused."""
         element = self.element
+        before = (element.coefficients(), element.stepper, element.h)
+        accepted = self._hand_over_settings()
+        if accepted and (element.coefficients(), element.stepper, element.h) != before:
+            self._warn_if_unstable()
+        return accepted
+
+    def _warn_if_unstable(self):
+        problem = self.element.stability_problem()
+        if problem:
+            self.log(problem, Fmi2Status.warning)
+
+    def _hand_over_settings(self) -> bool:
+        element = self.element
         changed = {name: value for name, value in self.parameters.items()
                    if value != element.coefficients()[name]}
         if changed:
@@ -154,10 +190,13 @@ class PrandtlElement(Fmi2Slave):
             if self.stepper not in STEPPERS:
                 return self._refuse(f"parameter stepper = {self.stepper!r} refused: must be one of "
                                     f"{', '.join(STEPPERS)}; steps are refused until it is set right")
-            element.set_stepper(self.stepper)
+            try:
+                element.set_stepper(self.stepper)
+            except ValueError as exc:
+                return self._refuse(f"parameter stepper = {self.stepper!r} refused: {exc}")
         if self.step != element.h:
             step = self.step
-            if isinstance(step, bool) or not isinstance(step, (int, float)) or not (math.isfinite(step) and step > 0):
+            if not (_is_finite_number(step) and step > 0):
                 return self._refuse(f"parameter step = {step!r} refused: must be finite and > 0; "
                                     "steps are refused until it is set right")
             element.set_step(step)

@@ -40,6 +40,36 @@ def shift(k, eta, u, dx):
 
 
 @kernel
+def shift_slipping(k, eta, u, dx):
+    """:func:`shift`, also returning the work dissipated by the sliders, sum_i alpha_i |slip_i| (J).
+
+    slip_i = u_i + dx - clip(u_i + dx) is the slider's own displacement over
+    the increment; alpha_i = k_i eta_i its threshold.
+    """
+    force = 0.0
+    dissipated = 0.0
+    for i in range(k.shape[0]):
+        moved = u[i] + dx
+        ui = min(max(moved, -eta[i]), eta[i])
+        u[i] = ui
+        force += k[i] * ui
+        dissipated += k[i] * eta[i] * abs(moved - ui)
+    return force, dissipated
+
+
+@kernel
+def move(k, eta, u, dx, energy):
+    """:func:`shift`; with an ``energy`` account (not None), add the sliders' dissipation to energy[1]."""
+    if k is None:
+        return 0.0
+    if energy is None:
+        return shift(k, eta, u, dx)
+    force, dissipated = shift_slipping(k, eta, u, dx)
+    energy[1] += dissipated
+    return force
+
+
+@kernel
 def piece(k, eta, u, dx, direction):
     """The branch force as a function of the increment, around ``dx``, in ``direction`` (+1 or -1).
 

@@ -2,11 +2,14 @@
 
 A stepper module defines
 
-* ``step(model, load, t, h, x, v, s, u) -> (x, v, s)``: a compiled function that
-  advances the state from t to t + h. ``model = (m, k0, k3, c, k, eta)`` holds
-  the coefficients of the scene (``None`` for an absent effect), ``load`` the
-  compiled force history, ``u`` the branch elongations (updated in place) and
-  ``s = sum_i k_i u_i`` their force, carried from step to step;
+* compiled steps ``step(model, load, t, h, x, v, s, u, energy) -> (x, v, s)``
+  that advance the state from t to t + h. ``model = (m, k0, k3, c, k, eta)``
+  holds the coefficients of the scene (``None`` for an absent effect),
+  ``load`` the compiled force history, ``u`` the branch elongations (updated
+  in place), ``s = sum_i k_i u_i`` their force, carried from step to step, and
+  ``energy`` an energy account or ``None`` (see ``kernels/energy.py``). A
+  step that cannot be taken returns a non-finite x;
+* ``step_for(scene)``: which of its steps fits the scene (ValueError if none);
 * ``ORDER``: the order of convergence in h;
 * a docstring with the update formula and the stability of the scheme.
 
