@@ -13,5 +13,17 @@ CACHE = os.environ.get("PRANDTL_FMU_JIT_CACHE", "1") != "0"
 
 
 def kernel(fn):
-    """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath)."""
+    """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath), cached on disk."""
     return njit(cache=CACHE)(fn)
+
+
+def loop_kernel(fn):
+    """:func:`kernel` for a loop that takes compiled functions as arguments: never cached.
+
+    numba can cache such a function only until a second process adds a
+    specialisation to the cache index: re-saving the index then fails
+    ("underlying object has vanished"), because the keys it reloads refer to
+    compiled-function types it cannot rebuild. The loop is small; what it
+    calls is cached.
+    """
+    return njit(cache=False)(fn)

@@ -21,7 +21,7 @@ from typing import Optional
 
 import numpy as np
 
-from ._jit import kernel
+from ._jit import loop_kernel
 from .kernels.energy import kinetic, stored
 from .kernels.increment import solve_increment
 from .kernels.play import branch_force, shift
@@ -61,7 +61,7 @@ def compile_step(scene: Scene, stepper: str):
     return get_stepper(stepper).step_for(scene)
 
 
-@kernel
+@loop_kernel
 def integrate(step, model, load, x, v, u, t0, h, steps_per_row, n_rows, out, out_u, energy, out_energy):
     """Advance ``n_rows * steps_per_row`` steps of size ``h`` from time ``t0``.
 
@@ -122,6 +122,7 @@ def initial_state(scene: Scene, model, load):
 
 def _collapse_message(scene: Scene, time: float, force: float) -> str:
     strength = scene.branches.strength if scene.branches is not None else 0.0
+    time, force = float(time), float(force)
     return (f"{scene.source}: plastic collapse at t = {time!r} s: the load F = {force!r} N exceeds the strength "
             f"sum alpha_i = {strength!r} N of a massless element with no hardening spring: no equilibrium exists")
 
@@ -132,7 +133,7 @@ def _failure(scene: Scene, stepper: str, load, time: float, h: float) -> Element
         return ElementError(_collapse_message(scene, time + h, force_at(load, time + h)))
     problem = stability_problem(scene, stepper, h)
     hint = f" ({problem})" if problem else ""
-    return ElementError(f"{scene.source}: the state became non-finite in the step from t = {time!r} s with "
+    return ElementError(f"{scene.source}: the state became non-finite in the step from t = {float(time)!r} s with "
                         f"stepper {stepper!r} and h = {h!r}{hint}")
 
 

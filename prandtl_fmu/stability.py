@@ -46,7 +46,8 @@ def growth_per_period(m: Optional[float], c: float, stiffness: float, h: float) 
     frequency = max(abs(mu.imag) for mu in np.atleast_1d(modes).astype(complex))
     if frequency == 0.0:
         return factor
-    return factor ** (2.0 * math.pi / (frequency * h))
+    # per period, but at least per step (a period shorter than a step is no comfort)
+    return max(factor, factor ** (2.0 * math.pi / (frequency * h)))
 
 
 def step_limit(m: Optional[float], c: float, stiffness: float) -> float:
