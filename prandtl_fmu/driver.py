@@ -210,7 +210,12 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     solver = scene.solver
     name = stepper or solver.stepper
     step = compile_step(scene, name)
-    h = solver.step
+    module = get_stepper(name)
+    if energy and not getattr(module, "ENERGY_ACCOUNT", True):
+        raise ValueError(f"stepper {name!r} keeps no energy account")
+    h, per_row = solver.step, solver.steps_per_output
+    if getattr(module, "STEP_IS_OUTPUT", False):
+        h, per_row = solver.output_interval, 1
     problem = stability_problem(scene, name, h)
     if problem:
         warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=2)
@@ -234,7 +239,6 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     def view(array, first, count):
         return None if array is None else array[first:first + count]
 
-    per_row = solver.steps_per_output
     last_is_short = rows > 1 and times[-1] - times[-2] < solver.output_interval * (1 - 1e-9)
     full_rows = rows - 1 - last_is_short  # row 0 is the initial state
     chunk = max(1, _CHUNK_WORK // max(1, per_row * max(n, 8)))
@@ -347,8 +351,9 @@ class Element:
         saved = self.checkpoint()
         load = held(force)
         self.force = float(force)
+        h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
         x, v, failed_at = _advance(self._step, self.model, load, self.x, self.v, self.u, self.time,
-                                   duration, self.h, self._out, None, self.account, self._energy_row)
+                                   duration, h, self._out, None, self.account, self._energy_row)
         if failed_at is not None:
             self.rollback(saved)
             raise _failure(self.scene, self.stepper, load, failed_at, self.h)

@@ -9,7 +9,9 @@ about exp(pi omega h) per period. We call the step unstable when the
 amplitude of the stiffest mode at least doubles within one period (undamped:
 omega h > ln(2)/pi ~ 0.22), or grows at all for a non-oscillating mode (the
 massless element with a dashpot: h K / c > 2): beyond that the output is
-garbage. ``implicit`` is unconditionally stable.
+garbage. ``symplectic`` and ``verlet`` (leapfrog type) are stable for
+omega h < 2. ``implicit`` is unconditionally stable, and ``exact`` has no
+step to speak of.
 """
 from __future__ import annotations
 
@@ -71,6 +73,8 @@ def step_limit(m: Optional[float], c: float, stiffness: float) -> float:
 
 def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) -> Optional[str]:
     """A one-line explanation when ``stepper`` with step ``h`` is unstable for ``scene``, else None."""
+    if stepper in ("symplectic", "verlet"):
+        return _leapfrog_problem(scene, stepper, h, x)
     if stepper != "projected":
         return None
     m = scene.mass.m if scene.mass is not None else None
@@ -91,3 +95,15 @@ def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) 
             f"(omega = sqrt(K/m) = {omega:.6g} rad/s with every branch sticking) makes the amplitude grow "
             f"x{min(growth_per_period(m, c, stiffness, h), 1e300):.3g} per period; "
             f"use 'implicit' or h <= {limit:.3g} s")
+
+
+def _leapfrog_problem(scene, stepper, h, x):
+    """Symplectic Euler and velocity Verlet are stable for omega h < 2 (every branch sticking)."""
+    if scene.mass is None:
+        return None
+    omega = math.sqrt(stiffest(scene, x) / scene.mass.m)
+    if omega * h < 2.0:
+        return None
+    return (f"stepper {stepper!r} is beyond its stability limit: omega h = {omega * h:.3g} >= 2 "
+            f"(omega = sqrt(K/m) = {omega:.6g} rad/s with every branch sticking); "
+            f"use 'implicit' or h < {2.0 / omega:.3g} s")

@@ -10,16 +10,22 @@ A stepper module defines
   ``energy`` an energy account or ``None`` (see ``kernels/energy.py``). A
   step that cannot be taken returns a non-finite x;
 * ``step_for(scene)``: which of its steps fits the scene (ValueError if none);
-* ``ORDER``: the order of convergence in h;
+* ``ORDER``: the order of convergence in h (``math.inf`` for ``exact``);
+* optionally ``STEP_IS_OUTPUT = True`` (the driver then takes one step per
+  output interval: h does not set the accuracy) and ``ENERGY_ACCOUNT = False``
+  (the stepper keeps no energy account);
 * a docstring with the update formula and the stability of the scheme.
 
 To add a scheme: write one such module and add it to ``STEPPERS`` below.
 """
-from . import implicit, projected
+from . import exact, implicit, projected, symplectic, verlet
 
 STEPPERS = {
     "projected": projected,
     "implicit": implicit,
+    "symplectic": symplectic,
+    "verlet": verlet,
+    "exact": exact,
 }
 
 

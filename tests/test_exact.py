@@ -1,0 +1,126 @@
+"""The exact stepper against a high-order ODE solver, and every other stepper's order against it."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from prandtl_fmu import STEPPERS, load_scene, simulate
+from prandtl_fmu.steppers import get_stepper
+
+from .conftest import SCENES, make_scene
+
+EVENT_FREE = {
+    # undamped resonance: K = m omega^2, c = 0 (the particular solution grows like t sin t)
+    "resonance": dict(mass={"m": 2.0, "x0": 0.1, "v0": 0.0}, spring={"k0": 0.5}, cubic=None, damper=None,
+                      branches=None, load={"kind": "harmonic", "amplitude": 1.0, "omega": 0.5, "offset": 0.2}),
+    # critical damping: c^2 = 4 m K
+    "critical": dict(mass={"m": 1.0, "x0": -0.3, "v0": 0.7}, spring={"k0": 1.0}, cubic=None, damper={"c": 2.0},
+                     branches=None, load={"kind": "harmonic", "amplitude": 0.5, "omega": 1.3, "offset": 0.3}),
+    # K = 0: no spring, every branch sliding from the start (u0 = eta, v0 > 0, load pushing on)
+    "no-stiffness": dict(mass={"m": 1.0, "x0": 0.0, "v0": 0.5}, spring=None, cubic=None, damper={"c": 0.1},
+                         branches={"k": [1.0, 2.0], "eta": [0.1, 0.2], "u0": [0.1, 0.2]},
+                         load={"kind": "constant", "value": 0.9}),
+    # sticking branches (thresholds out of reach) under a table load with kinks
+    "table": dict(mass={"m": 1.5, "x0": 0.0, "v0": 0.0}, spring={"k0": 0.3}, cubic=None, damper={"c": 0.05},
+                  branches={"k": [1.0, 0.5], "eta": [50.0, 80.0], "u0": [0.0, 0.0]},
+                  load={"kind": "table", "time": [0.0, 2.0, 3.0, 6.0], "force": [0.0, 1.0, -0.5, 0.25]}),
+}
+
+
+def dop853(scene, stop, rows):
+    """The same linear ODE by DOP853 at rtol 1e-13 (no event may happen: checked by the caller)."""
+    m, c = scene.mass.m, scene.damper.c if scene.damper else 0.0
+    k0 = scene.spring.k0 if scene.spring else 0.0
+    branches = scene.branches
+    sliding = np.zeros(0, bool) if branches is None else (np.abs(branches.u0) == branches.yield_displacement) & (
+        branches.u0 * scene.mass.v0 > 0)
+    k = np.zeros(0) if branches is None else branches.stiffness
+    u0 = np.zeros(0) if branches is None else branches.u0
+    from prandtl_fmu.loads import force_at
+
+    load = scene.load.compile()
+
+    def rhs(t, y):
+        x, v = y
+        u = np.where(sliding, u0, u0 + x - scene.mass.x0)
+        return [v, (force_at(load, t) - k0 * x - c * v - k @ u) / m]
+
+    times = np.linspace(0, stop, rows)
+    breaks = getattr(scene.load, "time", None)
+    t_eval, y = times, [scene.mass.x0, scene.mass.v0]
+    pieces = [0.0] + ([b for b in breaks if 0 < b < stop] if breaks is not None else []) + [stop]
+    out = np.empty((rows, 2))
+    for lo, hi in zip(pieces[:-1], pieces[1:]):  # integrate piece by piece across the table's kinks
+        mask = (t_eval >= lo) & (t_eval <= hi)
+        sol = solve_ivp(rhs, (lo, hi), y, method="DOP853", rtol=1e-13, atol=1e-15, t_eval=t_eval[mask])
+        out[mask] = sol.y.T
+        y = solve_ivp(rhs, (lo, hi), y, method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+    return times, out
+
+
+@pytest.mark.parametrize("case", list(EVENT_FREE))
+def test_exact_agrees_with_dop853_without_events(case):
+    stop = 10.0
+    scene = make_scene(**EVENT_FREE[case], solver={"stepper": "exact", "step": 0.05, "stop_time": stop,
+                                                   "output_interval": 0.05})
+    result = simulate(scene, states=True)
+    times, reference = dop853(scene, stop, len(result.time))
+    np.testing.assert_allclose(result.time, times, atol=1e-12)
+    scale = np.abs(reference).max(axis=0)
+    assert np.abs(result.x - reference[:, 0]).max() <= 1e-10 * scale[0]
+    assert np.abs(result.v - reference[:, 1]).max() <= 1e-10 * scale[1]
+    if scene.branches is not None:
+        assert np.all(np.abs(result.u) <= scene.branches.yield_displacement)
+
+
+def test_exact_agrees_with_dop853_on_the_papers_first_stretch():
+    """Before the first branch slips (x < min eta = 0.11) the paper's element is a linear oscillator."""
+    scene = load_scene(SCENES / "paper-section-8.toml").with_solver(
+        stepper="exact", stop_time=0.5, output_interval=0.01)
+    result = simulate(scene)
+    assert result.x.max() < 0.11
+    exact_linear = 0.45 / (1 - 0.25) * (np.cos(0.5 * result.time) - np.cos(result.time))
+    np.testing.assert_allclose(result.x, exact_linear, rtol=0, atol=1e-14)
+
+
+@pytest.fixture(scope="module")
+def paper_exact():
+    scene = load_scene(SCENES / "paper-section-8.toml").with_solver(stop_time=12.0, output_interval=0.04)
+    return scene, simulate(scene, "exact", states=True)
+
+
+def test_exact_is_consistent_with_the_extrapolated_projected_scheme(paper_exact):
+    """`projected` extrapolated to h -> 0 (Richardson, h = 2e-6 and 1e-6) lands on `exact`."""
+    scene, exact = paper_exact
+    runs = [simulate(scene.with_solver(step=h), "projected").x for h in (2e-6, 1e-6)]
+    extrapolated = 2 * runs[1] - runs[0]
+    assert np.abs(extrapolated - exact.x).max() < 1e-9
+    assert np.abs(runs[1] - exact.x).max() > 1e-7  # the raw runs are not that close: the test can fail
+
+
+@pytest.mark.parametrize("stepper", [name for name in STEPPERS if name != "exact"])
+def test_measured_order_against_exact(stepper, paper_exact):
+    scene, exact = paper_exact
+    hs = np.array([0.01, 0.005, 0.0025, 0.00125, 0.000625])
+    errors = [np.abs(simulate(scene.with_solver(step=h), stepper).x - exact.x).max() for h in hs]
+    order = np.polyfit(np.log(hs), np.log(errors), 1)[0]
+    declared = get_stepper(stepper).ORDER
+    assert abs(order - declared) < 0.05 * declared, (order, errors)
+
+
+def test_exact_handles_every_branch_event_of_the_paper_scene(paper_exact):
+    scene, exact = paper_exact
+    eta = scene.branches.yield_displacement
+    assert np.all(np.abs(exact.u) <= eta)
+    assert np.any(np.abs(exact.u[:, -1]) == eta[-1])  # even the largest threshold is reached
+    # reaction = k . u (k0 = 0): the branch force computed from the elongations
+    np.testing.assert_allclose(exact.reaction, exact.u @ scene.branches.stiffness, atol=1e-15)
+
+
+def test_exact_refuses_what_it_cannot_do():
+    with pytest.raises(ValueError, match="no \\[cubic\\]"):
+        get_stepper("exact").step_for(make_scene())
+    with pytest.raises(ValueError, match="energy account"):
+        simulate(make_scene(cubic=None), "exact", energy=True)
+    assert math.isinf(get_stepper("exact").ORDER)
