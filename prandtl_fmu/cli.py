@@ -37,6 +37,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--energy", action="store_true",
                      help="add the energy account: " + ", ".join(ENERGY_COLUMNS))
     run.add_argument("--plot", help="PNG file: hysteresis loop (reaction against x) and x(t)")
+    bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
+    bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
+    bench.add_argument("--out", default="out/bench", help="folder for the CSV, plots and report (default out/bench)")
+    bench.add_argument("--from-csv", action="store_true", help="redo the plots and report from the CSV files in --out")
     return parser
 
 
@@ -44,6 +48,10 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "run":
         return _run(args)
+    if args.command == "bench":
+        from .bench import main as bench
+
+        return bench(args.out, args.quick, args.from_csv)
     return 2
 
 
