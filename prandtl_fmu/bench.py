@@ -134,27 +134,24 @@ def fmu_rows(scene, reference, quick, folder, bar):
     load = scene.load.compile()
     rows = []
     hs = [1e-2, 1e-3] if quick else [2e-2, 1e-2, 5e-3, 1e-3]
+    def open_slave(name, stepper, h):
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setString([vr["stepper"]], [stepper])
+        slave.setReal([vr["step"]], [h])
+        slave.exitInitializationMode()
+        return slave
+
     for stepper in ("verlet", "projected"):
         for h in hs:
-            warm = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName="warm-up")
-            warm.instantiate()
-            warm.setupExperiment(startTime=0.0)
-            warm.enterInitializationMode()
-            warm.setString([vr["stepper"]], [stepper])
-            warm.setReal([vr["step"]], [h])
-            warm.exitInitializationMode()
+            warm = open_slave("warm-up", stepper, h)
             warm.doStep(0.0, OUTPUT)  # compile the kernels inside the FMU before timing
             warm.terminate()
             warm.freeInstance()
-            slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bench")
-            slave.instantiate()
-            slave.setupExperiment(startTime=0.0)
-            slave.enterInitializationMode()
-            slave.setString([vr["stepper"]], [stepper])
-            slave.setReal([vr["step"]], [h])
-            slave.exitInitializationMode()
+            slave = open_slave("bench", stepper, h)
             count = round(scene.solver.stop_time / OUTPUT)
 
             def drive():

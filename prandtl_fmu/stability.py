@@ -15,6 +15,7 @@ step to speak of.
 """
 from __future__ import annotations
 
+import cmath
 import math
 from typing import Optional
 
@@ -43,9 +44,10 @@ def growth_per_period(m: Optional[float], c: float, stiffness: float, h: float) 
     """Amplitude factor of explicit Euler's stiffest mode per period (per step if it does not oscillate)."""
     if m is None:  # c x' = -K x: one real mode
         return abs(1.0 - h * stiffness / c) if c > 0 else 1.0
-    modes = np.roots([m, c, stiffness]) if stiffness > 0 or c > 0 else np.array([0.0])
+    root = cmath.sqrt(c * c - 4.0 * m * stiffness)
+    modes = ((-c + root) / (2.0 * m), (-c - root) / (2.0 * m))  # m mu^2 + c mu + K = 0
     factor = max(abs(1.0 + h * mu) for mu in modes)
-    frequency = max(abs(mu.imag) for mu in np.atleast_1d(modes).astype(complex))
+    frequency = max(abs(mu.imag) for mu in modes)
     if frequency == 0.0:
         return factor
     # per period, but at least per step (a period shorter than a step is no comfort)
@@ -84,9 +86,10 @@ def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) 
     stiffness = stiffest(scene, x)
     if stiffness == 0.0:
         return None
-    limit = step_limit(m, c, stiffness)
-    if h <= limit:
+    allowed = 1.0 if (m is None or c * c >= 4 * m * stiffness) else GROWTH_LIMIT
+    if growth_per_period(m, c, stiffness, h) <= allowed * (1 + 1e-12):
         return None
+    limit = step_limit(m, c, stiffness)
     if m is None:
         return (f"stepper 'projected' is unstable here: h K / c = {h * stiffness / c:.3g} > 2 "
                 f"(K = {stiffness:.6g} N/m with every branch sticking); use 'implicit' or h <= {limit:.3g} s")

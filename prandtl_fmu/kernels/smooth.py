@@ -34,3 +34,11 @@ def elastic_energy(x, k0, k3):
     if k3 is not None:
         energy += 0.25 * k3 * x * x * x * x
     return energy
+
+
+@kernel
+def damped(v, c, h, m):
+    """v / (1 + h c / m): a dashpot taken implicitly over h; just v without a dashpot."""
+    if c is None:
+        return v
+    return v / (1.0 + h * c / m)

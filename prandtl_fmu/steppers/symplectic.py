@@ -17,7 +17,7 @@ Massless elements: not applicable (use ``implicit``, or ``projected`` with a das
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.play import move
-from ..kernels.smooth import elastic_force
+from ..kernels.smooth import damped, elastic_force
 from ..loads import force_at
 
 ORDER = 1
@@ -37,14 +37,7 @@ def step(model, load, t, h, x, v, s, u, energy):
     s = move(k, eta, u, dx, energy)
     x = x + dx
     force = force_at(load, t + h)
-    v1 = _damped(v + h * (force - elastic_force(x, k0, k3) - s) / m, c, h, m)
+    v1 = damped(v + h * (force - elastic_force(x, k0, k3) - s) / m, c, h, m)
     book(energy, force, dx, c, v1)
     return x, v1, s
 
-
-@kernel
-def _damped(v, c, h, m):
-    """v / (1 + h c / m): the dashpot taken implicitly; v without a dashpot."""
-    if c is None:
-        return v
-    return v / (1.0 + h * c / m)

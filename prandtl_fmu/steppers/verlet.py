@@ -12,7 +12,7 @@ and clip(u_i + dx) is the exact elongation of every branch at the end of
 the step: the branch force there is exact for that path. Cost: one pass over
 the branches per step, like ``projected``.
 
-Order 2 (measured: tests/test_orders.py). Why this escapes Remark 1.2 of
+Order 2 (measured against ``exact``: tests/test_exact.py). Why this escapes Remark 1.2 of
 Bastien & Schatzman (no classical order-2 scheme does better than order 1
 for the general inclusion): there the solution's derivative jumps (u' is
 discontinuous when a constraint becomes active), so any scheme sees an O(h)
@@ -30,7 +30,7 @@ Stable for omega h < 2 (omega^2 = stiffness / m). Massless elements: not applica
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.play import move
-from ..kernels.smooth import elastic_force, smooth_force
+from ..kernels.smooth import damped, elastic_force, smooth_force
 from ..loads import force_at
 
 ORDER = 2
@@ -52,14 +52,7 @@ def step(model, load, t, h, x, v, s, u, energy):
     s = move(k, eta, u, dx, energy)
     x = x + dx
     force1 = force_at(load, t + h)
-    v1 = _damped(half + 0.5 * h * (force1 - elastic_force(x, k0, k3) - s) / m, c, h, m)
+    v1 = damped(half + 0.5 * h * (force1 - elastic_force(x, k0, k3) - s) / m, c, 0.5 * h, m)
     book(energy, 0.5 * (force0 + force1), dx, c, half)
     return x, v1, s
 
-
-@kernel
-def _damped(v, c, h, m):
-    """v / (1 + (h/2) c / m): the dashpot's second half step taken implicitly; v without a dashpot."""
-    if c is None:
-        return v
-    return v / (1.0 + 0.5 * h * c / m)
