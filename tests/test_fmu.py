@@ -282,3 +282,34 @@ def test_a_thousand_instantiate_free_cycles_do_not_grow_memory(fmus):
     assert run.returncode == 0, run.stderr
     grown = int(run.stdout.strip().splitlines()[-1])
     assert grown < 4 * 2**20, f"grew by {grown / 2**20:.1f} MiB over 1000 cycles"
+
+
+@pytest.mark.parametrize("stepper", ["symplectic", "verlet", "exact"])
+def test_every_stepper_runs_inside_the_fmu(fmus, stepper):
+    fmu, scene_path = fmus["damper-only"]
+    sizes = [0.1, 0.25, 0.037, 1.0, 0.5]
+    slave = Slave(fmu, start_values={"stepper": stepper})
+    element = Element(load_scene(scene_path), stepper=stepper)
+    try:
+        for k, size in enumerate(sizes * 4):
+            force = 0.7 * np.cos(0.3 * k)
+            slave.step(size, force)
+            element.advance(size, force)
+            np.testing.assert_allclose(slave.get("x", "v", "reaction"), [element.x, element.v, element.reaction],
+                                       rtol=0, atol=1e-12)
+    finally:
+        slave.close()
+
+
+def test_a_stepper_that_does_not_apply_is_refused(fmus):
+    fmu, _ = fmus["all-effects"]  # has a cubic spring: `exact` does not apply
+    slave = Slave(fmu)
+    try:
+        slave.step(0.1, 0.5)
+        slave.set("stepper", "exact")
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.doStep(slave.time, 0.1)
+        assert refused.value.status == 2
+        assert any("no [cubic]" in message for _, message in slave.messages)
+    finally:
+        slave.close()
