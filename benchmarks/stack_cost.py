@@ -2,8 +2,8 @@
 
 Problem: n branches sampled from the paper's spectrum (k_i = 1/n, eta_i = 0.1 + i/n),
 x(t) = 0.9 cos(0.5 t) sampled every 1e-3 s over 200 s (2e5 moves), repeated,
-median of interleaved repeats. The stack is not yet used by the steppers
-(issue 6 goes on); this measures the kernel alone.
+median of interleaved repeats. This measures the kernels alone (the
+steppers add their own arithmetic and the load).
 
     python benchmarks/stack_cost.py [--repeat 5] [--out out/stack_cost.csv]
 """
@@ -33,7 +33,7 @@ def drive_play(k, eta, u, xs):
 def drive_stack(params, state, xs):
     total = 0.0
     for p in range(1, xs.shape[0]):
-        total += stack.move(params, state, xs[p - 1], xs[p])
+        total += stack.move(params, state, xs[p] - xs[p - 1])
     return total
 
 

@@ -11,19 +11,59 @@ The loops are branch-free (min/max) over contiguous arrays. ``k``, ``eta``
 and ``u`` are all ``None`` when the scene has no branches.
 """
 import numpy as np
+from numba.core import types
+from numba.core.errors import TypingError
+from numba.extending import overload
 
 from .._jit import kernel
+from . import stack
 
 
 @kernel
 def branch_force(k, u):
-    """sum_i k_i u_i (N)."""
-    if k is None:
-        return 0.0
-    force = 0.0
-    for i in range(k.shape[0]):
-        force += k[i] * u[i]
-    return force
+    """sum_i k_i u_i (N); ``k`` may also be memory-stack parameters (``u`` its state)."""
+    return _branch_force(k, u)
+
+
+def _branch_force(k, u):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_branch_force)
+def _branch_force_overload(k, u):
+    if isinstance(k, types.NoneType):
+        return lambda k, u: 0.0
+    if isinstance(k, types.BaseTuple):  # the memory stack (kernels/stack.py)
+        return lambda k, u: stack.force(k, u)
+
+    def impl(k, u):
+        force = 0.0
+        for i in range(k.shape[0]):
+            force += k[i] * u[i]
+        return force
+
+    return impl
+
+
+@kernel
+def write_elongations(k, u, out):
+    """Write the elongations u_i (m) into ``out`` (length n, the scene's order)."""
+    _write_elongations(k, u, out)
+
+
+def _write_elongations(k, u, out):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_write_elongations)
+def _write_elongations_overload(k, u, out):
+    if isinstance(k, types.BaseTuple):
+        return lambda k, u, out: stack.elongations(k, u, out)
+
+    def impl(k, u, out):
+        out[:] = u
+
+    return impl
 
 
 @kernel
@@ -59,14 +99,35 @@ def shift_slipping(k, eta, u, dx):
 
 @kernel
 def move(k, eta, u, dx, energy):
-    """:func:`shift`; with an ``energy`` account (not None), add the sliders' dissipation to energy[1]."""
-    if k is None:
-        return 0.0
-    if energy is None:
-        return shift(k, eta, u, dx)
-    force, dissipated = shift_slipping(k, eta, u, dx)
-    energy[1] += dissipated
-    return force
+    """:func:`shift`; with an ``energy`` account (not None), add the sliders' dissipation to energy[1].
+
+    With memory-stack parameters as ``k`` (and ``eta`` None) the stack moves
+    instead; it keeps no energy account.
+    """
+    return _move(k, eta, u, dx, energy)
+
+
+def _move(k, eta, u, dx, energy):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_move)
+def _move_overload(k, eta, u, dx, energy):
+    if isinstance(k, types.NoneType):
+        return lambda k, eta, u, dx, energy: 0.0
+    if isinstance(k, types.BaseTuple):
+        if not isinstance(energy, types.NoneType):
+            raise TypingError("the memory stack keeps no energy account")
+        return lambda k, eta, u, dx, energy: stack.move(k, u, dx)
+
+    def impl(k, eta, u, dx, energy):
+        if energy is None:
+            return shift(k, eta, u, dx)
+        force, dissipated = shift_slipping(k, eta, u, dx)
+        energy[1] += dissipated
+        return force
+
+    return impl
 
 
 @kernel

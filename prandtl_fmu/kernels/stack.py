@@ -1,7 +1,9 @@
 """The friction branches at a cost independent of n: the memory stack.
 
-Not yet used by the steppers (issue 6 goes on): this module is the kernel and
-its tests (tests/test_stack.py) show it equals the O(n) play kernel.
+Used by the explicit steppers (projected, symplectic, verlet) for scenes
+with many branches and an admissible initial state, when no energy account
+is asked for (see ``driver.compile_model``); tests/test_stack.py shows it
+equals the O(n) play kernel.
 
 Sort the branches by elastic range, eta_1 <= ... <= eta_n. From an admissible
 state (|u_i| <= eta_i and u 1-Lipschitz in eta: |u_i - u_j| <= |eta_i - eta_j|),
@@ -27,24 +29,24 @@ search per move, whatever n. The totals are recomputed from the pieces every
 
 State layout (one float64 array, so that it can be copied and saved as plain
 data): ``state[:HEADER]`` = count of pieces, top, d, SK, S0, moves since the
-last resync; then ``count`` rows of (lo, hi, a, beta, gamma), bottom (largest
-eta) first.
+last resync, x; then ``count`` rows of (lo, hi, a, beta, gamma), bottom
+(largest eta) first.
 """
 import numpy as np
 
 from .._jit import kernel
 
-HEADER = 6
+HEADER = 7
 ROW = 5
 RESYNC = 1024
-COUNT, TOP, DIRECTION, SK, S0, MOVES = range(HEADER)
+COUNT, TOP, DIRECTION, SK, S0, MOVES, X = range(HEADER)
 
 
 def prepare(stiffness, yield_displacement, u0, x0):
     """(params, state, order) for branches k, eta with elongations u0 at x = x0.
 
-    ``order`` sorts the branches by eta; ``params`` = (k, eta, c, K, M, C)
-    sorted, with prefix sums of length n + 1. ValueError if u0 is not
+    ``order`` sorts the branches by eta; ``params`` = (k, eta, c, K, M, C,
+    order) sorted, with prefix sums of length n + 1. ValueError if u0 is not
     admissible (then the O(n) kernel must be used).
     """
     order = np.argsort(yield_displacement, kind="stable")
@@ -55,8 +57,9 @@ def prepare(stiffness, yield_displacement, u0, x0):
         raise ValueError("the initial elongations are not 1-Lipschitz in eta: the memory stack does not apply")
     c = u - x0
     prefix = lambda values: np.concatenate([[0.0], np.cumsum(values)])  # noqa: E731
-    params = (k, eta, c, prefix(k), prefix(k * eta), prefix(k * c))
+    params = (k, eta, c, prefix(k), prefix(k * eta), prefix(k * c), order.astype(np.int64))
     state = np.zeros(HEADER + ROW * (len(k) + 1))
+    state[X] = x0
     state[COUNT] = 1.0
     state[HEADER:HEADER + ROW] = (0.0, len(k), 0.0, 0.0, 1.0)  # the initial piece: u_i = c_i + x
     resync(params, state)
@@ -74,7 +77,7 @@ def admissible(eta, u):
 @kernel
 def resync(params, state):
     """Recompute the running totals SK and S0 from the pieces."""
-    k, eta, c, K, M, C = params
+    k, eta, c, K, M, C, order = params
     sk = 0.0
     s0 = 0.0
     for j in range(int(state[COUNT])):
@@ -90,16 +93,17 @@ def resync(params, state):
 
 
 @kernel
-def force(params, state, x):
-    """sum_i k_i u_i (N) at displacement x."""
-    k, eta, c, K, M, C = params
+def force(params, state):
+    """sum_i k_i u_i (N) at the current displacement."""
+    x = state[X]
+    k, eta, c, K, M, C, order = params
     return state[S0] + x * state[SK] + state[DIRECTION] * M[int(state[TOP])]
 
 
 @kernel
 def _slides(params, state, row, i, x, s):
     """Whether branch i of the piece at ``row`` has reached s eta_i at x (it slides in direction s)."""
-    k, eta, c, K, M, C = params
+    k, eta, c, K, M, C, order = params
     u = state[row + 2] + x + state[row + 3] * eta[i] + state[row + 4] * c[i]
     return s * u >= eta[i]
 
@@ -107,17 +111,19 @@ def _slides(params, state, row, i, x, s):
 @kernel
 def _add(params, state, lo, hi, a, beta, gamma, sign):
     """Add (sign = 1) or remove (sign = -1) the block [lo, hi) of a piece to the running totals."""
-    k, eta, c, K, M, C = params
+    k, eta, c, K, M, C, order = params
     piece_k = K[hi] - K[lo]
     state[SK] += sign * piece_k
     state[S0] += sign * (a * piece_k + beta * (M[hi] - M[lo]) + gamma * (C[hi] - C[lo]))
 
 
 @kernel
-def move(params, state, x, x_new):
-    """Move the displacement from x to x_new (a monotone increment); return the new force."""
+def move(params, state, dx):
+    """Move the displacement by the monotone increment dx; return the new force."""
+    x = state[X]
+    x_new = x + dx
     if x_new == x:
-        return force(params, state, x)
+        return force(params, state)
     s = 1.0 if x_new > x else -1.0
     top = int(state[TOP])
     if s != state[DIRECTION] and top > 0:
@@ -157,23 +163,25 @@ def move(params, state, x, x_new):
             top = last
         break
     state[TOP] = top
+    state[X] = x_new
     state[MOVES] += 1.0
     if state[MOVES] >= RESYNC:
         resync(params, state)
-    return force(params, state, x_new)
+    return force(params, state)
 
 
 @kernel
-def elongations(params, state, x, out):
-    """Write u_i (sorted order) into ``out`` (length n): O(n), for output rows only."""
-    k, eta, c, K, M, C = params
+def elongations(params, state, out):
+    """Write u_i into ``out`` (length n, the scene's order): O(n), for output rows only."""
+    k, eta, c, K, M, C, order = params
+    x = state[X]
     top = int(state[TOP])
     d = state[DIRECTION]
     for i in range(top):
-        out[i] = d * eta[i]
+        out[order[i]] = d * eta[i]
     for j in range(int(state[COUNT])):
         row = HEADER + ROW * j
         lo, hi = int(state[row]), int(state[row + 1])
         a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
         for i in range(lo, hi):
-            out[i] = min(max(a + x + beta * eta[i] + gamma * c[i], -eta[i]), eta[i])
+            out[order[i]] = min(max(a + x + beta * eta[i] + gamma * c[i], -eta[i]), eta[i])

@@ -33,6 +33,7 @@ from ..kernels.play import move
 from ..kernels.smooth import damped, elastic_force, smooth_force
 from ..loads import force_at
 
+BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 2
 
 
