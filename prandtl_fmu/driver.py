@@ -44,9 +44,10 @@ class ElementError(RuntimeError):
 
 
 # The memory stack (kernels/stack.py) replaces the O(n) play kernel from this
-# many branches on: inside `projected` the two cost the same near n = 130
-# (one run: 129 against 162 ns per step at n = 100, 1316 against 174 at 1500).
-STACK_FROM = 256
+# many branches on: inside `projected` the two cost the same near n = 40
+# (benchmarks/branch_scaling.py: 55 against 80 ns per step at n = 10, 129
+# against 80 at n = 100).
+STACK_FROM = 64
 
 
 def compile_model(scene: Scene, branch_kernel: str = "play"):
@@ -138,9 +139,8 @@ def initial_state(scene: Scene, model, load):
     operator moves the branches) and v = 0. ElementError if none exists.
     """
     m, k0, k3, c, k, eta = model
-    if isinstance(k, tuple):  # the memory stack: its state stands for the elongations
-        u = stack.prepare(scene.branches.stiffness, scene.branches.yield_displacement, scene.branches.u0,
-                          _initial_x(scene))[1]
+    if k is not None and k.ndim == 2:  # the memory stack: its state stands for the elongations
+        u = stack.fresh_state(k, _initial_x(scene))
     else:
         u = np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None
     if scene.mass is not None:

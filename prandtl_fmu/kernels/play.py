@@ -33,7 +33,7 @@ def _branch_force(k, u):
 def _branch_force_overload(k, u):
     if isinstance(k, types.NoneType):
         return lambda k, u: 0.0
-    if isinstance(k, types.BaseTuple):  # the memory stack (kernels/stack.py)
+    if k.ndim == 2:  # the memory stack's parameters (kernels/stack.py)
         return lambda k, u: stack.force(k, u)
 
     def impl(k, u):
@@ -57,7 +57,7 @@ def _write_elongations(k, u, out):
 
 @overload(_write_elongations)
 def _write_elongations_overload(k, u, out):
-    if isinstance(k, types.BaseTuple):
+    if k.ndim == 2:
         return lambda k, u, out: stack.elongations(k, u, out)
 
     def impl(k, u, out):
@@ -115,7 +115,7 @@ def _move(k, eta, u, dx, energy):
 def _move_overload(k, eta, u, dx, energy):
     if isinstance(k, types.NoneType):
         return lambda k, eta, u, dx, energy: 0.0
-    if isinstance(k, types.BaseTuple):
+    if k.ndim == 2:
         if not isinstance(energy, types.NoneType):
             raise TypingError("the memory stack keeps no energy account")
         return lambda k, eta, u, dx, energy: stack.move(k, u, dx)

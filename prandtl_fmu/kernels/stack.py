@@ -45,9 +45,11 @@ COUNT, TOP, DIRECTION, SK, S0, MOVES, X = range(HEADER)
 def prepare(stiffness, yield_displacement, u0, x0):
     """(params, state, order) for branches k, eta with elongations u0 at x = x0.
 
-    ``order`` sorts the branches by eta; ``params`` = (k, eta, c, K, M, C,
-    order) sorted, with prefix sums of length n + 1. ValueError if u0 is not
-    admissible (then the O(n) kernel must be used).
+    ``order`` sorts the branches by eta; ``params`` is one (7, n + 1) array
+    whose rows are k, eta, c (sorted, padded), the prefix sums K, M, C (of
+    length n + 1) and the order (one array rather than a tuple of seven: the
+    steppers pass it on every step). ValueError if u0 is not admissible (then
+    the O(n) kernel must be used).
     """
     order = np.argsort(yield_displacement, kind="stable")
     k = np.ascontiguousarray(stiffness[order], dtype=float)
@@ -57,13 +59,28 @@ def prepare(stiffness, yield_displacement, u0, x0):
         raise ValueError("the initial elongations are not 1-Lipschitz in eta: the memory stack does not apply")
     c = u - x0
     prefix = lambda values: np.concatenate([[0.0], np.cumsum(values)])  # noqa: E731
-    params = (k, eta, c, prefix(k), prefix(k * eta), prefix(k * c), order.astype(np.int64))
-    state = np.zeros(HEADER + ROW * (len(k) + 1))
+    n = len(k)
+    params = np.zeros((7, n + 1))
+    params[0, :n], params[1, :n], params[2, :n] = k, eta, c
+    params[3], params[4], params[5] = prefix(k), prefix(k * eta), prefix(k * c)
+    params[6, :n] = order
+    return params, fresh_state(params, x0), order
+
+
+def fresh_state(params, x0):
+    """The state of :func:`prepare`'s initial elongations at x = x0: one piece, u_i = c_i + x."""
+    n = params.shape[1] - 1
+    state = np.zeros(HEADER + ROW * (n + 1))
     state[X] = x0
     state[COUNT] = 1.0
-    state[HEADER:HEADER + ROW] = (0.0, len(k), 0.0, 0.0, 1.0)  # the initial piece: u_i = c_i + x
+    state[HEADER:HEADER + ROW] = (0.0, n, 0.0, 0.0, 1.0)
     resync(params, state)
-    return params, state, order
+    return state
+
+
+@kernel
+def _rows(params):
+    return params[0], params[1], params[2], params[3], params[4], params[5], params[6]
 
 
 def admissible(eta, u):
@@ -77,7 +94,7 @@ def admissible(eta, u):
 @kernel
 def resync(params, state):
     """Recompute the running totals SK and S0 from the pieces."""
-    k, eta, c, K, M, C, order = params
+    k, eta, c, K, M, C, order = _rows(params)
     sk = 0.0
     s0 = 0.0
     for j in range(int(state[COUNT])):
@@ -96,14 +113,14 @@ def resync(params, state):
 def force(params, state):
     """sum_i k_i u_i (N) at the current displacement."""
     x = state[X]
-    k, eta, c, K, M, C, order = params
+    k, eta, c, K, M, C, order = _rows(params)
     return state[S0] + x * state[SK] + state[DIRECTION] * M[int(state[TOP])]
 
 
 @kernel
 def _slides(params, state, row, i, x, s):
     """Whether branch i of the piece at ``row`` has reached s eta_i at x (it slides in direction s)."""
-    k, eta, c, K, M, C, order = params
+    k, eta, c, K, M, C, order = _rows(params)
     u = state[row + 2] + x + state[row + 3] * eta[i] + state[row + 4] * c[i]
     return s * u >= eta[i]
 
@@ -111,7 +128,7 @@ def _slides(params, state, row, i, x, s):
 @kernel
 def _add(params, state, lo, hi, a, beta, gamma, sign):
     """Add (sign = 1) or remove (sign = -1) the block [lo, hi) of a piece to the running totals."""
-    k, eta, c, K, M, C, order = params
+    k, eta, c, K, M, C, order = _rows(params)
     piece_k = K[hi] - K[lo]
     state[SK] += sign * piece_k
     state[S0] += sign * (a * piece_k + beta * (M[hi] - M[lo]) + gamma * (C[hi] - C[lo]))
@@ -173,15 +190,15 @@ def move(params, state, dx):
 @kernel
 def elongations(params, state, out):
     """Write u_i into ``out`` (length n, the scene's order): O(n), for output rows only."""
-    k, eta, c, K, M, C, order = params
+    k, eta, c, K, M, C, order = _rows(params)
     x = state[X]
     top = int(state[TOP])
     d = state[DIRECTION]
     for i in range(top):
-        out[order[i]] = d * eta[i]
+        out[int(order[i])] = d * eta[i]
     for j in range(int(state[COUNT])):
         row = HEADER + ROW * j
         lo, hi = int(state[row]), int(state[row + 1])
         a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
         for i in range(lo, hi):
-            out[order[i]] = min(max(a + x + beta * eta[i] + gamma * c[i], -eta[i]), eta[i])
+            out[int(order[i])] = min(max(a + x + beta * eta[i] + gamma * c[i], -eta[i]), eta[i])
