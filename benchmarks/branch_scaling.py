@@ -9,7 +9,6 @@ out/branch_scaling.png.
     python benchmarks/branch_scaling.py [--repeat 3] [--out out]
 """
 import argparse
-import csv
 import os
 import sys
 import time
@@ -18,6 +17,7 @@ import numpy as np
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
+from common import write_rows  # noqa: E402
 from prandtl_fmu import simulate  # noqa: E402
 from prandtl_fmu.bench import paper_scene  # noqa: E402
 
@@ -46,11 +46,7 @@ def main():
             ns = float(np.median(samples)) / STEPS * 1e9
             rows.append({"stepper": stepper, "kernel": kernel, "n": n, "ns_per_step": f"{ns:.1f}"})
             print(rows[-1], flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "branch_scaling.csv"), "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows(os.path.join(args.out, "branch_scaling.csv"), rows)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -65,7 +61,7 @@ def main():
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     fig.savefig(os.path.join(args.out, "branch_scaling.png"), dpi=120)
-    print(f"written: {args.out}/branch_scaling.csv, branch_scaling.png")
+    print(f"written: {args.out}/branch_scaling.png")
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ scene measured in the same run.
     python benchmarks/effects_cost.py [--steps 200000] [--repeat 7] [--out out/effects_cost.csv]
 """
 import argparse
-import csv
 import os
 import platform
 import sys
@@ -24,6 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+from common import write_rows  # noqa: E402
 from prandtl_fmu import parse_scene, simulate  # noqa: E402
 from prandtl_fmu.effects import CubicSpring, Damper  # noqa: E402
 
@@ -72,12 +72,7 @@ def main():
             rows.append({"stepper": stepper, "n": count, "scene": name, "ns_per_step": f"{ns:.1f}",
                          "ratio_to_base": f"{median / reference:.3f}"})
             print(f"  {name:30s} {ns:8.1f} ns/step   x{median / reference:.3f}")
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"\nwritten: {args.out}")
+    write_rows(args.out, rows)
 
 
 if __name__ == "__main__":

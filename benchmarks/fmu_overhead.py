@@ -16,7 +16,6 @@ the same run.
     python benchmarks/fmu_overhead.py [--repeat 7] [--out out/fmu_overhead.csv]
 """
 import argparse
-import csv
 import os
 import platform
 import sys
@@ -27,6 +26,7 @@ import numpy as np
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
+from common import write_rows  # noqa: E402
 sys.path.insert(0, os.path.join(ROOT, "tests"))
 
 from prandtl_fmu import Element, load_scene  # noqa: E402
@@ -83,12 +83,7 @@ def main():
                 print(f"{stepper:9s} H = {internal:4d} h: library {lib_s * 1e6:9.2f} us, FMU {fmu_s * 1e6:9.2f} us"
                       f"  (x{fmu_s / lib_s:.3f}, +{(fmu_s - lib_s) * 1e6:.1f} us per doStep)")
             slave.close()
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"written: {args.out}")
+    write_rows(args.out, rows)
 
 
 if __name__ == "__main__":

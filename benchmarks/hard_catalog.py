@@ -8,7 +8,6 @@ error). Writes out/hard_catalog.csv and prints a Markdown table.
     python benchmarks/hard_catalog.py [--out out/hard_catalog.csv]
 """
 import argparse
-import csv
 import os
 import sys
 import time
@@ -18,6 +17,7 @@ import numpy as np
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
+from common import write_rows  # noqa: E402
 
 from prandtl_fmu import STEPPERS, load_scene, simulate  # noqa: E402
 from prandtl_fmu.driver import ElementError  # noqa: E402
@@ -73,16 +73,11 @@ def main():
             row["said"] = said
             rows.append(row)
             print(row, flush=True)
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     fields = ["scene", "stepper", "steps", "seconds", "finite", "max_u_over_eta", "residual_over_work", "said"]
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=fields)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows(args.out, rows, fields)
     print("\n| " + " | ".join(fields) + " |\n|" + "---|" * len(fields))
     for row in rows:
         print("| " + " | ".join(str(row[f]) for f in fields) + " |")
-    print(f"\nwritten: {args.out}")
 
 
 if __name__ == "__main__":

@@ -8,7 +8,6 @@ steppers add their own arithmetic and the load).
     python benchmarks/stack_cost.py [--repeat 5] [--out out/stack_cost.csv]
 """
 import argparse
-import csv
 import os
 import sys
 import time
@@ -18,6 +17,7 @@ from numba import njit
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
+from common import write_rows  # noqa: E402
 from prandtl_fmu.kernels import play, stack  # noqa: E402
 
 
@@ -64,12 +64,7 @@ def main():
             row[f"{name}_ns_per_move"] = f"{np.median(values) / (len(xs) - 1) * 1e9:.1f}"
         rows.append(row)
         print(row, flush=True)
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"written: {args.out}")
+    write_rows(args.out, rows)
 
 
 if __name__ == "__main__":
