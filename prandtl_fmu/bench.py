@@ -193,6 +193,7 @@ def scipy_rows(scene, reference, quick, bar):
     k = scene.branches.stiffness
     eta = scene.branches.yield_displacement
     m = scene.mass.m
+    k0 = scene.spring.k0 if scene.spring is not None else 0.0
     amplitude, omega = scene.load.amplitude, scene.load.omega
     times = reference.time
     rows = []
@@ -204,13 +205,13 @@ def scipy_rows(scene, reference, quick, bar):
                 x, v, u = y[0], y[1], y[2:]
                 out = np.empty_like(y)
                 out[0] = v
-                out[1] = (amplitude * np.cos(omega * t) - k @ u) / m
+                out[1] = (amplitude * np.cos(omega * t) - k0 * x - k @ u) / m
                 out[2:] = v - (u - np.clip(u, -eta, eta)) / eps
                 return out
 
             def jacobian(t, y, eps=eps, sparse=(method == "Radau")):
                 u = y[2:]
-                rows_, cols, values = [0], [1], [1.0]
+                rows_, cols, values = [0, 1], [1, 0], [1.0, -k0 / m]
                 rows_ += [1] * n
                 cols += list(range(2, n + 2))
                 values += list(-k / m)
