@@ -33,7 +33,7 @@ def drive_play(k, eta, u, xs):
 def drive_stack(params, state, xs):
     total = 0.0
     for p in range(1, xs.shape[0]):
-        total += stack.move(params, state, xs[p] - xs[p - 1])
+        total += stack.move(params, state, xs[p] - xs[p - 1], None)
     return total
 
 
@@ -47,7 +47,8 @@ def main():
     for n in (10, 100, 1_000, 10_000, 100_000):
         eta = 0.1 + np.arange(1, n + 1) / n
         k = np.full(n, 1.0 / n)
-        params, state, _ = stack.prepare(k, eta, np.zeros(n), xs[0])
+        params, _ = stack.prepare(k, eta, np.zeros(n))
+        state = stack.fresh_state(params, xs[0])
         u = np.zeros(n)
         drive_play(k, eta, u, xs[:10])
         drive_stack(params, state, xs[:10])

@@ -54,29 +54,35 @@ def compile_model(scene: Scene, branch_kernel: str = "play"):
     """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta)``, ``None`` where absent.
 
     With ``branch_kernel="stack"``, ``k`` holds the memory stack's parameters
-    and ``eta`` is None (see :func:`choose_branch_kernel`).
+    and ``eta`` is None (see :func:`choose_branch_kernel`); the continuum
+    always takes the stack (its parameters are a tuple).
     """
     m = float(scene.mass.m) if scene.mass is not None else None
     k0 = scene.spring.k0 if scene.spring is not None else None
     k3 = scene.cubic.k3 if scene.cubic is not None else None
     c = scene.damper.c if scene.damper is not None else None
-    if scene.branches is None:
+    branches = scene.branches
+    if branches is None:
         return (m, k0, k3, c, None, None)
-    k = np.ascontiguousarray(scene.branches.stiffness, dtype=float)
-    eta = np.ascontiguousarray(scene.branches.yield_displacement, dtype=float)
+    if branches.continuum:
+        return (m, k0, k3, c, stack.continuum(branches.k_total, branches.eta_min, branches.eta_max), None)
+    k = np.ascontiguousarray(branches.stiffness, dtype=float)
+    eta = np.ascontiguousarray(branches.yield_displacement, dtype=float)
     if branch_kernel == "stack":
-        params, _, _ = stack.prepare(k, eta, scene.branches.u0, _initial_x(scene))
+        params, _ = stack.prepare(k, eta, branches.u0)
         return (m, k0, k3, c, params, None)
     return (m, k0, k3, c, k, eta)
 
 
-def choose_branch_kernel(scene: Scene, stepper: str, energy: bool) -> str:
-    """"stack" for many branches with an admissible initial state, a stepper that takes it and no energy
-    account; "play" (one update per branch) otherwise."""
+def choose_branch_kernel(scene: Scene, stepper: str) -> str:
+    """"stack" for the continuum, and for many branches with an admissible initial state and a stepper
+    that takes it; "play" (one update per branch) otherwise."""
     branches = scene.branches
-    if branches is None or energy or branches.n < STACK_FROM:
+    if branches is None:
         return "play"
-    if not getattr(get_stepper(stepper), "BRANCH_STACK", False):
+    if branches.continuum:
+        return "stack"
+    if branches.n < STACK_FROM or not getattr(get_stepper(stepper), "BRANCH_STACK", False):
         return "play"
     order = np.argsort(branches.yield_displacement, kind="stable")
     if not stack.admissible(branches.yield_displacement[order], branches.u0[order]):
@@ -139,7 +145,7 @@ def initial_state(scene: Scene, model, load):
     operator moves the branches) and v = 0. ElementError if none exists.
     """
     m, k0, k3, c, k, eta = model
-    if k is not None and k.ndim == 2:  # the memory stack: its state stands for the elongations
+    if stack.is_stack(k):  # the memory stack: its state stands for the elongations
         u = stack.fresh_state(k, _initial_x(scene))
     else:
         u = np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None
@@ -255,12 +261,15 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     problem = stability_problem(scene, name, h)
     if problem:
         warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=2)
-    model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name, energy))
+    if states and scene.branches is not None and scene.branches.continuum:
+        raise ValueError("the continuum has no list of elongations to output (states): sample it with "
+                         "[branches] count = n instead")
+    model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
     load = scene.load.compile()
     times = output_grid(solver.stop_time, solver.output_interval)
     rows = len(times)
     out = np.empty((rows, 3))
-    n = scene.branches.n if scene.branches is not None else 0
+    n = scene.branches.n if scene.branches is not None and not scene.branches.continuum else 0
     out_u = np.empty((rows, n)) if (states and n) else None
     account = np.zeros(3) if energy else None
     out_energy = np.zeros((rows, 5)) if energy else None
@@ -277,7 +286,8 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
 
     last_is_short = rows > 1 and times[-1] - times[-2] < solver.output_interval * (1 - 1e-9)
     full_rows = rows - 1 - last_is_short  # row 0 is the initial state
-    chunk = max(1, _CHUNK_WORK // max(1, per_row * max(n, 8)))
+    work_per_step = 8 if stack.is_stack(model[4]) else max(n, 8)
+    chunk = max(1, _CHUNK_WORK // max(1, per_row * work_per_step))
     bar = _progress_bar(progress, total=rows - 1, label=f"{scene.name} [{name}]")
     try:
         j = 0
@@ -342,7 +352,6 @@ class Element:
         self.h = float(step if step is not None else scene.solver.step)
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
-        self.model = compile_model(scene)
         self._out = np.empty((1, 3))
         self._energy_row = np.empty((1, 5))
         self.account = np.zeros(3)
@@ -353,6 +362,8 @@ class Element:
         :func:`initial_state`); the energy account restarts."""
         self.time = 0.0
         self.force = float(force)
+        self.branch_kernel = choose_branch_kernel(self.scene, self.stepper)
+        self.model = compile_model(self.scene, self.branch_kernel)
         self.x, self.v, self.u = initial_state(self.scene, self.model, held(self.force))
         self.account[:] = 0.0
         self._record()
@@ -402,13 +413,46 @@ class Element:
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
-        self.scene, self.model = scene, compile_model(scene)
+        self.scene, self.model = scene, compile_model(scene, "play")[:4] + self.model[4:]
         self._record()
 
     def set_stepper(self, name: str) -> None:
-        """Use another stepper from the next step on (every stepper is one-step)."""
-        self._step = compile_step(self.scene, name)
-        self.stepper = name
+        """Use another stepper from the next step on (every stepper is one-step).
+
+        When the new stepper does not take the memory stack (``exact``), the
+        elongations are expanded to one per branch (O(n), once); when it does
+        and the branches are many, they are folded back into a stack.
+        """
+        step = compile_step(self.scene, name)
+        self._use_branch_kernel(choose_branch_kernel(self.scene, name) if self._can_fold() else "play")
+        self._step, self.stepper = step, name
+
+    def _can_fold(self) -> bool:
+        """Whether the current elongations can be held by the memory stack."""
+        if self.branch_kernel == "stack":
+            return True
+        if self.u is None:
+            return False
+        order = np.argsort(self.scene.branches.yield_displacement, kind="stable")
+        return stack.admissible(self.scene.branches.yield_displacement[order], self.u[order])
+
+    def _use_branch_kernel(self, kind: str) -> None:
+        """Switch the branches between the O(n) kernel and the memory stack, keeping the elongations."""
+        if kind == self.branch_kernel:
+            return
+        branches = self.scene.branches
+        if kind == "play":
+            u = np.empty(branches.n)
+            write_elongations(self.model[4], self.u, u)
+            branch_model = compile_model(self.scene, "play")[4:]
+        else:  # one initial piece that refers to the elongations now: u = (x - x_now) + u_now
+            params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, self.u)
+            u = stack.fresh_state(params, self.x)
+            branch_model = (params, None)
+        self.branch_kernel = kind
+        self.model = self.model[:4] + branch_model
+        self.u = u
+        self._record()
 
     def set_step(self, step: float) -> None:
         """Use another internal step h (s) from the next step on."""
@@ -434,48 +478,90 @@ class Element:
         return values
 
     def get_state(self) -> dict:
-        """Everything that determines the continuation, as plain data (numbers, strings, lists)."""
-        return {
+        """Everything that determines the continuation, as plain data (numbers, strings, lists).
+
+        ``u`` is the list of elongations with the O(n) kernel, the part in use
+        of the memory stack's state otherwise (then ``u_reference`` holds the
+        elongations its initial piece refers to, for n branches).
+        """
+        state = {
             "time": self.time, "x": self.x, "v": self.v, "force": self.force,
-            "u": [] if self.u is None else self.u.tolist(),
+            "branch_kernel": self.branch_kernel, "u": [], "u_reference": [],
             "energy_account": self.account.tolist(), "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
+        k = self.model[4]
+        if self.branch_kernel == "stack":
+            state["u"] = self.u[:stack.used(self.u)].tolist()
+            if not self.scene.branches.continuum:
+                reference = np.empty(self.scene.branches.n)
+                reference[k[stack.ORDER_ROW, :-1].astype(np.int64)] = k[stack.C_ROW, :-1]
+                state["u_reference"] = reference.tolist()
+        elif self.u is not None:
+            state["u"] = self.u.tolist()
+        return state
 
     def set_state(self, state: dict) -> None:
         """Restore a state from :meth:`get_state`; checks it fully before changing anything."""
-        n = 0 if self.u is None else self.u.shape[0]
         values = [float(state[key]) for key in ("time", "x", "v", "force", "initial_energy")]
-        u = np.array(state["u"], dtype=float).reshape(-1)
         account = np.array(state["energy_account"], dtype=float).reshape(-1)
-        if u.shape[0] != n or account.shape[0] != 3:
-            raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {n}")
-        finite = all(math.isfinite(value) for value in values)
-        if not finite or not np.all(np.isfinite(u)) or not np.all(np.isfinite(account)):
+        if not all(math.isfinite(value) for value in values) or not np.all(np.isfinite(account)):
             raise ValueError("state has a value that is not finite")
-        if n and np.any(np.abs(u) > self.scene.branches.yield_displacement):
-            raise ValueError("state has an elongation outside its elastic range")
+        if account.shape[0] != 3:
+            raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 3")
+        kind = state.get("branch_kernel", "play")
+        model, u = self._branch_state(kind, np.array(state["u"], dtype=float).reshape(-1),
+                                      np.array(state.get("u_reference", []), dtype=float).reshape(-1))
         scene = with_coefficients(self.scene, **state["coefficients"])
         step = compile_step(scene, state["stepper"])
         self.set_step(float(state["step"]))
-        self.scene, self.model = scene, compile_model(scene)
+        self.scene, self.branch_kernel = scene, kind
+        self.model = compile_model(scene, "play")[:4] + model
         self._step, self.stepper = step, state["stepper"]
         self.time, self.x, self.v, self.force, self.initial_energy = values
-        if n:
-            self.u[:] = u
+        self.u = u
         self.account[:] = account
         self._record()
 
+    def _branch_state(self, kind, u, reference):
+        """(branch part of the model, branch state) of a saved state; ValueError if it does not fit."""
+        branches = self.scene.branches
+        if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
+            raise ValueError("state has a value that is not finite")
+        if branches is None:
+            if u.size:
+                raise ValueError(f"state has {u.shape[0]} branch values, the element has no branches")
+            return (None, None), None
+        if kind == "stack":
+            if branches.continuum:
+                params = self.model[4]
+            else:
+                if reference.shape[0] != branches.n:
+                    raise ValueError(f"state has {reference.shape[0]} reference elongations, the element has "
+                                     f"{branches.n} branches")
+                params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
+            return (params, None), stack.restore(params, u)
+        if kind != "play" or branches.continuum:
+            raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
+        if u.shape[0] != branches.n:
+            raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {branches.n}")
+        if np.any(np.abs(u) > branches.yield_displacement):
+            raise ValueError("state has an elongation outside its elastic range")
+        return compile_model(self.scene, "play")[4:], u
+
     def checkpoint(self):
         """A cheap copy of the dynamic state, for :meth:`rollback` (not plain data)."""
-        return (self.time, self.x, self.v, self.force, None if self.u is None else self.u.copy(),
-                self.account.copy(), self._out.copy(), self._energy_row.copy())
+        u = None
+        if self.u is not None:
+            u = self.u[:stack.used(self.u)].copy() if self.branch_kernel == "stack" else self.u.copy()
+        return (self.time, self.x, self.v, self.force, u, self.account.copy(), self._out.copy(),
+                self._energy_row.copy())
 
     def rollback(self, checkpoint) -> None:
         """Return to a :meth:`checkpoint`, exactly."""
         self.time, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
         if u is not None:
-            self.u[:] = u
+            self.u[:u.shape[0]] = u
         self.account[:] = account
         self._out[:] = out
         self._energy_row[:] = energy_row

@@ -71,6 +71,13 @@ class Branches:
     yield_displacement: np.ndarray
     u0: np.ndarray
 
+    continuum = False
+
+    @property
+    def stiffness_sum(self) -> float:
+        """sum_i k_i (N/m): the stiffness of the branches while they all stick."""
+        return float(np.sum(self.stiffness))
+
     @property
     def n(self) -> int:
         return int(self.stiffness.shape[0])
@@ -84,3 +91,59 @@ class Branches:
     def strength(self) -> float:
         """sum_i alpha_i (N): the largest force the branches can carry."""
         return float(np.sum(self.threshold))
+
+
+@dataclass(frozen=True)
+class ContinuousBranches:
+    """The continuous Prandtl element: infinitely many branches s in [0, 1].
+
+    Branch s has stiffness density k(s) = ``k_total`` (N/m per unit of s) and
+    elastic range eta(s) = ``eta_min`` + (``eta_max`` - ``eta_min``) s (m), the
+    family of the paper's section 8 (Bastien, Schatzman & Lamarque 2002 study
+    its limit n -> infinity); it starts virgin, u(s) = 0. Its force is
+    integral_0^1 k(s) u(s) ds. Simulated by the memory stack with integrals in
+    place of sums (kernels/stack.py); the sampled elements of
+    :func:`sample_spectrum` converge to it.
+    """
+
+    k_total: float
+    eta_min: float
+    eta_max: float
+
+    continuum = True
+    n = None
+
+    @property
+    def stiffness_sum(self) -> float:
+        """integral k(s) ds = k_total (N/m): the stiffness while every branch sticks."""
+        return float(self.k_total)
+
+    @property
+    def strength(self) -> float:
+        """integral k(s) eta(s) ds (N): the largest force the branches can carry."""
+        return float(self.k_total * 0.5 * (self.eta_min + self.eta_max))
+
+    def sample(self, n: int, rule: str = "right") -> Branches:
+        """n virgin branches sampling this spectrum (see :func:`sample_spectrum`)."""
+        return sample_spectrum(n, self.k_total, (self.eta_min, self.eta_max), rule)
+
+
+# How the sampled spectrum places its n branches in [0, 1]: the paper's right
+# end points (eq. 7.19; the scene default) or the cell midpoints.
+SAMPLING_RULES = ("right", "midpoint")
+
+
+def sample_spectrum(n: int, k_total: float, eta_range, rule: str = "right", u0=None) -> Branches:
+    """n branches of the spectrum k(s) = k_total, eta(s) = a + (b - a) s, each with weight 1/n.
+
+    ``rule`` "right": s_i = i / n (eq. 7.19 of the paper; the force converges
+    to the continuum's like 1/n); "midpoint": s_i = (i - 1/2) / n (like 1/n^2).
+    """
+    if rule not in SAMPLING_RULES:
+        raise ValueError(f"sampling rule must be one of {', '.join(SAMPLING_RULES)}, got {rule!r}")
+    a, b = float(eta_range[0]), float(eta_range[1])
+    s = (np.arange(1, n + 1) - (0.5 if rule == "midpoint" else 0.0)) / n
+    stiffness = np.full(n, float(k_total) / n)
+    eta = a + (b - a) * s
+    u0 = np.zeros(n) if u0 is None else np.asarray(u0, dtype=float)
+    return Branches(stiffness, eta, u0)

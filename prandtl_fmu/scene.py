@@ -26,7 +26,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .effects import Branches, CubicSpring, Damper, Mass, Spring
+from .effects import SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Mass, Spring, sample_spectrum
 from .loads import ConstantLoad, HarmonicLoad, TableLoad
 
 Load = Union[ConstantLoad, HarmonicLoad, TableLoad]
@@ -276,19 +276,25 @@ def _mass(source, data) -> Mass:
     return Mass(m=r.number("m", positive=True), x0=r.number("x0", 0.0), v0=r.number("v0", 0.0))
 
 
-def _branches(source, data) -> Branches:
+def _branches(source, data):
     r = _Reader(source, "branches", data)
-    listed, sampled = {"k", "eta", "alpha", "u0"}, {"count", "k_total", "eta_range", "u0"}
+    listed = {"k", "eta", "alpha", "u0"}
+    sampled = {"count", "k_total", "eta_range", "u0", "sampling"}
+    continuous = {"continuum", "k_total", "eta_range"}
+    if "continuum" in r.data:
+        r.only(continuous)
+        if not isinstance(r.data["continuum"], bool):
+            r.fail("continuum", f"must be true or false, got {_kind(r.data['continuum'])}")
+        if r.data["continuum"]:
+            return _continuum(r)
+        del r.data["continuum"]  # continuum = false: the sampled spectrum
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
         r.only(sampled)
         n = r.integer("count", minimum=1)
-        k_total = r.number("k_total", positive=True)
-        ends = r.numbers("eta_range", minimum=0.0, length=None)
-        if len(ends) != 2:
-            r.fail("eta_range", f"must be [a, b] (two numbers), got {len(ends)} values")
-        s = np.arange(1, n + 1) / n  # right end points s_i = i / n, eq. (7.19)
-        stiffness = np.full(n, k_total / n)
-        eta = ends[0] + (ends[1] - ends[0]) * s
+        k_total, ends = _spectrum(r)
+        rule = r.string("sampling", "right", choices=SAMPLING_RULES)
+        branches = sample_spectrum(n, k_total, ends, rule)  # right end points s_i = i / n: eq. (7.19)
+        stiffness, eta = branches.stiffness, branches.yield_displacement
     else:
         r.only(listed)
         stiffness = r.numbers("k", positive=True)
@@ -311,6 +317,22 @@ def _branches(source, data) -> Branches:
     for array in (stiffness, eta, u0):
         array.setflags(write=False)
     return Branches(stiffness, eta, u0)
+
+
+def _spectrum(r):
+    """k_total and eta_range = [a, b] of a spectrum."""
+    k_total = r.number("k_total", positive=True)
+    ends = r.numbers("eta_range", minimum=0.0)
+    if len(ends) != 2:
+        r.fail("eta_range", f"must be [a, b] (two numbers), got {len(ends)} values")
+    return k_total, ends
+
+
+def _continuum(r) -> ContinuousBranches:
+    k_total, (a, b) = _spectrum(r)
+    if not a < b:
+        r.fail("eta_range", f"the continuum needs a < b (eta(s) = a + (b - a) s increasing), got [{a!r}, {b!r}]")
+    return ContinuousBranches(k_total, float(a), float(b))
 
 
 def _load(source, data) -> Load:

@@ -36,7 +36,7 @@ def stiffest(scene, x: Optional[float] = None) -> float:
     if scene.cubic is not None:
         stiffness += 3.0 * scene.cubic.k3 * x * x
     if scene.branches is not None:
-        stiffness += float(np.sum(scene.branches.stiffness))
+        stiffness += scene.branches.stiffness_sum
     return stiffness
 
 

@@ -18,7 +18,7 @@ involved except rounding.
 import numpy as np
 
 from .._jit import kernel
-from .play import piece
+from .play import branch_count, piece
 from .smooth import elastic_force
 
 
@@ -73,8 +73,7 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
         g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
     lo = 0.0  # direction * G(lo) < 0: the root lies beyond lo
     hi = direction * np.inf  # direction * G(hi) > 0
-    n = 0 if k is None else k.shape[0]
-    for _ in range(4 * n + 64):
+    for _ in range(4 * max(branch_count(k), 0) + 64):
         if direction * g >= 0.0:  # zero, or past zero by rounding only
             return lo
         end = lo + direction * room  # next kink: the smooth piece is [lo, end]

@@ -9,6 +9,13 @@ u' + d psi_[-eta, eta](u) ∋ x' over that increment:
 
 The loops are branch-free (min/max) over contiguous arrays. ``k``, ``eta``
 and ``u`` are all ``None`` when the scene has no branches.
+
+The entry points :func:`branch_force`, :func:`move`, :func:`piece`,
+:func:`stored_energy` and :func:`write_elongations` also take the memory
+stack (``kernels/stack.py``) in place of the arrays: its parameters as ``k``
+(a 2-D array for n branches, a tuple for the continuum), ``eta`` None and
+its state as ``u``. numba picks the implementation from the types when it
+compiles a stepper, so a step costs the same as if written for one kernel.
 """
 import numpy as np
 from numba.core import types
@@ -33,7 +40,7 @@ def _branch_force(k, u):
 def _branch_force_overload(k, u):
     if isinstance(k, types.NoneType):
         return lambda k, u: 0.0
-    if k.ndim == 2:  # the memory stack's parameters (kernels/stack.py)
+    if _is_stack(k):  # the memory stack's parameters (kernels/stack.py)
         return lambda k, u: stack.force(k, u)
 
     def impl(k, u):
@@ -57,7 +64,9 @@ def _write_elongations(k, u, out):
 
 @overload(_write_elongations)
 def _write_elongations_overload(k, u, out):
-    if k.ndim == 2:
+    if isinstance(k, types.BaseTuple):
+        raise TypingError("the continuum has no list of elongations")
+    if _is_stack(k):
         return lambda k, u, out: stack.elongations(k, u, out)
 
     def impl(k, u, out):
@@ -102,7 +111,7 @@ def move(k, eta, u, dx, energy):
     """:func:`shift`; with an ``energy`` account (not None), add the sliders' dissipation to energy[1].
 
     With memory-stack parameters as ``k`` (and ``eta`` None) the stack moves
-    instead; it keeps no energy account.
+    instead, with the same account.
     """
     return _move(k, eta, u, dx, energy)
 
@@ -115,10 +124,8 @@ def _move(k, eta, u, dx, energy):
 def _move_overload(k, eta, u, dx, energy):
     if isinstance(k, types.NoneType):
         return lambda k, eta, u, dx, energy: 0.0
-    if k.ndim == 2:
-        if not isinstance(energy, types.NoneType):
-            raise TypingError("the memory stack keeps no energy account")
-        return lambda k, eta, u, dx, energy: stack.move(k, u, dx)
+    if _is_stack(k):
+        return lambda k, eta, u, dx, energy: stack.move(k, u, dx, energy)
 
     def impl(k, eta, u, dx, energy):
         if energy is None:
@@ -138,29 +145,86 @@ def piece(k, eta, u, dx, direction):
     ``dx``; the stiffness sum of the branches still sticking just beyond ``dx``
     in ``direction`` (the one-sided slope); and ``room`` >= 0, how far the
     increment can go beyond ``dx`` before the next branch starts to slip
-    (``inf`` when none is left). ``u`` is not modified.
+    (``inf`` when none is left). ``u`` is not modified. ``dx`` is 0 or of the
+    sign of ``direction``.
     """
-    if k is None:
-        return 0.0, 0.0, np.inf
-    force = 0.0
-    stiffness = 0.0
-    room = np.inf
-    for i in range(k.shape[0]):
-        moved = u[i] + dx
-        force += k[i] * min(max(moved, -eta[i]), eta[i])
-        gap = eta[i] - direction * moved  # > 0 while branch i sticks beyond dx
-        sticking = gap > 0.0
-        stiffness += k[i] * sticking
-        room = min(room, gap if sticking else np.inf)
-    return force, stiffness, room
+    return _piece(k, eta, u, dx, direction)
+
+
+def _piece(k, eta, u, dx, direction):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_piece)
+def _piece_overload(k, eta, u, dx, direction):
+    if isinstance(k, types.NoneType):
+        return lambda k, eta, u, dx, direction: (0.0, 0.0, np.inf)
+    if _is_stack(k):
+        return lambda k, eta, u, dx, direction: stack.peek(k, u, dx, direction)
+
+    def impl(k, eta, u, dx, direction):
+        force = 0.0
+        stiffness = 0.0
+        room = np.inf
+        for i in range(k.shape[0]):
+            moved = u[i] + dx
+            force += k[i] * min(max(moved, -eta[i]), eta[i])
+            gap = eta[i] - direction * moved  # > 0 while branch i sticks beyond dx
+            sticking = gap > 0.0
+            stiffness += k[i] * sticking
+            room = min(room, gap if sticking else np.inf)
+        return force, stiffness, room
+
+    return impl
+
+
+@kernel
+def branch_count(k):
+    """n, the number of branches (0 without; -1 for the continuum, which has infinitely many)."""
+    return _branch_count(k)
+
+
+def _branch_count(k):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_branch_count)
+def _branch_count_overload(k):
+    if isinstance(k, types.NoneType):
+        return lambda k: 0
+    if isinstance(k, types.BaseTuple):
+        return lambda k: -1
+    if k.ndim == 2:
+        return lambda k: k.shape[1] - 1
+    return lambda k: k.shape[0]
+
+
+def _is_stack(k):
+    """At typing time: whether ``k`` is memory-stack parameters (2-D array, or the continuum's tuple)."""
+    return isinstance(k, types.BaseTuple) or (isinstance(k, types.Array) and k.ndim == 2)
 
 
 @kernel
 def stored_energy(k, u):
     """sum_i k_i u_i^2 / 2 (J)."""
-    if k is None:
-        return 0.0
-    energy = 0.0
-    for i in range(k.shape[0]):
-        energy += 0.5 * k[i] * u[i] * u[i]
-    return energy
+    return _stored_energy(k, u)
+
+
+def _stored_energy(k, u):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_stored_energy)
+def _stored_energy_overload(k, u):
+    if isinstance(k, types.NoneType):
+        return lambda k, u: 0.0
+    if _is_stack(k):
+        return lambda k, u: stack.stored_energy(k, u)
+
+    def impl(k, u):
+        energy = 0.0
+        for i in range(k.shape[0]):
+            energy += 0.5 * k[i] * u[i] * u[i]
+        return energy
+
+    return impl

@@ -1,86 +1,156 @@
 """The friction branches at a cost independent of n: the memory stack.
 
-Used by the explicit steppers (projected, symplectic, verlet) for scenes
-with many branches and an admissible initial state, when no energy account
-is asked for (see ``driver.compile_model``); tests/test_stack.py shows it
-equals the O(n) play kernel.
+Used by every stepper but ``exact`` for scenes with many branches and an
+admissible initial state, and for the continuous element (infinitely many
+branches); see ``driver.choose_branch_kernel``. tests/test_stack.py shows it
+equals the O(n) play kernel, tests/test_continuum.py that the continuum is
+the limit of the sampled branches.
 
 Sort the branches by elastic range, eta_1 <= ... <= eta_n. From an admissible
 state (|u_i| <= eta_i and u 1-Lipschitz in eta: |u_i - u_j| <= |eta_i - eta_j|),
 moving x monotonically keeps u admissible, and the profile i -> u_i is made of
-consecutive index blocks ("pieces"):
+consecutive blocks ("pieces") of *positions*:
 
 * the top piece [0, top): the branches that slid in the last direction d of
   motion, u_i = d eta_i;
 * below it, pieces [lo, hi) of sticking branches, u_i = a + x + beta eta_i
-  (+ c_i for the initial piece, c_i = u0_i - x0), beta in {-1, 0, +1}: each
-  moves with x, so its force is (a + x) K + beta M (+ C) with the prefix sums
-  K = sum k_i, M = sum k_i eta_i, C = sum k_i c_i over the piece.
+  (+ c_i for the initial piece, c_i = u0_i), beta in {-1, 0, +1}: each moves
+  with x, so its force is (a + x) K + beta M (+ C) with the sums K = sum k_i,
+  M = sum k_i eta_i, C = sum k_i c_i over the piece.
 
 Moving x by a monotone increment in direction s: a reversal (s != d) first
 turns the top piece into a sticking piece (a = -x, beta = d); then, from the
 top down, a piece whose largest-eta branch reaches s eta_i is popped whole
 (its branches slide), and at most one piece is split where its branches stop
-reaching (binary search: the condition s u_i >= eta_i is monotone in i within
-a piece). The force sum_i k_i u_i = S0 + x SK + d M(top) is kept as running
-totals, updated on every pop, split and push: O(1) amortised plus a binary
-search per move, whatever n. The totals are recomputed from the pieces every
-``RESYNC`` moves so that rounding does not drift.
+reaching (the condition s u_i >= eta_i is monotone in the position). The force
+sum_i k_i u_i = S0 + x SK + d M(top) is kept as running totals, updated on every
+pop, split and push: O(1) amortised plus a search per move, whatever n. The
+totals are recomputed from the pieces every ``RESYNC`` moves so that rounding
+does not drift.
+
+Two kinds of spectrum share this code, told apart by the type of ``params``:
+
+* n branches: ``params`` is one (10, n + 1) array (see :func:`prepare`),
+  positions are branch indices in eta order, sums are differences of prefix
+  sums, the split is a binary search;
+* the continuum (Bastien, Schatzman & Lamarque 2002): branches s in [0, 1]
+  with stiffness density k(s) = k_total and elastic range eta(s) = eta_min
+  + (eta_max - eta_min) s, virgin at the start; ``params`` is the tuple
+  ``(k_total, eta_min, eta_max)``, positions are values of s, sums are
+  integrals in closed form, the split is closed form too. Its memory holds at
+  most ``CONTINUUM_PIECES`` turning points: beyond that (thousands of
+  reversals that are never wiped out, e.g. a free decay with eta_min = 0) the
+  narrowest piece is merged into its neighbour, an approximation of the
+  order of that piece's width in eta; see :func:`_compact`.
+
+The energy account (optional) books the sliders' dissipation sum alpha_i |slip_i|
+from the same sums (and those of k eta^2, k eta c, k c^2), so the stack keeps
+the account at no extra cost per branch.
 
 State layout (one float64 array, so that it can be copied and saved as plain
 data): ``state[:HEADER]`` = count of pieces, top, d, SK, S0, moves since the
 last resync, x; then ``count`` rows of (lo, hi, a, beta, gamma), bottom
-(largest eta) first.
+(largest eta) first, and free rows up to the capacity.
 """
 import numpy as np
+from numba.core import types
+from numba.extending import overload
 
 from .._jit import kernel
 
 HEADER = 7
 ROW = 5
 RESYNC = 1024
+CONTINUUM_PIECES = 4096
 COUNT, TOP, DIRECTION, SK, S0, MOVES, X = range(HEADER)
+# rows of the parameters of n branches
+K_ROW, ETA_ROW, C_ROW, K_SUM, M_SUM, C_SUM, ORDER_ROW, E_SUM, D_SUM, G_SUM = range(10)
 
 
-def prepare(stiffness, yield_displacement, u0, x0):
-    """(params, state, order) for branches k, eta with elongations u0 at x = x0.
+def prepare(stiffness, yield_displacement, u0):
+    """(params, order) for branches k, eta with initial elongations u0.
 
-    ``order`` sorts the branches by eta; ``params`` is one (7, n + 1) array
-    whose rows are k, eta, c (sorted, padded), the prefix sums K, M, C (of
-    length n + 1) and the order (one array rather than a tuple of seven: the
-    steppers pass it on every step). ValueError if u0 is not admissible (then
-    the O(n) kernel must be used).
+    ``order`` sorts the branches by eta; ``params`` is one (10, n + 1) array
+    whose rows are k, eta, c = u0 (sorted, padded), the prefix sums (of length
+    n + 1) K, M, C, the order, and the prefix sums of k eta^2, k eta c, k c^2
+    (one array rather than a tuple of ten: the steppers pass it on every
+    step). ValueError if u0 is not admissible (then the O(n) kernel must be
+    used).
     """
     order = np.argsort(yield_displacement, kind="stable")
     k = np.ascontiguousarray(stiffness[order], dtype=float)
     eta = np.ascontiguousarray(yield_displacement[order], dtype=float)
-    u = np.asarray(u0, dtype=float)[order]
-    if not admissible(eta, u):
+    c = np.asarray(u0, dtype=float)[order]
+    if not admissible(eta, c):
         raise ValueError("the initial elongations are not 1-Lipschitz in eta: the memory stack does not apply")
-    c = u - x0
-    prefix = lambda values: np.concatenate([[0.0], np.cumsum(values)])  # noqa: E731
+
+    def prefix(values):
+        return np.concatenate([[0.0], np.cumsum(values)])
+
     n = len(k)
-    params = np.zeros((7, n + 1))
-    params[0, :n], params[1, :n], params[2, :n] = k, eta, c
-    params[3], params[4], params[5] = prefix(k), prefix(k * eta), prefix(k * c)
-    params[6, :n] = order
-    return params, fresh_state(params, x0), order
+    params = np.zeros((10, n + 1))
+    params[K_ROW, :n], params[ETA_ROW, :n], params[C_ROW, :n] = k, eta, c
+    params[K_SUM], params[M_SUM], params[C_SUM] = prefix(k), prefix(k * eta), prefix(k * c)
+    params[ORDER_ROW, :n] = order
+    params[E_SUM], params[D_SUM], params[G_SUM] = prefix(k * eta * eta), prefix(k * eta * c), prefix(k * c * c)
+    return params, order
+
+
+def continuum(k_total, eta_min, eta_max):
+    """The parameters of the continuous element: k(s) = k_total, eta(s) = eta_min + (eta_max - eta_min) s."""
+    if not (k_total > 0 and 0 <= eta_min < eta_max):
+        raise ValueError("the continuum needs k_total > 0 and 0 <= eta_min < eta_max")
+    return (float(k_total), float(eta_min), float(eta_max))
+
+
+def is_stack(params) -> bool:
+    """Whether ``params`` (a model's ``k``) are memory-stack parameters rather than the O(n) kernel's k."""
+    return isinstance(params, tuple) or (isinstance(params, np.ndarray) and params.ndim == 2)
+
+
+def capacity(params) -> int:
+    """How many pieces a state can hold: n + 1 (never reached), or CONTINUUM_PIECES + 1."""
+    return CONTINUUM_PIECES + 1 if isinstance(params, tuple) else params.shape[1]
 
 
 def fresh_state(params, x0):
-    """The state of :func:`prepare`'s initial elongations at x = x0: one piece, u_i = c_i + x."""
-    n = params.shape[1] - 1
-    state = np.zeros(HEADER + ROW * (n + 1))
+    """The initial state at x = x0: one sticking piece, u = u0 (+ x - x0 as x moves)."""
+    state = np.zeros(HEADER + ROW * capacity(params))
     state[X] = x0
     state[COUNT] = 1.0
-    state[HEADER:HEADER + ROW] = (0.0, n, 0.0, 0.0, 1.0)
+    if isinstance(params, tuple):
+        state[HEADER:HEADER + ROW] = (0.0, 1.0, -x0, 0.0, 0.0)  # virgin: u(s) = x - x0
+    else:
+        state[HEADER:HEADER + ROW] = (0.0, params.shape[1] - 1, -x0, 0.0, 1.0)  # u_i = x - x0 + u0_i
     resync(params, state)
     return state
 
 
-@kernel
-def _rows(params):
-    return params[0], params[1], params[2], params[3], params[4], params[5], params[6]
+def used(state) -> int:
+    """The length of the part of ``state`` in use (header and pieces): what must be saved."""
+    return HEADER + ROW * int(state[COUNT])
+
+
+def restore(params, saved):
+    """A full state from the used part of one (as saved by :func:`used`); ValueError if it is not one."""
+    saved = np.asarray(saved, dtype=float).reshape(-1)
+    state = np.zeros(HEADER + ROW * capacity(params))
+    if saved.shape[0] < HEADER or (saved.shape[0] - HEADER) % ROW or not np.all(np.isfinite(saved)):
+        raise ValueError("not a memory-stack state")
+    count = int(saved[COUNT])
+    end = 1.0 if isinstance(params, tuple) else float(params.shape[1] - 1)
+    if saved[COUNT] != count or saved.shape[0] != HEADER + ROW * count or count + 1 >= capacity(params) + 1:
+        raise ValueError("memory-stack state: wrong count of pieces")
+    rows = saved[HEADER:].reshape(count, ROW)
+    bounds = np.concatenate([[end], rows[:, 0]])
+    if (saved[DIRECTION] not in (-1.0, 0.0, 1.0) or not 0 <= saved[TOP] <= end
+            or np.any(rows[:, 1] != bounds[:-1]) or np.any(rows[:, 0] > rows[:, 1])
+            or (count and rows[-1, 0] != saved[TOP]) or (not count and saved[TOP] != end)
+            or np.any(np.abs(rows[:, 3]) > 1.0)):
+        raise ValueError("memory-stack state: the pieces do not tile the branches")
+    state[:saved.shape[0]] = saved
+    resync(params, state)
+    return state
 
 
 def admissible(eta, u):
@@ -91,19 +161,182 @@ def admissible(eta, u):
     return bool(np.all(np.abs(np.diff(u)) <= np.diff(eta) + tolerance))
 
 
+# ------------------------------------------------ the spectrum: sums, thresholds, split
+# Compiled only; each has one implementation per kind of spectrum (the type of params).
+
+def _sums(params, lo, hi):
+    """(K, M, C): the sums of k, k eta, k c over the positions [lo, hi)."""
+    raise NotImplementedError
+
+
+def _squares(params, lo, hi):
+    """(E, D, G): the sums of k eta^2, k eta c, k c^2 over the positions [lo, hi)."""
+    raise NotImplementedError
+
+
+def _moment(params, top):
+    """M over [0, top): sum k eta (the force of the top piece is d times it)."""
+    raise NotImplementedError
+
+
+def _threshold(params, pos):
+    """(eta, c) of the branch at position ``pos``."""
+    raise NotImplementedError
+
+
+def _split(params, state, row, x, s):
+    """The position p in [lo, hi] of the piece at ``row`` such that, at x, [lo, p) slides in direction s."""
+    raise NotImplementedError
+
+
+def _is_discrete(params):
+    return isinstance(params, types.Array)
+
+
+@overload(_sums)
+def _sums_overload(params, lo, hi):
+    if _is_discrete(params):
+        def discrete(params, lo, hi):
+            i, j = int(lo), int(hi)
+            return (params[K_SUM, j] - params[K_SUM, i], params[M_SUM, j] - params[M_SUM, i],
+                    params[C_SUM, j] - params[C_SUM, i])
+        return discrete
+
+    def continuous(params, lo, hi):
+        kappa, a, b = params
+        width = hi - lo
+        return kappa * width, kappa * width * (a + 0.5 * (b - a) * (lo + hi)), 0.0
+    return continuous
+
+
+@overload(_squares)
+def _squares_overload(params, lo, hi):
+    if _is_discrete(params):
+        def discrete(params, lo, hi):
+            i, j = int(lo), int(hi)
+            return (params[E_SUM, j] - params[E_SUM, i], params[D_SUM, j] - params[D_SUM, i],
+                    params[G_SUM, j] - params[G_SUM, i])
+        return discrete
+
+    def continuous(params, lo, hi):
+        kappa, a, b = params
+        e_lo, e_hi = a + (b - a) * lo, a + (b - a) * hi
+        return kappa * (hi - lo) * (e_lo * e_lo + e_lo * e_hi + e_hi * e_hi) / 3.0, 0.0, 0.0
+    return continuous
+
+
+@overload(_moment)
+def _moment_overload(params, top):
+    if _is_discrete(params):
+        return lambda params, top: params[M_SUM, int(top)]
+
+    def continuous(params, top):
+        kappa, a, b = params
+        return kappa * top * (a + 0.5 * (b - a) * top)
+    return continuous
+
+
+@overload(_threshold)
+def _threshold_overload(params, pos):
+    if _is_discrete(params):
+        return lambda params, pos: (params[ETA_ROW, int(pos)], params[C_ROW, int(pos)])
+
+    def continuous(params, pos):
+        kappa, a, b = params
+        return a + (b - a) * pos, 0.0
+    return continuous
+
+
+@kernel
+def _slides(params, state, row, i, x, s):
+    """Whether the branch at position i of the piece at ``row`` has reached s eta_i at x."""
+    eta, c = _threshold(params, i)
+    u = state[row + 2] + x + state[row + 3] * eta + state[row + 4] * c
+    return s * u >= eta
+
+
+@overload(_split)
+def _split_overload(params, state, row, x, s):
+    if _is_discrete(params):
+        def discrete(params, state, row, x, s):
+            lo, hi = state[row], state[row + 1]
+            if _slides(params, state, row, hi - 1.0, x, s):
+                return hi
+            if not _slides(params, state, row, lo, x, s):
+                return lo
+            first, last = lo, hi - 1.0  # slides at first, not at last: find the boundary
+            while last - first > 1.0:
+                middle = float((int(first) + int(last)) // 2)
+                if _slides(params, state, row, middle, x, s):
+                    first = middle
+                else:
+                    last = middle
+            return last
+        return discrete
+
+    def continuous(params, state, row, x, s):
+        # s (a + x + beta eta) >= eta  <=>  eta (1 - s beta) <= s (a + x)
+        lo, hi = state[row], state[row + 1]
+        reach = s * (state[row + 2] + x)
+        q = 1.0 - s * state[row + 3]
+        if q <= 0.0:
+            return hi if reach >= 0.0 else lo
+        kappa, a, b = params
+        p = (reach / q - a) / (b - a)
+        return min(max(p, lo), hi)
+    return continuous
+
+
+# ------------------------------------------------ the energy account
+
+@kernel
+def _book_sliding(energy, params, top, distance):
+    """The top piece slid by ``distance``: it dissipates distance * sum k eta."""
+    if energy is None:
+        return
+    energy[1] += distance * _moment(params, top)
+
+
+@kernel
+def _book_reached(energy, params, lo, hi, a_x, beta, gamma, s):
+    """The branches [lo, hi) of a piece reached their thresholds on the way to x: they slipped by
+    s (a + x + beta eta + gamma c) - eta each; add sum k eta slip."""
+    if energy is None:
+        return
+    k_sum, m_sum, c_sum = _sums(params, lo, hi)
+    e_sum, d_sum, g_sum = _squares(params, lo, hi)
+    energy[1] += s * (a_x * m_sum + beta * e_sum + gamma * d_sum) - e_sum
+
+
+@kernel
+def stored_energy(params, state):
+    """sum_i k_i u_i^2 / 2 (J): O(number of pieces)."""
+    x = state[X]
+    e_top, d_top, g_top = _squares(params, 0.0, state[TOP])
+    total = e_top
+    for j in range(int(state[COUNT])):
+        row = HEADER + ROW * j
+        a_x, beta, gamma = state[row + 2] + x, state[row + 3], state[row + 4]
+        k_sum, m_sum, c_sum = _sums(params, state[row], state[row + 1])
+        e_sum, d_sum, g_sum = _squares(params, state[row], state[row + 1])
+        total += (a_x * (a_x * k_sum + 2.0 * beta * m_sum + 2.0 * gamma * c_sum)
+                  + beta * (beta * e_sum + 2.0 * gamma * d_sum) + gamma * gamma * g_sum)
+    return 0.5 * total
+
+
+# ------------------------------------------------ moves
+
 @kernel
 def resync(params, state):
     """Recompute the running totals SK and S0 from the pieces."""
-    k, eta, c, K, M, C, order = _rows(params)
     sk = 0.0
     s0 = 0.0
     for j in range(int(state[COUNT])):
         row = HEADER + ROW * j
-        lo, hi = int(state[row]), int(state[row + 1])
         a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
-        piece_k = K[hi] - K[lo]
-        sk += piece_k
-        s0 += a * piece_k + beta * (M[hi] - M[lo]) + gamma * (C[hi] - C[lo])
+        k_sum, m_sum, c_sum = _sums(params, state[row], state[row + 1])
+        sk += k_sum
+        s0 += a * k_sum + beta * m_sum + gamma * c_sum
     state[SK] = sk
     state[S0] = s0
     state[MOVES] = 0.0
@@ -112,85 +345,148 @@ def resync(params, state):
 @kernel
 def force(params, state):
     """sum_i k_i u_i (N) at the current displacement."""
+    return state[S0] + state[X] * state[SK] + state[DIRECTION] * _moment(params, state[TOP])
+
+
+@kernel
+def move(params, state, dx, energy):
+    """Move the displacement by the monotone increment dx; return the new force.
+
+    With an ``energy`` account (not None), add the sliders' dissipation to energy[1].
+    """
     x = state[X]
-    k, eta, c, K, M, C, order = _rows(params)
-    return state[S0] + x * state[SK] + state[DIRECTION] * M[int(state[TOP])]
+    if x + dx == x:
+        return force(params, state)
+    s = 1.0 if dx > 0.0 else -1.0
+    result = _walk(params, state, dx, s, energy, True)
+    return result[0]
 
 
 @kernel
-def _slides(params, state, row, i, x, s):
-    """Whether branch i of the piece at ``row`` has reached s eta_i at x (it slides in direction s)."""
-    k, eta, c, K, M, C, order = _rows(params)
-    u = state[row + 2] + x + state[row + 3] * eta[i] + state[row + 4] * c[i]
-    return s * u >= eta[i]
+def peek(params, state, dx, direction):
+    """The branch force as a function of the increment around ``dx`` (0 or of the sign of ``direction``),
+    without moving: ``(force, stiffness, room)`` as :func:`play.piece`.
+
+    ``stiffness`` is the sum of k over the branches that still stick just
+    beyond dx in ``direction``; ``room`` how far the increment can go beyond
+    dx before the next branch slips (``inf`` when none is left).
+    """
+    return _walk(params, state, dx, direction, None, False)
 
 
 @kernel
-def _add(params, state, lo, hi, a, beta, gamma, sign):
-    """Add (sign = 1) or remove (sign = -1) the block [lo, hi) of a piece to the running totals."""
-    k, eta, c, K, M, C, order = _rows(params)
-    piece_k = K[hi] - K[lo]
-    state[SK] += sign * piece_k
-    state[S0] += sign * (a * piece_k + beta * (M[hi] - M[lo]) + gamma * (C[hi] - C[lo]))
+def _walk(params, state, dx, s, energy, commit):
+    """Move by dx in direction s (dx = 0 or of sign s); write the new state only if ``commit``.
 
-
-@kernel
-def move(params, state, dx):
-    """Move the displacement by the monotone increment dx; return the new force."""
+    Returns ``(force, stiffness, room)`` at x + dx (see :func:`peek`).
+    """
     x = state[X]
     x_new = x + dx
-    if x_new == x:
-        return force(params, state)
-    s = 1.0 if x_new > x else -1.0
-    top = int(state[TOP])
-    if s != state[DIRECTION] and top > 0:
-        # reversal: the branches that slid stick again, u_i = d eta_i = (-x) + x + d eta_i
-        count = int(state[COUNT])
+    count = int(state[COUNT])
+    top = state[TOP]
+    d = state[DIRECTION]
+    sk = state[SK]
+    s0 = state[S0]
+    if s != d and top > 0.0:
+        # reversal: the branches that slid stick again, u_i = d eta_i = (-x) + x + d eta_i.
+        # The row beyond the stack is free (kept so by _compact); without commit it is scratch.
         row = HEADER + ROW * count
-        d = state[DIRECTION]
         state[row] = 0.0
         state[row + 1] = top
         state[row + 2] = -x
         state[row + 3] = d
         state[row + 4] = 0.0
-        _add(params, state, 0, top, -x, d, 0.0, 1.0)
-        state[COUNT] = count + 1
-        top = 0
-    state[DIRECTION] = s
-    while state[COUNT] > 0:
-        count = int(state[COUNT])
+        k_sum, m_sum, c_sum = _sums(params, 0.0, top)
+        sk += k_sum
+        s0 += -x * k_sum + d * m_sum
+        count += 1
+        top = 0.0
+    elif commit:
+        _book_sliding(energy, params, top, abs(dx))
+    d = s
+    split_row = -1
+    split_at = 0.0
+    while count > 0:
         row = HEADER + ROW * (count - 1)  # the sticking piece with the smallest eta
-        lo, hi = int(state[row]), int(state[row + 1])
+        lo, hi = state[row], state[row + 1]
+        p = _split(params, state, row, x_new, s)
+        if p <= lo:
+            break
         a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
-        if _slides(params, state, row, hi - 1, x_new, s):
-            _add(params, state, lo, hi, a, beta, gamma, -1.0)  # the whole piece slides
-            state[COUNT] = count - 1
-            top = hi
-            continue
-        if _slides(params, state, row, lo, x_new, s):
-            first, last = lo, hi - 1  # slides at first, not at last: find the boundary
-            while last - first > 1:
-                middle = (first + last) // 2
-                if _slides(params, state, row, middle, x_new, s):
-                    first = middle
-                else:
-                    last = middle
-            _add(params, state, lo, last, a, beta, gamma, -1.0)
-            state[row] = last
-            top = last
-        break
-    state[TOP] = top
-    state[X] = x_new
-    state[MOVES] += 1.0
-    if state[MOVES] >= RESYNC:
-        resync(params, state)
-    return force(params, state)
+        k_sum, m_sum, c_sum = _sums(params, lo, p)
+        sk -= k_sum
+        s0 -= a * k_sum + beta * m_sum + gamma * c_sum
+        if commit:
+            _book_reached(energy, params, lo, p, a + x_new, beta, gamma, s)
+        top = p
+        if p < hi:  # split: [lo, p) slides, [p, hi) sticks
+            split_row = row
+            split_at = p
+            break
+        count -= 1  # the whole piece slides
+    if commit:
+        state[COUNT] = count
+        state[TOP] = top
+        state[DIRECTION] = d
+        state[SK] = sk
+        state[S0] = s0
+        state[X] = x_new
+        if split_row >= 0:
+            state[split_row] = split_at
+        state[MOVES] += 1.0
+        if state[MOVES] >= RESYNC:
+            resync(params, state)
+        if (count + 2) * ROW + HEADER > state.shape[0]:
+            _compact(params, state)
+        count = int(state[COUNT])
+        sk = state[SK]
+        s0 = state[S0]
+        top = state[TOP]
+    force_new = s0 + x_new * sk + d * _moment(params, top)
+    room = np.inf
+    if count > 0:
+        row = HEADER + ROW * (count - 1)
+        first = split_at if row == split_row else state[row]
+        eta, c = _threshold(params, first)
+        u = state[row + 2] + x_new + state[row + 3] * eta + state[row + 4] * c
+        room = max(eta - s * u, 0.0)
+    return force_new, sk, room
+
+
+@kernel
+def _compact(params, state):
+    """Make room for one more piece: merge the narrowest piece into its deeper neighbour.
+
+    Only the continuum can fill its capacity (n branches hold at most n
+    pieces). The merged piece's branches take the neighbour's formula: their
+    elongations change by at most twice the piece's width in eta.
+    """
+    count = int(state[COUNT])
+    narrowest = 0
+    width = np.inf
+    for j in range(count):
+        row = HEADER + ROW * j
+        if state[row + 1] - state[row] < width:
+            width = state[row + 1] - state[row]
+            narrowest = j
+    row = HEADER + ROW * narrowest
+    if narrowest > 0:  # the deeper neighbour (larger eta) extends up to the merged piece's lo
+        state[row - ROW] = state[row]
+    else:  # the deepest piece: its upper neighbour extends down to its hi
+        state[row + ROW + 1] = state[row + 1]
+    for j in range(narrowest, count - 1):
+        for f in range(ROW):
+            state[HEADER + ROW * j + f] = state[HEADER + ROW * (j + 1) + f]
+    state[COUNT] = count - 1
+    resync(params, state)
 
 
 @kernel
 def elongations(params, state, out):
-    """Write u_i into ``out`` (length n, the scene's order): O(n), for output rows only."""
-    k, eta, c, K, M, C, order = _rows(params)
+    """Write u_i into ``out`` (length n, the scene's order): O(n), for output rows only (n branches)."""
+    order = params[ORDER_ROW]
+    eta = params[ETA_ROW]
+    c = params[C_ROW]
     x = state[X]
     top = int(state[TOP])
     d = state[DIRECTION]
@@ -202,3 +498,22 @@ def elongations(params, state, out):
         a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
         for i in range(lo, hi):
             out[int(order[i])] = min(max(a + x + beta * eta[i] + gamma * c[i], -eta[i]), eta[i])
+
+
+@kernel
+def profile(params, state, s, out):
+    """The elongation u(s) (m) at the positions ``s`` of the continuum (for plots and tests)."""
+    kappa, a, b = params
+    x = state[X]
+    top = state[TOP]
+    d = state[DIRECTION]
+    for q in range(s.shape[0]):
+        eta = a + (b - a) * s[q]
+        out[q] = d * eta
+        if s[q] < top:
+            continue
+        for j in range(int(state[COUNT])):
+            row = HEADER + ROW * j
+            if state[row] <= s[q] <= state[row + 1]:
+                out[q] = min(max(state[row + 2] + x + state[row + 3] * eta, -eta), eta)
+                break

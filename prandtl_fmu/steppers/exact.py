@@ -48,6 +48,9 @@ def step_for(scene):
         raise ValueError("'exact' needs [mass] (the massless element is solved exactly by 'implicit')")
     if scene.cubic is not None:
         raise ValueError("'exact' needs a linear smooth part: no [cubic]")
+    if scene.branches is not None and scene.branches.continuum:
+        raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
+                         "'verlet' (order 2), 'symplectic' or 'projected'")
     return step
 
 

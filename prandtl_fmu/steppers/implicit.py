@@ -15,6 +15,10 @@ With the increment w = x1 - x = h v1 this is one scalar equation G(w) = 0,
 non-decreasing in w and smooth between the kinks w = ±eta_i - u_i, solved to
 rounding by :func:`prandtl_fmu.kernels.increment.solve_increment`.
 
+With many branches the branch force and its pieces come from the memory
+stack (``kernels/stack.py``, :func:`~prandtl_fmu.kernels.stack.peek`): the
+solve then costs O(log n) per kink it crosses instead of O(n).
+
 Order 1. Unconditionally stable: with no load the discrete energy
 m v^2/2 + k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 never increases, for any h,
 and with a load the energy balance residual (work - dissipated - change of
@@ -36,11 +40,17 @@ from ..kernels.increment import solve_increment
 from ..kernels.play import move
 from ..loads import force_at
 
+BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
 
 
 def step_for(scene):
-    """The compiled step for ``scene`` (every scene)."""
+    """The compiled step for ``scene``; ValueError for the continuum."""
+    if scene.branches is not None and scene.branches.continuum:
+        # the continuum's force is smooth (not piecewise linear) in the increment where branches
+        # yield one after the other: the exact scalar solve does not apply
+        raise ValueError("'implicit' solves a piecewise linear equation and the continuum yields smoothly: use "
+                         "'verlet' (order 2), 'symplectic' or 'projected'")
     return step
 
 
