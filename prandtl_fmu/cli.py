@@ -70,7 +70,7 @@ def _run(args) -> int:
         warnings.simplefilter("always", StabilityWarning)
         try:
             result = simulate(scene, states=args.states, energy=args.energy)
-        except ElementError as exc:
+        except (ElementError, ValueError) as exc:  # ValueError: an option that does not fit the scene
             error = exc
         else:
             error = None

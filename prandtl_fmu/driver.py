@@ -343,10 +343,16 @@ class Element:
     shorter last step for any remainder, with the force held constant. The
     energy account is always kept (:meth:`energy`). The state is saved and
     restored as plain data by :meth:`get_state` and :meth:`set_state`.
+
+    Many branches are held by the memory stack (see :func:`choose_branch_kernel`;
+    ``branch_kernel`` forces "play" or "stack"); switching to a stepper that
+    does not take it (``exact``) expands them to one elongation per branch.
     """
 
-    def __init__(self, scene: Scene, stepper: Optional[str] = None, step: Optional[float] = None):
+    def __init__(self, scene: Scene, stepper: Optional[str] = None, step: Optional[float] = None,
+                 branch_kernel: Optional[str] = None):
         self.scene = scene
+        self._forced_kernel = branch_kernel  # "play" or "stack"; None: the automatic choice
         self.stepper = stepper or scene.solver.stepper
         self._step = compile_step(scene, self.stepper)
         self.h = float(step if step is not None else scene.solver.step)
@@ -362,7 +368,7 @@ class Element:
         :func:`initial_state`); the energy account restarts."""
         self.time = 0.0
         self.force = float(force)
-        self.branch_kernel = choose_branch_kernel(self.scene, self.stepper)
+        self.branch_kernel = self._forced_kernel or choose_branch_kernel(self.scene, self.stepper)
         self.model = compile_model(self.scene, self.branch_kernel)
         self.x, self.v, self.u = initial_state(self.scene, self.model, held(self.force))
         self.account[:] = 0.0
@@ -424,7 +430,10 @@ class Element:
         and the branches are many, they are folded back into a stack.
         """
         step = compile_step(self.scene, name)
-        self._use_branch_kernel(choose_branch_kernel(self.scene, name) if self._can_fold() else "play")
+        kind = choose_branch_kernel(self.scene, name) if self._can_fold() else "play"
+        if self._forced_kernel and getattr(get_stepper(name), "BRANCH_STACK", False):
+            kind = self._forced_kernel
+        self._use_branch_kernel(kind)
         self._step, self.stepper = step, name
 
     def _can_fold(self) -> bool:

@@ -282,12 +282,12 @@ def _branches(source, data):
     sampled = {"count", "k_total", "eta_range", "u0", "sampling"}
     continuous = {"continuum", "k_total", "eta_range"}
     if "continuum" in r.data:
-        r.only(continuous)
         if not isinstance(r.data["continuum"], bool):
             r.fail("continuum", f"must be true or false, got {_kind(r.data['continuum'])}")
         if r.data["continuum"]:
+            r.only(continuous)
             return _continuum(r)
-        del r.data["continuum"]  # continuum = false: the sampled spectrum
+        r = _Reader(source, "branches", {key: v for key, v in data.items() if key != "continuum"})
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
         r.only(sampled)
         n = r.integer("count", minimum=1)

@@ -21,6 +21,8 @@ EFFECT_SETS = {
     "paper": None,  # scenes/paper-section-8.toml: mass, spring (k0 = 0), 100 branches
     "all-effects": base_tables(),
     "damper-only": base_tables(spring=None, cubic=None, mass={"m": 2.0, "x0": 0.1, "v0": 0.0}),
+    "continuum": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
+                             branches={"continuum": True, "k_total": 1.0, "eta_range": [0.0, 1.0]}),
 }
 
 
@@ -59,7 +61,8 @@ def test_model_description_is_valid_and_complete(fmus, name):
     expected |= {"k3"} if scene.cubic else set()
     expected |= {"c"} if scene.damper else set()
     assert {v.name for v in md.modelVariables if v.causality == "parameter"} == expected
-    assert variables["n"].variability == "constant" and int(variables["n"].start) == scene.branches.n
+    n = -1 if scene.branches.continuum else scene.branches.n
+    assert variables["n"].variability == "constant" and int(variables["n"].start) == n
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
     assert md.coSimulation.canHandleVariableCommunicationStepSize
     assert md.defaultExperiment.stopTime == str(scene.solver.stop_time) or \
@@ -87,7 +90,7 @@ def element_run(scene_path, stepper, times, forces):
 
 
 @pytest.mark.parametrize("stepper", ["projected", "implicit"])
-@pytest.mark.parametrize("name", list(EFFECT_SETS))
+@pytest.mark.parametrize("name", [name for name in EFFECT_SETS if name != "continuum"])
 def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
     fmu, scene_path = fmus[name]
     dt, stop = 0.05, 20.0
@@ -160,7 +163,9 @@ def test_state_rollback_and_serialization_give_identical_continuations(fmus):
         state = slave.fmu.getFMUstate()
         blob = slave.fmu.serializeFMUstate(state)
         data = json.loads(bytes(blob))  # plain JSON: nothing in it can run
-        assert len(data["element"]["u"]) == 100 and data["settings"]["step"] == 2e-3
+        element = data["element"]  # n = 100 branches: the memory stack, its pieces and the elongations they refer to
+        assert element["branch_kernel"] == "stack" and len(element["u_reference"]) == 100
+        assert data["settings"]["step"] == 2e-3
 
         def continuation(s):
             out = []
@@ -311,5 +316,37 @@ def test_a_stepper_that_does_not_apply_is_refused(fmus):
             slave.fmu.doStep(slave.time, 0.1)
         assert refused.value.status == 2
         assert any("no [cubic]" in message for _, message in slave.messages)
+    finally:
+        slave.close()
+
+
+@pytest.mark.parametrize("stepper", ["projected", "verlet"])
+def test_the_continuous_element_as_an_fmu(fmus, stepper):
+    """The continuum (infinitely many branches) in an FMU: equal to the library, its state saved and restored
+    as plain data, and a stepper that cannot take it refused by name."""
+    fmu, scene_path = fmus["continuum"]
+    dt, stop = 0.05, 20.0
+    times = np.round(np.arange(0, stop + dt / 2, dt), 12)
+    forces = 0.6 * np.cos(0.7 * times) + 0.2 * np.sin(2.3 * times)
+    result = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, input=held_input(times, forces),
+                          start_values={"stepper": stepper}, output=["x", "v", "reaction", "dissipated_sliders"])
+    expected = element_run(scene_path, stepper, times, forces)
+    np.testing.assert_allclose(np.column_stack([result["x"], result["v"], result["reaction"]]), expected,
+                               rtol=0, atol=1e-12)
+    assert result["dissipated_sliders"][-1] > 0
+    slave = Slave(fmu, start_values={"stepper": stepper})
+    try:
+        for k in range(30):
+            slave.step(0.2, 0.7 * np.cos(0.4 * k))
+        blob = slave.fmu.serializeFMUstate(slave.fmu.getFMUstate())
+        assert json.loads(bytes(blob))["element"]["branch_kernel"] == "stack"
+        first = [slave.step(0.2, 0.3) or slave.get("x", "reaction") for _ in range(10)]
+        slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(blob))
+        slave.time -= 2.0
+        np.testing.assert_array_equal([slave.step(0.2, 0.3) or slave.get("x", "reaction") for _ in range(10)], first)
+        slave.set("stepper", "implicit")
+        with pytest.raises(FMICallException):
+            slave.fmu.doStep(slave.time, 0.1)
+        assert any("continuum" in message for _, message in slave.messages)
     finally:
         slave.close()

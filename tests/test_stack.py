@@ -151,3 +151,37 @@ def test_steppers_give_the_same_motion_with_the_stack_over_a_million_steps(stepp
         a = fast.energy[name]
         assert np.abs(a - b).max() <= 1e-10 * max(1.0, np.abs(b).max()), name
     assert np.any((np.abs(slow.u) == eta) & (eta > 0))  # branches slipped
+
+
+def test_element_moves_between_the_kernels_when_the_stepper_changes():
+    """An Element holds n = 100 branches in the stack; `exact` needs one elongation per branch, so switching
+    to it expands the stack, and switching back folds them again: the motion is the one of the O(n) kernel."""
+    from prandtl_fmu import Element, load_scene
+
+    from .conftest import SCENES
+
+    scene = load_scene(SCENES / "paper-section-8.toml")
+    fast = Element(scene, stepper="projected")
+    slow = Element(scene, stepper="projected", branch_kernel="play")
+    assert (fast.branch_kernel, slow.branch_kernel) == ("stack", "play")
+    for stepper in ("projected", "exact", "implicit", "verlet"):
+        fast.set_stepper(stepper)
+        slow.set_stepper(stepper)
+        assert fast.branch_kernel == ("play" if stepper == "exact" else "stack")
+        for k in range(40):
+            force = 0.45 * np.cos(0.5 * fast.time)
+            fast.advance(0.5, force)
+            slow.advance(0.5, force)
+        assert fast.x == pytest.approx(slow.x, abs=1e-10) and fast.reaction == pytest.approx(slow.reaction, abs=1e-10)
+        for name, value in slow.energy().items():
+            assert fast.energy()[name] == pytest.approx(value, rel=1e-9, abs=1e-10), name
+    # plain-data state of the stack: restored into another element, the same continuation bit for bit
+    state = fast.get_state()
+    other = Element(scene, stepper="verlet")
+    other.set_state(state)
+    for element in (fast, other):
+        element.advance(3.7, 0.2)
+    assert (fast.x, fast.v, fast.reaction) == (other.x, other.v, other.reaction)
+    broken = dict(state, u=state["u"][:-1])
+    with pytest.raises(ValueError, match="memory-stack state"):
+        other.set_state(broken)

@@ -24,10 +24,16 @@ def index_html(model_description: bytes, scene) -> str:
             var.get("description", ""))) + "</tr>")
     effects = ", ".join(scene.effects)
     branches = scene.branches
-    branch_text = (f"{branches.n} branches, stiffness sum {branches.stiffness.sum():.6g} N/m, "
-                   f"elastic ranges {branches.yield_displacement.min():.6g} to "
-                   f"{branches.yield_displacement.max():.6g} m, strength sum alpha_i = {branches.strength:.6g} N"
-                   if branches is not None else "no branches")
+    if branches is None:
+        branch_text = "no branches"
+    elif branches.continuum:
+        branch_text = (f"the continuous element: branches s in [0, 1] with stiffness density {branches.k_total:.6g} "
+                       f"N/m and elastic range eta(s) = {branches.eta_min:.6g} + "
+                       f"{branches.eta_max - branches.eta_min:.6g} s m, strength {branches.strength:.6g} N")
+    else:
+        branch_text = (f"{branches.n} branches, stiffness sum {branches.stiffness.sum():.6g} N/m, "
+                       f"elastic ranges {branches.yield_displacement.min():.6g} to "
+                       f"{branches.yield_displacement.max():.6g} m, strength sum alpha_i = {branches.strength:.6g} N")
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{html.escape(scene.name)}: Prandtl element</title>
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}

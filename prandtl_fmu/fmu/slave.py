@@ -65,7 +65,8 @@ class PrandtlElement(Fmi2Slave):
         self.stepper = self.element.stepper
         self.step = self.element.h
         self.parameters = dict(self.element.coefficients())
-        self.n = self.scene.branches.n if self.scene.branches is not None else 0
+        branches = self.scene.branches
+        self.n = 0 if branches is None else -1 if branches.continuum else branches.n
         self._register()
 
     # ------------------------------------------------------------ variables
@@ -116,7 +117,8 @@ class PrandtlElement(Fmi2Slave):
             getter=lambda: self.stepper, setter=lambda value: setattr(self, "stepper", value)))
         self.register_variable(Integer(
             "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
-            description="number of Prandtl branches (from the scene)", getter=lambda: self.n))
+            description="number of Prandtl branches (from the scene); -1 for the continuous element",
+            getter=lambda: self.n))
 
     def to_xml(self, model_options=dict()):
         root = super().to_xml(model_options)

@@ -14,7 +14,8 @@ consecutive blocks ("pieces") of *positions*:
 * the top piece [0, top): the branches that slid in the last direction d of
   motion, u_i = d eta_i;
 * below it, pieces [lo, hi) of sticking branches, u_i = a + x + beta eta_i
-  (+ c_i for the initial piece, c_i = u0_i), beta in {-1, 0, +1}: each moves
+  (+ c_i for the initial piece, c_i = u0_i), beta in {-1, 0, +1} (in [-1, 1]
+  after a merge, see below; the rules only need |beta| <= 1): each moves
   with x, so its force is (a + x) K + beta M (+ C) with the sums K = sum k_i,
   M = sum k_i eta_i, C = sum k_i c_i over the piece.
 
@@ -40,8 +41,8 @@ Two kinds of spectrum share this code, told apart by the type of ``params``:
   integrals in closed form, the split is closed form too. Its memory holds at
   most ``CONTINUUM_PIECES`` turning points: beyond that (thousands of
   reversals that are never wiped out, e.g. a free decay with eta_min = 0) the
-  narrowest piece is merged into its neighbour, an approximation of the
-  order of that piece's width in eta; see :func:`_compact`.
+  two adjacent pieces whose kink matters least are replaced by their chord,
+  an approximation of second order in their width; see :func:`_compact`.
 
 The energy account (optional) books the sliders' dissipation sum alpha_i |slip_i|
 from the same sums (and those of k eta^2, k eta c, k c^2), so the stack keeps
@@ -149,7 +150,11 @@ def restore(params, saved):
             or np.any(np.abs(rows[:, 3]) > 1.0)):
         raise ValueError("memory-stack state: the pieces do not tile the branches")
     state[:saved.shape[0]] = saved
-    resync(params, state)
+    resync(params, state)  # the totals must be those of the pieces (to rounding) ...
+    scale = 1.0 + abs(state[SK]) + abs(state[S0])
+    if abs(state[SK] - saved[SK]) + abs(state[S0] - saved[S0]) > 1e-9 * scale or not 0 <= saved[MOVES] < RESYNC:
+        raise ValueError("memory-stack state: the running totals do not match the pieces")
+    state[:HEADER] = saved[:HEADER]  # ... and are kept as saved, so that the continuation is bit for bit the same
     return state
 
 
@@ -453,28 +458,57 @@ def _walk(params, state, dx, s, energy, commit):
     return force_new, sk, room
 
 
-@kernel
 def _compact(params, state):
-    """Make room for one more piece: merge the narrowest piece into its deeper neighbour.
+    """Make room for one more piece (the continuum only: see the overload)."""
+    raise NotImplementedError
 
-    Only the continuum can fill its capacity (n branches hold at most n
-    pieces). The merged piece's branches take the neighbour's formula: their
-    elongations change by at most twice the piece's width in eta.
+
+@overload(_compact)
+def _compact_overload(params, state):
+    if _is_discrete(params):
+        # n branches never need it: a reversal needs top > 0, so count <= n - 1 before its push,
+        # and the state has n + 1 rows
+        return lambda params, state: None
+    return _compact_continuum
+
+
+def _compact_continuum(params, state):
+    """Make room for one more piece: replace two adjacent pieces by their chord.
+
+    The two pieces u = a + x + beta eta meeting at a kink are
+    replaced by the straight line through the ends of the pair (slope in
+    [-1, 1]: the profile stays continuous, 1-Lipschitz and within |u| <= eta,
+    so the stack's rules still hold); the pair chosen is the one where this
+    changes the force least (kink height times width).
     """
+    kappa, a0, b0 = params
+    x = state[X]
     count = int(state[COUNT])
-    narrowest = 0
-    width = np.inf
-    for j in range(count):
-        row = HEADER + ROW * j
-        if state[row + 1] - state[row] < width:
-            width = state[row + 1] - state[row]
-            narrowest = j
-    row = HEADER + ROW * narrowest
-    if narrowest > 0:  # the deeper neighbour (larger eta) extends up to the merged piece's lo
-        state[row - ROW] = state[row]
-    else:  # the deepest piece: its upper neighbour extends down to its hi
-        state[row + ROW + 1] = state[row + 1]
-    for j in range(narrowest, count - 1):
+    best = 0
+    cost = np.inf
+    for j in range(count - 1):
+        deep = HEADER + ROW * j
+        upper = deep + ROW
+        eta_lo, eta_mid, eta_hi = (a0 + (b0 - a0) * state[upper], a0 + (b0 - a0) * state[deep],
+                                   a0 + (b0 - a0) * state[deep + 1])
+        u_lo = state[upper + 2] + x + state[upper + 3] * eta_lo
+        u_mid = state[deep + 2] + x + state[deep + 3] * eta_mid
+        u_hi = state[deep + 2] + x + state[deep + 3] * eta_hi
+        chord_mid = u_lo + (u_hi - u_lo) * (eta_mid - eta_lo) / (eta_hi - eta_lo)
+        change = abs(u_mid - chord_mid) * (eta_hi - eta_lo)
+        if change < cost:
+            cost = change
+            best = j
+    deep = HEADER + ROW * best
+    upper = deep + ROW
+    eta_lo, eta_hi = a0 + (b0 - a0) * state[upper], a0 + (b0 - a0) * state[deep + 1]
+    u_lo = state[upper + 2] + x + state[upper + 3] * eta_lo
+    u_hi = state[deep + 2] + x + state[deep + 3] * eta_hi
+    beta = min(max((u_hi - u_lo) / (eta_hi - eta_lo), -1.0), 1.0)
+    state[deep] = state[upper]
+    state[deep + 2] = u_lo - x - beta * eta_lo
+    state[deep + 3] = beta
+    for j in range(best + 1, count - 1):
         for f in range(ROW):
             state[HEADER + ROW * j + f] = state[HEADER + ROW * (j + 1) + f]
     state[COUNT] = count - 1
