@@ -40,7 +40,7 @@ from dataclasses import replace
 import numpy as np
 
 from .driver import simulate
-from .effects import Branches
+from .effects import ContinuousBranches
 from .loads import force_at
 
 PAPER_TABLE_1 = {  # (q, n): (alpha, C) as printed in Bastien & Schatzman (2002), Table 1
@@ -52,8 +52,9 @@ PAPER_TABLE_1 = {  # (q, n): (alpha, C) as printed in Bastien & Schatzman (2002)
 OUTPUT = 0.1
 
 
-def paper_scene(n: int, stop_time: float):
-    """The paper's section 8 scene with n sampled branches (eq. 7.19) up to ``stop_time``."""
+def paper_scene(n, stop_time: float, rule: str = "right"):
+    """The paper's section 8 scene up to ``stop_time``, with n branches sampled from its spectrum k(s) = 1,
+    eta(s) = s + 0.1 (by ``rule``: "right" is eq. 7.19), or the continuum itself for ``n=None``."""
     from .scene import parse_scene
 
     root = os.path.join(os.path.dirname(__file__), "..", "scenes", "paper-section-8.toml")
@@ -62,8 +63,8 @@ def paper_scene(n: int, stop_time: float):
             scene = parse_scene(fh.read(), root)
     else:  # installed without the repository: the same scene, written out
         scene = parse_scene(_PAPER_SCENE, "paper-section-8.toml")
-    s = np.arange(1, n + 1) / n
-    branches = Branches(np.full(n, 1.0 / n), 0.1 + s, np.zeros(n))
+    spectrum = ContinuousBranches(1.0, 0.1, 1.1)
+    branches = spectrum if n is None else spectrum.sample(n, rule)
     return replace(scene, branches=branches).with_solver(stop_time=stop_time, output_interval=OUTPUT)
 
 

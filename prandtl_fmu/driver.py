@@ -385,6 +385,15 @@ class Element:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N)."""
         return float(self._out[0, 2])
 
+    def elongations(self) -> Optional[np.ndarray]:
+        """The branch elongations u_i (m), in the scene's order, as a new array (O(n) with the memory
+        stack); None without branches or for the continuum."""
+        if self.u is None or self.scene.branches.continuum:
+            return None
+        u = np.empty(self.scene.branches.n)
+        write_elongations(self.model[4], self.u, u)
+        return u
+
     def energy(self) -> dict:
         """The energy account (J): see :data:`ENERGY_COLUMNS`."""
         columns = _energy_columns(self.initial_energy, self._energy_row)
