@@ -85,6 +85,12 @@ def kernel(fn):
     return njit(cache=CACHE)(fn)
 
 
+def inline_kernel(fn):
+    """:func:`kernel`, inlined into its callers by numba itself (for a hot helper whose callers fix some of
+    its arguments, such as a flag: each caller then compiles only its own branch)."""
+    return njit(cache=CACHE, inline="always")(fn)
+
+
 def loop_kernel(fn):
     """:func:`kernel` for a loop that takes compiled functions as arguments: never cached.
 

@@ -57,7 +57,7 @@ import numpy as np
 from numba.core import types
 from numba.extending import overload
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 
 HEADER = 7
 ROW = 5
@@ -198,7 +198,7 @@ def _is_discrete(params):
     return isinstance(params, types.Array)
 
 
-@overload(_sums)
+@overload(_sums, inline="always")
 def _sums_overload(params, lo, hi):
     if _is_discrete(params):
         def discrete(params, lo, hi):
@@ -214,7 +214,7 @@ def _sums_overload(params, lo, hi):
     return continuous
 
 
-@overload(_squares)
+@overload(_squares, inline="always")
 def _squares_overload(params, lo, hi):
     if _is_discrete(params):
         def discrete(params, lo, hi):
@@ -230,7 +230,7 @@ def _squares_overload(params, lo, hi):
     return continuous
 
 
-@overload(_moment)
+@overload(_moment, inline="always")
 def _moment_overload(params, top):
     if _is_discrete(params):
         return lambda params, top: params[M_SUM, int(top)]
@@ -241,7 +241,7 @@ def _moment_overload(params, top):
     return continuous
 
 
-@overload(_threshold)
+@overload(_threshold, inline="always")
 def _threshold_overload(params, pos):
     if _is_discrete(params):
         return lambda params, pos: (params[ETA_ROW, int(pos)], params[C_ROW, int(pos)])
@@ -260,23 +260,27 @@ def _slides(params, state, row, i, x, s):
     return s * u >= eta
 
 
-@overload(_split)
+@overload(_split, inline="always")
 def _split_overload(params, state, row, x, s):
     if _is_discrete(params):
         def discrete(params, state, row, x, s):
-            lo, hi = state[row], state[row + 1]
-            if _slides(params, state, row, hi - 1.0, x, s):
-                return hi
-            if not _slides(params, state, row, lo, x, s):
-                return lo
-            first, last = lo, hi - 1.0  # slides at first, not at last: find the boundary
-            while last - first > 1.0:
-                middle = float((int(first) + int(last)) // 2)
-                if _slides(params, state, row, middle, x, s):
+            # branch i slides when s (a + x + beta eta_i + gamma c_i) >= eta_i
+            eta = params[ETA_ROW]
+            c = params[C_ROW]
+            a_x, beta, gamma = state[row + 2] + x, state[row + 3], state[row + 4]
+            lo, hi = int(state[row]), int(state[row + 1])
+            if s * (a_x + beta * eta[hi - 1] + gamma * c[hi - 1]) >= eta[hi - 1]:
+                return float(hi)
+            if not s * (a_x + beta * eta[lo] + gamma * c[lo]) >= eta[lo]:
+                return float(lo)
+            first, last = lo, hi - 1  # slides at first, not at last: find the boundary
+            while last - first > 1:
+                middle = (first + last) >> 1
+                if s * (a_x + beta * eta[middle] + gamma * c[middle]) >= eta[middle]:
                     first = middle
                 else:
                     last = middle
-            return last
+            return float(last)
         return discrete
 
     def continuous(params, state, row, x, s):
@@ -379,7 +383,7 @@ def peek(params, state, dx, direction):
     return _walk(params, state, dx, direction, None, False)
 
 
-@kernel
+@inline_kernel
 def _walk(params, state, dx, s, energy, commit):
     """Move by dx in direction s (dx = 0 or of sign s); write the new state only if ``commit``.
 
@@ -449,7 +453,7 @@ def _walk(params, state, dx, s, energy, commit):
         top = state[TOP]
     force_new = s0 + x_new * sk + d * _moment(params, top)
     room = np.inf
-    if count > 0:
+    if count > 0 and not commit:  # only a peek asks for the room (a move would only waste a memory access)
         row = HEADER + ROW * (count - 1)
         first = split_at if row == split_row else state[row]
         eta, c = _threshold(params, first)
@@ -463,7 +467,7 @@ def _compact(params, state):
     raise NotImplementedError
 
 
-@overload(_compact)
+@overload(_compact, inline="always")
 def _compact_overload(params, state):
     if _is_discrete(params):
         # n branches never need it: a reversal needs top > 0, so count <= n - 1 before its push,
