@@ -262,8 +262,8 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     if problem:
         warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=2)
     if states and scene.branches is not None and scene.branches.continuum:
-        raise ValueError("the continuum has no list of elongations to output (states): sample it with "
-                         "[branches] count = n instead")
+        raise ValueError(f"{scene.source}: [branches] continuum: the continuum has no list of elongations to "
+                         "output (states): sample it with [branches] count = n instead")
     model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
     load = scene.load.compile()
     times = output_grid(solver.stop_time, solver.output_interval)

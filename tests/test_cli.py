@@ -68,3 +68,18 @@ def test_default_scene_runs_from_the_cli(tmp_path):
     strength = load_scene(SCENES / "paper-section-8.toml").branches.strength
     assert np.all(np.abs(reaction) <= strength * (1 + 1e-12))
     assert np.abs(reaction).max() > 0.9 * strength
+
+
+def test_the_continuum_runs_from_the_command_line_and_refuses_states_in_one_line(write_scene, tmp_path):
+    scene_path = write_scene(base_tables(cubic=None, branches={"continuum": True, "k_total": 1.0,
+                                                               "eta_range": [0.1, 1.1]}))
+    out = tmp_path / "out.csv"
+    assert main(["run", str(scene_path), "--out", str(out), "--stop-time", "3", "--energy"]) == 0
+    header, rows = read_csv(out)
+    assert header[:4] == ["time", "x", "v", "reaction"] and len(rows) == 31
+    expected = simulate(load_scene(scene_path).with_solver(stop_time=3.0))
+    assert [float(r[1]) for r in rows] == list(expected.x)
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "run", str(scene_path), "--states"],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1 and "continuum has no list of elongations" in done.stderr
