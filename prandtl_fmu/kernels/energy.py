@@ -3,7 +3,7 @@
 Over each step a stepper books, with the very forces its update uses,
 
     energy[0] += F dx            work done by the load
-    energy[1] += sum alpha_i |slip_i|   dissipated by the sliders (booked by play.move)
+    energy[1] += sum alpha_i |slip_i|   dissipated by the sliders (booked by play.move or stack.move)
     energy[2] += c v dx          dissipated by the dashpot
 
 and the state holds kinetic m v^2/2 and stored k0 x^2/2 + k3 x^4/4 + sum k_i u_i^2/2
