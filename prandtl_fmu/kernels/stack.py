@@ -140,7 +140,9 @@ def restore(params, saved):
         raise ValueError("not a memory-stack state")
     count = int(saved[COUNT])
     end = 1.0 if isinstance(params, tuple) else float(params.shape[1] - 1)
-    if saved[COUNT] != count or saved.shape[0] != HEADER + ROW * count or count + 1 >= capacity(params) + 1:
+    # n branches: at most n pieces; the continuum keeps a free row for the next reversal (see _compact)
+    limit = capacity(params) - (2 if isinstance(params, tuple) else 1)
+    if saved[COUNT] != count or saved.shape[0] != HEADER + ROW * count or count > limit:
         raise ValueError("memory-stack state: wrong count of pieces")
     rows = saved[HEADER:].reshape(count, ROW)
     bounds = np.concatenate([[end], rows[:, 0]])
