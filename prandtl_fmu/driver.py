@@ -57,10 +57,7 @@ def compile_model(scene: Scene, branch_kernel: str = "play"):
     and ``eta`` is None (see :func:`choose_branch_kernel`); the continuum
     always takes the stack (its parameters are a tuple).
     """
-    m = float(scene.mass.m) if scene.mass is not None else None
-    k0 = scene.spring.k0 if scene.spring is not None else None
-    k3 = scene.cubic.k3 if scene.cubic is not None else None
-    c = scene.damper.c if scene.damper is not None else None
+    m, k0, k3, c = _smooth_model(scene)
     branches = scene.branches
     if branches is None:
         return (m, k0, k3, c, None, None)
@@ -72,6 +69,15 @@ def compile_model(scene: Scene, branch_kernel: str = "play"):
         params, _ = stack.prepare(k, eta, branches.u0)
         return (m, k0, k3, c, params, None)
     return (m, k0, k3, c, k, eta)
+
+
+def _smooth_model(scene: Scene):
+    """``(m, k0, k3, c)``: the part of :func:`compile_model` that does not depend on the branches."""
+    m = float(scene.mass.m) if scene.mass is not None else None
+    k0 = scene.spring.k0 if scene.spring is not None else None
+    k3 = scene.cubic.k3 if scene.cubic is not None else None
+    c = scene.damper.c if scene.damper is not None else None
+    return (m, k0, k3, c)
 
 
 def choose_branch_kernel(scene: Scene, stepper: str) -> str:
@@ -351,6 +357,10 @@ class Element:
 
     def __init__(self, scene: Scene, stepper: Optional[str] = None, step: Optional[float] = None,
                  branch_kernel: Optional[str] = None):
+        if branch_kernel not in (None, "play", "stack"):
+            raise ValueError(f"branch_kernel must be 'play', 'stack' or None, got {branch_kernel!r}")
+        if branch_kernel == "play" and scene.branches is not None and scene.branches.continuum:
+            raise ValueError("the continuum has no O(n) kernel: it runs on the memory stack only")
         self.scene = scene
         self._forced_kernel = branch_kernel  # "play" or "stack"; None: the automatic choice
         self.stepper = stepper or scene.solver.stepper
@@ -428,7 +438,7 @@ class Element:
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
-        self.scene, self.model = scene, compile_model(scene, "play")[:4] + self.model[4:]
+        self.scene, self.model = scene, _smooth_model(scene) + self.model[4:]
         self._record()
 
     def set_stepper(self, name: str) -> None:
@@ -534,7 +544,7 @@ class Element:
         step = compile_step(scene, state["stepper"])
         self.set_step(float(state["step"]))
         self.scene, self.branch_kernel = scene, kind
-        self.model = compile_model(scene, "play")[:4] + model
+        self.model = _smooth_model(scene) + model
         self._step, self.stepper = step, state["stepper"]
         self.time, self.x, self.v, self.force, self.initial_energy = values
         self.u = u

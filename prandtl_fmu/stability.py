@@ -19,8 +19,6 @@ import cmath
 import math
 from typing import Optional
 
-import numpy as np
-
 GROWTH_LIMIT = 2.0  # amplitude factor per period of the stiffest mode
 
 

@@ -190,3 +190,15 @@ def test_every_stepper_that_takes_the_continuum_agrees_with_fine_sampling(steppe
                                         "sampling": "midpoint"}, stop_time=30.0, stepper=stepper))
     assert np.abs(continuum.x - sampled.x).max() < 1e-6
     assert np.abs(continuum.reaction - sampled.reaction).max() < 1e-6
+
+
+def test_an_element_of_the_continuum_cannot_be_forced_onto_the_per_branch_kernel():
+    from prandtl_fmu import Element
+
+    scene = continuum_scene({"continuum": True, "k_total": 1.0, "eta_range": [0.1, 1.1]}, stop_time=1.0)
+    with pytest.raises(ValueError, match="no O\\(n\\) kernel"):
+        Element(scene, branch_kernel="play")
+    element = Element(scene, stepper="projected")
+    element.set_stepper("verlet")
+    element.advance(1.0, 0.3)
+    assert element.branch_kernel == "stack" and element.elongations() is None and element.x > 0

@@ -254,14 +254,6 @@ def _threshold_overload(params, pos):
     return continuous
 
 
-@kernel
-def _slides(params, state, row, i, x, s):
-    """Whether the branch at position i of the piece at ``row`` has reached s eta_i at x."""
-    eta, c = _threshold(params, i)
-    u = state[row + 2] + x + state[row + 3] * eta + state[row + 4] * c
-    return s * u >= eta
-
-
 @overload(_split, inline="always")
 def _split_overload(params, state, row, x, s):
     if _is_discrete(params):
@@ -314,7 +306,7 @@ def _book_reached(energy, params, lo, hi, a_x, beta, gamma, s):
     s (a + x + beta eta + gamma c) - eta each; add sum k eta slip."""
     if energy is None:
         return
-    k_sum, m_sum, c_sum = _sums(params, lo, hi)
+    m_sum = _sums(params, lo, hi)[1]
     e_sum, d_sum, g_sum = _squares(params, lo, hi)
     energy[1] += s * (a_x * m_sum + beta * e_sum + gamma * d_sum) - e_sum
 
