@@ -61,7 +61,7 @@ def main(argv=None):
     for rule in ("right", "midpoint"):
         for n in CONVERGENCE_NS:
             result = results[(n, rule)]
-            rows.append({"sampling": rule, "n": n, "error_x_T": abs(result.x[-1] - limit.x[-1]),
+            rows.append({"sampling": rule, "n": n, "error_x_T": float(abs(result.x[-1] - limit.x[-1])),
                          "error_max": float(np.abs(result.x - limit.x).max())})
     with open(os.path.join(args.out, "convergence.csv"), "w") as fh:
         fh.write("sampling,n,error_x_T,error_max\n")
@@ -70,7 +70,7 @@ def main(argv=None):
     for rule in ("right", "midpoint"):
         chosen = [r for r in rows if r["sampling"] == rule]
         slope = -np.polyfit(np.log([r["n"] for r in chosen]), np.log([r["error_max"] for r in chosen]), 1)[0]
-        print(f"{rule}: max-norm error ~ n^-{slope:.2f}; x(T) = {limit.x[-1]!r} for the continuum")
+        print(f"{rule}: max-norm error ~ n^-{slope:.2f}; x(T) = {float(limit.x[-1])!r} for the continuum")
 
     import matplotlib
 
