@@ -8,9 +8,12 @@ of the stepper prints one ``warning:`` line on stderr and runs.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
-
+import tempfile
 import warnings
+
+import numpy as np
 
 from .driver import ENERGY_COLUMNS, ElementError
 from .scene import SceneError, load_scene
@@ -45,6 +48,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow chatter: errors are reported as one line
     args = _parser().parse_args(argv)
     if args.command == "run":
         return _run(args)
@@ -56,37 +60,170 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    from .driver import simulate
+    from .driver import ENERGY_COLUMNS, simulate_chunks
+    from .resources import ResourceError, check_disk
 
     try:
-        scene = load_scene(args.scene).with_solver(
+        scene = load_scene(args.scene, check_stepper=args.stepper is None).with_solver(
             stepper=args.stepper, step=args.step, stop_time=args.stop_time,
             output_interval=args.output_interval,
         )
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        _check_output_path(args.out, "--out")
+        _check_output_path(args.plot, "--plot")
+        if args.out:
+            columns = 4 + (_branch_count(scene) if args.states else 0) + (len(ENERGY_COLUMNS) if args.energy else 0)
+            rows = scene.solver.stop_time / scene.solver.output_interval + 2
+            check_disk(rows * columns * 24.0, _folder(args.out), f"--out {args.out} ({rows:.3g} rows x {columns} "
+                       "columns)")
+    except (SceneError, ResourceError) as exc:
+        return _error(exc)
+    plot_rows = _PlotRows() if args.plot else None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", StabilityWarning)
         try:
-            result = simulate(scene, states=args.states, energy=args.energy)
+            chunks = simulate_chunks(scene, states=args.states, energy=args.energy)
         except (ElementError, ValueError) as exc:  # ValueError: an option that does not fit the scene
-            error = exc
+            _print_warnings(caught)
+            return _error(exc)
+        _print_warnings(caught)
+        del caught[:]
+    sink = _AtomicFile(args.out) if args.out else sys.stdout
+    try:
+        for index, chunk in enumerate(chunks):
+            chunk.write_csv(sink, header=index == 0)
+            if plot_rows is not None:
+                plot_rows.add(chunk)
+        if args.out:
+            sink.commit()
         else:
-            error = None
+            sys.stdout.flush()
+    except BrokenPipeError:  # the reader stopped (`| head`): nothing more to say
+        _silence_stdout()
+        return 0
+    except KeyboardInterrupt:
+        _discard(sink)
+        print("error: interrupted; no output written" if args.out else "error: interrupted", file=sys.stderr)
+        return 130
+    except (ElementError, ValueError) as exc:
+        _discard(sink)
+        return _error(exc)
+    except OSError as exc:  # a full disk, a vanished folder
+        _discard(sink)
+        return _error(f"cannot write {args.out or 'the output'}: {exc.strerror or exc}")
+    if plot_rows is not None:
+        from .plots import plot_result
+
+        try:
+            note = f"every {plot_rows.stride}th output row" if plot_rows.stride > 1 else ""
+            plot_result(plot_rows.result(), args.plot, note=note)
+        except OSError as exc:
+            return _error(f"--plot {args.plot}: cannot write: {exc.strerror or exc}")
+    return 0
+
+
+def _error(exc) -> int:
+    print(f"error: {exc}", file=sys.stderr)
+    return 2
+
+
+def _print_warnings(caught) -> None:
     for warning in caught:
         if issubclass(warning.category, StabilityWarning):
             print(f"warning: {warning.message}", file=sys.stderr)
-    if error is not None:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    if args.out:
-        with open(args.out, "w", newline="") as fh:
-            result.write_csv(fh)
-    else:
-        result.write_csv(sys.stdout)
-    if args.plot:
-        from .plots import plot_result
 
-        plot_result(result, args.plot)
-    return 0
+
+def _branch_count(scene) -> int:
+    branches = scene.branches
+    return 0 if branches is None or branches.continuum else branches.n
+
+
+def _folder(path: str) -> str:
+    return os.path.dirname(os.path.abspath(path))
+
+
+def _check_output_path(path, option) -> None:
+    """SceneError-like one line when ``path`` cannot be written: checked before any work."""
+    if not path:
+        return
+    folder = _folder(path)
+    if os.path.isdir(path):
+        raise SceneError(f"{option} {path}: is a directory")
+    if not os.path.isdir(folder):
+        raise SceneError(f"{option} {path}: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise SceneError(f"{option} {path}: the folder {folder} is not writable")
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise SceneError(f"{option} {path}: the file is not writable")
+
+
+class _AtomicFile:
+    """A text file written under a temporary name in its folder and renamed into place by :meth:`commit`:
+    a failed or interrupted run leaves the target as it was, never half-written."""
+
+    def __init__(self, path: str):
+        self.path = path
+        handle, self.temporary = tempfile.mkstemp(prefix=".prandtl-", suffix=".part", dir=_folder(path))
+        self.file = os.fdopen(handle, "w", newline="")
+
+    def write(self, text: str) -> None:
+        self.file.write(text)
+
+    def commit(self) -> None:
+        self.file.close()
+        os.replace(self.temporary, self.path)
+
+    def discard(self) -> None:
+        try:
+            self.file.close()
+        except OSError:
+            pass
+        try:
+            os.unlink(self.temporary)
+        except OSError:
+            pass
+
+
+def _discard(sink) -> None:
+    if isinstance(sink, _AtomicFile):
+        sink.discard()
+
+
+def _silence_stdout() -> None:
+    """After a broken pipe, point stdout at /dev/null so that the interpreter's final flush is silent."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+class _PlotRows:
+    """The rows the plot needs (x, reaction, time), thinned to at most ~200 000 points in bounded memory:
+    every row while there are few, then every 2nd, 4th, ... row (the plot says which)."""
+
+    LIMIT = 200_000
+
+    def __init__(self):
+        self.stride, self.seen, self.parts, self.kept, self.first = 1, 0, [], 0, None
+
+    def add(self, chunk) -> None:
+        if self.first is None:
+            self.first = chunk
+        index = self.seen + np.arange(chunk.time.shape[0])
+        keep = index % self.stride == 0
+        self.parts.append(np.column_stack([chunk.time[keep], chunk.x[keep], chunk.reaction[keep]]))
+        self.kept += int(keep.sum())
+        self.seen += chunk.time.shape[0]
+        while self.kept > self.LIMIT:
+            self.stride *= 2
+            table = np.concatenate(self.parts)
+            table = table[::2]
+            self.parts, self.kept = [table], table.shape[0]
+
+    def result(self):
+        from .driver import Result
+
+        table = np.concatenate(self.parts)
+        first = self.first
+        return Result(table[:, 0], table[:, 1], np.full(table.shape[0], np.nan), table[:, 2], None, None,
+                      first.stepper, first.scene)

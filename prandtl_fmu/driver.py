@@ -25,7 +25,7 @@ from ._jit import loop_kernel
 from .kernels.energy import kinetic, stored
 from .kernels.increment import solve_increment
 from .kernels import stack
-from .kernels.play import branch_force, shift, write_elongations
+from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
 from .loads import force_at, held
 from .scene import Scene, with_coefficients
@@ -76,7 +76,7 @@ def _smooth_model(scene: Scene):
     m = float(scene.mass.m) if scene.mass is not None else None
     k0 = scene.spring.k0 if scene.spring is not None else None
     k3 = scene.cubic.k3 if scene.cubic is not None else None
-    c = scene.damper.c if scene.damper is not None else None
+    c = scene.damper.c if scene.has_dashpot else None  # c = 0: no dashpot at all
     return (m, k0, k3, c)
 
 
@@ -106,8 +106,13 @@ def compile_step(scene: Scene, stepper: str):
 
 
 @loop_kernel
-def integrate(step, model, load, x, v, u, t0, h, steps_per_row, n_rows, out, out_u, energy, out_energy):
-    """Advance ``n_rows * steps_per_row`` steps of size ``h`` from time ``t0``.
+def integrate(step, model, load, x, v, u, t_base, first_step, h, steps_per_row, n_rows, out, out_u, energy,
+              out_energy):
+    """Advance ``n_rows * steps_per_row`` steps of size ``h``, from step number ``first_step``.
+
+    Step number p starts at t_p = t_base + p h, computed from p alone: the
+    load a step sees does not depend on how a run is cut into calls (output
+    rows, chunks of rows, communication steps).
 
     After every ``steps_per_row`` steps, row j of ``out`` (shape (n_rows, 3))
     receives x, v and the reaction, row j of ``out_u`` (shape (n_rows, n), or
@@ -123,7 +128,7 @@ def integrate(step, model, load, x, v, u, t0, h, steps_per_row, n_rows, out, out
     p = 0
     for j in range(n_rows):
         for _ in range(steps_per_row):
-            x1, v1, s1 = step(model, load, t0 + p * h, h, x, v, s, u, energy)
+            x1, v1, s1 = step(model, load, t_base + (first_step + p) * h, h, x, v, s, u, energy)
             if not (abs(x1) < np.inf and abs(v1) < np.inf):
                 return x, v, p
             x, v, s = x1, v1, s1
@@ -163,7 +168,7 @@ def initial_state(scene: Scene, model, load):
     w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, u)
     if not math.isfinite(w):
         raise ElementError(_collapse_message(scene, 0.0, force))
-    shift(k, eta, u, w)
+    move(k, eta, u, w, None)  # the O(n) kernel or the memory stack
     return w, 0.0, u
 
 
@@ -176,7 +181,7 @@ def _collapse_message(scene: Scene, time: float, force: float) -> str:
 
 def _failure(scene: Scene, stepper: str, load, time: float, h: float) -> ElementError:
     """The error for a step from ``time`` that could not be taken."""
-    if scene.mass is None and scene.damper is None:
+    if scene.mass is None and not scene.has_dashpot:
         return ElementError(_collapse_message(scene, time + h, force_at(load, time + h)))
     problem = stability_problem(scene, stepper, h)
     hint = f" ({problem})" if problem else ""
@@ -213,27 +218,46 @@ class Result:
             cols.update(self.energy)
         return cols
 
-    def write_csv(self, file) -> None:
-        """Write ``time,x,v,reaction[,u[1]..u[n]][,energy columns]``, every float in full precision (repr)."""
+    def write_csv(self, file, header: bool = True) -> None:
+        """Write ``time,x,v,reaction[,u[1]..u[n]][,energy columns]``, every float in full precision (repr);
+        ``header=False`` writes the rows only (a later piece of :func:`simulate_chunks`)."""
         cols = self.columns()
-        file.write(",".join(cols) + "\n")
+        if header:
+            file.write(",".join(cols) + "\n")
         table = np.column_stack(list(cols.values()))
-        for row in table.tolist():
-            file.write(",".join(map(repr, row)) + "\n")
+        file.write("".join(",".join(map(repr, row)) + "\n" for row in table.tolist()))
+
+
+class OutputGrid:
+    """t = 0, interval, 2 interval, ... and stop_time itself as the last row, computed row by row (a grid of
+    10^13 rows costs nothing until its rows are asked for).
+
+    ``rows``: the number of rows; ``last_is_short``: whether the last interval is shorter than the others;
+    :meth:`times` the times of rows first .. first + count - 1.
+    """
+
+    def __init__(self, stop_time: float, interval: float):
+        self.stop_time, self.interval = stop_time, interval
+        self.full = math.floor(stop_time / interval * (1 + 1e-12))  # whole intervals
+        # j * interval, rounded to 14 significant digits of stop_time so that
+        # the CSV says 499.9 rather than 499.90000000000003.
+        self.digits = 13 - math.floor(math.log10(stop_time))
+        self.last_is_short = stop_time - self._time(self.full) > 1e-9 * interval
+        self.rows = self.full + 1 + self.last_is_short
+
+    def _time(self, j):
+        return np.round(np.asarray(j, dtype=float) * self.interval, self.digits)
+
+    def times(self, first: int, count: int) -> np.ndarray:
+        times = self._time(np.arange(first, first + count))
+        times[np.arange(first, first + count) == self.rows - 1] = self.stop_time  # the last row: stop_time
+        return times
 
 
 def output_grid(stop_time: float, interval: float) -> np.ndarray:
-    """t = 0, interval, 2 interval, ... and stop_time itself as the last row."""
-    count = math.floor(stop_time / interval * (1 + 1e-12))
-    # j * interval, rounded to 14 significant digits of stop_time so that
-    # the CSV says 499.9 rather than 499.90000000000003.
-    digits = 13 - math.floor(math.log10(stop_time))
-    times = np.round(np.arange(count + 1) * interval, digits)
-    if stop_time - times[-1] > 1e-9 * interval:
-        times = np.append(times, stop_time)
-    else:
-        times[-1] = stop_time
-    return times
+    """The whole :class:`OutputGrid` as an array."""
+    grid = OutputGrid(stop_time, interval)
+    return grid.times(0, grid.rows)
 
 
 def _energy_columns(initial_energy: float, table: np.ndarray) -> dict:
@@ -252,74 +276,137 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     step is beyond the stability limit of an explicit stepper; raises
     :class:`ElementError` when a step cannot be taken (plastic collapse of a
     massless element, non-finite state) and ValueError when the stepper does
-    not apply to the scene. ``branch_kernel`` ("play" or "stack") overrides
-    the automatic choice of :func:`choose_branch_kernel`.
+    not apply to the scene or the output would not fit in memory (stream it
+    with :func:`simulate_chunks` instead). ``branch_kernel`` ("play" or
+    "stack") overrides the automatic choice of :func:`choose_branch_kernel`.
     """
+    from .resources import check_memory
+
+    columns = 4 + (_state_count(scene) if states else 0) + (len(ENERGY_COLUMNS) if energy else 0)
+    rows = _row_count(scene)
+    check_memory(2 * rows * columns * 8, f"{scene.source}: the output ({rows:.0f} rows x {columns} columns)",
+                 hint="write it to a file with the CLI, which streams the rows")
+    chunks = list(simulate_chunks(scene, stepper, states=states, energy=energy, progress=progress,
+                                  branch_kernel=branch_kernel, warn_level=3))
+    first = chunks[0]
+
+    def joined(name):
+        parts = [getattr(chunk, name) for chunk in chunks]
+        return None if parts[0] is None else np.concatenate(parts)
+
+    energy_columns = None
+    if energy:
+        energy_columns = {key: np.concatenate([chunk.energy[key] for chunk in chunks]) for key in first.energy}
+    return Result(joined("time"), joined("x"), joined("v"), joined("reaction"), joined("u"), energy_columns,
+                  first.stepper, scene)
+
+
+def _row_count(scene: Scene) -> float:
+    return scene.solver.stop_time / scene.solver.output_interval + 2
+
+
+def _state_count(scene: Scene) -> int:
+    return scene.branches.n if scene.branches is not None and not scene.branches.continuum else 0
+
+
+# Rows of one chunk of :func:`simulate_chunks` hold at most this many values (64 MB).
+_CHUNK_VALUES = 8_000_000
+
+
+def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool = False, energy: bool = False,
+                    progress: Optional[bool] = None, branch_kernel: Optional[str] = None, warn_level: int = 2):
+    """:func:`simulate` as a generator of consecutive :class:`Result` pieces of the output grid, in bounded
+    memory (the first piece is the initial row). The same numbers as :func:`simulate`: step p is taken at
+    t_p = p h however the run is cut. Checks everything (stepper, options) before the first piece."""
     solver = scene.solver
     name = stepper or solver.stepper
     step = compile_step(scene, name)
     module = get_stepper(name)
     if energy and not getattr(module, "ENERGY_ACCOUNT", True):
-        raise ValueError(f"stepper {name!r} keeps no energy account")
+        raise ValueError(f"{scene.source}: stepper {name!r} keeps no energy account (drop --energy, or use "
+                         "another stepper)")
+    if states and scene.branches is not None and scene.branches.continuum:
+        raise ValueError(f"{scene.source}: [branches] continuum: the continuum has no list of elongations to "
+                         "output (states): sample it with [branches] count = n instead")
     h, per_row = solver.step, solver.steps_per_output
     if getattr(module, "STEP_IS_OUTPUT", False):
         h, per_row = solver.output_interval, 1
     problem = stability_problem(scene, name, h)
     if problem:
-        warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=2)
-    if states and scene.branches is not None and scene.branches.continuum:
-        raise ValueError(f"{scene.source}: [branches] continuum: the continuum has no list of elongations to "
-                         "output (states): sample it with [branches] count = n instead")
+        warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=warn_level + 1)
+    return _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kernel)
+
+
+def _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kernel):
+    solver = scene.solver
     model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
     load = scene.load.compile()
-    times = output_grid(solver.stop_time, solver.output_interval)
-    rows = len(times)
-    out = np.empty((rows, 3))
-    n = scene.branches.n if scene.branches is not None and not scene.branches.continuum else 0
-    out_u = np.empty((rows, n)) if (states and n) else None
+    grid = OutputGrid(solver.stop_time, solver.output_interval)
+    rows = grid.rows
+    n = _state_count(scene)
+    n_out = n if states else 0
     account = np.zeros(3) if energy else None
-    out_energy = np.zeros((rows, 5)) if energy else None
     x, v, u = initial_state(scene, model, load)
     m, k0, k3, c, k, eta = model
+
+    def piece(first, count):
+        """Empty output arrays for rows first .. first + count - 1."""
+        out = np.empty((count, 3))
+        out_u = np.empty((count, n)) if n_out else None
+        out_energy = np.zeros((count, 5)) if energy else None
+        return out, out_u, out_energy
+
+    def result(first, out, out_u, out_energy):
+        count = out.shape[0]
+        energy_columns = None
+        if energy:
+            energy_columns = _energy_columns(initial_energy, out_energy)
+        return Result(grid.times(first, count), out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out_u,
+                      energy_columns, name, scene)
+
+    out, out_u, out_energy = piece(0, 1)
     out[0] = (x, v, smooth_force(x, v, k0, k3, c) + branch_force(k, u))
     if out_u is not None:
         write_elongations(k, u, out_u[0])
-    if out_energy is not None:
+    initial_energy = 0.0
+    if energy:
         out_energy[0, :2] = (kinetic(m, v), stored(x, k0, k3, k, u))
+        initial_energy = out_energy[0, 0] + out_energy[0, 1]
+    yield result(0, out, out_u, out_energy)
 
-    def view(array, first, count):
-        return None if array is None else array[first:first + count]
-
-    last_is_short = rows > 1 and times[-1] - times[-2] < solver.output_interval * (1 - 1e-9)
+    last_is_short = grid.last_is_short
     full_rows = rows - 1 - last_is_short  # row 0 is the initial state
-    work_per_step = 8 if stack.is_stack(model[4]) else max(n, 8)
-    chunk = max(1, _CHUNK_WORK // max(1, per_row * work_per_step))
+    work_per_step = 8 if stack.is_stack(k) else max(n, 8)
+    chunk = max(1, min(_CHUNK_WORK // max(1, per_row * work_per_step), _CHUNK_VALUES // (8 + n_out)))
     bar = _progress_bar(progress, total=rows - 1, label=f"{scene.name} [{name}]")
     try:
         j = 0
         while j < full_rows:
             count = min(chunk, full_rows - j)
-            x, v, taken = integrate(step, model, load, x, v, u, times[j], h, per_row, count,
-                                    view(out, 1 + j, count), view(out_u, 1 + j, count),
-                                    account, view(out_energy, 1 + j, count))
+            out, out_u, out_energy = piece(1 + j, count)
+            x, v, taken = integrate(step, model, load, x, v, u, 0.0, j * per_row, h, per_row, count,
+                                    out, out_u, account, out_energy)
             if taken < per_row * count:
-                raise _failure(scene, name, load, times[j] + taken * h, h)
+                raise _failure(scene, name, load, (j * per_row + taken) * h, h)
+            yield result(1 + j, out, out_u, out_energy)
             j += count
             bar.update(count)
         if last_is_short:  # a last, shorter output interval up to stop_time
-            x, v, failed_at = _advance(step, model, load, x, v, u, times[-2], times[-1] - times[-2], h,
-                                       out[-1:], view(out_u, rows - 1, 1), account, view(out_energy, rows - 1, 1))
+            out, out_u, out_energy = piece(rows - 1, 1)
+            last = grid.times(rows - 2, 2)
+            x, v, failed_at = _advance(step, model, load, x, v, u, 0.0, full_rows * per_row, last[1] - last[0],
+                                       h, out, out_u, account, out_energy)
             if failed_at is not None:
                 raise _failure(scene, name, load, failed_at, h)
+            yield result(rows - 1, out, out_u, out_energy)
             bar.update(1)
     finally:
         bar.close()
-    energy_columns = _energy_columns(out_energy[0, 0] + out_energy[0, 1], out_energy) if energy else None
-    return Result(times, out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out_u, energy_columns, name, scene)
 
 
-def _advance(step, model, load, x, v, u, t0, duration, h, out, out_u, account, out_energy):
-    """Advance by ``duration``: whole steps of h, then one shorter step for the remainder.
+def _advance(step, model, load, x, v, u, t_base, first_step, duration, h, out, out_u, account, out_energy):
+    """Advance by ``duration`` from t_base + first_step h: whole steps of h, then one shorter step for the
+    remainder.
 
     The remainder is dropped when it is below 1e-9 h (rounding of the
     duration), so a duration that is a whole multiple of h takes whole steps
@@ -331,14 +418,15 @@ def _advance(step, model, load, x, v, u, t0, duration, h, out, out_u, account, o
     if rest <= 1e-9 * h:
         rest = 0.0
     if whole:
-        x, v, taken = integrate(step, model, load, x, v, u, t0, h, whole, 1, out, out_u, account, out_energy)
+        x, v, taken = integrate(step, model, load, x, v, u, t_base, first_step, h, whole, 1, out, out_u, account,
+                                out_energy)
         if taken < whole:
-            return x, v, t0 + taken * h
+            return x, v, t_base + (first_step + taken) * h
     if rest:
-        x, v, taken = integrate(step, model, load, x, v, u, t0 + whole * h, rest, 1, 1, out, out_u,
-                                account, out_energy)
+        start = t_base + (first_step + whole) * h
+        x, v, taken = integrate(step, model, load, x, v, u, start, 0, rest, 1, 1, out, out_u, account, out_energy)
         if taken < 1:
-            return x, v, t0 + whole * h
+            return x, v, start
     return x, v, None
 
 
@@ -424,7 +512,7 @@ class Element:
         load = held(force)
         self.force = float(force)
         h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
-        x, v, failed_at = _advance(self._step, self.model, load, self.x, self.v, self.u, self.time,
+        x, v, failed_at = _advance(self._step, self.model, load, self.x, self.v, self.u, self.time, 0,
                                    duration, h, self._out, None, self.account, self._energy_row)
         if failed_at is not None:
             self.rollback(saved)
@@ -438,7 +526,8 @@ class Element:
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
-        self.scene, self.model = scene, _smooth_model(scene) + self.model[4:]
+        step = compile_step(scene, self.stepper)  # c -> 0 on a massless element: 'projected' no longer applies
+        self.scene, self.model, self._step = scene, _smooth_model(scene) + self.model[4:], step
         self._record()
 
     def set_stepper(self, name: str) -> None:

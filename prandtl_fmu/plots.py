@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 
-def plot_result(result, path: str) -> None:
-    """Write a PNG with the loop reaction(x) and the displacement x(t) of a :class:`Result`."""
+def plot_result(result, path: str, note: str = "") -> None:
+    """Write a PNG with the loop reaction(x) and the displacement x(t) of a :class:`Result`; ``note`` is
+    added to the title (e.g. that the rows were thinned)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -20,6 +21,7 @@ def plot_result(result, path: str) -> None:
     history.set_ylabel("x (m)")
     history.set_title("displacement")
     history.grid(alpha=0.3)
-    fig.suptitle(f"{result.scene.name}: stepper {result.stepper}, h = {result.scene.solver.step:g} s")
+    title = f"{result.scene.name}: stepper {result.stepper}, h = {result.scene.solver.step:g} s"
+    fig.suptitle(f"{title} ({note})" if note else title)
     fig.savefig(path, dpi=120)
     plt.close(fig)

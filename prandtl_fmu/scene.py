@@ -28,6 +28,12 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .effects import SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Mass, Spring, sample_spectrum
 from .loads import ConstantLoad, HarmonicLoad, TableLoad
+from .resources import ResourceError, check_memory
+
+# Memory per branch: the scene's arrays, the kernel's copies and the memory stack (about 12 doubles).
+_BYTES_PER_BRANCH = 96
+# More steps than this cannot be counted exactly in a double (t_p = p h): refused, never truncated.
+MAX_STEPS = 2**53
 
 Load = Union[ConstantLoad, HarmonicLoad, TableLoad]
 
@@ -73,6 +79,12 @@ class Scene:
         scene = replace(self, solver=solver)
         _check_stepper_applies(scene, where="")
         return scene
+
+    @property
+    def has_dashpot(self) -> bool:
+        """Whether the element has a dashpot with c > 0 (a c = 0 damper is no damper: it costs nothing and a
+        massless element with it is quasi-static)."""
+        return self.damper is not None and self.damper.c > 0
 
     @property
     def effects(self) -> list[str]:
@@ -166,7 +178,10 @@ class _Reader:
     def _check_number(self, key, value, minimum, positive):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(key, f"must be a number, got {_kind(value)}")
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:  # an integer beyond the doubles
+            self.fail(key, "must be finite, got an integer beyond the range of a double")
         if not math.isfinite(value):
             self.fail(key, f"must be finite, got {value}")
         if positive and not value > 0:
@@ -216,19 +231,31 @@ def _kind(value) -> str:
             list: "a list", dict: "a table"}.get(type(value), type(value).__name__)
 
 
-def load_scene(path: Union[str, os.PathLike]) -> Scene:
-    """Read and check a scene file; raise :class:`SceneError` on any broken rule."""
+def load_scene(path: Union[str, os.PathLike], check_stepper: bool = True) -> Scene:
+    """Read and check a scene file; raise :class:`SceneError` on any broken rule.
+
+    ``check_stepper=False`` leaves out the check that the scene's stepper
+    applies, for a caller that replaces the stepper (``with_solver`` checks it).
+    """
     source = os.fspath(path)
     try:
         with open(source, "rb") as fh:
             text = fh.read()
     except OSError as exc:
         raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from None
-    return parse_scene(text, source)
+    return parse_scene(text, source, check_stepper)
 
 
-def parse_scene(text: Union[str, bytes], source: str = "<scene>") -> Scene:
+def parse_scene(text: Union[str, bytes], source: str = "<scene>", check_stepper: bool = True) -> Scene:
     """Parse scene TOML text; ``source`` names it in error messages."""
+    with np.errstate(all="ignore"):  # an overflow is reported as a broken rule, never as a numpy warning
+        try:
+            return _parse_scene(text, source, check_stepper)
+        except RecursionError:
+            raise SceneError(f"{source}: not valid TOML: nested too deeply") from None
+
+
+def _parse_scene(text, source, check_stepper) -> Scene:
     if isinstance(text, bytes):
         try:
             text = text.decode("utf-8")
@@ -266,7 +293,8 @@ def parse_scene(text: Union[str, bytes], source: str = "<scene>") -> Scene:
         raise SceneError(f"{source}: [solver]: missing (required: step, stop_time, output_interval)")
     solver = _solver(source, doc["solver"])
     scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source)
-    _check_stepper_applies(scene, where="[solver] ")
+    if check_stepper:
+        _check_stepper_applies(scene, where="[solver] ")
     return scene
 
 
@@ -291,6 +319,11 @@ def _branches(source, data):
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
         r.only(sampled)
         n = r.integer("count", minimum=1)
+        try:
+            check_memory(n * _BYTES_PER_BRANCH, f"{r.source}: [branches] count = {n}",
+                         hint="use [branches] continuum = true for the limit of many branches")
+        except ResourceError as exc:
+            raise SceneError(str(exc)) from None
         k_total, ends = _spectrum(r)
         rule = r.string("sampling", "right", choices=SAMPLING_RULES)
         branches = sample_spectrum(n, k_total, ends, rule)  # right end points s_i = i / n: eq. (7.19)
@@ -313,7 +346,7 @@ def _branches(source, data):
     bad = np.flatnonzero(np.abs(u0) > eta)
     if bad.size:
         i = int(bad[0])
-        r.fail(f"u0[{i + 1}]", f"|u0| must be <= eta = {eta[i]!r}, got {u0[i]!r}")
+        r.fail(f"u0[{i + 1}]", f"|u0| must be <= eta = {float(eta[i])!r}, got {float(u0[i])!r}")
     for array in (stiffness, eta, u0):
         array.setflags(write=False)
     return Branches(stiffness, eta, u0)
@@ -391,6 +424,11 @@ def _check_solver(solver: Solver, source: str, where: str) -> None:
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise SceneError(f"{source}: {where}{key}: must be a finite number > 0, got {value!r}")
     ratio = solver.output_interval / solver.step
+    steps = solver.stop_time / solver.step
+    if not (ratio < MAX_STEPS and steps < MAX_STEPS):
+        raise SceneError(
+            f"{source}: {where}step: {solver.step!r} s is too small: {max(ratio, steps):.3g} steps "
+            f"(more than 2^53, the steps a double counts exactly; the run would not end)")
     if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
         raise SceneError(
             f"{source}: {where}output_interval: must be a whole multiple of step = {solver.step!r}, "

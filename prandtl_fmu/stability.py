@@ -38,37 +38,75 @@ def stiffest(scene, x: Optional[float] = None) -> float:
     return stiffness
 
 
-def growth_per_period(m: Optional[float], c: float, stiffness: float, h: float) -> float:
-    """Amplitude factor of explicit Euler's stiffest mode per period (per step if it does not oscillate)."""
+def _modes(m: float, c: float, stiffness: float):
+    """The modes mu of m mu^2 + c mu + K = 0, computed from the rates c/(2m) and K/m (no overflow of c^2 or
+    m K for any finite coefficients; a rate that is not representable comes out as inf)."""
+    sigma = c / (2.0 * m)
+    omega_sq = stiffness / m
+    if not (math.isfinite(sigma) and math.isfinite(omega_sq)):
+        return (complex(-math.inf, 0.0),)
+    scale = max(sigma, math.sqrt(omega_sq))
+    if scale == 0.0:
+        return (0j,)
+    root = scale * cmath.sqrt((sigma / scale) ** 2 - omega_sq / scale / scale)
+    return (-sigma + root, -sigma - root)
+
+
+def log_growth_per_period(m: Optional[float], c: float, stiffness: float, h: float) -> float:
+    """log of the amplitude factor of explicit Euler's stiffest mode per period (per step if it does not
+    oscillate); +inf when it is not representable. Computed in logs: no overflow for any finite input."""
     if m is None:  # c x' = -K x: one real mode
-        return abs(1.0 - h * stiffness / c) if c > 0 else 1.0
-    root = cmath.sqrt(c * c - 4.0 * m * stiffness)
-    modes = ((-c + root) / (2.0 * m), (-c - root) / (2.0 * m))  # m mu^2 + c mu + K = 0
-    factor = max(abs(1.0 + h * mu) for mu in modes)
-    frequency = max(abs(mu.imag) for mu in modes)
-    if frequency == 0.0:
-        return factor
-    # per period, but at least per step (a period shorter than a step is no comfort)
-    return max(factor, factor ** (2.0 * math.pi / (frequency * h)))
+        if not c > 0:
+            return 0.0
+        factor = abs(1.0 - h * (stiffness / c))
+        return math.log(factor) if factor > 0 else -math.inf
+    worst = -math.inf
+    for mu in _modes(m, c, stiffness):
+        if not (cmath.isfinite(mu)):
+            return math.inf
+        factor = abs(1.0 + h * mu)
+        if not math.isfinite(factor):
+            return math.inf
+        log_factor = math.log(factor) if factor > 0 else -math.inf
+        frequency = abs(mu.imag)
+        if frequency > 0.0 and log_factor > 0.0:
+            # per period, but at least per step (a period shorter than a step is no comfort)
+            log_factor *= max(1.0, 2.0 * math.pi / (frequency * h))
+        worst = max(worst, log_factor)
+    return worst
+
+
+def growth_per_period(m: Optional[float], c: float, stiffness: float, h: float) -> float:
+    """Amplitude factor of explicit Euler's stiffest mode per period (per step if it does not oscillate);
+    inf beyond what a float holds."""
+    log_growth = log_growth_per_period(m, c, stiffness, h)
+    return math.exp(log_growth) if log_growth < 709.0 else math.inf
+
+
+def _allowed(m: Optional[float], c: float, stiffness: float) -> float:
+    """The growth allowed: GROWTH_LIMIT per period for an oscillating mode, none (1) otherwise."""
+    if m is None:
+        return 1.0
+    oscillates = any(mu.imag != 0.0 for mu in _modes(m, c, stiffness))
+    return GROWTH_LIMIT if oscillates else 1.0
 
 
 def step_limit(m: Optional[float], c: float, stiffness: float) -> float:
-    """The largest h whose growth per period stays within GROWTH_LIMIT (per step: 1 without oscillation)."""
-    limit = GROWTH_LIMIT
-    if m is None or (c * c >= 4 * m * stiffness):
-        limit = 1.0
-    low, high = 0.0, 1.0
-    while growth_per_period(m, c, stiffness, high) <= limit * (1 + 1e-12):
-        high *= 2.0
-        if high > 1e300:
-            return math.inf
+    """The largest h whose growth per period stays within the allowed growth (see :func:`_allowed`);
+    found by bisection on log h over the whole range of floats."""
+    log_limit = math.log(_allowed(m, c, stiffness)) + 1e-12
+    low, high = -745.0, 709.0  # log h
+    if log_growth_per_period(m, c, stiffness, math.exp(high)) <= log_limit:
+        return math.inf
+    if log_growth_per_period(m, c, stiffness, math.exp(low)) > log_limit:
+        return 0.0
     for _ in range(200):
         middle = 0.5 * (low + high)
-        if growth_per_period(m, c, stiffness, middle) <= limit * (1 + 1e-12):
+        if log_growth_per_period(m, c, stiffness, math.exp(middle)) <= log_limit:
             low = middle
         else:
             high = middle
-    return low
+    return math.exp(low)
 
 
 def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) -> Optional[str]:
@@ -84,18 +122,19 @@ def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) 
     stiffness = stiffest(scene, x)
     if stiffness == 0.0:
         return None
-    allowed = 1.0 if (m is None or c * c >= 4 * m * stiffness) else GROWTH_LIMIT
-    if growth_per_period(m, c, stiffness, h) <= allowed * (1 + 1e-12):
+    if log_growth_per_period(m, c, stiffness, h) <= math.log(_allowed(m, c, stiffness)) + 1e-12:
         return None
     limit = step_limit(m, c, stiffness)
+    advice = f"use 'implicit' or h <= {limit:.3g} s" if limit > 0 else "use 'implicit' (no step is small enough)"
     if m is None:
         return (f"stepper 'projected' is unstable here: h K / c = {h * stiffness / c:.3g} > 2 "
-                f"(K = {stiffness:.6g} N/m with every branch sticking); use 'implicit' or h <= {limit:.3g} s")
+                f"(K = {stiffness:.6g} N/m with every branch sticking); {advice}")
     omega = math.sqrt(stiffness / m)
+    growth = growth_per_period(m, c, stiffness, h)
+    growth_text = f"x{growth:.3g}" if math.isfinite(growth) else "beyond any float"
     return (f"stepper 'projected' is beyond its stability limit: omega h = {omega * h:.3g} "
             f"(omega = sqrt(K/m) = {omega:.6g} rad/s with every branch sticking) makes the amplitude grow "
-            f"x{min(growth_per_period(m, c, stiffness, h), 1e300):.3g} per period; "
-            f"use 'implicit' or h <= {limit:.3g} s")
+            f"{growth_text} per period; {advice}")
 
 
 def _leapfrog_problem(scene, stepper, h, x):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -38,6 +39,13 @@ def _digest(scene_bytes: bytes) -> str:
     return sha.hexdigest()[:12]
 
 
+def file_stem(name: str) -> str:
+    """A scene name as a file name: data, never a path. Letters, digits, '-', '_' and '.' are kept, anything
+    else becomes '_'; no leading dot; an empty result is 'prandtl_element'."""
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".")[:100]
+    return stem or "prandtl_element"
+
+
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None) -> Path:
     """Build the FMU of the scene at ``scene_path`` into ``out`` (default ``./<scene name>.fmu``).
 
@@ -48,10 +56,13 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
 
     scene = load_scene(scene_path)
     scene_bytes = Path(scene_path).read_bytes()
-    out = Path(out) if out is not None else Path.cwd() / f"{scene.name}.fmu"
+    out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
     if out.suffix != ".fmu":
         raise ValueError(f"{out}: the FMU file name must end in .fmu")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if out.is_dir():
+        raise ValueError(f"{out}: is a directory")
+    if not out.parent.is_dir():
+        raise ValueError(f"{out}: the folder {out.parent} does not exist")
     module = f"prandtl_slave_{_digest(scene_bytes)}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
@@ -63,8 +74,10 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
             target = package / path.relative_to(LIBRARY)
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(path, target)
+        built = staging / "out" / f"{MODEL_IDENTIFIER}.fmu"
+        built.parent.mkdir()
         try:
-            FmuBuilder.build_FMU(script, dest=out, project_files=[package, staging / "scene.toml"],
+            FmuBuilder.build_FMU(script, dest=built, project_files=[package, staging / "scene.toml"],
                                  canGetAndSetFMUstate=True, canSerializeFMUstate=True)
         finally:
             # The builder imported the slave (and its private copy of the
@@ -74,7 +87,16 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
                 del sys.modules[name]
             if str(staging) in sys.path:
                 sys.path.remove(str(staging))
-    _add_documentation(out, scene)
+        _add_documentation(built, scene)
+        # into place in one rename: a failed build never leaves a half-written FMU behind
+        handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".fmu.part", dir=out.parent)
+        os.close(handle)
+        try:
+            shutil.copyfile(built, partial)
+            os.replace(partial, out)
+        except BaseException:
+            os.unlink(partial)
+            raise
     return out
 
 

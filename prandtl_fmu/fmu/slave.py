@@ -10,11 +10,25 @@ when H is not a multiple of it, one shorter last step for the remainder, with
 the input F held at the value set before the call.
 
 Refusals: a non-finite F, a parameter outside its range or a step that would
-leave a non-finite state is refused: a message naming the variable and the
-value is logged, ``do_step`` returns fmi2Discard, and the state is exactly
-what it was before. Setting a bad value is accepted as such (FMI setters have
-no way to say no); it is refused at the next step, until a good value is set.
+leave a non-finite state during stepping is refused: a message naming the
+variable and the value is logged, ``do_step`` returns fmi2Discard, and the
+state is exactly what it was before (a master may set a good value and step
+again; FMPy's ``simulate_fmu`` ends the run early on a Discard).
+
+A bad start value (set before or during initialization) is refused at
+``fmi2ExitInitializationMode``, a fixed parameter (x0, v0) set after
+initialization where it is set, and a state of another FMU or a tampered
+blob at ``fmi2SetFMUstate``/``fmi2DeSerializeFMUstate``: the reason is logged
+and the call fails, so that a master such as FMPy raises with that reason.
+PythonFMU 0.7.0 can only fail such a call as fmi2Fatal (it turns every Python
+exception into fatal; fmi2Error would be the right status, it has no way to
+return it). It also releases its references to the slave when a call fails,
+and again when the instance is freed: :meth:`PrandtlElement._fail` takes one
+more reference first, so that the instance stays intact (the refused call
+changed nothing, later calls still work) and the host never touches freed
+memory.
 """
+import ctypes
 import math
 import os
 import sys
@@ -30,10 +44,15 @@ from ..steppers import STEPPERS
 from .description import RealVariable, complete
 
 DBL_MAX = sys.float_info.max
+SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
+
+
+class Refused(Exception):
+    """A call refused by the slave (logged first); PythonFMU reports it as fmi2Fatal."""
 
 # Parameters of the effects: (name, table of the scene, unit, min, variability, description).
 EFFECT_PARAMETERS = [
-    ("m", "mass", "kg", 0.0, Fmi2Variability.tunable, "mass of the point; must be > 0"),
+    ("m", "mass", "kg", SMALLEST, Fmi2Variability.tunable, "mass of the point; must be > 0"),
     ("x0", "mass", "m", -DBL_MAX, Fmi2Variability.fixed, "initial displacement"),
     ("v0", "mass", "m/s", -DBL_MAX, Fmi2Variability.fixed, "initial velocity"),
     ("k0", "spring", "N/m", 0.0, Fmi2Variability.tunable, "stiffness of the linear spring: force k0 x"),
@@ -60,6 +79,7 @@ class PrandtlElement(Fmi2Slave):
                                                     step_size=solver.output_interval)
         self.element = Element(self.scene)
         self.start_time = 0.0
+        self.initialized = False  # after fmi2ExitInitializationMode: fixed parameters are frozen
         # What the master set; checked and handed to the element at each step.
         self.F = 0.0
         self.stepper = self.element.stepper
@@ -106,10 +126,10 @@ class PrandtlElement(Fmi2Slave):
                 name, unit=unit, causality=Fmi2Causality.parameter, variability=variability,
                 min=low, max=DBL_MAX, description=text,
                 getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
+                setter=lambda value, name=name: self._set_parameter(name, value)))
         self.register_variable(real(
             "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            min=0.0, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
+            min=SMALLEST, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
             getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
         self.register_variable(String(
             "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
@@ -132,15 +152,54 @@ class PrandtlElement(Fmi2Slave):
         self.start_time = float(start_time)
 
     def exit_initialization_mode(self):
-        if self._apply_settings():
-            force = self.F if _is_finite_number(self.F) else 0.0
-            try:  # a massless element starts in equilibrium with the input F
-                self.element.reset(force)
-            except ElementError as exc:
-                self.log(f"{exc}; starting from F = 0 instead", Fmi2Status.error)
-                self.element.reset(0.0)
+        problem = self._settings_problem()
+        if problem is None and not _is_finite_number(self.F):
+            problem = f"F = {self.F!r} refused: the force must be finite"
+        if problem is None:
+            if not self._hand_over_settings():  # e.g. a stepper that does not apply (logged)
+                problem = self.log_queue[-1].msg if self.log_queue else "a parameter does not fit the scene"
+            else:
+                try:  # a massless element starts in equilibrium with the input F
+                    self.element.reset(self.F)
+                except (ElementError, ValueError) as exc:
+                    problem = str(exc)
+        if problem is not None:
+            self._fail(f"initialization refused: {problem}")
         self.element.time = self.start_time
+        self.initialized = True
         self._warn_if_unstable()
+
+    def _set_parameter(self, name, value):
+        """Setter of an effect's parameter: a fixed one (x0, v0) cannot change after initialization."""
+        if self.initialized and name in ("x0", "v0") and value != self.parameters[name]:
+            self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (the initial state) and cannot "
+                       "change after initialization; the element is unchanged")
+        self.parameters[name] = value
+
+    def _settings_problem(self):
+        """Why a parameter the master set cannot be used, or None."""
+        from ..scene import coefficient_problem
+
+        for name, value in self.parameters.items():
+            problem = coefficient_problem(name, value)
+            if problem:
+                return f"parameter {name}: {problem}"
+        if self.stepper not in STEPPERS:
+            return f"parameter stepper = {self.stepper!r}: must be one of {', '.join(STEPPERS)}"
+        if not (_is_finite_number(self.step) and self.step > 0):
+            return f"parameter step = {self.step!r}: must be finite and > 0"
+        return None
+
+    def _fail(self, message):
+        """Log ``message`` and fail the current call (fmi2Fatal under PythonFMU 0.7.0; see the module
+        docstring), keeping the instance alive and unchanged."""
+        self.log(message, Fmi2Status.error)
+        # PythonFMU releases its references to the class, the instance and the log queue once more than
+        # it took when a call raises: take one more of each, never to be given back (balanced by that
+        # extra release), so that nothing the host still points to is freed.
+        for owned in (type(self), self, self.log_queue):
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(owned))
+        raise Refused(message)
 
     def do_step(self, current_time, step_size):
         if not self._apply_settings():
@@ -219,8 +278,27 @@ class PrandtlElement(Fmi2Slave):
         }
 
     def _set_fmu_state(self, state):
-        settings = state["settings"]
-        self.element.set_state(state["element"])
-        self.F, self.step, self.stepper = settings["F"], settings["step"], settings["stepper"]
-        self.parameters = dict(settings["parameters"])
-        self.start_time = settings["start_time"]
+        try:
+            if not isinstance(state, dict) or "invalid" in state:
+                raise ValueError(state.get("invalid") if isinstance(state, dict) else "not a state of this FMU")
+            settings = state["settings"]
+            parameters = dict(settings["parameters"])
+            if set(parameters) != set(self.parameters):
+                raise ValueError("its parameters are not this FMU's")
+            values = (settings["F"], settings["step"], settings["stepper"], float(settings["start_time"]))
+            self.element.set_state(state["element"])  # checks everything before changing anything
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
+        self.F, self.step, self.stepper, self.start_time = values
+        self.parameters = parameters
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes):
+        """A serialized state, never an exception here (PythonFMU has no instance to survive one with): what
+        cannot be read becomes a state that :meth:`_set_fmu_state` refuses with the reason."""
+        import json
+
+        try:
+            return json.loads(bytes(state).decode("utf-8"))
+        except Exception as exc:  # any garbage: refused later, with its reason
+            return {"invalid": f"not a serialized state of this FMU ({exc.__class__.__name__})"}

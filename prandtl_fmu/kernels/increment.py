@@ -71,13 +71,21 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
     if g > 0.0:
         direction = -1.0
         g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
+    if g != g:
+        return np.nan
     lo = 0.0  # direction * G(lo) < 0: the root lies beyond lo
     hi = direction * np.inf  # direction * G(hi) > 0
+    crawl = 0
     for _ in range(4 * max(branch_count(k), 0) + 64):
+        if g != g:  # not representable (overflow)
+            return np.nan
         if direction * g >= 0.0:  # zero, or past zero by rounding only
             return lo
         end = lo + direction * room  # next kink: the smooth piece is [lo, end]
         if end == lo:
+            crawl += 1
+            if crawl > 8:  # rounding stalls the walk: bisect instead
+                break
             end = np.nextafter(lo, hi)
         last_piece = direction * (end - hi) >= 0.0  # the root is in this piece
         if last_piece:
@@ -117,7 +125,41 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
             hi = jump
         lo = end
         g, sticking, room = residual(lo, x, linear, offset, k0, k3, k, eta, u, direction)
-    raise RuntimeError("implicit step: the scalar solve did not terminate")
+    return _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi)
+
+
+@kernel
+def _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi):
+    """The root beyond ``lo`` by bisection on the doubles: direction G(lo) < 0, direction G(hi) > 0 (hi may
+    be infinite: a bracket is found by doubling first). NaN when G has no root (collapse) or is not
+    representable. Always terminates: at most ~2100 doublings and ~2100 halvings."""
+    if not abs(hi) < np.inf:
+        width = max(abs(lo), 1e-300)
+        while True:
+            trial = lo + direction * width
+            if not abs(trial) < np.inf:
+                return np.nan  # G stays short of zero up to the largest double: no representable root
+            g = residual(trial, x, linear, offset, k0, k3, k, eta, u, direction)[0]
+            if g != g:
+                return np.nan
+            if direction * g >= 0.0:
+                hi = trial
+                break
+            lo = trial
+            width *= 2.0
+    while True:
+        middle = lo + 0.5 * (hi - lo)
+        if middle == lo or middle == hi:
+            return lo
+        g = residual(middle, x, linear, offset, k0, k3, k, eta, u, direction)[0]
+        if g != g:
+            return np.nan
+        if g == 0.0:
+            return middle
+        if direction * g < 0.0:
+            lo = middle
+        else:
+            hi = middle
 
 
 @kernel

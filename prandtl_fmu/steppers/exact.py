@@ -18,15 +18,44 @@ critical damping need no special case and no division by a small number.
 
 Events: a sticking branch reaches its threshold (x reaches a known level:
 it slides from then on), a velocity reversal while some branch slides (all
-branches stick again), and the kinks and jumps of a table load. Each is
-bracketed by sampling the phase (at least 4 samples per time constant and per
-period) and refined to rounding by the Illinois method on the closed form.
+branches stick again), and the kinks and jumps of a table load.
+
+Why no event can be missed. Between two zeros of v, x is monotone; so once
+the next zero z of v is known, whether x reaches a level before z is decided
+by x(z) alone, and the crossing is unique and located by Illinois' method on
+a bracket. Everything rests on finding the *next* zero of v with certainty:
+
+* constant load (and every held FMU input): v solves m v'' + c v' + K v = 0.
+  Oscillating (c^2 < 4 m K), its zeros are exactly pi / omega_d apart, so
+  (lo, lo + pi/omega_d] holds exactly one zero; otherwise (over- or
+  critically damped, K = 0) v is a sum of two real exponentials, or a
+  polynomial of degree 1 times one, and has at most one zero on (0, inf).
+  A sign test at the end of such an interval is therefore a proof;
+* harmonic loads and table ramps: validated subdivision. On [a, a + L],
+  |v^(p)(a + s)| <= |row 1 of A^p| e^(|A| L) |y(a)| (weighted max norms),
+  so |v(a)| > L max|v'| proves no zero, and |v'(a)| > L max|v''| proves v
+  monotone (at most one zero: a sign test decides). Otherwise the interval
+  is halved; an interval at the rounding level of t decides by its signs
+  (a zero that touches without changing sign is not a reversal).
+
+Long event-free stretches cost O(1): a phase in which every branch sticks
+ends early only by reaching a level, and the energy of the motion about the
+load's steady response (m e_v^2/2 + K e_x^2/2, never increasing for c >= 0)
+bounds |x - x_steady| <= sqrt(e_x^2 + m e_v^2 / K): when that bound keeps x
+strictly between its levels, no event can happen before the phase ends and
+one matrix exponential takes the state there. It is checked at the start of
+the phase and at every turning point. For a constant load the zeros of v
+come from the rule above, so a sliding phase of any length also costs O(1).
+There is no cap on the number of phases: each ends at an event, a load kink
+or the end of the step, and a run of 10^6 phases that make no progress in
+time raises an error (it cannot happen unless the state is not finite).
 
 ``ORDER`` is infinite: the error is rounding (checked against scipy's DOP853
 at rtol 1e-13 on event-free stretches, tests/test_exact.py). The cost grows
 with the number of events, about n per half cycle of the load for n branches
 (every branch starts to slip once per half cycle), each costing a few dozen
-6x6 matrix exponentials; the step h only sets where the state is reported
+6x6 matrix exponentials (under a harmonic load, also with the number of
+periods a phase spans); the step h only sets where the state is reported
 (the driver takes one exact step per output interval). No energy account.
 """
 import math
@@ -35,7 +64,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..kernels.play import branch_force
-from ..loads import CONSTANT, HARMONIC, force_at
+from ..loads import CONSTANT, HARMONIC, TABLE, force_at
 
 ORDER = math.inf
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
@@ -188,41 +217,6 @@ def _next_break(load, t):
 
 
 @kernel
-def _events(y, direction, up, down, armed):
-    """Event functions at state y (each fires when it turns > 0): level up, level down, reversal."""
-    g_up = y[0] - up
-    g_down = -y[0] - down
-    g_reverse = -direction * y[1] if armed else -1.0
-    return g_up, g_down, g_reverse
-
-
-@kernel
-def _refine(a, y0, lo, hi, which, direction, up, down):
-    """The first tau in (lo, hi] where event ``which`` fires (> 0), to rounding (Illinois)."""
-    g_lo = _events(_expm_times(a, lo, y0), direction, up, down, True)[which]
-    g_hi = _events(_expm_times(a, hi, y0), direction, up, down, True)[which]
-    side = 0
-    for _ in range(200):
-        if hi - lo <= 4.0 * 2.220446049250313e-16 * hi:
-            break
-        mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
-        if not (lo < mid < hi):
-            mid = 0.5 * (lo + hi)
-        g_mid = _events(_expm_times(a, mid, y0), direction, up, down, True)[which]
-        if g_mid > 0.0:
-            hi, g_hi = mid, g_mid
-            if side == 1:
-                g_lo *= 0.5
-            side = 1
-        else:
-            lo, g_lo = mid, g_mid
-            if side == -1:
-                g_hi *= 0.5
-            side = -1
-    return hi
-
-
-@kernel
 def _direction(k0, k, load, t, x, v, u):
     """Sign of the motion at t: of v, else of the acceleration, else of the load's rate."""
     if v != 0.0:
@@ -237,50 +231,258 @@ def _direction(k0, k, load, t, x, v, u):
     return 0.0
 
 
+_EPS = 2.220446049250313e-16
+NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL = -1, 0, 1, 2
+
+
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta = model
     end = t + h
-    for _ in range(20 * _count(k) + 10000):  # phases; each ends at an event, a load kink or t + h
-        if t >= end:
-            break
+    stalled = 0
+    while t < end:  # phases; each ends at an event, a load kink or t + h
         direction = _direction(k0, k, load, t, x, v, u)
         a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction)
         y0[1] = v
-        phase_end = min(end, _next_break(load, t))
-        span = phase_end - t
-        # samples: at least 4 per time constant and per period of the phase
-        rate = math.sqrt(stiffness / m) + _damping(c) / m + abs(load[3])
-        samples = max(4, int(math.ceil(4.0 * rate * span)))
-        armed = sliding and v != 0.0  # a reversal counts once v has the phase's sign
-        hit = -1
-        tau_hit = span
-        previous = 0.0
-        for j in range(1, samples + 1):
-            tau = span if j == samples else span * j / samples
-            g = _events(_expm_times(a, tau, y0), direction, up, down, armed)
-            for which in range(3):
-                if g[which] > 0.0:
-                    root = _refine(a, y0, previous, tau, which, direction, up, down)
-                    if hit < 0 or root < tau_hit:
-                        tau_hit, hit = root, which
-            if hit >= 0:
-                break
-            if sliding and g[2] < 0.0:
-                armed = True
-            previous = tau
+        span = min(end, _next_break(load, t)) - t
+        tau_hit, hit = _first_event(a, y0, load, t, m, _damping(c), stiffness, span, direction, up, down,
+                                    sliding and direction != 0.0)
         y = _expm_times(a, tau_hit, y0)
         moved, v = y[0], y[1]
-        if hit == 0:
+        if hit == LEVEL_UP:
             moved = up  # x is exactly at the level
-        elif hit == 1:
+        elif hit == LEVEL_DOWN:
             moved = -down
-        elif hit == 2:
+        elif hit == REVERSAL:
             v = 0.0  # exactly at rest: every branch sticks again
         x = x + moved
         _move_branches(k, eta, u, direction, hit, up, down, moved)
-        t = t + tau_hit if hit >= 0 else phase_end
+        t_next = t + tau_hit if hit != NO_EVENT else t + span
+        stalled = stalled + 1 if t_next <= t else 0
+        if stalled > 1000000 or not (abs(x) < np.inf and abs(v) < np.inf):
+            return np.nan, np.nan, branch_force(k, u)  # reported by the driver: never a silent stop
+        t = t_next
     return x, v, branch_force(k, u)
+
+
+@kernel
+def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sliding):
+    """(tau, which) of the first event of the phase in (0, span], or (span, NO_EVENT).
+
+    x is monotone between zeros of v: the search walks from one zero of v to
+    the next (:func:`_next_zero`) and checks the levels on each monotone
+    piece; a zero of v is itself the event when some branch slides.
+    """
+    if not sliding and up == np.inf and down == np.inf:
+        return span, NO_EVENT  # nothing can happen: no branch sticks below its threshold, none slides
+    rho, weights, norm = _scales(a, m, c, stiffness, load[3], span)
+    lo = 0.0
+    at_zero = y0[1] == 0.0
+    sign = direction
+    if y0[1] != 0.0:
+        sign = math.copysign(1.0, y0[1])
+    if sign == 0.0:
+        sign = math.copysign(1.0, _row_times(a, y0, 1))  # at rest: v leaves zero with the acceleration
+    while True:
+        y_lo = _expm_times(a, lo, y0)
+        if not sliding and _cannot_reach(y_lo, load, t + lo, m, c, stiffness, up, down):
+            return span, NO_EVENT
+        level = up if sign > 0.0 else -down  # the level x may reach while v keeps its sign
+        reached = LEVEL_UP if sign > 0.0 else LEVEL_DOWN
+        if load[0] == CONSTANT or (load[0] == TABLE and y0[3] == 0.0):  # a flat piece of a table is constant
+            zero = _next_zero_free(a, y0, m, c, stiffness, lo, span, sign, at_zero)
+        else:
+            zero, crossed = _walk_validated(a, y0, lo, span, sign, level, rho, weights, norm)
+            if crossed:
+                return zero, reached
+        final = zero < 0.0
+        z = span if final else zero
+        if sign * (_expm_times(a, z, y0)[0] - level) >= 0.0:  # x is monotone on [lo, z]
+            return _refine(a, y0, lo, z, 0, level, -sign), reached
+        if final:
+            return span, NO_EVENT
+        if sliding:
+            return z, REVERSAL
+        lo, sign, at_zero = z, -sign, True
+
+
+@kernel
+def _scales(a, m, c, stiffness, omega, span):
+    """The phase's rate rho (1/s), the weights of the state's max norm (units of length) and |A| in it."""
+    rho = math.sqrt(stiffness / m) + c / m + abs(omega) + 1.0 / span
+    weights = np.empty(6)
+    weights[0] = 1.0
+    weights[1] = 1.0 / rho
+    for i in range(2, 6):
+        weights[i] = 1.0 / (rho * rho)
+    norm = 0.0
+    for i in range(6):
+        row = 0.0
+        for j in range(6):
+            row += abs(a[i, j]) * weights[i] / weights[j]
+        norm = max(norm, row)
+    return rho, weights, norm
+
+
+@kernel
+def _row_times(a, y, row):
+    total = 0.0
+    for j in range(6):
+        total += a[row, j] * y[j]
+    return total
+
+
+@kernel
+def _leaves(a, y0, tau, sign):
+    """Whether v(tau) no longer has the sign ``sign``."""
+    return sign * _expm_times(a, tau, y0)[1] <= 0.0
+
+
+@kernel
+def _next_zero_free(a, y0, m, c, stiffness, lo, hi, sign, at_zero):
+    """:func:`_next_zero` for a constant load: v solves m v'' + c v' + K v = 0 (see the module docstring)."""
+    sigma = c / (2.0 * m)
+    omega0 = math.sqrt(stiffness / m)
+    omega_d = math.sqrt(max(omega0 - sigma, 0.0) * (omega0 + sigma))
+    if omega_d > 0.0:  # oscillating: zeros exactly pi / omega_d apart
+        half = math.pi / omega_d
+        if at_zero:
+            if lo + half > hi:
+                return -1.0
+            b = min(hi, lo + 1.5 * half)  # the next zero is lo + half: alone in (lo, lo + 2 half)
+            if _leaves(a, y0, b, sign):
+                return _refine(a, y0, lo + 0.5 * half, b, 1, 0.0, sign)
+            return b  # only rounding can leave v on its side past lo + half, and only when b = hi
+        b = min(hi, lo + half)  # exactly one zero in (lo, lo + half]
+        if _leaves(a, y0, b, sign):
+            return _refine(a, y0, lo, b, 1, 0.0, sign)
+        if b == hi:
+            return -1.0
+        b2 = min(hi, lo + 1.5 * half)  # the zero is at lo + half within rounding
+        if _leaves(a, y0, b2, sign):
+            return _refine(a, y0, b, b2, 1, 0.0, sign)
+        return -1.0 if b2 == hi else b2
+    if at_zero:
+        return -1.0  # a sum of two real exponentials has at most one zero: it was lo
+    if _leaves(a, y0, hi, sign):
+        return _refine(a, y0, lo, hi, 1, 0.0, sign)
+    return -1.0
+
+
+@kernel
+def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
+    """The next zero of v in (lo, hi] by validated subdivision (see the module docstring), stopping early
+    where x reaches ``level``: returns (tau, crossed), tau = -1 when v keeps its sign up to hi and x does
+    not reach the level (checked at every point the walk passes: x is monotone in between).
+    """
+    a2 = _matmul(a, a)
+    bound1 = 0.0  # |row 1 of A| and |row 1 of A^2| in the weighted norm
+    bound2 = 0.0
+    for j in range(6):
+        bound1 += abs(a[1, j]) / weights[j]
+        bound2 += abs(a2[1, j]) / weights[j]
+    longest = 1.0 / max(norm, 1e-300)
+    start = lo
+    previous = lo
+    length = min(hi - lo, longest)
+    if not np.any(_matvec(a, _expm_times(a, lo, y0))):
+        return -1.0, False  # a fixed point: nothing moves until the phase ends
+    while lo < hi:
+        y = _expm_times(a, lo, y0)
+        if lo > start and sign * (y[0] - level) >= 0.0:
+            return _refine(a, y0, previous, lo, 0, level, -sign), True
+        b = min(hi, lo + length)
+        length = b - lo
+        size = 0.0
+        for j in range(6):
+            size = max(size, abs(y[j]) * weights[j])
+        growth = math.exp(norm * length) * size
+        v = y[1]
+        acc = _row_times(a, y, 1)
+        if sign * v > 0.0 and abs(v) > length * bound1 * growth:
+            previous, lo = lo, b  # no zero in [lo, b]
+            length = min(2.0 * length, longest)
+            continue
+        rounding = 8.0 * _EPS * (abs(lo) + 1.0 / rho)
+        if (abs(acc) > length * bound2 * growth and (lo > start or sign * acc > 0.0 or v != 0.0)) \
+                or length <= rounding:
+            # v monotone on [lo, b] (or [lo, b] at the rounding level): a zero iff v leaves its sign at b
+            if _leaves(a, y0, b, sign):
+                if sign * v <= 0.0 and lo > start:
+                    return lo, False
+                return _refine(a, y0, lo, b, 1, 0.0, sign), False
+            previous, lo = lo, b
+            length = min(2.0 * length, longest)
+            continue
+        length *= 0.5
+    if lo > start and sign * (_expm_times(a, lo, y0)[0] - level) >= 0.0:
+        return _refine(a, y0, previous, lo, 0, level, -sign), True
+    return -1.0, False
+
+
+@kernel
+def _cannot_reach(y, load, t, m, c, stiffness, up, down):
+    """Whether, with every branch sticking from state y at time t on, x can never reach a level.
+
+    The motion is x_steady(t) + a free damped oscillation whose energy
+    m e_v^2/2 + K e_x^2/2 never increases, so |x - x_steady| <= |P| + sqrt(e_x^2 + m e_v^2/K),
+    |P| the amplitude of the steady response to the harmonic part of the load.
+    False (not proven) for table ramps and undamped resonance.
+    """
+    kind = load[0]
+    if stiffness <= 0.0 or (kind == TABLE and y[3] != 0.0):
+        return False
+    omega0_sq = stiffness / m
+    centre = y[4] / omega0_sq  # the constant part of the load over K (relative to the phase's start)
+    amplitude = 0.0
+    p0 = 0.0
+    p1 = 0.0
+    if kind == HARMONIC:
+        omega = load[3]
+        denominator = complex(omega0_sq - omega * omega, c / m * omega)
+        if denominator == 0.0:
+            return False  # resonance: the response grows without bound
+        forcing = complex(y[2], y[3])  # (amplitude / m) exp(i omega t)
+        response = forcing / denominator
+        p0 = response.real
+        p1 = (1j * omega * response).real
+        amplitude = abs(response)
+    e_x = y[0] - centre - p0
+    e_v = y[1] - p1
+    radius = amplitude + math.sqrt(e_x * e_x + e_v * e_v / omega0_sq)
+    margin = 64.0 * _EPS * (abs(centre) + radius + min(up, down))
+    return centre + radius < up - margin and centre - radius > -down + margin
+
+
+@kernel
+def _refine(a, y0, lo, hi, component, level, sign):
+    """The tau in (lo, hi] where sign * (y[component] - level) stops being > 0, to rounding (Illinois).
+
+    sign * (y[component](lo) - level) > 0 (or = 0 at the start of a search) and <= 0 at hi.
+    """
+    g_lo = sign * (_expm_times(a, lo, y0)[component] - level)
+    g_hi = sign * (_expm_times(a, hi, y0)[component] - level)
+    side = 0
+    while hi - lo > 4.0 * _EPS * hi:
+        mid = 0.5 * (lo + hi)
+        if g_hi != g_lo:
+            mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+        if not (lo < mid < hi):
+            mid = 0.5 * (lo + hi)
+        if not (lo < mid < hi):
+            break
+        g_mid = sign * (_expm_times(a, mid, y0)[component] - level)
+        if g_mid <= 0.0:
+            hi, g_hi = mid, g_mid
+            if side == 1:
+                g_lo *= 0.5
+            side = 1
+        else:
+            lo, g_lo = mid, g_mid
+            if side == -1:
+                g_hi *= 0.5
+            side = -1
+    return hi
 
 
 @kernel
@@ -291,9 +493,9 @@ def _move_branches(k, eta, u, direction, hit, up, down, moved):
     for i in range(k.shape[0]):
         if direction != 0.0 and u[i] == direction * eta[i]:
             continue  # sliding
-        if hit == 0 and eta[i] - u[i] <= up * (1.0 + 1e-15):
+        if hit == LEVEL_UP and eta[i] - u[i] <= up * (1.0 + 1e-15):
             u[i] = eta[i]  # reached its threshold with the one that fired: it slides now
-        elif hit == 1 and eta[i] + u[i] <= down * (1.0 + 1e-15):
+        elif hit == LEVEL_DOWN and eta[i] + u[i] <= down * (1.0 + 1e-15):
             u[i] = -eta[i]
         else:
             u[i] = min(max(u[i] + moved, -eta[i]), eta[i])

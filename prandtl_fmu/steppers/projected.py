@@ -44,9 +44,9 @@ def step_for(scene):
     """The compiled step for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is not None:
         return step
-    if scene.damper is not None:
+    if scene.has_dashpot:
         return step_massless
-    raise ValueError("'projected' is explicit and needs [mass] or [damper]; a massless element "
+    raise ValueError("'projected' is explicit and needs [mass] or a [damper] with c > 0; a massless element "
                      "without a dashpot is quasi-static: use 'implicit'")
 
 
