@@ -48,6 +48,22 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """The command line; returns the exit status. No input makes it print a traceback: a failure nobody
+    foresaw is still one line naming the exception (PRANDTL_FMU_DEBUG=1 shows the traceback)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # the last line of defence, not a way of handling errors
+        if os.environ.get("PRANDTL_FMU_DEBUG"):
+            raise
+        print(f"error: internal error ({exc.__class__.__name__}: {exc}); please report it with the scene",
+              file=sys.stderr)
+        return 2
+
+
+def _main(argv) -> int:
     warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow chatter: errors are reported as one line
     args = _parser().parse_args(argv)
     if args.command == "run":
@@ -83,18 +99,22 @@ def _run(args) -> int:
         try:
             chunks = simulate_chunks(scene, states=args.states, energy=args.energy)
         except (ElementError, ValueError) as exc:  # ValueError: an option that does not fit the scene
-            _print_warnings(caught)
             return _error(exc)
-        _print_warnings(caught)
-        del caught[:]
-    sink = _AtomicFile(args.out) if args.out else sys.stdout
+    # A stability warning is printed once the run is done: should the run fail, its one error line
+    # already says why (it carries the same explanation).
+    stability = [w for w in caught if issubclass(w.category, StabilityWarning)]
+    sink = None
     try:
+        sink = _AtomicFile(args.out) if args.out and _is_regular(args.out) else (
+            open(args.out, "w", newline="") if args.out else sys.stdout)
         for index, chunk in enumerate(chunks):
             chunk.write_csv(sink, header=index == 0)
             if plot_rows is not None:
                 plot_rows.add(chunk)
-        if args.out:
+        if isinstance(sink, _AtomicFile):
             sink.commit()
+        elif args.out:
+            sink.close()
         else:
             sys.stdout.flush()
     except BrokenPipeError:  # the reader stopped (`| head`): nothing more to say
@@ -110,6 +130,7 @@ def _run(args) -> int:
     except OSError as exc:  # a full disk, a vanished folder
         _discard(sink)
         return _error(f"cannot write {args.out or 'the output'}: {exc.strerror or exc}")
+    _print_warnings(stability)
     if plot_rows is not None:
         from .plots import plot_result
 
@@ -130,6 +151,12 @@ def _print_warnings(caught) -> None:
     for warning in caught:
         if issubclass(warning.category, StabilityWarning):
             print(f"warning: {warning.message}", file=sys.stderr)
+
+
+def _is_regular(path: str) -> bool:
+    """Whether ``path`` is (or will be) a regular file: only those are replaced atomically (a device such as
+    /dev/stdout or a pipe is written directly)."""
+    return not os.path.exists(path) or os.path.isfile(path)
 
 
 def _branch_count(scene) -> int:

@@ -225,7 +225,10 @@ class Result:
         if header:
             file.write(",".join(cols) + "\n")
         table = np.column_stack(list(cols.values()))
-        file.write("".join(",".join(map(repr, row)) + "\n" for row in table.tolist()))
+        block = max(1, 100_000 // table.shape[1])  # rows turned into text at a time: a few MB
+        for first in range(0, table.shape[0], block):
+            rows = table[first:first + block].tolist()
+            file.write("".join(",".join(map(repr, row)) + "\n" for row in rows))
 
 
 class OutputGrid:
@@ -309,8 +312,8 @@ def _state_count(scene: Scene) -> int:
     return scene.branches.n if scene.branches is not None and not scene.branches.continuum else 0
 
 
-# Rows of one chunk of :func:`simulate_chunks` hold at most this many values (64 MB).
-_CHUNK_VALUES = 8_000_000
+# Rows of one chunk of :func:`simulate_chunks` hold at most this many values (16 MB).
+_CHUNK_VALUES = 2_000_000
 
 
 def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool = False, energy: bool = False,

@@ -114,7 +114,7 @@ BAD = {
                           "whole multiple"),
     "unknown stepper": (lambda t: t["solver"].update(stepper="rk4"), "[solver] stepper", "one of"),
     "massless projected without dashpot": (lambda t: (t.pop("mass"), t.pop("damper")), "[solver] stepper",
-                                           "needs [mass] or [damper]"),
+                                           "needs [mass] or a [damper] with c > 0"),
     "name not string": (lambda t: t.update(name=3), "name", "string"),
 }
 

@@ -57,10 +57,10 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     scene = load_scene(scene_path)
     scene_bytes = Path(scene_path).read_bytes()
     out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
-    if out.suffix != ".fmu":
-        raise ValueError(f"{out}: the FMU file name must end in .fmu")
     if out.is_dir():
         raise ValueError(f"{out}: is a directory")
+    if out.suffix != ".fmu":
+        raise ValueError(f"{out}: the FMU file name must end in .fmu")
     if not out.parent.is_dir():
         raise ValueError(f"{out}: the folder {out.parent} does not exist")
     module = f"prandtl_slave_{_digest(scene_bytes)}"

@@ -104,6 +104,11 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
                 return tangent_root
             if last_piece:  # only rounding can put the tangent root beyond hi
                 return end
+        elif k3 == 0.0:  # a cubic spring with k3 = 0: the same straight pieces (no Newton iterations)
+            if direction * (tangent_root - end) <= 0.0:
+                return tangent_root
+            if last_piece:
+                return end
         else:
             if direction * (tangent_root - end) <= 0.0 or last_piece:
                 stop = tangent_root if direction * (tangent_root - end) <= 0.0 else end
@@ -178,8 +183,9 @@ def _piece_root(x, lo, hi, g_lo, slope_linear, k3):
         trial = w - q / dq
         if not ((trial - a) * (trial - b) < 0.0):
             trial = 0.5 * (a + b)
-        if abs(trial - w) <= 4.4e-16 * abs(trial) or trial == a or trial == b:
-            return trial  # Newton's step is at the rounding level: converged
+        if abs(trial - w) <= 4.4e-16 * max(abs(trial), abs(x + trial)) or trial == a or trial == b \
+                or b - a <= 4.4e-16 * max(abs(a), abs(b)):
+            return trial  # Newton's step, or the bracket, is at the rounding level of w or x + w: converged
         w = trial
         q = g_lo + slope_linear * (w - lo) + _cubic_change(x, lo, w, k3)
         if q == 0.0:

@@ -1,0 +1,196 @@
+"""A corpus of hostile inputs for the CLI and build_fmu.py: each exits 0 or 2, never prints a traceback,
+prints at most one line on stderr and leaves no partial file (issue: "Trust every number and every exit")."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from .conftest import ROOT, base_tables, scene_text
+
+
+def run_cli(argv, capsys):
+    """main() in-process: returns (status, stderr lines, stdout). An exception escaping is a traceback."""
+    status = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    return status, lines, captured.out
+
+
+def check(status, lines, folder=None):
+    assert status in (0, 2), lines
+    assert len(lines) <= 1, lines
+    assert not any("Traceback" in line for line in lines)
+    if folder is not None:  # no partial or temporary file left behind
+        assert not [p.name for p in folder.iterdir() if p.name.startswith(".prandtl-") or p.suffix == ".part"]
+
+
+SOLVER = {"stepper": "implicit", "step": 1e-2, "stop_time": 2.0, "output_interval": 0.5}
+HOSTILE_SCENES = {
+    "massless quasi-static on the stack": (base_tables(mass=None, damper=None, cubic=None, solver=SOLVER, branches={
+        "count": 100, "k_total": 1.0, "eta_range": [0.1, 1.1]}), 0, None),
+    "massless with c = 0 and projected": (base_tables(mass=None, damper={"c": 0.0}, solver={**SOLVER,
+                                          "stepper": "projected"}), 2, "c > 0"),
+    "stability overflow": (base_tables(mass={"m": 1.0}, damper={"c": 2.0}, spring={"k0": 1.0000000001}, cubic=None,
+                                       branches=None, solver={"stepper": "projected", "step": 3.0,
+                                                              "stop_time": 3000.0, "output_interval": 3.0}), None, None),
+    "m = 1e308": (base_tables(mass={"m": 1e308}), 0, None),
+    "F = 1e307 implicit": (base_tables(load={"kind": "constant", "value": 1e307}, solver=SOLVER), None, None),
+    "F = 1.7e308 implicit": (base_tables(load={"kind": "constant", "value": 1.7e308}, solver=SOLVER), None, None),
+    "count = 10**12": (base_tables(branches={"count": 10**12, "k_total": 1.0, "eta_range": [0.1, 1.1]}), 2,
+                       "memory"),
+    "u0 beyond eta": (base_tables(branches={"k": [1.0], "eta": [0.5], "u0": [0.7]}), 2, "eta = 0.5, got 0.7"),
+    "huge integer": (base_tables(spring={"k0": 10**400}), 2, "k0"),
+    "alpha / k overflows": (base_tables(branches={"k": [1e-300], "alpha": [1e300]}), 2, "alpha"),
+    "collapse of the massless element": (base_tables(mass=None, damper=None, spring=None, cubic=None, solver=SOLVER,
+                                                     load={"kind": "constant", "value": 100.0}), 2, "collapse"),
+}
+
+
+@pytest.mark.parametrize("case", list(HOSTILE_SCENES))
+def test_hostile_scenes(case, write_scene, tmp_path, capsys):
+    tables, expected, words = HOSTILE_SCENES[case]
+    out = tmp_path / "out.csv"
+    status, lines, _ = run_cli(["run", write_scene(tables), "--out", out], capsys)
+    check(status, lines, tmp_path)
+    if expected is not None:
+        assert status == expected, lines
+    if words:
+        assert words in lines[0]
+    assert "np.float64" not in " ".join(lines)
+    assert out.exists() == (status == 0)
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--out", "/nonexistent-folder/x.csv"], "does not exist"),
+    (["--out", "{tmp}"], "is a directory"),
+    (["--plot", "/nonexistent-folder/p.png"], "does not exist"),
+    (["--step", "1e-300"], "too small"),
+    (["--step", "nan"], "finite"),
+    (["--stop-time", "1e12", "--out", "{tmp}/big.csv"], "disk"),
+    (["--stepper", "exact", "--energy"], "scene.toml: stepper 'exact' keeps no energy account"),
+    (["--output-interval", "0.0015"], "whole multiple"),
+])
+def test_hostile_options(options, words, write_scene, tmp_path, capsys):
+    scene = write_scene(base_tables(cubic=None))
+    options = [o.replace("{tmp}", str(tmp_path)) for o in options]
+    status, lines, out = run_cli(["run", scene] + options, capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and words in lines[0], lines
+    assert out == ""  # nothing ran
+
+
+def test_stepper_option_rescues_a_massless_scene(write_scene, capsys):
+    """The scene's default stepper (projected) does not apply to it; --stepper implicit must."""
+    tables = base_tables(mass=None, damper=None, solver={"step": 1e-2, "stop_time": 1.0, "output_interval": 0.5})
+    status, lines, out = run_cli(["run", write_scene(tables), "--stepper", "implicit"], capsys)
+    assert status == 0 and lines == [] and out.count("\n") == 4
+
+
+def test_a_full_disk_leaves_no_file(write_scene, capsys):
+    """/dev/full: every write fails with ENOSPC. A device is written directly (never replaced)."""
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    status, lines, _ = run_cli(["run", write_scene(base_tables()), "--out", "/dev/full"], capsys)
+    check(status, lines)
+    assert status == 2 and "cannot write /dev/full" in lines[0]
+    assert os.path.exists("/dev/full") and not os.path.isfile("/dev/full")
+
+
+def test_an_existing_output_is_untouched_by_a_failed_run(write_scene, tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    out.write_text("precious\n")
+    tables = base_tables(mass=None, damper=None, spring=None, cubic=None, solver=SOLVER,
+                         load={"kind": "table", "time": [0.0, 1.0, 1.0], "force": [0.0, 0.0, 100.0]})
+    status, lines, _ = run_cli(["run", write_scene(tables), "--out", out], capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "collapse" in lines[0]
+    assert out.read_text() == "precious\n"
+
+
+def test_output_streams_in_bounded_memory(write_scene, tmp_path, capsys):
+    """100 000 rows x 204 columns (about 160 MB as doubles) go to the file a chunk at a time."""
+    import tracemalloc
+
+    tables = base_tables(cubic=None, branches={"count": 200, "k_total": 1.0, "eta_range": [0.1, 1.1]},
+                         solver={"stepper": "projected", "step": 1e-3, "stop_time": 100.0, "output_interval": 1e-3})
+    scene = write_scene(tables)
+    out = tmp_path / "out.csv"
+    tracemalloc.start()
+    status, lines, _ = run_cli(["run", scene, "--states", "--out", out], capsys)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    check(status, lines, tmp_path)
+    assert status == 0
+    assert peak < 100e6  # 16 MB chunks of doubles (and their text), never the whole table
+    with open(out) as fh:
+        assert sum(1 for _ in fh) == 100_002
+
+
+def test_head_closing_the_pipe_is_silent():
+    scene = os.path.join(ROOT, "scenes", "paper-section-8.toml")
+    shell = f"{sys.executable} -m prandtl_fmu run {scene} --stop-time 100 | head -1"
+    run = subprocess.run(["bash", "-c", shell], capture_output=True, text=True, cwd=ROOT)
+    assert run.stdout == "time,x,v,reaction\n"
+    assert run.stderr == ""
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_fuzzed_scenes(seed, tmp_path, capsys):
+    """Random mutations of a valid scene (values replaced by hostile ones, keys dropped or renamed, bytes
+    cut): 0 or 2, one line at most, never a traceback. The solver stays short so that every case ends."""
+    rng = np.random.default_rng(seed)
+    tables = base_tables(solver={"stepper": str(rng.choice(["projected", "implicit", "symplectic", "verlet"])),
+                                 "step": 1e-2, "stop_time": 1.0, "output_interval": 0.5})
+    hostile = [float("nan"), float("inf"), -1.0, 0.0, 1e308, -1e308, 5e-324, "text", True, [], [1.0, "x"], 10**30]
+    for _ in range(int(rng.integers(1, 4))):
+        table = str(rng.choice([t for t in tables if t not in ("name", "solver")]))
+        if rng.random() < 0.2:
+            del tables[table]
+            continue
+        keys = list(tables[table])
+        if not keys:
+            continue
+        key = str(rng.choice(keys))
+        choice = rng.random()
+        if choice < 0.6:
+            tables[table][key] = hostile[int(rng.integers(len(hostile)))]
+        elif choice < 0.8:
+            tables[table][key + "_typo"] = tables[table].pop(key)
+        else:
+            del tables[table][key]
+    text = scene_text(tables)
+    if rng.random() < 0.3:  # cut the file somewhere
+        text = text[:int(rng.integers(len(text)))]
+    scene = tmp_path / "fuzz.toml"
+    scene.write_text(text)
+    status, lines, _ = run_cli(["run", scene, "--out", tmp_path / "out.csv"], capsys)
+    check(status, lines, tmp_path)
+
+
+@pytest.mark.parametrize("name", ["../escaped", "", "/abs/path", "con:\x00"])
+def test_build_fmu_with_hostile_names(name, tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(scene_text(base_tables(name=name)))
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "build_fmu.py"), str(scene)], capture_output=True,
+                         text=True, cwd=tmp_path)
+    lines = [line for line in run.stderr.splitlines() if line.strip()]
+    assert run.returncode in (0, 2) and len(lines) <= 1 and "Traceback" not in run.stderr, run.stderr
+    if run.returncode == 0:
+        built = [p for p in tmp_path.iterdir() if p.suffix == ".fmu"]
+        assert len(built) == 1 and built[0].parent == tmp_path
+
+
+@pytest.mark.parametrize("argv, words", [(["{tmp}/missing.toml"], "cannot read"),
+                                         (["{scene}", "-o", "{tmp}"], "is a directory"),
+                                         (["{scene}", "-o", "{tmp}/no/such/x.fmu"], "does not exist")])
+def test_build_fmu_refuses_in_one_line(argv, words, tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(scene_text(base_tables()))
+    argv = [a.replace("{tmp}", str(tmp_path)).replace("{scene}", str(scene)) for a in argv]
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "build_fmu.py")] + argv, capture_output=True,
+                         text=True, cwd=tmp_path)
+    assert run.returncode == 2 and words in run.stderr and len(run.stderr.splitlines()) == 1, run.stderr
