@@ -310,11 +310,14 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
 def _scales(a, m, c, stiffness, omega, span):
     """The phase's rate rho (1/s), the weights of the state's max norm (units of length) and |A| in it."""
     rho = math.sqrt(stiffness / m) + c / m + abs(omega) + 1.0 / span
+    # any positive weights give rigorous bounds; these balance the state (lengths, length/rho, length/rho^2)
+    # and stay representable (rho^-2 of a phase 1e-213 s long would underflow)
+    balance = min(max(rho, 1e-100), 1e100)
     weights = np.empty(6)
     weights[0] = 1.0
-    weights[1] = 1.0 / rho
+    weights[1] = 1.0 / balance
     for i in range(2, 6):
-        weights[i] = 1.0 / (rho * rho)
+        weights[i] = 1.0 / (balance * balance)
     norm = 0.0
     for i in range(6):
         row = 0.0
