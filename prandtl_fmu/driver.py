@@ -411,15 +411,19 @@ def _advance(step, model, load, x, v, u, t_base, first_step, duration, h, out, o
     """Advance by ``duration`` from t_base + first_step h: whole steps of h, then one shorter step for the
     remainder.
 
-    The remainder is dropped when it is below 1e-9 h (rounding of the
-    duration), so a duration that is a whole multiple of h takes whole steps
-    only. Returns ``(x, v, failed_at)``: the start time of a step that could
+    A duration within 1e-9 h of a whole multiple of h (rounding of a
+    master's clock) takes whole steps only. Returns ``(x, v, failed_at)``: the start time of a step that could
     not be taken, or None.
     """
-    whole = math.floor(duration / h * (1 + 1e-12))
-    rest = duration - whole * h
-    if rest <= 1e-9 * h:
-        rest = 0.0
+    ratio = duration / h
+    nearest = round(ratio)
+    if nearest >= 1 and abs(ratio - nearest) <= 1e-9:
+        # a whole multiple of h up to rounding (a master's clock that adds up 0.05 s steps drifts by ulps,
+        # e.g. 0.04999999999999716): whole steps only, so the result does not depend on that drift
+        whole, rest = nearest, 0.0
+    else:
+        whole = math.floor(ratio)
+        rest = duration - whole * h
     if whole:
         x, v, taken = integrate(step, model, load, x, v, u, t_base, first_step, h, whole, 1, out, out_u, account,
                                 out_energy)

@@ -183,8 +183,7 @@ def _piece_root(x, lo, hi, g_lo, slope_linear, k3):
         trial = w - q / dq
         if not ((trial - a) * (trial - b) < 0.0):
             trial = 0.5 * (a + b)
-        if abs(trial - w) <= 4.4e-16 * max(abs(trial), abs(x + trial)) or trial == a or trial == b \
-                or b - a <= 4.4e-16 * max(abs(a), abs(b)):
+        if abs(trial - w) <= 4.4e-16 * abs(trial) or trial == a or trial == b:
             return trial  # Newton's step, or the bracket, is at the rounding level of w or x + w: converged
         w = trial
         q = g_lo + slope_linear * (w - lo) + _cubic_change(x, lo, w, k3)
