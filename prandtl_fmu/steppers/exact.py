@@ -184,13 +184,6 @@ def _phase(m, k0, c, k, eta, load, t, x, u, direction):
 
 
 @kernel
-def _count(k):
-    if k is None:
-        return 0
-    return k.shape[0]
-
-
-@kernel
 def _linear_spring(k0):
     if k0 is None:
         return 0.0
