@@ -211,8 +211,14 @@ class _AtomicFile:
 
 
 def _discard(sink) -> None:
+    """Drop a failed run's output: the temporary file, or close a device opened directly."""
     if isinstance(sink, _AtomicFile):
         sink.discard()
+    elif sink is not None and sink is not sys.stdout:
+        try:
+            sink.close()
+        except OSError:
+            pass
 
 
 def _silence_stdout() -> None:

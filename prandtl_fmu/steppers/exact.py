@@ -47,8 +47,10 @@ one matrix exponential takes the state there. It is checked at the start of
 the phase and at every turning point. For a constant load the zeros of v
 come from the rule above, so a sliding phase of any length also costs O(1).
 There is no cap on the number of phases: each ends at an event, a load kink
-or the end of the step, and a run of 10^6 phases that make no progress in
-time raises an error (it cannot happen unless the state is not finite).
+or the end of the step; a run of 10^6 phases that make no progress in time
+(it cannot happen unless the state is not finite) ends the step with a
+non-finite state, which the driver reports as a failed step: never a silent
+stop.
 
 ``ORDER`` is infinite: the error is rounding (checked against scipy's DOP853
 at rtol 1e-13 on event-free stretches, tests/test_exact.py). The cost grows
