@@ -21,8 +21,12 @@ SETTINGS = settings(max_examples=25, deadline=None, derandomize=True, database=N
 
 
 @st.composite
-def tables(draw, cubic=True):
-    """Tables of a random element with inertia: each effect present or not, a random load, T = p h."""
+def tables(draw, cubic=True, jumps=True):
+    """Tables of a random element with inertia: each effect present or not, a random load, T = p h.
+
+    ``jumps=False``: table loads without jumps (times at least 0.05 s apart), for a comparison with a
+    scheme whose order a jump inside a step lowers to 1.
+    """
     n = draw(st.integers(0, 6))
     branches = None
     if n:
@@ -37,7 +41,10 @@ def tables(draw, cubic=True):
         load = {"kind": "harmonic", "amplitude": draw(st.floats(0.0, 3.0)), "omega": draw(st.floats(0.1, 5.0)),
                 "offset": draw(st.floats(-1.0, 1.0))}
     else:
-        times = sorted(draw(st.lists(st.floats(0.0, 3.0), min_size=2, max_size=5)))
+        if jumps:
+            times = sorted(draw(st.lists(st.floats(0.0, 3.0), min_size=2, max_size=5)))
+        else:
+            times = np.cumsum([0.0] + draw(st.lists(st.floats(0.05, 1.0), min_size=1, max_size=4))).tolist()
         load = {"kind": "table", "time": times,
                 "force": draw(st.lists(st.floats(-2.0, 2.0), min_size=len(times), max_size=len(times)))}
     steps = draw(st.integers(200, 3000))
@@ -123,9 +130,13 @@ def test_element_does_not_depend_on_how_a_master_cuts_its_steps(tables, cuts):
 
 
 @settings(max_examples=12, deadline=None, derandomize=True, database=None, phases=[Phase.explicit, Phase.generate])
-@given(tables(cubic=False))
+@given(tables(cubic=False, jumps=False))
 def test_exact_agrees_with_extrapolated_verlet(tables):
-    """An independent check of exact's event location: verlet at h and h/2 (order 2), Richardson-extrapolated."""
+    """An independent check of exact's event location: verlet at h and h/2 (order 2), Richardson-extrapolated.
+
+    No load jumps here: a jump inside a step (verlet samples F at the step's ends) makes verlet of order 1
+    (a table jumping at t = 2.2e-16 gave verlet 0.0239283 at h = 1e-4 and 0.0239499 at 1e-6, converging
+    to exact's 0.0239501), so extrapolating at order 2 would blame exact for verlet's error."""
     scene = make_scene(**tables)
     stop = scene.solver.stop_time
     exact = simulate(scene.with_solver(stepper="exact", step=stop, output_interval=stop))
