@@ -35,7 +35,7 @@ def main():
         scene = load_scene(os.path.join(folder, file))
         for stepper in STEPPERS:
             try:
-                get_stepper(stepper).step_for(scene)
+                get_stepper(stepper).loop_for(scene)
             except ValueError:
                 continue
             states = scene.branches.n <= 1000

@@ -1,14 +1,32 @@
-"""One place that decides how the kernels are compiled.
+"""One place that decides how the kernels are compiled and where their machine code is cached.
 
-Kernels are compiled with numba on first use and cached on disk. numba
-invalidates a cached function when *its own* source file changes, not when a
-function it calls in another file does; so our cache lives in a folder named
-after a digest of every source file of the package (``<numba cache>/prandtl_fmu-<digest>``):
-any edit anywhere gives a fresh cache.
+Every kernel, the time loops included, is compiled with numba on first use and
+cached on disk, so that a second process loads machine code instead of
+compiling (``benchmarks/startup.py``). The cache lives in the user's cache
+folder, never beside the sources:
 
-Inside an FMU the sources live in a temporary resources folder where numba's
-on-disk cache has crashed host processes, so the FMU's entry point sets
-``PRANDTL_FMU_JIT_CACHE=0`` before importing the library.
+    $NUMBA_CACHE_DIR, else $XDG_CACHE_HOME/numba, else ~/.cache/numba
+        / <package name>-<digest of every source file of the package> / <subpackage> / ...
+
+* numba invalidates a cached function when *its own* source changes, not when
+  a function it calls in another file does; the digest of the whole package
+  in the folder name makes any edit anywhere start a fresh cache, and stands
+  for the source stamp numba would take from the file (so a copy of the same
+  sources at another place, an FMU extracted to a new temporary folder, finds
+  the same cache);
+* the package name is part of the folder: the library bundled in an FMU is
+  imported under a private name (``fmu/entry.py``), and cached code names the
+  modules it was compiled in, so the FMU never loads code compiled for the
+  installed ``prandtl_fmu`` nor the other way round;
+* inside an FMU the sources sit in a temporary folder that the importer
+  deletes when it unloads the FMU. numba's default locator caches beside the
+  sources (``__pycache__``) and would write there, into a folder that can
+  vanish under a running process (the crash the FMU used to meet). When the
+  user's cache folder cannot be created, caching is off altogether
+  (``CACHE``): never beside the sources.
+
+``PRANDTL_FMU_JIT_CACHE=0`` turns the cache off (everything compiles in every
+process).
 """
 import hashlib
 import os
@@ -17,40 +35,63 @@ import pathlib
 from numba import njit
 from numba.core import caching
 
-CACHE = os.environ.get("PRANDTL_FMU_JIT_CACHE", "1") != "0"
 _PACKAGE = pathlib.Path(__file__).resolve().parent
+_PACKAGE_NAME = __name__.rpartition(".")[0] or "prandtl_fmu"
 
 
 def _digest() -> str:
     sha = hashlib.sha256()
     for path in sorted(_PACKAGE.rglob("*.py")):
-        sha.update(str(path.relative_to(_PACKAGE)).encode())
+        if "__pycache__" in path.parts:
+            continue
+        sha.update(str(path.relative_to(_PACKAGE).as_posix()).encode())
         sha.update(path.read_bytes())
     return sha.hexdigest()[:16]
 
 
-def _install_locator():
-    """Put a locator in front of numba's own for this package's functions (numba internals:
-    if they differ in some numba version, numba's default locator is kept)."""
+def cache_root() -> pathlib.Path:
+    """The folder of this package's compiled code (see the module docstring)."""
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "numba")
+    return pathlib.Path(base) / f"{_PACKAGE_NAME.lstrip('_')}-{_digest()}"
+
+
+def _usable_root():
+    """:func:`cache_root`, created; None if it cannot be (no home, read-only disk, ...)."""
+    try:
+        root = cache_root()
+        root.mkdir(parents=True, exist_ok=True)
+        probe = root / f".probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+        return root
+    except (OSError, RuntimeError, ValueError):
+        return None
+
+
+def _install_locator(root: pathlib.Path, digest: str) -> bool:
+    """Put a locator in front of numba's own for this package's functions. False (no caching) if numba's
+    internals differ from what it needs."""
     impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
     mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
     base = getattr(caching, "_CacheLocator", None)
-    if impl is None or mixin is None or base is None:
-        return
+    if impl is None or mixin is None or base is None or not hasattr(impl, "_locator_classes"):
+        return False
 
     class DigestLocator(mixin, base):
-        """numba's cache locator for this package's functions: a folder per source digest."""
-
-        root = None
+        """numba's cache locator for this package's functions: a folder per package digest."""
 
         def __init__(self, py_func, py_file):
             self._py_file = py_file
             self._lineno = py_func.__code__.co_firstlineno
             relative = pathlib.Path(py_file).resolve().relative_to(_PACKAGE).parent
-            self._cache_path = str(pathlib.Path(self.root) / str(relative))
+            self._cache_path = str(root / relative)
 
         def get_cache_path(self):
             return self._cache_path
+
+        def get_source_stamp(self):
+            return digest  # the whole package's sources, wherever they sit
 
         @classmethod
         def from_function(cls, py_func, py_file):
@@ -58,30 +99,34 @@ def _install_locator():
                 pathlib.Path(py_file).resolve().relative_to(_PACKAGE)
             except ValueError:
                 return None  # not ours: numba's own locators decide
-            if cls.root is None:
-                base_dir = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
-                    os.environ.get("XDG_CACHE_HOME", os.path.join(os.path.expanduser("~"), ".cache")), "numba")
-                cls.root = os.path.join(base_dir, f"prandtl_fmu-{_digest()}")
             self = cls(py_func, py_file)
             try:
                 self.ensure_cache_path()
             except OSError:
-                return None
+                return None  # the root was writable at import: only a full disk gets here
             return self
 
-    if not any(getattr(c, "__name__", "") == "DigestLocator" for c in impl._locator_classes):
-        impl._locator_classes.insert(0, DigestLocator)
+    impl._locator_classes.insert(0, DigestLocator)
+    return True
 
 
-if CACHE:
+def _cache_enabled() -> bool:
+    if os.environ.get("PRANDTL_FMU_JIT_CACHE", "1") == "0":
+        return False
+    root = _usable_root()
+    if root is None:
+        return False
     try:
-        _install_locator()
+        return _install_locator(root, root.name)
     except Exception:  # never let a cache refinement stop the library from importing
-        pass
+        return False
+
+
+CACHE = _cache_enabled()
 
 
 def kernel(fn):
-    """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath), cached on disk."""
+    """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath), cached on disk (see above)."""
     return njit(cache=CACHE)(fn)
 
 
@@ -91,13 +136,8 @@ def inline_kernel(fn):
     return njit(cache=CACHE, inline="always")(fn)
 
 
-def loop_kernel(fn):
-    """:func:`kernel` for a loop that takes compiled functions as arguments: never cached.
-
-    numba can cache such a function only until a second process adds a
-    specialisation to the cache index: re-saving the index then fails
-    ("underlying object has vanished"), because the keys it reloads refer to
-    compiled-function types it cannot rebuild. The loop is small; what it
-    calls is cached.
-    """
+def generic_kernel(fn):
+    """:func:`kernel` for a closure over compiled functions (the time loop around a step): never cached on its
+    own, since numba keys a closure's cache entry on a pickle of what it closes over. A cached kernel that
+    calls it holds its machine code, and is cached (``kernels/loop.py``)."""
     return njit(cache=False)(fn)

@@ -6,9 +6,9 @@
   arbitrary durations under a held force: what an FMU (or any co-simulation
   master) needs.
 
-Both call :func:`integrate`, the one compiled time loop, with the stepper's
-compiled ``step`` as argument; Python runs once per chunk of output rows,
-never once per step.
+Both call :func:`integrate`, which runs the stepper's compiled time loop
+(``kernels/loop.py``); Python runs once per chunk of output rows, never once
+per step.
 """
 from __future__ import annotations
 
@@ -21,7 +21,6 @@ from typing import Optional
 
 import numpy as np
 
-from ._jit import loop_kernel
 from .kernels.energy import kinetic, stored
 from .kernels.increment import solve_increment
 from .kernels import stack
@@ -100,51 +99,16 @@ def _initial_x(scene: Scene) -> float:
     return scene.mass.x0 if scene.mass is not None else 0.0
 
 
-def compile_step(scene: Scene, stepper: str):
-    """The compiled step of ``stepper`` for ``scene``; ValueError if the scheme does not apply."""
-    return get_stepper(stepper).step_for(scene)
+def compile_loop(scene: Scene, stepper: str):
+    """The compiled time loop of ``stepper`` for ``scene``; ValueError if the scheme does not apply."""
+    return get_stepper(stepper).loop_for(scene)
 
 
-@loop_kernel
-def integrate(step, model, load, x, v, u, t_base, first_step, h, steps_per_row, n_rows, out, out_u, energy,
-              out_energy):
-    """Advance ``n_rows * steps_per_row`` steps of size ``h``, from step number ``first_step``.
-
-    Step number p starts at t_p = t_base + p h, computed from p alone: the
-    load a step sees does not depend on how a run is cut into calls (output
-    rows, chunks of rows, communication steps).
-
-    After every ``steps_per_row`` steps, row j of ``out`` (shape (n_rows, 3))
-    receives x, v and the reaction, row j of ``out_u`` (shape (n_rows, n), or
-    ``None``) the elongations and row j of ``out_energy`` (shape (n_rows, 5),
-    or ``None``) the kinetic and stored energy and the account ``energy``
-    (work, dissipated by the sliders, by the dashpot). ``u`` and ``energy``
-    are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
-    of steps taken, fewer than asked if a step failed (non-finite result; the
-    state returned is the one before that step).
-    """
-    m, k0, k3, c, k, eta = model
-    s = branch_force(k, u)
-    p = 0
-    for j in range(n_rows):
-        for _ in range(steps_per_row):
-            x1, v1, s1 = step(model, load, t_base + (first_step + p) * h, h, x, v, s, u, energy)
-            if not (abs(x1) < np.inf and abs(v1) < np.inf):
-                return x, v, p
-            x, v, s = x1, v1, s1
-            p += 1
-        out[j, 0] = x
-        out[j, 1] = v
-        out[j, 2] = smooth_force(x, v, k0, k3, c) + s
-        if out_u is not None:
-            write_elongations(k, u, out_u[j])
-        if out_energy is not None:
-            out_energy[j, 0] = kinetic(m, v)
-            out_energy[j, 1] = stored(x, k0, k3, k, u)
-            out_energy[j, 2] = energy[0]
-            out_energy[j, 3] = energy[1]
-            out_energy[j, 4] = energy[2]
-    return x, v, p
+def integrate(loop, model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """Run a stepper's compiled ``loop`` (``kernels/loop.py``): ``out.shape[0] * steps_per_row`` steps of
+    size ``h`` from step number ``first_step`` (t_p = t_base + p h). Returns ``(x, v, steps taken)``."""
+    return loop(model, load, x, v, u, float(t_base), int(first_step), float(h), int(steps_per_row), out, out_u,
+                energy, out_energy)
 
 
 def initial_state(scene: Scene, model, load):
@@ -323,7 +287,7 @@ def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool
     t_p = p h however the run is cut. Checks everything (stepper, options) before the first piece."""
     solver = scene.solver
     name = stepper or solver.stepper
-    step = compile_step(scene, name)
+    loop = compile_loop(scene, name)
     module = get_stepper(name)
     if energy and not getattr(module, "ENERGY_ACCOUNT", True):
         raise ValueError(f"{scene.source}: stepper {name!r} keeps no energy account (drop --energy, or use "
@@ -337,10 +301,10 @@ def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool
     problem = stability_problem(scene, name, h)
     if problem:
         warnings.warn(f"{scene.source}: {problem}", StabilityWarning, stacklevel=warn_level + 1)
-    return _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kernel)
+    return _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kernel)
 
 
-def _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kernel):
+def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kernel):
     solver = scene.solver
     model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
     load = scene.load.compile()
@@ -387,8 +351,8 @@ def _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kern
         while j < full_rows:
             count = min(chunk, full_rows - j)
             out, out_u, out_energy = piece(1 + j, count)
-            x, v, taken = integrate(step, model, load, x, v, u, 0.0, j * per_row, h, per_row, count,
-                                    out, out_u, account, out_energy)
+            x, v, taken = integrate(loop, model, load, x, v, u, 0.0, j * per_row, h, per_row, out, out_u, account,
+                                    out_energy)
             if taken < per_row * count:
                 raise _failure(scene, name, load, (j * per_row + taken) * h, h)
             yield result(1 + j, out, out_u, out_energy)
@@ -397,7 +361,7 @@ def _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kern
         if last_is_short:  # a last, shorter output interval up to stop_time
             out, out_u, out_energy = piece(rows - 1, 1)
             last = grid.times(rows - 2, 2)
-            x, v, failed_at = _advance(step, model, load, x, v, u, 0.0, full_rows * per_row, last[1] - last[0],
+            x, v, failed_at = _advance(loop, model, load, x, v, u, 0.0, full_rows * per_row, last[1] - last[0],
                                        h, out, out_u, account, out_energy)
             if failed_at is not None:
                 raise _failure(scene, name, load, failed_at, h)
@@ -407,7 +371,7 @@ def _chunks(scene, name, step, h, per_row, states, energy, progress, branch_kern
         bar.close()
 
 
-def _advance(step, model, load, x, v, u, t_base, first_step, duration, h, out, out_u, account, out_energy):
+def _advance(loop, model, load, x, v, u, t_base, first_step, duration, h, out, out_u, account, out_energy):
     """Advance by ``duration`` from t_base + first_step h: whole steps of h, then one shorter step for the
     remainder.
 
@@ -425,13 +389,13 @@ def _advance(step, model, load, x, v, u, t_base, first_step, duration, h, out, o
         whole = math.floor(ratio)
         rest = duration - whole * h
     if whole:
-        x, v, taken = integrate(step, model, load, x, v, u, t_base, first_step, h, whole, 1, out, out_u, account,
+        x, v, taken = integrate(loop, model, load, x, v, u, t_base, first_step, h, whole, out, out_u, account,
                                 out_energy)
         if taken < whole:
             return x, v, t_base + (first_step + taken) * h
     if rest:
         start = t_base + (first_step + whole) * h
-        x, v, taken = integrate(step, model, load, x, v, u, start, 0, rest, 1, 1, out, out_u, account, out_energy)
+        x, v, taken = integrate(loop, model, load, x, v, u, start, 0, rest, 1, out, out_u, account, out_energy)
         if taken < 1:
             return x, v, start
     return x, v, None
@@ -459,7 +423,7 @@ class Element:
         self.scene = scene
         self._forced_kernel = branch_kernel  # "play" or "stack"; None: the automatic choice
         self.stepper = stepper or scene.solver.stepper
-        self._step = compile_step(scene, self.stepper)
+        self._loop = compile_loop(scene, self.stepper)
         self.h = float(step if step is not None else scene.solver.step)
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
@@ -519,7 +483,7 @@ class Element:
         load = held(force)
         self.force = float(force)
         h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
-        x, v, failed_at = _advance(self._step, self.model, load, self.x, self.v, self.u, self.time, 0,
+        x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self.time, 0,
                                    duration, h, self._out, None, self.account, self._energy_row)
         if failed_at is not None:
             self.rollback(saved)
@@ -533,8 +497,8 @@ class Element:
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
-        step = compile_step(scene, self.stepper)  # c -> 0 on a massless element: 'projected' no longer applies
-        self.scene, self.model, self._step = scene, _smooth_model(scene) + self.model[4:], step
+        loop = compile_loop(scene, self.stepper)  # c -> 0 on a massless element: 'projected' no longer applies
+        self.scene, self.model, self._loop = scene, _smooth_model(scene) + self.model[4:], loop
         self._record()
 
     def set_stepper(self, name: str) -> None:
@@ -544,12 +508,12 @@ class Element:
         elongations are expanded to one per branch (O(n), once); when it does
         and the branches are many, they are folded back into a stack.
         """
-        step = compile_step(self.scene, name)
+        loop = compile_loop(self.scene, name)
         kind = choose_branch_kernel(self.scene, name) if self._can_fold() else "play"
         if self._forced_kernel and getattr(get_stepper(name), "BRANCH_STACK", False):
             kind = self._forced_kernel
         self._use_branch_kernel(kind)
-        self._step, self.stepper = step, name
+        self._loop, self.stepper = loop, name
 
     def _can_fold(self) -> bool:
         """Whether the current elongations can be held by the memory stack."""
@@ -637,11 +601,11 @@ class Element:
         model, u = self._branch_state(kind, np.array(state["u"], dtype=float).reshape(-1),
                                       np.array(state.get("u_reference", []), dtype=float).reshape(-1))
         scene = with_coefficients(self.scene, **state["coefficients"])
-        step = compile_step(scene, state["stepper"])
+        loop = compile_loop(scene, state["stepper"])
         self.set_step(float(state["step"]))
         self.scene, self.branch_kernel = scene, kind
         self.model = _smooth_model(scene) + model
-        self._step, self.stepper = step, state["stepper"]
+        self._loop, self.stepper = loop, state["stepper"]
         self.time, self.x, self.v, self.force, self.initial_energy = values
         self.u = u
         self.account[:] = account

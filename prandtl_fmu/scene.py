@@ -408,7 +408,7 @@ def _check_stepper_applies(scene: Scene, where: str) -> None:
     from .steppers import get_stepper
 
     try:
-        get_stepper(scene.solver.stepper).step_for(scene)
+        get_stepper(scene.solver.stepper).loop_for(scene)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {where}stepper: {exc}") from None
 

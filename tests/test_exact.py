@@ -120,7 +120,7 @@ def test_exact_handles_every_branch_event_of_the_paper_scene(paper_exact):
 
 def test_exact_refuses_what_it_cannot_do():
     with pytest.raises(ValueError, match="no \\[cubic\\]"):
-        get_stepper("exact").step_for(make_scene())
+        get_stepper("exact").loop_for(make_scene())
     with pytest.raises(ValueError, match="energy account"):
         simulate(make_scene(cubic=None), "exact", energy=True)
     assert math.isinf(get_stepper("exact").ORDER)

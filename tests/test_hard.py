@@ -27,7 +27,7 @@ def hard(name):
 
 def applies(scene, stepper):
     try:
-        get_stepper(stepper).step_for(scene)
+        get_stepper(stepper).loop_for(scene)
         return True
     except ValueError:
         return False

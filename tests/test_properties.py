@@ -61,7 +61,7 @@ def applicable(scene):
     names = []
     for name in STEPPERS:
         try:
-            get_stepper(name).step_for(scene)
+            get_stepper(name).loop_for(scene)
             names.append(name)
         except ValueError:
             pass

@@ -17,7 +17,7 @@ def fits(stepper, **changes):
     """make_scene(**changes), without the cubic spring if the stepper refuses it (``exact``)."""
     try:
         scene = make_scene(**changes)
-        get_stepper(stepper).step_for(scene)
+        get_stepper(stepper).loop_for(scene)
     except ValueError:  # SceneError is a ValueError
         scene = make_scene(**{**changes, "cubic": None})
     return scene
@@ -65,7 +65,7 @@ def test_an_effect_with_zero_coefficient_is_the_absent_effect(stepper, table, ze
     solver = {"stepper": stepper, "step": 1e-3, "stop_time": 5.0, "output_interval": 0.01}
     if stepper == "exact" and table == "cubic":
         with pytest.raises(ValueError, match="cubic"):  # any cubic spring, even k3 = 0
-            get_stepper(stepper).step_for(make_scene(solver=solver, cubic=zero))
+            get_stepper(stepper).loop_for(make_scene(solver=solver, cubic=zero))
         return
     others = {} if stepper != "exact" else {"cubic": None}
     present = simulate(make_scene(solver=solver, **{**others, table: zero}), states=True)

@@ -6,8 +6,8 @@ imports the library bundled beside it (``resources/prandtl_fmu``) under a
 private package name, so that the FMU runs the code it was built and tested
 with whatever ``prandtl_fmu`` the host may have imported, and hands PythonFMU
 the slave class defined there. The library is imported once per process;
-numba compiles its kernels then, without its on-disk cache (which has crashed
-hosts when it lived in extracted resources).
+its compiled kernels come from the user's numba cache folder, never from the
+extracted resources (see ``_jit.py``).
 
 Two defects of PythonFMU 0.7.0's loader are neutralised here. At every
 instantiation it executes this file again (globals: this module's dict) and
@@ -45,18 +45,11 @@ def _import_library():
         _LIBRARY, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder])
     package = importlib.util.module_from_spec(spec)
     sys.modules[_LIBRARY] = package
-    previous = os.environ.get("PRANDTL_FMU_JIT_CACHE")
-    os.environ["PRANDTL_FMU_JIT_CACHE"] = "0"
     try:
         spec.loader.exec_module(package)
     except BaseException:
         del sys.modules[_LIBRARY]
         raise
-    finally:
-        if previous is None:
-            del os.environ["PRANDTL_FMU_JIT_CACHE"]
-        else:
-            os.environ["PRANDTL_FMU_JIT_CACHE"] = previous
     return package
 
 

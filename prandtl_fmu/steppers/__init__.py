@@ -9,7 +9,9 @@ A stepper module defines
   in place), ``s = sum_i k_i u_i`` their force, carried from step to step, and
   ``energy`` an energy account or ``None`` (see ``kernels/energy.py``). A
   step that cannot be taken returns a non-finite x;
-* ``step_for(scene)``: which of its steps fits the scene (ValueError if none);
+* for each step, its compiled time loop ``run(model, load, x, v, u, t_base, first_step, h, ...)``: one
+  line, ``return time_loop(step, ...)`` (``kernels/loop.py``), so that the loop is cached across processes;
+* ``loop_for(scene)``: the loop of the step that fits the scene (ValueError if none);
 * ``ORDER``: the order of convergence in h (``math.inf`` for ``exact``);
 * optionally ``STEP_IS_OUTPUT = True`` (the driver then takes one step per
   output interval: h does not set the accuracy) and ``ENERGY_ACCOUNT = False``

@@ -65,6 +65,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
+from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, TABLE, force_at
 
@@ -73,8 +74,8 @@ STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accura
 ENERGY_ACCOUNT = False
 
 
-def step_for(scene):
-    """The compiled step for ``scene``; ValueError if the scheme does not apply."""
+def loop_for(scene):
+    """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is None:
         raise ValueError("'exact' needs [mass] (the massless element is solved exactly by 'implicit')")
     if scene.cubic is not None:
@@ -82,7 +83,7 @@ def step_for(scene):
     if scene.branches is not None and scene.branches.continuum:
         raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
-    return step
+    return run
 
 
 @kernel
@@ -497,3 +498,12 @@ def _move_branches(k, eta, u, direction, hit, up, down, moved):
             u[i] = -eta[i]
         else:
             u[i] = min(max(u[i] + moved, -eta[i]), eta[i])
+
+
+_loop = time_loop(step)
+
+
+@kernel
+def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
+    return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)

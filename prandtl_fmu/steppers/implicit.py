@@ -37,6 +37,7 @@ import numpy as np
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.increment import solve_increment
+from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..loads import force_at
 
@@ -44,14 +45,14 @@ BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branch
 ORDER = 1
 
 
-def step_for(scene):
-    """The compiled step for ``scene``; ValueError for the continuum."""
+def loop_for(scene):
+    """The compiled time loop for ``scene``; ValueError for the continuum."""
     if scene.branches is not None and scene.branches.continuum:
         # the continuum's force is smooth (not piecewise linear) in the increment where branches
         # yield one after the other: the exact scalar solve does not apply
         raise ValueError("'implicit' solves a piecewise linear equation and the continuum yields smoothly: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
-    return step
+    return run
 
 
 @kernel
@@ -90,3 +91,12 @@ def _plus_damping(value, c, h):
     if c is None:
         return value
     return value + c / h
+
+
+_loop = time_loop(step)
+
+
+@kernel
+def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
+    return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)

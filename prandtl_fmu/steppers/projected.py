@@ -32,6 +32,7 @@ quasi-static and has no explicit scheme: use ``implicit``.
 """
 from .._jit import kernel
 from ..kernels.energy import book
+from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..kernels.smooth import elastic_force, smooth_force
 from ..loads import force_at
@@ -40,12 +41,12 @@ BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branch
 ORDER = 1
 
 
-def step_for(scene):
-    """The compiled step for ``scene``; ValueError if the scheme does not apply."""
+def loop_for(scene):
+    """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is not None:
-        return step
+        return run
     if scene.has_dashpot:
-        return step_massless
+        return run_massless
     raise ValueError("'projected' is explicit and needs [mass] or a [damper] with c > 0; a massless element "
                      "without a dashpot is quasi-static: use 'implicit'")
 
@@ -71,3 +72,22 @@ def step_massless(model, load, t, h, x, v, s, u, energy):
     s = move(k, eta, u, dx, energy)
     x = x + dx
     return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s) / c, s
+
+
+_loop = time_loop(step)
+
+
+@kernel
+def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
+    return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)
+
+
+_loop_massless = time_loop(step_massless)
+
+
+@kernel
+def run_massless(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """The time loop (``kernels/loop.py``) over :func:`step_massless`, cached."""
+    return _loop_massless(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy,
+                          out_energy)

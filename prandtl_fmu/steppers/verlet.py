@@ -29,6 +29,7 @@ Stable for omega h < 2 (omega^2 = stiffness / m). Massless elements: not applica
 """
 from .._jit import kernel
 from ..kernels.energy import book
+from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..kernels.smooth import damped, elastic_force, smooth_force
 from ..loads import force_at
@@ -37,11 +38,11 @@ BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branch
 ORDER = 2
 
 
-def step_for(scene):
-    """The compiled step for ``scene``; ValueError if the scheme does not apply."""
+def loop_for(scene):
+    """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is None:
         raise ValueError("'verlet' needs [mass]; a massless element is solved by 'implicit'")
-    return step
+    return run
 
 
 @kernel
@@ -57,3 +58,11 @@ def step(model, load, t, h, x, v, s, u, energy):
     book(energy, 0.5 * (force0 + force1), dx, c, half)
     return x, v1, s
 
+
+_loop = time_loop(step)
+
+
+@kernel
+def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+    """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
+    return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)

@@ -1,0 +1,146 @@
+"""Time to first result: what a new process pays before its first number.
+
+Each case runs in fresh processes (the median of ``--repeat`` runs, wall
+time of the whole process, measured here in one run so the ratios compare
+like with like):
+
+* ``import numba``: the floor, ``python -c "import numba"``;
+* ``cli``: ``prandtl-fmu run`` on a tiny scene (10 steps, 2 branches) writing
+  a CSV, the way a user's first command runs;
+* ``fmu``: a fresh process that loads the FMU of the same scene with FMPy and
+  calls instantiate ... first ``doStep`` (reported: the time from
+  instantiate to the end of the first doStep, and the whole process);
+
+each with a *warm* cache (the compiled kernels are in the user's numba cache
+folder: every run after the first) and a *cold* one (an empty cache folder:
+the first run after an install or an edit of the library, which compiles and
+fills the cache). numba's first compiled call imports scipy.linalg when scipy
+is installed (to find BLAS, which no kernel here uses): the ``no scipy`` rows
+hide scipy from the process, as in a core install (``pip install prandtl_fmu``
+without extras).
+
+    python benchmarks/startup.py [--repeat 5] [--out docs/bench/startup.csv]
+"""
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+sys.path.insert(0, ROOT)
+from common import write_rows  # noqa: E402
+
+TINY_SCENE = """\
+name = "tiny"
+[mass]
+m = 1.0
+[spring]
+k0 = 1.0
+[branches]
+k = [0.5, 0.5]
+eta = [0.1, 0.3]
+[load]
+kind = "harmonic"
+amplitude = 0.4
+omega = 1.0
+[solver]
+stepper = "projected"
+step = 0.01
+stop_time = 0.1
+output_interval = 0.01
+"""
+
+HIDE_SCIPY = "import sys; sys.modules['scipy'] = None\n"
+
+CLI = "from prandtl_fmu.cli import main\nsys.exit(main(['run', {scene!r}, '--out', {out!r}]))\n"
+
+FMU = textwrap.dedent("""\
+    import os, time
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    description = read_model_description({fmu!r})
+    folder = extract({fmu!r})
+    slave = FMU2Slave(guid=description.guid, unzipDirectory=folder,
+                      modelIdentifier=description.coSimulation.modelIdentifier, instanceName="tiny")
+    start = time.perf_counter()
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.01)
+    print("FIRST", time.perf_counter() - start, flush=True)
+    slave.terminate()
+    slave.freeInstance()
+    os._exit(0)  # the known teardown abort of numba in an FMU host (README)
+""")
+
+
+def timed(code, cache_dir):
+    """Wall time of a fresh ``python -c code``, and the 'FIRST' time it prints (or None)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"benchmark process failed ({done.returncode}): {done.stderr.strip()[-500:]}")
+    first = [float(line.split()[1]) for line in done.stdout.splitlines() if line.startswith("FIRST ")]
+    return wall, (first[0] if first else None)
+
+
+def measure(code, repeat, warm):
+    """Median wall time (and first-result time) over ``repeat`` fresh processes."""
+    walls, firsts = [], []
+    with tempfile.TemporaryDirectory(prefix="prandtl_startup_cache_") as shared:
+        if warm:
+            timed(code, shared)  # fills the cache
+        for _ in range(repeat):
+            if warm:
+                wall, first = timed(code, shared)
+            else:
+                with tempfile.TemporaryDirectory(prefix="prandtl_startup_cold_") as empty:
+                    wall, first = timed(code, empty)
+            walls.append(wall)
+            firsts.append(first)
+    first = statistics.median(firsts) if firsts[0] is not None else None
+    return statistics.median(walls), first
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--out", default=os.path.join(ROOT, "docs", "bench", "startup.csv"))
+    args = parser.parse_args(argv)
+
+    from prandtl_fmu.fmu.build import build_fmu
+
+    with tempfile.TemporaryDirectory(prefix="prandtl_startup_") as work:
+        scene = os.path.join(work, "tiny.toml")
+        with open(scene, "w") as fh:
+            fh.write(TINY_SCENE)
+        fmu = str(build_fmu(scene, os.path.join(work, "tiny.fmu")))
+        cases = [("import numba", "import numba\n")]
+        cli = CLI.format(scene=scene, out=os.path.join(work, "tiny.csv"))
+        fmu_code = FMU.format(fmu=fmu)
+        for label, code in (("cli", "import sys\n" + cli), ("fmu", fmu_code)):
+            cases.append((label, code))
+            cases.append((label + ", no scipy", HIDE_SCIPY + ("" if label == "fmu" else "import sys\n") + code))
+        rows = []
+        for label, code in cases:
+            for warm in ((True,) if label == "import numba" else (True, False)):
+                wall, first = measure(code, args.repeat, warm)
+                rows.append({"case": label, "cache": "warm" if warm else "cold", "process_s": round(wall, 3),
+                             "instantiate_to_first_step_s": "" if first is None else round(first, 3)})
+                print(f"{label:18s} {rows[-1]['cache']:5s} process {wall:6.3f} s"
+                      + ("" if first is None else f"   instantiate..first doStep {first:6.3f} s"), flush=True)
+    floor = rows[0]["process_s"]
+    for row in rows:
+        row["x_import_numba"] = round(row["process_s"] / floor, 2)
+    write_rows(args.out, rows)
+
+
+if __name__ == "__main__":
+    main()

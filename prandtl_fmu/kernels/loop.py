@@ -1,0 +1,64 @@
+"""The time loop: ``steps_per_row`` steps per output row, for every row of ``out``.
+
+Each stepper builds it around its own step (``time_loop(step)``, a closure:
+the step is a compile-time constant, not a run-time value) and wraps it in
+``run``, a one-line cached kernel. The machine code of ``run`` holds the
+loop, so a later process loads it from the cache and compiles nothing. The
+closure itself is not cached (numba keys a closure's cache entry on a pickle
+of the functions it closes over, which is not stable across processes); a
+loop taking the step as an argument could not be cached either (the
+dispatcher would be a run-time Python object: "dynamic globals").
+"""
+import numpy as np
+
+from .._jit import generic_kernel
+from .energy import kinetic, stored
+from .play import branch_force, write_elongations
+from .smooth import smooth_force
+
+
+def time_loop(step):
+    """The time loop over the compiled ``step``, compiled (not cached on its own: see above)."""
+
+    @generic_kernel
+    def loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
+        """Advance ``out.shape[0] * steps_per_row`` steps of size ``h`` with ``step``, from step number
+        ``first_step``.
+
+        Step number p starts at t_p = t_base + p h, computed from p alone: the
+        load a step sees does not depend on how a run is cut into calls (output
+        rows, chunks of rows, communication steps).
+
+        After every ``steps_per_row`` steps, row j of ``out`` (shape (rows, 3))
+        receives x, v and the reaction, row j of ``out_u`` (shape (rows, n), or
+        ``None``) the elongations and row j of ``out_energy`` (shape (rows, 5),
+        or ``None``) the kinetic and stored energy and the account ``energy``
+        (work, dissipated by the sliders, by the dashpot). ``u`` and ``energy``
+        are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
+        of steps taken, fewer than asked if a step failed (non-finite result; the
+        state returned is the one before that step).
+        """
+        m, k0, k3, c, k, eta = model
+        s = branch_force(k, u)
+        p = 0
+        for j in range(out.shape[0]):
+            for _ in range(steps_per_row):
+                x1, v1, s1 = step(model, load, t_base + (first_step + p) * h, h, x, v, s, u, energy)
+                if not (abs(x1) < np.inf and abs(v1) < np.inf):
+                    return x, v, p
+                x, v, s = x1, v1, s1
+                p += 1
+            out[j, 0] = x
+            out[j, 1] = v
+            out[j, 2] = smooth_force(x, v, k0, k3, c) + s
+            if out_u is not None:
+                write_elongations(k, u, out_u[j])
+            if out_energy is not None:
+                out_energy[j, 0] = kinetic(m, v)
+                out_energy[j, 1] = stored(x, k0, k3, k, u)
+                out_energy[j, 2] = energy[0]
+                out_energy[j, 3] = energy[1]
+                out_energy[j, 4] = energy[2]
+        return x, v, p
+
+    return loop
