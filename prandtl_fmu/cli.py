@@ -1,4 +1,14 @@
-"""Command line: ``python -m prandtl_fmu run SCENE.toml [options]``.
+"""Command line: ``prandtl-fmu`` (or ``python -m prandtl_fmu``).
+
+    prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
+                          [--states] [--energy] [--plot PNG]
+    prandtl-fmu build SCENE [-o OUT.fmu]
+    prandtl-fmu scenes
+    prandtl-fmu bench [--quick] [--out DIR] [--from-csv]
+    prandtl-fmu --version
+
+SCENE is a scene file, or the name of a scene shipped in the package
+(``prandtl-fmu scenes`` lists them: ``paper-section-8``, ``hard/step-load``, ...).
 
 Exit status 0 on success; 2 on a bad scene or option, or when the element
 cannot be advanced (plastic collapse of a massless element, a non-finite
@@ -21,16 +31,22 @@ from .stability import StabilityWarning
 from .steppers import STEPPERS
 
 
+_SCENE_HELP = "scene file (TOML), or the name of a packaged scene (see: prandtl-fmu scenes)"
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit status 2
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="python -m prandtl_fmu", description="The generalized Prandtl element.")
+    from . import __version__
+
+    parser = _Parser(prog="prandtl-fmu", description="The generalized Prandtl element (dry-friction hysteresis).")
+    parser.add_argument("--version", action="version", version=f"prandtl-fmu {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     run = commands.add_parser("run", help="simulate a scene and write the CSV time,x,v,reaction")
-    run.add_argument("scene", help="scene file (TOML)")
+    run.add_argument("scene", help=_SCENE_HELP)
     run.add_argument("--stepper", choices=list(STEPPERS), help="time stepper (default: the scene's)")
     run.add_argument("--step", type=float, help="internal time step h (s)")
     run.add_argument("--stop-time", type=float, help="end of the run (s)")
@@ -40,6 +56,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--energy", action="store_true",
                      help="add the energy account: " + ", ".join(ENERGY_COLUMNS))
     run.add_argument("--plot", help="PNG file: hysteresis loop (reaction against x) and x(t)")
+    build = commands.add_parser("build", help="build the FMI 2.0 co-simulation FMU of a scene")
+    build.add_argument("scene", help=_SCENE_HELP)
+    build.add_argument("-o", "--out", help="FMU file to write (default: ./<scene name>.fmu)")
+    commands.add_parser("scenes", help="list the scenes shipped in the package")
     bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
     bench.add_argument("--out", default="out/bench", help="folder for the CSV, plots and report (default out/bench)")
@@ -68,11 +88,43 @@ def _main(argv) -> int:
     args = _parser().parse_args(argv)
     if args.command == "run":
         return _run(args)
+    if args.command == "build":
+        return _build(args)
+    if args.command == "scenes":
+        from .scene import packaged_scenes
+
+        print("\n".join(packaged_scenes()))
+        return 0
     if args.command == "bench":
+        missing = _missing("scipy", "matplotlib", "fmpy")
+        if missing:
+            return _error(f"bench needs {', '.join(missing)}: pip install 'prandtl_fmu[bench,fmpy]'")
         from .bench import main as bench
 
         return bench(args.out, args.quick, args.from_csv)
     return 2
+
+
+def _missing(*modules) -> list:
+    """The modules of an extra that cannot be imported (an install without that extra)."""
+    import importlib.util
+
+    return [name for name in modules if importlib.util.find_spec(name) is None]
+
+
+def _build(args) -> int:
+    from .fmu.build import build_fmu
+
+    if _missing("pythonfmu"):
+        return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
+    try:
+        path = build_fmu(args.scene, args.out)
+    except (SceneError, ValueError) as exc:
+        return _error(exc)
+    except OSError as exc:
+        return _error(f"cannot write {args.out or 'the FMU'}: {exc.strerror or exc}")
+    print(path)  # the path alone: FMU=$(prandtl-fmu build SCENE)
+    return 0
 
 
 def _run(args) -> int:
@@ -86,6 +138,8 @@ def _run(args) -> int:
         )
         _check_output_path(args.out, "--out")
         _check_output_path(args.plot, "--plot")
+        if args.plot and _missing("matplotlib"):
+            raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
         if args.out:
             columns = 4 + (_branch_count(scene) if args.states else 0) + (len(ENERGY_COLUMNS) if args.energy else 0)
             rows = scene.solver.stop_time / scene.solver.output_interval + 2

@@ -35,7 +35,7 @@ from .steppers import get_stepper
 # progress-bar updates (about 10 ms).
 _CHUNK_WORK = 20_000_000
 
-ENERGY_COLUMNS = ("kinetic", "stored", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
+ENERGY_COLUMNS = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
 
 
 class ElementError(RuntimeError):

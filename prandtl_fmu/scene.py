@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import pathlib
 from dataclasses import dataclass, replace
 from typing import Any, Optional, Union
 
@@ -231,13 +232,40 @@ def _kind(value) -> str:
             list: "a list", dict: "a table"}.get(type(value), type(value).__name__)
 
 
+# The example scenes shipped in the package (``scenes/`` of the repository links here).
+PACKAGED_SCENES = pathlib.Path(__file__).resolve().parent / "scenes"
+
+
+def packaged_scenes() -> list:
+    """The names of the scenes shipped in the package ("paper-section-8", "hard/step-load", ...)."""
+    return sorted(path.relative_to(PACKAGED_SCENES).with_suffix("").as_posix()
+                  for path in PACKAGED_SCENES.rglob("*.toml"))
+
+
+def scene_path(name_or_path: Union[str, os.PathLike]) -> str:
+    """A scene file's path: ``name_or_path`` itself when it is an existing file, else the packaged scene of that
+    name (``paper-section-8``, ``hard/step-load``, with or without ``.toml``), else ``name_or_path`` (whose
+    reading then fails with a message that lists the packaged scenes)."""
+    path = os.fspath(name_or_path)
+    if os.path.exists(path):
+        return path
+    name = path[:-5] if path.endswith(".toml") else path
+    if name in packaged_scenes():
+        return str(PACKAGED_SCENES / f"{name}.toml")
+    return path
+
+
 def load_scene(path: Union[str, os.PathLike], check_stepper: bool = True) -> Scene:
-    """Read and check a scene file; raise :class:`SceneError` on any broken rule.
+    """Read and check a scene file, or a packaged scene named without a path (:func:`scene_path`); raise
+    :class:`SceneError` on any broken rule.
 
     ``check_stepper=False`` leaves out the check that the scene's stepper
     applies, for a caller that replaces the stepper (``with_solver`` checks it).
     """
-    source = os.fspath(path)
+    source = scene_path(path)
+    if not os.path.exists(source) and os.sep not in source and "/" not in source:
+        raise SceneError(f"{source}: no such scene file, and no packaged scene of that name (packaged: "
+                         f"{', '.join(packaged_scenes())})")
     try:
         with open(source, "rb") as fh:
             text = fh.read()

@@ -83,3 +83,55 @@ def test_the_continuum_runs_from_the_command_line_and_refuses_states_in_one_line
                           capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.count("\n") == 1 and "continuum has no list of elongations" in done.stderr
+
+
+def test_version_scenes_and_a_packaged_scene_named_without_a_path(tmp_path, capsys):
+    import prandtl_fmu
+
+    try:
+        main(["--version"])
+    except SystemExit as exit_:
+        assert exit_.code == 0
+    assert capsys.readouterr().out.strip() == f"prandtl-fmu {prandtl_fmu.__version__}"
+    assert main(["scenes"]) == 0
+    names = capsys.readouterr().out.split()
+    assert "paper-section-8" in names and "hard/step-load" in names
+    assert len(names) == len(list(SCENES.rglob("*.toml")))
+    # a packaged scene by name, run from a folder where no such file exists: the same numbers as its file
+    out = tmp_path / "named.csv"
+    assert main(["run", "hard/single-branch", "--stop-time", "0.5", "--out", str(out)]) == 0
+    by_file = simulate(load_scene(SCENES / "hard" / "single-branch.toml").with_solver(stop_time=0.5))
+    _, rows = read_csv(out)
+    assert [float(r[1]) for r in rows] == by_file.x.tolist()
+
+
+def test_a_name_that_is_neither_a_file_nor_a_packaged_scene_is_one_line(capsys):
+    assert main(["run", "paper-section-9"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "paper-section-9" in err and "paper-section-8" in err
+
+
+def test_build_writes_an_fmu_and_prints_its_path(tmp_path, capsys):
+    from fmpy import read_model_description
+
+    out = tmp_path / "element.fmu"
+    assert main(["build", "hard/single-branch", "-o", str(out)]) == 0
+    assert capsys.readouterr().out.strip() == str(out)
+    assert read_model_description(str(out)).modelName == load_scene(SCENES / "hard" / "single-branch.toml").name
+    assert main(["build", "hard/single-branch", "-o", str(tmp_path / "no" / "x.fmu")]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+    script = subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "-o", str(tmp_path / "default.fmu")],
+                            capture_output=True, text=True, cwd=tmp_path)
+    assert script.returncode == 0, script.stderr
+    assert read_model_description(str(tmp_path / "default.fmu")).modelName == "paper-section-8"
+
+
+def test_an_extra_that_is_not_installed_is_one_line_before_any_work(write_scene, tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as in a core install: no [plot] extra
+    out = tmp_path / "out.csv"
+    assert main(["run", str(write_scene(base_tables())), "--out", str(out), "--plot", str(tmp_path / "p.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "matplotlib" in err and "prandtl_fmu[plot]" in err
+    assert not out.exists()
+    assert main(["bench", "--quick", "--out", str(tmp_path / "bench")]) == 2
+    assert "matplotlib" in capsys.readouterr().err and not (tmp_path / "bench").exists()

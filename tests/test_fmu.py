@@ -12,7 +12,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from prandtl_fmu import Element, load_scene, parse_scene, simulate
+from prandtl_fmu.driver import ENERGY_COLUMNS
 from prandtl_fmu.fmu.build import build_fmu
+from prandtl_fmu.fmu.documentation import equations
+from prandtl_fmu.steppers import STEPPERS
 
 from .conftest import SCENES, base_tables, scene_text
 from .fmu_tools import Slave, held_input
@@ -63,6 +66,8 @@ def test_model_description_is_valid_and_complete(fmus, name):
     assert {v.name for v in md.modelVariables if v.causality == "parameter"} == expected
     n = -1 if scene.branches.continuum else scene.branches.n
     assert variables["n"].variability == "constant" and int(variables["n"].start) == n
+    energy_outputs = {v.name for v in md.modelVariables if v.causality == "output" and v.unit == "J"}
+    assert {"kinetic_energy", "stored_energy", "work"} <= energy_outputs <= set(ENERGY_COLUMNS)  # as in the CSV
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
     assert md.coSimulation.canHandleVariableCommunicationStepSize
     assert md.defaultExperiment.stopTime == str(scene.solver.stop_time) or \
@@ -74,7 +79,12 @@ def test_model_description_is_valid_and_complete(fmus, name):
     outputs = root.find("ModelStructure/Outputs")
     assert all(u.get("dependencies") == "" for u in outputs)  # no direct feedthrough of F
     assert len(root.find("ModelStructure/InitialUnknowns")) == len(outputs) >= 3
-    assert "m v' = F - k0 x - k3 x^3 - c v - sum_i k_i u_i" in doc and "reaction" in doc
+    # the page describes this FMU: the equations of its effects only, every stepper, readable bounds
+    assert equations(scene) in doc
+    assert ("k3" in doc) == (scene.cubic is not None) and ("c v" in doc) == scene.has_dashpot
+    assert all(f"<td>{name}</td>" in doc for name in STEPPERS) and "1.797" not in doc
+    assert root.get("modelName") == scene.name and root.find("CoSimulation").get("modelIdentifier") == \
+        "PrandtlElement"
     assert "resources/scene.toml" in names and "resources/prandtl_fmu/steppers/projected.py" in names
     slave_modules = [n for n in names if n.startswith("resources/prandtl_slave_") and n.endswith(".py")]
     assert len(slave_modules) == 1

@@ -18,8 +18,9 @@ import tempfile
 import zipfile
 from pathlib import Path
 from typing import Optional, Union
+from xml.sax.saxutils import escape as xml_escape
 
-from ..scene import load_scene
+from ..scene import load_scene, scene_path as resolve_scene
 
 LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
 MODEL_IDENTIFIER = "PrandtlElement"
@@ -47,7 +48,8 @@ def file_stem(name: str) -> str:
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None) -> Path:
-    """Build the FMU of the scene at ``scene_path`` into ``out`` (default ``./<scene name>.fmu``).
+    """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
+    ``./<scene name>.fmu``).
 
     The scene is checked first (:class:`SceneError` on any broken rule).
     Returns the path of the FMU.
@@ -55,7 +57,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     from pythonfmu import FmuBuilder
 
     scene = load_scene(scene_path)
-    scene_bytes = Path(scene_path).read_bytes()
+    scene_bytes = Path(resolve_scene(scene_path)).read_bytes()
     out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
     if out.is_dir():
         raise ValueError(f"{out}: is a directory")
@@ -87,7 +89,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
                 del sys.modules[name]
             if str(staging) in sys.path:
                 sys.path.remove(str(staging))
-        _add_documentation(built, scene)
+        _finish(built, scene)
         # into place in one rename: a failed build never leaves a half-written FMU behind
         handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".fmu.part", dir=out.parent)
         os.close(handle)
@@ -100,10 +102,23 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     return out
 
 
-def _add_documentation(fmu: Path, scene) -> None:
+def _finish(fmu: Path, scene) -> None:
+    """Name the model after the scene (``modelName``; the ``modelIdentifier``, which names the binaries,
+    stays :data:`MODEL_IDENTIFIER`) and add ``documentation/index.html``."""
     from .documentation import index_html
 
     with zipfile.ZipFile(fmu) as archive:
-        model_description = archive.read("modelDescription.xml")
-    with zipfile.ZipFile(fmu, "a", compression=zipfile.ZIP_DEFLATED) as archive:
+        entries = [(info, archive.read(info)) for info in archive.infolist()]
+    model_name = xml_escape(scene.name, {'"': "&quot;"})
+    with zipfile.ZipFile(fmu, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for info, data in entries:
+            if info.filename == "modelDescription.xml":
+                text = data.decode("utf-8")
+                text, count = re.subn(r'(<fmiModelDescription\b[^>]*?\smodelName=")[^"]*(")',
+                                      lambda m: m.group(1) + model_name + m.group(2), text, count=1)
+                if count != 1:
+                    raise RuntimeError("modelDescription.xml written by PythonFMU has no modelName attribute")
+                data = text.encode("utf-8")
+                model_description = data
+            archive.writestr(info, data)
         archive.writestr("documentation/index.html", index_html(model_description, scene))

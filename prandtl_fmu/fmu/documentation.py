@@ -1,14 +1,102 @@
-"""``documentation/index.html`` of the FMU: equations, variables, units, the scene."""
+"""``documentation/index.html`` of the FMU: the equations of *its* effects, its steppers, its variables."""
 from __future__ import annotations
 
 import html
 import xml.etree.ElementTree as ET
 
-_EQUATIONS = """\
-x' = v
-m v' = F - k0 x - k3 x^3 - c v - sum_i k_i u_i
-u_i' + d psi_[-eta_i, eta_i](u_i) ∋ v        (|u_i| <= eta_i, i = 1..n)
-reaction = k0 x + k3 x^3 + c v + sum_i k_i u_i  (= F - m v')"""
+from ..steppers import STEPPERS
+
+_UNBOUNDED = 1e308  # a min or max beyond this is shown as no bound at all (the XML holds +-DBL_MAX)
+
+
+def _terms(scene, spring, cubic, dashpot, branches, continuum):
+    """The terms of the effects present, in the order spring, cubic, dashpot, branches."""
+    pairs = [(scene.spring, spring), (scene.cubic, cubic), (scene.damper if scene.has_dashpot else None, dashpot),
+             (scene.branches, continuum if scene.branches is not None and scene.branches.continuum else branches)]
+    return [text for effect, text in pairs if effect is not None and text]
+
+
+def reaction_formula(scene) -> str:
+    """The reaction k0 x + k3 x^3 + c v + sum_i k_i u_i, with the terms of the effects present only."""
+    return " + ".join(_terms(scene, "k0 x", "k3 x^3", "c v", "sum_i k_i u_i", "integral of k(s) u(s) ds")) or "0"
+
+
+def stored_energy_formula(scene) -> str:
+    """The elastic energy, with the terms of the effects present only."""
+    return " + ".join(_terms(scene, "k0 x^2/2", "k3 x^4/4", None, "sum_i k_i u_i^2/2",
+                             "integral of k(s) u(s)^2/2 ds")) or "0"
+
+
+def equations(scene) -> str:
+    """The element's equations with the terms of the effects present only."""
+    branches = scene.branches
+    forces = _terms(scene, "k0 x", "k3 x^3", "c v", "sum_i k_i u_i", "integral of k(s) u(s) ds")
+    reaction = reaction_formula(scene)
+    lines = []
+    if scene.mass is not None:
+        lines += ["x' = v", f"m v' = F - ({reaction})"]
+    elif scene.has_dashpot:
+        elastic = " + ".join(f for f in forces if f != "c v") or "0"
+        lines += [f"c x' = F - ({elastic})        (massless: the dashpot sets the rate)"]
+    else:
+        lines += [f"0 = F - ({reaction})        (massless, no dashpot: quasi-static equilibrium at every instant)"]
+    if branches is not None and branches.continuum:
+        lines.append("u(s)' + d psi_[-eta(s), eta(s)](u(s)) ∋ x'   (|u(s)| <= eta(s), s in [0, 1])")
+    elif branches is not None:
+        lines.append(f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x'        (|u_i| <= eta_i, i = 1..{branches.n})")
+    lines.append(f"reaction = {reaction}" + ("  (= F - m v')" if scene.mass is not None else ""))
+    return "\n".join(lines)
+
+
+def _effect_text(scene) -> str:
+    branches = scene.branches
+    parts = []
+    if scene.mass is not None:
+        parts.append(f"a point of mass m = {scene.mass.m:.6g} kg")
+    else:
+        parts.append("no mass (the massless element)")
+    if scene.spring is not None:
+        parts.append(f"a linear spring k0 = {scene.spring.k0:.6g} N/m")
+    if scene.cubic is not None:
+        parts.append(f"a cubic spring k3 = {scene.cubic.k3:.6g} N/m3")
+    if scene.has_dashpot:
+        parts.append(f"a dashpot c = {scene.damper.c:.6g} N s/m")
+    if branches is None:
+        parts.append("no friction branches")
+    elif branches.continuum:
+        parts.append(f"the continuous element: infinitely many branches s in [0, 1] of stiffness density "
+                     f"{branches.k_total:.6g} N/m and elastic range eta(s) = {branches.eta_min:.6g} + "
+                     f"{branches.eta_max - branches.eta_min:.6g} s m (strength {branches.strength:.6g} N)")
+    else:
+        parts.append(f"{branches.n} Prandtl branches (a spring k_i in series with a Coulomb slider of threshold "
+                     f"alpha_i = k_i eta_i): stiffness sum {branches.stiffness.sum():.6g} N/m, elastic ranges "
+                     f"{branches.yield_displacement.min():.6g} to {branches.yield_displacement.max():.6g} m, "
+                     f"strength sum alpha_i = {branches.strength:.6g} N")
+    return "; ".join(parts)
+
+
+def _stepper_rows(scene) -> str:
+    rows = []
+    for name, module in STEPPERS.items():
+        summary = module.__doc__.strip().split("\n\n")[0].replace("\n", " ").replace(f"``{name}``: ", "", 1)
+        try:
+            module.loop_for(scene)
+            applies = "default" if name == scene.solver.stepper else "yes"
+        except ValueError as exc:
+            applies = f"no: {exc}"
+        order = "exact (events located to rounding)" if module.ORDER == float("inf") else str(module.ORDER)
+        rows.append("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in (name, applies, order, summary))
+                    + "</tr>")
+    return "\n".join(rows)
+
+
+def _bound(text: str) -> str:
+    if not text:
+        return ""
+    try:
+        return "" if abs(float(text)) >= _UNBOUNDED else text
+    except ValueError:
+        return text
 
 
 def index_html(model_description: bytes, scene) -> str:
@@ -17,53 +105,42 @@ def index_html(model_description: bytes, scene) -> str:
     rows = []
     for var in root.find("ModelVariables"):
         typed = var[0]
-        start = typed.get("start", "")
         rows.append("<tr>" + "".join(f"<td>{html.escape(str(cell))}</td>" for cell in (
             var.get("name"), var.get("causality", "local"), var.get("variability", "continuous"),
-            typed.tag, typed.get("unit", ""), start, typed.get("min", ""), typed.get("max", ""),
-            var.get("description", ""))) + "</tr>")
-    effects = ", ".join(scene.effects)
-    branches = scene.branches
-    if branches is None:
-        branch_text = "no branches"
-    elif branches.continuum:
-        branch_text = (f"the continuous element: branches s in [0, 1] with stiffness density {branches.k_total:.6g} "
-                       f"N/m and elastic range eta(s) = {branches.eta_min:.6g} + "
-                       f"{branches.eta_max - branches.eta_min:.6g} s m, strength {branches.strength:.6g} N")
-    else:
-        branch_text = (f"{branches.n} branches, stiffness sum {branches.stiffness.sum():.6g} N/m, "
-                       f"elastic ranges {branches.yield_displacement.min():.6g} to "
-                       f"{branches.yield_displacement.max():.6g} m, strength sum alpha_i = {branches.strength:.6g} N")
+            typed.tag, typed.get("unit", ""), typed.get("start", ""), _bound(typed.get("min", "")),
+            _bound(typed.get("max", "")), var.get("description", ""))) + "</tr>")
+    name = html.escape(scene.name)
     return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{html.escape(scene.name)}: Prandtl element</title>
+<html><head><meta charset="utf-8"><title>{name}: Prandtl element</title>
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}
 table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style></head><body>
-<h1>Generalized Prandtl element: {html.escape(scene.name)}</h1>
-<p>A point of mass m at displacement x with velocity v under the input force F, held in parallel by a linear
-spring k0, a cubic spring k3, a dashpot c and n Prandtl branches (a spring k_i in series with a Coulomb slider of
-threshold alpha_i = k_i eta_i). Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7), with the dashpot and
-cubic spring of the related models.</p>
-<pre>{html.escape(_EQUATIONS)}</pre>
-<p>Effects present in this FMU: {html.escape(effects)} ({html.escape(branch_text)}).
-Absent effects have no parameter. The branch stiffnesses and elastic ranges come from the scene in
-<code>resources/scene.toml</code>.</p>
+<h1>Generalized Prandtl element: {name}</h1>
+<p>This FMU holds {html.escape(_effect_text(scene))}, under the input force F. Effects the scene leaves out are
+absent: they have no parameter and no term below. Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7),
+with the dashpot and cubic spring of the related models; the scene is <code>resources/scene.toml</code>.</p>
+<pre>{html.escape(equations(scene))}</pre>
 <h2>Stepping</h2>
 <p>The input F is held constant over each communication step. <code>doStep(t, H)</code> advances by whole internal
-steps of the parameter <code>step</code> and, when H is not a multiple of it, one last shorter step for the
-remainder. Steppers (parameter <code>stepper</code>): <code>projected</code> is the scheme (5.1) of the paper
-(which the paper calls the implicit Euler scheme: implicit in the friction term only, explicit otherwise; order 1;
-needs omega h &lt;&lt; 1); <code>implicit</code> is backward Euler in every term (order 1, unconditionally
-stable). A non-finite F, a parameter out of range or a step that would leave a non-finite state is refused
-(fmi2Discard, a logged message naming the culprit) with the state unchanged. The whole state can be saved,
-restored and serialized (as JSON).</p>
+steps of the parameter <code>step</code> (default {scene.solver.step:g} s) and, when H is not a multiple of it, one
+last shorter step for the remainder. The parameter <code>stepper</code> chooses the scheme:</p>
+<table><tr><th>stepper</th><th>applies to this FMU</th><th>order</th><th>scheme</th></tr>
+{_stepper_rows(scene)}
+</table>
+<p><code>projected</code> is the scheme (5.1) of the paper, which the paper calls "the implicit Euler scheme"
+because it is implicit in the friction term only; our <code>implicit</code> is implicit in every term.</p>
+<p>A non-finite F or a step that would leave a non-finite state is refused: fmi2Discard, a logged message naming
+the culprit, the state unchanged. A bad parameter value is refused where it is set or at
+fmi2ExitInitializationMode with a logged reason. The whole state can be saved, restored and serialized.</p>
 <h2>Variables</h2>
+<p>An empty min or max means no bound.</p>
 <table><tr><th>name</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>min</th>
 <th>max</th><th>description</th></tr>
 {chr(10).join(rows)}
 </table>
 <h2>Requirements</h2>
-<p>A PythonFMU FMU runs in the host's Python: the host process needs Python 3 with numpy and numba. A host that
-is not itself Python may need <code>LD_PRELOAD=libpython3.X.so</code> so that the Python extension modules find the
-interpreter's symbols.</p>
+<p>A PythonFMU FMU runs in the host's Python: the host process needs Python 3 with numpy, numba and pythonfmu
+(<code>pip install prandtl_fmu</code> installs them). A host that is not itself Python (OMSimulator's or ecos'
+binaries) needs <code>LD_PRELOAD=&lt;libpython3.X.so&gt;</code> and <code>PYTHONPATH=&lt;the site-packages that
+hold numpy and numba&gt;</code>: see the project's README.</p>
 </body></html>
 """

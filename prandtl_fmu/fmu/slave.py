@@ -42,6 +42,7 @@ from ..driver import Element, ElementError
 from ..scene import load_scene
 from ..steppers import STEPPERS
 from .description import RealVariable, complete
+from .documentation import reaction_formula, stored_energy_formula
 
 DBL_MAX = sys.float_info.max
 SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
@@ -67,8 +68,9 @@ def _is_finite_number(value) -> bool:
 
 class PrandtlElement(Fmi2Slave):
     author = "prandtl_fmu"
-    description = ("Generalized Prandtl element (dry-friction hysteresis): a mass under a force F, held by "
-                   "springs, a dashpot and Prandtl branches (spring in series with a Coulomb slider)")
+    description = ("Generalized Prandtl element (dry-friction hysteresis) under a force F: the springs, dashpot "
+                   "and Prandtl branches (spring in series with a Coulomb slider) of its scene, with or without a "
+                   "mass (documentation/index.html)")
     version = __version__
 
     def __init__(self, **kwargs):
@@ -100,12 +102,13 @@ class PrandtlElement(Fmi2Slave):
         outputs = [
             ("x", "m", "displacement of the point", lambda: self.element.x),
             ("v", "m/s", "velocity of the point", lambda: self.element.v),
-            ("reaction", "N", "force of the element on the point: k0 x + k3 x^3 + c v + sum k_i u_i (= F - m v')",
+            ("reaction", "N", f"force of the element on the point: {reaction_formula(self.scene)}"
+             + (" (= F - m v')" if self.scene.mass is not None else ""),
              lambda: self.element.reaction),
         ]
         energy = [  # the energy account, for the effects present
-            ("kinetic_energy", "kinetic", "mass", "kinetic energy m v^2/2"),
-            ("stored_energy", "stored", None, "elastic energy k0 x^2/2 + k3 x^4/4 + sum k_i u_i^2/2"),
+            ("kinetic_energy", "kinetic_energy", "mass", "kinetic energy m v^2/2"),
+            ("stored_energy", "stored_energy", None, f"elastic energy {stored_energy_formula(self.scene)}"),
             ("work", "work", None, "work done by F since the start (as the stepper books it)"),
             ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
             ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
