@@ -4,7 +4,11 @@ Each case runs in fresh processes (the median of ``--repeat`` runs, wall
 time of the whole process, measured here in one run so the ratios compare
 like with like):
 
-* ``import numba``: the floor, ``python -c "import numba"``;
+* ``import numba``: ``python -c "import numba"``;
+* ``numba floor``: one trivial cached numba function called once: what any
+  program that uses numba's cache pays before its first compiled call (numba
+  then loads its typing and lowering registries), the floor of the two
+  cases below;
 * ``cli``: ``prandtl-fmu run`` on a tiny scene (10 steps, 2 branches) writing
   a CSV, the way a user's first command runs;
 * ``fmu``: a fresh process that loads the FMU of the same scene with FMPy and
@@ -56,6 +60,8 @@ output_interval = 0.01
 
 HIDE_SCIPY = "import sys; sys.modules['scipy'] = None\n"
 
+TRIVIAL = "from numba import njit\n\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n"
+
 CLI = "from prandtl_fmu.cli import main\nsys.exit(main(['run', {scene!r}, '--out', {out!r}]))\n"
 
 FMU = textwrap.dedent("""\
@@ -91,22 +97,27 @@ def timed(code, cache_dir):
     return wall, (first[0] if first else None)
 
 
-def measure(code, repeat, warm):
-    """Median wall time (and first-result time) over ``repeat`` fresh processes."""
-    walls, firsts = [], []
+def measure_all(cases, repeat):
+    """Median wall time (and first-result time) of each (label, code, warm) case over ``repeat`` fresh
+    processes, the cases interleaved round-robin so that a slow spell of the machine hits them all alike."""
+    walls = {case: [] for case in cases}
+    firsts = {case: [] for case in cases}
     with tempfile.TemporaryDirectory(prefix="prandtl_startup_cache_") as shared:
-        if warm:
-            timed(code, shared)  # fills the cache
-        for _ in range(repeat):
+        for label, code, warm in cases:
             if warm:
-                wall, first = timed(code, shared)
-            else:
-                with tempfile.TemporaryDirectory(prefix="prandtl_startup_cold_") as empty:
-                    wall, first = timed(code, empty)
-            walls.append(wall)
-            firsts.append(first)
-    first = statistics.median(firsts) if firsts[0] is not None else None
-    return statistics.median(walls), first
+                timed(code, shared)  # fills the cache
+        for _ in range(repeat):
+            for case in cases:
+                label, code, warm = case
+                if warm:
+                    wall, first = timed(code, shared)
+                else:
+                    with tempfile.TemporaryDirectory(prefix="prandtl_startup_cold_") as empty:
+                        wall, first = timed(code, empty)
+                walls[case].append(wall)
+                firsts[case].append(first)
+    return {case: (statistics.median(walls[case]),
+                   statistics.median(firsts[case]) if firsts[case][0] is not None else None) for case in cases}
 
 
 def main(argv=None):
@@ -122,20 +133,25 @@ def main(argv=None):
         with open(scene, "w") as fh:
             fh.write(TINY_SCENE)
         fmu = str(build_fmu(scene, os.path.join(work, "tiny.fmu")))
-        cases = [("import numba", "import numba\n")]
+        with open(os.path.join(work, "trivial_kernel.py"), "w") as fh:
+            fh.write(TRIVIAL)
+        floor = f"import sys; sys.path.insert(0, {work!r})\nimport trivial_kernel\ntrivial_kernel.twice(1.0)\n"
+        cases = [("import numba", "import numba\n"), ("numba floor", floor), ("numba floor, no scipy", HIDE_SCIPY + floor)]
         cli = CLI.format(scene=scene, out=os.path.join(work, "tiny.csv"))
         fmu_code = FMU.format(fmu=fmu)
         for label, code in (("cli", "import sys\n" + cli), ("fmu", fmu_code)):
             cases.append((label, code))
             cases.append((label + ", no scipy", HIDE_SCIPY + ("" if label == "fmu" else "import sys\n") + code))
+        runs = [(label, code, warm) for label, code in cases
+                for warm in ((True,) if label.startswith(("import numba", "numba floor")) else (True, False))]
+        measured = measure_all(runs, args.repeat)
         rows = []
-        for label, code in cases:
-            for warm in ((True,) if label == "import numba" else (True, False)):
-                wall, first = measure(code, args.repeat, warm)
-                rows.append({"case": label, "cache": "warm" if warm else "cold", "process_s": round(wall, 3),
-                             "instantiate_to_first_step_s": "" if first is None else round(first, 3)})
-                print(f"{label:18s} {rows[-1]['cache']:5s} process {wall:6.3f} s"
-                      + ("" if first is None else f"   instantiate..first doStep {first:6.3f} s"), flush=True)
+        for label, code, warm in runs:
+            wall, first = measured[(label, code, warm)]
+            rows.append({"case": label, "cache": "warm" if warm else "cold", "process_s": round(wall, 3),
+                         "instantiate_to_first_step_s": "" if first is None else round(first, 3)})
+            print(f"{label:22s} {rows[-1]['cache']:5s} process {wall:6.3f} s"
+                  + ("" if first is None else f"   instantiate..first doStep {first:6.3f} s"), flush=True)
     floor = rows[0]["process_s"]
     for row in rows:
         row["x_import_numba"] = round(row["process_s"] / floor, 2)

@@ -1,7 +1,6 @@
 """Scenes: TOML files that name the effects of an element and their coefficients.
 
-The format is the contract of ``shared/scene-format.md`` (summarised in the
-README). A scene is data: it is parsed with :mod:`tomllib` and checked key by
+The format is the contract written down in ``docs/scene-format.md``. A scene is data: it is parsed with :mod:`tomllib` and checked key by
 key; nothing in it is ever evaluated. Every broken rule raises
 :class:`SceneError` with one line naming the file, the key and the rule.
 
