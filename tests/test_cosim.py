@@ -46,3 +46,29 @@ def test_fmpy_example_script_runs_the_fmu_as_the_library(tmp_path):
     for k in range(300):
         element.advance(0.1, 0.45 * np.cos(0.5 * k * 0.1))
     assert result["x"][-1] == pytest.approx(element.x, abs=1e-12)
+
+
+def test_the_example_force_source_gives_f0_of_the_amplitude_set_during_initialization(tmp_path):
+    """A master that reads F during initialization (OMSimulator, ecos: to start a massless element from the
+    equilibrium with F(0)) must get F(0) of the amplitude it set, not of the default."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    from pythonfmu import FmuBuilder
+
+    FmuBuilder.build_FMU(ROOT / "examples" / "cosim" / "prandtl_example_harmonic_force.py",
+                         dest=tmp_path / "HarmonicForce.fmu")
+    fmu = str(tmp_path / "HarmonicForce.fmu")
+    md = read_model_description(fmu)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu), modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="source")
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.setReal([vr["amplitude"], vr["offset"]], [2.0, 0.25])
+    assert slave.getReal([vr["F"]]) == [2.25]  # read before leaving initialization
+    slave.exitInitializationMode()
+    slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=1.0)
+    assert slave.getReal([vr["F"]])[0] == 0.25 + 2.0 * np.cos(0.5)
+    slave.terminate()
+    slave.freeInstance()
