@@ -39,7 +39,8 @@ _PACKAGE = pathlib.Path(__file__).resolve().parent
 _PACKAGE_NAME = __name__.rpartition(".")[0] or "prandtl_fmu"
 
 
-def _digest() -> str:
+def source_digest() -> str:
+    """A digest of every source file of the package (names and contents)."""
     sha = hashlib.sha256()
     for path in sorted(_PACKAGE.rglob("*.py")):
         if "__pycache__" in path.parts:
@@ -53,7 +54,7 @@ def cache_root() -> pathlib.Path:
     """The folder of this package's compiled code (see the module docstring)."""
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "numba")
-    return pathlib.Path(base) / f"{_PACKAGE_NAME.lstrip('_')}-{_digest()}"
+    return pathlib.Path(base) / f"{_PACKAGE_NAME.lstrip('_')}-{source_digest()}"
 
 
 def _usable_root():

@@ -33,11 +33,10 @@ def _library_files():
 
 
 def _digest(scene_bytes: bytes) -> str:
-    sha = hashlib.sha256(scene_bytes)
-    for path in _library_files():
-        sha.update(str(path.relative_to(LIBRARY)).encode())
-        sha.update(path.read_bytes())
-    return sha.hexdigest()[:12]
+    """The scene and the library's sources (the digest that also names the kernel cache, ``_jit.py``)."""
+    from .._jit import source_digest
+
+    return hashlib.sha256(scene_bytes + source_digest().encode()).hexdigest()[:12]
 
 
 def file_stem(name: str) -> str:
