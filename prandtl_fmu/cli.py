@@ -2,7 +2,7 @@
 
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
-    prandtl-fmu build SCENE [-o OUT.fmu]
+    prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp]
     prandtl-fmu scenes
     prandtl-fmu bench [--quick] [--out DIR] [--from-csv]
     prandtl-fmu --version
@@ -59,6 +59,13 @@ def _parser() -> argparse.ArgumentParser:
     build = commands.add_parser("build", help="build the FMI 2.0 co-simulation FMU of a scene")
     build.add_argument("scene", help=_SCENE_HELP)
     build.add_argument("-o", "--out", help="FMU file to write (default: ./<scene name>.fmu)")
+    build.add_argument("--causality", choices=("force", "displacement"),
+                       help="force: force in; x, v, reaction out (default). displacement: the connector between "
+                            "two bodies, massless scenes only: x, v in; force out. Same as the scene's "
+                            "[fmu] causality, which it must not contradict")
+    build.add_argument("--osp", action="store_true",
+                       help="also write <modelName>_OspModelDescription.xml beside the FMU (libcosim reads it "
+                            "from there: mechanical ports for powerBond and ECCO); its path is printed second")
     commands.add_parser("scenes", help="list the scenes shipped in the package")
     bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
@@ -118,12 +125,17 @@ def _build(args) -> int:
     if _missing("pythonfmu"):
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
-        path = build_fmu(args.scene, args.out)
+        path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp)
     except (SceneError, ValueError) as exc:
         return _error(exc)
     except OSError as exc:
         return _error(f"cannot write {args.out or 'the FMU'}: {exc.strerror or exc}")
     print(path)  # the path alone: FMU=$(prandtl-fmu build SCENE)
+    if args.osp:
+        from .fmu.osp import file_name
+        from .scene import load_scene
+
+        print(path.parent / file_name(load_scene(args.scene, check_stepper=False).name))
     return 0
 
 

@@ -24,9 +24,10 @@ import numpy as np
 from .kernels.energy import kinetic, stored
 from .kernels.increment import solve_increment
 from .kernels import stack
+from .kernels.drive import tangent
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
-from .loads import force_at, held
+from .loads import force_at, held, plus
 from .scene import Scene, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
@@ -454,6 +455,13 @@ class Element:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N)."""
         return float(self._out[0, 2])
 
+    def stiffness(self) -> float:
+        """The tangent dF/dx (N/m) of the reaction at the current state, for a motion in the direction of v
+        (of increasing x when v = 0): k0 + 3 k3 x^2 + the stiffnesses of the branches that stick (a branch
+        on its threshold that the motion pushes on slides and adds nothing)."""
+        direction = -1.0 if self.v < 0 else 1.0
+        return float(tangent(self.model, self.x, self.u, direction))
+
     def elongations(self) -> Optional[np.ndarray]:
         """The branch elongations u_i (m), in the scene's order, as a new array (O(n) with the memory
         stack); None without branches or for the continuum."""
@@ -468,8 +476,10 @@ class Element:
         columns = _energy_columns(self.initial_energy, self._energy_row)
         return {name: float(values[0]) for name, values in columns.items()}
 
-    def advance(self, duration: float, force: float) -> None:
-        """Advance by ``duration`` (s) with the force held at ``force`` (N).
+    def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
+        """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is
+        ``force`` plus the scene's ``[load]`` F(t), evaluated by the stepper as in :func:`simulate` (the
+        element's ``time`` is the load's clock).
 
         ElementError (state unchanged) when a step cannot be taken.
         """
@@ -480,7 +490,7 @@ class Element:
         if duration == 0:
             return
         saved = self.checkpoint()
-        load = held(force)
+        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
         self.force = float(force)
         h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
         x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self.time, 0,

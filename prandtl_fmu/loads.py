@@ -1,7 +1,7 @@
 """Force histories F(t) (N) for standalone runs.
 
 Each load compiles to the tuple ``(kind, offset, amplitude, omega, time, force)``
-that the kernels evaluate with :func:`force_at`; an FMU instead holds its
+(``offset`` is added to every kind: see :func:`plus`) that the kernels evaluate with :func:`force_at`; an FMU instead holds its
 input F constant over a communication step (:func:`held`).
 """
 from __future__ import annotations
@@ -58,6 +58,12 @@ def held(value: float):
     return (CONSTANT, float(value), 0.0, 0.0, _NO_TABLE, _NO_TABLE)
 
 
+def plus(load, value: float):
+    """A compiled ``load`` plus a constant ``value`` (N): the scene's load and an FMU's input F."""
+    kind, offset, amplitude, omega, time, force = load
+    return (kind, offset + float(value), amplitude, omega, time, force)
+
+
 @kernel
 def force_at(load, t):
     """F(t) for a compiled load tuple."""
@@ -68,8 +74,8 @@ def force_at(load, t):
         return offset + amplitude * np.cos(omega * t)
     j = np.searchsorted(time, t, side="right")  # time[j-1] <= t < time[j]
     if j == 0:
-        return force[0]
+        return offset + force[0]
     if j == time.shape[0]:
-        return force[-1]
+        return offset + force[-1]
     t0, t1 = time[j - 1], time[j]
-    return force[j - 1] + (force[j] - force[j - 1]) * ((t - t0) / (t1 - t0))
+    return offset + (force[j - 1] + (force[j] - force[j - 1]) * ((t - t0) / (t1 - t0)))

@@ -70,6 +70,7 @@ class Scene:
     load: Load
     solver: Solver
     source: str = "<scene>"
+    causality: str = "force"  # of its FMU: see CAUSALITIES
 
     def with_solver(self, **overrides) -> "Scene":
         """A copy with some solver settings replaced (``None`` values are ignored), checked."""
@@ -147,7 +148,10 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 
 # ---------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "mass", "spring", "cubic", "damper", "branches", "load", "solver"}
+_TOP_KEYS = {"name", "mass", "spring", "cubic", "damper", "branches", "load", "solver", "fmu"}
+# How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
+# with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
+CAUSALITIES = ("force", "displacement")
 
 
 class _Reader:
@@ -319,8 +323,16 @@ def _parse_scene(text, source, check_stepper) -> Scene:
     if "solver" not in doc:
         raise SceneError(f"{source}: [solver]: missing (required: step, stop_time, output_interval)")
     solver = _solver(source, doc["solver"])
-    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source)
-    if check_stepper:
+    causality = "force"
+    if "fmu" in doc:
+        r = _Reader(source, "fmu", doc["fmu"])
+        r.only({"causality"})
+        causality = r.string("causality", "force", choices=CAUSALITIES)
+        if causality == "displacement" and mass is not None:
+            r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
+                   "remove [mass] (the bodies hold the inertia) or use \"force\"")
+    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality)
+    if check_stepper and causality == "force":  # the connector takes no time steps: no stepper to check
         _check_stepper_applies(scene, where="[solver] ")
     return scene
 

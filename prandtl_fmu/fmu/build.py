@@ -2,8 +2,9 @@
 
 The FMU holds, in ``resources/``: the slave script under a unique module name
 (``prandtl_slave_<digest>``, the digest of the scene and the library's
-sources), a copy of the library (``prandtl_fmu/``, the code the tests run)
-and the scene (``scene.toml``); ``documentation/index.html`` with the
+sources), a copy of the library (``prandtl_fmu/``, the code the tests run),
+the scene (``scene.toml``) and the OSP interface description
+(``<modelIdentifier>_OspModelDescription.xml``, see ``osp.py``); ``documentation/index.html`` with the
 equations and the variables. The host needs Python with numpy and numba (and
 nothing else): PythonFMU FMUs run in the host's Python.
 """
@@ -46,17 +47,25 @@ def file_stem(name: str) -> str:
     return stem or "prandtl_element"
 
 
-def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None) -> Path:
+def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
+              causality: Optional[str] = None, osp: bool = False) -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
 
-    The scene is checked first (:class:`SceneError` on any broken rule).
+    ``causality`` ("force" or "displacement", the connector) overrides a scene without an ``[fmu]`` table
+    (SceneError if the scene's table says otherwise). With ``osp``, also write
+    ``<modelName>_OspModelDescription.xml`` beside the FMU, where libcosim looks for it (it is always inside
+    the FMU, in ``resources/``). The scene is checked first (:class:`SceneError` on any broken rule).
     Returns the path of the FMU.
     """
     from pythonfmu import FmuBuilder
 
-    scene = load_scene(scene_path)
+    from .osp import MODEL_IDENTIFIERS, file_name, osp_model_description
+
+    scene = load_scene(scene_path, check_stepper=causality != "displacement")
     scene_bytes = Path(resolve_scene(scene_path)).read_bytes()
+    if causality is not None:
+        scene, scene_bytes = _with_causality(scene, scene_bytes, causality)
     out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
     if out.is_dir():
         raise ValueError(f"{out}: is a directory")
@@ -64,12 +73,23 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         raise ValueError(f"{out}: the FMU file name must end in .fmu")
     if not out.parent.is_dir():
         raise ValueError(f"{out}: the folder {out.parent} does not exist")
+    sidecar = out.parent / file_name(scene.name) if osp else None
+    if osp and file_stem(scene.name) != scene.name:
+        raise ValueError(f"--osp: the scene name {scene.name!r} is not a plain file name, and libcosim looks for "
+                         "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
+                         "'-', '_' and '.'")
+    identifier = MODEL_IDENTIFIERS[scene.causality]
     module = f"prandtl_slave_{_digest(scene_bytes)}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
         script = staging / f"{module}.py"
-        shutil.copyfile(LIBRARY / "fmu" / "entry.py", script)
+        entry = (LIBRARY / "fmu" / "entry.py").read_text(encoding="utf-8")
+        marker = '\n_CAUSALITY = "force"\n'
+        if entry.count(marker) != 1:
+            raise RuntimeError("entry.py has lost its _CAUSALITY line")
+        script.write_text(entry.replace(marker, f'\n_CAUSALITY = "{scene.causality}"\n'), encoding="utf-8")
         (staging / "scene.toml").write_bytes(scene_bytes)
+        (staging / file_name(identifier)).write_text(osp_model_description(scene.causality), encoding="utf-8")
         package = staging / "prandtl_fmu"
         for path in _library_files():
             target = package / path.relative_to(LIBRARY)
@@ -78,7 +98,8 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         built = staging / "out" / f"{MODEL_IDENTIFIER}.fmu"
         built.parent.mkdir()
         try:
-            FmuBuilder.build_FMU(script, dest=built, project_files=[package, staging / "scene.toml"],
+            FmuBuilder.build_FMU(script, dest=built, project_files=[package, staging / "scene.toml",
+                                                                    staging / file_name(identifier)],
                                  canGetAndSetFMUstate=True, canSerializeFMUstate=True)
         finally:
             # The builder imported the slave (and its private copy of the
@@ -98,7 +119,35 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         except BaseException:
             os.unlink(partial)
             raise
+    if sidecar is not None:
+        _write_atomically(sidecar, osp_model_description(scene.causality).encode("utf-8"))
     return out
+
+
+def _with_causality(scene, scene_bytes: bytes, causality: str):
+    """The scene (and its text) with ``[fmu] causality`` set; SceneError if its own table says otherwise."""
+    from ..scene import CAUSALITIES, SceneError, parse_scene
+
+    if causality not in CAUSALITIES:
+        raise SceneError(f"--causality: must be one of {', '.join(CAUSALITIES)}, got {causality!r}")
+    if b"[fmu]" in scene_bytes or scene.causality != "force":
+        if scene.causality != causality:
+            raise SceneError(f"{scene.source}: [fmu] causality = {scene.causality!r} contradicts --causality "
+                             f"{causality}: change one of them")
+        return scene, scene_bytes
+    text = scene_bytes.rstrip(b"\n") + f'\n\n[fmu]\ncausality = "{causality}"\n'.encode()
+    return parse_scene(text, scene.source), text
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".part", dir=path.parent)
+    try:
+        with os.fdopen(handle, "wb") as fh:
+            fh.write(data)
+        os.replace(partial, path)
+    except BaseException:
+        os.unlink(partial)
+        raise
 
 
 def _finish(fmu: Path, scene) -> None:

@@ -48,6 +48,17 @@ def equations(scene) -> str:
     return "\n".join(lines)
 
 
+def connector_equations(scene) -> str:
+    """The connector's equations (x, v given), with the terms of the effects present only."""
+    branches = scene.branches
+    lines = [f"force = {reaction_formula(scene)}        (x, v: the inputs)"]
+    if branches is not None and branches.continuum:
+        lines.append("u(s)' + d psi_[-eta(s), eta(s)](u(s)) ∋ x'   (|u(s)| <= eta(s), s in [0, 1])")
+    elif branches is not None:
+        lines.append(f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x'        (|u_i| <= eta_i, i = 1..{branches.n})")
+    return "\n".join(lines)
+
+
 def _effect_text(scene) -> str:
     branches = scene.branches
     parts = []
@@ -110,17 +121,42 @@ def index_html(model_description: bytes, scene) -> str:
             typed.tag, typed.get("unit", ""), typed.get("start", ""), _bound(typed.get("min", "")),
             _bound(typed.get("max", "")), var.get("description", ""))) + "</tr>")
     name = html.escape(scene.name)
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{name}: Prandtl element</title>
-<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}
-table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style></head><body>
-<h1>Generalized Prandtl element: {name}</h1>
-<p>This FMU holds {html.escape(_effect_text(scene))}, under the input force F. Effects the scene leaves out are
+    if scene.causality == "displacement":
+        return _page(name, rows, _connector_body(scene))
+    return _page(name, rows, _element_body(scene))
+
+
+def _connector_body(scene) -> str:
+    return f"""<p>This FMU is the element as a <b>connector</b> between two bodies that other FMUs hold: it takes the
+relative displacement <code>x</code> and velocity <code>v</code> of its two flanges and returns the force
+<code>force</code> it transmits. It holds {html.escape(_effect_text(scene))}. Effects the scene leaves out are
+absent: they have no parameter and no term below. Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7),
+with the dashpot and cubic spring of the related models; the scene is <code>resources/scene.toml</code>.</p>
+<pre>{html.escape(connector_equations(scene))}</pre>
+<h2>Stepping</h2>
+<p>No time integration: the branches follow the exact play update along x, taken linear between the samples
+the master sets (a master that gives only the end value of a step gets the linear interpolant; the play
+operator is rate independent, so the time between samples does not matter). The outputs always show the element
+at the inputs set last (<code>force</code> depends directly on <code>x</code> and <code>v</code>); only
+<code>doStep</code> commits an input sample, so a master may set x several times at one communication point.
+Initialization takes the element from x = 0 (elongations u0) to the first input x, monotonically.
+<code>stiffness</code> is the tangent dF/dx for a motion in the direction of v (of the last motion when
+v = 0): a master can choose a stable communication step from it, or build a coupling Jacobian.</p>
+<p>A non-finite input at doStep is refused: fmi2Discard, a logged message, the state unchanged. A bad parameter
+value is refused at fmi2ExitInitializationMode with a logged reason, or by a Discard during stepping. The
+whole state can be saved, restored and serialized. OSP: <code>resources/PrandtlConnector_OspModelDescription.xml</code>
+declares a LinearMechanicalPort (force out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
+
+
+def _element_body(scene) -> str:
+    return f"""<p>This FMU holds {html.escape(_effect_text(scene))}, under the input force F. Effects the scene leaves out are
 absent: they have no parameter and no term below. Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7),
 with the dashpot and cubic spring of the related models; the scene is <code>resources/scene.toml</code>.</p>
 <pre>{html.escape(equations(scene))}</pre>
 <h2>Stepping</h2>
-<p>The input F is held constant over each communication step. <code>doStep(t, H)</code> advances by whole internal
+<p>The input F is held constant over each communication step (with the parameter <code>scene_load</code> true,
+the scene's [load] F_scene(t) is added and evaluated at every internal step as in the library).
+<code>doStep(t, H)</code> advances by whole internal
 steps of the parameter <code>step</code> (default {scene.solver.step:g} s) and, when H is not a multiple of it, one
 last shorter step for the remainder. The parameter <code>stepper</code> chooses the scheme:</p>
 <table><tr><th>stepper</th><th>applies to this FMU</th><th>order</th><th>scheme</th></tr>
@@ -130,7 +166,18 @@ last shorter step for the remainder. The parameter <code>stepper</code> chooses 
 because it is implicit in the friction term only; our <code>implicit</code> is implicit in every term.</p>
 <p>A non-finite F or a step that would leave a non-finite state is refused: fmi2Discard, a logged message naming
 the culprit, the state unchanged. A bad parameter value is refused where it is set or at
-fmi2ExitInitializationMode with a logged reason. The whole state can be saved, restored and serialized.</p>
+fmi2ExitInitializationMode with a logged reason. The whole state can be saved, restored and serialized. OSP:
+<code>resources/PrandtlElement_OspModelDescription.xml</code> declares a LinearMechanicalPort (F in, v out) and a
+LinearMechanicalQuasiPort (F in, x out).</p>"""
+
+
+def _page(name, rows, body) -> str:
+    return f"""<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>{name}: Prandtl element</title>
+<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}
+table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style></head><body>
+<h1>Generalized Prandtl element: {name}</h1>
+{body}
 <h2>Variables</h2>
 <p>An empty min or max means no bound.</p>
 <table><tr><th>name</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>min</th>

@@ -28,19 +28,19 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 _LIBRARY = "_" + __name__ + "_lib"
 
 
-def _drop_duplicate_path_entries():
+def _drop_duplicate_path_entries(here):
     seen = False
     for entry in list(sys.path):
-        if os.path.abspath(entry or ".") == _HERE:
+        if os.path.abspath(entry or ".") == here:
             if seen:
                 sys.path.remove(entry)
             seen = True
 
 
-def _import_library():
+def _import_library(here):
     if _LIBRARY in sys.modules:
         return sys.modules[_LIBRARY]
-    folder = os.path.join(_HERE, "prandtl_fmu")
+    folder = os.path.join(here, "prandtl_fmu")
     spec = importlib.util.spec_from_file_location(
         _LIBRARY, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder])
     package = importlib.util.module_from_spec(spec)
@@ -53,8 +53,25 @@ def _import_library():
     return package
 
 
-_drop_duplicate_path_entries()
-_import_library()
+# Which slave this FMU is: its scene's [fmu] causality, written here by build_fmu (the scene cannot be read
+# from here at a later instantiation: ``__file__`` keeps the folder of the first one, which a master may have
+# deleted since).
+_CAUSALITY = "force"
+
+_drop_duplicate_path_entries(_HERE)
+try:
+    _import_library(_HERE)
+except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
+    raise ImportError(
+        f"prandtl_fmu FMU: {_exc} in the host's Python ({sys.version.split()[0]}, prefix {sys.prefix}): the FMU "
+        "runs in the host's embedded Python, which needs numpy and numba; a host that is not itself Python needs "
+        "LD_PRELOAD=<libpython3.X.so> and PYTHONPATH=<the site-packages that hold them> (README, 'Other masters')"
+    ) from None
 # The slave class, defined in the library. PythonFMU 0.7.0 finds it as the
-# class of this module's namespace whose MRO is deepest in Fmi2Slave.
-PrandtlElement = importlib.import_module(_LIBRARY + ".fmu.slave").PrandtlElement
+# class of this module's namespace whose MRO is deepest in Fmi2Slave: exactly
+# one is bound here, by a plain assignment (PythonFMU reads the names the
+# file's execution defines).
+if _CAUSALITY == "displacement":
+    PrandtlConnector = importlib.import_module(_LIBRARY + ".fmu.connector_slave").PrandtlConnector
+else:
+    PrandtlElement = importlib.import_module(_LIBRARY + ".fmu.slave").PrandtlElement

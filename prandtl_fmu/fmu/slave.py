@@ -7,7 +7,10 @@ private name by the entry point (``entry.py``, see there).
 
 Stepping: ``do_step(t, H)`` advances by whole internal steps of ``step`` and,
 when H is not a multiple of it, one shorter last step for the remainder, with
-the input F held at the value set before the call.
+the input F held at the value set before the call. With the parameter
+``scene_load`` true the force is F plus the scene's ``[load]`` F_scene(t),
+evaluated by the stepper at every internal step exactly as the library does:
+with no input connected, the FMU then reproduces ``simulate`` of its scene.
 
 Refusals: a non-finite F, a parameter outside its range or a step that would
 leave a non-finite state during stepping is refused: a message naming the
@@ -20,36 +23,24 @@ A bad start value (set before or during initialization) is refused at
 initialization where it is set, and a state of another FMU or a tampered
 blob at ``fmi2SetFMUstate``/``fmi2DeSerializeFMUstate``: the reason is logged
 and the call fails, so that a master such as FMPy raises with that reason.
-PythonFMU 0.7.0 can only fail such a call as fmi2Fatal (it turns every Python
-exception into fatal; fmi2Error would be the right status, it has no way to
-return it). It also releases its references to the slave when a call fails,
-and again when the instance is freed: :meth:`PrandtlElement._fail` takes one
-more reference first, so that the instance stays intact (the refused call
-changed nothing, later calls still work) and the host never touches freed
-memory.
+PythonFMU 0.7.0 can only fail such a call as fmi2Fatal (see ``common.py``);
+the instance stays intact.
 """
-import ctypes
 import math
 import os
-import sys
 
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, String
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from .. import __version__
 from ..driver import Element, ElementError
+from ..loads import force_at
 from ..scene import load_scene
 from ..steppers import STEPPERS
+from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
 from .documentation import reaction_formula, stored_energy_formula
-
-DBL_MAX = sys.float_info.max
-SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
-
-
-class Refused(Exception):
-    """A call refused by the slave (logged first); PythonFMU reports it as fmi2Fatal."""
 
 # Parameters of the effects: (name, table of the scene, unit, min, variability, description).
 EFFECT_PARAMETERS = [
@@ -62,11 +53,7 @@ EFFECT_PARAMETERS = [
 ]
 
 
-def _is_finite_number(value) -> bool:
-    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
-
-
-class PrandtlElement(Fmi2Slave):
+class PrandtlElement(SlaveBase):
     author = "prandtl_fmu"
     description = ("Generalized Prandtl element (dry-friction hysteresis) under a force F: the springs, dashpot "
                    "and Prandtl branches (spring in series with a Coulomb slider) of its scene, with or without a "
@@ -84,6 +71,7 @@ class PrandtlElement(Fmi2Slave):
         self.initialized = False  # after fmi2ExitInitializationMode: fixed parameters are frozen
         # What the master set; checked and handed to the element at each step.
         self.F = 0.0
+        self.scene_load = False
         self.stepper = self.element.stepper
         self.step = self.element.h
         self.parameters = dict(self.element.coefficients())
@@ -105,6 +93,9 @@ class PrandtlElement(Fmi2Slave):
             ("reaction", "N", f"force of the element on the point: {reaction_formula(self.scene)}"
              + (" (= F - m v')" if self.scene.mass is not None else ""),
              lambda: self.element.reaction),
+            ("stiffness", "N/m", "tangent stiffness d(reaction)/dx at the current state for a motion in the "
+             "direction of v (of increasing x when v = 0): k0 + 3 k3 x^2 + the k_i of the sticking branches",
+             self.element.stiffness),
         ]
         energy = [  # the energy account, for the effects present
             ("kinetic_energy", "kinetic_energy", "mass", "kinetic energy m v^2/2"),
@@ -134,6 +125,12 @@ class PrandtlElement(Fmi2Slave):
             "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
             min=SMALLEST, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
             getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
+        self.register_variable(Boolean(
+            "scene_load", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            description="true: the force on the element is F plus the scene's [load] F_scene(t), evaluated at "
+                        "every internal step as in the library (with no input connected the FMU reproduces the "
+                        "library's run of its scene); false (default): F alone",
+            getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
         self.register_variable(String(
             "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
             description="time stepper: " + ", ".join(STEPPERS),
@@ -156,14 +153,14 @@ class PrandtlElement(Fmi2Slave):
 
     def exit_initialization_mode(self):
         problem = self._settings_problem()
-        if problem is None and not _is_finite_number(self.F):
+        if problem is None and not finite_number(self.F):
             problem = f"F = {self.F!r} refused: the force must be finite"
         if problem is None:
             if not self._hand_over_settings():  # e.g. a stepper that does not apply (logged)
                 problem = self.log_queue[-1].msg if self.log_queue else "a parameter does not fit the scene"
             else:
-                try:  # a massless element starts in equilibrium with the input F
-                    self.element.reset(self.F)
+                try:  # a massless element starts in equilibrium with the force at the start
+                    self.element.reset(self._force_at_start())
                 except (ElementError, ValueError) as exc:
                     problem = str(exc)
         if problem is not None:
@@ -171,6 +168,11 @@ class PrandtlElement(Fmi2Slave):
         self.element.time = self.start_time
         self.initialized = True
         self._warn_if_unstable()
+
+    def _force_at_start(self) -> float:
+        if self.scene_load:
+            return self.F + float(force_at(self.scene.load.compile(), self.start_time))
+        return self.F
 
     def _set_parameter(self, name, value):
         """Setter of an effect's parameter: a fixed one (x0, v0) cannot change after initialization."""
@@ -189,26 +191,15 @@ class PrandtlElement(Fmi2Slave):
                 return f"parameter {name}: {problem}"
         if self.stepper not in STEPPERS:
             return f"parameter stepper = {self.stepper!r}: must be one of {', '.join(STEPPERS)}"
-        if not (_is_finite_number(self.step) and self.step > 0):
+        if not (finite_number(self.step) and self.step > 0):
             return f"parameter step = {self.step!r}: must be finite and > 0"
         return None
-
-    def _fail(self, message):
-        """Log ``message`` and fail the current call (fmi2Fatal under PythonFMU 0.7.0; see the module
-        docstring), keeping the instance alive and unchanged."""
-        self.log(message, Fmi2Status.error)
-        # PythonFMU releases its references to the class, the instance and the log queue once more than
-        # it took when a call raises: take one more of each, never to be given back (balanced by that
-        # extra release), so that nothing the host still points to is freed.
-        for owned in (type(self), self, self.log_queue):
-            ctypes.pythonapi.Py_IncRef(ctypes.py_object(owned))
-        raise Refused(message)
 
     def do_step(self, current_time, step_size):
         if not self._apply_settings():
             return False
         force = self.F
-        if not _is_finite_number(force):
+        if not finite_number(force):
             return self._refuse(f"F = {force!r} refused: the force must be finite; step not taken")
         if not (math.isfinite(step_size) and step_size >= 0):
             return self._refuse(f"communication step {step_size!r} refused: it must be finite and >= 0")
@@ -216,7 +207,7 @@ class PrandtlElement(Fmi2Slave):
         saved = element.checkpoint()
         element.time = current_time
         try:
-            element.advance(step_size, force)
+            element.advance(step_size, force, scene_load=bool(self.scene_load))
         except Exception as exc:  # never fatal for the host: refuse the step (ElementError: already rolled back)
             element.rollback(saved)
             return self._refuse(f"step from t = {current_time!r} with F = {force!r} refused: {exc}")
@@ -260,15 +251,11 @@ class PrandtlElement(Fmi2Slave):
                 return self._refuse(f"parameter stepper = {self.stepper!r} refused: {exc}")
         if self.step != element.h:
             step = self.step
-            if not (_is_finite_number(step) and step > 0):
+            if not (finite_number(step) and step > 0):
                 return self._refuse(f"parameter step = {step!r} refused: must be finite and > 0; "
                                     "steps are refused until it is set right")
             element.set_step(step)
         return True
-
-    def _refuse(self, message) -> bool:
-        self.log(message, Fmi2Status.discard)
-        return False
 
     # ------------------------------------------------------------ FMU state
 
@@ -276,7 +263,7 @@ class PrandtlElement(Fmi2Slave):
         """The whole state as plain data (PythonFMU serializes it as JSON: no code can hide in it)."""
         return {
             "element": self.element.get_state(),
-            "settings": {"F": self.F, "step": self.step, "stepper": self.stepper,
+            "settings": {"F": self.F, "step": self.step, "stepper": self.stepper, "scene_load": bool(self.scene_load),
                          "parameters": dict(self.parameters), "start_time": self.start_time},
         }
 
@@ -293,15 +280,5 @@ class PrandtlElement(Fmi2Slave):
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.F, self.step, self.stepper, self.start_time = values
+        self.scene_load = bool(settings.get("scene_load", False))
         self.parameters = parameters
-
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes):
-        """A serialized state, never an exception here (PythonFMU has no instance to survive one with): what
-        cannot be read becomes a state that :meth:`_set_fmu_state` refuses with the reason."""
-        import json
-
-        try:
-            return json.loads(bytes(state).decode("utf-8"))
-        except Exception as exc:  # any garbage: refused later, with its reason
-            return {"invalid": f"not a serialized state of this FMU ({exc.__class__.__name__})"}

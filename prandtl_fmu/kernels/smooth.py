@@ -17,6 +17,17 @@ def elastic_force(x, k0, k3):
 
 
 @kernel
+def elastic_stiffness(x, k0, k3):
+    """k0 + 3 k3 x^2 (N/m): the slope of :func:`elastic_force`."""
+    stiffness = 0.0
+    if k0 is not None:
+        stiffness += k0
+    if k3 is not None:
+        stiffness += 3.0 * k3 * x * x
+    return stiffness
+
+
+@kernel
 def smooth_force(x, v, k0, k3, c):
     """k0 x + k3 x^3 + c v (N): springs and dashpot."""
     force = elastic_force(x, k0, k3)

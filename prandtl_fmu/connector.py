@@ -1,0 +1,250 @@
+"""The element as a connector: driven by the motion of its two flanges, it returns the force.
+
+A massless scene (no ``[mass]``) between two bodies: the input is the
+relative displacement x (m) and velocity v (m/s) of the flanges, the output
+the force the element transmits,
+
+    force = k0 x + k3 x^3 + c v + sum_i k_i u_i,
+
+with the branches moved by the exact play update along x. Between two
+samples x is taken linear; the play operator is rate independent, so one
+monotone move per sample is exact whatever the time between the samples (a
+master that gives only the end value of a step gets the linear interpolant).
+The element starts at x = 0 with the scene's initial elongations u0; a first
+sample x(0) != 0 moves it there monotonically (a virgin loading).
+
+* :func:`displacement_response` runs a whole sampled history in one compiled call;
+* :class:`Connector` is the same element as a stateful object for a
+  co-simulation master: :meth:`Connector.preview` gives the force at a new
+  input without moving the state, :meth:`Connector.move_to` commits it.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+
+from .driver import choose_branch_kernel, compile_model, _smooth_model
+from .kernels import stack
+from .kernels.drive import drive, preview, tangent
+from .kernels.play import branch_force, write_elongations
+from .kernels.smooth import smooth_force
+from .kernels.energy import stored
+from .scene import Scene, with_coefficients
+
+# energy account of the connector: work is not booked (no load), energy[1] = sliders, energy[2] = dashpot
+SLIDERS, DAMPER = 1, 2
+
+
+def _require_massless(scene: Scene) -> None:
+    if scene.mass is not None:
+        raise ValueError(f"{scene.source}: the connector is the massless element: the scene must have no [mass] "
+                         "(the bodies on either side hold the inertia)")
+
+
+def _branch_kernel(scene: Scene) -> str:
+    return choose_branch_kernel(scene, "projected")  # the memory stack for many branches and the continuum
+
+
+def _initial_u(scene: Scene, model):
+    k = model[4]
+    if stack.is_stack(k):
+        return stack.fresh_state(k, 0.0)
+    return np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None
+
+
+def displacement_response(scene: Scene, x, v=None, energy: bool = False):
+    """The force at each sample of a displacement history ``x`` (m), from x = 0 and the scene's u0.
+
+    ``v`` (m/s) feeds the dashpot (zeros when None; a scene with a dashpot needs it). Returns the forces,
+    or ``(forces, dissipated_sliders)`` with ``energy=True``. One compiled call for the whole history.
+    """
+    _require_massless(scene)
+    xs = np.ascontiguousarray(x, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(xs)):
+        raise ValueError("x must be finite")
+    if v is None:
+        if scene.has_dashpot:
+            raise ValueError("the scene has a dashpot: give the velocities v")
+        vs = np.zeros_like(xs)
+    else:
+        vs = np.ascontiguousarray(v, dtype=float).reshape(-1)
+        if vs.shape != xs.shape or not np.all(np.isfinite(vs)):
+            raise ValueError("v must be finite and as long as x")
+    model = compile_model(scene, _branch_kernel(scene))
+    u = _initial_u(scene, model)
+    forces = np.empty_like(xs)
+    account = np.zeros(3) if energy else None
+    drive(model, u, 0.0, xs, vs, forces, account)
+    return (forces, float(account[SLIDERS])) if energy else forces
+
+
+class Connector:
+    """The massless element of a scene driven by the relative motion (x, v) of its flanges.
+
+    ``move_to(x, v, time)`` commits a new sample; ``preview(x, v)`` is the
+    force there without committing (what an FMU output shows for an input
+    set but not yet stepped). ``stiffness(v)`` is the tangent dF/dx.
+    """
+
+    def __init__(self, scene: Scene):
+        _require_massless(scene)
+        self.scene = scene
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to x = 0, v = 0, the scene's u0, time 0; the energy account restarts."""
+        self.branch_kernel = _branch_kernel(self.scene)
+        self.model = compile_model(self.scene, self.branch_kernel)
+        self.u = _initial_u(self.scene, self.model)
+        self.x = self.v = self.time = 0.0
+        self.direction = 1.0  # of the last motion: increasing x before any
+        self.account = np.zeros(3)
+
+    # ------------------------------------------------------------ outputs
+
+    @property
+    def force(self) -> float:
+        """k0 x + k3 x^3 + c v + sum_i k_i u_i (N) at the committed sample."""
+        m, k0, k3, c, k, eta = self.model
+        return float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u))
+
+    def preview(self, x: float, v: float) -> float:
+        """The force if the flanges moved (monotonically) from the committed x to ``x``, at velocity
+        ``v``; the state does not change."""
+        return float(preview(self.model, self.u, x - self.x, v, x))
+
+    def stiffness(self, v: Optional[float] = None) -> float:
+        """dF/dx (N/m) at the committed state for a motion in the direction of ``v`` (default: the committed
+        v); for v = 0, in the direction of the last motion (increasing x before any): k0 + 3 k3 x^2 + the
+        stiffnesses of the branches that stick. A branch on its threshold that the motion pushes on slides
+        and adds nothing; one that the motion takes off its threshold sticks."""
+        v = self.v if v is None else v
+        direction = self.direction if v == 0 else math.copysign(1.0, v)
+        return float(tangent(self.model, self.x, self.u, direction))
+
+    def stored_energy(self) -> float:
+        """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""
+        m, k0, k3, c, k, eta = self.model
+        return float(stored(self.x, k0, k3, k, self.u))
+
+    def energy(self) -> dict:
+        """stored_energy, dissipated_sliders, dissipated_damper (J) since the start."""
+        return {"stored_energy": self.stored_energy(), "dissipated_sliders": float(self.account[SLIDERS]),
+                "dissipated_damper": float(self.account[DAMPER])}
+
+    def elongations(self) -> Optional[np.ndarray]:
+        """u_i (m) in the scene's order (None without branches or for the continuum)."""
+        if self.u is None or self.scene.branches.continuum:
+            return None
+        u = np.empty(self.scene.branches.n)
+        write_elongations(self.model[4], self.u, u)
+        return u
+
+    def copy(self) -> "Connector":
+        """An independent copy (the state is copied, the parameters shared: they are never modified)."""
+        twin = Connector.__new__(Connector)
+        twin.__dict__.update(self.__dict__)
+        twin.u = None if self.u is None else self.u.copy()
+        twin.account = self.account.copy()
+        return twin
+
+    # ------------------------------------------------------------ motion
+
+    def move_to(self, x: float, v: float, time: Optional[float] = None) -> None:
+        """Commit the sample (x, v) at ``time`` (s; default: the committed time). The branches follow the
+        exact play update along the line from the committed x; the dashpot dissipates c (v0^2 + v0 v + v^2)
+        (time - t0) / 3 (v linear in between). ValueError (nothing changed) for a non-finite value or a time
+        that goes back."""
+        time = self.time if time is None else float(time)
+        if not (math.isfinite(x) and math.isfinite(v)):
+            raise ValueError(f"the motion must be finite, got x = {x!r}, v = {v!r}")
+        if not (math.isfinite(time) and time >= self.time):
+            raise ValueError(f"time {time!r} goes back (the connector is at t = {self.time!r})")
+        dx = x - self.x
+        drive(self.model, self.u, self.x, np.array([x]), np.array([float(v)]), np.empty(1), self.account)
+        c = self.model[3]
+        if c is not None:
+            self.account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
+        if dx != 0:
+            self.direction = math.copysign(1.0, dx)
+        self.x, self.v, self.time = float(x), float(v), time
+
+    def set_coefficients(self, **values) -> None:
+        """Change k0, k3 or c (ValueError names the culprit, nothing changed)."""
+        unknown = set(values) - {"k0", "k3", "c"}
+        if unknown:
+            raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c)")
+        self.scene = with_coefficients(self.scene, **values)
+        self.model = _smooth_model(self.scene) + self.model[4:]
+
+    def coefficients(self) -> dict:
+        scene, values = self.scene, {}
+        if scene.spring is not None:
+            values["k0"] = scene.spring.k0
+        if scene.cubic is not None:
+            values["k3"] = scene.cubic.k3
+        if scene.damper is not None:
+            values["c"] = scene.damper.c
+        return values
+
+    # ------------------------------------------------------------ state
+
+    def get_state(self) -> dict:
+        """Everything that determines the continuation, as plain data."""
+        state = {"time": self.time, "x": self.x, "v": self.v, "direction": self.direction,
+                 "branch_kernel": self.branch_kernel, "energy_account": self.account.tolist(),
+                 "coefficients": self.coefficients(), "u": [], "u_reference": []}
+        k = self.model[4]
+        if self.branch_kernel == "stack":
+            state["u"] = self.u[:stack.used(self.u)].tolist()
+            if not self.scene.branches.continuum:
+                reference = np.empty(self.scene.branches.n)
+                reference[k[stack.ORDER_ROW, :-1].astype(np.int64)] = k[stack.C_ROW, :-1]
+                state["u_reference"] = reference.tolist()
+        elif self.u is not None:
+            state["u"] = self.u.tolist()
+        return state
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state of :meth:`get_state`; checks it fully before changing anything (ValueError)."""
+        values = [float(state[key]) for key in ("time", "x", "v", "direction")]
+        account = np.array(state["energy_account"], dtype=float).reshape(-1)
+        if not all(math.isfinite(value) for value in values) or not np.all(np.isfinite(account)):
+            raise ValueError("state has a value that is not finite")
+        if account.shape[0] != 3 or values[3] not in (-1.0, 1.0):
+            raise ValueError("state does not fit the connector")
+        kind = state["branch_kernel"]
+        if kind != self.branch_kernel:
+            raise ValueError(f"state has branch kernel {kind!r}, the connector uses {self.branch_kernel!r}")
+        u = np.array(state["u"], dtype=float).reshape(-1)
+        reference = np.array(state["u_reference"], dtype=float).reshape(-1)
+        if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
+            raise ValueError("state has a value that is not finite")
+        branches = self.scene.branches
+        if branches is None:
+            if u.size:
+                raise ValueError("state has branch values, the connector has no branches")
+            model, restored = (None, None), None
+        elif kind == "stack":
+            if branches.continuum:
+                params = self.model[4]
+            else:
+                if reference.shape[0] != branches.n:
+                    raise ValueError(f"state has {reference.shape[0]} reference elongations, the connector has "
+                                     f"{branches.n} branches")
+                params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
+            model, restored = (params, None), stack.restore(params, u)
+        else:
+            if u.shape[0] != branches.n:
+                raise ValueError(f"state has {u.shape[0]} branch elongations, the connector has {branches.n}")
+            if np.any(np.abs(u) > branches.yield_displacement):
+                raise ValueError("state has an elongation outside its elastic range")
+            model, restored = compile_model(self.scene, "play")[4:], u
+        scene = with_coefficients(self.scene, **state["coefficients"])
+        self.scene = scene
+        self.model = _smooth_model(scene) + model
+        self.time, self.x, self.v, self.direction = values
+        self.u = restored
+        self.account[:] = account

@@ -1,0 +1,56 @@
+"""What both slaves (the element with its force input, the connector) share: refusals and FMU states.
+
+PythonFMU 0.7.0 can only fail a call as fmi2Fatal (it turns every Python
+exception into fatal; fmi2Error would be the right status, it has no way to
+return it). It also releases its references to the slave when a call fails,
+and again when the instance is freed: :meth:`SlaveBase._fail` takes one more
+reference first, so that the instance stays intact (the refused call changed
+nothing, later calls still work) and the host never touches freed memory.
+"""
+import ctypes
+import json
+import math
+import sys
+
+from pythonfmu import Fmi2Slave
+from pythonfmu.enums import Fmi2Status
+
+DBL_MAX = sys.float_info.max
+SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
+
+
+class Refused(Exception):
+    """A call refused by the slave (logged first); PythonFMU reports it as fmi2Fatal."""
+
+
+def finite_number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+
+
+class SlaveBase(Fmi2Slave):
+    """Logging refusals, failing a call without freeing the instance, reading a serialized state."""
+
+    def _fail(self, message):
+        """Log ``message`` and fail the current call (fmi2Fatal under PythonFMU 0.7.0; see the module
+        docstring), keeping the instance alive and unchanged."""
+        self.log(message, Fmi2Status.error)
+        # PythonFMU releases its references to the class, the instance and the log queue once more than
+        # it took when a call raises: take one more of each, never to be given back (balanced by that
+        # extra release), so that nothing the host still points to is freed.
+        for owned in (type(self), self, self.log_queue):
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(owned))
+        raise Refused(message)
+
+    def _refuse(self, message) -> bool:
+        """Log ``message`` as a Discard and return False (``do_step`` returns it: fmi2Discard)."""
+        self.log(message, Fmi2Status.discard)
+        return False
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes):
+        """A serialized state, never an exception here (PythonFMU has no instance to survive one with): what
+        cannot be read becomes a state that ``_set_fmu_state`` refuses with the reason."""
+        try:
+            return json.loads(bytes(state).decode("utf-8"))
+        except Exception as exc:  # any garbage: refused later, with its reason
+            return {"invalid": f"not a serialized state of this FMU ({exc.__class__.__name__})"}

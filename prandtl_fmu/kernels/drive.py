@@ -1,0 +1,40 @@
+"""The massless element driven by its displacement: the force it transmits along a path of x.
+
+The branches follow the exact play update: between two samples x is taken
+linear (monotone), and the play operator is rate independent, so one
+monotone move per sample is exact whatever the time between samples.
+"""
+from .._jit import kernel
+from .play import branch_force, move, piece
+from .smooth import elastic_stiffness, smooth_force
+
+
+@kernel
+def drive(model, u, x_start, xs, vs, forces, energy):
+    """Move the branches ``u`` (in place) along the samples ``xs`` from ``x_start``; write the force
+    k0 x + k3 x^3 + c v + sum_i k_i u_i at each sample into ``forces`` (``vs``: the velocities, for the
+    dashpot). With an ``energy`` account (not None), the sliders' dissipation is added to energy[1].
+    Returns the last x."""
+    m, k0, k3, c, k, eta = model
+    x = x_start
+    for j in range(xs.shape[0]):
+        move(k, eta, u, xs[j] - x, energy)
+        x = xs[j]
+        forces[j] = smooth_force(x, vs[j], k0, k3, c) + branch_force(k, u)
+    return x
+
+
+@kernel
+def tangent(model, x, u, direction):
+    """dF/dx at (x, u) for a motion in ``direction`` (+1 or -1): k0 + 3 k3 x^2 + the stiffnesses of the
+    branches that stick (a branch on its threshold in ``direction`` slides and adds nothing)."""
+    m, k0, k3, c, k, eta = model
+    return elastic_stiffness(x, k0, k3) + piece(k, eta, u, 0.0, direction)[1]
+
+
+@kernel
+def preview(model, u, dx, v, x):
+    """The force at x = (current x) + dx without moving the branches (``x`` is the new displacement)."""
+    m, k0, k3, c, k, eta = model
+    direction = 1.0 if dx >= 0.0 else -1.0
+    return smooth_force(x, v, k0, k3, c) + piece(k, eta, u, dx, direction)[0]
