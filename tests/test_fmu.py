@@ -52,14 +52,14 @@ def test_model_description_is_valid_and_complete(fmus, name):
     scene = load_scene(scene_path)
     variables = {v.name: v for v in md.modelVariables}
     assert variables["F"].causality == "input" and variables["F"].unit == "N"
-    for out, unit in (("x", "m"), ("v", "m/s"), ("reaction", "N")):
+    for out, unit in (("x", "m"), ("v", "m/s"), ("reaction", "N"), ("stiffness", "N/m")):
         assert variables[out].causality == "output" and variables[out].unit == unit
     for v in md.modelVariables:
         assert v.description
         if v.type == "Real":
             assert v.unit, v.name
     # parameters only for the effects present
-    expected = {"m", "x0", "v0", "step", "stepper"}
+    expected = {"m", "x0", "v0", "step", "stepper", "scene_load"}
     expected |= {"k0"} if scene.spring else set()
     expected |= {"k3"} if scene.cubic else set()
     expected |= {"c"} if scene.damper else set()
@@ -113,6 +113,56 @@ def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
     got = np.column_stack([result["x"], result["v"], result["reaction"]])
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
     assert np.abs(expected[:, 0]).max() > 1e-2  # it moved
+
+
+@pytest.mark.parametrize("stepper", ["projected", "implicit", "verlet", "exact"])
+@pytest.mark.parametrize("name", ["paper", "all-effects"])
+def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name, stepper):
+    """The README route: simulate_fmu with no input and scene_load = true is the library's run of the scene
+    (the load evaluated at every internal step), not F held per communication step."""
+    fmu, scene_path = fmus[name]
+    scene = load_scene(scene_path)
+    if stepper == "exact" and scene.cubic is not None:
+        pytest.skip("exact does not apply to a cubic spring")
+    stop = min(scene.solver.stop_time, 60.0)
+    library = simulate(scene.with_solver(stop_time=stop), stepper=stepper)
+    result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True, "stepper": stepper}, output=["x", "v", "reaction"])
+    assert len(result) == len(library.time)
+    # exact: FMPy's step sizes differ from the output interval by an ulp (t_k+1 - t_k), which the event
+    # times feel; every time-stepping scheme agrees to rounding
+    tolerance = 1e-11 if stepper == "exact" else 1e-12
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_allclose(result[column], getattr(library, column), rtol=0, atol=tolerance)
+    assert np.abs(library.x).max() > 1e-2
+    without = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
+                           start_values={"stepper": stepper}, output=["x"])
+    assert np.abs(without["x"] - library.x).max() > 1e-6  # the switch matters: F alone is 0 here
+
+
+def test_the_stiffness_output_is_the_tangent_of_the_sticking_branches(fmus):
+    """Against the rule written out: k0 + 3 k3 x^2 + k_i of every branch not pushed on its threshold by v."""
+    fmu, scene_path = fmus["all-effects"]
+    scene = load_scene(scene_path)
+    element = Element(scene)
+    slave = Slave(fmu)
+    k, eta = scene.branches.stiffness, scene.branches.yield_displacement
+    seen = set()
+    try:
+        for j in range(400):
+            force = 1.5 * np.sin(0.05 * j)
+            slave.step(0.05, force)
+            element.advance(0.05, force)
+            x, v, stiffness = slave.get("x", "v", "stiffness")
+            u = element.elongations()
+            direction = -1.0 if v < 0 else 1.0
+            sliding = (np.abs(u) >= eta) & (np.sign(u) == direction)
+            expected = scene.spring.k0 + 3 * scene.cubic.k3 * x * x + k[~sliding].sum()
+            assert stiffness == pytest.approx(expected, rel=1e-12, abs=1e-15)
+            seen.add(int(sliding.sum()))
+    finally:
+        slave.close()
+    assert len(seen) >= 3  # sticking, some and all branches sliding were all met
 
 
 def test_held_input_of_the_library_equals_a_constant_load_scene():

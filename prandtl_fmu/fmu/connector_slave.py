@@ -35,7 +35,7 @@ from ..connector import Connector
 from ..scene import coefficient_problem, load_scene
 from .common import DBL_MAX, SlaveBase, finite_number
 from .description import RealVariable, complete
-from .documentation import reaction_formula, stored_energy_formula
+from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
 PARAMETERS = [  # (name, table of the scene, unit, description)
     ("k0", "spring", "N/m", "stiffness of the linear spring: force k0 x"),
@@ -85,7 +85,7 @@ class PrandtlConnector(SlaveBase):
             ("force", "N", f"force the element transmits: {reaction_formula(self.scene)}",
              lambda: self._current().force),
             ("stiffness", "N/m", "tangent stiffness dF/dx for a motion in the direction of v (of the last motion "
-             "when v = 0): k0 + 3 k3 x^2 + the k_i of the sticking branches", lambda: self._current().stiffness()),
+             f"when v = 0): {stiffness_formula(self.scene)}", lambda: self._current().stiffness()),
             ("stored_energy", "J", f"elastic energy {stored_energy_formula(self.scene)}",
              lambda: self._current().stored_energy()),
         ]

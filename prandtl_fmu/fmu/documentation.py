@@ -21,6 +21,12 @@ def reaction_formula(scene) -> str:
     return " + ".join(_terms(scene, "k0 x", "k3 x^3", "c v", "sum_i k_i u_i", "integral of k(s) u(s) ds")) or "0"
 
 
+def stiffness_formula(scene) -> str:
+    """The tangent dF/dx, with the terms of the effects present only."""
+    return " + ".join(_terms(scene, "k0", "3 k3 x^2", None, "the k_i of the sticking branches",
+                             "the integral of k(s) over the sticking branches")) or "0"
+
+
 def stored_energy_formula(scene) -> str:
     """The elastic energy, with the terms of the effects present only."""
     return " + ".join(_terms(scene, "k0 x^2/2", "k3 x^4/4", None, "sum_i k_i u_i^2/2",

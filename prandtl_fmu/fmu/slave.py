@@ -40,7 +40,7 @@ from ..scene import load_scene
 from ..steppers import STEPPERS
 from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
-from .documentation import reaction_formula, stored_energy_formula
+from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
 # Parameters of the effects: (name, table of the scene, unit, min, variability, description).
 EFFECT_PARAMETERS = [
@@ -94,7 +94,7 @@ class PrandtlElement(SlaveBase):
              + (" (= F - m v')" if self.scene.mass is not None else ""),
              lambda: self.element.reaction),
             ("stiffness", "N/m", "tangent stiffness d(reaction)/dx at the current state for a motion in the "
-             "direction of v (of increasing x when v = 0): k0 + 3 k3 x^2 + the k_i of the sticking branches",
+             f"direction of v (of increasing x when v = 0): {stiffness_formula(self.scene)}",
              self.element.stiffness),
         ]
         energy = [  # the energy account, for the effects present
