@@ -2,11 +2,13 @@
 
     python examples/run_fmu.py ELEMENT.fmu [--amplitude 0.45] [--omega 0.5] [--offset 0]
                                [--stop-time T] [--interval DT] [--stepper NAME]
-                               [--out run.csv] [--plot loop.png]
+                               [--scene-load] [--out run.csv] [--plot loop.png]
 
 The force F(t) = offset + amplitude cos(omega t) is sampled at every
 communication point and held over the step (FMPy sets inputs at the start of
-each step). Stop time and communication step default to the FMU's
+each step). With --scene-load there is no input: the FMU's parameter
+scene_load applies its scene's [load] at every internal step, and the run
+reproduces the library's run of the scene. Stop time and communication step default to the FMU's
 DefaultExperiment (the scene's [solver] stop_time and output_interval).
 """
 import argparse
@@ -17,7 +19,8 @@ import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
 
-def run(fmu, amplitude=0.45, omega=0.5, offset=0.0, stop_time=None, interval=None, stepper=None):
+def run(fmu, amplitude=0.45, omega=0.5, offset=0.0, stop_time=None, interval=None, stepper=None,
+        scene_load=False):
     """Simulate and return FMPy's structured array with time, x, v, reaction."""
     experiment = read_model_description(fmu).defaultExperiment
     stop_time = float(stop_time or experiment.stopTime)
@@ -27,7 +30,9 @@ def run(fmu, amplitude=0.45, omega=0.5, offset=0.0, stop_time=None, interval=Non
     signal = np.zeros(count + 1, dtype=[("time", float), ("F", float)])
     signal["time"], signal["F"] = times, offset + amplitude * np.cos(omega * times)
     start_values = {"stepper": stepper} if stepper else {}
-    return simulate_fmu(fmu, stop_time=stop_time, output_interval=interval, input=signal,
+    if scene_load:
+        start_values["scene_load"] = True
+    return simulate_fmu(fmu, stop_time=stop_time, output_interval=interval, input=None if scene_load else signal,
                         start_values=start_values, output=["x", "v", "reaction"])
 
 
@@ -40,10 +45,13 @@ def main():
     parser.add_argument("--stop-time", type=float)
     parser.add_argument("--interval", type=float)
     parser.add_argument("--stepper")
+    parser.add_argument("--scene-load", action="store_true",
+                        help="no input: the scene's own [load] at every internal step (reproduces the library)")
     parser.add_argument("--out", help="CSV file: time,x,v,reaction")
     parser.add_argument("--plot", help="PNG file: the hysteresis loop and x(t)")
     args = parser.parse_args()
-    result = run(args.fmu, args.amplitude, args.omega, args.offset, args.stop_time, args.interval, args.stepper)
+    result = run(args.fmu, args.amplitude, args.omega, args.offset, args.stop_time, args.interval, args.stepper,
+                 args.scene_load)
     print(f"{args.fmu}: {len(result)} communication points, x(T) = {float(result['x'][-1])!r}, "
           f"reaction(T) = {float(result['reaction'][-1])!r}")
     if args.out:

@@ -72,3 +72,23 @@ def test_the_example_force_source_gives_f0_of_the_amplitude_set_during_initializ
     assert slave.getReal([vr["F"]])[0] == 0.25 + 2.0 * np.cos(0.5)
     slave.terminate()
     slave.freeInstance()
+
+
+spec = importlib.util.spec_from_file_location("run_connector",
+                                              ROOT / "examples" / "cosim" / "connector" / "run_connector.py")
+run_connector = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(run_connector)
+
+
+def test_a_mass_on_the_ground_through_the_connector_converges_in_libcosim_to_the_library(tmp_path):
+    """Connected by their OSP mechanical ports (VariableGroupConnection): first order in the communication step
+    towards the element with its mass solved exactly; ECCO's adaptive run converges with its tolerance."""
+    folder = run_connector.build(tmp_path)
+    rows = run_connector.convergence(folder, stop_time=12.0, steps=(0.04, 0.02, 0.01), ecco_tolerances=(1e-4, 1e-6))
+    fixed = [row for row in rows if row[0] == "fixedStep"]
+    errors = [row[3] for row in fixed]
+    orders = [row[4] for row in fixed[1:]]
+    assert all(0.8 < order < 1.5 for order in orders), rows
+    assert errors[-1] < 0.3 * errors[0]  # H / 4: the error falls about fourfold
+    ecco = [row for row in rows if row[0] == "ecco"]
+    assert ecco[1][3] < ecco[0][3] and ecco[1][2] > ecco[0][2], rows  # tighter: more steps, smaller error

@@ -1,0 +1,230 @@
+"""A mass on the ground through the Prandtl connector FMU, in libcosim: convergence to the library's solution.
+
+    python examples/cosim/connector/run_connector.py [--out DIR] [--stop-time T] [--plot FILE.png]
+
+The system: a point mass (``PointMass.fmu``, this folder) under F(t) = 0.45 cos(0.5 t), tied to the ground
+by the connector FMU of ``bushing.toml`` (spring, dashpot, five Prandtl branches): the connector takes the
+mass's x and v (relative to the ground: the mass's own) and returns the force that acts against it. Exactly
+the element with its mass of ``bushing-with-mass.toml``, which the library solves with the event-driven
+``exact`` stepper (error: rounding): the reference.
+
+Coupled through the OSP system structure (a ``VariableGroupConnection`` of the two LinearMechanicalPorts,
+force <-> v, plus x), with libcosim's fixed-step algorithm at communication steps H = 0.1 ... 0.00625 s, then
+with its ECCO algorithm (adaptive step, power bond force * v). Prints the error max |x - x_ref| on the 0.1 s
+grid and the measured order at each H, and the ECCO run's error and step count; writes DIR/convergence.csv.
+libcosim counts time in integer nanoseconds.
+"""
+import argparse
+import csv
+import math
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[2]
+sys.path.insert(0, str(ROOT))
+
+NANOSECONDS = 1_000_000_000
+STEPS = (0.1, 0.05, 0.025, 0.0125, 0.00625)
+
+STRUCTURE = """<?xml version="1.0" encoding="UTF-8"?>
+<!-- A point mass on the ground through the Prandtl connector (run_connector.py writes this file). -->
+<OspSystemStructure xmlns="http://opensimulationplatform.com/MSMI/OSPSystemStructure" version="0.1">
+    <StartTime>0.0</StartTime>
+    <BaseStepSize>{step!r}</BaseStepSize>
+    <Algorithm>{algorithm}</Algorithm>
+    <Simulators>
+        <Simulator name="mass" source="PointMass.fmu">
+            <InitialValues>
+                <InitialValue variable="m"><Real value="1.0"/></InitialValue>
+                <InitialValue variable="amplitude"><Real value="0.45"/></InitialValue>
+                <InitialValue variable="omega"><Real value="0.5"/></InitialValue>
+            </InitialValues>
+        </Simulator>
+        <Simulator name="bushing" source="bushing.fmu"/>
+    </Simulators>
+    <Connections>
+{connections}
+    </Connections>{ecco}
+</OspSystemStructure>
+"""
+
+PORTS = """        <VariableGroupConnection>
+            <VariableGroup simulator="mass" name="mechanical_port"/>
+            <VariableGroup simulator="bushing" name="mechanical_port"/>
+        </VariableGroupConnection>
+        <VariableConnection>
+            <Variable simulator="mass" name="x"/>
+            <Variable simulator="bushing" name="x"/>
+        </VariableConnection>"""
+
+# ECCO: the power bond force * v, declared on the two connections that carry it (libcosim's quarter-truck form)
+BONDS = """        <VariableConnection powerBond="bushing_mass">
+            <Variable simulator="bushing" name="v" causality="input"/>
+            <Variable simulator="mass" name="v" causality="output"/>
+        </VariableConnection>
+        <VariableConnection powerBond="bushing_mass">
+            <Variable simulator="mass" name="force" causality="input"/>
+            <Variable simulator="bushing" name="force" causality="output"/>
+        </VariableConnection>
+        <VariableConnection>
+            <Variable simulator="mass" name="x"/>
+            <Variable simulator="bushing" name="x"/>
+        </VariableConnection>"""
+
+ECCO = """
+    <EccoConfiguration>
+        <SafetyFactor>0.8</SafetyFactor>
+        <StepSize>0.01</StepSize>
+        <MinimumStepSize>0.0001</MinimumStepSize>
+        <MaximumStepSize>0.1</MaximumStepSize>
+        <MinimumChangeRate>0.2</MinimumChangeRate>
+        <MaximumChangeRate>1.5</MaximumChangeRate>
+        <ProportionalGain>0.2</ProportionalGain>
+        <IntegralGain>0.15</IntegralGain>
+        <RelativeTolerance>{tolerance!r}</RelativeTolerance>
+        <AbsoluteTolerance>{tolerance!r}</AbsoluteTolerance>
+    </EccoConfiguration>"""
+
+
+def build(folder):
+    """Build both FMUs and their OSP descriptions into ``folder``."""
+    from pythonfmu import FmuBuilder
+
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    build_fmu(HERE / "bushing.toml", folder / "bushing.fmu", osp=True)  # + bushing_OspModelDescription.xml
+    source = HERE / "prandtl_example_mass.py"
+    try:
+        FmuBuilder.build_FMU(source, dest=folder / "PointMass.fmu")
+    finally:  # let the FMU import its own copy when loaded in this process
+        sys.modules.pop(source.stem, None)
+        if str(source.parent) in sys.path:
+            sys.path.remove(str(source.parent))
+    shutil.copyfile(HERE / "PointMass_OspModelDescription.xml", folder / "PointMass_OspModelDescription.xml")
+    return folder
+
+
+def write_structure(folder, step, ecco_tolerance=None):
+    """OspSystemStructure.xml for a fixed step, or for ECCO (initial step ``step``) with a tolerance."""
+    if ecco_tolerance is None:
+        text = STRUCTURE.format(step=step, algorithm="fixedStep", connections=PORTS, ecco="")
+        path = Path(folder) / "OspSystemStructure.xml"
+    else:
+        text = STRUCTURE.format(step=step, algorithm="ecco", connections=BONDS,
+                                ecco=ECCO.format(tolerance=ecco_tolerance))
+        path = Path(folder) / "OspSystemStructure-ecco.xml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def run(structure, stop_time):
+    """Run the system to ``stop_time``; return the arrays time, x, v, force after every step."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_osp_config_file(str(structure))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    mass = execution.slave_index_from_instance_name("mass")  # indices are not in declaration order
+    bushing = execution.slave_index_from_instance_name("bushing")
+
+    def reference(slave, name):
+        for variable in execution.slave_variables(slave):
+            if variable.name.decode() == name:
+                return variable.reference
+        raise KeyError(name)
+
+    mass_outputs = [reference(mass, "x"), reference(mass, "v")]
+    force = [reference(bushing, "force")]
+    columns = {name: [] for name in ("time", "x", "v", "force")}
+    end = round(stop_time * NANOSECONDS)
+    while True:
+        now = execution.status().current_time
+        if now >= end:
+            break
+        execution.step(1)
+        x, v = observer.last_real_values(mass, mass_outputs)
+        columns["time"].append(execution.status().current_time / NANOSECONDS)
+        columns["x"].append(x)
+        columns["v"].append(v)
+        columns["force"].append(observer.last_real_values(bushing, force)[0])
+    return {name: np.array(values) for name, values in columns.items()}
+
+
+def reference_x(times):
+    """x of the element with its mass (bushing-with-mass.toml, exact stepper) at the given times."""
+    from prandtl_fmu import Element, load_scene
+
+    element = Element(load_scene(HERE / "bushing-with-mass.toml"))
+    values, now = [], 0.0
+    for t in times:
+        element.advance(t - now, 0.0, scene_load=True)
+        now = t
+        values.append(element.x)
+    return np.array(values)
+
+
+def convergence(folder, stop_time=40.0, steps=STEPS, ecco_tolerances=(1e-4, 1e-6)):
+    """Rows (algorithm, H or tolerance, steps taken, max error of x, order) of the study."""
+    grid = np.round(np.arange(1, round(stop_time / 0.1) + 1) * 0.1, 10)
+    exact = reference_x(grid)
+    rows, previous = [], None
+    for step in steps:
+        result = run(write_structure(folder, step), stop_time)
+        index = np.searchsorted(np.round(result["time"], 9), grid)
+        error = float(np.abs(result["x"][index] - exact).max())
+        order = math.log2(previous / error) if previous else float("nan")
+        rows.append(("fixedStep", step, len(result["time"]), error, order))
+        previous = error
+    for tolerance in ecco_tolerances:
+        result = run(write_structure(folder, 0.01, ecco_tolerance=tolerance), stop_time)
+        error = float(np.abs(result["x"] - reference_x(result["time"])).max())
+        rows.append(("ecco", tolerance, len(result["time"]), error, float("nan")))
+    return rows
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default=str(ROOT / "out" / "connector"))
+    parser.add_argument("--stop-time", type=float, default=40.0)
+    parser.add_argument("--plot", help="PNG of the force-displacement loop, co-simulated against the reference")
+    args = parser.parse_args()
+    folder = build(args.out)
+    rows = convergence(folder, args.stop_time)
+    path = os.path.join(args.out, "convergence.csv")
+    with open(path, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["algorithm", "step_or_tolerance", "steps", "max_error_x", "order"])
+        writer.writerows(rows)
+    print(f"{'algorithm':10} {'H / tol':>9} {'steps':>7} {'max |x - x_ref|':>16} {'order':>6}")
+    for algorithm, setting, count, error, order in rows:
+        print(f"{algorithm:10} {setting:9.3g} {count:7d} {error:16.3e} {order:6.2f}")
+    print(path)
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        result = run(write_structure(folder, 0.0125), args.stop_time)
+        fig, ax = plt.subplots(figsize=(6, 4.5), layout="constrained")
+        ax.plot(result["x"], result["force"], lw=0.8, label="libcosim, H = 0.0125 s")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("connector force (N)")
+        ax.set_title("Mass on the ground through the Prandtl connector")
+        ax.legend()
+        fig.savefig(args.plot, dpi=120)
+        print(args.plot)
+
+
+if __name__ == "__main__":
+    main()
