@@ -92,3 +92,15 @@ def test_a_mass_on_the_ground_through_the_connector_converges_in_libcosim_to_the
     assert errors[-1] < 0.3 * errors[0]  # H / 4: the error falls about fourfold
     ecco = [row for row in rows if row[0] == "ecco"]
     assert ecco[1][3] < ecco[0][3] and ecco[1][2] > ecco[0][2], rows  # tighter: more steps, smaller error
+
+
+def test_the_ssp_system_description_runs_the_same_system_as_the_osp_structure(tmp_path):
+    """SystemStructure.ssd (written for SSP masters such as OMSimulator) read by libcosim's SSP loader gives the
+    very run of the OspSystemStructure."""
+    folder = run_connector.build(tmp_path)
+    osp = run_connector.run(run_connector.write_structure(folder, 0.02), 6.0)
+    ssp = run_connector.run(folder, 6.0, ssp_step=0.02)
+    assert len(osp["time"]) == len(ssp["time"]) == 300
+    for column in ("x", "v", "force"):
+        np.testing.assert_array_equal(osp[column], ssp[column])
+    assert np.abs(osp["force"]).max() > 0.1

@@ -107,7 +107,8 @@ def build(folder):
         sys.modules.pop(source.stem, None)
         if str(source.parent) in sys.path:
             sys.path.remove(str(source.parent))
-    shutil.copyfile(HERE / "PointMass_OspModelDescription.xml", folder / "PointMass_OspModelDescription.xml")
+    for name in ("PointMass_OspModelDescription.xml", "SystemStructure.ssd"):
+        shutil.copyfile(HERE / name, folder / name)
     return folder
 
 
@@ -124,14 +125,19 @@ def write_structure(folder, step, ecco_tolerance=None):
     return path
 
 
-def run(structure, stop_time):
-    """Run the system to ``stop_time``; return the arrays time, x, v, force after every step."""
+def run(structure, stop_time, ssp_step=None):
+    """Run the system to ``stop_time``; return the arrays time, x, v, force after every step.
+
+    ``structure`` is an OspSystemStructure.xml, or with ``ssp_step`` (s) the folder of SystemStructure.ssd."""
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
 
     log_output_level(CosimLogLevel.ERROR)
-    execution = CosimExecution.from_osp_config_file(str(structure))
+    if ssp_step is None:
+        execution = CosimExecution.from_osp_config_file(str(structure))
+    else:
+        execution = CosimExecution.from_ssp_file(str(structure), step_size=round(ssp_step * NANOSECONDS))
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
     mass = execution.slave_index_from_instance_name("mass")  # indices are not in declaration order
