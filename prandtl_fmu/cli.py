@@ -3,6 +3,8 @@
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp]
+    prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL] [--branches N] [--dashpot]
+                    [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
     prandtl-fmu scenes
     prandtl-fmu bench [--quick] [--out DIR] [--from-csv]
     prandtl-fmu --version
@@ -66,6 +68,21 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--osp", action="store_true",
                        help="also write <modelName>_OspModelDescription.xml beside the FMU (libcosim reads it "
                             "from there: mechanical ports for powerBond and ECCO); its path is printed second")
+    fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
+                                          "history: non-negative least squares on the play-operator basis")
+    fit.add_argument("data", help="CSV file with a header line")
+    fit.add_argument("--time", help="time column (s); needed by --dashpot without --v and for [solver]")
+    fit.add_argument("--x", default="x", help="displacement column (m), default 'x'")
+    fit.add_argument("--force", default="force", help="force column (N), default 'force'")
+    fit.add_argument("--v", help="velocity column (m/s), for --dashpot")
+    fit.add_argument("--branches", type=int, default=40, metavar="N",
+                     help="number of candidate elastic ranges in the grid (default 40); the fit keeps those with "
+                          "a non-zero stiffness")
+    fit.add_argument("--dashpot", action="store_true", help="also fit a dashpot c v")
+    fit.add_argument("--cubic", action="store_true", help="also fit a cubic spring k3 x^3")
+    fit.add_argument("--out", help="scene file to write (default: print it)")
+    fit.add_argument("--fmu", help="also build the connector FMU of the fitted scene")
+    fit.add_argument("--plot", help="PNG: measured against fitted loop, and the residual")
     commands.add_parser("scenes", help="list the scenes shipped in the package")
     bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
@@ -97,6 +114,8 @@ def _main(argv) -> int:
         return _run(args)
     if args.command == "build":
         return _build(args)
+    if args.command == "fit":
+        return _fit(args)
     if args.command == "scenes":
         from .scene import packaged_scenes
 
@@ -137,6 +156,58 @@ def _build(args) -> int:
 
         print(path.parent / file_name(load_scene(args.scene, check_stepper=False).name))
     return 0
+
+
+def _fit(args) -> int:
+    from .identify import FitError, fit, plot_fit, read_columns
+
+    missing = _missing("scipy") + (_missing("matplotlib") if args.plot else [])
+    if missing:
+        return _error(f"fit needs {', '.join(missing)}: pip install 'prandtl_fmu[fit{',plot' if args.plot else ''}]'")
+    try:
+        for option in ("out", "fmu", "plot"):
+            _check_output_path(getattr(args, option), f"--{option}")
+        if args.branches < 1:
+            raise FitError(f"--branches must be >= 1, got {args.branches}")
+        data = read_columns(args.data, args.time, args.x, args.force, args.v)
+        result = fit(data["x"], data["force"], time=data.get("time"), v=data.get("v"), grid_size=args.branches,
+                     dashpot=args.dashpot, cubic=args.cubic)
+    except (FitError, SceneError) as exc:
+        return _error(exc)
+    name = os.path.splitext(os.path.basename(args.data))[0] + "-fit"
+    text = result.scene_text(name, data.get("time"))
+    print(result.report(), file=sys.stderr)
+    if args.out:
+        _write_text_atomically(args.out, text)
+        print(args.out)
+    else:
+        print(text)
+    if args.fmu:
+        from .fmu.build import build_fmu
+
+        scene_file = args.out
+        if scene_file is None:
+            folder = tempfile.mkdtemp(prefix="prandtl-fit-")
+            scene_file = os.path.join(folder, f"{name}.toml")
+            _write_text_atomically(scene_file, text)
+        try:
+            print(build_fmu(scene_file, args.fmu))
+        except (SceneError, ValueError) as exc:
+            return _error(exc)
+    if args.plot:
+        plot_fit(args.plot, data["x"], data["force"], result, f"{name}: measured and fitted")
+        print(args.plot)
+    return 0
+
+
+def _write_text_atomically(path, text) -> None:
+    sink = _AtomicFile(path)
+    try:
+        sink.write(text)
+        sink.commit()
+    except BaseException:
+        sink.discard()
+        raise
 
 
 def _run(args) -> int:

@@ -4,6 +4,8 @@ The branches follow the exact play update: between two samples x is taken
 linear (monotone), and the play operator is rate independent, so one
 monotone move per sample is exact whatever the time between samples.
 """
+import numpy as np
+
 from .._jit import kernel
 from .play import branch_force, move, piece
 from .smooth import elastic_stiffness, smooth_force
@@ -38,3 +40,17 @@ def preview(model, u, dx, v, x):
     m, k0, k3, c, k, eta = model
     direction = 1.0 if dx >= 0.0 else -1.0
     return smooth_force(x, v, k0, k3, c) + piece(k, eta, u, dx, direction)[0]
+
+
+@kernel
+def play_basis(xs, etas, out):
+    """out[j, i]: the play operator of elastic range etas[i] (a branch of unit stiffness, virgin at x = 0)
+    along the samples xs: the elongation u_i after sample j."""
+    u = np.zeros(etas.shape[0])
+    previous = 0.0
+    for j in range(xs.shape[0]):
+        dx = xs[j] - previous
+        previous = xs[j]
+        for i in range(etas.shape[0]):
+            u[i] = min(max(u[i] + dx, -etas[i]), etas[i])
+            out[j, i] = u[i]
