@@ -25,7 +25,7 @@ from typing import Optional
 
 import numpy as np
 
-from .driver import choose_branch_kernel, compile_model, _smooth_model
+from .driver import branch_state, choose_branch_kernel, compile_model, restore_branch_state, _smooth_model
 from .kernels import stack
 from .kernels.drive import drive, preview, tangent
 from .kernels.play import branch_force, write_elongations
@@ -195,16 +195,8 @@ class Connector:
         """Everything that determines the continuation, as plain data."""
         state = {"time": self.time, "x": self.x, "v": self.v, "direction": self.direction,
                  "branch_kernel": self.branch_kernel, "energy_account": self.account.tolist(),
-                 "coefficients": self.coefficients(), "u": [], "u_reference": []}
-        k = self.model[4]
-        if self.branch_kernel == "stack":
-            state["u"] = self.u[:stack.used(self.u)].tolist()
-            if not self.scene.branches.continuum:
-                reference = np.empty(self.scene.branches.n)
-                reference[k[stack.ORDER_ROW, :-1].astype(np.int64)] = k[stack.C_ROW, :-1]
-                state["u_reference"] = reference.tolist()
-        elif self.u is not None:
-            state["u"] = self.u.tolist()
+                 "coefficients": self.coefficients()}
+        state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
         return state
 
     def set_state(self, state: dict) -> None:
@@ -218,30 +210,7 @@ class Connector:
         kind = state["branch_kernel"]
         if kind != self.branch_kernel:
             raise ValueError(f"state has branch kernel {kind!r}, the connector uses {self.branch_kernel!r}")
-        u = np.array(state["u"], dtype=float).reshape(-1)
-        reference = np.array(state["u_reference"], dtype=float).reshape(-1)
-        if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
-            raise ValueError("state has a value that is not finite")
-        branches = self.scene.branches
-        if branches is None:
-            if u.size:
-                raise ValueError("state has branch values, the connector has no branches")
-            model, restored = (None, None), None
-        elif kind == "stack":
-            if branches.continuum:
-                params = self.model[4]
-            else:
-                if reference.shape[0] != branches.n:
-                    raise ValueError(f"state has {reference.shape[0]} reference elongations, the connector has "
-                                     f"{branches.n} branches")
-                params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
-            model, restored = (params, None), stack.restore(params, u)
-        else:
-            if u.shape[0] != branches.n:
-                raise ValueError(f"state has {u.shape[0]} branch elongations, the connector has {branches.n}")
-            if np.any(np.abs(u) > branches.yield_displacement):
-                raise ValueError("state has an elongation outside its elastic range")
-            model, restored = compile_model(self.scene, "play")[4:], u
+        model, restored = restore_branch_state(self.scene, self.model[4], kind, state["u"], state["u_reference"])
         scene = with_coefficients(self.scene, **state["coefficients"])
         self.scene = scene
         self.model = _smooth_model(scene) + model

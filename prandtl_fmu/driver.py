@@ -588,15 +588,7 @@ class Element:
             "energy_account": self.account.tolist(), "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
-        k = self.model[4]
-        if self.branch_kernel == "stack":
-            state["u"] = self.u[:stack.used(self.u)].tolist()
-            if not self.scene.branches.continuum:
-                reference = np.empty(self.scene.branches.n)
-                reference[k[stack.ORDER_ROW, :-1].astype(np.int64)] = k[stack.C_ROW, :-1]
-                state["u_reference"] = reference.tolist()
-        elif self.u is not None:
-            state["u"] = self.u.tolist()
+        state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
         return state
 
     def set_state(self, state: dict) -> None:
@@ -608,8 +600,7 @@ class Element:
         if account.shape[0] != 3:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 3")
         kind = state.get("branch_kernel", "play")
-        model, u = self._branch_state(kind, np.array(state["u"], dtype=float).reshape(-1),
-                                      np.array(state.get("u_reference", []), dtype=float).reshape(-1))
+        model, u = restore_branch_state(self.scene, self.model[4], kind, state["u"], state.get("u_reference", []))
         scene = with_coefficients(self.scene, **state["coefficients"])
         loop = compile_loop(scene, state["stepper"])
         self.set_step(float(state["step"]))
@@ -620,32 +611,6 @@ class Element:
         self.u = u
         self.account[:] = account
         self._record()
-
-    def _branch_state(self, kind, u, reference):
-        """(branch part of the model, branch state) of a saved state; ValueError if it does not fit."""
-        branches = self.scene.branches
-        if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
-            raise ValueError("state has a value that is not finite")
-        if branches is None:
-            if u.size:
-                raise ValueError(f"state has {u.shape[0]} branch values, the element has no branches")
-            return (None, None), None
-        if kind == "stack":
-            if branches.continuum:
-                params = self.model[4]
-            else:
-                if reference.shape[0] != branches.n:
-                    raise ValueError(f"state has {reference.shape[0]} reference elongations, the element has "
-                                     f"{branches.n} branches")
-                params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
-            return (params, None), stack.restore(params, u)
-        if kind != "play" or branches.continuum:
-            raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
-        if u.shape[0] != branches.n:
-            raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {branches.n}")
-        if np.any(np.abs(u) > branches.yield_displacement):
-            raise ValueError("state has an elongation outside its elastic range")
-        return compile_model(self.scene, "play")[4:], u
 
     def checkpoint(self):
         """A cheap copy of the dynamic state, for :meth:`rollback` (not plain data)."""
@@ -663,6 +628,53 @@ class Element:
         self.account[:] = account
         self._out[:] = out
         self._energy_row[:] = energy_row
+
+
+def branch_state(scene: Scene, k, kind: str, u):
+    """The branches' state as plain data: ``(u, u_reference)`` lists.
+
+    ``u`` is the list of elongations with the O(n) kernel, the part in use of
+    the memory stack's state otherwise (then ``u_reference`` holds the
+    elongations its initial piece refers to, for n branches).
+    """
+    if kind == "stack":
+        reference = []
+        if not scene.branches.continuum:
+            values = np.empty(scene.branches.n)
+            values[k[stack.ORDER_ROW, :-1].astype(np.int64)] = k[stack.C_ROW, :-1]
+            reference = values.tolist()
+        return u[:stack.used(u)].tolist(), reference
+    return ([] if u is None else u.tolist()), []
+
+
+def restore_branch_state(scene: Scene, k, kind: str, u, reference):
+    """(branch part of the model, branch state) of saved :func:`branch_state` data for ``scene`` whose
+    current branch parameters are ``k``; ValueError if it does not fit."""
+    u = np.array(u, dtype=float).reshape(-1)
+    reference = np.array(reference, dtype=float).reshape(-1)
+    branches = scene.branches
+    if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
+        raise ValueError("state has a value that is not finite")
+    if branches is None:
+        if u.size:
+            raise ValueError(f"state has {u.shape[0]} branch values, the element has no branches")
+        return (None, None), None
+    if kind == "stack":
+        if branches.continuum:
+            params = k
+        else:
+            if reference.shape[0] != branches.n:
+                raise ValueError(f"state has {reference.shape[0]} reference elongations, the element has "
+                                 f"{branches.n} branches")
+            params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
+        return (params, None), stack.restore(params, u)
+    if kind != "play" or branches.continuum:
+        raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
+    if u.shape[0] != branches.n:
+        raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {branches.n}")
+    if np.any(np.abs(u) > branches.yield_displacement):
+        raise ValueError("state has an elongation outside its elastic range")
+    return compile_model(scene, "play")[4:], u
 
 
 class _NoBar:

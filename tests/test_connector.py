@@ -347,3 +347,23 @@ def test_each_fmu_ships_an_osp_description_valid_against_the_schema_with_opposit
         assert pair == {"input", "output"}
         assert units[force.get("ref")] == force.get("unit") == "N"
         assert units[moving.get("ref")] == moving.get("unit")
+
+
+def test_a_host_python_without_numba_gets_a_logged_reason_naming_it_and_the_recipe(tmp_path, connector_fmu):
+    """What a non-Python host without PYTHONPATH meets: the FMU's import fails with one logged reason."""
+    script = tmp_path / "host.py"
+    script.write_text(
+        "import os, sys\n"
+        "sys.modules['numba'] = None  # a host Python without numba\n"
+        "from fmpy import simulate_fmu\n"
+        "messages = []\n"
+        "try:\n"
+        "    simulate_fmu(sys.argv[1], stop_time=0.1, debug_logging=True,\n"
+        "                 logger=lambda c, i, s, cat, m: messages.append(m.decode()))\n"
+        "except Exception as exc:\n"
+        "    messages.append('raised ' + type(exc).__name__)\n"
+        "print('\\n'.join(messages)); sys.stdout.flush(); os._exit(0)\n")
+    run = subprocess.run([sys.executable, str(script), str(connector_fmu[0])], capture_output=True, text=True,
+                         timeout=300)
+    assert "raised" in run.stdout
+    assert "numba" in run.stdout and "in the host's Python" in run.stdout and "PYTHONPATH" in run.stdout

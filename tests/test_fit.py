@@ -154,3 +154,15 @@ def test_the_library_refuses_bad_data_naming_it():
         fit(np.ones(20), np.arange(20.0))
     with pytest.raises(FitError, match="needs the velocity or the time"):
         fit(np.sin(np.arange(20.0)), np.arange(20.0), dashpot=True)
+
+
+def test_the_example_goes_from_a_csv_to_a_scene_an_fmu_and_a_plot(tmp_path):
+    from .conftest import ROOT
+
+    run = subprocess.run([sys.executable, str(ROOT / "examples" / "fit_loop.py"), "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    for name in ("measured.csv", "fitted.toml", "fitted.fmu", "fit.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    relative_rms = float(run.stderr.split("residual RMS")[1].split("(")[1].split("%")[0])
+    assert 0.8 < relative_rms < 1.2  # the stand-in's 1 % noise, not more
