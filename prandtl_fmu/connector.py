@@ -31,7 +31,7 @@ from .kernels.drive import drive, preview, tangent
 from .kernels.play import branch_force, write_elongations
 from .kernels.smooth import smooth_force
 from .kernels.energy import stored
-from .scene import Scene, with_coefficients
+from .scene import Scene, coefficients_of, with_coefficients
 
 # energy account of the connector: work is not booked (no load), energy[1] = sliders, energy[2] = dashpot
 SLIDERS, DAMPER = 1, 2
@@ -180,14 +180,8 @@ class Connector:
         self.model = _smooth_model(self.scene) + self.model[4:]
 
     def coefficients(self) -> dict:
-        scene, values = self.scene, {}
-        if scene.spring is not None:
-            values["k0"] = scene.spring.k0
-        if scene.cubic is not None:
-            values["k3"] = scene.cubic.k3
-        if scene.damper is not None:
-            values["c"] = scene.damper.c
-        return values
+        """k0, k3, c of the effects present (a connector has no mass)."""
+        return coefficients_of(self.scene)
 
     # ------------------------------------------------------------ state
 

@@ -28,7 +28,7 @@ from .kernels.drive import tangent
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
 from .loads import force_at, held, plus
-from .scene import Scene, with_coefficients
+from .scene import Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
@@ -564,16 +564,7 @@ class Element:
 
     def coefficients(self) -> dict:
         """The coefficients of the effects present (see :data:`scene.COEFFICIENTS`)."""
-        scene, values = self.scene, {}
-        if scene.mass is not None:
-            values.update(m=scene.mass.m, x0=scene.mass.x0, v0=scene.mass.v0)
-        if scene.spring is not None:
-            values["k0"] = scene.spring.k0
-        if scene.cubic is not None:
-            values["k3"] = scene.cubic.k3
-        if scene.damper is not None:
-            values["c"] = scene.damper.c
-        return values
+        return coefficients_of(self.scene)
 
     def get_state(self) -> dict:
         """Everything that determines the continuation, as plain data (numbers, strings, lists).

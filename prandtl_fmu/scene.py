@@ -106,6 +106,20 @@ COEFFICIENTS = {
 }
 
 
+def coefficients_of(scene: "Scene") -> dict:
+    """The coefficients of the effects present in ``scene`` (names of COEFFICIENTS)."""
+    values = {}
+    if scene.mass is not None:
+        values.update(m=scene.mass.m, x0=scene.mass.x0, v0=scene.mass.v0)
+    if scene.spring is not None:
+        values["k0"] = scene.spring.k0
+    if scene.cubic is not None:
+        values["k3"] = scene.cubic.k3
+    if scene.damper is not None:
+        values["c"] = scene.damper.c
+    return values
+
+
 def coefficient_problem(name: str, value) -> Optional[str]:
     """Why ``value`` is not a valid coefficient ``name`` (see COEFFICIENTS), or None."""
     rule = COEFFICIENTS[name][1]

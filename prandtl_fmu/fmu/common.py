@@ -10,10 +10,14 @@ nothing, later calls still work) and the host never touches freed memory.
 import ctypes
 import json
 import math
+import os
 import sys
 
 from pythonfmu import Fmi2Slave
+from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
+
+from ..scene import load_scene
 
 DBL_MAX = sys.float_info.max
 SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
@@ -28,7 +32,22 @@ def finite_number(value) -> bool:
 
 
 class SlaveBase(Fmi2Slave):
-    """Logging refusals, failing a call without freeing the instance, reading a serialized state."""
+    """The scene of the FMU, logging refusals, failing a call without freeing the instance, reading a
+    serialized state."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
+        solver = self.scene.solver
+        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
+                                                    step_size=solver.output_interval)
+        self.start_time = 0.0
+        branches = self.scene.branches
+        # the variable n: the number of branches, -1 for the continuous element
+        self.n = 0 if branches is None else -1 if branches.continuum else branches.n
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self.start_time = float(start_time)
 
     def _fail(self, message):
         """Log ``message`` and fail the current call (fmi2Fatal under PythonFMU 0.7.0; see the module

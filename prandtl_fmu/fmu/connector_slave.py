@@ -25,14 +25,12 @@ fmi2Discard with the state unchanged; a bad parameter or input at
 ``fmi2ExitInitializationMode`` fails that call with the logged reason.
 """
 import math
-import os
 
 from pythonfmu import Fmi2Causality, Fmi2Variability, Integer
-from pythonfmu.default_experiment import DefaultExperiment
 
 from .. import __version__
 from ..connector import Connector
-from ..scene import coefficient_problem, load_scene
+from ..scene import coefficient_problem
 from .common import DBL_MAX, SlaveBase, finite_number
 from .description import RealVariable, complete
 from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
@@ -53,19 +51,12 @@ class PrandtlConnector(SlaveBase):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
-        solver = self.scene.solver
-        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
-                                                    step_size=solver.output_interval)
         self.connector = Connector(self.scene)
         self.x = 0.0  # the inputs as set last
         self.v = 0.0
         self.parameters = dict(self.connector.coefficients())
-        self.start_time = 0.0
         self._preview_key = None  # (x, v, coefficients) of the cached preview
         self._preview = None
-        branches = self.scene.branches
-        self.n = 0 if branches is None else -1 if branches.continuum else branches.n
         self._register()
 
     # ------------------------------------------------------------ variables
@@ -133,9 +124,6 @@ class PrandtlConnector(SlaveBase):
         return self._preview
 
     # ------------------------------------------------------------ stepping
-
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self.start_time = float(start_time)
 
     def exit_initialization_mode(self):
         problem = self._hand_over_parameters()

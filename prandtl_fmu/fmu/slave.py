@@ -27,16 +27,13 @@ PythonFMU 0.7.0 can only fail such a call as fmi2Fatal (see ``common.py``);
 the instance stays intact.
 """
 import math
-import os
 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, String
-from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from .. import __version__
 from ..driver import Element, ElementError
 from ..loads import force_at
-from ..scene import load_scene
 from ..steppers import STEPPERS
 from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
@@ -62,12 +59,7 @@ class PrandtlElement(SlaveBase):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
-        solver = self.scene.solver
-        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
-                                                    step_size=solver.output_interval)
         self.element = Element(self.scene)
-        self.start_time = 0.0
         self.initialized = False  # after fmi2ExitInitializationMode: fixed parameters are frozen
         # What the master set; checked and handed to the element at each step.
         self.F = 0.0
@@ -75,8 +67,6 @@ class PrandtlElement(SlaveBase):
         self.stepper = self.element.stepper
         self.step = self.element.h
         self.parameters = dict(self.element.coefficients())
-        branches = self.scene.branches
-        self.n = 0 if branches is None else -1 if branches.continuum else branches.n
         self._register()
 
     # ------------------------------------------------------------ variables
@@ -147,9 +137,6 @@ class PrandtlElement(SlaveBase):
         return complete(root, list(self.vars.values()), output_dependencies={})
 
     # ------------------------------------------------------------ stepping
-
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self.start_time = float(start_time)
 
     def exit_initialization_mode(self):
         problem = self._settings_problem()
