@@ -5,6 +5,7 @@
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL] [--branches N] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
+    prandtl-fmu sweep SCENE SWEEP.toml [--scheduler ADDRESS] [--workers N] [--out DIR] [--resume]
     prandtl-fmu scenes
     prandtl-fmu bench [--quick] [--out DIR] [--from-csv]
     prandtl-fmu --version
@@ -83,6 +84,17 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--out", help="scene file to write (default: print it)")
     fit.add_argument("--fmu", help="also build the connector FMU of the fitted scene")
     fit.add_argument("--plot", help="PNG: measured against fitted loop, and the residual")
+    sweep = commands.add_parser("sweep", help="many runs of a scene (grid and random samples of its keys) on "
+                                              "dask.distributed; one Parquet row per run")
+    sweep.add_argument("scene", help=_SCENE_HELP)
+    sweep.add_argument("spec", metavar="SWEEP.toml", help="the sweep file: the keys that vary and what to keep "
+                                                          "(docs/sweeps.md)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running dask scheduler (tcp://host:8786); default: "
+                                                              "a LocalCluster on this machine's cores")
+    sweep.add_argument("--workers", type=int, help="worker processes of the LocalCluster (default: one per core)")
+    sweep.add_argument("--out", metavar="DIR", help="folder of the Parquet files (default: ./<scene name>-sweep)")
+    sweep.add_argument("--resume", action="store_true", help="finish the sweep in --out: run only its unfinished "
+                                                             "tasks")
     commands.add_parser("scenes", help="list the scenes shipped in the package")
     bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
@@ -116,6 +128,8 @@ def _main(argv) -> int:
         return _build(args)
     if args.command == "fit":
         return _fit(args)
+    if args.command == "sweep":
+        return _sweep(args)
     if args.command == "scenes":
         from .scene import packaged_scenes
 
@@ -197,6 +211,37 @@ def _fit(args) -> int:
     if args.plot:
         plot_fit(args.plot, data["x"], data["force"], result, f"{name}: measured and fitted")
         print(args.plot)
+    return 0
+
+
+def _sweep(args) -> int:
+    missing = _missing("distributed", "pandas", "pyarrow")
+    if missing:
+        return _error(f"sweep needs {', '.join(missing)}: pip install 'prandtl_fmu[sweep]'")
+    from .sweep import SweepError, plan, sweep
+
+    if args.workers is not None and args.workers < 1:
+        return _error(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler:
+        return _error("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
+    try:
+        the_plan = plan(args.scene, args.spec)  # every check before a cluster starts
+        out = args.out or f"{load_scene(args.scene, check_stepper=False).name}-sweep"
+        frame = sweep(args.scene, the_plan.spec, out=out, resume=args.resume, scheduler=args.scheduler,
+                      workers=args.workers)
+    except (SweepError, SceneError) as exc:
+        return _error(exc)
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    failed = frame[frame["error"] != ""]
+    print(out)
+    print(f"{len(frame)} runs in {out}", file=sys.stderr)
+    if len(failed):
+        first = failed.iloc[0]
+        print(f"error: {len(failed)} of {len(frame)} runs failed (column 'error'); first, run {first['run']}: "
+              f"{first['error']}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -372,6 +372,21 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
         bar.close()
 
 
+def split_duration(duration: float, h: float) -> tuple:
+    """``(whole, rest)``: ``duration`` as ``whole`` steps of h and a last shorter step ``rest`` (s, 0 if none).
+
+    A duration within 1e-9 h of a whole multiple of h (rounding of a master's
+    clock that adds up 0.05 s steps drifts by ulps, e.g. 0.04999999999999716)
+    is whole steps only, so that a result does not depend on that drift.
+    """
+    ratio = duration / h
+    nearest = round(ratio)
+    if nearest >= 1 and abs(ratio - nearest) <= 1e-9:
+        return nearest, 0.0
+    whole = math.floor(ratio)
+    return whole, duration - whole * h
+
+
 def _advance(loop, model, load, x, v, u, t_base, first_step, duration, h, out, out_u, account, out_energy):
     """Advance by ``duration`` from t_base + first_step h: whole steps of h, then one shorter step for the
     remainder.
@@ -380,15 +395,7 @@ def _advance(loop, model, load, x, v, u, t_base, first_step, duration, h, out, o
     master's clock) takes whole steps only. Returns ``(x, v, failed_at)``: the start time of a step that could
     not be taken, or None.
     """
-    ratio = duration / h
-    nearest = round(ratio)
-    if nearest >= 1 and abs(ratio - nearest) <= 1e-9:
-        # a whole multiple of h up to rounding (a master's clock that adds up 0.05 s steps drifts by ulps,
-        # e.g. 0.04999999999999716): whole steps only, so the result does not depend on that drift
-        whole, rest = nearest, 0.0
-    else:
-        whole = math.floor(ratio)
-        rest = duration - whole * h
+    whole, rest = split_duration(duration, h)
     if whole:
         x, v, taken = integrate(loop, model, load, x, v, u, t_base, first_step, h, whole, out, out_u, account,
                                 out_energy)

@@ -27,7 +27,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 from .effects import SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Mass, Spring, sample_spectrum
-from .loads import ConstantLoad, HarmonicLoad, TableLoad
+from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad
 from .resources import ResourceError, check_memory
 
 # Memory per branch: the scene's arrays, the kernel's copies and the memory stack (about 12 doubles).
@@ -35,7 +35,7 @@ _BYTES_PER_BRANCH = 96
 # More steps than this cannot be counted exactly in a double (t_p = p h): refused, never truncated.
 MAX_STEPS = 2**53
 
-Load = Union[ConstantLoad, HarmonicLoad, TableLoad]
+Load = Union[ConstantLoad, HarmonicLoad, TableLoad, RandomLoad]
 
 
 class SceneError(ValueError):
@@ -279,16 +279,8 @@ def load_scene(path: Union[str, os.PathLike], check_stepper: bool = True) -> Sce
     ``check_stepper=False`` leaves out the check that the scene's stepper
     applies, for a caller that replaces the stepper (``with_solver`` checks it).
     """
-    source = scene_path(path)
-    if not os.path.exists(source) and os.sep not in source and "/" not in source:
-        raise SceneError(f"{source}: no such scene file, and no packaged scene of that name (packaged: "
-                         f"{', '.join(packaged_scenes())})")
-    try:
-        with open(source, "rb") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from None
-    return parse_scene(text, source, check_stepper)
+    doc, source = read_document(path)
+    return scene_from_document(doc, source, check_stepper)
 
 
 def parse_scene(text: Union[str, bytes], source: str = "<scene>", check_stepper: bool = True) -> Scene:
@@ -310,6 +302,40 @@ def _parse_scene(text, source, check_stepper) -> Scene:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{source}: not valid TOML: {exc}") from None
+    return scene_from_document(doc, source, check_stepper)
+
+
+def read_document(path: Union[str, os.PathLike]) -> tuple:
+    """``(document, source)``: a scene file (or packaged scene) parsed as TOML but not yet checked, for a caller
+    that changes some keys before :func:`scene_from_document` (a sweep). SceneError on an unreadable file."""
+    source = scene_path(path)
+    if not os.path.exists(source) and os.sep not in source and "/" not in source:
+        raise SceneError(f"{source}: no such scene file, and no packaged scene of that name (packaged: "
+                         f"{', '.join(packaged_scenes())})")
+    try:
+        with open(source, "rb") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from None
+    try:
+        text = text.decode("utf-8")
+    except UnicodeDecodeError:
+        raise SceneError(f"{source}: not a UTF-8 text file") from None
+    try:
+        return tomllib.loads(text), source
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{source}: not valid TOML: nested too deeply") from None
+
+
+def scene_from_document(doc: dict, source: str = "<scene>", check_stepper: bool = True) -> Scene:
+    """The scene of a parsed TOML document (a dict), checked key by key like a file."""
+    with np.errstate(all="ignore"):
+        return _scene_from_document(doc, source, check_stepper)
+
+
+def _scene_from_document(doc, source, check_stepper) -> Scene:
     for key in doc:
         if key not in _TOP_KEYS:
             raise SceneError(f"{source}: {key}: unknown key (allowed at top level: {', '.join(sorted(_TOP_KEYS))})")
@@ -423,13 +449,15 @@ def _continuum(r) -> ContinuousBranches:
 
 def _load(source, data) -> Load:
     r = _Reader(source, "load", data)
-    kind = r.string("kind", choices=("harmonic", "constant", "table"))
+    kind = r.string("kind", choices=("harmonic", "constant", "table", "random"))
     if kind == "harmonic":
         r.only({"kind", "amplitude", "omega", "offset"})
         return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset", 0.0))
     if kind == "constant":
         r.only({"kind", "value"})
         return ConstantLoad(r.number("value"))
+    if kind == "random":
+        return _random_load(r)
     r.only({"kind", "time", "force"})
     time = r.numbers("time", minimum=0.0)
     force = r.numbers("force", length=len(time))
@@ -440,6 +468,23 @@ def _load(source, data) -> Load:
     if np.any((steps[1:] == 0) & (steps[:-1] == 0)):
         r.fail("time", "a time may appear at most twice (one jump at a time)")
     return TableLoad(time, force)
+
+
+def _random_load(r) -> RandomLoad:
+    r.only({"kind", "seed", "rms", "band", "components", "offset"})
+    seed = r.integer("seed", minimum=0)
+    if seed >= 2**63:
+        r.fail("seed", f"must be < 2^63, got {seed}")
+    band = r.numbers("band", minimum=0.0)
+    if len(band) != 2 or not band[0] < band[1]:
+        r.fail("band", f"must be [omega_min, omega_max] (rad/s) with omega_min < omega_max, got {list(band)}")
+    components = r.integer("components", minimum=1) if "components" in r.data else 100
+    try:
+        check_memory(components * 16, f"{r.source}: [load] components = {components}")
+    except ResourceError as exc:
+        raise SceneError(str(exc)) from None
+    return RandomLoad(seed, r.number("rms", minimum=0.0), float(band[0]), float(band[1]), components,
+                      r.number("offset", 0.0))
 
 
 def _solver(source, data) -> Solver:

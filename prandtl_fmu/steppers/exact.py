@@ -67,7 +67,7 @@ import numpy as np
 from .._jit import kernel
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
-from ..loads import CONSTANT, HARMONIC, TABLE, force_at
+from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
 
 ORDER = math.inf
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
@@ -83,6 +83,9 @@ def loop_for(scene):
     if scene.branches is not None and scene.branches.continuum:
         raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
+    if scene.load.compile()[0] == RANDOM:
+        raise ValueError("'exact' follows constant, harmonic and table loads; a random load is a sum of many "
+                         "harmonics: use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
     return run
 
 

@@ -1,0 +1,200 @@
+"""Sweeps: many runs of one scene on dask.distributed (parameter studies, Monte Carlo).
+
+    from prandtl_fmu.sweep import sweep
+    frame = sweep("paper-section-8", "amplitude.toml", out="amplitude-sweep")   # a LocalCluster on this machine
+    frame = sweep(scene, spec, client=Client("tcp://scheduler:8786"))            # an existing cluster
+
+The sweep file (:mod:`.spec`) names scene keys and their values; the runs are
+split into tasks of many runs each (:mod:`.runs`: one task is a batch, not a
+run, so that the scheduler's cost stays small against the work), the rows go to
+a folder of Parquet files as tasks finish (:mod:`.store`), and the result is a
+pandas DataFrame with one row per run: its number, its values, the summary
+quantities (``summary.SUMMARIES``), optionally its output grid, and the
+``error`` and ``warning`` of the run ("" if none).
+
+Needs the ``sweep`` extra: ``pip install "prandtl_fmu[sweep]"`` (dask[distributed], pandas, pyarrow).
+"""
+from __future__ import annotations
+
+import os
+import uuid
+from typing import Optional, Union
+
+from ..scene import Scene, SceneError, read_document, scene_from_document
+from ..summary import default_summaries, summary_problem
+from .runs import columns, run_batch
+from .spec import MAX_RUNS_PER_TASK, SweepError, SweepSpec, apply, load_spec
+from .store import Store, read_sweep
+
+__all__ = ["sweep", "load_spec", "read_sweep", "SweepError", "SweepSpec", "plan"]
+
+
+class Plan:
+    """What a sweep will do, checked before any run: the scene document, the spec, the columns, the tasks."""
+
+    def __init__(self, document: dict, source: str, spec: SweepSpec):
+        self.document, self.source, self.spec = document, source, spec
+        run0 = spec.values(0, 1)[0][1]
+        try:
+            scene = scene_from_document(apply(document, run0), f"{source} with the first run's values")
+        except SceneError as exc:
+            raise SweepError(str(exc)) from None
+        stepper = scene.solver.stepper
+        if spec.summary is None:
+            self.summary = default_summaries(scene, stepper)
+        else:
+            problem = summary_problem(scene, stepper, spec.summary)
+            if problem:
+                raise SweepError(f"{spec.source}: [keep] summary: {problem}")
+            self.summary = list(spec.summary)
+        self.columns = columns(spec.keys, self.summary, spec.history)
+        self.schema = _schema(spec, run0, self.summary)
+
+    def manifest(self) -> dict:
+        import hashlib
+        import json
+
+        scene_digest = hashlib.sha256(json.dumps(self.document, sort_keys=True, default=str).encode()).hexdigest()
+        return {"scene": self.source, "scene_digest": scene_digest[:16], "sweep": self.spec.source,
+                "sweep_digest": self.spec.digest(), "runs": self.spec.runs, "columns": self.columns}
+
+    def tasks(self, runs_per_task: int) -> list:
+        """``[(first, stop)]``: consecutive runs, ``runs_per_task`` each (the last may be shorter)."""
+        runs = self.spec.runs
+        return [(first, min(runs, first + runs_per_task)) for first in range(0, runs, runs_per_task)]
+
+
+def plan(scene, spec) -> Plan:
+    """Check a sweep without running it (:class:`Plan`); SweepError names the culprit."""
+    if isinstance(scene, Scene):
+        raise SweepError("sweep: give the scene as a file name (or its TOML document as a dict), not a Scene "
+                         "object: a sweep sets keys of the file")
+    if isinstance(scene, dict):
+        document, source = scene, "<scene>"
+    else:
+        try:
+            document, source = read_document(scene)
+        except SceneError as exc:
+            raise SweepError(str(exc)) from None
+    return Plan(document, source, load_spec(spec))
+
+
+def default_runs_per_task(runs: int, workers: int) -> int:
+    """About 8 tasks per worker (so that a slow or lost worker delays little), at most MAX_RUNS_PER_TASK runs
+    each."""
+    return max(1, min(MAX_RUNS_PER_TASK, -(-runs // (8 * max(1, workers)))))
+
+
+def sweep(scene, spec, client=None, *, out: Optional[Union[str, os.PathLike]] = None, resume: bool = False,
+          scheduler: Optional[str] = None, workers: Optional[int] = None, progress: Optional[bool] = None):
+    """Run the sweep ``spec`` (a file, a dict or a :class:`SweepSpec`) of ``scene`` (a file or packaged scene
+    name, or its TOML document as a dict) and return a pandas DataFrame, one row per run, sorted by run.
+
+    ``client``: a ``dask.distributed.Client`` to run on; else one connected to ``scheduler``
+    (``tcp://host:port``); else a ``LocalCluster`` of ``workers`` processes (default: one per core), closed at
+    the end. ``out``: a folder that receives the rows as tasks finish (:mod:`.store`); ``resume`` continues a
+    sweep there, running only its unfinished tasks. SweepError (one line) for a bad sweep, scene or folder,
+    before any run; RuntimeError if a task fails (its message names the runs).
+    """
+    the_plan = plan(scene, spec)
+    _require_dask()
+    store = Store(out, the_plan.manifest(), resume) if out is not None else None  # checked before a cluster starts
+    owned = []
+    try:
+        if client is None:
+            client = _client(scheduler, workers, owned)
+        worker_count = len(client.scheduler_info().get("workers", {})) or 1
+        runs_per_task = the_plan.spec.runs_per_task or default_runs_per_task(the_plan.spec.runs, worker_count)
+        if store is not None:
+            runs_per_task = store.start(runs_per_task)
+        tables = _run(client, the_plan, runs_per_task, store, progress)
+    finally:
+        for thing in reversed(owned):
+            thing.close()
+    if store is not None:
+        return read_sweep(store.out)
+    import pyarrow as pa
+
+    return pa.concat_tables(tables).to_pandas().sort_values("run", kind="stable").reset_index(drop=True)
+
+
+def _run(client, the_plan: Plan, runs_per_task: int, store: Optional[Store], progress):
+    import pyarrow as pa
+    from distributed import as_completed
+
+    from ..driver import _progress_bar
+
+    done = store.finished() if store is not None else set()
+    todo = [(first, stop) for first, stop in the_plan.tasks(runs_per_task) if first not in done]
+    spec = the_plan.spec
+    tag = uuid.uuid4().hex[:8]
+    futures = {}
+    for first, stop in todo:
+        future = client.submit(run_batch, the_plan.document, the_plan.source, spec.keys, spec.values(first, stop),
+                               the_plan.summary, spec.history, key=f"prandtl-sweep-{tag}-{first}", pure=False)
+        futures[future] = (first, stop)
+    bar = _progress_bar(progress, total=sum(stop - first for first, stop in todo), label="sweep runs")
+    tables = []
+    try:
+        for future in as_completed(futures):
+            first, stop = futures[future]
+            try:
+                rows = future.result()
+            except Exception as exc:
+                kept = f"; the finished runs are in {store.out} (--resume continues)" if store is not None else ""
+                raise RuntimeError(f"sweep: the task of runs {first}..{stop - 1} failed: "
+                                   f"{type(exc).__name__}: {exc}{kept}") from exc
+            table = pa.Table.from_pydict(rows, schema=the_plan.schema)
+            if store is not None:
+                store.write(first, stop, table)
+            else:
+                tables.append(table)
+            bar.update(stop - first)
+    finally:
+        bar.close()
+        client.cancel(list(futures))
+    return tables
+
+
+def _schema(spec: SweepSpec, run0: dict, summary: list):
+    import pyarrow as pa
+
+    fields = [("run", pa.int64())]
+    for key in spec.keys:
+        value = run0[key]
+        kind = pa.string() if isinstance(value, str) else pa.int64() if isinstance(value, int) else pa.float64()
+        fields.append((key, kind))
+    fields += [(q, pa.float64()) for q in summary]
+    if spec.history:
+        fields += [(name, pa.list_(pa.float64())) for name in ("time", "x", "v", "reaction")]
+    fields += [("error", pa.string()), ("warning", pa.string())]
+    return pa.schema(fields)
+
+
+def _require_dask():
+    try:
+        import distributed  # noqa: F401
+        import pandas  # noqa: F401
+        import pyarrow  # noqa: F401
+    except ImportError as exc:
+        raise SweepError(f"sweeps need the sweep extra ({exc.name} is missing): pip install "
+                         "\"prandtl_fmu[sweep]\"") from None
+
+
+def _client(scheduler, workers, owned):
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise SweepError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
+        owned.append(client)
+        return client
+    # dashboard on a free port (its address is in client.dashboard_link): never a clash with another cluster
+    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")
+    owned.append(cluster)
+    client = Client(cluster)
+    owned.append(client)
+    return client

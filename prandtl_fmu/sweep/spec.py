@@ -1,0 +1,384 @@
+"""The sweep file: which scene keys vary, how, and what to keep per run.
+
+    [grid]                              # every combination of these values (the first key varies slowest)
+    "spring.k0" = [0.0, 0.5, 1.0]                                  # values (numbers or strings)
+    "load.amplitude" = { from = 0.1, to = 0.5, count = 9 }         # evenly spaced, both ends included
+    "load.omega" = { from = 0.1, to = 10.0, count = 5, spacing = "log" }
+
+    [random]                            # samples, each combined with every grid point
+    samples = 100                       # required in [random]
+    seed = 1                            # default 0
+    "mass.m" = { distribution = "uniform", low = 0.8, high = 1.2 }
+    "damper.c" = { distribution = "loguniform", low = 1e-3, high = 1e-1 }
+    "branches.k_total" = { distribution = "normal", mean = 1.0, std = 0.05 }
+    "cubic.k3" = { distribution = "lognormal", median = 0.1, sigma = 0.3 }
+    "load.seed" = { distribution = "integers", low = 0, high = 1000000 }    # both ends included
+    "solver.stepper" = { distribution = "choice", values = ["verlet", "symplectic"] }
+
+    [keep]
+    summary = ["max_abs_x", "dissipated", "loop_area"]   # default: every quantity that applies
+    history = false                     # also the output grid of every run (time, x, v, reaction)
+
+    [tasks]
+    runs_per_task = 2000                # default: the runs split into about 8 tasks per worker, at most 2000 each
+
+A key is a scene key, ``table.key`` (``spring.k0``, ``load.amplitude``,
+``branches.k_total``, ``solver.step``, ...) or one value of a list,
+``table.key[i]`` (1-based: ``branches.k[2]``, ``branches.eta_range[2]``).
+Setting a key of a table the scene lacks adds the table (``spring.k0`` on a
+scene without [spring] adds the spring); every run's scene is checked by the
+rules of the scene format. Run r combines grid point r // samples with random
+sample r % samples (runs = grid points x samples).
+
+Random draws come from the raw PCG64 stream of ``seed`` (``loads.uniform_stream``),
+sample by sample and key by key in the file's order, and are turned into each
+distribution by its inverse CDF: the values do not depend on the NumPy version,
+nor on how the runs are split into tasks. Each row of the result holds the
+values of its run, so any run can be repeated alone.
+"""
+from __future__ import annotations
+
+import copy
+import functools
+import hashlib
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from statistics import NormalDist
+from typing import Optional, Union
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from ..loads import uniform_stream
+from ..summary import SUMMARIES
+
+# Scene keys that hold integers: a grid or a distribution gives them whole numbers.
+INTEGER_KEYS = {"branches.count", "load.seed", "load.components"}
+DISTRIBUTIONS = {
+    "uniform": ("low", "high"),
+    "loguniform": ("low", "high"),
+    "normal": ("mean", "std"),
+    "lognormal": ("median", "sigma"),
+    "integers": ("low", "high"),
+    "choice": ("values",),
+}
+_KEY = re.compile(r"^([a-z_]+)\.([a-z_0-9]+)(?:\[([0-9]+)\])?$")
+MAX_RUNS_PER_TASK = 2000
+
+
+class SweepError(ValueError):
+    """A sweep file breaks a rule; the message is one line naming the key."""
+
+
+@dataclass(frozen=True)
+class Distribution:
+    kind: str
+    args: tuple
+
+    def draw(self, u: np.ndarray) -> list:
+        """Values for uniform draws ``u`` in (0, 1)."""
+        kind, args = self.kind, self.args
+        if kind == "uniform":
+            return list(args[0] + (args[1] - args[0]) * u)
+        if kind == "loguniform":
+            return list(np.exp(math.log(args[0]) + (math.log(args[1]) - math.log(args[0])) * u))
+        if kind == "normal":
+            dist = NormalDist(args[0], args[1])
+            return [dist.inv_cdf(float(p)) for p in u]
+        if kind == "lognormal":
+            unit = NormalDist()
+            return [args[0] * math.exp(args[1] * unit.inv_cdf(float(p))) for p in u]
+        if kind == "integers":
+            low, high = args
+            return [int(low + min(high - low, math.floor(p * (high - low + 1)))) for p in u]
+        values = args[0]  # choice
+        return [values[min(len(values) - 1, math.floor(p * len(values)))] for p in u]
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep file (see the module docstring)."""
+
+    grid: dict                      # key -> list of values
+    samples: int                    # random samples per grid point (1 and no distribution without [random])
+    seed: int
+    distributions: dict             # key -> Distribution
+    summary: Optional[tuple]        # None: every quantity that applies
+    history: bool = False
+    runs_per_task: Optional[int] = None
+    source: str = "<sweep>"
+    text: str = field(default="", repr=False)
+
+    @property
+    def keys(self) -> list:
+        """The varied keys: the grid's, then the random ones, in the file's order."""
+        return list(self.grid) + list(self.distributions)
+
+    @property
+    def grid_size(self) -> int:
+        return math.prod(len(values) for values in self.grid.values())
+
+    @property
+    def runs(self) -> int:
+        return self.grid_size * self.samples
+
+    def values(self, first: int, stop: int) -> list:
+        """``[(run, {key: value})]`` for runs first .. stop - 1."""
+        shape = [len(values) for values in self.grid.values()]
+        random = self._draws if self.distributions else None
+        rows = []
+        for run in range(first, stop):
+            point, sample = divmod(run, self.samples)
+            values = {}
+            if shape:
+                for key, index in zip(self.grid, np.unravel_index(point, shape)):
+                    values[key] = self.grid[key][int(index)]
+            if random is not None:
+                for key in self.distributions:
+                    values[key] = random[key][sample]
+            rows.append((run, values))
+        return rows
+
+    @functools.cached_property
+    def _draws(self) -> dict:
+        """key -> the values of every sample (drawn once)."""
+        keys, samples = list(self.distributions), self.samples
+        u = uniform_stream(self.seed, samples * len(keys)).reshape(samples, len(keys))
+        u = u + 0.5 / 9007199254740992.0  # in (0, 1): the inverse CDFs are finite
+        return {key: self.distributions[key].draw(u[:, j]) for j, key in enumerate(keys)}
+
+    def digest(self) -> str:
+        """A digest of what the sweep computes (not of how it is split into tasks)."""
+        what = {"grid": self.grid, "samples": self.samples, "seed": self.seed,
+                "distributions": {k: [d.kind, list(d.args) if d.kind != "choice" else d.args[0]]
+                                  for k, d in self.distributions.items()},
+                "summary": self.summary, "history": self.history}
+        return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def load_spec(spec: Union[str, os.PathLike, dict, SweepSpec]) -> SweepSpec:
+    """A sweep from a file, a dict (the parsed TOML) or a SweepSpec; SweepError names the culprit."""
+    if isinstance(spec, SweepSpec):
+        return spec
+    if isinstance(spec, dict):
+        return parse_spec(spec, "<sweep>", "")
+    source = os.fspath(spec)
+    try:
+        with open(source, "rb") as fh:
+            text = fh.read().decode("utf-8")
+    except OSError as exc:
+        raise SweepError(f"{source}: cannot read the sweep file: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise SweepError(f"{source}: not a UTF-8 text file") from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SweepError(f"{source}: not valid TOML: {exc}") from None
+    return parse_spec(doc, source, text)
+
+
+def parse_spec(doc: dict, source: str, text: str = "") -> SweepSpec:
+    def fail(where, rule):
+        raise SweepError(f"{source}: {where}: {rule}")
+
+    for key in doc:
+        if key not in ("grid", "random", "keep", "tasks"):
+            fail(key, "unknown table (allowed: grid, random, keep, tasks)")
+    for table in doc:
+        if not isinstance(doc[table], dict):
+            fail(f"[{table}]", "must be a table")
+    grid = {}
+    for key, value in doc.get("grid", {}).items():
+        _check_key(key, f"[grid] {key}", fail)
+        grid[key] = _grid_values(key, value, lambda rule: fail(f"[grid] {key}", rule))
+    random = dict(doc.get("random", {}))
+    distributions, samples, seed = {}, 1, 0
+    if "random" in doc:
+        if "samples" not in random:
+            fail("[random] samples", "missing (required: the number of random samples per grid point)")
+        samples = _integer(random.pop("samples"), 1, lambda rule: fail("[random] samples", rule))
+        seed = _integer(random.pop("seed", 0), 0, lambda rule: fail("[random] seed", rule))
+        if seed >= 2**63:
+            fail("[random] seed", f"must be < 2^63, got {seed}")
+        for key, value in random.items():
+            _check_key(key, f"[random] {key}", fail)
+            if key in grid:
+                fail(f"[random] {key}", "already in [grid]: a key varies one way")
+            distributions[key] = _distribution(key, value, lambda rule: fail(f"[random] {key}", rule))
+        if not distributions:
+            fail("[random]", "names no key to draw (add e.g. \"load.seed\" = { distribution = \"integers\", ... })")
+    if not grid and not distributions:
+        fail("[grid]", "the sweep varies nothing: give [grid] values or [random] distributions")
+    keep = doc.get("keep", {})
+    for key in keep:
+        if key not in ("summary", "history"):
+            fail(f"[keep] {key}", "unknown key (allowed: history, summary)")
+    summary = None
+    if "summary" in keep:
+        summary = keep["summary"]
+        if not isinstance(summary, list) or not all(isinstance(q, str) for q in summary):
+            fail("[keep] summary", "must be a list of names")
+        for q in summary:
+            if q not in SUMMARIES:
+                fail("[keep] summary", f"unknown quantity {q!r} (known: {', '.join(SUMMARIES)})")
+        if len(set(summary)) != len(summary):
+            fail("[keep] summary", "names a quantity twice")
+        summary = tuple(summary)
+    history = keep.get("history", False)
+    if not isinstance(history, bool):
+        fail("[keep] history", "must be true or false")
+    if summary == () and not history:
+        fail("[keep]", "keeps nothing: name a summary quantity or set history = true")
+    tasks = doc.get("tasks", {})
+    for key in tasks:
+        if key != "runs_per_task":
+            fail(f"[tasks] {key}", "unknown key (allowed: runs_per_task)")
+    runs_per_task = None
+    if "runs_per_task" in tasks:
+        runs_per_task = _integer(tasks["runs_per_task"], 1, lambda rule: fail("[tasks] runs_per_task", rule))
+    spec = SweepSpec(grid, samples, seed, distributions, summary, history, runs_per_task, source, text)
+    if spec.runs > 10**9:
+        fail("[grid]", f"{spec.runs} runs: more than 10^9 (split the sweep)")
+    return spec
+
+
+def _check_key(key, where, fail):
+    match = _KEY.match(key)
+    if not match:
+        fail(where.rsplit(" ", 1)[0] + f" {key!r}", "not a scene key: write table.key or table.key[i] "
+             "(e.g. \"spring.k0\", \"branches.k[2]\")")
+    table = match.group(1)
+    if table in ("fmu",) or table not in ("mass", "spring", "cubic", "damper", "branches", "load", "solver"):
+        fail(where, f"[{table}] is not a table a sweep can vary (mass, spring, cubic, damper, branches, load, "
+             "solver)")
+    if match.group(3) is not None and int(match.group(3)) < 1:
+        fail(where, "list positions count from 1")
+
+
+def _number(value, rule):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        rule(f"must be a finite number, got {value!r}")
+    return value
+
+
+def _integer(value, minimum, rule):
+    if isinstance(value, bool) or not isinstance(value, int):
+        rule(f"must be an integer, got {value!r}")
+    if value < minimum:
+        rule(f"must be >= {minimum}, got {value}")
+    return value
+
+
+def _grid_values(key, value, rule):
+    if isinstance(value, list):
+        if not value:
+            rule("must not be empty")
+        if all(isinstance(v, str) for v in value):
+            return list(value)
+        for v in value:
+            _number(v, rule)
+        return [_whole(key, v, rule) for v in value]
+    if not isinstance(value, dict):
+        rule("must be a list of values or a range { from, to, count }")
+    for name in value:
+        if name not in ("from", "to", "count", "spacing"):
+            rule(f"unknown range key {name!r} (allowed: from, to, count, spacing)")
+    for name in ("from", "to", "count"):
+        if name not in value:
+            rule(f"range: {name} missing")
+    low, high = _number(value["from"], rule), _number(value["to"], rule)
+    count = _integer(value["count"], 1, rule)
+    spacing = value.get("spacing", "linear")
+    if spacing not in ("linear", "log"):
+        rule(f"spacing must be \"linear\" or \"log\", got {spacing!r}")
+    if count == 1:
+        points = np.array([float(low)])
+    elif spacing == "log":
+        if not (low > 0 and high > 0):
+            rule("a log range needs from > 0 and to > 0")
+        points = np.geomspace(float(low), float(high), count)
+    else:
+        points = np.linspace(float(low), float(high), count)
+    return [_whole(key, float(v), rule) for v in points]
+
+
+def _whole(key, value, rule):
+    """An integer key's value as an int (refused unless whole); others as float."""
+    if _base(key) in INTEGER_KEYS:
+        if not float(value).is_integer():
+            rule(f"{key} takes whole numbers, got {value!r}")
+        return int(value)
+    return float(value)
+
+
+def _base(key):
+    return key.split("[", 1)[0]
+
+
+def _distribution(key, value, rule) -> Distribution:
+    if not isinstance(value, dict) or "distribution" not in value:
+        rule("must be a table { distribution = ..., ... }")
+    kind = value["distribution"]
+    if kind not in DISTRIBUTIONS:
+        rule(f"distribution must be one of {', '.join(DISTRIBUTIONS)}, got {kind!r}")
+    names = DISTRIBUTIONS[kind]
+    for name in value:
+        if name != "distribution" and name not in names:
+            rule(f"unknown key {name!r} for {kind} (allowed: {', '.join(names)})")
+    for name in names:
+        if name not in value:
+            rule(f"{kind}: {name} missing")
+    if kind == "choice":
+        values = value["values"]
+        if not isinstance(values, list) or not values:
+            rule("choice: values must be a non-empty list")
+        if not all(isinstance(v, str) for v in values):
+            values = [_whole(key, _number(v, rule), rule) for v in values]
+        return Distribution(kind, (list(values),))
+    args = tuple(_number(value[name], rule) for name in names)
+    if kind in ("uniform", "loguniform", "integers") and not args[0] < args[1] and kind != "integers":
+        rule(f"{kind}: needs low < high, got {args[0]!r}, {args[1]!r}")
+    if kind == "loguniform" and not args[0] > 0:
+        rule("loguniform: needs low > 0")
+    if kind in ("normal",) and not args[1] > 0:
+        rule("normal: needs std > 0")
+    if kind == "lognormal" and not (args[0] > 0 and args[1] > 0):
+        rule("lognormal: needs median > 0 and sigma > 0")
+    if kind == "integers":
+        if not all(isinstance(a, int) for a in args):
+            rule("integers: low and high must be integers")
+        if args[0] > args[1]:
+            rule(f"integers: needs low <= high, got {args[0]}, {args[1]}")
+    elif _base(key) in INTEGER_KEYS:
+        rule(f"{key} takes whole numbers: use distribution = \"integers\" or \"choice\"")
+    return Distribution(kind, args)
+
+
+def apply(document: dict, values: dict) -> dict:
+    """A copy of the scene ``document`` with the sweep's ``values`` set (``table.key`` or ``table.key[i]``).
+    A key of a missing table adds the table; a position beyond a list's end is a SweepError."""
+    doc = copy.deepcopy(document)
+    for key, value in values.items():
+        table, name, index = _KEY.match(key).groups()
+        target = doc.setdefault(table, {})
+        if not isinstance(target, dict):
+            raise SweepError(f"{key}: the scene's {table} is not a table")
+        if isinstance(value, np.generic):
+            value = value.item()
+        if index is None:
+            target[name] = value
+            continue
+        values_list = target.get(name)
+        if not isinstance(values_list, list) or int(index) > len(values_list):
+            have = len(values_list) if isinstance(values_list, list) else 0
+            raise SweepError(f"{key}: the scene's [{table}] {name} has {have} values")
+        target[name] = list(values_list)
+        target[name][int(index) - 1] = value
+    return doc
