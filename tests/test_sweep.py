@@ -396,3 +396,15 @@ def test_bad_input_to_the_sweep_command_is_one_line_and_exit_2(write_scene, tmp_
     done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "sweep", args[0], str(spec), *args[1:]],
                           capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and message in done.stderr, done.stderr
+
+
+def test_the_amplitude_example_draws_its_heat_map(tmp_path):
+    out = tmp_path / "map.png"
+    done = subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "..", "examples",
+                                                         "sweep_amplitude.py"), "--quick", "--workers", "2",
+                           "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert out.stat().st_size > 10_000
+    table = pd.read_csv(tmp_path / "map.csv", index_col=0)
+    assert table.shape == (3, 4) and np.all(table.values >= 0)
+    assert np.all(np.diff(table.values, axis=1) >= 0)  # at k0 = 0..1, a larger amplitude dissipates more
