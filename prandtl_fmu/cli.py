@@ -224,9 +224,10 @@ def _sweep(args) -> int:
         return _error(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         return _error("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
+    out = args.out
     try:
         the_plan = plan(args.scene, args.spec)  # every check before a cluster starts
-        out = args.out or f"{load_scene(args.scene, check_stepper=False).name}-sweep"
+        out = out or f"{load_scene(args.scene, check_stepper=False).name}-sweep"
         frame = sweep(args.scene, the_plan.spec, out=out, resume=args.resume, scheduler=args.scheduler,
                       workers=args.workers)
     except (SweepError, SceneError) as exc:
@@ -234,6 +235,10 @@ def _sweep(args) -> int:
     except RuntimeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        kept = f"; the finished tasks are in {out}: add --resume to finish the sweep" if out else ""
+        print(f"error: interrupted{kept}", file=sys.stderr)
+        return 130
     failed = frame[frame["error"] != ""]
     print(out)
     print(f"{len(frame)} runs in {out}", file=sys.stderr)

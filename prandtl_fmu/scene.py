@@ -285,24 +285,33 @@ def load_scene(path: Union[str, os.PathLike], check_stepper: bool = True) -> Sce
 
 def parse_scene(text: Union[str, bytes], source: str = "<scene>", check_stepper: bool = True) -> Scene:
     """Parse scene TOML text; ``source`` names it in error messages."""
-    with np.errstate(all="ignore"):  # an overflow is reported as a broken rule, never as a numpy warning
-        try:
-            return _parse_scene(text, source, check_stepper)
-        except RecursionError:
-            raise SceneError(f"{source}: not valid TOML: nested too deeply") from None
+    return scene_from_document(toml_document(text, source), source, check_stepper)
 
 
-def _parse_scene(text, source, check_stepper) -> Scene:
+def toml_document(text: Union[str, bytes], source: str, error=SceneError) -> dict:
+    """TOML text (or UTF-8 bytes) as a dict; ``error`` (one line naming ``source``) if it is not."""
     if isinstance(text, bytes):
         try:
             text = text.decode("utf-8")
         except UnicodeDecodeError:
-            raise SceneError(f"{source}: not a UTF-8 text file") from None
+            raise error(f"{source}: not a UTF-8 text file") from None
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{source}: not valid TOML: {exc}") from None
-    return scene_from_document(doc, source, check_stepper)
+        raise error(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise error(f"{source}: not valid TOML: nested too deeply") from None
+
+
+def read_toml(path: Union[str, os.PathLike], what: str, error=SceneError) -> dict:
+    """The TOML file ``path`` (``what`` it is, for the message) as a dict; ``error`` (one line) if it cannot be
+    read or parsed."""
+    try:
+        with open(path, "rb") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise error(f"{os.fspath(path)}: cannot read {what}: {exc.strerror}") from None
+    return toml_document(text, os.fspath(path), error)
 
 
 def read_document(path: Union[str, os.PathLike]) -> tuple:
@@ -312,21 +321,7 @@ def read_document(path: Union[str, os.PathLike]) -> tuple:
     if not os.path.exists(source) and os.sep not in source and "/" not in source:
         raise SceneError(f"{source}: no such scene file, and no packaged scene of that name (packaged: "
                          f"{', '.join(packaged_scenes())})")
-    try:
-        with open(source, "rb") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise SceneError(f"{source}: cannot read the scene: {exc.strerror}") from None
-    try:
-        text = text.decode("utf-8")
-    except UnicodeDecodeError:
-        raise SceneError(f"{source}: not a UTF-8 text file") from None
-    try:
-        return tomllib.loads(text), source
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{source}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise SceneError(f"{source}: not valid TOML: nested too deeply") from None
+    return read_toml(source, "the scene"), source
 
 
 def scene_from_document(doc: dict, source: str = "<scene>", check_stepper: bool = True) -> Scene:

@@ -3,7 +3,6 @@ that equal the same runs done one by one, bit for bit, however they are run (a L
 workers in separate processes, a worker killed in the middle, an interrupted sweep resumed)."""
 import math
 import os
-import shutil
 import signal
 import socket
 import subprocess
@@ -26,7 +25,7 @@ distributed = pytest.importorskip("distributed")
 pd = pytest.importorskip("pandas")
 pytest.importorskip("pyarrow")
 
-from prandtl_fmu.sweep import SweepError, load_spec, plan, read_sweep, sweep  # noqa: E402
+from prandtl_fmu.sweep import SweepError, plan, read_sweep, sweep  # noqa: E402
 from prandtl_fmu.sweep.spec import parse_spec  # noqa: E402
 
 RANDOM = {"kind": "random", "seed": 11, "rms": 0.4, "band": [0.2, 3.0], "components": 64}

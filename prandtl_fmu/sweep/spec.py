@@ -45,18 +45,14 @@ import json
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Optional, Union
 
 import numpy as np
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
-
 from ..loads import uniform_stream
+from ..scene import read_toml
 from ..summary import SUMMARIES
 
 # Scene keys that hold integers: a grid or a distribution gives them whole numbers.
@@ -114,7 +110,6 @@ class SweepSpec:
     history: bool = False
     runs_per_task: Optional[int] = None
     source: str = "<sweep>"
-    text: str = field(default="", repr=False)
 
     @property
     def keys(self) -> list:
@@ -168,23 +163,13 @@ def load_spec(spec: Union[str, os.PathLike, dict, SweepSpec]) -> SweepSpec:
     if isinstance(spec, SweepSpec):
         return spec
     if isinstance(spec, dict):
-        return parse_spec(spec, "<sweep>", "")
+        return parse_spec(spec, "<sweep>")
     source = os.fspath(spec)
-    try:
-        with open(source, "rb") as fh:
-            text = fh.read().decode("utf-8")
-    except OSError as exc:
-        raise SweepError(f"{source}: cannot read the sweep file: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise SweepError(f"{source}: not a UTF-8 text file") from None
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SweepError(f"{source}: not valid TOML: {exc}") from None
-    return parse_spec(doc, source, text)
+    return parse_spec(read_toml(source, "the sweep file", SweepError), source)
 
 
-def parse_spec(doc: dict, source: str, text: str = "") -> SweepSpec:
+def parse_spec(doc: dict, source: str) -> SweepSpec:
+    """The sweep of a parsed TOML document; SweepError names the culprit."""
     def fail(where, rule):
         raise SweepError(f"{source}: {where}: {rule}")
 
@@ -243,7 +228,7 @@ def parse_spec(doc: dict, source: str, text: str = "") -> SweepSpec:
     runs_per_task = None
     if "runs_per_task" in tasks:
         runs_per_task = _integer(tasks["runs_per_task"], 1, lambda rule: fail("[tasks] runs_per_task", rule))
-    spec = SweepSpec(grid, samples, seed, distributions, summary, history, runs_per_task, source, text)
+    spec = SweepSpec(grid, samples, seed, distributions, summary, history, runs_per_task, source)
     if spec.runs > 10**9:
         fail("[grid]", f"{spec.runs} runs: more than 10^9 (split the sweep)")
     return spec
