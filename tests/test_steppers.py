@@ -263,3 +263,50 @@ def test_output_grid_ends_at_stop_time_with_a_partial_last_interval(stepper):
     else:
         np.testing.assert_array_equal(coarse.x[:-1], fine.x[::10])
     assert np.isfinite(coarse.x[-1]) and coarse.x[-1] != coarse.x[-2]
+
+
+# ------------------------------------------------ each stepper runs its own loop, whatever the cache holds
+
+_RUN_STEPPERS = """
+import sys
+from prandtl_fmu import parse_scene, simulate
+scene = parse_scene(sys.argv[1], "s.toml")
+for name in sys.argv[2:]:
+    print(name, repr(simulate(scene, name).x[-1].item()))
+"""
+
+
+def test_the_steppers_loops_have_names_of_their_own():
+    """numba links a closure's machine code by module, qualified name, types and a per-process counter: the
+    loops must differ by name (see kernels/loop.py), else a cached `run` can call another stepper's loop."""
+    from prandtl_fmu.steppers import projected
+
+    loops = [get_stepper(name)._loop for name in STEPPERS] + [projected._loop_massless]
+    names = {loop.py_func.__qualname__ for loop in loops}
+    assert len(names) == len(loops), names
+
+
+@pytest.mark.slow
+def test_each_stepper_compiled_alone_in_its_own_process_then_loaded_together_runs_its_own_scheme(tmp_path):
+    """The CI failure this guards: `projected`, loaded from a cache that processes filled one stepper each, ran
+    `implicit`. Every stepper is compiled alone in a fresh process, then all are loaded in one process from that
+    cache, and each must give the numbers of a process that caches nothing."""
+    import os
+    import subprocess
+    import sys
+
+    from .conftest import base_tables, scene_text
+
+    text = scene_text(base_tables(cubic=None, load={"kind": "constant", "value": 0.9}))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+
+    def run(names, **extra):
+        done = subprocess.run([sys.executable, "-c", _RUN_STEPPERS, text, *names], capture_output=True, text=True,
+                              env=dict(env, **extra), timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return dict(line.split() for line in done.stdout.splitlines())
+
+    for name in STEPPERS:
+        run([name])
+    names = list(STEPPERS)
+    assert run(names) == run(names[::-1]) == run(names, PRANDTL_FMU_JIT_CACHE="0")

@@ -8,6 +8,17 @@ closure itself is not cached (numba keys a closure's cache entry on a pickle
 of the functions it closes over, which is not stable across processes); a
 loop taking the step as an argument could not be cached either (the
 dispatcher would be a run-time Python object: "dynamic globals").
+
+Each closure gets a name of its own, made from its step's module and name.
+numba names a compiled function by module, qualified name, argument types and
+a counter of compilations *in the process* ("loop$6"), and the machine code of
+a closure is linked into every ``run`` that calls it under that name. With one
+qualified name for all the closures, the loops of two steppers compiled first
+in two different processes both got the name ``time_loop.<locals>.loop$6``;
+a third process that loaded both ``run`` from the cache could link either one
+to the other's loop, and ``projected`` ran the ``implicit`` scheme (seen in CI,
+order-dependent: tests/test_steppers.py now checks every stepper against an
+uncached process after each was compiled alone in its own process).
 """
 import numpy as np
 
@@ -20,7 +31,6 @@ from .smooth import smooth_force
 def time_loop(step):
     """The time loop over the compiled ``step``, compiled (not cached on its own: see above)."""
 
-    @generic_kernel
     def loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
         """Advance ``out.shape[0] * steps_per_row`` steps of size ``h`` with ``step``, from step number
         ``first_step``.
@@ -61,4 +71,5 @@ def time_loop(step):
                 out_energy[j, 4] = energy[2]
         return x, v, p
 
-    return loop
+    loop.__qualname__ = f"time_loop.<locals>.loop_{step.__module__.rpartition('.')[2]}_{step.__name__}"
+    return generic_kernel(loop)
