@@ -11,14 +11,16 @@ dispatcher would be a run-time Python object: "dynamic globals").
 
 Each closure gets a name of its own, made from its step's module and name.
 numba names a compiled function by module, qualified name, argument types and
-a counter of compilations *in the process* ("loop$6"), and the machine code of
-a closure is linked into every ``run`` that calls it under that name. With one
-qualified name for all the closures, the loops of two steppers compiled first
-in two different processes both got the name ``time_loop.<locals>.loop$6``;
-a third process that loaded both ``run`` from the cache could link either one
-to the other's loop, and ``projected`` ran the ``implicit`` scheme (seen in CI,
-order-dependent: tests/test_steppers.py now checks every stepper against an
-uncached process after each was compiled alone in its own process).
+a counter of compilations *in the process* ("loop$6"; its own source says the
+name "*must* be unique, else the wrong function can be chosen at link time"),
+and the machine code of a closure is linked into every ``run`` that calls it.
+With one qualified name for all the closures, the loops of two steppers
+compiled first in two different processes (a test's subprocess, a dask
+worker) both got the name ``time_loop.<locals>.loop$6``. Once, in CI, a
+process whose cache had been filled that way saw ``projected`` return exactly
+the numbers of ``implicit``; that clash is the explanation we have (not
+reproduced on demand since). tests/test_steppers.py checks the names and runs
+every stepper from a cache filled one stepper per process.
 """
 import numpy as np
 
