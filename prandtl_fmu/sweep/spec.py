@@ -328,7 +328,7 @@ def _distribution(key, value, rule) -> Distribution:
             values = [_whole(key, _number(v, rule), rule) for v in values]
         return Distribution(kind, (list(values),))
     args = tuple(_number(value[name], rule) for name in names)
-    if kind in ("uniform", "loguniform", "integers") and not args[0] < args[1] and kind != "integers":
+    if kind in ("uniform", "loguniform") and not args[0] < args[1]:
         rule(f"{kind}: needs low < high, got {args[0]!r}, {args[1]!r}")
     if kind == "loguniform" and not args[0] > 0:
         rule("loguniform: needs low > 0")
