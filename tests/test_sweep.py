@@ -235,7 +235,7 @@ history = true
 def cluster():
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as local:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as local:
         with Client(local) as client:
             yield local, client
 
@@ -330,7 +330,7 @@ def test_a_killed_worker_loses_no_finished_row_and_the_sweep_completes(sweep_fil
         os.kill(victim, signal.SIGKILL)
         killed["pid"] = victim
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as local:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as local:
         with Client(local) as client:
             killer = threading.Thread(target=kill_a_worker_once_runs_are_written, args=(client,))
             killer.start()
