@@ -63,7 +63,7 @@ def paper_scene(n, stop_time: float, rule: str = "right"):
             scene = parse_scene(fh.read(), root)
     else:  # installed without the repository: the same scene, written out
         scene = parse_scene(_PAPER_SCENE, "paper-section-8.toml")
-    spectrum = ContinuousBranches(1.0, 0.1, 1.1)
+    spectrum = ContinuousBranches.linear(1.0, 0.1, 1.1)
     branches = spectrum if n is None else spectrum.sample(n, rule)
     return replace(scene, branches=branches).with_solver(stop_time=stop_time, output_interval=OUTPUT)
 

@@ -62,7 +62,7 @@ def compile_model(scene: Scene, branch_kernel: str = "play"):
     if branches is None:
         return (m, k0, k3, c, None, None)
     if branches.continuum:
-        return (m, k0, k3, c, stack.continuum(branches.k_total, branches.eta_min, branches.eta_max), None)
+        return (m, k0, k3, c, branches.params, None)
     k = np.ascontiguousarray(branches.stiffness, dtype=float)
     eta = np.ascontiguousarray(branches.yield_displacement, dtype=float)
     if branch_kernel == "stack":

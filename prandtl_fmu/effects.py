@@ -97,35 +97,161 @@ class Branches:
 class ContinuousBranches:
     """The continuous Prandtl element: infinitely many branches s in [0, 1].
 
-    Branch s has stiffness density k(s) = ``k_total`` (N/m per unit of s) and
-    elastic range eta(s) = ``eta_min`` + (``eta_max`` - ``eta_min``) s (m), the
-    family of the paper's section 8 (Bastien, Schatzman & Lamarque 2002 study
-    its limit n -> infinity); it starts virgin, u(s) = 0. Its force is
-    integral_0^1 k(s) u(s) ds. Simulated by the memory stack with integrals in
-    place of sums (kernels/stack.py); the sampled elements of
-    :func:`sample_spectrum` converge to it.
+    Branch s has stiffness density k(s) (N/m per unit of s) and elastic range
+    eta(s) (m); it starts virgin, u(s) = 0, and its force is integral_0^1
+    k(s) u(s) ds. The spectrum is cut into segments [s_j, s_j+1): eta(s) is
+    linear on each (``eta`` holds its J + 1 values at the ends: continuous,
+    non-decreasing; a flat segment is a Dirac of the spectrum, branches that
+    all slip at once) and k(s) = ``coefficient``_j eta(s)^``power``_j. Built
+    by one of:
+
+    * :meth:`linear`: k(s) = k_total, eta(s) = eta_min + (eta_max - eta_min) s,
+      the family of the paper's section 8 (Bastien, Schatzman & Lamarque 2002
+      study its limit n -> infinity);
+    * :meth:`piecewise`: piecewise-constant k(s), piecewise-linear eta(s): any
+      spectrum, to any accuracy;
+    * :meth:`iwan`: Segalman's four-parameter Iwan model of bolted joints.
+
+    Simulated by the memory stack with integrals in place of sums
+    (kernels/stack.py); the sampled elements of :meth:`sample` converge to it.
+    ``description`` says in words what the scene asked for.
     """
 
-    k_total: float
-    eta_min: float
-    eta_max: float
+    s: np.ndarray
+    eta: np.ndarray
+    coefficient: np.ndarray
+    power: np.ndarray
+    description: str
 
     continuum = True
     n = None
 
+    def __post_init__(self):
+        from .kernels import stack
+
+        stack.segments(self.s, self.eta, self.coefficient, self.power)  # ValueError names the broken rule
+        for array in (self.s, self.eta, self.coefficient, self.power):
+            array.setflags(write=False)
+
+    @classmethod
+    def linear(cls, k_total: float, eta_min: float, eta_max: float) -> "ContinuousBranches":
+        """The paper's continuum: k(s) = k_total (N/m), eta(s) = eta_min + (eta_max - eta_min) s (m)."""
+        return cls(np.array([0.0, 1.0]), np.array([float(eta_min), float(eta_max)]), np.array([float(k_total)]),
+                   np.zeros(1), f"stiffness density {k_total:.6g} N/m and elastic range eta(s) = {eta_min:.6g} + "
+                   f"{eta_max - eta_min:.6g} s m")
+
+    @classmethod
+    def piecewise(cls, s, k, eta) -> "ContinuousBranches":
+        """k(s) = k_j (N/m per unit of s) on [s_j, s_j+1), eta(s) linear between its values ``eta`` at the
+        ends ``s`` (0 = s_0 < ... < s_J = 1); eta_j = eta_j+1 makes segment j a Dirac of stiffness
+        k_j (s_j+1 - s_j) at elastic range eta_j."""
+        k = np.asarray(k, dtype=float)
+        return cls(np.asarray(s, dtype=float), np.asarray(eta, dtype=float), k, np.zeros_like(k),
+                   f"piecewise-constant stiffness density over {len(k)} segments, elastic ranges "
+                   f"{float(eta[0]):.6g} to {float(eta[-1]):.6g} m")
+
+    @classmethod
+    def iwan(cls, F_S: float, K_T: float, chi: float, beta: float) -> "ContinuousBranches":
+        """Segalman's four-parameter Iwan model (J. Appl. Mech. 72, 2005).
+
+        Sliders of strength phi (m) with the density rho(phi) = R phi^chi on
+        (0, phi_max) plus a Dirac S delta(phi - phi_max) (N/m per m of phi):
+        K_T = integral rho (N/m) is the stiffness while everything sticks,
+        F_S = integral phi rho (N) the force at macro-slip, -1 < chi the
+        power (Segalman: -1 < chi < 0), beta = S / (R phi_max^(chi+1) / (chi + 1))
+        >= 0 the weight of the Dirac against the power law. Then
+
+            phi_max = F_S (1 + beta) / (K_T (beta + (chi + 1) / (chi + 2)))
+            R = F_S (chi + 1) / (phi_max^(chi + 2) (beta + (chi + 1) / (chi + 2)))
+            S = F_S beta / (phi_max (beta + (chi + 1) / (chi + 2)))
+
+        and, in our terms, eta = phi and k = rho: segment 0 is the power law
+        on s in [0, 1 / (1 + beta)) (eta = phi_max s (1 + beta)), segment 1
+        the Dirac (its stiffness fraction beta / (1 + beta)).
+        """
+        params = iwan_parameters(F_S, K_T, chi, beta)
+        phi_max, r, dirac = params["phi_max"], params["R"], params["S"]
+        split = 1.0 / (1.0 + beta)
+        text = f"Segalman's four-parameter Iwan model F_S = {F_S:.6g} N, K_T = {K_T:.6g} N/m, chi = {chi:.6g}, " \
+               f"beta = {beta:.6g} (phi_max = {phi_max:.6g} m)"
+        if beta == 0.0:
+            return cls(np.array([0.0, 1.0]), np.array([0.0, phi_max]), np.array([r * phi_max]), np.array([chi]), text)
+        # d eta / ds = phi_max / split on the power law: k(s) = rho(eta) d eta / ds
+        return cls(np.array([0.0, split, 1.0]), np.array([0.0, phi_max, phi_max]),
+                   np.array([r * phi_max / split, dirac / (1.0 - split)]), np.array([chi, 0.0]), text)
+
+    @property
+    def params(self):
+        """The memory stack's parameters of this spectrum (kernels/stack.py :func:`segments`)."""
+        from .kernels import stack
+
+        return stack.segments(self.s, self.eta, self.coefficient, self.power)
+
     @property
     def stiffness_sum(self) -> float:
-        """integral k(s) ds = k_total (N/m): the stiffness while every branch sticks."""
-        return float(self.k_total)
+        """integral k(s) ds (N/m): the stiffness while every branch sticks."""
+        from .kernels import stack
+
+        return stack.spectrum_totals(self.params)[0]
 
     @property
     def strength(self) -> float:
         """integral k(s) eta(s) ds (N): the largest force the branches can carry."""
-        return float(self.k_total * 0.5 * (self.eta_min + self.eta_max))
+        from .kernels import stack
 
-    def sample(self, n: int, rule: str = "right") -> Branches:
-        """n virgin branches sampling this spectrum (see :func:`sample_spectrum`)."""
-        return sample_spectrum(n, self.k_total, (self.eta_min, self.eta_max), rule)
+        return stack.spectrum_totals(self.params)[1]
+
+    @property
+    def is_linear(self) -> bool:
+        """Whether this is the paper's family (one segment of constant density)."""
+        return self.coefficient.shape[0] == 1 and self.power[0] == 0.0
+
+    def sample(self, n: int, rule: str = "mean") -> Branches:
+        """Virgin branches sampling this spectrum, one per cell: the n equal parts of [0, 1] in s, cut
+        further at the segment ends (so no cell mixes two segments), except that the cells of a flat
+        segment (a Dirac) make one branch and empty cells none: at most n + J - 1 branches.
+
+        k_i = the integral of k(s) over the cell; eta_i = eta at the cell's right end ("right", the paper's
+        eq. 7.19: the force converges like 1/n), at its midpoint ("midpoint"), or the cell's stiffness-
+        weighted mean of eta ("mean": each segment's stiffness and strength are those of the continuum, and
+        the force converges like 1/n^2 where the density is bounded; like n^-(chi+2) for a power law
+        eta^chi, chi < 0, at eta = 0). For the paper's family, "right" and "midpoint" are
+        :func:`sample_spectrum` and "mean" is "midpoint".
+        """
+        if rule not in SAMPLING_RULES + ("mean",):
+            raise ValueError(f"sampling rule must be one of right, midpoint, mean, got {rule!r}")
+        if self.is_linear:
+            return sample_spectrum(n, float(self.coefficient[0]), (float(self.eta[0]), float(self.eta[1])),
+                                   "midpoint" if rule == "mean" else rule)
+        from .kernels import stack
+
+        params = self.params
+        flat = self.eta[1:] == self.eta[:-1]
+        cuts = [np.arange(n + 1) / n, self.s]
+        for j in np.flatnonzero(flat):  # a Dirac is one cell
+            grid = cuts[0]
+            cuts[0] = grid[(grid <= self.s[j]) | (grid >= self.s[j + 1])]
+        ends = np.unique(np.concatenate(cuts))
+        stiffness, moment, _ = stack.spectrum_integrals(params, ends)
+        lo, hi = ends[:-1], ends[1:]
+        if rule == "mean":
+            safe = np.where(stiffness > 0, stiffness, 1.0)
+            eta = np.clip(moment / safe, stack.eta_of(params, lo), stack.eta_of(params, hi))  # clip: rounding
+        else:
+            eta = stack.eta_of(params, hi if rule == "right" else 0.5 * (lo + hi))
+        keep = stiffness > 0  # a cell where the density vanishes holds no branch
+        return Branches(stiffness[keep], eta[keep], np.zeros(int(np.sum(keep))))
+
+
+def iwan_parameters(F_S: float, K_T: float, chi: float, beta: float) -> dict:
+    """phi_max (m), R, S of Segalman's four-parameter Iwan model (see :meth:`ContinuousBranches.iwan`);
+    ValueError if F_S, K_T <= 0, chi <= -1 or beta < 0."""
+    if not (F_S > 0 and K_T > 0 and chi > -1 and beta >= 0):
+        raise ValueError("the Iwan model needs F_S > 0, K_T > 0, chi > -1 and beta >= 0")
+    ratio = (chi + 1.0) / (chi + 2.0)
+    phi_max = F_S * (1.0 + beta) / (K_T * (beta + ratio))
+    return {"phi_max": phi_max, "R": F_S * (chi + 1.0) / (phi_max ** (chi + 2.0) * (beta + ratio)),
+            "S": F_S * beta / (phi_max * (beta + ratio))}
 
 
 # How the sampled spectrum places its n branches in [0, 1]: the paper's right

@@ -387,17 +387,22 @@ def _branches(source, data):
         if not isinstance(r.data["continuum"], bool):
             r.fail("continuum", f"must be true or false, got {_kind(r.data['continuum'])}")
         if r.data["continuum"]:
+            if "density" in r.data:
+                r.only({"continuum", "density"})
+                return _density(r)
             r.only(continuous)
             return _continuum(r)
         r = _Reader(source, "branches", {key: v for key, v in data.items() if key != "continuum"})
+    if "density" in r.data:
+        r.only({"count", "density", "sampling"})
+        if "count" not in r.data:
+            r.fail("density", "give count = n for n sampled branches, or continuum = true for the continuum")
+        n = _branch_count(r)
+        rule = r.string("sampling", "mean", choices=SAMPLING_RULES + ("mean",))
+        return _density(r).sample(n, rule)
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
         r.only(sampled)
-        n = r.integer("count", minimum=1)
-        try:
-            check_memory(n * _BYTES_PER_BRANCH, f"{r.source}: [branches] count = {n}",
-                         hint="use [branches] continuum = true for the limit of many branches")
-        except ResourceError as exc:
-            raise SceneError(str(exc)) from None
+        n = _branch_count(r)
         k_total, ends = _spectrum(r)
         rule = r.string("sampling", "right", choices=SAMPLING_RULES)
         branches = sample_spectrum(n, k_total, ends, rule)  # right end points s_i = i / n: eq. (7.19)
@@ -426,6 +431,59 @@ def _branches(source, data):
     return Branches(stiffness, eta, u0)
 
 
+def _branch_count(r) -> int:
+    n = r.integer("count", minimum=1)
+    try:
+        check_memory(n * _BYTES_PER_BRANCH, f"{r.source}: [branches] count = {n}",
+                     hint="use [branches] continuum = true for the limit of many branches")
+    except ResourceError as exc:
+        raise SceneError(str(exc)) from None
+    return n
+
+
+def _density(branches_reader) -> ContinuousBranches:
+    """The spectrum of ``[branches] density = { kind = ... }``: Segalman's Iwan model or piecewise."""
+    r = _Reader(branches_reader.source, "branches.density", branches_reader.data["density"])
+    kind = r.string("kind", choices=("iwan", "piecewise"))
+    if kind == "iwan":
+        r.only({"kind", "F_S", "K_T", "chi", "beta"})
+        F_S, K_T = r.number("F_S", positive=True), r.number("K_T", positive=True)
+        chi, beta = r.number("chi"), r.number("beta", minimum=0.0)
+        if not chi > -1.0:
+            r.fail("chi", f"must be > -1 (the density phi^chi must be integrable at 0), got {chi!r}")
+        try:
+            spectrum = ContinuousBranches.iwan(F_S, K_T, chi, beta)
+        except (ValueError, ZeroDivisionError, OverflowError) as exc:
+            r.fail("F_S", f"with K_T, chi, beta gives no finite spectrum ({exc})")
+        if not (0 < spectrum.strength < math.inf and 0 < spectrum.stiffness_sum < math.inf):
+            r.fail("F_S", "with K_T, chi, beta gives no finite spectrum (phi_max or the density overflows)")
+        return spectrum
+    r.only({"kind", "s", "k", "eta"})
+    k = r.numbers("k", minimum=0.0)
+    if not np.any(k > 0):
+        r.fail("k", "at least one segment needs a stiffness density > 0")
+    eta = r.numbers("eta", minimum=0.0, length=len(k) + 1)
+    drops = np.flatnonzero(np.diff(eta) < 0)
+    if drops.size:
+        r.fail(f"eta[{int(drops[0]) + 2}]", "eta(s) must be non-decreasing")
+    if "s" in r.data:
+        ends = r.numbers("s", length=len(k) + 1)
+        if ends[0] != 0.0 or ends[-1] != 1.0:
+            r.fail("s", f"the segment ends must run from 0 to 1, got {ends[0]!r} to {ends[-1]!r}")
+        flat = np.flatnonzero(np.diff(ends) <= 0)
+        if flat.size:
+            r.fail(f"s[{int(flat[0]) + 2}]", "the segment ends must rise strictly")
+    else:
+        ends = np.linspace(0.0, 1.0, len(k) + 1)
+    try:
+        spectrum = ContinuousBranches.piecewise(ends, k, eta)
+    except ValueError as exc:
+        r.fail("k", str(exc))
+    if not 0 < spectrum.strength < math.inf:
+        r.fail("k", "the spectrum's stiffness or strength overflows")
+    return spectrum
+
+
 def _spectrum(r):
     """k_total and eta_range = [a, b] of a spectrum."""
     k_total = r.number("k_total", positive=True)
@@ -439,7 +497,7 @@ def _continuum(r) -> ContinuousBranches:
     k_total, (a, b) = _spectrum(r)
     if not a < b:
         r.fail("eta_range", f"the continuum needs a < b (eta(s) = a + (b - a) s increasing), got [{a!r}, {b!r}]")
-    return ContinuousBranches(k_total, float(a), float(b))
+    return ContinuousBranches.linear(k_total, float(a), float(b))
 
 
 def _load(source, data) -> Load:

@@ -145,7 +145,7 @@ def test_memory_of_the_continuum_stays_bounded():
 
 def test_scene_keys_of_the_spectrum():
     scene = continuum_scene({"continuum": True, "k_total": 2.0, "eta_range": [0.0, 0.5]})
-    assert scene.branches.continuum and scene.branches.k_total == 2.0
+    assert scene.branches.continuum and scene.branches.stiffness_sum == 2.0 and scene.branches.is_linear
     assert scene.branches.strength == pytest.approx(0.5)
     mid = continuum_scene({"count": 4, "k_total": 2.0, "eta_range": [0.0, 1.0], "sampling": "midpoint"})
     np.testing.assert_allclose(mid.branches.yield_displacement, [0.125, 0.375, 0.625, 0.875])

@@ -81,9 +81,8 @@ def _effect_text(scene) -> str:
     if branches is None:
         parts.append("no friction branches")
     elif branches.continuum:
-        parts.append(f"the continuous element: infinitely many branches s in [0, 1] of stiffness density "
-                     f"{branches.k_total:.6g} N/m and elastic range eta(s) = {branches.eta_min:.6g} + "
-                     f"{branches.eta_max - branches.eta_min:.6g} s m (strength {branches.strength:.6g} N)")
+        parts.append(f"the continuous element: infinitely many branches s in [0, 1], {branches.description} "
+                     f"(stiffness {branches.stiffness_sum:.6g} N/m, strength {branches.strength:.6g} N)")
     else:
         parts.append(f"{branches.n} Prandtl branches (a spring k_i in series with a Coulomb slider of threshold "
                      f"alpha_i = k_i eta_i): stiffness sum {branches.stiffness.sum():.6g} N/m, elastic ranges "

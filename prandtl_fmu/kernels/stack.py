@@ -34,11 +34,17 @@ Two kinds of spectrum share this code, told apart by the type of ``params``:
 * n branches: ``params`` is one (10, n + 1) array (see :func:`prepare`),
   positions are branch indices in eta order, sums are differences of prefix
   sums, the split is a binary search;
-* the continuum (Bastien, Schatzman & Lamarque 2002): branches s in [0, 1]
-  with stiffness density k(s) = k_total and elastic range eta(s) = eta_min
-  + (eta_max - eta_min) s, virgin at the start; ``params`` is the tuple
-  ``(k_total, eta_min, eta_max)``, positions are values of s, sums are
-  integrals in closed form, the split is closed form too. Its memory holds at
+* the continuum (Bastien, Schatzman & Lamarque 2002, and the spectra beyond
+  it): branches s in [0, 1], virgin at the start, cut into segments
+  [s_j, s_j+1) on which the elastic range eta(s) is linear (continuous and
+  non-decreasing in s; a flat segment is a Dirac of the spectrum) and the
+  stiffness density is k(s) = c_j eta(s)^p_j (p_j = 0: piecewise constant,
+  the paper's section 8 is one segment; p_j = chi: Segalman's power law).
+  ``params`` is the 1-tuple ``(table,)`` of :func:`segments`; positions are
+  values of s, sums are integrals in closed form (cumulative values at the
+  segment ends plus the part of one segment, found by a binary search over
+  the segments), the split is the inverse of the piecewise-linear eta(s).
+  The cost per move does not depend on any resolution. Its memory holds at
   most ``CONTINUUM_PIECES`` turning points: beyond that (thousands of
   reversals that are never wiped out, e.g. a free decay with eta_min = 0) the
   two adjacent pieces whose kink matters least are replaced by their chord,
@@ -66,6 +72,8 @@ CONTINUUM_PIECES = 4096
 COUNT, TOP, DIRECTION, SK, S0, MOVES, X = range(HEADER)
 # rows of the parameters of n branches
 K_ROW, ETA_ROW, C_ROW, K_SUM, M_SUM, C_SUM, ORDER_ROW, E_SUM, D_SUM, G_SUM = range(10)
+# rows of the continuum's table (columns: the J + 1 segment ends; SLOPE, COEF, POWER: J segments + padding)
+S_AT, ETA_AT, SLOPE, COEF, POWER, K_AT, M_AT, E_AT = range(8)
 
 
 def prepare(stiffness, yield_displacement, u0):
@@ -98,10 +106,71 @@ def prepare(stiffness, yield_displacement, u0):
 
 
 def continuum(k_total, eta_min, eta_max):
-    """The parameters of the continuous element: k(s) = k_total, eta(s) = eta_min + (eta_max - eta_min) s."""
+    """The parameters of the paper's continuum: k(s) = k_total, eta(s) = eta_min + (eta_max - eta_min) s."""
     if not (k_total > 0 and 0 <= eta_min < eta_max):
         raise ValueError("the continuum needs k_total > 0 and 0 <= eta_min < eta_max")
-    return (float(k_total), float(eta_min), float(eta_max))
+    return segments([0.0, 1.0], [eta_min, eta_max], [k_total], [0.0])
+
+
+def segments(s, eta, coefficient, power):
+    """The parameters ``(table,)`` of a segmented spectrum on [0, 1].
+
+    ``s`` (J + 1,): 0 = s_0 < ... < s_J = 1; ``eta`` (J + 1,): eta(s_j) (m),
+    non-decreasing, eta linear in between; ``coefficient`` c_j and ``power``
+    p_j (J,): stiffness density k(s) = c_j eta(s)^p_j (N/m per unit of s) on
+    [s_j, s_j+1), with c_j >= 0, p_j > -1, and eta > 0 on a segment with p_j
+    != 0 except at its lower end (where the density may be integrably
+    infinite). ValueError otherwise.
+    """
+    s, eta = np.asarray(s, dtype=float), np.asarray(eta, dtype=float)
+    coefficient, power = np.asarray(coefficient, dtype=float), np.asarray(power, dtype=float)
+    count = len(coefficient)
+    if (count < 1 or s.shape != (count + 1,) or eta.shape != (count + 1,) or power.shape != (count,)
+            or not (np.all(np.isfinite(s)) and np.all(np.isfinite(eta)) and np.all(np.isfinite(coefficient))
+                    and np.all(np.isfinite(power)))):
+        raise ValueError("a spectrum needs J >= 1 segments: J + 1 finite ends s and eta, J coefficients and powers")
+    if s[0] != 0.0 or s[-1] != 1.0 or np.any(np.diff(s) <= 0):
+        raise ValueError("the segment ends s must rise from 0 to 1")
+    if eta[0] < 0 or np.any(np.diff(eta) < 0):
+        raise ValueError("eta(s) must be >= 0 and non-decreasing")
+    if np.any(coefficient < 0) or np.any(power <= -1) or not np.any(coefficient > 0):
+        raise ValueError("the density needs coefficients c_j >= 0 (not all 0) and powers p_j > -1")
+    if np.any((power != 0) & (eta[1:] <= 0)):
+        raise ValueError("a power-law segment needs eta > 0 beyond its lower end")
+    table = np.zeros((8, count + 1))
+    table[S_AT], table[ETA_AT] = s, eta
+    table[SLOPE, :count] = np.diff(eta) / np.diff(s)
+    table[COEF, :count], table[POWER, :count] = coefficient, power
+    for j in range(count):
+        k_part, m_part, e_part = _partial.py_func(table, j, s[j + 1] - s[j])  # no compilation for this
+        table[K_AT, j + 1] = table[K_AT, j] + k_part
+        table[M_AT, j + 1] = table[M_AT, j] + m_part
+        table[E_AT, j + 1] = table[E_AT, j] + e_part
+    if not (np.all(np.isfinite(table)) and table[K_AT, -1] > 0):
+        raise ValueError("the spectrum's stiffness overflows or is zero")
+    return (table,)
+
+
+def spectrum_totals(params):
+    """(integral k ds, integral k eta ds, integral k eta^2 ds) of a continuum: stiffness (N/m), strength (N),
+    and twice the energy its sliders store at full slip (J)."""
+    table = params[0]
+    return float(table[K_AT, -1]), float(table[M_AT, -1]), float(table[E_AT, -1])
+
+
+def spectrum_integrals(params, ends):
+    """(K, M, E): arrays of the integrals of k, k eta, k eta^2 over the cells [ends_i, ends_i+1) of the
+    positions of a continuum (``ends`` rising in [0, 1])."""
+    ends = np.ascontiguousarray(ends, dtype=float)
+    out = np.empty((3, max(ends.shape[0] - 1, 0)))
+    _cells(params[0], ends, out)
+    return out[0], out[1], out[2]
+
+
+def eta_of(params, s):
+    """eta(s) (m) of a continuum at the positions ``s`` (array)."""
+    table = params[0]
+    return np.interp(np.asarray(s, dtype=float), table[S_AT], table[ETA_AT])
 
 
 def is_stack(params) -> bool:
@@ -168,6 +237,88 @@ def admissible(eta, u):
     return bool(np.all(np.abs(np.diff(u)) <= np.diff(eta) + tolerance))
 
 
+# ------------------------------------------------ the continuum's segments (closed forms)
+
+@kernel
+def _partial(table, j, t):
+    """Integrals of k, k eta, k eta^2 over [s_j, s_j + t) of segment j (0 <= t <= s_j+1 - s_j).
+
+    With e = eta(s_j), g the slope, k = c eta^p: for p = 0, polynomials in t
+    (no cancellation for a short part); for p != 0, (eta^(p+q) - e^(p+q)) /
+    (g (p + q)), q = 1, 2, 3, or c e^(p+q-1) t on a flat segment (g = 0).
+    """
+    e, g, c, p = table[ETA_AT, j], table[SLOPE, j], table[COEF, j], table[POWER, j]
+    if p == 0.0:
+        return c * t, c * t * (e + 0.5 * g * t), c * t * (e * e + g * t * (e + g * t / 3.0))
+    if g == 0.0:
+        density = c * e ** p
+        return density * t, density * e * t, density * e * e * t
+    end = e + g * t
+    return (c * (end ** (p + 1.0) - e ** (p + 1.0)) / (g * (p + 1.0)),
+            c * (end ** (p + 2.0) - e ** (p + 2.0)) / (g * (p + 2.0)),
+            c * (end ** (p + 3.0) - e ** (p + 3.0)) / (g * (p + 3.0)))
+
+
+@kernel
+def _segment_of(table, pos):
+    """The segment j with s_j <= pos < s_j+1 (the last one for pos = 1)."""
+    s = table[S_AT]
+    first, last = 0, s.shape[0] - 2
+    while first < last:
+        middle = (first + last + 1) >> 1
+        if s[middle] <= pos:
+            first = middle
+        else:
+            last = middle - 1
+    return first
+
+
+@kernel
+def _integrals_between(table, lo, hi):
+    """Integrals of k, k eta, k eta^2 over [lo, hi): one segment's part, or cumulative values between."""
+    i, j = _segment_of(table, lo), _segment_of(table, hi)
+    k_lo, m_lo, e_lo = _partial(table, i, lo - table[S_AT, i])
+    k_hi, m_hi, e_hi = _partial(table, j, hi - table[S_AT, j])
+    if i == j:
+        return k_hi - k_lo, m_hi - m_lo, e_hi - e_lo
+    return (table[K_AT, j] + k_hi - table[K_AT, i] - k_lo, table[M_AT, j] + m_hi - table[M_AT, i] - m_lo,
+            table[E_AT, j] + e_hi - table[E_AT, i] - e_lo)
+
+
+@kernel
+def _cells(table, ends, out):
+    for i in range(ends.shape[0] - 1):
+        out[0, i], out[1, i], out[2, i] = _integrals_between(table, ends[i], ends[i + 1])
+
+
+@kernel
+def _eta_at(table, pos):
+    """eta(pos) (m)."""
+    j = _segment_of(table, pos)
+    return table[ETA_AT, j] + table[SLOPE, j] * (pos - table[S_AT, j])
+
+
+@kernel
+def _last_reached(table, target):
+    """sup {pos in [0, 1]: eta(pos) <= target} (0 when eta(0) > target): the branches below it reach
+    ``target``; a flat segment (a Dirac) at eta = target is reached whole."""
+    eta = table[ETA_AT]
+    ends = eta.shape[0]
+    if not eta[0] <= target:
+        return 0.0
+    if eta[ends - 1] <= target:
+        return 1.0
+    first, last = 0, ends - 2  # the largest end b with eta_b <= target: then eta_b+1 > target, slope > 0
+    while first < last:
+        middle = (first + last + 1) >> 1
+        if eta[middle] <= target:
+            first = middle
+        else:
+            last = middle - 1
+    pos = table[S_AT, first] + (target - eta[first]) / table[SLOPE, first]
+    return min(pos, table[S_AT, first + 1])
+
+
 # ------------------------------------------------ the spectrum: sums, thresholds, split
 # Compiled only; each has one implementation per kind of spectrum (the type of params).
 
@@ -210,9 +361,8 @@ def _sums_overload(params, lo, hi):
         return discrete
 
     def continuous(params, lo, hi):
-        kappa, a, b = params
-        width = hi - lo
-        return kappa * width, kappa * width * (a + 0.5 * (b - a) * (lo + hi)), 0.0
+        k_sum, m_sum, e_sum = _integrals_between(params[0], lo, hi)
+        return k_sum, m_sum, 0.0
     return continuous
 
 
@@ -226,9 +376,7 @@ def _squares_overload(params, lo, hi):
         return discrete
 
     def continuous(params, lo, hi):
-        kappa, a, b = params
-        e_lo, e_hi = a + (b - a) * lo, a + (b - a) * hi
-        return kappa * (hi - lo) * (e_lo * e_lo + e_lo * e_hi + e_hi * e_hi) / 3.0, 0.0, 0.0
+        return _integrals_between(params[0], lo, hi)[2], 0.0, 0.0
     return continuous
 
 
@@ -238,8 +386,7 @@ def _moment_overload(params, top):
         return lambda params, top: params[M_SUM, int(top)]
 
     def continuous(params, top):
-        kappa, a, b = params
-        return kappa * top * (a + 0.5 * (b - a) * top)
+        return _integrals_between(params[0], 0.0, top)[1]
     return continuous
 
 
@@ -249,8 +396,7 @@ def _threshold_overload(params, pos):
         return lambda params, pos: (params[ETA_ROW, int(pos)], params[C_ROW, int(pos)])
 
     def continuous(params, pos):
-        kappa, a, b = params
-        return a + (b - a) * pos, 0.0
+        return _eta_at(params[0], pos), 0.0
     return continuous
 
 
@@ -284,9 +430,7 @@ def _split_overload(params, state, row, x, s):
         q = 1.0 - s * state[row + 3]
         if q <= 0.0:
             return hi if reach >= 0.0 else lo
-        kappa, a, b = params
-        p = (reach / q - a) / (b - a)
-        return min(max(p, lo), hi)
+        return min(max(_last_reached(params[0], reach / q), lo), hi)
     return continuous
 
 
@@ -477,9 +621,11 @@ def _compact_continuum(params, state):
     replaced by the straight line through the ends of the pair (slope in
     [-1, 1]: the profile stays continuous, 1-Lipschitz and within |u| <= eta,
     so the stack's rules still hold); the pair chosen is the one where this
-    changes the force least (kink height times width).
+    changes the force least (kink height times the pair's stiffness). A pair
+    of zero eta width (inside a Dirac) is never chosen: the stack never cuts
+    a flat segment of eta(s) (a Dirac slides whole, see _last_reached).
     """
-    kappa, a0, b0 = params
+    table = params[0]
     x = state[X]
     count = int(state[COUNT])
     best = 0
@@ -487,22 +633,24 @@ def _compact_continuum(params, state):
     for j in range(count - 1):
         deep = HEADER + ROW * j
         upper = deep + ROW
-        eta_lo, eta_mid, eta_hi = (a0 + (b0 - a0) * state[upper], a0 + (b0 - a0) * state[deep],
-                                   a0 + (b0 - a0) * state[deep + 1])
+        eta_lo, eta_mid, eta_hi = _eta_at(table, state[upper]), _eta_at(table, state[deep]), _eta_at(
+            table, state[deep + 1])
+        if not eta_hi > eta_lo:
+            continue
         u_lo = state[upper + 2] + x + state[upper + 3] * eta_lo
         u_mid = state[deep + 2] + x + state[deep + 3] * eta_mid
         u_hi = state[deep + 2] + x + state[deep + 3] * eta_hi
         chord_mid = u_lo + (u_hi - u_lo) * (eta_mid - eta_lo) / (eta_hi - eta_lo)
-        change = abs(u_mid - chord_mid) * (eta_hi - eta_lo)
+        change = abs(u_mid - chord_mid) * _integrals_between(table, state[upper], state[deep + 1])[0]
         if change < cost:
             cost = change
             best = j
     deep = HEADER + ROW * best
     upper = deep + ROW
-    eta_lo, eta_hi = a0 + (b0 - a0) * state[upper], a0 + (b0 - a0) * state[deep + 1]
+    eta_lo, eta_hi = _eta_at(table, state[upper]), _eta_at(table, state[deep + 1])
     u_lo = state[upper + 2] + x + state[upper + 3] * eta_lo
     u_hi = state[deep + 2] + x + state[deep + 3] * eta_hi
-    beta = min(max((u_hi - u_lo) / (eta_hi - eta_lo), -1.0), 1.0)
+    beta = min(max((u_hi - u_lo) / (eta_hi - eta_lo), -1.0), 1.0) if eta_hi > eta_lo else 0.0
     state[deep] = state[upper]
     state[deep + 2] = u_lo - x - beta * eta_lo
     state[deep + 3] = beta
@@ -535,12 +683,11 @@ def elongations(params, state, out):
 @kernel
 def profile(params, state, s, out):
     """The elongation u(s) (m) at the positions ``s`` of the continuum (for plots and tests)."""
-    kappa, a, b = params
     x = state[X]
     top = state[TOP]
     d = state[DIRECTION]
     for q in range(s.shape[0]):
-        eta = a + (b - a) * s[q]
+        eta = _eta_at(params[0], s[q])
         out[q] = d * eta
         if s[q] < top:
             continue
