@@ -3,7 +3,8 @@
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp]
-    prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL] [--branches N] [--dashpot]
+    prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
+                    [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
     prandtl-fmu sweep SCENE SWEEP.toml [--scheduler ADDRESS] [--workers N] [--out DIR] [--resume]
     prandtl-fmu scenes
@@ -76,9 +77,14 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--x", default="x", help="displacement column (m), default 'x'")
     fit.add_argument("--force", default="force", help="force column (N), default 'force'")
     fit.add_argument("--v", help="velocity column (m/s), for --dashpot")
-    fit.add_argument("--branches", type=int, default=40, metavar="N",
-                     help="number of candidate elastic ranges in the grid (default 40); the fit keeps those with "
-                          "a non-zero stiffness")
+    spectrum = fit.add_mutually_exclusive_group()
+    spectrum.add_argument("--branches", type=int, default=40, metavar="N",
+                          help="number of candidate elastic ranges in the grid (default 40); the fit keeps those "
+                               "with a non-zero stiffness")
+    spectrum.add_argument("--continuum", metavar="MODEL", choices=("piecewise", "iwan", "linear"),
+                          help="fit a continuous element instead: 'piecewise' (a density over a grid of 40 "
+                               "elastic ranges, linear least squares), 'iwan' (Segalman's F_S, K_T, chi, beta) or "
+                               "'linear' (the paper's k_total, eta_range), by nonlinear least squares")
     fit.add_argument("--dashpot", action="store_true", help="also fit a dashpot c v")
     fit.add_argument("--cubic", action="store_true", help="also fit a cubic spring k3 x^3")
     fit.add_argument("--out", help="scene file to write (default: print it)")
@@ -173,7 +179,7 @@ def _build(args) -> int:
 
 
 def _fit(args) -> int:
-    from .identify import FitError, fit, plot_fit, read_columns
+    from .identify import FitError, fit, fit_continuum, plot_fit, read_columns
 
     missing = _missing("scipy") + (_missing("matplotlib") if args.plot else [])
     if missing:
@@ -184,8 +190,12 @@ def _fit(args) -> int:
         if args.branches < 1:
             raise FitError(f"--branches must be >= 1, got {args.branches}")
         data = read_columns(args.data, args.time, args.x, args.force, args.v)
-        result = fit(data["x"], data["force"], time=data.get("time"), v=data.get("v"), grid_size=args.branches,
-                     dashpot=args.dashpot, cubic=args.cubic)
+        if args.continuum:
+            result = fit_continuum(data["x"], data["force"], args.continuum, time=data.get("time"),
+                                   v=data.get("v"), dashpot=args.dashpot, cubic=args.cubic)
+        else:
+            result = fit(data["x"], data["force"], time=data.get("time"), v=data.get("v"),
+                         grid_size=args.branches, dashpot=args.dashpot, cubic=args.cubic)
     except (FitError, SceneError) as exc:
         return _error(exc)
     name = os.path.splitext(os.path.basename(args.data))[0] + "-fit"

@@ -19,6 +19,21 @@ at eta = x): quantiles of |F''| along the virgin branch, where the data has
 one (the first monotone stretch from x near 0 covers at least a fifth of the
 largest excursion).
 
+The continuous families (:func:`fit_continuum`, ``--continuum MODEL``):
+
+* ``piecewise``: a piecewise-constant density over a grid of elastic ranges
+  0 = e_0 < e_1 < ... < e_J. Segment j (stiffness w_j spread evenly over
+  eta in [e_j-1, e_j]) adds w_j times the force of a unit continuum on that
+  range, so the fit is again linear: NNLS on those J columns (each one
+  compiled drive of the memory stack along x). The scene is
+  ``density = { kind = "piecewise" }`` with equal s-segments, k_j = J w_j.
+* ``iwan`` (Segalman's F_S, K_T, chi, beta) and ``linear`` (the paper's
+  k_total, eta_range): for a fixed shape (phi_max, chi, beta; or eta_min,
+  eta_max) the force is linear in the scale (K_T; k_total) and in k0, k3,
+  c: variable projection. NNLS gives the linear weights of each shape, and
+  ``scipy.optimize.least_squares`` moves the shape (bounded), started from
+  the best of a coarse grid of shapes.
+
 Needs scipy (the ``[fit]`` extra).
 """
 from __future__ import annotations
@@ -28,7 +43,9 @@ from typing import Optional
 
 import numpy as np
 
-from .kernels.drive import play_basis
+from .kernels.drive import play_basis, spectrum_drive
+
+CONTINUUM_MODELS = ("piecewise", "iwan", "linear")
 
 
 class FitError(ValueError):
@@ -50,6 +67,9 @@ class Fit:
     force_range: float
     grid_size: int
     effects: dict = field(default_factory=dict)  # which smooth terms were in the basis
+    model: Optional[str] = None  # a continuous family (CONTINUUM_MODELS), or None for n branches
+    density: dict = field(default_factory=dict)  # the [branches] keys of the fitted continuum
+    notes: list = field(default_factory=list)  # what the data could not determine
 
     @property
     def relative_rms(self) -> float:
@@ -59,17 +79,34 @@ class Fit:
     def relative_max(self) -> float:
         return self.residual_max / self.force_range
 
+    @property
+    def label(self) -> str:
+        """What was fitted, in a few words."""
+        if self.model is None:
+            return f"{len(self.k)} branches"
+        if self.model == "piecewise":
+            kept = int(np.count_nonzero(np.asarray(self.density["density"]["k"]) > 0))
+            return f"continuum, {kept} of {len(self.density['density']['k'])} segments non-empty"
+        if self.model == "iwan":
+            d = self.density["density"]
+            return f"Iwan F_S = {d['F_S']:.6g} N, K_T = {d['K_T']:.6g} N/m, chi = {d['chi']:.4g}, beta = {d['beta']:.4g}"
+        return (f"continuum k_total = {self.density['k_total']:.6g} N/m, eta_range = "
+                f"[{self.density['eta_range'][0]:.6g}, {self.density['eta_range'][1]:.6g}] m")
+
     def report(self) -> str:
-        return (f"{len(self.k)} branches kept of {self.grid_size} candidates; k0 = {self.k0:.6g}"
+        head = (f"{len(self.k)} branches kept of {self.grid_size} candidates" if self.model is None
+                else f"{self.label} ({self.grid_size} candidate {'segments' if self.model == 'piecewise' else 'shapes'})")
+        return (f"{head}; k0 = {self.k0:.6g}"
                 + (f", k3 = {self.k3:.6g}" if self.effects.get("cubic") else "")
                 + (f", c = {self.c:.6g}" if self.effects.get("dashpot") else "")
                 + f"; residual RMS {self.residual_rms:.3g} N ({100 * self.relative_rms:.3g} % of the force range "
-                f"{self.force_range:.3g} N), max {self.residual_max:.3g} N ({100 * self.relative_max:.3g} %)")
+                f"{self.force_range:.3g} N), max {self.residual_max:.3g} N ({100 * self.relative_max:.3g} %)"
+                + "".join(f"\nnote: {note}" for note in self.notes))
 
     def scene_text(self, name: str, time: Optional[np.ndarray] = None) -> str:
         """A scene in the contract's format: the connector ([fmu] causality = "displacement"); add [mass] and
         a [load] (and drop the [fmu] table) for an element with its mass."""
-        lines = [f"# Fitted by prandtl-fmu fit: {self.report()}",
+        lines = ["# Fitted by prandtl-fmu fit: " + self.report().replace("\n", "\n# "),
                  "# The connector (displacement in, force out). For the element with its mass under a force, add",
                  "# [mass] and [load] tables and remove [fmu].",
                  f"name = {_toml_string(name)}", ""]
@@ -79,7 +116,10 @@ class Fit:
             lines += ["[cubic]", f"k3 = {self.k3!r}", ""]
         if self.effects.get("dashpot") and self.c > 0:
             lines += ["[damper]", f"c = {self.c!r}", ""]
-        if len(self.k):
+        if self.model is not None:
+            lines += ["[branches]", "continuum = true"]
+            lines += [f"{key} = {_toml_value(value)}" for key, value in self.density.items()] + [""]
+        elif len(self.k):
             lines += ["[branches]", "k = [" + ", ".join(repr(float(v)) for v in self.k) + "]",
                       "eta = [" + ", ".join(repr(float(v)) for v in self.eta) + "]", ""]
         lines += ["[fmu]", 'causality = "displacement"', ""]
@@ -92,6 +132,17 @@ class Fit:
 
 def _toml_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _toml_value(value) -> str:
+    """A number, string, list or inline table in TOML (numbers as repr: full precision)."""
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{key} = {_toml_value(v)}" for key, v in value.items()) + " }"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(float(value))
 
 
 def check_data(x, force, time=None, v=None):
@@ -177,16 +228,7 @@ def fit(x, force, *, time=None, v=None, etas=None, grid_size: int = 40, dashpot:
     """
     from scipy.optimize import nnls
 
-    data = check_data(x, force, time, v)
-    xs, fs = data["x"], data["force"]
-    if dashpot:
-        if "v" in data:
-            vs = data["v"]
-        elif "time" in data:
-            vs = np.gradient(xs, data["time"])
-        else:
-            raise FitError("--dashpot needs the velocity or the time column")
-    smooth = [xs] + ([xs ** 3] if cubic else []) + ([vs] if dashpot else [])
+    xs, fs, smooth = _smooth_columns(x, force, time, v, dashpot, cubic)
     grid = np.unique(np.asarray(etas if etas is not None else default_grid(xs, fs, grid_size), dtype=float))
     if grid.size == 0 or np.any(grid <= 0) or not np.all(np.isfinite(grid)):
         raise FitError("the elastic ranges of the grid must be finite and > 0")
@@ -197,27 +239,162 @@ def fit(x, force, *, time=None, v=None, etas=None, grid_size: int = 40, dashpot:
         if etas is not None or _ == refine or not np.any(kept):
             break
         grid = _refined(grid, kept)
+    kept = weights[len(smooth):] > 1e-12 * max(weights[len(smooth):].max(initial=0.0), 1e-300)
+    return _result(fs, columns, weights, len(smooth), dashpot, cubic, grid_size=int(grid.size),
+                   k=weights[len(smooth):][kept], eta=grid[kept])
+
+
+def _smooth_columns(x, force, time, v, dashpot, cubic):
+    """(x, force, [x, x^3?, v?]): the checked data and the columns of the smooth terms."""
+    data = check_data(x, force, time, v)
+    xs, fs = data["x"], data["force"]
+    if dashpot:
+        if "v" in data:
+            vs = data["v"]
+        elif "time" in data:
+            vs = np.gradient(xs, data["time"])
+        else:
+            raise FitError("--dashpot needs the velocity or the time column")
+    return xs, fs, [xs] + ([xs ** 3] if cubic else []) + ([vs] if dashpot else [])
+
+
+def _result(fs, columns, weights, smooth_count, dashpot, cubic, **fields) -> Fit:
     fitted = columns @ weights
     residual = fs - fitted
-    smooth_weights = list(weights[:len(smooth)])
+    smooth_weights = list(weights[:smooth_count])
     k0 = smooth_weights.pop(0)
     k3 = smooth_weights.pop(0) if cubic else 0.0
     c = smooth_weights.pop(0) if dashpot else 0.0
-    kept = weights[len(smooth):] > 1e-12 * max(weights[len(smooth):].max(initial=0.0), 1e-300)
-    return Fit(k0=float(k0), k3=float(k3), c=float(c), k=weights[len(smooth):][kept], eta=grid[kept],
-               fitted=fitted, residual_rms=float(np.sqrt(np.mean(residual ** 2))),
-               residual_max=float(np.abs(residual).max()), force_range=float(np.ptp(fs)) or 1.0,
-               grid_size=int(grid.size), effects={"cubic": cubic, "dashpot": dashpot})
+    fields.setdefault("k", np.zeros(0))
+    fields.setdefault("eta", np.zeros(0))
+    return Fit(k0=float(k0), k3=float(k3), c=float(c), fitted=fitted,
+               residual_rms=float(np.sqrt(np.mean(residual ** 2))), residual_max=float(np.abs(residual).max()),
+               force_range=float(np.ptp(fs)) or 1.0, effects={"cubic": cubic, "dashpot": dashpot}, **fields)
 
 
 def _solve(nnls, xs, fs, smooth, grid):
     basis = np.empty((xs.shape[0], grid.shape[0]))
     play_basis(xs, grid, basis)
-    columns = np.column_stack(smooth + [basis])
+    return _nnls(nnls, fs, np.column_stack(smooth + [basis]))
+
+
+def _nnls(nnls, fs, columns):
+    """(weights >= 0, columns): least squares on the columns scaled to unit norm (for the conditioning)."""
     scale = np.sqrt(np.sum(columns ** 2, axis=0))
     scale[scale == 0] = 1.0
     weights, _ = nnls(columns / scale, fs, maxiter=50 * columns.shape[1])
     return weights / scale, columns
+
+
+def spectrum_response(params, xs) -> np.ndarray:
+    """The force of a virgin continuum (memory-stack ``params``) along the samples xs, from x = 0."""
+    from .kernels import stack
+
+    out = np.empty(xs.shape[0])
+    spectrum_drive(params, stack.fresh_state(params, 0.0), np.ascontiguousarray(xs, dtype=float), out)
+    return out
+
+
+def fit_continuum(x, force, model: str, *, time=None, v=None, etas=None, grid_size: int = 40,
+                  dashpot: bool = False, cubic: bool = False) -> Fit:
+    """Fit a continuous family (``model`` in CONTINUUM_MODELS; see the module docstring). ``etas``: the
+    piecewise density's nodes beyond 0 (default :func:`default_grid`). FitError for data that cannot be
+    fitted."""
+    from scipy.optimize import nnls
+
+    if model not in CONTINUUM_MODELS:
+        raise FitError(f"--continuum must be one of {', '.join(CONTINUUM_MODELS)}, got {model!r}")
+    xs, fs, smooth = _smooth_columns(x, force, time, v, dashpot, cubic)
+    if model == "piecewise":
+        grid = np.asarray(etas if etas is not None else default_grid(xs, fs, grid_size), dtype=float)
+        if grid.size == 0 or np.any(grid <= 0) or not np.all(np.isfinite(grid)):
+            raise FitError("the elastic ranges of the grid must be finite and > 0")
+        return _fit_piecewise(nnls, xs, fs, smooth, grid, dashpot, cubic)
+    return _fit_family(nnls, xs, fs, smooth, model, dashpot, cubic)
+
+
+def _fit_piecewise(nnls, xs, fs, smooth, grid, dashpot, cubic) -> Fit:
+    from .kernels import stack
+
+    nodes = np.unique(np.concatenate([[0.0], grid]))
+    basis = np.column_stack([spectrum_response(stack.continuum(1.0, lo, hi), xs)
+                             for lo, hi in zip(nodes[:-1], nodes[1:])])
+    weights, columns = _nnls(nnls, fs, np.column_stack(smooth + [basis]))
+    segment = weights[len(smooth):]
+    present = np.flatnonzero(segment > 1e-12 * max(segment.max(initial=0.0), 1e-300))
+    fields = {"grid_size": int(segment.size), "model": "piecewise"}
+    if present.size:
+        first, last = int(present[0]), int(present[-1])
+        kept = np.where(segment[first:last + 1] > 1e-12 * segment.max(), segment[first:last + 1], 0.0)
+        count = kept.shape[0]  # equal s-segments of width 1 / count: density count * w_j
+        fields["density"] = {"density": {"kind": "piecewise", "k": (count * kept).tolist(),
+                                         "eta": nodes[first:last + 2].tolist()}}
+    else:
+        raise FitError("the fit found no friction: every segment's weight is 0 (fit the branches instead, "
+                       "or check that force and x are the element's)")
+    return _result(fs, columns, weights, len(smooth), dashpot, cubic, **fields)
+
+
+def _family_params(model, shape):
+    """(memory-stack params of the unit-scale spectrum, its [branches] keys as a function of the scale)."""
+    from .effects import ContinuousBranches
+
+    if model == "iwan":
+        phi_max, chi, beta = np.exp(shape[0]), shape[1], shape[2]
+        ratio = (chi + 1.0) / (chi + 2.0)
+        f_s = phi_max * (beta + ratio) / (1.0 + beta)  # at K_T = 1
+        spectrum = ContinuousBranches.iwan(f_s, 1.0, chi, beta)
+        return spectrum.params, lambda scale: {"density": {"kind": "iwan", "F_S": float(scale * f_s),
+                                                            "K_T": float(scale), "chi": float(chi),
+                                                            "beta": float(beta)}}
+    eta_min, eta_max = np.exp(shape[0]), np.exp(shape[0]) + np.exp(shape[1])
+    spectrum = ContinuousBranches.linear(1.0, eta_min, eta_max)
+    return spectrum.params, lambda scale: {"k_total": float(scale), "eta_range": [float(eta_min), float(eta_max)]}
+
+
+def _fit_family(nnls, xs, fs, smooth, model, dashpot, cubic) -> Fit:
+    """Variable projection: the shape by bounded least squares, the scale and smooth terms by NNLS."""
+    from scipy.optimize import least_squares
+
+    excursion = float(np.max(np.abs(xs)))
+    low, high = np.log(excursion * 1e-4), np.log(excursion * 10.0)
+
+    def projected(shape):
+        params, _ = _family_params(model, shape)
+        return _nnls(nnls, fs, np.column_stack(smooth + [spectrum_response(params, xs)]))
+
+    def residual(shape):
+        weights, columns = projected(shape)
+        return columns @ weights - fs
+
+    sizes = np.log(np.geomspace(excursion * 1e-3, excursion * 2.0, 10))
+    if model == "iwan":
+        starts = [(a, chi, beta) for a in sizes for chi in (-0.8, -0.5, -0.2, 0.5) for beta in (0.0, 0.3, 1.0, 3.0)]
+        bounds = ([low, -0.99, 0.0], [high, 5.0, 100.0])
+    else:
+        starts = [(a, b) for a in sizes for b in sizes]
+        bounds = ([low, low], [high, high])
+    start = min(starts, key=lambda shape: float(np.sum(residual(shape) ** 2)))
+    solution = least_squares(residual, start, bounds=bounds, x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                             max_nfev=2000)
+    if solution.status == 0:
+        raise FitError(f"the {model} fit did not converge in {solution.nfev} evaluations (the family may not "
+                       "fit this loop: try --continuum piecewise or the branches)")
+    weights, columns = projected(solution.x)
+    scale = float(weights[-1])
+    if not scale > 0:
+        raise FitError(f"the {model} fit found no friction (scale 0): fit the branches or piecewise instead")
+    _, keys = _family_params(model, solution.x)
+    top = np.exp(solution.x[0]) if model == "iwan" else np.exp(solution.x[0]) + np.exp(solution.x[1])
+    notes = []
+    if top >= 0.99 * excursion:  # the optimum's top is anywhere beyond the data: it stops near the edge
+        what = ("phi_max", "F_S, beta and the split of the stiffness between k0 and K_T") if model == "iwan" else (
+            "eta_max", "the top of eta_range and the split of the stiffness between k0 and k_total")
+        notes.append(f"the loop barely or never reaches macro-slip (max |x| = {excursion:.3g} m, {what[0]} = "
+                     f"{top:.3g} m): "
+                     f"{what[1]} are not determined by this data; this is one of many equally good fits")
+    return _result(fs, columns, weights, len(smooth), dashpot, cubic, grid_size=len(starts), model=model,
+                   density=keys(scale), notes=notes)
 
 
 def _refined(grid, kept):
@@ -276,7 +453,7 @@ def plot_fit(path, x, force, fit_result: Fit, title: str) -> None:
 
     fig, (loop, error) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     loop.plot(x, force, lw=1.6, color="0.6", label="measured")
-    loop.plot(x, fit_result.fitted, lw=0.8, color="C3", label=f"fitted ({len(fit_result.k)} branches)")
+    loop.plot(x, fit_result.fitted, lw=0.8, color="C3", label=f"fitted ({fit_result.label})")
     loop.set(xlabel="x (m)", ylabel="force (N)", title=title)
     loop.legend()
     error.plot(np.arange(len(x)), force - fit_result.fitted, lw=0.6)

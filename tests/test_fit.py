@@ -166,3 +166,155 @@ def test_the_example_goes_from_a_csv_to_a_scene_an_fmu_and_a_plot(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
     relative_rms = float(run.stderr.split("residual RMS")[1].split("(")[1].split("%")[0])
     assert 0.8 < relative_rms < 1.2  # the stand-in's 1 % noise, not more
+
+
+# ------------------------------------------------ the continuous families (--continuum MODEL)
+
+def continuum_connector(branches, k0):
+    tables = {"spring": {"k0": float(k0)}, "branches": branches, "fmu": {"causality": "displacement"},
+              "solver": SOLVER}
+    return parse_scene(scene_text(tables))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_an_iwan_fit_recovers_segalmans_four_parameters(seed):
+    rng = np.random.default_rng(100 + seed)
+    truth = {"kind": "iwan", "F_S": float(rng.uniform(0.5, 3.0)), "K_T": float(rng.uniform(5.0, 50.0)),
+             "chi": float(rng.uniform(-0.9, -0.1)), "beta": float(rng.choice([0.0, rng.uniform(0.1, 2.0)]))}
+    k0 = float(rng.uniform(0.1, 2.0))
+    scene = continuum_connector({"continuum": True, "density": truth}, k0)
+    phi_max = scene.branches.eta[-1]
+    t, x = history(rng)
+    x = 1.2 * phi_max * x / np.abs(x).max()  # micro-slip and a little macro-slip
+    force = displacement_response(scene, x)
+    result = fit_continuum_checked(x, force, "iwan")
+    assert result.residual_max <= 1e-8 * np.ptp(force)
+    fitted = result.density["density"]
+    for key in ("F_S", "K_T", "chi", "beta"):
+        assert fitted[key] == pytest.approx(truth[key], rel=1e-6, abs=1e-6), key
+    assert result.k0 == pytest.approx(k0, rel=1e-6)
+    assert not result.notes
+
+
+def fit_continuum_checked(x, force, model, **options):
+    """fit_continuum, and the scene it writes reproduces the fitted force (the contract's keys, reparsed)."""
+    from prandtl_fmu.identify import fit_continuum
+
+    result = fit_continuum(x, force, model, **options)
+    scene = parse_scene(result.scene_text("fit"))
+    assert scene.branches.continuum
+    np.testing.assert_allclose(displacement_response(scene, x), result.fitted, rtol=0, atol=1e-9 * np.ptp(force))
+    residual = force - result.fitted
+    assert result.residual_rms == pytest.approx(np.sqrt(np.mean(residual ** 2)), rel=1e-12, abs=1e-300)
+    assert result.residual_max == pytest.approx(np.abs(residual).max(), rel=1e-12, abs=1e-300)
+    return result
+
+
+def test_a_linear_continuum_fit_recovers_the_papers_spectrum():
+    rng = np.random.default_rng(7)
+    scene = continuum_connector({"continuum": True, "k_total": 1.7, "eta_range": [0.05, 0.6]}, 0.4)
+    t, x = history(rng)
+    force = displacement_response(scene, x)
+    result = fit_continuum_checked(x, force, "linear")
+    assert result.residual_max <= 1e-8 * np.ptp(force)
+    assert result.density["k_total"] == pytest.approx(1.7, rel=1e-6)
+    np.testing.assert_allclose(result.density["eta_range"], [0.05, 0.6], rtol=1e-6)
+    assert result.k0 == pytest.approx(0.4, rel=1e-6)
+
+
+def test_a_piecewise_fit_on_a_grid_holding_the_true_nodes_recovers_the_density():
+    rng = np.random.default_rng(8)
+    nodes = np.geomspace(0.02, 1.0, 12)
+    truth = rng.uniform(0.2, 2.0, 11) * (rng.uniform(size=11) > 0.3)  # total stiffness per segment, some empty
+    truth[0] = truth[-1] = 1.0
+    density = {"kind": "piecewise", "k": (11 * truth).tolist(), "eta": nodes.tolist()}
+    scene = continuum_connector({"continuum": True, "density": density}, 0.3)
+    t, x = history(rng)
+    force = displacement_response(scene, x)
+    grid = np.unique(np.concatenate([nodes, np.geomspace(0.01, 2.0, 15)]))
+    result = fit_continuum_checked(x, force, "piecewise", etas=grid)
+    assert result.residual_max <= 1e-8 * np.ptp(force)
+    fitted = result.density["density"]
+    fitted_nodes = np.array(fitted["eta"])
+    stiffness = np.array(fitted["k"]) / len(fitted["k"])  # total stiffness per fitted segment
+    # the true segment j spreads over the grid's segments inside it, in proportion to their width
+    for j in range(11):
+        inside = (fitted_nodes[:-1] >= nodes[j] * (1 - 1e-12)) & (fitted_nodes[1:] <= nodes[j + 1] * (1 + 1e-12))
+        assert np.sum(stiffness[inside]) == pytest.approx(truth[j], rel=1e-6, abs=1e-9), j
+    assert result.k0 == pytest.approx(0.3, rel=1e-6)
+
+
+def test_a_loop_without_macro_slip_says_what_it_cannot_determine():
+    """Below phi_max the force is (k0 + K_T) x - R x^(chi+2) / ((chi+1)(chi+2)) on the virgin curve: F_S, beta
+    and the split of k0 and K_T are not in the data. The fit is exact, and says so."""
+    rng = np.random.default_rng(4)
+    scene = continuum_connector({"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 30.0,
+                                                                "chi": -0.6, "beta": 0.2}}, 1.0)
+    t, x = history(rng, count=800)
+    x = 0.7 * scene.branches.eta[-1] * x / np.abs(x).max()
+    force = displacement_response(scene, x)
+    result = fit_continuum_checked(x, force, "iwan")
+    assert result.residual_max <= 1e-8 * np.ptp(force)
+    assert result.density["density"]["chi"] == pytest.approx(-0.6, rel=1e-6)  # chi is in the data
+    assert result.k0 + result.density["density"]["K_T"] == pytest.approx(31.0, rel=1e-6)
+    assert len(result.notes) == 1 and "never reaches macro-slip" in result.report()
+
+
+def test_an_iwan_fit_with_one_percent_noise_has_the_noise_as_residual():
+    rng = np.random.default_rng(21)
+    truth = {"kind": "iwan", "F_S": 1.0, "K_T": 20.0, "chi": -0.4, "beta": 0.5}
+    scene = continuum_connector({"continuum": True, "density": truth}, 0.5)
+    t, x = history(rng)
+    x = 0.1 * x / np.abs(x).max()
+    clean = displacement_response(scene, x)
+    noise = 0.01 * np.ptp(clean) * rng.standard_normal(len(clean))
+    result = fit_continuum_checked(x, clean + noise, "iwan")
+    level = np.sqrt(np.mean(noise ** 2))
+    assert 0.95 * level < result.residual_rms < 1.02 * level
+    assert np.sqrt(np.mean((result.fitted - clean) ** 2)) < 0.2 * level
+
+
+@pytest.mark.parametrize("model", ["piecewise", "iwan", "linear"])
+def test_a_bouc_wen_loop_fitted_by_each_continuum_reports_its_residual_honestly(model):
+    t, x, force = bouc_wen_loop()
+    result = fit_continuum_checked(x, force, model, time=t)
+    limit = {"piecewise": 0.02, "iwan": 0.05, "linear": 0.1}[model]
+    assert result.relative_rms < limit, result.report()
+    assert f"{100 * result.relative_rms:.3g} %" in result.report()
+
+
+def test_the_command_fits_an_iwan_continuum_and_builds_its_fmu(tmp_path):
+    from fmpy import simulate_fmu
+
+    rng = np.random.default_rng(4)
+    scene = continuum_connector({"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 30.0,
+                                                                "chi": -0.6, "beta": 0.2}}, 1.0)
+    t, x = history(rng, count=800)
+    phi_max = scene.branches.eta[-1]
+    x = 1.3 * phi_max * x / np.abs(x).max()
+    force = displacement_response(scene, x)
+    data = tmp_path / "loop.csv"
+    np.savetxt(data, np.column_stack([t, x, force]), delimiter=",", header="t,x,force", comments="")
+    run = _cli(data, "--time", "t", "--continuum", "iwan", "--out", tmp_path / "fit.toml", "--fmu",
+               tmp_path / "fit.fmu")
+    assert run.returncode == 0, run.stderr
+    assert "Iwan F_S = 1 N" in run.stderr and "residual RMS" in run.stderr
+    fitted_scene = load_scene(tmp_path / "fit.toml")
+    assert fitted_scene.branches.continuum and "Segalman" in fitted_scene.branches.description
+    signal = np.zeros(len(t), dtype=[("time", float), ("x", float), ("v", float)])
+    signal["time"], signal["x"] = t, x
+    out = simulate_fmu(str(tmp_path / "fit.fmu"), stop_time=t[-1], output_interval=t[1] - t[0], input=signal,
+                       output=["force"])
+    rows = min(len(out) - 1, len(t) - 1)
+    np.testing.assert_allclose(out["force"][1:rows + 1], force[:rows], rtol=0, atol=1e-7 * np.ptp(force))
+
+
+@pytest.mark.parametrize("options, culprit", [
+    (["--continuum", "spline"], "invalid choice: 'spline'"),
+    (["--continuum", "iwan", "--branches", "5"], "not allowed with argument"),
+])
+def test_bad_continuum_options_are_one_line_and_exit_2(tmp_path, options, culprit):
+    data = tmp_path / "loop.csv"
+    data.write_text("x,force\n" + "".join(f"{np.sin(i / 3)},{np.sin(i / 3)}\n" for i in range(30)))
+    run = _cli(data, *options)
+    assert run.returncode == 2 and culprit in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr

@@ -8,6 +8,8 @@ import numpy as np
 
 from .._jit import kernel
 from .play import branch_force, move, piece
+from .stack import X as stack_x
+from .stack import move as stack_move
 from .smooth import elastic_stiffness, smooth_force
 
 
@@ -54,3 +56,11 @@ def play_basis(xs, etas, out):
         for i in range(etas.shape[0]):
             u[i] = min(max(u[i] + dx, -etas[i]), etas[i])
             out[j, i] = u[i]
+
+
+@kernel
+def spectrum_drive(params, state, xs, out):
+    """out[j]: the force of the memory stack ``params`` (n branches or a continuum) in ``state`` after moving
+    to each sample xs[j] in turn (state in place, from its own x)."""
+    for j in range(xs.shape[0]):
+        out[j] = stack_move(params, state, xs[j] - state[stack_x], None)
