@@ -453,9 +453,10 @@ def plot_fit(path, x, force, fit_result: Fit, title: str) -> None:
 
     fig, (loop, error) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     loop.plot(x, force, lw=1.6, color="0.6", label="measured")
-    loop.plot(x, fit_result.fitted, lw=0.8, color="C3", label=f"fitted ({fit_result.label})")
+    loop.plot(x, fit_result.fitted, lw=0.8, color="C3", label="fitted")
+    fig.suptitle(f"fitted: {fit_result.label}", fontsize="medium")
     loop.set(xlabel="x (m)", ylabel="force (N)", title=title)
-    loop.legend()
+    loop.legend(loc="upper left")
     error.plot(np.arange(len(x)), force - fit_result.fitted, lw=0.6)
     error.set(xlabel="sample", ylabel="measured - fitted (N)",
               title=f"residual: RMS {100 * fit_result.relative_rms:.2g} % of the range")

@@ -156,10 +156,11 @@ def test_the_library_refuses_bad_data_naming_it():
         fit(np.sin(np.arange(20.0)), np.arange(20.0), dashpot=True)
 
 
-def test_the_example_goes_from_a_csv_to_a_scene_an_fmu_and_a_plot(tmp_path):
+@pytest.mark.parametrize("options", [[], ["--continuum", "iwan"]])
+def test_the_example_goes_from_a_csv_to_a_scene_an_fmu_and_a_plot(tmp_path, options):
     from .conftest import ROOT
 
-    run = subprocess.run([sys.executable, str(ROOT / "examples" / "fit_loop.py"), "--out", str(tmp_path)],
+    run = subprocess.run([sys.executable, str(ROOT / "examples" / "fit_loop.py"), "--out", str(tmp_path), *options],
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     for name in ("measured.csv", "fitted.toml", "fitted.fmu", "fit.png"):
