@@ -216,6 +216,35 @@ def test_a_key_the_scene_cannot_take_is_refused_before_any_run(write_scene, tmp_
         plan(scene, spec)
 
 
+def test_a_sweep_varies_the_keys_of_a_density_table():
+    """branches.density.chi: a key of an inline table; each run is the scene with it set (its own rules)."""
+    from prandtl_fmu.sweep.runs import run_batch
+    from prandtl_fmu.sweep.spec import apply
+
+    tables = base_tables(mass={"m": 1.0}, cubic=None, damper=None,
+                         branches={"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 5.0,
+                                                                  "chi": -0.5, "beta": 0.2}},
+                         solver={"stepper": "verlet", "step": 1e-3, "stop_time": 5.0, "output_interval": 0.5})
+    import tomllib
+
+    document = tomllib.loads(scene_text(tables))
+    spec = _spec('[grid]\n"branches.density.chi" = [-0.8, -0.3]\n"branches.density.F_S" = [1.0, 2.0]\n'
+                 '[keep]\nsummary = ["max_abs_x", "dissipated_sliders"]')
+    runs = spec.values(0, spec.runs)
+    table = run_batch(document, "iwan.toml", spec.keys, runs, spec.summary, False)
+    assert table["error"] == [""] * 4
+    for (run, values), peak, dissipated in zip(runs, table["max_abs_x"], table["dissipated_sliders"]):
+        alone = summarize(parse_scene(scene_text({**tables, "branches": {"continuum": True, "density": {
+            "kind": "iwan", "F_S": values["branches.density.F_S"], "K_T": 5.0,
+            "chi": values["branches.density.chi"], "beta": 0.2}}})), None, ["max_abs_x", "dissipated_sliders"])
+        assert (peak, dissipated) == (alone["max_abs_x"], alone["dissipated_sliders"])
+    bad = run_batch(document, "iwan.toml", spec.keys, [(0, {"branches.density.chi": -1.5,
+                                                             "branches.density.F_S": 1.0})], spec.summary, False)
+    assert "[branches.density] chi: must be > -1" in bad["error"][0]
+    with pytest.raises(SweepError, match="the scene's branches.k is not a table"):
+        apply({"branches": {"k": [1.0]}}, {"branches.k.x": 1.0})
+
+
 # ------------------------------------------------------------------ sweeps
 
 SWEEP = """

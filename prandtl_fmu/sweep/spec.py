@@ -65,7 +65,8 @@ DISTRIBUTIONS = {
     "integers": ("low", "high"),
     "choice": ("values",),
 }
-_KEY = re.compile(r"^([a-z_]+)\.([a-z_0-9]+)(?:\[([0-9]+)\])?$")
+# table.key, table.key[i], or a key of an inline table: table.key.key (branches.density.chi)
+_KEY = re.compile(r"^([a-z_]+)\.([A-Za-z_][A-Za-z_0-9]*(?:\.[A-Za-z_][A-Za-z_0-9]*)*)(?:\[([0-9]+)\])?$")
 MAX_RUNS_PER_TASK = 2000
 
 
@@ -237,8 +238,8 @@ def parse_spec(doc: dict, source: str) -> SweepSpec:
 def _check_key(key, where, fail):
     match = _KEY.match(key)
     if not match:
-        fail(where.rsplit(" ", 1)[0] + f" {key!r}", "not a scene key: write table.key or table.key[i] "
-             "(e.g. \"spring.k0\", \"branches.k[2]\")")
+        fail(where.rsplit(" ", 1)[0] + f" {key!r}", "not a scene key: write table.key, table.key[i] or "
+             "table.key.key (e.g. \"spring.k0\", \"branches.k[2]\", \"branches.density.chi\")")
     table = match.group(1)
     if table in ("fmu",) or table not in ("mass", "spring", "cubic", "damper", "branches", "load", "solver"):
         fail(where, f"[{table}] is not a table a sweep can vary (mass, spring, cubic, damper, branches, load, "
@@ -347,14 +348,18 @@ def _distribution(key, value, rule) -> Distribution:
 
 
 def apply(document: dict, values: dict) -> dict:
-    """A copy of the scene ``document`` with the sweep's ``values`` set (``table.key`` or ``table.key[i]``).
+    """A copy of the scene ``document`` with the sweep's ``values`` set (``table.key``, ``table.key[i]`` or
+    ``table.key.key`` for a key of an inline table).
     A key of a missing table adds the table; a position beyond a list's end is a SweepError."""
     doc = copy.deepcopy(document)
     for key, value in values.items():
-        table, name, index = _KEY.match(key).groups()
-        target = doc.setdefault(table, {})
-        if not isinstance(target, dict):
-            raise SweepError(f"{key}: the scene's {table} is not a table")
+        table, path, index = _KEY.match(key).groups()
+        *inner, name = path.split(".")
+        target = doc
+        for depth, part in enumerate([table] + inner):
+            target = target.setdefault(part, {})
+            if not isinstance(target, dict):
+                raise SweepError(f"{key}: the scene's {'.'.join(([table] + inner)[:depth + 1])} is not a table")
         if isinstance(value, np.generic):
             value = value.item()
         if index is None:
