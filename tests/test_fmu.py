@@ -26,6 +26,9 @@ EFFECT_SETS = {
     "damper-only": base_tables(spring=None, cubic=None, mass={"m": 2.0, "x0": 0.1, "v0": 0.0}),
     "continuum": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
                              branches={"continuum": True, "k_total": 1.0, "eta_range": [0.0, 1.0]}),
+    "iwan": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
+                        branches={"continuum": True, "density": {"kind": "iwan", "F_S": 0.5, "K_T": 2.0,
+                                                                 "chi": -0.5, "beta": 0.3}}),
 }
 
 
@@ -100,7 +103,7 @@ def element_run(scene_path, stepper, times, forces):
 
 
 @pytest.mark.parametrize("stepper", ["projected", "implicit"])
-@pytest.mark.parametrize("name", [name for name in EFFECT_SETS if name != "continuum"])
+@pytest.mark.parametrize("name", [name for name in EFFECT_SETS if name not in ("continuum", "iwan")])
 def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
     fmu, scene_path = fmus[name]
     dt, stop = 0.05, 20.0
@@ -380,11 +383,11 @@ def test_a_stepper_that_does_not_apply_is_refused(fmus):
         slave.close()
 
 
-@pytest.mark.parametrize("stepper", ["projected", "verlet"])
-def test_the_continuous_element_as_an_fmu(fmus, stepper):
-    """The continuum (infinitely many branches) in an FMU: equal to the library, its state saved and restored
-    as plain data, and a stepper that cannot take it refused by name."""
-    fmu, scene_path = fmus["continuum"]
+@pytest.mark.parametrize("name, stepper", [("continuum", "projected"), ("continuum", "verlet"), ("iwan", "verlet")])
+def test_the_continuous_element_as_an_fmu(fmus, name, stepper):
+    """The continuum (infinitely many branches; the paper's spectrum, Segalman's Iwan model) in an FMU: equal
+    to the library, its state saved and restored as plain data, and a stepper that cannot take it refused."""
+    fmu, scene_path = fmus[name]
     dt, stop = 0.05, 20.0
     times = np.round(np.arange(0, stop + dt / 2, dt), 12)
     forces = 0.6 * np.cos(0.7 * times) + 0.2 * np.sin(2.3 * times)
