@@ -260,17 +260,22 @@ def _partial(table, j, t):
 
 
 @kernel
-def _segment_of(table, pos):
-    """The segment j with s_j <= pos < s_j+1 (the last one for pos = 1)."""
-    s = table[S_AT]
-    first, last = 0, s.shape[0] - 2
+def _last_not_above(values, target):
+    """The largest index b <= len(values) - 2 with values[b] <= target (0 if none): values non-decreasing."""
+    first, last = 0, values.shape[0] - 2
     while first < last:
         middle = (first + last + 1) >> 1
-        if s[middle] <= pos:
+        if values[middle] <= target:
             first = middle
         else:
             last = middle - 1
     return first
+
+
+@kernel
+def _segment_of(table, pos):
+    """The segment j with s_j <= pos < s_j+1 (the last one for pos = 1)."""
+    return _last_not_above(table[S_AT], pos)
 
 
 @kernel
@@ -308,13 +313,7 @@ def _last_reached(table, target):
         return 0.0
     if eta[ends - 1] <= target:
         return 1.0
-    first, last = 0, ends - 2  # the largest end b with eta_b <= target: then eta_b+1 > target, slope > 0
-    while first < last:
-        middle = (first + last + 1) >> 1
-        if eta[middle] <= target:
-            first = middle
-        else:
-            last = middle - 1
+    first = _last_not_above(eta, target)  # then eta[first + 1] > target: the slope is > 0
     pos = table[S_AT, first] + (target - eta[first]) / table[SLOPE, first]
     return min(pos, table[S_AT, first + 1])
 
