@@ -166,6 +166,28 @@ def run(structure, stop_time, ssp_step=None):
     return {name: np.array(values) for name, values in columns.items()}
 
 
+def run_ecos(folder, step, stop_time):
+    """The same system in ecos (ecospy, in this process) from the SSP folder (SystemStructure.ssd and the FMUs):
+    the arrays time, x, v, force after every step of size ``step`` (s). ecos 0.7.2 reads SSP, not
+    OspSystemStructure.xml; its fixed-step master couples like libcosim's."""
+    from ecospy import EcosSimulation
+
+    simulation = EcosSimulation(step, ssp_path=str(folder))
+    columns = {name: [] for name in ("time", "x", "v", "force")}
+    try:
+        simulation.init(parameter_set="initialValues")
+        for _ in range(round(stop_time / step)):
+            simulation.step(1)
+            columns["time"].append(simulation.get_time())
+            columns["x"].append(simulation.get_real("mass::x"))
+            columns["v"].append(simulation.get_real("mass::v"))
+            columns["force"].append(simulation.get_real("bushing::force"))
+        simulation.terminate()
+    finally:
+        simulation.free()
+    return {name: np.array(values) for name, values in columns.items()}
+
+
 def reference_x(times):
     """x of the element with its mass (bushing-with-mass.toml, exact stepper) at the given times."""
     from prandtl_fmu import Element, load_scene
