@@ -456,7 +456,8 @@ def _density(branches_reader) -> ContinuousBranches:
         except (ValueError, ZeroDivisionError, OverflowError) as exc:
             r.fail("F_S", f"with K_T, chi, beta gives no finite spectrum ({exc})")
         if not (0 < spectrum.strength < math.inf and 0 < spectrum.stiffness_sum < math.inf):
-            r.fail("F_S", "with K_T, chi, beta gives no finite spectrum (phi_max or the density overflows)")
+            r.fail("F_S", "with K_T, chi, beta gives no finite spectrum (phi_max or the density overflows or "
+                   "underflows)")
         return spectrum
     r.only({"kind", "s", "k", "eta"})
     k = r.numbers("k", minimum=0.0)
@@ -479,8 +480,8 @@ def _density(branches_reader) -> ContinuousBranches:
         spectrum = ContinuousBranches.piecewise(ends, k, eta)
     except ValueError as exc:
         r.fail("k", str(exc))
-    if not 0 < spectrum.strength < math.inf:
-        r.fail("k", "the spectrum's stiffness or strength overflows")
+    if not spectrum.strength < math.inf:  # 0 is allowed: branches of zero elastic range, as in the lists
+        r.fail("k", "the spectrum's strength integral k eta ds overflows")
     return spectrum
 
 
