@@ -145,15 +145,16 @@ def _toml_value(value) -> str:
     return repr(float(value))
 
 
+def _roles(x, force, time, v) -> dict:
+    """{"x": x, "force": force} plus "time" and "v" where given."""
+    given = {"x": x, "force": force, "time": time, "v": v}
+    return {role: value for role, value in given.items() if value is not None}
+
+
 def check_data(x, force, time=None, v=None):
     """The arrays as float, or FitError naming what is wrong (one line)."""
-    arrays = {"x": x, "force": force}
-    if time is not None:
-        arrays["time"] = time
-    if v is not None:
-        arrays["v"] = v
     checked = {}
-    for name, values in arrays.items():
+    for name, values in _roles(x, force, time, v).items():
         values = np.asarray(values, dtype=float).reshape(-1)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
@@ -422,11 +423,7 @@ def read_columns(path, time: Optional[str], x: str, force: str, v: Optional[str]
     if not rows:
         raise FitError(f"{path}: empty")
     header = [name.strip() for name in rows[0]]
-    wanted = {"x": x, "force": force}
-    if time is not None:
-        wanted["time"] = time
-    if v is not None:
-        wanted["v"] = v
+    wanted = _roles(x, force, time, v)
     index = {}
     for role, name in wanted.items():
         if name not in header:
