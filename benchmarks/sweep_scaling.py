@@ -16,10 +16,15 @@ Measured in one run of this script, on this machine:
   share them with the workers); and the share of the workers' time not
   spent inside a task (dask's task stream): the scheduler's cost;
 * ``single`` again at the end: how much the machine itself drifted;
+* short runs (T = 0.1 s, 100 steps), where Python per run matters most: one
+  task's batch of ``--short-runs`` runs in this process (``runs.run_batch``:
+  scene checks, then one compiled call, ``summary.summarize_many``) against
+  the same runs one by one (scene check and :func:`summary.summarize` each),
+  and the part of the batch spent in its compiled call;
 * the time of one full run (T = 500 s) and, from it, what 10^6 runs of the
   paper's scene cost on N machines of C cores at the measured efficiency.
 
-    python benchmarks/sweep_scaling.py [--runs 400] [--stop-time 50] [--out docs/sweep]
+    python benchmarks/sweep_scaling.py [--runs 400] [--stop-time 50] [--short-runs 2000] [--out docs/sweep]
 """
 import argparse
 import os
@@ -32,8 +37,10 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from common import write_rows  # noqa: E402
 from prandtl_fmu import load_scene  # noqa: E402
 from prandtl_fmu.scene import read_document, scene_from_document  # noqa: E402
+from prandtl_fmu import summary as summary_module  # noqa: E402
 from prandtl_fmu.summary import summarize  # noqa: E402
 from prandtl_fmu.sweep import sweep  # noqa: E402
+from prandtl_fmu.sweep.runs import run_batch  # noqa: E402
 from prandtl_fmu.sweep.spec import apply  # noqa: E402
 
 SUMMARY = ["max_abs_x", "final_x", "dissipated", "loop_area"]
@@ -49,6 +56,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=400)
     parser.add_argument("--stop-time", type=float, default=50.0)
+    parser.add_argument("--short-runs", type=int, default=2000)
     parser.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "docs", "sweep"))
     args = parser.parse_args()
     from distributed import Client, LocalCluster, get_task_stream
@@ -71,6 +79,8 @@ def main():
     rows = [{"configuration": "one by one in-process", "workers": 0, "runs_per_task": "", "seconds": single,
              "runs_per_second": args.runs / single, "overhead_fraction": 1.0, "scheduler_share": ""}]
     print(f"single: {args.runs} runs in {single:.3f} s ({single / args.runs * 1e3:.2f} ms per run)")
+
+    rows += short_runs(document, source, args.short_runs)
 
     for workers in (1, 2):
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
@@ -118,6 +128,43 @@ def main():
     with open(os.path.join(args.out, "million_runs.md"), "w") as fh:
         fh.write("\n".join(lines) + "\n")
     print("\n".join(lines))
+
+
+def short_runs(document, source, count):
+    """Per-run cost of short runs (T = 0.1 s) in one task: batched against one by one."""
+    short = dict(document, solver=dict(document["solver"], stop_time=0.1))
+    quantities = ["max_abs_x", "final_x", "dissipated"]
+    runs = [(i, {"load.amplitude": 0.05 + 0.4 * i / (count - 1)}) for i in range(count)]
+    run_batch(short, source, ["load.amplitude"], runs[:2], quantities, False)  # warm
+    compiled = []
+    run = summary_module._Batch.run
+
+    def timed(self, outcomes, wanted):  # the time inside the compiled call and the unpacking after it
+        start = time.perf_counter()
+        run(self, outcomes, wanted)
+        compiled.append(time.perf_counter() - start)
+
+    summary_module._Batch.run = timed
+    start = time.perf_counter()
+    table = run_batch(short, source, ["load.amplitude"], runs, quantities, False)
+    batched = time.perf_counter() - start
+    summary_module._Batch.run = run
+    assert all(error == "" for error in table["error"])
+    start = time.perf_counter()
+    for _, values in runs:
+        summarize(scene_from_document(apply(short, values), source), quantities=quantities)
+    alone = time.perf_counter() - start
+    print(f"short runs (T = 0.1 s): batched {batched / count * 1e6:.0f} us a run ({len(compiled)} compiled "
+          f"call(s): {sum(compiled) / count * 1e6:.0f} us a run), one by one {alone / count * 1e6:.0f} us a run")
+    return [{"configuration": f"short runs (T = 0.1 s), one task of {count} runs, in-process", "workers": 0,
+             "runs_per_task": count, "seconds": batched, "runs_per_second": count / batched,
+             "overhead_fraction": "", "scheduler_share": ""},
+            {"configuration": "  of which the compiled call (and unpacking)", "workers": 0,
+             "runs_per_task": count, "seconds": sum(compiled), "runs_per_second": count / sum(compiled),
+             "overhead_fraction": "", "scheduler_share": ""},
+            {"configuration": "short runs one by one (scene check + summarize each)", "workers": 0,
+             "runs_per_task": 1, "seconds": alone, "runs_per_second": count / alone,
+             "overhead_fraction": "", "scheduler_share": ""}]
 
 
 def _write(folder, name, text):

@@ -4,8 +4,10 @@
 at the same times, bit for bit) but watches *every internal step*, so that
 the peaks do not depend on the output grid, and keeps only the quantities
 asked for (and, on request, the output grid itself: the rows ``simulate``
-would return). The steps run in compiled chunks; Python runs once per
-chunk of up to :data:`_CHUNK_STEPS` steps.
+would return). :func:`summarize_many` does many runs at once: the runs that
+share a structure go through one compiled call per stepper
+(``kernels/batch.py``, at most :data:`BATCH_BYTES` of state and history per
+call); Python runs per run only to check and pack it, never per step.
 
 The quantities (``SUMMARIES``):
 
@@ -22,16 +24,19 @@ The quantities (``SUMMARIES``):
 from __future__ import annotations
 
 import math
+import warnings
+from dataclasses import dataclass
 from typing import Iterable, Optional
 
 import numpy as np
 
-from .driver import (OutputGrid, choose_branch_kernel, compile_loop, compile_model, initial_state, integrate,
-                     split_duration, _failure)
-from .kernels.play import branch_force
-from .kernels.smooth import smooth_force
+from .driver import (ElementError, OutputGrid, choose_branch_kernel, compile_loop, compile_model,
+                     initial_state, split_duration, _failure, _smooth_model)
+from .kernels import batch as packed
 from .loads import HarmonicLoad
+from .resources import check_memory
 from .scene import Scene
+from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
 SUMMARIES = {
@@ -50,8 +55,9 @@ SUMMARIES = {
 ENERGY_SUMMARIES = ("work", "dissipated", "dissipated_sliders", "dissipated_damper", "loop_area")
 HISTORY_COLUMNS = ("time", "x", "v", "reaction")
 
-# Steps of one compiled call (the per-step rows of a chunk take 24 bytes each: 6 MB).
-_CHUNK_STEPS = 1 << 18
+# The branch states and output rows of one compiled call hold at most this many bytes (a continuum's state
+# takes 160 kB: 400 runs a call; a paper-scene run without history 1 kB).
+BATCH_BYTES = 64 << 20
 
 
 def summary_problem(scene: Scene, stepper: str, quantities: Iterable[str]) -> Optional[str]:
@@ -82,111 +88,203 @@ def summarize(scene: Scene, stepper: Optional[str] = None, quantities: Optional[
     """Run ``scene`` and return ``{quantity: float}`` (see the module docstring; default: every quantity that
     applies), plus the output grid as arrays ``time, x, v, reaction`` with ``history``.
 
-    ValueError if a quantity does not apply; :class:`driver.ElementError` if a step cannot be taken, as
-    :func:`driver.simulate`.
+    Warns (:class:`stability.StabilityWarning`) as :func:`driver.simulate` does; ValueError if a quantity or
+    the stepper does not apply; :class:`driver.ElementError` if a step cannot be taken.
     """
     name = stepper or scene.solver.stepper
     quantities = default_summaries(scene, name) if quantities is None else list(quantities)
-    problem = summary_problem(scene, name, quantities)
-    if problem:
-        raise ValueError(f"{scene.source}: {problem}")
-    loop = compile_loop(scene, name)
-    solver = scene.solver
-    h, per_row = solver.step, solver.steps_per_output
-    if getattr(get_stepper(name), "STEP_IS_OUTPUT", False):
-        h, per_row = solver.output_interval, 1
-    model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
-    load = scene.load.compile()
-    x, v, u = initial_state(scene, model, load)
-    m, k0, k3, c, k, eta = model
-    account = np.zeros(3) if any(q in ENERGY_SUMMARIES for q in quantities) else None
-
-    grid = OutputGrid(solver.stop_time, solver.output_interval)
-    full_steps = (grid.rows - 1 - grid.last_is_short) * per_row
-    watch = _Watch(x, v, smooth_force(x, v, k0, k3, c) + branch_force(k, u), per_row, grid.rows if history else 0)
-    # loop_area: the account after step p0, one period of the load before the end
-    p0 = None
-    if "loop_area" in quantities:
-        p0 = min(full_steps, max(0, round((solver.stop_time - 2 * math.pi / abs(scene.load.omega)) / h)))
-    at_p0 = None
-
-    def run(first, count, step, t_base=0.0):
-        nonlocal x, v
-        out = np.empty((count, 3))
-        x, v, taken = integrate(loop, model, load, x, v, u, t_base, first, step, 1, out, None, account, None)
-        if taken < count:
-            raise _failure(scene, name, load, t_base + (first + taken) * step, step)
-        watch.see(out)
-
-    p = 0
-    for end in sorted({full_steps} | ({p0} if p0 is not None else set())):
-        while p < end:
-            count = min(_CHUNK_STEPS, end - p)
-            run(p, count, h)
-            p += count
-        if p == p0:
-            at_p0 = account.copy()
-    if grid.last_is_short:  # the last, shorter output interval up to stop_time, as driver._advance takes it
-        last = grid.times(grid.rows - 2, 2)
-        whole, rest = split_duration(last[1] - last[0], h)
-        watch.row_every = 0  # the last row is the final state, whatever the steps
-        for first in range(0, whole, _CHUNK_STEPS):
-            run(full_steps + first, min(_CHUNK_STEPS, whole - first), h)
-        if rest:
-            run(0, 1, rest, t_base=(full_steps + whole) * h)
-        watch.final_row()
-
-    result = {}
-    final = watch.last
-    values = {
-        "max_abs_x": watch.peak[0], "max_abs_v": watch.peak[1], "max_abs_reaction": watch.peak[2],
-        "final_x": final[0], "final_v": final[1], "final_reaction": final[2],
-    }
-    if account is not None:
-        values.update(work=account[0], dissipated_sliders=account[1], dissipated_damper=account[2],
-                      dissipated=account[1] + account[2])
-        if at_p0 is not None:
-            values["loop_area"] = (account[1] + account[2]) - (at_p0[1] + at_p0[2])
-    for q in quantities:
-        result[q] = float(values[q])
-    if history:
-        rows = watch.history()
-        result.update(time=grid.times(0, grid.rows), x=rows[:, 0], v=rows[:, 1], reaction=rows[:, 2])
-    return result
+    [outcome] = summarize_many([(scene, name)], quantities, history=history, branch_kernel=branch_kernel)
+    if outcome.warning:
+        warnings.warn(outcome.warning, StabilityWarning, stacklevel=2)
+    if outcome.error is not None:
+        raise outcome.error
+    return outcome.values
 
 
-class _Watch:
-    """The peaks of |x|, |v|, |reaction| over every step seen, the last state, and (for a history) every
-    ``row_every``-th step's state as an output row."""
+@dataclass
+class Outcome:
+    """One run of :func:`summarize_many`: its ``values`` (as :func:`summarize` returns them) or the ``error``
+    that stopped it (ValueError, ElementError), and its stability ``warning`` ("" if none)."""
 
-    def __init__(self, x, v, reaction, row_every, rows):
-        self.last = np.array([x, v, reaction], dtype=float)
-        self.peak = np.abs(self.last)
-        self.row_every, self.steps = row_every, 0
-        self.rows = np.empty((rows, 3)) if rows else None
-        self.filled = 0
-        if self.rows is not None:
-            self.rows[0] = self.last
-            self.filled = 1
+    values: Optional[dict] = None
+    error: Optional[Exception] = None
+    warning: str = ""
 
-    def see(self, out):
-        """The states after the next ``out.shape[0]`` steps."""
-        np.maximum(self.peak, np.abs(out).max(axis=0), out=self.peak)
-        self.last = out[-1].copy()
-        if self.rows is not None and self.row_every:
-            # rows after steps number row_every, 2 row_every, ... (counted over the whole run)
-            first = (-self.steps - 1) % self.row_every
-            picked = out[first::self.row_every]
-            self.rows[self.filled:self.filled + picked.shape[0]] = picked
-            self.filled += picked.shape[0]
-        self.steps += out.shape[0]
 
-    def final_row(self):
-        if self.rows is not None:
-            self.rows[self.filled] = self.last
-            self.filled += 1
+def summarize_many(runs, quantities: Iterable[str], *, history: bool = False,
+                   branch_kernel: Optional[str] = None) -> list:
+    """:func:`summarize` for each ``(scene, stepper)`` of ``runs``, the same numbers bit for bit, as a list of
+    :class:`Outcome` (a failed run does not stop the others).
 
-    def history(self):
-        if self.filled != self.rows.shape[0]:  # a broken invariant, never a short history
-            raise RuntimeError(f"summary: {self.filled} of {self.rows.shape[0]} output rows written")
-        return self.rows
+    The runs of one structure (stepper loop, effects present, branch kernel)
+    are packed into a batch and run by one compiled call (``kernels/batch.py``).
+    """
+    quantities = list(quantities)
+    energy = any(q in ENERGY_SUMMARIES for q in quantities)
+    outcomes = [Outcome() for _ in runs]
+    batches, branch_models = {}, {}
+    for position, (scene, name) in enumerate(runs):
+        try:
+            job = _Job(scene, name, quantities, history, branch_kernel, branch_models)
+        except (ValueError, ElementError) as exc:
+            outcomes[position].error = exc
+            continue
+        outcomes[position].warning = job.warning
+        key = job.structure()
+        batch = batches.get(key)
+        if batch is None:
+            batch = batches[key] = _Batch(job, energy)
+        batch.add(position, job)
+        if batch.nbytes >= BATCH_BYTES:
+            batch.run(outcomes, quantities)
+            del batches[key]
+    for batch in batches.values():
+        batch.run(outcomes, quantities)
+    return outcomes
+
+
+class _Job:
+    """One run, checked and compiled to kernel form: what :class:`_Batch` packs."""
+
+    def __init__(self, scene: Scene, name: str, quantities: list, history: bool, branch_kernel: Optional[str],
+                 branch_models: dict):
+        problem = summary_problem(scene, name, quantities)
+        if problem:
+            raise ValueError(f"{scene.source}: {problem}")
+        self.scene, self.name = scene, name
+        module = get_stepper(name)
+        loop = compile_loop(scene, name)
+        self.kernel = module.SUMMARY_LOOPS[loop]
+        solver = scene.solver
+        h, per_row = solver.step, solver.steps_per_output
+        if getattr(module, "STEP_IS_OUTPUT", False):
+            h, per_row = solver.output_interval, 1
+        self.h, self.per_row = h, per_row
+        problem = stability_problem(scene, name, h)
+        self.warning = f"{scene.source}: {problem}" if problem else ""
+        self.model = _smooth_model(scene) + _branch_model(scene, name, branch_kernel, branch_models)
+        self.load = scene.load.compile()
+        self.x, self.v, self.u = initial_state(scene, self.model, self.load)
+
+        self.grid = grid = OutputGrid(solver.stop_time, solver.output_interval)
+        self.full_steps = (grid.rows - 1 - grid.last_is_short) * per_row
+        self.tail_steps, self.rest = 0, 0.0
+        if grid.last_is_short:  # the last, shorter output interval up to stop_time, as driver._advance takes it
+            last = grid.times(grid.rows - 2, 2)
+            self.tail_steps, self.rest = split_duration(last[1] - last[0], h)
+        # loop_area: the account after step `mark`, one period of the load before the end
+        self.mark = -1
+        if "loop_area" in quantities:
+            period = 2 * math.pi / abs(scene.load.omega)
+            self.mark = min(self.full_steps, max(0, round((solver.stop_time - period) / h)))
+        self.history_rows = grid.rows if history else 0
+        if history:
+            check_memory(24.0 * grid.rows, f"{scene.source}: the history ({grid.rows} rows)",
+                         hint="keep summaries only")
+
+    def structure(self):
+        """What fixes the compiled code of a run: its loop, the effects present, the branch kernel."""
+        k = self.model[4]
+        kind = None if k is None else "continuum" if isinstance(k, tuple) else k.ndim
+        return self.kernel, tuple(value is None for value in self.model[:4]), kind, self.u is None
+
+
+def _branch_model(scene: Scene, name: str, branch_kernel: Optional[str], known: dict):
+    """The branch part ``(k, eta)`` of :func:`driver.compile_model`, shared by the runs whose branches are
+    equal (the kernels only read it): a sweep that varies the load prepares its memory stack once."""
+    branches = scene.branches
+    if branches is None or branches.continuum:
+        return compile_model(scene)[4:]
+    key = (name, branch_kernel, branches.stiffness.tobytes(), branches.yield_displacement.tobytes(),
+           branches.u0.tobytes())
+    if key not in known:
+        known[key] = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))[4:]
+    return known[key]
+
+
+class _Batch:
+    """Runs of one structure packed into the flat arrays of ``kernels/batch.py``."""
+
+    def __init__(self, job: _Job, energy: bool):
+        self.kernel = job.kernel
+        self.template = (job.model, job.u, np.zeros(3) if energy else None)
+        self.jobs, self.positions = [], []
+        self.real, self.index = [], []
+        self.branch, self.eta, self.tables, self.states = [], [], [], []
+        self.ends = {"branch": 0, "table": 0, "state": 0, "history": 0}
+        self.packed = {}  # id of a branch parameter array -> its range in branch_data
+        self.nbytes = 0
+
+    def _extend(self, part: str, size: int):
+        start = self.ends[part]
+        self.ends[part] = start + size
+        return start, start + size
+
+    def add(self, position: int, job: _Job):
+        m, k0, k3, c, k, eta = job.model
+        kind, offset, amplitude, omega, table_time, table_force = job.load
+        real = [m, k0, k3, c, job.x, job.v, job.h, job.rest, offset, amplitude, omega]
+        real[:4] = [0.0 if value is None else value for value in real[:4]]
+        branch_a = branch_b = rows = cols = 0
+        if k is not None:
+            values = k[0] if isinstance(k, tuple) else k
+            rows, cols = (values.shape if values.ndim == 2 else (1, values.shape[0]))
+            if id(values) not in self.packed:  # runs that share their branches (_branch_model) share one copy
+                self.packed[id(values)] = self._extend("branch", values.size)
+                self.branch.append(values.ravel())
+                self.eta.append(eta if eta is not None else np.zeros(values.size))
+            branch_a, branch_b = self.packed[id(values)]
+        table_a, table_b = self._extend("table", table_time.shape[0])
+        _, table_c = self._extend("table", table_force.shape[0])
+        self.tables += [table_time, table_force]
+        state_a = state_b = 0
+        if job.u is not None:
+            state_a, state_b = self._extend("state", job.u.shape[0])
+            self.states.append(job.u)
+        history_a, history_b = self._extend("history", 3 * job.history_rows)
+        self.real.append(real)
+        self.index.append([kind, job.full_steps, job.per_row, job.mark, job.tail_steps, int(job.grid.last_is_short),
+                           branch_a, branch_b, rows, cols, table_a, table_b, table_c, state_a, state_b,
+                           history_a, history_b])
+        self.jobs.append(job)
+        self.positions.append(position)
+        self.nbytes += 8 * (state_b - state_a + history_b - history_a) + 8 * (packed.REAL_COLUMNS + packed.INDEX_COLUMNS)
+
+    def run(self, outcomes: list, quantities: list):
+        """One compiled call for every run of the batch; their outcomes into ``outcomes``."""
+        count = len(self.jobs)
+
+        def flat(parts):
+            return np.ascontiguousarray(np.concatenate(parts), dtype=float) if parts else np.zeros(0)
+
+        real = np.array(self.real, dtype=float).reshape(count, packed.REAL_COLUMNS)
+        index = np.array(self.index, dtype=np.int64).reshape(count, packed.INDEX_COLUMNS)
+        history = np.zeros(self.ends["history"])
+        accounts, marks = np.zeros((count, 3)), np.zeros((count, 3))
+        out = np.zeros((count, packed.OUT_COLUMNS))
+        self.kernel(self.template, (real, index, flat(self.branch), flat(self.eta), flat(self.tables),
+                                    flat(self.states), history, accounts, marks, out))
+        for j, (job, position) in enumerate(zip(self.jobs, self.positions)):
+            row = out[j]
+            if not math.isnan(row[packed.FAILED_AT]):
+                outcomes[position].error = _failure(job.scene, job.name, job.load, row[packed.FAILED_AT],
+                                                    row[packed.FAILED_STEP])
+                continue
+            account, mark = accounts[j], marks[j]
+            values = {
+                "max_abs_x": row[packed.PEAK_X], "max_abs_v": row[packed.PEAK_V],
+                "max_abs_reaction": row[packed.PEAK_REACTION], "final_x": row[packed.FINAL_X],
+                "final_v": row[packed.FINAL_V], "final_reaction": row[packed.FINAL_REACTION],
+                "work": account[0], "dissipated_sliders": account[1], "dissipated_damper": account[2],
+                "dissipated": account[1] + account[2], "loop_area": (account[1] + account[2]) - (mark[1] + mark[2]),
+            }
+            result = {q: float(values[q]) for q in quantities}
+            if job.history_rows:
+                written = int(row[packed.ROWS_WRITTEN])
+                if written != job.history_rows:  # a broken invariant, never a short history
+                    raise RuntimeError(f"summary: {written} of {job.history_rows} output rows written")
+                a, b = index[j, packed.HISTORY_A], index[j, packed.HISTORY_B]
+                rows = history[a:b].reshape(-1, 3)
+                result.update(time=job.grid.times(0, job.grid.rows), x=rows[:, 0].copy(), v=rows[:, 1].copy(),
+                              reaction=rows[:, 2].copy())
+            outcomes[position].values = result

@@ -11,6 +11,9 @@ A stepper module defines
   step that cannot be taken returns a non-finite x;
 * for each step, its compiled time loop ``run(model, load, x, v, u, t_base, first_step, h, ...)``: one
   line, ``return time_loop(step, ...)`` (``kernels/loop.py``), so that the loop is cached across processes;
+* for each step, its compiled summary loop ``run_summary(template, batch)``: one line,
+  ``return summary_loop(step)(...)`` (``kernels/batch.py``: many runs in one call, for sweeps), and
+  ``SUMMARY_LOOPS = {run: run_summary, ...}``;
 * ``loop_for(scene)``: the loop of the step that fits the scene (ValueError if none);
 * ``ORDER``: the order of convergence in h (``math.inf`` for ``exact``);
 * optionally ``STEP_IS_OUTPUT = True`` (the driver then takes one step per

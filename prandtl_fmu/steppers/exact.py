@@ -65,6 +65,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
+from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
@@ -510,3 +511,16 @@ _loop = time_loop(step)
 def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
     """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
     return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)
+
+
+_summary = summary_loop(step)
+
+
+@kernel
+def run_summary(template, batch):
+    """The summary loop (``kernels/batch.py``) over :func:`step`, cached."""
+    _summary(template, batch)
+
+
+# the summary loop of each time loop that loop_for gives
+SUMMARY_LOOPS = {run: run_summary}

@@ -37,6 +37,7 @@ import numpy as np
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.increment import solve_increment
+from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..loads import force_at
@@ -100,3 +101,16 @@ _loop = time_loop(step)
 def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
     """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
     return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)
+
+
+_summary = summary_loop(step)
+
+
+@kernel
+def run_summary(template, batch):
+    """The summary loop (``kernels/batch.py``) over :func:`step`, cached."""
+    _summary(template, batch)
+
+
+# the summary loop of each time loop that loop_for gives
+SUMMARY_LOOPS = {run: run_summary}

@@ -32,6 +32,7 @@ quasi-static and has no explicit scheme: use ``implicit``.
 """
 from .._jit import kernel
 from ..kernels.energy import book
+from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..kernels.smooth import elastic_force, smooth_force
@@ -91,3 +92,25 @@ def run_massless(model, load, x, v, u, t_base, first_step, h, steps_per_row, out
     """The time loop (``kernels/loop.py``) over :func:`step_massless`, cached."""
     return _loop_massless(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy,
                           out_energy)
+
+
+_summary = summary_loop(step)
+
+
+@kernel
+def run_summary(template, batch):
+    """The summary loop (``kernels/batch.py``) over :func:`step`, cached."""
+    _summary(template, batch)
+
+
+_summary_massless = summary_loop(step_massless)
+
+
+@kernel
+def run_summary_massless(template, batch):
+    """The summary loop (``kernels/batch.py``) over :func:`step_massless`, cached."""
+    _summary_massless(template, batch)
+
+
+# the summary loop of each time loop that loop_for gives
+SUMMARY_LOOPS = {run: run_summary, run_massless: run_summary_massless}

@@ -16,6 +16,7 @@ Massless elements: not applicable (use ``implicit``, or ``projected`` with a das
 """
 from .._jit import kernel
 from ..kernels.energy import book
+from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import move
 from ..kernels.smooth import damped, elastic_force
@@ -51,3 +52,16 @@ _loop = time_loop(step)
 def run(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
     """The time loop (``kernels/loop.py``) over :func:`step`, cached."""
     return _loop(model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy)
+
+
+_summary = summary_loop(step)
+
+
+@kernel
+def run_summary(template, batch):
+    """The summary loop (``kernels/batch.py``) over :func:`step`, cached."""
+    _summary(template, batch)
+
+
+# the summary loop of each time loop that loop_for gives
+SUMMARY_LOOPS = {run: run_summary}
