@@ -1,6 +1,6 @@
-"""A mass on the ground through the Prandtl connector FMU, in libcosim: convergence to the library's solution.
+"""A mass on the ground through the Prandtl connector FMU, in a master: convergence to the library's solution.
 
-    python examples/cosim/connector/run_connector.py [--out DIR] [--stop-time T] [--plot FILE.png]
+    python examples/cosim/connector/run_connector.py [--out DIR] [--stop-time T] [--master M] [--plot FILE.png]
 
 The system: a point mass (``PointMass.fmu``, this folder) under F(t) = 0.45 cos(0.5 t), tied to the ground
 by the connector FMU of ``bushing.toml`` (spring, dashpot, five Prandtl branches): the connector takes the
@@ -13,6 +13,9 @@ force <-> v, plus x), with libcosim's fixed-step algorithm at communication step
 with its ECCO algorithm (adaptive step, power bond force * v). Prints the error max |x - x_ref| on the 0.1 s
 grid and the measured order at each H, and the ECCO run's error and step count; writes DIR/convergence.csv.
 libcosim counts time in integer nanoseconds.
+
+``--master ecos`` runs the same system from SystemStructure.ssd in ecos (ecospy), ``--master cofmupy`` in
+cofmupy (Jacobi and Gauss-Seidel; from cofmupy's own environment, see the README): DIR/convergence-M.csv.
 """
 import argparse
 import csv
@@ -188,6 +191,38 @@ def run_ecos(folder, step, stop_time):
     return {name: np.array(values) for name, values in columns.items()}
 
 
+def run_cofmupy(folder, step, stop_time, cosim_method="jacobi"):
+    """The same system in cofmupy 1.0.0 (in this process): the arrays time, x, v, force after every step of size
+    ``step`` (s). cofmupy pins fmpy 0.3.20 and pythonfmu 0.6.3: run it from its own virtual environment with
+    pythonfmu 0.7.0, numpy and numba added, and ``pip install --no-deps prandtl_fmu`` (README, Other masters).
+    Its configuration is a dict (or JSON file) of FMUs, initial values and connections; ``cosim_method``
+    "jacobi" (every FMU steps on the previous step's outputs, as libcosim's fixed step) or "gauss_seidel" (its
+    docstring says "gauss-seidel", which it refuses)."""
+    from cofmupy import Coordinator
+
+    def port(element, variable, unit):
+        return {"type": "fmu", "id": element, "variable": variable, "unit": unit}
+
+    config = {
+        "fmus": [{"id": "mass", "path": str(Path(folder).resolve() / "PointMass.fmu"),
+                  "initialization": {"m": 1.0, "amplitude": 0.45, "omega": 0.5}},
+                 {"id": "bushing", "path": str(Path(folder).resolve() / "bushing.fmu")}],
+        "connections": [{"source": port("mass", "x", "m"), "target": [port("bushing", "x", "m")]},
+                        {"source": port("mass", "v", "m/s"), "target": [port("bushing", "v", "m/s")]},
+                        {"source": port("bushing", "force", "N"), "target": [port("mass", "force", "N")]}],
+        "cosim_method": cosim_method,
+        "iterative": False,
+    }
+    coordinator = Coordinator()
+    coordinator.start(config)
+    for _ in range(round(stop_time / step)):
+        coordinator.do_step(step)
+    results = coordinator.get_results()
+    # cofmupy labels the outputs after a step with the step's start time: here, its end (as the others)
+    return {"time": np.array(results["time"]) + step, "x": np.array(results[("mass", "x")]),
+            "v": np.array(results[("mass", "v")]), "force": np.array(results[("bushing", "force")])}
+
+
 def reference_x(times):
     """x of the element with its mass (bushing-with-mass.toml, exact stepper) at the given times."""
     from prandtl_fmu import Element, load_scene
@@ -202,17 +237,9 @@ def reference_x(times):
 
 
 def convergence(folder, stop_time=40.0, steps=STEPS, ecco_tolerances=(1e-4, 1e-6)):
-    """Rows (algorithm, H or tolerance, steps taken, max error of x, order) of the study."""
-    grid = np.round(np.arange(1, round(stop_time / 0.1) + 1) * 0.1, 10)
-    exact = reference_x(grid)
-    rows, previous = [], None
-    for step in steps:
-        result = run(write_structure(folder, step), stop_time)
-        index = np.searchsorted(np.round(result["time"], 9), grid)
-        error = float(np.abs(result["x"][index] - exact).max())
-        order = math.log2(previous / error) if previous else float("nan")
-        rows.append(("fixedStep", step, len(result["time"]), error, order))
-        previous = error
+    """Rows (algorithm, H or tolerance, steps taken, max error of x, order) of the study in libcosim."""
+    rows = fixed_step_rows("fixedStep", lambda step: run(write_structure(folder, step), stop_time), stop_time,
+                           steps)
     for tolerance in ecco_tolerances:
         result = run(write_structure(folder, 0.01, ecco_tolerance=tolerance), stop_time)
         error = float(np.abs(result["x"] - reference_x(result["time"])).max())
@@ -220,22 +247,52 @@ def convergence(folder, stop_time=40.0, steps=STEPS, ecco_tolerances=(1e-4, 1e-6
     return rows
 
 
+def fixed_step_rows(label, run_at, stop_time, steps=STEPS):
+    """Rows (label, H, steps taken, max error of x on the 0.1 s grid, order) of ``run_at(H)`` (arrays time at
+    the end of each step, x, ...) for each H of ``steps``."""
+    grid = np.round(np.arange(1, round(stop_time / 0.1) + 1) * 0.1, 10)
+    exact = reference_x(grid)
+    rows, previous = [], None
+    for step in steps:
+        result = run_at(step)
+        index = np.searchsorted(np.round(result["time"], 9), grid)
+        error = float(np.abs(result["x"][index] - exact).max())
+        order = math.log2(previous / error) if previous else float("nan")
+        rows.append((label, step, len(result["time"]), error, order))
+        previous = error
+    return rows
+
+
+def master_rows(master, folder, stop_time):
+    """The convergence rows of one master: libcosim (fixed step and ECCO), ecos (fixed step), cofmupy (Jacobi
+    and Gauss-Seidel)."""
+    if master == "libcosim":
+        return convergence(folder, stop_time)
+    if master == "ecos":
+        return fixed_step_rows("ecos", lambda step: run_ecos(folder, step, stop_time), stop_time)
+    return [row for method in ("jacobi", "gauss_seidel")
+            for row in fixed_step_rows(f"cofmupy-{method}", lambda step: run_cofmupy(folder, step, stop_time, method),
+                                       stop_time)]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(ROOT / "out" / "connector"))
     parser.add_argument("--stop-time", type=float, default=40.0)
+    parser.add_argument("--master", choices=("libcosim", "ecos", "cofmupy"), default="libcosim",
+                        help="the master to run (ecos: the [ecos] extra; cofmupy: its own environment, see README)")
     parser.add_argument("--plot", help="PNG of the force-displacement loop, co-simulated against the reference")
     args = parser.parse_args()
     folder = build(args.out)
-    rows = convergence(folder, args.stop_time)
-    path = os.path.join(args.out, "convergence.csv")
+    rows = master_rows(args.master, folder, args.stop_time)
+    path = os.path.join(args.out, "convergence.csv" if args.master == "libcosim" else f"convergence-{args.master}.csv")
     with open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["algorithm", "step_or_tolerance", "steps", "max_error_x", "order"])
         writer.writerows(rows)
-    print(f"{'algorithm':10} {'H / tol':>9} {'steps':>7} {'max |x - x_ref|':>16} {'order':>6}")
+    print(f"{'algorithm':20} {'H / tol':>9} {'steps':>7} {'max |x - x_ref|':>16} {'order':>6}")
     for algorithm, setting, count, error, order in rows:
-        print(f"{algorithm:10} {setting:9.3g} {count:7d} {error:16.3e} {order:6.2f}")
+        print(f"{algorithm:20} {setting:9.3g} {count:7d} {error:16.3e} {order:6.2f}")
     print(path)
     if args.plot:
         import matplotlib
