@@ -1,5 +1,8 @@
-"""The FMU in a real co-simulation master: libcosim (libcosimpy), against FMPy."""
+"""The FMU in real co-simulation masters: libcosim (libcosimpy), ecos, OMSimulator, against FMPy."""
 import importlib.util
+import os
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -124,3 +127,55 @@ def test_ecos_runs_the_connector_system_as_libcosim(tmp_path):
         np.testing.assert_allclose(ecos[column], libcosim[column], rtol=0, atol=1e-11)
     np.testing.assert_allclose(ecos["force"][:-1], libcosim["force"][1:], rtol=0, atol=1e-11)
     assert np.abs(ecos["force"]).max() > 0.1
+
+
+def gauss_seidel(folder, step, stop_time):
+    """An independent Gauss-Seidel master over FMPy: the mass steps with the force of the previous step, then
+    the connector with the mass's new x, v; returns the arrays time, x, v, force after every step."""
+    from fmpy import extract, instantiate_fmu, read_model_description
+
+    units = {}
+    for name in ("mass", "bushing"):
+        path = str(Path(folder) / ("PointMass.fmu" if name == "mass" else "bushing.fmu"))
+        description = read_model_description(path)
+        fmu = instantiate_fmu(extract(path), description, fmi_type="CoSimulation")
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        units[name] = (fmu, {v.name: v.valueReference for v in description.modelVariables})
+    (mass, m), (bushing, b) = units["mass"], units["bushing"]
+    columns = {name: [] for name in ("time", "x", "v", "force")}
+    force = 0.0
+    try:
+        for k in range(round(stop_time / step)):
+            mass.setReal([m["force"]], [force])
+            mass.doStep(k * step, step)
+            x, v = mass.getReal([m["x"], m["v"]])
+            bushing.setReal([b["x"], b["v"]], [x, v])
+            bushing.doStep(k * step, step)
+            force = bushing.getReal([b["force"]])[0]
+            for name, value in zip(columns, ((k + 1) * step, x, v, force)):
+                columns[name].append(value)
+    finally:
+        for fmu, _ in units.values():
+            fmu.terminate()
+            fmu.freeInstance()
+    return {name: np.array(values) for name, values in columns.items()}
+
+
+def test_omsimulator_runs_the_connector_system_as_a_gauss_seidel_master(tmp_path):
+    """The SSD packed into an SSP archive in OMSimulator's binary (when one is installed: OMSIMULATOR=path or
+    OMSimulator on PATH; CI has none, it takes ~15 min to build): with the mass's outputs declared free of
+    direct feedthrough it steps the mass, then the connector on the mass's new x, v: a Gauss-Seidel master,
+    equal to an FMPy loop doing that to the 12 digits of its CSV."""
+    binary = shutil.which(os.environ.get("OMSIMULATOR", "OMSimulator"))
+    if binary is None:
+        pytest.skip("no OMSimulator binary (set OMSIMULATOR=path; README: building it from source)")
+    folder = run_connector.build(tmp_path)
+    oms = run_connector.run_omsimulator(folder, 0.05, 8.0, binary)
+    expected = gauss_seidel(folder, 0.05, 8.0)
+    assert len(oms["time"]) == len(expected["time"]) == 160
+    np.testing.assert_allclose(oms["time"], expected["time"], rtol=0, atol=1e-9)
+    for column in ("x", "v", "force"):
+        np.testing.assert_allclose(oms[column], expected[column], rtol=1e-10, atol=1e-11)
+    assert np.abs(oms["force"]).max() > 0.1

@@ -9,8 +9,16 @@ coupling's. Its module name is unique on purpose (PythonFMU FMUs cannot share
 a module name with anything the host imports).
 """
 import math
+from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+
+# The unit of each variable and the SI base units of each unit (PythonFMU 0.7.0 writes none; OMSimulator
+# refuses to connect a variable with a unit to one without).
+VARIABLE_UNITS = {"m": "kg", "amplitude": "N", "omega": "rad/s", "x0": "m", "v0": "m/s", "force": "N", "x": "m",
+                  "v": "m/s"}
+BASE_UNITS = {"kg": {"kg": "1"}, "N": {"kg": "1", "m": "1", "s": "-2"}, "rad/s": {"rad": "1", "s": "-1"},
+              "m": {"m": "1"}, "m/s": {"m": "1", "s": "-1"}}
 
 # PythonFMU 0.7.0 executes this file again at each instantiation and then
 # releases a reference to the module's dict it never took: keep one more.
@@ -39,6 +47,23 @@ class PointMass(Fmi2Slave):
         for name, text in (("x", "displacement (m)"), ("v", "velocity (m/s)")):
             self.register_variable(Real(name, causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous, description=text))
+
+    def to_xml(self, model_options=dict()):
+        """PythonFMU's modelDescription.xml with the units, the initial unknowns and the outputs' (absent) direct
+        dependencies put in (without the last, a master sees an algebraic loop through the connector)."""
+        root = super().to_xml(model_options)
+        units = Element("UnitDefinitions")
+        for name, exponents in BASE_UNITS.items():
+            SubElement(SubElement(units, "Unit", name=name), "BaseUnit", exponents)
+        root.insert(list(root).index(root.find("CoSimulation")) + 1, units)  # the FMI 2.0 schema's order
+        for variable in root.find("ModelVariables"):
+            variable.find("Real").set("unit", VARIABLE_UNITS[variable.get("name")])
+        structure = root.find("ModelStructure")
+        initial = SubElement(structure, "InitialUnknowns")
+        for output in structure.find("Outputs"):
+            output.set("dependencies", "")  # x and v are states: no direct feedthrough from the force
+            SubElement(initial, "Unknown", index=output.get("index"))  # computed from x0, v0
+        return root
 
     def exit_initialization_mode(self):
         self.x, self.v = self.x0, self.v0

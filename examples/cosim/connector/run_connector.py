@@ -14,8 +14,10 @@ with its ECCO algorithm (adaptive step, power bond force * v). Prints the error 
 grid and the measured order at each H, and the ECCO run's error and step count; writes DIR/convergence.csv.
 libcosim counts time in integer nanoseconds.
 
-``--master ecos`` runs the same system from SystemStructure.ssd in ecos (ecospy), ``--master cofmupy`` in
-cofmupy (Jacobi and Gauss-Seidel; from cofmupy's own environment, see the README): DIR/convergence-M.csv.
+``--master ecos`` runs the same system from SystemStructure.ssd in ecos (ecospy), ``--master omsimulator``
+in OMSimulator's binary (``--omsimulator PATH``; the SSD packed into connector.ssp), ``--master cofmupy`` in
+cofmupy (Jacobi and Gauss-Seidel; from cofmupy's own environment): DIR/convergence-M.csv. See the README's
+table of masters for what each needs.
 """
 import argparse
 import csv
@@ -223,6 +225,63 @@ def run_cofmupy(folder, step, stop_time, cosim_method="jacobi"):
             "v": np.array(results[("mass", "v")]), "force": np.array(results[("bushing", "force")])}
 
 
+def make_ssp(folder, step=None):
+    """``folder``/connector.ssp: SystemStructure.ssd and the two FMUs in one SSP archive (the FMUs under
+    resources/), as OMSimulator reads a system; ``step`` (s) replaces the communication step of the SSD's
+    OMSimulator annotation (which its --stepSize option does not override)."""
+    import re
+    import zipfile
+
+    folder = Path(folder)
+    ssd = (folder / "SystemStructure.ssd").read_text(encoding="utf-8")
+    if step is not None:
+        ssd = re.sub(r'(<oms:FixedStepMaster [^>]*stepSize=")[^"]*"', rf'\g<1>{step!r}"', ssd)
+    for name in ("PointMass.fmu", "bushing.fmu"):
+        ssd = ssd.replace(f'source="{name}"', f'source="resources/{name}"')
+    path = folder / "connector.ssp"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("SystemStructure.ssd", ssd)
+        for name in ("PointMass.fmu", "bushing.fmu"):
+            archive.write(folder / name, f"resources/{name}")
+    return path
+
+
+def run_omsimulator(folder, step, stop_time, omsimulator="OMSimulator"):
+    """The same system in OMSimulator's binary (``omsimulator``: its path) from connector.ssp (:func:`make_ssp`):
+    the arrays time, x, v, force at every step of size ``step`` (s), from its result CSV (12 significant digits).
+
+    A PythonFMU FMU in a host that is not a Python process needs the host's libpython preloaded and the
+    environment's packages on PYTHONPATH (the README's recipe): set here from this interpreter."""
+    import subprocess
+    import sysconfig
+
+    folder = Path(folder).resolve()
+    ssp = make_ssp(folder, step)
+    result = folder / f"omsimulator-{step!r}.csv"
+    libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("LDLIBRARY")
+    paths = [p for p in sys.path if p.endswith("-packages")] + [str(ROOT)]
+    env = dict(os.environ, LD_PRELOAD=str(libpython), PYTHONPATH=os.pathsep.join(paths))
+    command = [omsimulator, str(ssp), f"--stopTime={stop_time!r}", f"--stepSize={step!r}", "--mode=cs",
+               f"--resultFile={result}", f"--tempDir={folder}"]
+    done = subprocess.run(command, cwd=folder, env=env, capture_output=True, text=True, timeout=3600)
+    if done.returncode != 0 or not result.exists():
+        raise RuntimeError(f"OMSimulator failed (exit {done.returncode}): {done.stdout[-2000:]}{done.stderr[-2000:]}")
+    with open(result, newline="") as fh:
+        rows = list(csv.reader(fh))
+    header = [name.strip().strip('"') for name in rows[0]]
+    table = np.array([[float(value) for value in row] for row in rows[1:]])
+
+    def column(suffix):
+        return table[:, header.index(f"prandtl_connector_example.mass_on_bushing.{suffix}")]
+
+    # the initial state is the first row; OMSimulator writes two rows at each communication point (before and
+    # after its outputs are updated): keep the last of each time
+    last = np.append(table[1:, 0] != table[:-1, 0], True)
+    keep = last & (table[:, 0] > 0)
+    return {"time": table[keep, 0], "x": column("mass.x")[keep], "v": column("mass.v")[keep],
+            "force": column("bushing.force")[keep]}
+
+
 def reference_x(times):
     """x of the element with its mass (bushing-with-mass.toml, exact stepper) at the given times."""
     from prandtl_fmu import Element, load_scene
@@ -263,13 +322,16 @@ def fixed_step_rows(label, run_at, stop_time, steps=STEPS):
     return rows
 
 
-def master_rows(master, folder, stop_time):
-    """The convergence rows of one master: libcosim (fixed step and ECCO), ecos (fixed step), cofmupy (Jacobi
-    and Gauss-Seidel)."""
+def master_rows(master, folder, stop_time, omsimulator="OMSimulator"):
+    """The convergence rows of one master: libcosim (fixed step and ECCO), ecos (fixed step), OMSimulator (its
+    binary ``omsimulator``), cofmupy (Jacobi and Gauss-Seidel)."""
     if master == "libcosim":
         return convergence(folder, stop_time)
     if master == "ecos":
         return fixed_step_rows("ecos", lambda step: run_ecos(folder, step, stop_time), stop_time)
+    if master == "omsimulator":
+        return fixed_step_rows("omsimulator", lambda step: run_omsimulator(folder, step, stop_time, omsimulator),
+                               stop_time)
     return [row for method in ("jacobi", "gauss_seidel")
             for row in fixed_step_rows(f"cofmupy-{method}", lambda step: run_cofmupy(folder, step, stop_time, method),
                                        stop_time)]
@@ -279,12 +341,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(ROOT / "out" / "connector"))
     parser.add_argument("--stop-time", type=float, default=40.0)
-    parser.add_argument("--master", choices=("libcosim", "ecos", "cofmupy"), default="libcosim",
-                        help="the master to run (ecos: the [ecos] extra; cofmupy: its own environment, see README)")
+    parser.add_argument("--master", choices=("libcosim", "ecos", "omsimulator", "cofmupy"), default="libcosim",
+                        help="the master to run (ecos: the [ecos] extra; omsimulator: its binary, see --omsimulator; "
+                             "cofmupy: its own environment; see the README)")
+    parser.add_argument("--omsimulator", default="OMSimulator", help="path of the OMSimulator binary")
     parser.add_argument("--plot", help="PNG of the force-displacement loop, co-simulated against the reference")
     args = parser.parse_args()
     folder = build(args.out)
-    rows = master_rows(args.master, folder, args.stop_time)
+    rows = master_rows(args.master, folder, args.stop_time, args.omsimulator)
     path = os.path.join(args.out, "convergence.csv" if args.master == "libcosim" else f"convergence-{args.master}.csv")
     with open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
