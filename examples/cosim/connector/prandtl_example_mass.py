@@ -49,8 +49,9 @@ class PointMass(Fmi2Slave):
                                         variability=Fmi2Variability.continuous, description=text))
 
     def to_xml(self, model_options=dict()):
-        """PythonFMU's modelDescription.xml with the units, the initial unknowns and the outputs' (absent) direct
-        dependencies put in (without the last, a master sees an algebraic loop through the connector)."""
+        """PythonFMU's modelDescription.xml with the units, the outputs' (absent) direct dependencies and the
+        initial unknowns put in (without their dependencies, OMSimulator sees an algebraic loop through the
+        connector at initialization)."""
         root = super().to_xml(model_options)
         units = Element("UnitDefinitions")
         for name, exponents in BASE_UNITS.items():
@@ -60,9 +61,11 @@ class PointMass(Fmi2Slave):
             variable.find("Real").set("unit", VARIABLE_UNITS[variable.get("name")])
         structure = root.find("ModelStructure")
         initial = SubElement(structure, "InitialUnknowns")
+        index = {variable.get("name"): str(i + 1) for i, variable in enumerate(root.find("ModelVariables"))}
         for output in structure.find("Outputs"):
             output.set("dependencies", "")  # x and v are states: no direct feedthrough from the force
-            SubElement(initial, "Unknown", index=output.get("index"))  # computed from x0, v0
+            SubElement(initial, "Unknown", index=output.get("index"),  # computed from x0 and v0 alone
+                       dependencies=f"{index['x0']} {index['v0']}")
         return root
 
     def exit_initialization_mode(self):
