@@ -1,7 +1,8 @@
 """What one FMU instantiation keeps in the host (README, "PythonFMU 0.7.0, worked around").
 
-Builds the FMU of the paper's scene and the connector example's point mass (a plain PythonFMU slave), then, in a
-fresh process for each FMU and kernel-cache setting: 50 warm-up cycles of instantiate, initialize, one doStep,
+Builds the FMU of the paper's scene with each native loader (ours, ``prandtl_fmu/fmu/loader``, and PythonFMU's
+stock one) and the connector example's point mass (a plain PythonFMU slave, stock loader), then, in a fresh
+process for each: 50 warm-up cycles of instantiate, initialize, one doStep,
 terminate, free through FMPy, then ``--cycles`` more, and the growth of ``sys.getallocatedblocks()`` (Python's
 live memory blocks, after a garbage collection) per cycle. The processes end with ``os._exit`` (the known abort
 at interpreter exit is not what is measured).
@@ -55,22 +56,24 @@ def main():
 
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        element = build_fmu(os.path.join(ROOT, "scenes", "paper-section-8.toml"), os.path.join(folder, "paper.fmu"))
+        scene = os.path.join(ROOT, "scenes", "paper-section-8.toml")
+        element = build_fmu(scene, os.path.join(folder, "paper.fmu"))
+        element_stock = build_fmu(scene, os.path.join(folder, "paper-stock.fmu"), loader="pythonfmu")
         mass = os.path.join(run_connector.build(folder), "PointMass.fmu")
         script = os.path.join(folder, "cycles.py")
         with open(script, "w") as fh:
             fh.write(SCRIPT)
-        for label, fmu, cache in (("PrandtlElement", element, "1"), ("PrandtlElement", element, "0"),
-                                  ("PointMass (plain PythonFMU slave)", mass, "1")):
-            env = dict(os.environ, PRANDTL_FMU_JIT_CACHE=cache)
+        for label, fmu, loader in (("PrandtlElement", element, "prandtl"),
+                                   ("PrandtlElement", element_stock, "pythonfmu"),
+                                   ("PointMass (plain PythonFMU slave)", mass, "pythonfmu")):
             done = subprocess.run([sys.executable, script, str(fmu), str(args.cycles)], capture_output=True,
-                                  text=True, env=env, timeout=1800)
+                                  text=True, timeout=1800)
             if done.returncode != 0:
                 raise SystemExit(f"{label}: exit {done.returncode}: {done.stderr.strip()[-500:]}")
             blocks = float(done.stdout.split()[-1])
-            rows.append({"fmu": label, "kernel_cache": cache, "cycles": args.cycles,
+            rows.append({"fmu": label, "loader": loader, "cycles": args.cycles,
                          "blocks_per_instantiation": round(blocks, 2)})
-            print(f"{label}, kernel cache {'on' if cache == '1' else 'off'}: {blocks:.2f} blocks per instantiation")
+            print(f"{label}, {loader} loader: {blocks:.2f} blocks per instantiation")
     write_rows(args.out, rows)
 
 

@@ -81,7 +81,6 @@ FMU = textwrap.dedent("""\
     print("FIRST", time.perf_counter() - start, flush=True)
     slave.terminate()
     slave.freeInstance()
-    os._exit(0)  # the known teardown abort of numba in an FMU host (README)
 """)
 
 

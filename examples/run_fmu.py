@@ -12,8 +12,6 @@ reproduces the library's run of the scene. Stop time and communication step defa
 DefaultExperiment (the scene's [solver] stop_time and output_interval).
 """
 import argparse
-import os
-import sys
 
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
@@ -79,8 +77,3 @@ def main():
 
 if __name__ == "__main__":
     main()
-    # Known problem (README, "an abort at interpreter exit"): a process that ran the FMU can abort during
-    # the interpreter's teardown, after every result is written. End here, with the results flushed.
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(0)

@@ -2,7 +2,7 @@
 
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
-    prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp]
+    prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp] [--loader prandtl|pythonfmu]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
@@ -70,6 +70,10 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--osp", action="store_true",
                        help="also write <modelName>_OspModelDescription.xml beside the FMU (libcosim reads it "
                             "from there: mechanical ports for powerBond and ECCO); its path is printed second")
+    build.add_argument("--loader", choices=("prandtl", "pythonfmu"), default="prandtl",
+                       help="the FMU's native library on Linux x86-64: prandtl (default), PythonFMU 0.7.0's loader "
+                            "patched (a refused call is fmi2Error, the instance stays usable; no leaks), or "
+                            "pythonfmu, its stock loader (refusals fmi2Fatal)")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
@@ -164,8 +168,8 @@ def _build(args) -> int:
     if _missing("pythonfmu"):
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
-        path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp)
-    except (SceneError, ValueError) as exc:
+        path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader)
+    except (SceneError, ValueError, RuntimeError) as exc:
         return _error(exc)
     except OSError as exc:
         return _error(f"cannot write {args.out or 'the FMU'}: {exc.strerror or exc}")

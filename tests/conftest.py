@@ -86,14 +86,18 @@ def pytest_sessionfinish(session, exitstatus):
 
 @pytest.hookimpl(trylast=True)
 def pytest_unconfigure(config):
-    """End the test process with the tests' verdict once pytest is done (summary printed).
+    """End a test process that loaded PythonFMU's stock loader with the tests' verdict, without the
+    interpreter's teardown, once pytest is done (summary printed).
 
-    Known problem (README, "an abort at interpreter exit"): a process that ran PythonFMU FMUs can abort
-    with a heap corruption detected in a library finalizer during exit(), after every result is out. The
-    suite runs hundreds of FMUs in one process, so the interpreter's teardown is skipped here: the exit
-    status is the tests' own, not the teardown's. Set PRANDTL_FMU_FULL_EXIT=1 to see the teardown.
+    The stock loader (built with ``loader="pythonfmu"`` by the tests that compare it with ours) frees its
+    interpreter state in a static destructor and writes to it again from its library destructor in exit():
+    a use-after-free that corrupts the heap when the block was reused meanwhile (SIGABRT after every result
+    is out; prandtl_fmu/fmu/loader fixes it in ours). Processes that loaded only our FMUs exit normally.
+    PRANDTL_FMU_FULL_EXIT=1 exits normally in any case.
     """
-    if "status" in _SESSION and not os.environ.get("PRANDTL_FMU_FULL_EXIT"):
+    tools = sys.modules.get("tests.fmu_tools")
+    if tools is not None and tools.STOCK_LOADER_LOADED and "status" in _SESSION \
+            and not os.environ.get("PRANDTL_FMU_FULL_EXIT"):
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(_SESSION["status"])

@@ -7,6 +7,16 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 
+# Set by the tests that load an FMU built with PythonFMU's stock loader into the test process (see
+# conftest.pytest_unconfigure: that loader's use-after-free at exit).
+STOCK_LOADER_LOADED = False
+
+
+def stock_loader_loaded():
+    global STOCK_LOADER_LOADED
+    STOCK_LOADER_LOADED = True
+
+
 class Slave:
     """One FMU2Slave instance with name-based access and a list of logged messages."""
 

@@ -150,7 +150,6 @@ FMU_RUN = textwrap.dedent("""\
                     compiled += [f"{name}.{attr}"] * sum(value.stats.cache_misses.values())
     print(json.dumps({"results": [float(r) for r in results], "beside": beside, "compiled": compiled}),
           flush=True)
-    os._exit(0)  # the known teardown abort of numba in an FMU host (README)
 """)
 
 

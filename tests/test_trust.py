@@ -221,27 +221,41 @@ def test_implicit_on_the_stack_solves_branch_sets_over_many_decades(seed):
 def trust_fmus(tmp_path_factory):
     from prandtl_fmu.fmu.build import build_fmu
 
+    from .fmu_tools import stock_loader_loaded
+
     folder = tmp_path_factory.mktemp("trust_fmus")
     built = {}
     for name, tables in {"all": base_tables(), "other": base_tables(cubic=None, damper=None)}.items():
         scene_path = folder / f"{name}.toml"
         scene_path.write_text(scene_text(tables))
         built[name] = build_fmu(scene_path, folder / f"{name}.fmu")
+        if name == "all":  # the same FMU with PythonFMU's stock loader
+            built["all-stock"] = build_fmu(scene_path, folder / f"{name}-stock.fmu", loader="pythonfmu")
+    stock_loader_loaded()
     return built
 
 
+# what a refused call returns: fmi2Error under the FMU's own loader, fmi2Fatal under PythonFMU's stock one
+REFUSAL_STATUS = {"all": 3, "all-stock": 4}
+
+
+@pytest.mark.parametrize("fmu", REFUSAL_STATUS)
 @pytest.mark.parametrize("start_values, culprit", [({"m": -1.0}, "m: must be > 0"),
                                                    ({"stepper": "Verlet"}, "stepper = 'Verlet'"),
                                                    ({"m": float("nan")}, "m: must be finite")])
-def test_simulate_fmu_raises_on_a_bad_start_value(trust_fmus, start_values, culprit):
-    """It returned 2 rows with exit 0 (a Discard at the first doStep, which FMPy takes as 'stop early')."""
+def test_simulate_fmu_raises_on_a_bad_start_value(trust_fmus, fmu, start_values, culprit):
+    """It returned 2 rows with exit 0 (a Discard at the first doStep, which FMPy takes as 'stop early'); the
+    refusal is fmi2Error (fmi2Fatal only under PythonFMU's stock loader)."""
     from fmpy import simulate_fmu
+    from fmpy.fmi1 import FMICallException
 
     messages = []
-    with pytest.raises(Exception):
-        simulate_fmu(str(trust_fmus["all"]), stop_time=1.0, output_interval=0.1, start_values=start_values,
+    with pytest.raises(FMICallException) as refused:
+        simulate_fmu(str(trust_fmus[fmu]), stop_time=1.0, output_interval=0.1, start_values=start_values,
                      logger=lambda *args: messages.append(args[-1].decode() if isinstance(args[-1], bytes)
                                                           else str(args[-1])), debug_logging=True)
+    assert refused.value.status == REFUSAL_STATUS[fmu]
+    assert "ExitInitializationMode" in str(refused.value)
     assert any(culprit in message for message in messages), messages
 
 
@@ -254,14 +268,16 @@ def _good_slave(fmu):
     return slave
 
 
-def test_a_fixed_parameter_cannot_change_after_initialization(trust_fmus):
+@pytest.mark.parametrize("fmu", REFUSAL_STATUS)
+def test_a_fixed_parameter_cannot_change_after_initialization(trust_fmus, fmu):
     from fmpy.fmi1 import FMICallException
 
-    slave = _good_slave(trust_fmus["all"])
+    slave = _good_slave(trust_fmus[fmu])
     try:
         x = slave.get("x")
-        with pytest.raises(FMICallException):
+        with pytest.raises(FMICallException) as refused:
             slave.set("x0", 0.3)
+        assert refused.value.status == REFUSAL_STATUS[fmu]
         assert any("x0 = 0.3 refused" in message for _, message in slave.messages)
         assert slave.get("x") == x  # the instance is intact and still works
         slave.step(0.1, 0.5)
@@ -271,20 +287,23 @@ def test_a_fixed_parameter_cannot_change_after_initialization(trust_fmus):
         slave.close()
 
 
-def test_a_refused_fmu_state_leaves_the_instance_working(trust_fmus):
-    """A state of another FMU, a tampered blob: reported as a failed call (fatal under PythonFMU 0.7.0); two
-    such calls followed by getReal used to crash the host."""
+@pytest.mark.parametrize("fmu", REFUSAL_STATUS)
+def test_a_refused_fmu_state_leaves_the_instance_working(trust_fmus, fmu):
+    """A state of another FMU, a tampered blob: a failed call, fmi2Error (fmi2Fatal under PythonFMU's stock
+    loader, where two such calls followed by getReal used to crash the host)."""
     from fmpy.fmi1 import FMICallException
 
-    slave = _good_slave(trust_fmus["all"])
+    slave = _good_slave(trust_fmus[fmu])
     other = _good_slave(trust_fmus["other"])
     try:
         outputs = slave.get("x", "v", "reaction")
         foreign = other.fmu.serializeFMUstate(other.fmu.getFMUstate())
         for blob in (foreign, b"\x00garbage{", b'{"element": {}, "settings": {}}'):
-            with pytest.raises(FMICallException):
+            with pytest.raises(FMICallException) as refused:
                 state = slave.fmu.deSerializeFMUstate(blob)
                 slave.fmu.setFMUstate(state)
+            assert refused.value.status == REFUSAL_STATUS[fmu]
+            assert "SetFMUstate" in str(refused.value)
             assert slave.get("x", "v", "reaction") == outputs
         assert any("FMU state refused" in message for _, message in slave.messages)
         saved = slave.fmu.getFMUstate()  # and the instance goes on normally

@@ -28,6 +28,7 @@ def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml"):
     from pythonfmu import FmuBuilder
 
     from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.fmu.loader import install as install_loader
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -35,6 +36,7 @@ def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml"):
     source = HERE / "prandtl_example_harmonic_force.py"
     try:
         FmuBuilder.build_FMU(source, dest=folder / "HarmonicForce.fmu")
+        install_loader(folder / "HarmonicForce.fmu")  # our patched PythonFMU loader (prandtl_fmu/fmu/loader)
     finally:  # let the FMU import its own copy when loaded in this process
         sys.modules.pop(source.stem, None)
         if str(source.parent) in sys.path:

@@ -48,20 +48,27 @@ def file_stem(name: str) -> str:
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
-              causality: Optional[str] = None, osp: bool = False) -> Path:
+              causality: Optional[str] = None, osp: bool = False, loader: str = "prandtl") -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
 
     ``causality`` ("force" or "displacement", the connector) overrides a scene without an ``[fmu]`` table
     (SceneError if the scene's table says otherwise). With ``osp``, also write
     ``<modelName>_OspModelDescription.xml`` beside the FMU, where libcosim looks for it (it is always inside
-    the FMU, in ``resources/``). The scene is checked first (:class:`SceneError` on any broken rule).
-    Returns the path of the FMU.
+    the FMU, in ``resources/``). ``loader`` is the FMU's native library on Linux x86-64: "prandtl", PythonFMU
+    0.7.0's patched (``loader/``: a refused call is fmi2Error and the instance stays usable), or "pythonfmu",
+    PythonFMU's own (refusals fmi2Fatal); the other platforms always get PythonFMU's own. The scene is checked
+    first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
     """
     from pythonfmu import FmuBuilder
 
+    from . import loader as native
     from .osp import MODEL_IDENTIFIERS, file_name, osp_model_description
 
+    if loader not in native.LOADERS:
+        raise ValueError(f"--loader: must be one of {', '.join(native.LOADERS)}, got {loader!r}")
+    if loader == "prandtl" and native.stale():
+        raise RuntimeError(native.stale())
     scene = load_scene(scene_path, check_stepper=causality != "displacement")
     scene_bytes = Path(resolve_scene(scene_path)).read_bytes()
     if causality is not None:
@@ -109,7 +116,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
                 del sys.modules[name]
             if str(staging) in sys.path:
                 sys.path.remove(str(staging))
-        _finish(built, scene)
+        _finish(built, scene, loader)
         # into place in one rename: a failed build never leaves a half-written FMU behind
         handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".fmu.part", dir=out.parent)
         os.close(handle)
@@ -150,9 +157,12 @@ def _write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def _finish(fmu: Path, scene) -> None:
+def _finish(fmu: Path, scene, loader: str) -> None:
     """Name the model after the scene (``modelName``; the ``modelIdentifier``, which names the binaries,
-    stays :data:`MODEL_IDENTIFIER`) and add ``documentation/index.html``."""
+    stays :data:`MODEL_IDENTIFIER`), put the patched loader in place of PythonFMU's where there is one (with
+    ``loader="prandtl"``; PythonFMU's licence in ``documentation/licenses/``) and add
+    ``documentation/index.html``."""
+    from . import loader as native
     from .documentation import index_html
 
     with zipfile.ZipFile(fmu) as archive:
@@ -168,5 +178,8 @@ def _finish(fmu: Path, scene) -> None:
                     raise RuntimeError("modelDescription.xml written by PythonFMU has no modelName attribute")
                 data = text.encode("utf-8")
                 model_description = data
+            if loader == "prandtl":
+                data = native.replacement(info.filename) or data
             archive.writestr(info, data)
+        archive.write(native.LICENSE, "documentation/licenses/PythonFMU.txt")
         archive.writestr("documentation/index.html", index_html(model_description, scene))

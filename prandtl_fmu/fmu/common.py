@@ -1,11 +1,12 @@
 """What both slaves (the element with its force input, the connector) share: refusals and FMU states.
 
-PythonFMU 0.7.0 can only fail a call as fmi2Fatal (it turns every Python
-exception into fatal; fmi2Error would be the right status, it has no way to
-return it). It also releases its references to the slave when a call fails,
-and again when the instance is freed: :meth:`SlaveBase._fail` takes one more
-reference first, so that the instance stays intact (the refused call changed
-nothing, later calls still work) and the host never touches freed memory.
+A refused call logs its reason and raises :class:`Refused`. Under the FMU's own loader (``loader/``,
+PythonFMU 0.7.0 patched; Linux x86-64) the call then fails with fmi2Error and the instance stays as it was.
+Under PythonFMU's stock loader (its Windows binary, or an FMU built with ``loader="pythonfmu"``) every
+Python exception is fmi2Fatal, and that loader releases its references to the slave when a call fails and
+again when the instance is freed: :meth:`SlaveBase._fail` then takes one more reference first, so that the
+instance stays intact there too (the refused call changed nothing, later calls still work) and the host
+never touches freed memory. The loader says which it is by the ``pythonfmu_loader`` argument.
 """
 import ctypes
 import json
@@ -24,7 +25,7 @@ SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0
 
 
 class Refused(Exception):
-    """A call refused by the slave (logged first); PythonFMU reports it as fmi2Fatal."""
+    """A call refused by the slave (logged first): fmi2Error (fmi2Fatal under PythonFMU's stock loader)."""
 
 
 def finite_number(value) -> bool:
@@ -36,6 +37,8 @@ class SlaveBase(Fmi2Slave):
     serialized state."""
 
     def __init__(self, **kwargs):
+        # absent under PythonFMU's stock loader (and when PythonFMU's builder instantiates the class)
+        self.loader = kwargs.pop("pythonfmu_loader", None)
         super().__init__(**kwargs)
         self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
         solver = self.scene.solver
@@ -50,14 +53,15 @@ class SlaveBase(Fmi2Slave):
         self.start_time = float(start_time)
 
     def _fail(self, message):
-        """Log ``message`` and fail the current call (fmi2Fatal under PythonFMU 0.7.0; see the module
-        docstring), keeping the instance alive and unchanged."""
+        """Log ``message`` and fail the current call (fmi2Error; fmi2Fatal under PythonFMU's stock loader, see
+        the module docstring), keeping the instance alive and unchanged."""
         self.log(message, Fmi2Status.error)
-        # PythonFMU releases its references to the class, the instance and the log queue once more than
-        # it took when a call raises: take one more of each, never to be given back (balanced by that
-        # extra release), so that nothing the host still points to is freed.
-        for owned in (type(self), self, self.log_queue):
-            ctypes.pythonapi.Py_IncRef(ctypes.py_object(owned))
+        if self.loader is None:
+            # PythonFMU's stock loader releases its references to the class, the instance and the log queue
+            # once more than it took when a call raises: take one more of each, never to be given back
+            # (balanced by that extra release), so that nothing the host still points to is freed.
+            for owned in (type(self), self, self.log_queue):
+                ctypes.pythonapi.Py_IncRef(ctypes.py_object(owned))
         raise Refused(message)
 
     def _refuse(self, message) -> bool:

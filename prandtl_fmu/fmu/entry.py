@@ -9,20 +9,23 @@ the slave class defined there. The library is imported once per process;
 its compiled kernels come from the user's numba cache folder, never from the
 extracted resources (see ``_jit.py``).
 
-Two defects of PythonFMU 0.7.0's loader are neutralised here. At every
-instantiation it executes this file again (globals: this module's dict) and
-then releases one reference to the module's dict that it never took; and it
-inserts the resources folder into ``sys.path`` once more. Each execution
-therefore keeps one more reference to the dict, and drops the duplicate
-``sys.path`` entries, so that a thousand instantiations neither crash the
-host nor slow its imports down.
+At every instantiation the loader executes this file again (globals: this
+module's dict) and inserts the resources folder into ``sys.path`` once more:
+the duplicate entries are dropped, so that a thousand instantiations do not
+slow the host's imports down. PythonFMU 0.7.0's stock loader (the Windows
+binary, or an FMU built with ``loader="pythonfmu"``) also releases one
+reference to the module's dict that it never took: each execution under it
+keeps one more reference. The FMU's own loader (``loader/``) marks the
+globals with ``__prandtl_loader__`` before executing the file, and takes
+nothing.
 """
 import importlib
 import importlib.util
 import os
 import sys
 
-globals().setdefault("_DICT_REFERENCES", []).append(globals())
+if not globals().get("__prandtl_loader__"):  # the stock loader's extra release (module docstring)
+    globals().setdefault("_DICT_REFERENCES", []).append(globals())
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _LIBRARY = "_" + __name__ + "_lib"

@@ -16,6 +16,10 @@
 
 using namespace pythonfmu;
 
+// prandtl_fmu: the name the slave receives as its ``pythonfmu_loader`` argument (fmu/common.py): the stock
+// loader passes none, and the slave then compensates that loader's reference counting.
+static const char* const PRANDTL_LOADER_NAME = "prandtl_fmu";
+
 namespace
 {
 std::string getline(const std::filesystem::path& fileName)
@@ -26,103 +30,92 @@ std::string getline(const std::filesystem::path& fileName)
     return line;
 }
 
+// prandtl_fmu: the stock findClass released a reference to the module's dict that it never took (the host
+// crashed after enough instantiations), leaked the repr and UTF-8 copy of every class name it read, called
+// Py_Finalize (the host's interpreter!) on a syntax error and ignored an exception raised by the script. This
+// one releases exactly what it owns, returns nullptr with the Python exception set on any failure (the caller
+// reports it), and marks the module's globals with ``__prandtl_loader__`` so that the script knows that no
+// reference is taken from them (fmu/entry.py compensates the stock loader only).
 PyObject* findClass(const std::string& resources, const std::string& moduleName)
 {
-    // Initialize the Python interpreter
-    std::string filename = resources + "/" + moduleName + ".py";
-    std::string deepestFile;
-    int deepestChain = 0;
-
-    // Read and execute the Python file
-    std::ifstream file;
-    file.open(filename);
-
+    const std::string filename = resources + "/" + moduleName + ".py";
+    std::ifstream file(filename);
     if (!file.is_open()) {
+        PyErr_SetString(PyExc_FileNotFoundError, ("cannot read the slave script " + filename).c_str());
         return nullptr;
     }
+    std::stringstream contents;
+    contents << file.rdbuf();
 
-    std::stringstream fileContents;
-    std::string line;
-
-    while (std::getline(file, line)) {
-        fileContents << line << "\n";
-    }
-
-    // Compile python code so classes are added to the namespace
     PyObject* pyModule = PyImport_ImportModule(moduleName.c_str());
-
     if (pyModule == nullptr) {
         return nullptr;
     }
-    PyObject* pGlobals = PyModule_GetDict(pyModule);
-    PyObject* pLocals = PyDict_New();
-    PyObject* pCode = Py_CompileString(fileContents.str().c_str(), moduleName.c_str(), Py_file_input);
-
-    if (pCode != nullptr) {
-        PyObject* pResult = PyEval_EvalCode(pCode, pGlobals, pLocals);
-        Py_XDECREF(pResult);
-    } else {
-        PyErr_Print(); // Handle compilation error
-        Py_Finalize();
-        Py_DECREF(pGlobals);
+    PyObject* pGlobals = PyModule_GetDict(pyModule); // borrowed
+    if (PyDict_SetItemString(pGlobals, "__prandtl_loader__", Py_True) != 0) {
         Py_DECREF(pyModule);
-        Py_DECREF(pLocals);
-        Py_DECREF(pCode);
-        file.close();
         return nullptr;
     }
+    // Executed again, as the stock loader does: the classes it binds are the ones looked for.
+    PyObject* pLocals = PyDict_New();
+    PyObject* pCode = Py_CompileString(contents.str().c_str(), filename.c_str(), Py_file_input);
+    PyObject* pResult = pCode != nullptr ? PyEval_EvalCode(pCode, pGlobals, pLocals) : nullptr;
+    Py_XDECREF(pCode);
+    Py_DECREF(pyModule);
+    if (pResult == nullptr) {
+        Py_DECREF(pLocals);
+        return nullptr;
+    }
+    Py_DECREF(pResult);
 
-    fileContents.clear();
+    // The class bound by the script whose MRO reaches Fmi2Slave deepest.
+    PyObject* pyClass = nullptr;
+    Py_ssize_t deepestChain = 0;
     PyObject *key, *value;
     Py_ssize_t pos = 0;
-
     while (PyDict_Next(pLocals, &pos, &key, &value)) {
-        // Check if element in namespace is a class
         if (!PyType_Check(value)) {
             continue;
         }
-
-        PyObject* pMroAttribute = PyObject_GetAttrString(value, "__mro__");
-
-        if (pMroAttribute != nullptr && PySequence_Check(pMroAttribute)) {
-            std::regex pattern("<class '[^']+\\.([^']+)'");
-            PyObject* pMROList = PySequence_List(pMroAttribute);
-
-            for (Py_ssize_t i = 0; i < PyList_Size(pMROList); ++i) {
-                PyObject* pItem = PyList_GetItem(pMROList, i);
-                std::smatch match;
-                const char* className = PyBytes_AsString(PyUnicode_AsUTF8String(PyObject_Repr(pItem)));
-
-                std::string str(className);
-                const bool isMatch = std::regex_search(str, match, pattern);
-
-                // If regex match is successfull, and found Fmi2Slave at the deepest level then update state
-                if (isMatch && i > deepestChain && match[1] == "Fmi2Slave") {
-                    deepestFile = PyBytes_AsString(PyUnicode_AsUTF8String(key));
-                    deepestChain = i;
-                }
+        PyObject* pMro = PyObject_GetAttrString(value, "__mro__");
+        if (pMro == nullptr) {
+            PyErr_Clear();
+            continue;
+        }
+        const Py_ssize_t length = PySequence_Check(pMro) ? PySequence_Size(pMro) : 0;
+        for (Py_ssize_t i = 0; i < length; ++i) {
+            PyObject* pItem = PySequence_GetItem(pMro, i);
+            PyObject* pName = pItem != nullptr ? PyObject_GetAttrString(pItem, "__name__") : nullptr;
+            const bool isSlave = pName != nullptr && PyUnicode_CompareWithASCIIString(pName, "Fmi2Slave") == 0;
+            Py_XDECREF(pName);
+            Py_XDECREF(pItem);
+            PyErr_Clear();
+            if (isSlave && i > deepestChain) {
+                pyClass = value;
+                deepestChain = i;
             }
         }
-        Py_DECREF(pMroAttribute);
+        Py_DECREF(pMro);
     }
-
-    PyObject* pyClassName = Py_BuildValue("s", deepestFile.c_str());
-    PyObject* pyClass = PyObject_GetAttr(pyModule, pyClassName);
-
-    // Clean up Python objects
-    Py_DECREF(pCode);
+    Py_XINCREF(pyClass);
     Py_DECREF(pLocals);
-    Py_DECREF(pyModule);
-    Py_DECREF(pGlobals);
-    file.close();
-    Py_DECREF(pyClassName);
+    if (pyClass == nullptr) {
+        PyErr_SetString(PyExc_RuntimeError, (filename + " binds no subclass of pythonfmu's Fmi2Slave").c_str());
+    }
     return pyClass;
 }
 
+// prandtl_fmu: the GIL is released on every path, an exception's included (the stock handle_py_exception
+// released it itself, and any other exception left it held).
 void py_safe_run(const std::function<void(PyGILState_STATE gilState)>& f)
 {
     PyGILState_STATE gil_state = PyGILState_Ensure();
-    f(gil_state);
+    try {
+        f(gil_state);
+    } catch (...) {
+        PyGILState_Release(gil_state);
+        throw;
+    }
     PyGILState_Release(gil_state);
 }
 
@@ -145,7 +138,9 @@ public:
             if (sys_path == nullptr) {
                 handle_py_exception("[ctor] PyObject_GetAttrString", gilState);
             }
-            int success = PyList_Insert(sys_path, 0, PyUnicode_FromString(resourceLocation().c_str()));
+            PyObject* resources = PyUnicode_FromString(resourceLocation().c_str());
+            int success = resources != nullptr ? PyList_Insert(sys_path, 0, resources) : -1;
+            Py_XDECREF(resources); // prandtl_fmu: PyList_Insert takes its own reference
 
             Py_DECREF(sys_path);
             if (success != 0) {
@@ -176,25 +171,28 @@ public:
             for (auto i = 0; i < size; i++) {
                 PyObject* msg = PyList_GetItem(pMessages_, i);
 
-                const auto msgAttr = PyObject_GetAttr(msg, msgField);
-                const auto categoryAttr = PyObject_GetAttr(msg, categoryField);
-                const auto statusAttr = PyObject_GetAttr(msg, statusField);
-
-                const auto statusValue = static_cast<fmi2Status>(PyLong_AsLong(statusAttr));
-
-                PyObject* msgValue = PyUnicode_AsEncodedString(msgAttr, "utf-8", nullptr);
-                char* msgStr = PyBytes_AsString(msgValue);
-                logStrBuffer.emplace_back(msgValue);
-
-                const char* categoryStr = "";
-                if (categoryAttr != Py_None) {
-                    PyObject* categoryValue = PyUnicode_AsEncodedString(categoryAttr, "utf-8", nullptr);
-                    categoryStr = PyBytes_AsString(categoryValue);
-                    logStrBuffer.emplace_back(categoryValue);
+                // prandtl_fmu: the attributes read are released (the stock loader kept three references per
+                // message), and a message that cannot be read is skipped, never dereferenced.
+                PyObject* msgAttr = PyObject_GetAttr(msg, msgField);
+                PyObject* categoryAttr = PyObject_GetAttr(msg, categoryField);
+                PyObject* statusAttr = PyObject_GetAttr(msg, statusField);
+                PyObject* msgValue = msgAttr != nullptr ? PyUnicode_AsEncodedString(msgAttr, "utf-8", "replace") : nullptr;
+                PyObject* categoryValue = categoryAttr != nullptr && categoryAttr != Py_None
+                    ? PyUnicode_AsEncodedString(categoryAttr, "utf-8", "replace")
+                    : nullptr;
+                const auto statusValue = statusAttr != nullptr
+                    ? static_cast<fmi2Status>(PyLong_AsLong(statusAttr))
+                    : fmi2Error;
+                if (msgValue != nullptr) {
+                    log(statusValue, categoryValue != nullptr ? PyBytes_AsString(categoryValue) : "",
+                        PyBytes_AsString(msgValue));
                 }
-
-
-                log(statusValue, categoryStr, msgStr);
+                Py_XDECREF(msgValue);
+                Py_XDECREF(categoryValue);
+                Py_XDECREF(msgAttr);
+                Py_XDECREF(categoryAttr);
+                Py_XDECREF(statusAttr);
+                PyErr_Clear();
             }
             PyList_SetSlice(pMessages_, 0, size, nullptr);
         }
@@ -206,15 +204,19 @@ public:
 
     void initialize(PyGILState_STATE gilState)
     {
-        Py_XDECREF(pInstance_);
-        Py_XDECREF(pMessages_);
+        // prandtl_fmu: the released references are forgotten (the stock loader released them again in its
+        // destructor when the new instance could not be made), and the slave is told which loader runs it
+        // (``pythonfmu_loader``: it then takes no references to compensate for the stock loader's defects).
+        Py_CLEAR(pInstance_);
+        Py_CLEAR(pMessages_);
 
         PyObject* args = PyTuple_New(0);
-        PyObject* kwargs = Py_BuildValue("{ss,ss,sn,si}",
+        PyObject* kwargs = Py_BuildValue("{ss,ss,sn,si,ss}",
             "instance_name", data_.instanceName.c_str(),
             "resources", data_.resourceLocation.c_str(),
             "logger", data_.fmiLogger,
-            "visible", data_.visible);
+            "visible", data_.visible,
+            "pythonfmu_loader", PRANDTL_LOADER_NAME);
         pInstance_ = PyObject_Call(pClass_, args, kwargs);
         Py_DECREF(args);
         Py_DECREF(kwargs);
@@ -222,6 +224,9 @@ public:
             handle_py_exception("[initialize] PyObject_Call", gilState);
         }
         pMessages_ = PyObject_CallMethod(pInstance_, "_get_log_queue", nullptr);
+        if (pMessages_ == nullptr) {
+            handle_py_exception("[initialize] _get_log_queue", gilState);
+        }
     }
 
     void SetupExperiment(double startTime, std::optional<double> stop, std::optional<double> tolerance) override
@@ -307,7 +312,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
                 PyList_SetItem(refs, i, Py_BuildValue("d", values[i]));
             }
@@ -328,7 +333,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
                 PyList_SetItem(refs, i, Py_BuildValue("i", values[i]));
             }
@@ -349,7 +354,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
                 PyList_SetItem(refs, i, PyBool_FromLong(values[i]));
             }
@@ -370,7 +375,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
                 PyList_SetItem(refs, i, Py_BuildValue("s", values[i]));
             }
@@ -390,7 +395,7 @@ public:
     {
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
             }
 
@@ -399,11 +404,13 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getReal] PyObject_CallMethod", gilState);
             }
+            checkValues(refs, nvr, "[getReal]", gilState);
 
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyObject* value = PyList_GetItem(refs, i);
                 values[i] = PyFloat_AsDouble(value);
             }
+            checkConverted(refs, "[getReal]", gilState);
             Py_DECREF(refs);
             clearLogBuffer();
         });
@@ -413,7 +420,7 @@ public:
     {
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_integer", "O", vrs);
@@ -421,11 +428,13 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getInteger] PyObject_CallMethod", gilState);
             }
+            checkValues(refs, nvr, "[getInteger]", gilState);
 
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyObject* value = PyList_GetItem(refs, i);
                 values[i] = static_cast<fmi2Integer>(PyLong_AsLong(value));
             }
+            checkConverted(refs, "[getInteger]", gilState);
             Py_DECREF(refs);
             clearLogBuffer();
         });
@@ -435,7 +444,7 @@ public:
     {
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_boolean", "O", vrs);
@@ -443,11 +452,13 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getBoolean] PyObject_CallMethod", gilState);
             }
+            checkValues(refs, nvr, "[getBoolean]", gilState);
 
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyObject* value = PyList_GetItem(refs, i);
                 values[i] = PyObject_IsTrue(value);
             }
+            checkConverted(refs, "[getBoolean]", gilState);
             Py_DECREF(refs);
             clearLogBuffer();
         });
@@ -458,7 +469,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             clearStrBuffer();
             PyObject* vrs = PyList_New(nvr);
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_string", "O", vrs);
@@ -466,9 +477,13 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getString] PyObject_CallMethod", gilState);
             }
+            checkValues(refs, nvr, "[getString]", gilState);
 
-            for (int i = 0; i < nvr; i++) {
+            for (std::size_t i = 0; i < nvr; i++) {
                 PyObject* value = PyUnicode_AsEncodedString(PyList_GetItem(refs, i), "utf-8", nullptr);
+                if (value == nullptr) {
+                    checkConverted(refs, "[getString]", gilState);
+                }
                 values[i] = PyBytes_AsString(value);
                 strBuffer.emplace_back(value);
             }
@@ -484,6 +499,9 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[_get_fmu_state] PyObject_CallMethod", gilState);
             }
+            // prandtl_fmu: a state passed in (FMI 2.0: one returned earlier, to be overwritten) is released;
+            // the stock loader leaked it.
+            Py_XDECREF(reinterpret_cast<PyObject*>(state));
             state = reinterpret_cast<fmi2FMUstate*>(f);
             clearLogBuffer();
         });
@@ -497,6 +515,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[_set_fmu_state] PyObject_CallMethod", gilState);
             }
+            Py_DECREF(f); // prandtl_fmu: the stock loader leaked it
             clearLogBuffer();
         });
     }
@@ -506,6 +525,7 @@ public:
         py_safe_run([this, &state](PyGILState_STATE gilState) {
             auto f = reinterpret_cast<PyObject*>(state);
             Py_XDECREF(f);
+            state = nullptr; // prandtl_fmu: FMI 2.0 asks for *FMUstate = NULL
         });
     }
 
@@ -534,10 +554,15 @@ public:
                 handle_py_exception("[SerializeFMUstate] PyObject_CallMethod", gilState);
             }
             char* c = PyBytes_AsString(pyStateBytes);
-            if (c == nullptr) {
+            if (c == nullptr || static_cast<size_t>(PyBytes_Size(pyStateBytes)) != size) {
+                // prandtl_fmu: the stock loader copied `size` bytes whatever the state's length
+                if (c != nullptr) {
+                    PyErr_SetString(PyExc_ValueError, "the serialized state's size changed since fmi2SerializedFMUstateSize");
+                }
+                Py_DECREF(pyStateBytes);
                 handle_py_exception("[SerializeFMUstate] PyBytes_AsString", gilState);
             }
-            for (int i = 0; i < size; i++) {
+            for (std::size_t i = 0; i < size; i++) {
                 bytes[i] = c[i];
             }
             Py_DECREF(pyStateBytes);
@@ -553,11 +578,11 @@ public:
                 handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
             }
             PyObject* pyState = PyObject_CallMethod(pClass_, "_fmu_state_from_bytes", "(O)", pyStateBytes);
+            Py_DECREF(pyStateBytes);
             if (pyState == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
             }
             state = reinterpret_cast<fmi2FMUstate*>(pyState);
-            Py_DECREF(pyStateBytes);
             clearLogBuffer();
         });
     }
@@ -572,7 +597,7 @@ public:
 private:
     fmu_data data_;
 
-    PyObject* pClass_;
+    PyObject* pClass_{};
     PyObject* pInstance_{};
     PyObject* pMessages_{};
 
@@ -625,37 +650,62 @@ private:
     }
 
 
-    void handle_py_exception(const std::string& what, PyGILState_STATE gilState) const
+    // prandtl_fmu: a failed Python call fails the FMI call with fmi2Error (a std::runtime_error, which fmi2.cpp
+    // maps to fmi2Error; the stock loader threw fatal_error: fmi2Fatal) and leaves the instance as it was, so that
+    // the host may go on with it (FMI 2.0: after fmi2Error, fmi2SetFMUstate to an earlier state, fmi2Reset or
+    // fmi2FreeInstance). The stock loader released pClass_, pInstance_ and pMessages_ here and again in the
+    // destructor (a double free: two refused fmi2SetFMUstate calls and a fmi2GetReal crashed the host), and
+    // released the GIL itself (py_safe_run does it now). The messages the slave logged before failing are
+    // passed on first: they give the reason. Never returns.
+    [[noreturn]] void handle_py_exception(const std::string& what, PyGILState_STATE) const
     {
-        const auto err = PyErr_Occurred();
-        if (err != nullptr) {
-            cleanPyObject();
+        PyObject *pExcType, *pExcValue, *pExcTraceback;
+        PyErr_Fetch(&pExcType, &pExcValue, &pExcTraceback);
 
-            PyObject *pExcType, *pExcValue, *pExcTraceback;
-            PyErr_Fetch(&pExcType, &pExcValue, &pExcTraceback);
-
-            std::ostringstream oss;
-            oss << "Fatal py exception encountered: ";
-            oss << what << "\n";
-            if (pExcValue != nullptr) {
-                PyObject* pRepr = PyObject_Repr(pExcValue);
-                PyObject* pyStr = PyUnicode_AsEncodedString(pRepr, "utf-8", nullptr);
-                oss << PyBytes_AsString(pyStr);
-                Py_DECREF(pyStr);
-                Py_DECREF(pRepr);
-            } else {
-                oss << "unknown error";
+        std::ostringstream oss;
+        oss << "Python exception in " << what << ": ";
+        if (pExcType != nullptr) {
+            PyObject* pName = PyObject_GetAttrString(pExcType, "__name__");
+            PyObject* pStr = pExcValue != nullptr ? PyObject_Str(pExcValue) : nullptr;
+            PyObject* pNameBytes = pName != nullptr ? PyUnicode_AsEncodedString(pName, "utf-8", "replace") : nullptr;
+            PyObject* pStrBytes = pStr != nullptr ? PyUnicode_AsEncodedString(pStr, "utf-8", "replace") : nullptr;
+            oss << (pNameBytes != nullptr ? PyBytes_AsString(pNameBytes) : "exception");
+            if (pStrBytes != nullptr && PyBytes_Size(pStrBytes) > 0) {
+                oss << ": " << PyBytes_AsString(pStrBytes);
             }
+            Py_XDECREF(pNameBytes);
+            Py_XDECREF(pStrBytes);
+            Py_XDECREF(pName);
+            Py_XDECREF(pStr);
+        } else {
+            oss << "a Python call failed without an exception";
+        }
+        Py_XDECREF(pExcType);
+        Py_XDECREF(pExcValue);
+        Py_XDECREF(pExcTraceback);
+        PyErr_Clear();
 
-            PyErr_Clear();
+        clearLogBuffer();
+        PyErr_Clear();
+        throw std::runtime_error(oss.str());
+    }
 
-            Py_XDECREF(pExcType);
-            Py_XDECREF(pExcValue);
-            Py_XDECREF(pExcTraceback);
+    // prandtl_fmu: a getter's result is a list of at least nvr values (the stock loader read past a short one).
+    void checkValues(PyObject* refs, std::size_t nvr, const std::string& what, PyGILState_STATE gilState) const
+    {
+        if (!PyList_Check(refs) || PyList_Size(refs) < static_cast<Py_ssize_t>(nvr)) {
+            Py_DECREF(refs);
+            PyErr_SetString(PyExc_ValueError, "the slave returned fewer values than were asked for");
+            handle_py_exception(what, gilState);
+        }
+    }
 
-            PyGILState_Release(gilState);
-
-            throw fatal_error(oss.str());
+    // prandtl_fmu: a value that could not be converted fails the call (the stock loader returned -1 silently).
+    void checkConverted(PyObject* refs, const std::string& what, PyGILState_STATE gilState) const
+    {
+        if (PyErr_Occurred() != nullptr) {
+            Py_DECREF(refs);
+            handle_py_exception(what, gilState);
         }
     }
 };
@@ -663,24 +713,27 @@ private:
 namespace
 {
 
+// prandtl_fmu: a plain pointer, created once and deleted once, by finalizePythonInterpreter. The stock loader
+// kept it in a global std::shared_ptr, whose static destructor (run by exit()'s handlers) freed the PyState
+// before the library's destructor function (run later by _dl_fini) assigned nullptr to the destroyed
+// shared_ptr: a reference count decremented in freed memory, and a second destruction when it reached zero.
+// Where that 128-byte block had been reused meanwhile (Python's, numba's and LLVM's teardown allocate and free
+// a lot at exit), the host's heap was corrupted: the "corrupted double-linked list" SIGABRT at interpreter exit
+// after FMPy runs (found with valgrind: "Invalid read of size 4 at finalizePythonInterpreter ... inside a
+// block of size 128 free'd ... by __run_exit_handlers ... alloc'd by pythonfmu::createInstance"). The
+// mutex has a trivial destructor.
 std::mutex pyStateMutex{};
-std::shared_ptr<PyState> pyState{};
+PyState* pyState = nullptr;
 
 } // namespace
 
 std::unique_ptr<SlaveInstance> pythonfmu::createInstance(fmu_data data)
 {
     {
-        auto const ensurePyStateAlive = [&]() {
-            auto const lock = std::lock_guard{pyStateMutex};
-            if (nullptr == pyState) pyState = std::make_shared<PyState>();
-        };
-
-        ensurePyStateAlive();
-        auto c = std::make_unique<PySlaveInstance>(data);
-        data.pyState = pyState;
-        return c;
+        auto const lock = std::lock_guard{pyStateMutex};
+        if (nullptr == pyState) pyState = new PyState();
     }
+    return std::make_unique<PySlaveInstance>(data);
 }
 
 
@@ -692,6 +745,8 @@ extern "C" {
 // Thus, use DllMain on Windows and __attribute__((destructor)) on Linux for signaling to the PyState about de-initialization.
 void finalizePythonInterpreter()
 {
+    auto const lock = std::lock_guard{pyStateMutex};
+    delete pyState; // prandtl_fmu: see pyState
     pyState = nullptr;
 }
 }

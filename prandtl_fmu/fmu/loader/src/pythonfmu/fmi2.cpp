@@ -557,6 +557,9 @@ fmi2Status fmi2DoStep(
         if (ok) {
             component->lastSuccessfulTime =
                 currentCommunicationPoint + communicationStepSize;
+            // prandtl_fmu: fmi2Terminated tells about the last step (the stock loader kept it true for ever
+            // after the first Discard, although a master may fix an input and step on)
+            component->wantsToTerminate = false;
             return fmi2OK;
         }
 
