@@ -1,11 +1,11 @@
 """What one FMU instantiation keeps in the host (README, "PythonFMU 0.7.0, worked around").
 
-Builds the FMU of the paper's scene with each native loader (ours, ``prandtl_fmu/fmu/loader``, and PythonFMU's
-stock one) and the connector example's point mass (a plain PythonFMU slave, stock loader), then, in a fresh
-process for each: 50 warm-up cycles of instantiate, initialize, one doStep,
-terminate, free through FMPy, then ``--cycles`` more, and the growth of ``sys.getallocatedblocks()`` (Python's
-live memory blocks, after a garbage collection) per cycle. The processes end with ``os._exit`` (the known abort
-at interpreter exit is not what is measured).
+Builds the FMU of the paper's scene with each native loader (ours, ``prandtl_fmu/fmu/loader``, and
+PythonFMU's stock one) and the connector example's point mass (a plain PythonFMU slave; ``run_connector.build``
+gives it our loader), then, in a fresh process for each: 50 warm-up cycles of instantiate, initialize, one
+doStep, terminate, free through FMPy, then ``--cycles`` more, and the growth of ``sys.getallocatedblocks()``
+(Python's live memory blocks, after a garbage collection) per cycle. The processes end with ``os._exit``: the
+stock loader's use-after-free at exit is not what is measured.
 
     python benchmarks/instantiation_leak.py [--cycles 200] [--out out/instantiation_leak.csv]
 """
@@ -65,7 +65,7 @@ def main():
             fh.write(SCRIPT)
         for label, fmu, loader in (("PrandtlElement", element, "prandtl"),
                                    ("PrandtlElement", element_stock, "pythonfmu"),
-                                   ("PointMass (plain PythonFMU slave)", mass, "pythonfmu")):
+                                   ("PointMass (plain PythonFMU slave)", mass, "prandtl")):
             done = subprocess.run([sys.executable, script, str(fmu), str(args.cycles)], capture_output=True,
                                   text=True, timeout=1800)
             if done.returncode != 0:

@@ -23,8 +23,8 @@ A bad start value (set before or during initialization) is refused at
 initialization where it is set, and a state of another FMU or a tampered
 blob at ``fmi2SetFMUstate``/``fmi2DeSerializeFMUstate``: the reason is logged
 and the call fails, so that a master such as FMPy raises with that reason.
-PythonFMU 0.7.0 can only fail such a call as fmi2Fatal (see ``common.py``);
-the instance stays intact.
+Such a call fails with fmi2Error under the FMU's own loader (fmi2Fatal under
+PythonFMU's stock one, see ``common.py``); the instance stays intact.
 """
 import math
 
