@@ -62,7 +62,8 @@ HIDE_SCIPY = "import sys; sys.modules['scipy'] = None\n"
 
 TRIVIAL = "from numba import njit\n\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n"
 
-CLI = "from prandtl_fmu.cli import main\nsys.exit(main(['run', {scene!r}, '--out', {out!r}]))\n"
+# as the console script runs it: main() reads the process's arguments
+CLI = "sys.argv = ['prandtl-fmu', 'run', {scene!r}, '--out', {out!r}]\nfrom prandtl_fmu.cli import main\nsys.exit(main())\n"
 
 FMU = textwrap.dedent("""\
     import os, time

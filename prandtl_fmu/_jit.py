@@ -126,6 +126,31 @@ def _cache_enabled() -> bool:
 CACHE = _cache_enabled()
 
 
+def skip_blas_probe() -> None:
+    """Keep numba from importing scipy.linalg when it loads its numpy implementations (0.2-0.4 s of the
+    start of a command or of an FMU when scipy is installed; ``benchmarks/startup.py``), with no other effect.
+
+    ``numba.np.arraymath`` probes for BLAS at import (``import scipy.linalg.cython_blas``), and numba imports
+    it with its registries before the first compiled call, even from the cache. The probe is made to fail
+    once, without importing scipy; its result, the module flag ``_HAVE_BLAS``, is then set to what it would
+    have found (BLAS comes with scipy). Nothing else reads that flag (numba 0.58-0.68: it picks np.cov's inner
+    product when such code is compiled); np.dot and np.linalg import scipy when first compiled, as always, so
+    a host's own numba code is unaffected. Does nothing if numba's numpy implementations are already loaded.
+    """
+    import importlib.util
+    import sys
+
+    blas = "scipy.linalg.cython_blas"
+    if "numba.np.arraymath" in sys.modules or blas in sys.modules:
+        return
+    sys.modules[blas] = None  # "import scipy.linalg.cython_blas" raises ImportError without importing scipy
+    try:
+        from numba.np import arraymath  # the probe runs here
+    finally:
+        del sys.modules[blas]
+    arraymath._HAVE_BLAS = importlib.util.find_spec("scipy") is not None
+
+
 def kernel(fn):
     """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath), cached on disk (see above)."""
     return njit(cache=CACHE)(fn)
@@ -142,3 +167,6 @@ def generic_kernel(fn):
     own, since numba keys a closure's cache entry on a pickle of what it closes over. A cached kernel that
     calls it holds its machine code, and is cached (``kernels/loop.py``)."""
     return njit(cache=False)(fn)
+
+
+skip_blas_probe()  # before any kernel is defined (they load numba's registries)

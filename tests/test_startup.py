@@ -176,3 +176,40 @@ def test_the_fmu_uses_the_user_cache_and_survives_its_deleted_resources(tmp_path
     assert warm["results"] == cold["results"]
     folders = sorted(p.name for p in cache.iterdir())
     assert len(folders) == 1 and folders[0].startswith("prandtl_slave_"), folders
+
+
+BLAS_PROBE = textwrap.dedent("""\
+    import importlib.util, sys
+    if sys.argv[1] == "numba-first":  # numba's numpy implementations loaded, and BLAS probed, before us
+        import numba.np.arraymath
+    from prandtl_fmu import load_scene, simulate
+    result = simulate(load_scene("paper-section-8"), "projected", progress=False)
+    scipy_linalg_before = "scipy.linalg" in sys.modules
+    from numba.np import arraymath
+    import numpy as np
+    from numba import njit
+    @njit
+    def dot(a, b):  # a host's own code that needs BLAS, compiled after our kernels
+        return np.dot(a, b)
+    print(repr(float(result.x[-1])), scipy_linalg_before, arraymath._HAVE_BLAS,
+          importlib.util.find_spec("scipy") is not None, dot(np.arange(3.0), np.ones(3)), flush=True)
+""")
+
+
+def test_numba_does_not_import_scipy_linalg_for_our_kernels_and_nothing_else_changes(tmp_path):
+    """_jit.skip_blas_probe: numba probes BLAS by importing scipy.linalg (0.2-0.4 s) when it loads its numpy
+    implementations; our kernels need none. With the probe skipped, scipy.linalg is not imported by a run,
+    numba's flag is what the probe finds, np.dot still compiles in the same process, and the results are
+    bit for bit those of a process where numba probed first."""
+    script = tmp_path / "probe.py"
+    script.write_text(BLAS_PROBE)
+    outputs = {}
+    for order in ("ours-first", "numba-first"):
+        done = subprocess.run([sys.executable, str(script), order], capture_output=True, text=True, timeout=900)
+        assert done.returncode == 0, done.stderr[-2000:]
+        outputs[order] = done.stdout.split()
+    x, scipy_linalg_before, have_blas, scipy_present, dot = outputs["ours-first"]
+    assert scipy_linalg_before == "False"  # not imported for our kernels
+    assert have_blas == scipy_present  # what the probe would have found
+    assert dot == "3.0"
+    assert outputs["numba-first"][0] == x and outputs["numba-first"][2] == have_blas
