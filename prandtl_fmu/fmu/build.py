@@ -33,11 +33,12 @@ def _library_files():
             yield path
 
 
-def _digest(scene_bytes: bytes) -> str:
-    """The scene and the library's sources (the digest that also names the kernel cache, ``_jit.py``)."""
+def _digest(scene_bytes: bytes, loader: str) -> str:
+    """The scene, the native loader and the library's sources (the digest that also names the kernel cache,
+    ``_jit.py``): FMUs that differ in any of them never share their script's module in a host."""
     from .._jit import source_digest
 
-    return hashlib.sha256(scene_bytes + source_digest().encode()).hexdigest()[:12]
+    return hashlib.sha256(scene_bytes + loader.encode() + source_digest().encode()).hexdigest()[:12]
 
 
 def file_stem(name: str) -> str:
@@ -86,7 +87,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
                          "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
                          "'-', '_' and '.'")
     identifier = MODEL_IDENTIFIERS[scene.causality]
-    module = f"prandtl_slave_{_digest(scene_bytes)}"
+    module = f"prandtl_slave_{_digest(scene_bytes, loader)}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
         script = staging / f"{module}.py"

@@ -17,14 +17,16 @@ binary, or an FMU built with ``loader="pythonfmu"``) also releases one
 reference to the module's dict that it never took: each execution under it
 keeps one more reference. The FMU's own loader (``loader/``) marks the
 globals with ``__prandtl_loader__`` before executing the file, and takes
-nothing.
+nothing for this execution.
 """
 import importlib
 import importlib.util
 import os
 import sys
 
-if not globals().get("__prandtl_loader__"):  # the stock loader's extra release (module docstring)
+# The mark is taken away at once: it says which loader runs *this* execution (a process may load FMUs of
+# both loaders, and a stale mark would leave the stock loader's release uncompensated: a freed dict).
+if not globals().pop("__prandtl_loader__", False):  # the stock loader's extra release (module docstring)
     globals().setdefault("_DICT_REFERENCES", []).append(globals())
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
