@@ -66,6 +66,8 @@ _CAUSALITY = "force"
 _drop_duplicate_path_entries(_HERE)
 try:
     _import_library(_HERE)
+    _slave_module = importlib.import_module(
+        _LIBRARY + (".fmu.connector_slave" if _CAUSALITY == "displacement" else ".fmu.slave"))
 except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
     raise ImportError(
         f"prandtl_fmu FMU: {_exc} in the host's Python ({sys.version.split()[0]}, prefix {sys.prefix}): the FMU "
@@ -77,6 +79,6 @@ except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which 
 # one is bound here, by a plain assignment (PythonFMU reads the names the
 # file's execution defines).
 if _CAUSALITY == "displacement":
-    PrandtlConnector = importlib.import_module(_LIBRARY + ".fmu.connector_slave").PrandtlConnector
+    PrandtlConnector = _slave_module.PrandtlConnector
 else:
-    PrandtlElement = importlib.import_module(_LIBRARY + ".fmu.slave").PrandtlElement
+    PrandtlElement = _slave_module.PrandtlElement
