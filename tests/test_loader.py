@@ -6,11 +6,13 @@ The refusal statuses themselves are tested in test_trust.py for both loaders.
 """
 import ctypes
 import gc
+import os
 import shutil
 import subprocess
 import sys
 import tracemalloc
 import zipfile
+from pathlib import Path
 
 import pytest
 
@@ -63,18 +65,12 @@ def test_the_prebuilt_library_is_built_from_the_sources_in_the_repository():
 def test_the_sources_compile_without_a_warning(tmp_path):
     """What ``python -m prandtl_fmu.fmu.loader`` does, into a scratch file: -Wall is silent."""
     import sysconfig
-    from pathlib import Path
 
     if not (Path(sysconfig.get_paths()["include"]) / "Python.h").is_file():
         pytest.skip("no Python headers on this machine")
     out = tmp_path / "loader.so"
-    include = sysconfig.get_paths()["include"]
-    done = subprocess.run(["g++", "-std=c++17", "-O2", "-fPIC", "-shared", "-Wall", "-DPy_LIMITED_API=0x03080000",
-                           f"-I{loader.SOURCES}", f"-I{include}",
-                           str(loader.SOURCES / "pythonfmu" / "PySlaveInstance.cpp"),
-                           str(loader.SOURCES / "pythonfmu" / "fmi2.cpp"), "-o", str(out)],
-                          capture_output=True, text=True)
-    assert done.returncode == 0 and done.stderr == "", done.stderr
+    warnings = loader.compile_loader(out)  # -Wall
+    assert warnings == "", warnings
     exported = subprocess.run(["nm", "-D", "--defined-only", str(out)], capture_output=True, text=True).stdout
     for function in ("fmi2Instantiate", "fmi2DoStep", "fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeInstance"):
         assert f" T {function}\n" in exported
@@ -82,7 +78,6 @@ def test_the_sources_compile_without_a_warning(tmp_path):
 
 def test_the_fmu_carries_the_patched_library_on_linux_and_pythonfmus_elsewhere(fmus):
     import pythonfmu
-    from pathlib import Path
 
     stock = Path(pythonfmu.__file__).parent / "resources" / "binaries"
     with zipfile.ZipFile(fmus["prandtl"]) as archive:
@@ -194,7 +189,7 @@ def test_many_refusals_leave_the_instance_and_the_host_intact(fmus, name):
     stock loader's double release (compensated by the slave) and ours (nothing to compensate) both hold."""
     script = f"""
 import sys
-sys.path.insert(0, {str(__import__('pathlib').Path(__file__).parent.parent)!r})
+sys.path.insert(0, {str(Path(__file__).parent.parent)!r})
 from fmpy.fmi1 import FMICallException
 from tests.fmu_tools import Slave
 slave = Slave({str(fmus[name])!r})
@@ -242,8 +237,6 @@ def test_both_loaders_on_one_script_module_keep_its_dict_alive(fmus, tmp_path):
     stock loader's releases stay compensated after our loader has run the script. A mark left over from our
     loader made the script skip the compensation, and the module's dict was freed while in use (a worker
     of the test suite crashed in numba's compiler)."""
-    from pathlib import Path
-
     import pythonfmu
 
     stock_binary = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64" /
@@ -255,7 +248,7 @@ def test_both_loaders_on_one_script_module_keep_its_dict_alive(fmus, tmp_path):
             target.writestr(info, stock_binary if info.filename == "binaries/linux64/PrandtlElement.so" else data)
     script = MIXED.format(root=str(Path(__file__).parent.parent), patched=str(fmus["prandtl"]), stock=str(swapped))
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600,
-                          env=dict(__import__("os").environ, PRANDTL_FMU_FULL_EXIT=""))
+                          env=dict(os.environ, PRANDTL_FMU_FULL_EXIT=""))
     assert done.returncode in (0, -6, 134) and done.stdout.strip(), done.stderr[-2000:]  # stock: abort at exit
     before, after, x = done.stdout.split()
     assert int(after) >= int(before)  # never fewer references to the dict than before the stock runs

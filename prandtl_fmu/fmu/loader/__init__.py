@@ -110,16 +110,16 @@ def stale() -> Optional[str]:
     return None
 
 
-def compile_loader(out: Path, compiler: str = "g++") -> None:
-    """Compile ``src/`` into the shared library ``out`` (raises CalledProcessError with the compiler's
-    output on failure)."""
+def compile_loader(out: Path, compiler: str = "g++") -> str:
+    """Compile ``src/`` into the shared library ``out``; returns the compiler's warnings (raises
+    CalledProcessError with its output on failure)."""
     include = sysconfig.get_paths()["include"]
     command = [compiler, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wall",
                "-DPy_LIMITED_API=0x03080000",  # the stable ABI: one library for every Python 3.8+
                f"-I{SOURCES}", f"-I{include}",
                str(SOURCES / "pythonfmu" / "PySlaveInstance.cpp"), str(SOURCES / "pythonfmu" / "fmi2.cpp"),
                "-s", "-o", str(out)]
-    subprocess.run(command, check=True, capture_output=True, text=True)
+    return subprocess.run(command, check=True, capture_output=True, text=True).stderr
 
 
 def build() -> Path:
