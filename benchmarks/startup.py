@@ -10,7 +10,10 @@ like with like):
   then loads its typing and lowering registries), the floor of the two
   cases below;
 * ``cli``: ``prandtl-fmu run`` on a tiny scene (10 steps, 2 branches) writing
-  a CSV, the way a user's first command runs;
+  a CSV, the way a user's first command runs (it ends without the interpreter's
+  teardown once its output is closed); ``cli, interpreter teardown``: the same
+  run through ``main(argv)``, which returns and lets the interpreter tear numba
+  down: what that teardown costs;
 * ``fmu``: a fresh process that loads the FMU of the same scene with FMPy and
   calls instantiate ... first ``doStep`` (reported: the time from
   instantiate to the end of the first doStep, and the whole process);
@@ -64,6 +67,7 @@ TRIVIAL = "from numba import njit\n\n\n@njit(cache=True)\ndef twice(x):\n    ret
 
 # as the console script runs it: main() reads the process's arguments
 CLI = "sys.argv = ['prandtl-fmu', 'run', {scene!r}, '--out', {out!r}]\nfrom prandtl_fmu.cli import main\nsys.exit(main())\n"
+CLI_TEARDOWN = "from prandtl_fmu.cli import main\nsys.exit(main(['run', {scene!r}, '--out', {out!r}]))\n"
 
 FMU = textwrap.dedent("""\
     import os, time
@@ -142,8 +146,11 @@ def main(argv=None):
         for label, code in (("cli", "import sys\n" + cli), ("fmu", fmu_code)):
             cases.append((label, code))
             cases.append((label + ", no scipy", HIDE_SCIPY + ("" if label == "fmu" else "import sys\n") + code))
+        teardown = "import sys\n" + CLI_TEARDOWN.format(scene=scene, out=os.path.join(work, "tiny.csv"))
+        cases.insert(4, ("cli, interpreter teardown", teardown))
+        warm_only = ("import numba", "numba floor", "cli, interpreter teardown")
         runs = [(label, code, warm) for label, code in cases
-                for warm in ((True,) if label.startswith(("import numba", "numba floor")) else (True, False))]
+                for warm in ((True,) if label.startswith(warm_only) else (True, False))]
         measured = measure_all(runs, args.repeat)
         rows = []
         for label, code, warm in runs:
