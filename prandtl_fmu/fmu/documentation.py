@@ -148,7 +148,8 @@ Initialization takes the element from x = 0 (elongations u0) to the first input 
 <code>stiffness</code> is the tangent dF/dx for a motion in the direction of v (of the last motion when
 v = 0): a master can choose a stable communication step from it, or build a coupling Jacobian.</p>
 <p>A non-finite input at doStep is refused: fmi2Discard, a logged message, the state unchanged. A bad parameter
-value is refused at fmi2ExitInitializationMode with a logged reason, or by a Discard during stepping. The
+value is refused at fmi2ExitInitializationMode with a logged reason (fmi2Error; fmi2Fatal where the FMU runs on
+PythonFMU's own binary: Windows, macOS), or by a Discard during stepping. The instance stays usable. The
 whole state can be saved, restored and serialized. OSP: <code>resources/PrandtlConnector_OspModelDescription.xml</code>
 declares a LinearMechanicalPort (force out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
 
@@ -171,7 +172,8 @@ last shorter step for the remainder. The parameter <code>stepper</code> chooses 
 because it is implicit in the friction term only; our <code>implicit</code> is implicit in every term.</p>
 <p>A non-finite F or a step that would leave a non-finite state is refused: fmi2Discard, a logged message naming
 the culprit, the state unchanged. A bad parameter value is refused where it is set or at
-fmi2ExitInitializationMode with a logged reason. The whole state can be saved, restored and serialized. OSP:
+fmi2ExitInitializationMode with a logged reason (fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own
+binary: Windows, macOS); the instance stays usable. The whole state can be saved, restored and serialized. OSP:
 <code>resources/PrandtlElement_OspModelDescription.xml</code> declares a LinearMechanicalPort (F in, v out) and a
 LinearMechanicalQuasiPort (F in, x out).</p>"""
 
