@@ -88,17 +88,16 @@ def install(fmu: os.PathLike) -> None:
     fmu = Path(fmu)
     with zipfile.ZipFile(fmu) as archive:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
-    handle, partial = tempfile.mkstemp(prefix=".loader-", suffix=".fmu.part", dir=fmu.parent)
-    os.close(handle)
-    try:
-        with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as archive:
-            for info, data in entries:
-                archive.writestr(info, replacement(info.filename) or data)
-            archive.write(LICENSE, "documentation/licenses/PythonFMU.txt")
-        os.replace(partial, fmu)
-    finally:
-        if os.path.exists(partial):
-            os.unlink(partial)
+    import io
+
+    from ...outputs import write_atomically
+
+    rewritten = io.BytesIO()
+    with zipfile.ZipFile(rewritten, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for info, data in entries:
+            archive.writestr(info, replacement(info.filename) or data)
+        archive.write(LICENSE, "documentation/licenses/PythonFMU.txt")
+    write_atomically(fmu, rewritten.getvalue())
 
 
 def stale() -> Optional[str]:

@@ -25,8 +25,10 @@ public:
 protected:
     void debugLog(fmi2Status s, const std::string& category, const std::string& message) override
     {
-        f_->logger(f_->componentEnvironment, instanceName_.c_str(),
-            s, category.empty() ? nullptr : category.c_str(), message.c_str());
+        // prandtl_fmu: never a NULL category (PyLogger names one); no logger, no call
+        if (f_ != nullptr && f_->logger != nullptr) {
+            f_->logger(f_->componentEnvironment, instanceName_.c_str(), s, category.c_str(), message.c_str());
+        }
     }
 
 private:
@@ -45,10 +47,45 @@ struct Fmi2Component
 
     double lastSuccessfulTime{0};
     bool wantsToTerminate{false};
+    // prandtl_fmu: where the instance is in FMI 2.0's co-simulation call sequence (4.2.4). A step refused with
+    // fmi2Discard leaves it stepping: the instance is unchanged and a master may set a good input and step again.
+    enum Mode : unsigned { instantiated = 1, initialization = 2, stepping = 4, terminated = 8 };
+    Mode mode{instantiated};
 
     std::unique_ptr<pythonfmu::SlaveInstance> slave;
     std::unique_ptr<Fmi2Logger> logger;
 };
+
+// prandtl_fmu: the calls each mode allows, as the Reference-FMUs' masks for co-simulation (getters also after
+// fmi2Terminate: the master reads the final values then; setters not after it)
+constexpr unsigned ANY_MODE = Fmi2Component::instantiated | Fmi2Component::initialization | Fmi2Component::stepping
+    | Fmi2Component::terminated;
+constexpr unsigned GETTERS = Fmi2Component::initialization | Fmi2Component::stepping | Fmi2Component::terminated;
+constexpr unsigned SETTERS = Fmi2Component::instantiated | Fmi2Component::initialization | Fmi2Component::stepping;
+
+const char* modeName(unsigned mode)
+{
+    switch (mode) {
+        case Fmi2Component::instantiated: return "before fmi2EnterInitializationMode";
+        case Fmi2Component::initialization: return "in initialization mode";
+        case Fmi2Component::stepping: return "after initialization";
+        default: return "after fmi2Terminate";
+    }
+}
+
+// prandtl_fmu: whether `function` may be called now; if not, the reason is logged (fmi2Error, always logged)
+bool allowed(Fmi2Component* component, unsigned modes, const char* function)
+{
+    if (component == nullptr) {
+        return false;
+    }
+    if ((component->mode & modes) != 0) {
+        return true;
+    }
+    component->logger->log(fmi2Error, std::string(function) + " refused: not allowed " + modeName(component->mode)
+        + " (FMI 2.0 co-simulation call sequence); the instance is unchanged");
+    return false;
+}
 
 } // namespace
 
@@ -81,6 +118,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
     fmi2Boolean visible,
     fmi2Boolean loggingOn)
 {
+
+    // prandtl_fmu: a missing argument is logged and refused (std::string of NULL is undefined behaviour)
+    if (functions == nullptr || functions->logger == nullptr) {
+        return nullptr;
+    }
+    if (instanceName == nullptr || fmuResourceLocation == nullptr) {
+        functions->logger(functions->componentEnvironment, instanceName != nullptr ? instanceName : "", fmi2Error,
+            "logStatusError", "fmi2Instantiate refused: instanceName and fmuResourceLocation must not be NULL");
+        return nullptr;
+    }
 
     // Convert URI %20 to space
     auto resources = std::regex_replace(std::string(fmuResourceLocation), std::regex("%20"), " ");
@@ -156,6 +203,9 @@ fmi2Status fmi2SetupExperiment(
     fmi2Real stopTime)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, Fmi2Component::instantiated, "fmi2SetupExperiment")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->SetupExperiment(
             startTime,
@@ -175,8 +225,12 @@ fmi2Status fmi2SetupExperiment(
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, Fmi2Component::instantiated, "fmi2EnterInitializationMode")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->EnterInitializationMode();
+        component->mode = Fmi2Component::initialization; // prandtl_fmu: the call sequence
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -191,8 +245,12 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, Fmi2Component::initialization, "fmi2ExitInitializationMode")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->ExitInitializationMode();
+        component->mode = Fmi2Component::stepping; // prandtl_fmu: the call sequence
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -207,8 +265,12 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, Fmi2Component::stepping, "fmi2Terminate")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->Terminate();
+        component->mode = Fmi2Component::terminated; // prandtl_fmu: the call sequence
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -223,8 +285,12 @@ fmi2Status fmi2Terminate(fmi2Component c)
 fmi2Status fmi2Reset(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, ANY_MODE, "fmi2Reset")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->Reset();
+        component->mode = Fmi2Component::instantiated; // prandtl_fmu: the call sequence
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -243,6 +309,9 @@ fmi2Status fmi2GetReal(
     fmi2Real value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, GETTERS, "fmi2GetReal")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->GetReal(vr, nvr, value);
         return fmi2OK;
@@ -262,6 +331,9 @@ fmi2Status fmi2GetInteger(
     fmi2Integer value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, GETTERS, "fmi2GetInteger")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->GetInteger(vr, nvr, value);
         return fmi2OK;
@@ -281,6 +353,9 @@ fmi2Status fmi2GetBoolean(
     fmi2Boolean value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, GETTERS, "fmi2GetBoolean")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->GetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -300,6 +375,9 @@ fmi2Status fmi2GetString(
     fmi2String value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, GETTERS, "fmi2GetString")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->GetString(vr, nvr, value);
         return fmi2OK;
@@ -320,6 +398,9 @@ fmi2Status fmi2SetReal(
     const fmi2Real value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, SETTERS, "fmi2SetReal")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->SetReal(vr, nvr, value);
         return fmi2OK;
@@ -339,6 +420,9 @@ fmi2Status fmi2SetInteger(
     const fmi2Integer value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, SETTERS, "fmi2SetInteger")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->SetInteger(vr, nvr, value);
         return fmi2OK;
@@ -358,6 +442,9 @@ fmi2Status fmi2SetBoolean(
     const fmi2Boolean value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, SETTERS, "fmi2SetBoolean")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->SetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -377,6 +464,9 @@ fmi2Status fmi2SetString(
     const fmi2String value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, SETTERS, "fmi2SetString")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         component->slave->SetString(vr, nvr, value);
         return fmi2OK;
@@ -509,7 +599,7 @@ fmi2Status fmi2GetDirectionalDerivative(
 {
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
+        "logStatusError", // prandtl_fmu: a category the modelDescription declares (not "cppfmu")
         "FMI function not supported: fmi2GetDirectionalDerivative");
     return fmi2Error;
 }
@@ -523,7 +613,7 @@ fmi2Status fmi2SetRealInputDerivatives(
 {
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
+        "logStatusError", // prandtl_fmu: a category the modelDescription declares (not "cppfmu")
         "FMI function not supported: fmi2SetRealInputDerivatives");
     return fmi2Error;
 }
@@ -537,7 +627,7 @@ fmi2Status fmi2GetRealOutputDerivatives(
 {
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
+        "logStatusError", // prandtl_fmu: a category the modelDescription declares (not "cppfmu")
         "FMI function not supported: fmiGetRealOutputDerivatives");
     return fmi2Error;
 }
@@ -549,6 +639,9 @@ fmi2Status fmi2DoStep(
     fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (!allowed(component, Fmi2Component::stepping, "fmi2DoStep")) { // prandtl_fmu: the call sequence
+        return fmi2Error;
+    }
     try {
         double endTime = currentCommunicationPoint;
         const auto ok = component->slave->DoStep(
