@@ -124,3 +124,79 @@ def test_exact_refuses_what_it_cannot_do():
     with pytest.raises(ValueError, match="energy account"):
         simulate(make_scene(cubic=None), "exact", energy=True)
     assert math.isinf(get_stepper("exact").ORDER)
+
+
+# Run in a child process with a time limit: a regression of the event loop would spin for ever in compiled code
+# (SIGINT does not reach it), and a test must fail, not hang the suite.
+_REST_FUZZ = r'''
+import sys
+import numpy as np
+from prandtl_fmu import parse_scene, simulate
+from tests.conftest import scene_text
+
+rng = np.random.default_rng(int(sys.argv[1]))
+cases = 0
+for case in range(int(sys.argv[2])):
+    n = int(rng.integers(0, 4))
+    k = rng.uniform(0.2, 2.0, n)
+    eta = rng.uniform(0.05, 0.5, n)
+    u0 = rng.uniform(-1, 1, n) * eta * (rng.random(n) < 0.7)
+    u0 = np.where(rng.random(n) < 0.3, np.sign(rng.standard_normal(n)) * eta, u0)  # some on their threshold
+    k0 = float(rng.choice([0.0, rng.uniform(0.1, 2.0)]))
+    x0 = float(rng.choice([0.0, rng.uniform(-1, 1)]))
+    rest = k0 * x0 + float(k @ u0)  # the force of equilibrium at the initial state
+    kind = rng.choice(["equilibrium", "none", "harmonic", "table"])
+    load = {"equilibrium": {"kind": "constant", "value": rest},
+            "none": {"kind": "constant", "value": 0.0},
+            "harmonic": {"kind": "harmonic", "amplitude": float(rng.uniform(0.1, 1)), "omega": 1.0,
+                         "offset": rest, "phase": float(rng.choice([0.0, np.pi / 2]))},
+            "table": {"kind": "table", "time": [0.0, 0.3, 0.7, 2.0], "force": [rest, rest, rest + 0.4, rest]}}[kind]
+    if kind == "harmonic":  # a harmonic load starting at a peak or a zero of its rate
+        load.pop("phase")
+    zeros = int(rng.integers(1, 3))  # branches of elastic range 0: they never carry a force
+    tables = {"name": "rest", "mass": {"m": float(rng.uniform(0.5, 2)), "x0": x0, "v0": 0.0},
+              "spring": {"k0": k0} if k0 else None,
+              "damper": {"c": float(rng.choice([0.0, 0.3]))},
+              "load": load,
+              "solver": {"stepper": "exact", "step": 0.1, "stop_time": 2.0, "output_interval": 0.1}}
+    with_zeros = dict(tables, branches={"k": list(k) + [1.0] * zeros, "eta": list(eta) + [0.0] * zeros,
+                                        "u0": list(u0) + [0.0] * zeros})
+    without = dict(tables, branches={"k": list(k), "eta": list(eta), "u0": list(u0)} if n else None)
+    clean = lambda t: {key: value for key, value in t.items() if value is not None}
+    a = simulate(parse_scene(scene_text(clean(with_zeros)), "a.toml"))
+    b = simulate(parse_scene(scene_text(clean(without)), "b.toml"))
+    scale = 1.0 + np.abs(b.x).max()
+    assert np.all(np.isfinite(a.x)), (case, with_zeros)
+    assert np.abs(a.x - b.x).max() <= 1e-12 * scale, (case, np.abs(a.x - b.x).max(), with_zeros)
+    assert np.abs(a.v - b.v).max() <= 1e-12 * scale, (case, with_zeros)
+    if kind in ("equilibrium",) or (kind == "none" and rest == 0.0):
+        assert np.all(a.x == x0) and np.all(a.v == 0.0), (case, "an equilibrium moved", with_zeros)
+    cases += 1
+print("cases", cases)
+'''
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_exact_at_rest_with_zero_elastic_ranges_never_spins_and_zero_ranges_carry_nothing(seed):
+    """Issue 23, item 7: at rest in equilibrium with a branch of elastic range 0, ``exact`` spun for ever (a
+    level at distance 0 fired an event at tau = 5e-324 again and again). Random rest states, equilibria and
+    loads starting at rest: every run ends (within the child's time limit), a branch of range 0 changes nothing
+    (the same scene without it, to 1e-12), and an equilibrium stays exactly where it is."""
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    done = subprocess.run([sys.executable, "-c", _REST_FUZZ, str(seed), "25"], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "cases 25" in done.stdout
+
+
+def test_the_element_at_rest_with_a_zero_elastic_range_is_a_fixed_point_of_exact():
+    """The issue's scene, in process: 10 exact steps of the element at rest in equilibrium."""
+    scene = make_scene(mass={"m": 1.0, "x0": 0.5, "v0": 0.0}, spring={"k0": 1.0}, cubic=None, damper=None,
+                       branches={"k": [1.0], "eta": [0.0]}, load={"kind": "constant", "value": 0.5},
+                       solver={"stepper": "exact", "step": 0.1, "stop_time": 1.0, "output_interval": 0.1})
+    result = simulate(scene)
+    assert np.all(result.x == 0.5) and np.all(result.v == 0.0) and np.all(result.reaction == 0.5)

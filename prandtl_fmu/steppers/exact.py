@@ -47,10 +47,22 @@ one matrix exponential takes the state there. It is checked at the start of
 the phase and at every turning point. For a constant load the zeros of v
 come from the rule above, so a sliding phase of any length also costs O(1).
 There is no cap on the number of phases: each ends at an event, a load kink
-or the end of the step; a run of 10^6 phases that make no progress in time
-(it cannot happen unless the state is not finite) ends the step with a
-non-finite state, which the driver reports as a failed step: never a silent
-stop.
+or the end of the step.
+
+Progress. At rest with no net force (v = 0, F = reaction) the direction of
+the coming motion is the sign of the first nonzero derivative of v,
+(A^p y0)[1] for p = 1..5 with the all-sticking phase matrix; when all of
+them vanish, so do all higher ones (Cayley-Hamilton, A is 6 x 6): v is 0
+for ever, the element is at a fixed point and the phase runs to its end
+with no event. (Taking the sticking branches' levels as events there made a
+branch of elastic range 0, at distance 0 from its level, fire an event at
+tau = 5e-324 for ever.) Once the direction is known, a branch on its
+threshold in that direction slides, so every level ahead is at a positive
+distance. Events at one instant (branches of equal thresholds, a reversal)
+are finitely many: more than 2 n + 16 phases in a row that do not advance
+t end the step with a non-finite state, which the driver reports as a
+failed step (one line; fmi2Discard in the FMU): never a silent stop, never a
+loop that spins.
 
 ``ORDER`` is infinite: the error is rounding (checked against scipy's DOP853
 at rtol 1e-13 on event-free stretches, tests/test_exact.py). The cost grows
@@ -122,11 +134,23 @@ def _expm_times(a, tau, y):
     for k in range(1, 30):
         term = _matmul(term, b) / k
         result += term
-        if np.abs(term).max() <= 1e-18 * np.abs(result).max():
+        if _converged(term, result):
             break
     for _ in range(squarings):
         result = _matmul(result, result)
     return _matvec(result, y)
+
+
+@kernel
+def _converged(term, result):
+    """Whether every entry of the Taylor series has converged to rounding, entry by entry: for a tiny tau the
+    entries of order tau^2 (how v leaves 0 when v = v' = 0, e.g. from rest on a ramp) are far below the
+    identity's, and a test on the largest entry dropped them (v(tau) came out exactly 0, a false reversal)."""
+    for i in range(6):
+        for j in range(6):
+            if abs(term[i, j]) > 1e-18 * abs(result[i, j]):
+                return False
+    return True
 
 
 @kernel
@@ -198,6 +222,13 @@ def _linear_spring(k0):
 
 
 @kernel
+def _branch_count(k):
+    if k is None:
+        return 0
+    return k.shape[0]
+
+
+@kernel
 def _damping(c):
     if c is None:
         return 0.0
@@ -218,16 +249,26 @@ def _next_break(load, t):
 
 @kernel
 def _direction(k0, k, load, t, x, v, u):
-    """Sign of the motion at t: of v, else of the acceleration, else of the load's rate."""
+    """Sign of the motion at t: of v, else of the net force F - reaction, else 0 (decided by
+    :func:`_leaving_direction`)."""
     if v != 0.0:
         return math.copysign(1.0, v)
     reaction = _linear_spring(k0) * x + branch_force(k, u)
     push = force_at(load, t) - reaction
     if push != 0.0:
         return math.copysign(1.0, push)
-    rate = force_at(load, t + 1e-9) - force_at(load, t)
-    if rate != 0.0:
-        return math.copysign(1.0, rate)
+    return 0.0
+
+
+@kernel
+def _leaving_direction(a, y0):
+    """At rest with no net force: the sign of the first nonzero derivative of v, (A^p y0)[1], p = 1..5;
+    0 when all vanish (then v = 0 for ever: a fixed point)."""
+    y = y0.copy()
+    for _ in range(5):
+        y = _matvec(a, y)
+        if y[1] != 0.0:
+            return math.copysign(1.0, y[1])
     return 0.0
 
 
@@ -240,13 +281,22 @@ def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta = model
     end = t + h
     stalled = 0
+    stall_limit = 16 + 2 * _branch_count(k)
     while t < end:  # phases; each ends at an event, a load kink or t + h
         direction = _direction(k0, k, load, t, x, v, u)
         a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction)
         y0[1] = v
         span = min(end, _next_break(load, t)) - t
+        if direction == 0.0:
+            direction = _leaving_direction(a, y0)
+            if direction == 0.0:  # a fixed point: nothing moves until the load changes
+                t = t + span
+                stalled = 0
+                continue
+            a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction)
+            y0[1] = v
         tau_hit, hit = _first_event(a, y0, load, t, m, _damping(c), stiffness, span, direction, up, down,
-                                    sliding and direction != 0.0)
+                                    sliding)
         y = _expm_times(a, tau_hit, y0)
         moved, v = y[0], y[1]
         if hit == LEVEL_UP:
@@ -259,7 +309,7 @@ def step(model, load, t, h, x, v, s, u, energy):
         _move_branches(k, eta, u, direction, hit, up, down, moved)
         t_next = t + tau_hit if hit != NO_EVENT else t + span
         stalled = stalled + 1 if t_next <= t else 0
-        if stalled > 1000000 or not (abs(x) < np.inf and abs(v) < np.inf):
+        if stalled > stall_limit or not (abs(x) < np.inf and abs(v) < np.inf):
             return np.nan, np.nan, branch_force(k, u)  # reported by the driver: never a silent stop
         t = t_next
     return x, v, branch_force(k, u)
