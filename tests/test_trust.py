@@ -336,3 +336,75 @@ def test_the_scene_name_is_data_not_a_path(tmp_path, monkeypatch, name, expected
     path = build_fmu(scene_path)
     assert path.parent == work and path.name == expected
     assert sorted(p.name for p in work.iterdir()) == [expected]
+
+
+def test_a_tampered_memory_stack_state_is_refused_even_with_consistent_totals():
+    """Issue 23, item 6: a stack state whose sticking piece was moved beyond the elastic ranges, with its running
+    totals recomputed to match, was accepted (a reaction of 4.99 N against a strength of 0.605 N)."""
+    import numpy as np
+
+    from prandtl_fmu import Element, parse_scene
+    from prandtl_fmu.kernels import stack
+
+    scene = parse_scene(scene_text(base_tables(cubic=None, branches={
+        "count": 100, "k_total": 1.0, "eta_range": [0.1, 1.1]})), "stack.toml")
+    element = Element(scene)
+    assert element.branch_kernel == "stack"
+    element.advance(1.0, 0.4)
+    good = element.get_state()
+    saved = np.array(good["u"])
+    for piece in range(int(saved[stack.COUNT])):
+        tampered = saved.copy()
+        tampered[stack.HEADER + stack.ROW * piece + 2] += 2.0  # a: every elongation of the piece moves by 2 m
+        full = np.zeros(stack.HEADER + stack.ROW * stack.capacity(element.model[4]))
+        full[:tampered.shape[0]] = tampered
+        stack.resync(element.model[4], full)  # totals that match the tampered pieces
+        tampered[stack.SK], tampered[stack.S0] = full[stack.SK], full[stack.S0]
+        before = (element.x, element.v, element.reaction)
+        with pytest.raises(ValueError, match="elastic range"):
+            element.set_state(dict(good, u=tampered.tolist()))
+        assert (element.x, element.v, element.reaction) == before
+    element.set_state(good)  # the untouched state is still taken
+    assert abs(element.reaction) <= 1.0 * 0.2 * abs(element.x) + scene.branches.strength + 0.01 * abs(element.v)
+
+
+@pytest.mark.parametrize("path, value, words", [
+    (("settings", "F"), "abc", "F = 'abc'"),
+    (("settings", "parameters", "m"), "abc", "parameter m"),
+    (("settings", "stepper"), 123, "stepper = 123"),
+    (("settings", "step"), [1], "step = [1]"),
+    (("settings", "scene_load"), "yes", "scene_load"),
+    (("element", "x"), 1e308, "not finite"),
+    (("element", "v"), "0.5", "v = '0.5'"),
+    (("element", "step"), [1], "step = [1]"),
+    (("element", "stepper"), 7, "stepper 7"),
+    (("element", "u"), [0.05, -0.1, 9.0], "elastic range"),
+    (("element", "u"), "abc", "not a list"),
+    (("element", "energy_account"), [0, 0, "x"], "energy_account"),
+])
+def test_every_field_of_a_saved_fmu_state_is_checked_before_it_is_applied(trust_fmus, path, value, words):
+    """Issue 23, item 6: fmi2SetFMUstate accepted F = "abc", m = "abc", stepper = 123, step = [1] and x = 1e308
+    (then infinite outputs). Each tampered blob is refused with its reason and the instance is unchanged."""
+    import json
+
+    from fmpy.fmi1 import FMICallException
+
+    slave = _good_slave(trust_fmus["all"])
+    try:
+        outputs = slave.get("x", "v", "reaction", "stored_energy")
+        document = json.loads(bytes(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate())).decode())
+        target = document
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+        blob = json.dumps(document).encode()
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(blob))
+        assert refused.value.status == 3
+        assert any("FMU state refused" in message and words in message for _, message in slave.messages), \
+            slave.messages[-3:]
+        assert slave.get("x", "v", "reaction", "stored_energy") == outputs
+        slave.step(0.1, 0.5)  # and it goes on
+        assert all(np.isfinite(slave.get("x", "v", "reaction")))
+    finally:
+        slave.close()

@@ -114,7 +114,7 @@ class PrandtlConnector(SlaveBase):
 
     def _current(self):
         """The connector moved to the inputs set last, without committing (cached per input)."""
-        key = (self.x, self.v, tuple(sorted(self.connector.coefficients().items())))
+        key = (self.x, self.v, self.connector._memo("revision", object))  # a new object per state
         if key != self._preview_key:
             if not (finite_number(self.x) and finite_number(self.v)):
                 return _NotFinite()
@@ -177,7 +177,14 @@ class PrandtlConnector(SlaveBase):
             parameters = dict(settings["parameters"])
             if set(parameters) != set(self.parameters):
                 raise ValueError("its parameters are not this FMU's")
-            values = (settings["x"], settings["v"], float(settings["start_time"]))
+            values = (settings["x"], settings["v"], settings["start_time"])
+            for name, value in zip(("x", "v", "start time"), values):
+                if not finite_number(value):
+                    raise ValueError(f"{name} = {value!r}: must be a finite number")
+            for name, value in parameters.items():
+                problem = coefficient_problem(name, value)
+                if problem:
+                    raise ValueError(f"parameter {name}: {problem}")
             self.connector.set_state(state["connector"])  # checks everything before changing anything
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")

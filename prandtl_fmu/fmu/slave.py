@@ -50,6 +50,23 @@ EFFECT_PARAMETERS = [
 ]
 
 
+def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None":
+    """Why the parameters a master set (or a saved state holds) cannot be used, or None."""
+    from ..scene import coefficient_problem
+
+    for name, value in parameters.items():
+        problem = coefficient_problem(name, value)
+        if problem:
+            return f"parameter {name}: {problem}"
+    if not isinstance(stepper, str) or stepper not in STEPPERS:
+        return f"parameter stepper = {stepper!r}: must be one of {', '.join(STEPPERS)}"
+    if not (finite_number(step) and step > 0):
+        return f"parameter step = {step!r}: must be finite and > 0"
+    if not isinstance(scene_load, bool):
+        return f"parameter scene_load = {scene_load!r}: must be true or false"
+    return None
+
+
 class PrandtlElement(SlaveBase):
     author = "prandtl_fmu"
     description = ("Generalized Prandtl element (dry-friction hysteresis) under a force F: the springs, dashpot "
@@ -170,17 +187,7 @@ class PrandtlElement(SlaveBase):
 
     def _settings_problem(self):
         """Why a parameter the master set cannot be used, or None."""
-        from ..scene import coefficient_problem
-
-        for name, value in self.parameters.items():
-            problem = coefficient_problem(name, value)
-            if problem:
-                return f"parameter {name}: {problem}"
-        if self.stepper not in STEPPERS:
-            return f"parameter stepper = {self.stepper!r}: must be one of {', '.join(STEPPERS)}"
-        if not (finite_number(self.step) and self.step > 0):
-            return f"parameter step = {self.step!r}: must be finite and > 0"
-        return None
+        return settings_problem(self.parameters, self.stepper, self.step, self.scene_load)
 
     def do_step(self, current_time, step_size):
         if not self._apply_settings():
@@ -262,10 +269,15 @@ class PrandtlElement(SlaveBase):
             parameters = dict(settings["parameters"])
             if set(parameters) != set(self.parameters):
                 raise ValueError("its parameters are not this FMU's")
-            values = (settings["F"], settings["step"], settings["stepper"], float(settings["start_time"]))
+            values = (settings["F"], settings["step"], settings["stepper"], settings["start_time"])
+            problem = settings_problem(parameters, settings["stepper"], settings["step"], settings["scene_load"])
+            if problem is None and not (finite_number(settings["F"]) and finite_number(settings["start_time"])):
+                problem = f"F = {settings['F']!r}, start time {settings['start_time']!r}: must be finite numbers"
+            if problem:
+                raise ValueError(problem)
             self.element.set_state(state["element"])  # checks everything before changing anything
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.F, self.step, self.stepper, self.start_time = values
-        self.scene_load = bool(settings.get("scene_load", False))
+        self.scene_load = settings["scene_load"]
         self.parameters = parameters

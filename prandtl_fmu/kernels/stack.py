@@ -220,6 +220,9 @@ def restore(params, saved):
             or (count and rows[-1, 0] != saved[TOP]) or (not count and saved[TOP] != end)
             or np.any(np.abs(rows[:, 3]) > 1.0)):
         raise ValueError("memory-stack state: the pieces do not tile the branches")
+    if saved[DIRECTION] == 0.0 and saved[TOP] != 0.0:
+        raise ValueError("memory-stack state: branches slid in no direction")
+    _check_admissible(params, saved, rows)
     state[:saved.shape[0]] = saved
     resync(params, state)  # the totals must be those of the pieces (to rounding) ...
     scale = 1.0 + abs(state[SK]) + abs(state[S0])
@@ -227,6 +230,36 @@ def restore(params, saved):
         raise ValueError("memory-stack state: the running totals do not match the pieces")
     state[:HEADER] = saved[:HEADER]  # ... and are kept as saved, so that the continuation is bit for bit the same
     return state
+
+
+def _check_admissible(params, saved, rows):
+    """ValueError unless every sticking piece keeps its elongations in their elastic ranges, |u| <= eta (and,
+    for n branches, u 1-Lipschitz in eta: the stack's rules need it). Without this, a state whose pieces tile
+    the branches and whose totals match them could carry a force beyond the element's strength."""
+    x = saved[X]
+    # u = a + x + ... is computed from numbers of the size of x: the rounding of that sum is allowed
+    size = abs(x) + float(np.max(np.abs(rows[:, 2]), initial=0.0))
+    if isinstance(params, tuple):  # the continuum: u(s) = a + x + beta eta(s) on a piece, |u| <= eta is linear
+        table = params[0]           # in eta: checked at the piece's ends
+        for lo, hi, a, beta, _ in rows:
+            for position in (lo, hi):
+                eta = _eta_at(table, position)
+                if abs(a + x + beta * eta) > eta + 1e-12 * max(1.0, eta, size):
+                    raise ValueError("memory-stack state: an elongation outside its elastic range")
+        return
+    n = params.shape[1] - 1
+    eta, c = params[ETA_ROW, :n], params[C_ROW, :n]
+    u = np.empty(n)
+    top = int(saved[TOP])
+    u[:top] = saved[DIRECTION] * eta[:top]
+    for lo, hi, a, beta, gamma in rows:
+        lo, hi = int(lo), int(hi)
+        u[lo:hi] = a + x + beta * eta[lo:hi] + gamma * c[lo:hi]
+    tolerance = 1e-12 * max(1.0, float(np.max(eta, initial=0.0)), size)
+    if np.any(np.abs(u) > eta + tolerance):
+        raise ValueError("memory-stack state: an elongation outside its elastic range")
+    if not np.all(np.abs(np.diff(u)) <= np.diff(eta) + tolerance):
+        raise ValueError("memory-stack state: the elongations are not admissible (|u_i - u_j| > |eta_i - eta_j|)")
 
 
 def admissible(eta, u):
