@@ -21,14 +21,37 @@ of the stepper prints one ``warning:`` line on stderr and runs.
 """
 from __future__ import annotations
 
-import argparse
 import os
+import signal
 import sys
-import tempfile
-import warnings
 
-import numpy as np
+# Stopped while the modules load (the first second: numpy, numba): one line and the usual status, never an
+# import's traceback. Only when this module is the program (the console script, python -m prandtl_fmu): a
+# process that imports it (a test, a notebook) keeps its own handlers. main() installs the handlers of the run.
+_SIGNALS = {signal.SIGINT: "interrupted"}
+for _name in ("SIGTERM", "SIGHUP"):
+    if hasattr(signal, _name):
+        _SIGNALS[getattr(signal, _name)] = f"stopped by {_name}"
 
+
+def _stop_while_loading(signum, frame):
+    os.write(2, f"error: {_SIGNALS.get(signum, 'stopped')}\n".encode())
+    os._exit(128 + signum)
+
+
+_PROGRAM = os.path.basename(sys.argv[0]) == "prandtl-fmu" or sys.argv[0].replace(os.sep, "/").endswith(
+    "prandtl_fmu/__main__.py")
+if _PROGRAM:
+    for _signum in _SIGNALS:
+        signal.signal(_signum, _stop_while_loading)
+
+import argparse  # noqa: E402  (after the handlers above)
+import tempfile  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from .outputs import AtomicFile, write_atomically
 from .scene import SceneError, load_scene
 from .stability import StabilityWarning
 
@@ -119,8 +142,17 @@ def main(argv=None) -> int:
     makes it print a traceback: a failure nobody foresaw is still one line naming the exception
     (PRANDTL_FMU_DEBUG=1 shows the traceback). ``prandtl-fmu run`` as the process's own command (no
     ``argv``) ends the process when done (``_end_process``)."""
+    # the process's own command: SIGINT, SIGTERM, SIGHUP delete the partial outputs and exit with one line (a
+    # caller of main(argv), a test or a notebook, keeps its own handlers)
+    previous = _catch_signals() if argv is None else {}
     try:
         status = _main(argv)
+    except BrokenPipeError:  # the reader stopped (`| head`): what it read is all it wanted
+        _silence_stdout()
+        return 0
+    except Stopped as stop:
+        print(f"error: {stop}", file=sys.stderr)
+        return stop.status
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130
@@ -130,9 +162,55 @@ def main(argv=None) -> int:
         print(f"error: internal error ({exc.__class__.__name__}: {exc}); please report it with the scene",
               file=sys.stderr)
         return 2
+    finally:
+        from .outputs import remove_partial_files
+
+        remove_partial_files()  # whatever stopped the run, no hidden .prandtl-*.part file stays behind
+        _restore_signals(previous)
     if argv is None and sys.argv[1:2] == ["run"]:
         _end_process(status)
     return status
+
+
+class Stopped(KeyboardInterrupt):
+    """SIGINT, SIGTERM or SIGHUP during a sweep (:func:`_raise_stopped`): raised where the program is, so that
+    the cluster is shut down and the finished tasks named; exit status 128 + the signal."""
+
+    def __init__(self, signum: int):
+        super().__init__(_SIGNALS.get(signum, f"stopped by signal {signum}"))
+        self.status = 128 + signum
+
+
+def _raise_stopped(signum, frame):
+    raise Stopped(signum)
+
+
+def _stop_now(signum, frame):
+    """SIGINT, SIGTERM or SIGHUP during a command: delete the partial outputs, say so in one line and exit with
+    128 + the signal. Done in the handler itself, not by an exception: an exception raised while numba compiles
+    is swallowed by a ctypes callback ("Exception ignored ..."), and the run would go on."""
+    from .outputs import remove_partial_files
+
+    tail = "; no output written" if remove_partial_files() else ""
+    os.write(2, f"error: {_SIGNALS.get(signum, 'stopped')}{tail}\n".encode())
+    os._exit(128 + signum)
+
+
+def _catch_signals(handler=_stop_now) -> dict:
+    """Install ``handler`` for SIGINT, SIGTERM, SIGHUP (main thread only); returns the previous handlers."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    previous = {}
+    for signum in _SIGNALS:
+        previous[signum] = signal.signal(signum, handler)
+    return previous
+
+
+def _restore_signals(previous: dict) -> None:
+    for signum, handler in previous.items():
+        signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
 
 
 def _end_process(status: int) -> None:
@@ -202,14 +280,15 @@ def _build(args) -> int:
 
 
 def _fit(args) -> int:
-    from .identify import FitError, fit, fit_continuum, plot_fit, read_columns
+    from .identify import FitError, fit, fit_continuum, read_columns
 
     missing = _missing("scipy") + (_missing("matplotlib") if args.plot else [])
     if missing:
         return _error(f"fit needs {', '.join(missing)}: pip install 'prandtl_fmu[fit{',plot' if args.plot else ''}]'")
     try:
-        for option in ("out", "fmu", "plot"):
+        for option in ("out", "fmu"):
             _check_output_path(getattr(args, option), f"--{option}")
+        _check_image_path(args.plot, "--plot")
         if args.branches < 1:
             raise FitError(f"--branches must be >= 1, got {args.branches}")
         data = read_columns(args.data, args.time, args.x, args.force, args.v)
@@ -224,23 +303,33 @@ def _fit(args) -> int:
     name = os.path.splitext(os.path.basename(args.data))[0] + "-fit"
     text = result.scene_text(name, data.get("time"))
     print(result.report(), file=sys.stderr)
+    try:
+        return _write_fit(args, name, text, data, result)
+    except OSError as exc:
+        return _error(f"cannot write {exc.filename or 'the output'}: {exc.strerror or exc}")
+
+
+def _write_fit(args, name, text, data, result) -> int:
+    """The fitted scene (to --out or standard output), its FMU (--fmu) and figure (--plot)."""
+    from .identify import plot_fit
+
     if args.out:
-        _write_text_atomically(args.out, text)
+        write_atomically(args.out, text)
         print(args.out)
     else:
         print(text)
     if args.fmu:
         from .fmu.build import build_fmu
 
-        scene_file = args.out
-        if scene_file is None:
-            folder = tempfile.mkdtemp(prefix="prandtl-fit-")
-            scene_file = os.path.join(folder, f"{name}.toml")
-            _write_text_atomically(scene_file, text)
-        try:
-            print(build_fmu(scene_file, args.fmu))
-        except (SceneError, ValueError) as exc:
-            return _error(exc)
+        with tempfile.TemporaryDirectory(prefix="prandtl-fit-") as folder:
+            scene_file = args.out
+            if scene_file is None:
+                scene_file = os.path.join(folder, f"{name}.toml")
+                write_atomically(scene_file, text)
+            try:
+                print(build_fmu(scene_file, args.fmu))
+            except (SceneError, ValueError) as exc:
+                return _error(exc)
     if args.plot:
         plot_fit(args.plot, data["x"], data["force"], result, f"{name}: measured and fitted")
         print(args.plot)
@@ -258,6 +347,7 @@ def _sweep(args) -> int:
     if args.workers is not None and args.scheduler:
         return _error("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
     out = args.out
+    previous = _catch_signals(_raise_stopped)  # the cluster is shut down on the way out
     try:
         the_plan = plan(args.scene, args.spec)  # every check before a cluster starts
         out = out or f"{load_scene(args.scene, check_stepper=False).name}-sweep"
@@ -268,10 +358,13 @@ def _sweep(args) -> int:
     except RuntimeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:
         kept = f"; the finished tasks are in {out}: add --resume to finish the sweep" if out else ""
-        print(f"error: interrupted{kept}", file=sys.stderr)
-        return 130
+        what = str(stop) if isinstance(stop, Stopped) else "interrupted"
+        print(f"error: {what}{kept}", file=sys.stderr)
+        return getattr(stop, "status", 130)
+    finally:
+        _restore_signals(previous)
     failed = frame[frame["error"] != ""]
     print(out)
     print(f"{len(frame)} runs in {out}", file=sys.stderr)
@@ -281,16 +374,6 @@ def _sweep(args) -> int:
               f"{first['error']}", file=sys.stderr)
         return 1
     return 0
-
-
-def _write_text_atomically(path, text) -> None:
-    sink = _AtomicFile(path)
-    try:
-        sink.write(text)
-        sink.commit()
-    except BaseException:
-        sink.discard()
-        raise
 
 
 def _run(args) -> int:
@@ -303,9 +386,9 @@ def _run(args) -> int:
             output_interval=args.output_interval,
         )
         _check_output_path(args.out, "--out")
-        _check_output_path(args.plot, "--plot")
         if args.plot and _missing("matplotlib"):
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
+        _check_image_path(args.plot, "--plot")
         if args.out:
             columns = 4 + (_branch_count(scene) if args.states else 0) + (len(ENERGY_COLUMNS) if args.energy else 0)
             rows = scene.solver.stop_time / scene.solver.output_interval + 2
@@ -325,13 +408,13 @@ def _run(args) -> int:
     stability = [w for w in caught if issubclass(w.category, StabilityWarning)]
     sink = None
     try:
-        sink = _AtomicFile(args.out) if args.out and _is_regular(args.out) else (
+        sink = AtomicFile(args.out) if args.out and _is_regular(args.out) else (
             open(args.out, "w", newline="") if args.out else sys.stdout)
         for index, chunk in enumerate(chunks):
             chunk.write_csv(sink, header=index == 0)
             if plot_rows is not None:
                 plot_rows.add(chunk)
-        if isinstance(sink, _AtomicFile):
+        if isinstance(sink, AtomicFile):
             sink.commit()
         elif args.out:
             sink.close()
@@ -340,7 +423,7 @@ def _run(args) -> int:
     except BrokenPipeError:  # the reader stopped (`| head`): nothing more to say
         _silence_stdout()
         return 0
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # a KeyboardInterrupt raised by code of the process (the handler exits itself)
         _discard(sink)
         print("error: interrupted; no output written" if args.out else "error: interrupted", file=sys.stderr)
         return 130
@@ -401,38 +484,30 @@ def _check_output_path(path, option) -> None:
         raise SceneError(f"{option} {path}: the folder {folder} is not writable")
     if os.path.exists(path) and not os.access(path, os.W_OK):
         raise SceneError(f"{option} {path}: the file is not writable")
+    try:
+        longest = os.pathconf(folder, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        longest = 255
+    if len(os.fsencode(os.path.basename(path))) > longest:
+        raise SceneError(f"{option} {path[:60]}...: the file name is longer than the {longest} bytes the folder "
+                         "allows")
 
 
-class _AtomicFile:
-    """A text file written under a temporary name in its folder and renamed into place by :meth:`commit`:
-    a failed or interrupted run leaves the target as it was, never half-written."""
+def _check_image_path(path, option) -> None:
+    """:func:`_check_output_path`, and an image format matplotlib writes (from the extension)."""
+    _check_output_path(path, option)
+    if path:
+        from .plots import image_format
 
-    def __init__(self, path: str):
-        self.path = path
-        handle, self.temporary = tempfile.mkstemp(prefix=".prandtl-", suffix=".part", dir=_folder(path))
-        self.file = os.fdopen(handle, "w", newline="")
-
-    def write(self, text: str) -> None:
-        self.file.write(text)
-
-    def commit(self) -> None:
-        self.file.close()
-        os.replace(self.temporary, self.path)
-
-    def discard(self) -> None:
         try:
-            self.file.close()
-        except OSError:
-            pass
-        try:
-            os.unlink(self.temporary)
-        except OSError:
-            pass
+            image_format(path)
+        except ValueError as exc:
+            raise SceneError(f"{option} {exc}") from None
 
 
 def _discard(sink) -> None:
     """Drop a failed run's output: the temporary file, or close a device opened directly."""
-    if isinstance(sink, _AtomicFile):
+    if isinstance(sink, AtomicFile):
         sink.discard()
     elif sink is not None and sink is not sys.stdout:
         try:

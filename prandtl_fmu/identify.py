@@ -230,6 +230,7 @@ def fit(x, force, *, time=None, v=None, etas=None, grid_size: int = 40, dashpot:
     from scipy.optimize import nnls
 
     xs, fs, smooth = _smooth_columns(x, force, time, v, dashpot, cubic)
+    _check_basis_memory(xs.shape[0], len(smooth) + (len(etas) if etas is not None else grid_size))
     grid = np.unique(np.asarray(etas if etas is not None else default_grid(xs, fs, grid_size), dtype=float))
     if grid.size == 0 or np.any(grid <= 0) or not np.all(np.isfinite(grid)):
         raise FitError("the elastic ranges of the grid must be finite and > 0")
@@ -273,7 +274,24 @@ def _result(fs, columns, weights, smooth_count, dashpot, cubic, **fields) -> Fit
                force_range=float(np.ptp(fs)) or 1.0, effects={"cubic": cubic, "dashpot": dashpot}, **fields)
 
 
+# Copies of the basis a least-squares solve holds at once: the basis, the columns stacked with the smooth terms,
+# the same scaled to unit norm, and scipy's nnls's own copy (measured: tests/test_hostile.py)
+_BASIS_COPIES = 4
+
+
+def _check_basis_memory(samples: int, columns: int) -> None:
+    """FitError (one line) when the least-squares basis of ``samples`` x ``columns`` would not fit in memory."""
+    from .resources import available_memory, size_text
+
+    need = _BASIS_COPIES * 8.0 * samples * columns
+    available = available_memory()
+    if need > available:
+        raise FitError(f"the fit's basis ({samples} samples x {columns} columns) needs about {size_text(need)} of "
+                       f"memory, {size_text(available)} available: fewer candidates (--branches) or fewer samples")
+
+
 def _solve(nnls, xs, fs, smooth, grid):
+    _check_basis_memory(xs.shape[0], len(smooth) + grid.shape[0])
     basis = np.empty((xs.shape[0], grid.shape[0]))
     play_basis(xs, grid, basis)
     return _nnls(nnls, fs, np.column_stack(smooth + [basis]))
@@ -307,6 +325,7 @@ def fit_continuum(x, force, model: str, *, time=None, v=None, etas=None, grid_si
         raise FitError(f"--continuum must be one of {', '.join(CONTINUUM_MODELS)}, got {model!r}")
     xs, fs, smooth = _smooth_columns(x, force, time, v, dashpot, cubic)
     if model == "piecewise":
+        _check_basis_memory(xs.shape[0], len(smooth) + 1 + (len(etas) if etas is not None else grid_size))
         grid = np.asarray(etas if etas is not None else default_grid(xs, fs, grid_size), dtype=float)
         if grid.size == 0 or np.any(grid <= 0) or not np.all(np.isfinite(grid)):
             raise FitError("the elastic ranges of the grid must be finite and > 0")
@@ -410,36 +429,43 @@ def _refined(grid, kept):
 
 
 def read_columns(path, time: Optional[str], x: str, force: str, v: Optional[str]):
-    """The named columns of a CSV file with a header; FitError for a missing file, column or bad value."""
+    """The named columns of a CSV file with a header; FitError for a missing file, column or bad value.
+
+    Read row by row into arrays of the named columns only (8 bytes a value: a file of any size takes no more
+    than its numbers do); a UTF-8 byte-order mark (as spreadsheets save CSV) is skipped."""
     import csv
+    from array import array
 
     try:
-        with open(path, newline="") as fh:
-            rows = list(csv.reader(fh))
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            rows = csv.reader(fh)
+            header = next(rows, None)
+            if header is None:
+                raise FitError(f"{path}: empty")
+            header = [name.strip() for name in header]
+            wanted = _roles(x, force, time, v)
+            index = {}
+            for role, name in wanted.items():
+                if name not in header:
+                    raise FitError(f"{path}: no column {name!r} (columns: {', '.join(header)}); name it with "
+                                   f"--{role}")
+                index[role] = header.index(name)
+            columns = {role: array("d") for role in wanted}
+            for number, row in enumerate(rows, start=2):
+                if not row or all(not cell.strip() for cell in row):
+                    continue
+                for role, position in index.items():
+                    try:
+                        columns[role].append(float(row[position]))
+                    except (IndexError, ValueError):
+                        cell = row[position] if position < len(row) else "(missing)"
+                        raise FitError(f"{path}: line {number}, column {wanted[role]!r}: not a number: "
+                                       f"{cell[:40]!r}") from None
     except OSError as exc:
         raise FitError(f"{path}: cannot read: {exc.strerror or exc}") from None
     except (UnicodeDecodeError, csv.Error) as exc:
         raise FitError(f"{path}: not a CSV text file ({exc.__class__.__name__})") from None
-    if not rows:
-        raise FitError(f"{path}: empty")
-    header = [name.strip() for name in rows[0]]
-    wanted = _roles(x, force, time, v)
-    index = {}
-    for role, name in wanted.items():
-        if name not in header:
-            raise FitError(f"{path}: no column {name!r} (columns: {', '.join(header)}); name it with --{role}")
-        index[role] = header.index(name)
-    columns = {role: [] for role in wanted}
-    for number, row in enumerate(rows[1:], start=2):
-        if not row or all(not cell.strip() for cell in row):
-            continue
-        for role, position in index.items():
-            try:
-                columns[role].append(float(row[position]))
-            except (IndexError, ValueError):
-                cell = row[position] if position < len(row) else "(missing)"
-                raise FitError(f"{path}: line {number}, column {wanted[role]!r}: not a number: {cell!r}") from None
-    return {role: np.array(values) for role, values in columns.items()}
+    return {role: np.frombuffer(values, dtype=float).copy() for role, values in columns.items()}
 
 
 def plot_fit(path, x, force, fit_result: Fit, title: str) -> None:
@@ -459,7 +485,8 @@ def plot_fit(path, x, force, fit_result: Fit, title: str) -> None:
               title=f"residual: RMS {100 * fit_result.relative_rms:.2g} % of the range")
     for ax in (loop, error):
         ax.grid(alpha=0.3)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    from .plots import save_figure
+
+    save_figure(fig, path)
 
 

@@ -1,5 +1,8 @@
-"""Figures: the hysteresis loop (reaction against x) and x(t)."""
+"""Figures: the hysteresis loop (reaction against x) and x(t); how every figure of the tools is saved."""
 from __future__ import annotations
+
+import io
+import os
 
 
 def plot_result(result, path: str, note: str = "") -> None:
@@ -23,5 +26,34 @@ def plot_result(result, path: str, note: str = "") -> None:
     history.grid(alpha=0.3)
     title = f"{result.scene.name}: stepper {result.stepper}, h = {result.scene.solver.step:g} s"
     fig.suptitle(f"{title} ({note})" if note else title)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
+
+
+def image_format(path: str) -> str:
+    """The image format named by ``path``'s extension (png, pdf, svg, ...; PNG for a device or a pipe);
+    ValueError naming the formats matplotlib writes when it names none of them. Checked before any work."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    extension = os.path.splitext(path)[1].lstrip(".").lower()
+    if not extension and os.path.exists(path) and not os.path.isfile(path):
+        return "png"  # a device or a pipe (/dev/stdout): PNG
+    if extension not in formats:
+        raise ValueError(f"{path}: unknown image format {extension or '(no extension)'!r}: name the file "
+                         f"with one of {', '.join('.' + name for name in sorted(formats))}")
+    return extension
+
+
+def save_figure(fig, path: str, dpi: int = 120) -> None:
+    """Render ``fig`` in memory, then write it whole (:func:`outputs.write_output`: atomically, with the usual
+    mode; a device's write error raised) and close it."""
+    import matplotlib.pyplot as plt
+
+    from .outputs import write_output
+
+    buffer = io.BytesIO()
+    try:
+        fig.savefig(buffer, format=image_format(path), dpi=dpi)
+    finally:
+        plt.close(fig)
+    write_output(path, buffer.getvalue())

@@ -100,6 +100,19 @@ def test_a_mass_on_the_ground_through_the_connector_converges_in_libcosim_to_the
     assert ecco[1][3] < ecco[0][3] and ecco[1][2] > ecco[0][2], rows  # tighter: more steps, smaller error
 
 
+def test_every_ssd_component_says_it_is_an_fmu():
+    """SSP 1.0 lets a component's ``type`` default to an FMU, but OMSimulator 3's Python ``SSP()`` loads only
+    components that say ``type="application/x-fmu-sharedlibrary"`` (without it: KeyError CRef['mass'])."""
+    import xml.etree.ElementTree as ET
+
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription"}
+    root = ET.parse(run_connector.HERE / "SystemStructure.ssd").getroot()
+    components = root.findall(".//ssd:Component", ns)
+    assert len(components) == 2
+    for component in components:
+        assert component.get("type") == "application/x-fmu-sharedlibrary", component.get("name")
+
+
 def test_the_ssp_system_description_runs_the_same_system_as_the_osp_structure(tmp_path):
     """SystemStructure.ssd (written for SSP masters such as OMSimulator) read by libcosim's SSP loader gives the
     very run of the OspSystemStructure."""

@@ -89,8 +89,10 @@ def test_no_memory_error_in_the_loader_at_exit_under_valgrind(tmp_path):
                       "result = simulate_fmu(sys.argv[1], stop_time=1.0, output_interval=0.25)\n"
                       "print(repr(float(result['y'][-1])), flush=True)\n")
     env = dict(os.environ, PYTHONMALLOC="malloc")  # every Python allocation seen by memcheck
+    # sys.executable as it is, never its realpath: in a virtual environment the realpath is the base interpreter,
+    # which does not see the environment's packages (issue 23, item 16: "No module named 'fmpy'")
     runs = {name: subprocess.Popen(["valgrind", f"--log-file={tmp_path / name}.log", "--num-callers=12",
-                                    os.path.realpath(sys.executable), str(script), str(fmu)],
+                                    sys.executable, str(script), str(fmu)],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
             for name, fmu in fmus.items()}
     for name, run in runs.items():

@@ -201,3 +201,160 @@ def test_build_fmu_refuses_in_one_line(argv, words, tmp_path):
     run = subprocess.run([sys.executable, os.path.join(ROOT, "build_fmu.py")] + argv, capture_output=True,
                          text=True, cwd=tmp_path)
     assert run.returncode == 2 and words in run.stderr and len(run.stderr.splitlines()) == 1, run.stderr
+
+
+# ------------------------------------------------------------------ issue 23, item 13: what still got through
+
+
+def _loop_csv(path, rows=400, bom=False):
+    """A force-displacement loop of a two-branch connector, as a spreadsheet might save it."""
+    from prandtl_fmu import parse_scene
+    from prandtl_fmu.connector import displacement_response
+
+    t = np.linspace(0.0, 20.0, rows)
+    x = (0.1 + 0.03 * t) * np.sin(0.9 * t)
+    scene = parse_scene(scene_text({"spring": {"k0": 0.2}, "branches": {"k": [1.0, 0.5], "eta": [0.1, 0.4]},
+                                    "fmu": {"causality": "displacement"},
+                                    "solver": {"step": 0.01, "stop_time": 1.0, "output_interval": 0.01}}))
+    force = displacement_response(scene, x)
+    text = "t,x,force\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in zip(t.tolist(), x.tolist(), force.tolist()))
+    path.write_bytes(("\ufeff" if bom else "").encode() + text.encode())
+    return path
+
+
+@pytest.mark.parametrize("command", ["run", "fit"])
+def test_an_unknown_image_format_is_one_line_before_any_work(write_scene, tmp_path, capsys, command):
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("scipy")
+    source = write_scene(base_tables()) if command == "run" else _loop_csv(tmp_path / "loop.csv")
+    status, lines, _ = run_cli([command, source, "--plot", tmp_path / "x.xyz", "--out", tmp_path / "out"], capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "unknown image format 'xyz'" in lines[0] and ".png" in lines[0], lines
+    assert not (tmp_path / "out").exists() and not (tmp_path / "x.xyz").exists()
+
+
+@pytest.mark.parametrize("option", ["--out", "--fmu"])
+def test_a_file_name_longer_than_the_folder_allows_is_one_line(tmp_path, capsys, option):
+    pytest.importorskip("scipy")
+    data = _loop_csv(tmp_path / "loop.csv")
+    status, lines, _ = run_cli(["fit", data, option, tmp_path / ("f" * 300 + ".toml")], capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "longer than" in lines[0], lines
+
+
+def test_a_reader_that_closed_the_pipe_gets_no_traceback(tmp_path):
+    """`prandtl-fmu scenes | head -1`: the reader is gone before the program writes (a pipe whose reading end is
+    closed): exit 0, nothing on stderr."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "scenes"], stdout=write_end,
+                              stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write_end)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+
+
+def test_a_sweep_grid_too_large_for_memory_is_one_line(write_scene, tmp_path, capsys):
+    pytest.importorskip("distributed")
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('[grid]\n"spring.k0" = { from = 0.1, to = 1.0, count = 1000000000000 }\n')
+    status, lines, _ = run_cli(["sweep", write_scene(base_tables()), sweep, "--out", tmp_path / "out"], capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "memory" in lines[0] and "spring.k0" in lines[0], lines
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_fit_basis_too_large_for_memory_is_one_line_before_any_work(tmp_path, capsys):
+    pytest.importorskip("scipy")
+    status, lines, _ = run_cli(["fit", _loop_csv(tmp_path / "loop.csv"), "--branches", 10**9], capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "memory" in lines[0] and "--branches" in lines[0], lines
+
+
+def test_reading_a_large_csv_takes_the_memory_of_its_numbers_only(tmp_path):
+    """fit's reader peaked at 31 times the file (a list of every row's strings); the named columns alone, as
+    doubles, are 16 bytes a row here."""
+    import tracemalloc
+
+    from prandtl_fmu.identify import read_columns
+
+    rows = 200_000
+    data = tmp_path / "big.csv"
+    with open(data, "w") as fh:
+        fh.write("t,x,force,a,b\n")
+        for i in range(rows):
+            fh.write(f"{i * 0.001!r},{float(np.sin(i * 0.01))!r},{float(np.cos(i * 0.01))!r},123456.789,987654.321\n")
+    tracemalloc.start()
+    try:
+        columns = read_columns(str(data), None, "x", "force", None)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert columns["x"].shape == (rows,) and columns["x"][1] == np.sin(0.01)
+    assert peak < 64 * rows, f"{peak / rows:.0f} bytes a row"
+
+
+def test_a_csv_with_a_byte_order_mark_is_read(tmp_path):
+    from prandtl_fmu.identify import read_columns
+
+    plain = read_columns(str(_loop_csv(tmp_path / "plain.csv")), "t", "x", "force", None)
+    marked = read_columns(str(_loop_csv(tmp_path / "marked.csv", bom=True)), "t", "x", "force", None)
+    for role in ("time", "x", "force"):
+        assert np.array_equal(plain[role], marked[role])
+
+
+def test_a_plot_to_a_full_device_fails_in_one_line(write_scene, capsys):
+    pytest.importorskip("matplotlib")
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    status, lines, _ = run_cli(["run", write_scene(base_tables()), "--plot", "/dev/full"], capsys)
+    check(status, lines)
+    assert status == 2 and "/dev/full" in lines[0], lines
+
+
+def test_the_branch_memory_check_bounds_the_real_peak():
+    """The scene's check of [branches] count uses BYTES_PER_BRANCH: the measured peak of a run, an Element and
+    its saved state stays below it (2.5e7 branches passed the old figure, 96, and then failed)."""
+    import tracemalloc
+
+    from prandtl_fmu import Element, parse_scene, simulate
+    from prandtl_fmu.scene import BYTES_PER_BRANCH
+
+    def tables(count):
+        return base_tables(cubic=None, branches={"count": count, "k_total": 1.0, "eta_range": [0.1, 1.1]},
+                           solver={"stepper": "projected", "step": 1e-2, "stop_time": 0.05, "output_interval": 0.05})
+
+    n = 200_000
+    warm = parse_scene(scene_text(tables(100)), "warm.toml")  # compiled before the measure
+    simulate(warm)
+    Element(warm).advance(0.05, 0.3)
+    text = scene_text(tables(n))
+    tracemalloc.start()
+    try:
+        scene = parse_scene(text, "many.toml")
+        simulate(scene)
+        element = Element(scene)
+        element.advance(0.05, 0.3)
+        element.get_state()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < BYTES_PER_BRANCH * n, f"{peak / n:.0f} bytes a branch"
+
+
+def test_an_overflow_of_a_massless_element_with_a_spring_is_not_called_a_collapse(write_scene, capsys):
+    tables = base_tables(mass=None, damper=None, cubic=None, load={"kind": "constant", "value": 1e308},
+                         solver={"stepper": "implicit", "step": 1e-2, "stop_time": 1.0, "output_interval": 0.5})
+    status, lines, _ = run_cli(["run", write_scene(tables)], capsys)
+    check(status, lines)
+    assert status == 2 and "collapse" not in lines[0] and "hardening" not in lines[0], lines
+
+
+def test_a_duration_of_more_than_2_to_the_53_steps_is_refused_in_words():
+    from prandtl_fmu import Element, parse_scene
+
+    element = Element(parse_scene(scene_text(base_tables()), "scene.toml"))
+    with pytest.raises(ValueError, match="2\\^53"):
+        element.advance(1e300, 0.5)
+    assert element.time == 0.0 and element.x == 0.0

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Optional, Union
 from xml.sax.saxutils import escape as xml_escape
 
+from ..outputs import write_atomically
 from ..scene import load_scene, scene_path as resolve_scene
 
 LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
@@ -118,17 +119,10 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
             if str(staging) in sys.path:
                 sys.path.remove(str(staging))
         _finish(built, scene, loader)
-        # into place in one rename: a failed build never leaves a half-written FMU behind
-        handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".fmu.part", dir=out.parent)
-        os.close(handle)
-        try:
-            shutil.copyfile(built, partial)
-            os.replace(partial, out)
-        except BaseException:
-            os.unlink(partial)
-            raise
+        # into place in one rename, with the usual mode: a failed build never leaves a half-written FMU behind
+        write_atomically(out, Path(built).read_bytes())
     if sidecar is not None:
-        _write_atomically(sidecar, osp_model_description(scene.causality).encode("utf-8"))
+        write_atomically(sidecar, osp_model_description(scene.causality).encode("utf-8"))
     return out
 
 
@@ -145,17 +139,6 @@ def _with_causality(scene, scene_bytes: bytes, causality: str):
         return scene, scene_bytes
     text = scene_bytes.rstrip(b"\n") + f'\n\n[fmu]\ncausality = "{causality}"\n'.encode()
     return parse_scene(text, scene.source), text
-
-
-def _write_atomically(path: Path, data: bytes) -> None:
-    handle, partial = tempfile.mkstemp(prefix=".prandtl-", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(handle, "wb") as fh:
-            fh.write(data)
-        os.replace(partial, path)
-    except BaseException:
-        os.unlink(partial)
-        raise
 
 
 def _finish(fmu: Path, scene, loader: str) -> None:

@@ -190,6 +190,7 @@ def parse_spec(doc: dict, source: str) -> SweepSpec:
         if "samples" not in random:
             fail("[random] samples", "missing (required: the number of random samples per grid point)")
         samples = _integer(random.pop("samples"), 1, lambda rule: fail("[random] samples", rule))
+        _check_values_fit(samples, lambda rule: fail("[random] samples", rule))
         seed = _integer(random.pop("seed", 0), 0, lambda rule: fail("[random] seed", rule))
         if seed >= 2**63:
             fail("[random] seed", f"must be < 2^63, got {seed}")
@@ -281,6 +282,7 @@ def _grid_values(key, value, rule):
             rule(f"range: {name} missing")
     low, high = _number(value["from"], rule), _number(value["to"], rule)
     count = _integer(value["count"], 1, rule)
+    _check_values_fit(count, rule)
     spacing = value.get("spacing", "linear")
     if spacing not in ("linear", "log"):
         rule(f"spacing must be \"linear\" or \"log\", got {spacing!r}")
@@ -293,6 +295,20 @@ def _grid_values(key, value, rule):
     else:
         points = np.linspace(float(low), float(high), count)
     return [_whole(key, float(v), rule) for v in points]
+
+
+# Memory of one grid value: a Python float in a list, and its array element while the points are made
+_BYTES_PER_VALUE = 64
+
+
+def _check_values_fit(count, rule):
+    """A range of ``count`` values must fit in memory (the grid is made whole): one line before any work."""
+    from ..resources import available_memory, size_text
+
+    need = _BYTES_PER_VALUE * float(count)
+    if need > available_memory():
+        rule(f"{count} values need about {size_text(need)} of memory, {size_text(available_memory())} "
+             "available: a sweep that large could not be run either")
 
 
 def _whole(key, value, rule):
