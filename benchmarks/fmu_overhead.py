@@ -11,7 +11,10 @@ Problem: the paper's section 8 scene (n = 100, h = 1e-3), force held at
 with H = 1000 h (the target: the FMU within 1.2x of the library) and H = h
 (one internal step: the fixed overhead per doStep). Repeats are interleaved
 and the median per communication step is reported, with the ratio measured in
-the same run.
+the same run. With H = h the FMU also reads every output after each step
+(one getReal of all of them, as a master's observer does): ``read_all_us`` is
+what that read adds to a step, each output computed once per step however
+many are read.
 
     python benchmarks/fmu_overhead.py [--repeat 7] [--out out/fmu_overhead.csv]
 """
@@ -45,16 +48,25 @@ def library_run(stepper, size, count):
     return (time.perf_counter() - start) / count
 
 
-def fmu_run(slave, size, count):
+def fmu_run(slave, size, count, read=()):
+    """Seconds per communication step: setReal(F), doStep and, with ``read``, one getReal of those value
+    references."""
     fmu, vr = slave.fmu, [slave.vr["F"]]
     t = slave.time
     start = time.perf_counter()
     for _ in range(count):
         fmu.setReal(vr, [0.3])
         fmu.doStep(t, size)
+        if read:
+            fmu.getReal(read)
         t += size
     slave.time = t
     return (time.perf_counter() - start) / count
+
+
+def outputs(slave):
+    """The value references of every output of the FMU."""
+    return [v.valueReference for v in slave.md.modelVariables if v.causality == "output"]
 
 
 def main():
@@ -72,16 +84,21 @@ def main():
             slave.step(h, 0.3)  # compile inside the FMU
             for internal, count in ((1000, 200), (1, 5000)):
                 size = internal * h
-                lib, ours = [], []
+                lib, ours, reading = [], [], []
                 for _ in range(args.repeat):
                     lib.append(library_run(stepper, size, count))
                     ours.append(fmu_run(slave, size, count))
+                    if internal == 1:
+                        reading.append(fmu_run(slave, size, count, read=outputs(slave)))
                 lib_s, fmu_s = np.median(lib), np.median(ours)
+                read_s = np.median(reading) - fmu_s if reading else float("nan")
                 rows.append({"stepper": stepper, "internal_steps": internal,
                              "library_us": f"{lib_s * 1e6:.2f}", "fmu_us": f"{fmu_s * 1e6:.2f}",
-                             "overhead_us": f"{(fmu_s - lib_s) * 1e6:.2f}", "ratio": f"{fmu_s / lib_s:.3f}"})
+                             "overhead_us": f"{(fmu_s - lib_s) * 1e6:.2f}", "ratio": f"{fmu_s / lib_s:.3f}",
+                             "outputs": len(outputs(slave)), "read_all_us": f"{read_s * 1e6:.2f}"})
                 print(f"{stepper:9s} H = {internal:4d} h: library {lib_s * 1e6:9.2f} us, FMU {fmu_s * 1e6:9.2f} us"
-                      f"  (x{fmu_s / lib_s:.3f}, +{(fmu_s - lib_s) * 1e6:.1f} us per doStep)")
+                      f"  (x{fmu_s / lib_s:.3f}, +{(fmu_s - lib_s) * 1e6:.1f} us per doStep)"
+                      + (f"; reading all {len(outputs(slave))} outputs +{read_s * 1e6:.1f} us" if reading else ""))
             slave.close()
     write_rows(args.out, rows)
 

@@ -25,7 +25,7 @@ from typing import Optional
 
 import numpy as np
 
-from .driver import branch_state, choose_branch_kernel, compile_model, restore_branch_state, _smooth_model
+from .driver import OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model, restore_branch_state, _smooth_model
 from .kernels import stack
 from .kernels.drive import drive, preview, tangent
 from .kernels.play import branch_force, write_elongations
@@ -80,7 +80,7 @@ def displacement_response(scene: Scene, x, v=None, energy: bool = False):
     return (forces, float(account[SLIDERS])) if energy else forces
 
 
-class Connector:
+class Connector(OutputMemo):
     """The massless element of a scene driven by the relative motion (x, v) of its flanges.
 
     ``move_to(x, v, time)`` commits a new sample; ``preview(x, v)`` is the
@@ -95,6 +95,7 @@ class Connector:
 
     def reset(self) -> None:
         """Back to x = 0, v = 0, the scene's u0, time 0; the energy account restarts."""
+        self._touch()
         self.branch_kernel = _branch_kernel(self.scene)
         self.model = compile_model(self.scene, self.branch_kernel)
         self.u = _initial_u(self.scene, self.model)
@@ -108,7 +109,7 @@ class Connector:
     def force(self) -> float:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N) at the committed sample."""
         m, k0, k3, c, k, eta = self.model
-        return float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u))
+        return self._memo("force", lambda: float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)))
 
     def preview(self, x: float, v: float) -> float:
         """The force if the flanges moved (monotonically) from the committed x to ``x``, at velocity
@@ -122,12 +123,12 @@ class Connector:
         and adds nothing; one that the motion takes off its threshold sticks."""
         v = self.v if v is None else v
         direction = self.direction if v == 0 else math.copysign(1.0, v)
-        return float(tangent(self.model, self.x, self.u, direction))
+        return self._memo(("stiffness", direction), lambda: float(tangent(self.model, self.x, self.u, direction)))
 
     def stored_energy(self) -> float:
         """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""
         m, k0, k3, c, k, eta = self.model
-        return float(stored(self.x, k0, k3, k, self.u))
+        return self._memo("stored_energy", lambda: float(stored(self.x, k0, k3, k, self.u)))
 
     def energy(self) -> dict:
         """stored_energy, dissipated_sliders, dissipated_damper (J) since the start."""
@@ -148,6 +149,7 @@ class Connector:
         twin.__dict__.update(self.__dict__)
         twin.u = None if self.u is None else self.u.copy()
         twin.account = self.account.copy()
+        twin._touch()
         return twin
 
     # ------------------------------------------------------------ motion
@@ -163,6 +165,7 @@ class Connector:
         if not (math.isfinite(time) and time >= self.time):
             raise ValueError(f"time {time!r} goes back (the connector is at t = {self.time!r})")
         dx = x - self.x
+        self._touch()
         drive(self.model, self.u, self.x, np.array([x]), np.array([float(v)]), np.empty(1), self.account)
         c = self.model[3]
         if c is not None:
@@ -178,6 +181,7 @@ class Connector:
             raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c)")
         self.scene = with_coefficients(self.scene, **values)
         self.model = _smooth_model(self.scene) + self.model[4:]
+        self._touch()
 
     def coefficients(self) -> dict:
         """k0, k3, c of the effects present (a connector has no mass)."""
@@ -195,19 +199,26 @@ class Connector:
 
     def set_state(self, state: dict) -> None:
         """Restore a state of :meth:`get_state`; checks it fully before changing anything (ValueError)."""
-        values = [float(state[key]) for key in ("time", "x", "v", "direction")]
-        account = np.array(state["energy_account"], dtype=float).reshape(-1)
-        if not all(math.isfinite(value) for value in values) or not np.all(np.isfinite(account)):
-            raise ValueError("state has a value that is not finite")
+        values = [plain_number(state[key], key) for key in ("time", "x", "v", "direction")]
+        account = number_list(state["energy_account"], "energy_account")
         if account.shape[0] != 3 or values[3] not in (-1.0, 1.0):
             raise ValueError("state does not fit the connector")
         kind = state["branch_kernel"]
         if kind != self.branch_kernel:
             raise ValueError(f"state has branch kernel {kind!r}, the connector uses {self.branch_kernel!r}")
         model, restored = restore_branch_state(self.scene, self.model[4], kind, state["u"], state["u_reference"])
+        if not isinstance(state["coefficients"], dict):
+            raise ValueError("state has no table of coefficients")
         scene = with_coefficients(self.scene, **state["coefficients"])
+        model = _smooth_model(scene) + model
+        m, k0, k3, c, k, eta = model
+        x, v = values[1], values[2]
+        outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, restored), stored(x, k0, k3, k, restored))
+        if not all(math.isfinite(value) for value in outputs):
+            raise ValueError(f"state has x = {x!r}, v = {v!r}: its force or energy is not finite")
         self.scene = scene
-        self.model = _smooth_model(scene) + model
+        self.model = model
         self.time, self.x, self.v, self.direction = values
         self.u = restored
         self.account[:] = account
+        self._touch()

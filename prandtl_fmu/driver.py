@@ -28,7 +28,7 @@ from .kernels.drive import tangent
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
 from .loads import force_at, held, plus
-from .scene import Scene, coefficients_of, with_coefficients
+from .scene import MAX_STEPS, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
@@ -132,7 +132,8 @@ def initial_state(scene: Scene, model, load):
         return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / c, u
     w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, u)
     if not math.isfinite(w):
-        raise ElementError(_collapse_message(scene, 0.0, force))
+        raise ElementError(_collapse_message(scene, 0.0, force) if not _hardening(scene) else
+                           f"{scene.source}: the equilibrium with F = {float(force)!r} N at t = 0 overflows")
     move(k, eta, u, w, None)  # the O(n) kernel or the memory stack
     return w, 0.0, u
 
@@ -144,12 +145,19 @@ def _collapse_message(scene: Scene, time: float, force: float) -> str:
             f"sum alpha_i = {strength!r} N of a massless element with no hardening spring: no equilibrium exists")
 
 
+def _hardening(scene: Scene) -> bool:
+    """Whether a spring holds the element whatever the load (then a massless element always has an
+    equilibrium, and a step that fails has overflowed)."""
+    return (scene.spring is not None and scene.spring.k0 > 0) or (scene.cubic is not None and scene.cubic.k3 > 0)
+
+
 def _failure(scene: Scene, stepper: str, load, time: float, h: float) -> ElementError:
     """The error for a step from ``time`` that could not be taken."""
-    if scene.mass is None and not scene.has_dashpot:
-        return ElementError(_collapse_message(scene, time + h, force_at(load, time + h)))
+    force = float(force_at(load, time + h))
+    if scene.mass is None and not scene.has_dashpot and not _hardening(scene):
+        return ElementError(_collapse_message(scene, time + h, force))
     problem = stability_problem(scene, stepper, h)
-    hint = f" ({problem})" if problem else ""
+    hint = f" ({problem})" if problem else f" (F = {force!r} N: an overflow?)" if abs(force) > 1e150 else ""
     return ElementError(f"{scene.source}: the state became non-finite in the step from t = {float(time)!r} s with "
                         f"stepper {stepper!r} and h = {h!r}{hint}")
 
@@ -409,7 +417,24 @@ def _advance(loop, model, load, x, v, u, t_base, first_step, duration, h, out, o
     return x, v, None
 
 
-class Element:
+class OutputMemo:
+    """Outputs computed once per state. Every change of the state calls :meth:`_touch`; until the next one,
+    :meth:`_memo` returns what was computed (an FMU master reads a dozen outputs per step: each would otherwise
+    recompute the O(n) energy account or the tangent stiffness)."""
+
+    _memo_values: dict
+
+    def _touch(self) -> None:
+        self._memo_values = {}
+
+    def _memo(self, name: str, compute):
+        values = self.__dict__.setdefault("_memo_values", {})
+        if name not in values:
+            values[name] = compute()
+        return values[name]
+
+
+class Element(OutputMemo):
     """The element of a scene as a stateful object, advanced under a held force.
 
     ``advance(duration, force)`` takes whole internal steps of ``step`` and one
@@ -453,6 +478,7 @@ class Element:
         self.initial_energy = float(self._energy_row[0, 0] + self._energy_row[0, 1])
 
     def _record(self) -> None:
+        self._touch()
         m, k0, k3, c, k, eta = self.model
         self._out[0] = (self.x, self.v, smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u))
         self._energy_row[0] = (kinetic(m, self.v), stored(self.x, k0, k3, k, self.u), *self.account)
@@ -467,7 +493,7 @@ class Element:
         (of increasing x when v = 0): k0 + 3 k3 x^2 + the stiffnesses of the branches that stick (a branch
         on its threshold that the motion pushes on slides and adds nothing)."""
         direction = -1.0 if self.v < 0 else 1.0
-        return float(tangent(self.model, self.x, self.u, direction))
+        return self._memo("stiffness", lambda: float(tangent(self.model, self.x, self.u, direction)))
 
     def elongations(self) -> Optional[np.ndarray]:
         """The branch elongations u_i (m), in the scene's order, as a new array (O(n) with the memory
@@ -480,8 +506,11 @@ class Element:
 
     def energy(self) -> dict:
         """The energy account (J): see :data:`ENERGY_COLUMNS`."""
-        columns = _energy_columns(self.initial_energy, self._energy_row)
-        return {name: float(values[0]) for name, values in columns.items()}
+        def account():
+            columns = _energy_columns(self.initial_energy, self._energy_row)
+            return {name: float(values[0]) for name, values in columns.items()}
+
+        return dict(self._memo("energy", account))
 
     def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
         """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is
@@ -496,10 +525,14 @@ class Element:
             raise ValueError(f"force must be finite, got {force!r}")
         if duration == 0:
             return
+        h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
+        if not duration / h < MAX_STEPS:
+            raise ValueError(f"duration {duration!r} s is {duration / h:.3g} steps of h = {h!r} s: more than 2^53 "
+                             "cannot be counted exactly; advance by shorter durations or with a larger step")
         saved = self.checkpoint()
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
         self.force = float(force)
-        h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
+        self._touch()  # the compiled loop writes the state and the outputs in place
         x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self.time, 0,
                                    duration, h, self._out, None, self.account, self._energy_row)
         if failed_at is not None:
@@ -590,21 +623,35 @@ class Element:
         return state
 
     def set_state(self, state: dict) -> None:
-        """Restore a state from :meth:`get_state`; checks it fully before changing anything."""
-        values = [float(state[key]) for key in ("time", "x", "v", "force", "initial_energy")]
-        account = np.array(state["energy_account"], dtype=float).reshape(-1)
-        if not all(math.isfinite(value) for value in values) or not np.all(np.isfinite(account)):
-            raise ValueError("state has a value that is not finite")
+        """Restore a state from :meth:`get_state`; checks every field (types, finiteness, the admissibility of
+        the branch state, finite outputs) before changing anything: ValueError naming what does not fit."""
+        values = [plain_number(state[key], key) for key in ("time", "x", "v", "force", "initial_energy")]
+        account = number_list(state["energy_account"], "energy_account")
         if account.shape[0] != 3:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 3")
         kind = state.get("branch_kernel", "play")
+        if not isinstance(kind, str):
+            raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
         model, u = restore_branch_state(self.scene, self.model[4], kind, state["u"], state.get("u_reference", []))
+        if not isinstance(state["coefficients"], dict):
+            raise ValueError("state has no table of coefficients")
         scene = with_coefficients(self.scene, **state["coefficients"])
-        loop = compile_loop(scene, state["stepper"])
-        self.set_step(float(state["step"]))
+        stepper, step = state["stepper"], plain_number(state["step"], "step")
+        if not isinstance(stepper, str):
+            raise ValueError(f"state has stepper {stepper!r}, not a name")
+        loop = compile_loop(scene, stepper)
+        if not step > 0:
+            raise ValueError(f"state has step = {step!r}, must be > 0")
+        model = _smooth_model(scene) + model
+        m, k0, k3, c, k, eta = model
+        _, x, v, _, _ = values
+        outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, u), kinetic(m, v), stored(x, k0, k3, k, u))
+        if not all(math.isfinite(value) for value in outputs):
+            raise ValueError(f"state has x = {x!r}, v = {v!r}: its reaction or energy is not finite")
+        self.set_step(step)
         self.scene, self.branch_kernel = scene, kind
-        self.model = _smooth_model(scene) + model
-        self._loop, self.stepper = loop, state["stepper"]
+        self.model = model
+        self._loop, self.stepper = loop, stepper
         self.time, self.x, self.v, self.force, self.initial_energy = values
         self.u = u
         self.account[:] = account
@@ -621,11 +668,27 @@ class Element:
     def rollback(self, checkpoint) -> None:
         """Return to a :meth:`checkpoint`, exactly."""
         self.time, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
+        self._touch()
         if u is not None:
             self.u[:u.shape[0]] = u
         self.account[:] = account
         self._out[:] = out
         self._energy_row[:] = energy_row
+
+
+def plain_number(value, what: str) -> float:
+    """``value`` as a float if it is a finite int or float (not a bool, a string or a list); ValueError naming
+    ``what`` otherwise. What a saved state must hold where it holds a number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"state has {what} = {value!r}, not a finite number")
+    return float(value)
+
+
+def number_list(values, what: str) -> np.ndarray:
+    """A list of finite numbers (:func:`plain_number` each) as a 1-D array; ValueError otherwise."""
+    if not isinstance(values, (list, tuple)):
+        raise ValueError(f"state has {what} = {values!r:.60}, not a list of numbers")
+    return np.array([plain_number(value, what) for value in values], dtype=float)
 
 
 def branch_state(scene: Scene, k, kind: str, u):
@@ -648,11 +711,9 @@ def branch_state(scene: Scene, k, kind: str, u):
 def restore_branch_state(scene: Scene, k, kind: str, u, reference):
     """(branch part of the model, branch state) of saved :func:`branch_state` data for ``scene`` whose
     current branch parameters are ``k``; ValueError if it does not fit."""
-    u = np.array(u, dtype=float).reshape(-1)
-    reference = np.array(reference, dtype=float).reshape(-1)
+    u = number_list(u, "u")
+    reference = number_list(reference, "u_reference")
     branches = scene.branches
-    if not np.all(np.isfinite(u)) or not np.all(np.isfinite(reference)):
-        raise ValueError("state has a value that is not finite")
     if branches is None:
         if u.size:
             raise ValueError(f"state has {u.shape[0]} branch values, the element has no branches")
