@@ -28,7 +28,7 @@ from .kernels.drive import tangent
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
 from .loads import force_at, held, plus
-from .scene import MAX_STEPS, Scene, coefficients_of, with_coefficients
+from .scene import MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
@@ -208,21 +208,40 @@ class OutputGrid:
     """t = 0, interval, 2 interval, ... and stop_time itself as the last row, computed row by row (a grid of
     10^13 rows costs nothing until its rows are asked for).
 
-    ``rows``: the number of rows; ``last_is_short``: whether the last interval is shorter than the others;
-    :meth:`times` the times of rows first .. first + count - 1.
+    The run is cut on the step grid of ``h`` (the stepper's step; an output interval is a whole number
+    ``per_row`` of steps): stop_time is ``whole`` steps of h and a last shorter step ``rest`` (split_duration:
+    within 1e-9 h of a whole multiple is whole steps). Row j >= 1 is the state after j * per_row steps, for
+    the ``full`` rows that fit; a last row holds the state at stop_time when the run does not end on a row
+    (``last_is_short``: ``tail_steps`` more steps, then ``rest``). So the final state depends on stop_time and
+    h only, never on the output interval (issue 23, item 10), and a stop time shorter than a step is one short
+    step (t = 0 and t = stop_time rows).
+
+    ``rows``: the number of rows; :meth:`times` the times of rows first .. first + count - 1.
     """
 
-    def __init__(self, stop_time: float, interval: float):
+    def __init__(self, stop_time: float, interval: float, h: Optional[float] = None):
         self.stop_time, self.interval = stop_time, interval
-        self.full = math.floor(stop_time / interval * (1 + 1e-12))  # whole intervals
-        # j * interval, rounded to 14 significant digits of stop_time so that
-        # the CSV says 499.9 rather than 499.90000000000003.
-        self.digits = 13 - math.floor(math.log10(stop_time))
-        self.last_is_short = stop_time - self._time(self.full) > 1e-9 * interval
+        self.h = h = interval if h is None else h
+        self.per_row = max(1, round(interval / h))
+        self.whole, self.rest = split_duration(stop_time, h)
+        self.full = self.whole // self.per_row  # rows on the grid after row 0
+        self.tail_steps = self.whole - self.full * self.per_row
+        self.last_is_short = bool(self.tail_steps or self.rest)
         self.rows = self.full + 1 + self.last_is_short
+        # j * interval, rounded to 14 significant digits of stop_time so that the CSV says 499.9 rather than
+        # 499.90000000000003 (not where 10^digits would overflow: a stop time below 1e-290)
+        self.digits = 13 - math.floor(math.log10(stop_time))
+
+    def tail(self, loop_step: float) -> tuple:
+        """``(whole, rest)`` of the last row for a loop whose steps are ``loop_step``: the scene's step h (whole
+        steps, then the rest), or one step per output interval (``exact``): one step of what is left."""
+        if loop_step == self.h:
+            return self.tail_steps, self.rest
+        return 0, self.stop_time - self.full * loop_step
 
     def _time(self, j):
-        return np.round(np.asarray(j, dtype=float) * self.interval, self.digits)
+        times = np.asarray(j, dtype=float) * self.interval
+        return np.round(times, self.digits) if self.digits < 290 else times
 
     def times(self, first: int, count: int) -> np.ndarray:
         times = self._time(np.arange(first, first + count))
@@ -317,7 +336,7 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
     solver = scene.solver
     model = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))
     load = scene.load.compile()
-    grid = OutputGrid(solver.stop_time, solver.output_interval)
+    grid = OutputGrid(solver.stop_time, solver.output_interval, solver.step)
     rows = grid.rows
     n = _state_count(scene)
     n_out = n if states else 0
@@ -367,11 +386,10 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
             yield result(1 + j, out, out_u, out_energy)
             j += count
             bar.update(count)
-        if last_is_short:  # a last, shorter output interval up to stop_time
+        if last_is_short:  # a last, shorter output interval up to stop_time, on the step grid
             out, out_u, out_energy = piece(rows - 1, 1)
-            last = grid.times(rows - 2, 2)
-            x, v, failed_at = _advance(loop, model, load, x, v, u, 0.0, full_rows * per_row, last[1] - last[0],
-                                       h, out, out_u, account, out_energy)
+            x, v, failed_at = _advance(loop, model, load, x, v, u, 0.0, full_rows * per_row, *grid.tail(h), h,
+                                       out, out_u, account, out_energy)
             if failed_at is not None:
                 raise _failure(scene, name, load, failed_at, h)
             yield result(rows - 1, out, out_u, out_energy)
@@ -395,15 +413,11 @@ def split_duration(duration: float, h: float) -> tuple:
     return whole, duration - whole * h
 
 
-def _advance(loop, model, load, x, v, u, t_base, first_step, duration, h, out, out_u, account, out_energy):
-    """Advance by ``duration`` from t_base + first_step h: whole steps of h, then one shorter step for the
-    remainder.
-
-    A duration within 1e-9 h of a whole multiple of h (rounding of a
-    master's clock) takes whole steps only. Returns ``(x, v, failed_at)``: the start time of a step that could
-    not be taken, or None.
-    """
-    whole, rest = split_duration(duration, h)
+def _advance(loop, model, load, x, v, u, t_base, first_step, whole, rest, h, out, out_u, account,
+             out_energy):
+    """``whole`` steps of h from step number ``first_step`` (t_p = t_base + p h), then one step of ``rest``
+    (s, if > 0) from t_base + (first_step + whole) h (see :func:`split_duration`). Returns ``(x, v,
+    failed_at)``: the start time of a step that could not be taken, or None."""
     if whole:
         x, v, taken = integrate(loop, model, load, x, v, u, t_base, first_step, h, whole, out, out_u, account,
                                 out_energy)
@@ -468,7 +482,7 @@ class Element(OutputMemo):
     def reset(self, force: float = 0.0) -> None:
         """Back to the scene's initial state at time 0 under the held ``force`` (massless: see
         :func:`initial_state`); the energy account restarts."""
-        self.time = 0.0
+        self._origin, self._steps, self._grid = 0.0, 0, None  # the clock (see time)
         self.force = float(force)
         self.branch_kernel = self._forced_kernel or choose_branch_kernel(self.scene, self.stepper)
         self.model = compile_model(self.scene, self.branch_kernel)
@@ -476,6 +490,23 @@ class Element(OutputMemo):
         self.account[:] = 0.0
         self._record()
         self.initial_energy = float(self._energy_row[0, 0] + self._energy_row[0, 1])
+
+    @property
+    def time(self) -> float:
+        """The element's time (s), kept on its step grid as ``origin + steps * h``: the time of step p is computed
+        as :func:`simulate` computes it (t_base + p h), however the advances are cut (``time += duration``
+        drifted by rounding, and a load evaluated at the drifted times differed in the last bits)."""
+        return self._origin + self._steps * self._grid if self._steps else self._origin
+
+    @time.setter
+    def time(self, value: float) -> None:
+        """Set the clock (a master's communication point): a value within 1e-9 h of the element's own time is
+        the same instant (a master's clock that adds up its steps drifts by ulps) and keeps the grid; another
+        starts a new grid there."""
+        value = float(value)
+        if self._grid is not None and abs(value - self.time) <= 1e-9 * self._grid:
+            return
+        self._origin, self._steps = value, 0
 
     def _record(self) -> None:
         self._touch()
@@ -525,7 +556,14 @@ class Element(OutputMemo):
             raise ValueError(f"force must be finite, got {force!r}")
         if duration == 0:
             return
-        h = duration if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False) else self.h
+        h = self.h
+        if getattr(get_stepper(self.stepper), "STEP_IS_OUTPUT", False):  # one step per advance (exact) ...
+            h = duration
+            if self._grid is not None and abs(duration - self._grid) <= 1e-9 * self._grid:
+                h = self._grid  # ... of the grid's step when it is that to rounding (a master's step of H drifts)
+        if duration < SHORTEST_STEP:
+            raise ValueError(f"duration {duration!r} s is shorter than {SHORTEST_STEP:g} s (a step's square "
+                             "underflows)")
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is {duration / h:.3g} steps of h = {h!r} s: more than 2^53 "
                              "cannot be counted exactly; advance by shorter durations or with a larger step")
@@ -533,13 +571,20 @@ class Element(OutputMemo):
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
         self.force = float(force)
         self._touch()  # the compiled loop writes the state and the outputs in place
-        x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self.time, 0,
-                                   duration, h, self._out, None, self.account, self._energy_row)
+        if self._grid != h:  # a new step: the grid starts again at the current time
+            self._origin, self._steps, self._grid = self.time, 0, h
+        whole, rest = split_duration(duration, h)
+        x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self._origin,
+                                         self._steps, whole, rest, h, self._out, None, self.account,
+                                         self._energy_row)
         if failed_at is not None:
             self.rollback(saved)
             raise _failure(self.scene, self.stepper, load, failed_at, self.h)
         self.x, self.v = x, v
-        self.time += duration
+        if rest:  # a short last step: the grid starts again where it ends
+            self._origin, self._steps = self._origin + (self._steps + whole) * h + rest, 0
+        else:
+            self._steps += whole
 
     def set_coefficients(self, **values) -> None:
         """Change coefficients (m, k0, k3, c; x0 and v0 take effect at :meth:`reset`).
@@ -614,7 +659,8 @@ class Element(OutputMemo):
         elongations its initial piece refers to, for n branches).
         """
         state = {
-            "time": self.time, "x": self.x, "v": self.v, "force": self.force,
+            "time": self.time, "clock": [self._origin, self._steps, self._grid or 0.0],
+            "x": self.x, "v": self.v, "force": self.force,
             "branch_kernel": self.branch_kernel, "u": [], "u_reference": [],
             "energy_account": self.account.tolist(), "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
@@ -626,6 +672,7 @@ class Element(OutputMemo):
         """Restore a state from :meth:`get_state`; checks every field (types, finiteness, the admissibility of
         the branch state, finite outputs) before changing anything: ValueError naming what does not fit."""
         values = [plain_number(state[key], key) for key in ("time", "x", "v", "force", "initial_energy")]
+        clock = _clock(state.get("clock"), values[0])
         account = number_list(state["energy_account"], "energy_account")
         if account.shape[0] != 3:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 3")
@@ -652,7 +699,8 @@ class Element(OutputMemo):
         self.scene, self.branch_kernel = scene, kind
         self.model = model
         self._loop, self.stepper = loop, stepper
-        self.time, self.x, self.v, self.force, self.initial_energy = values
+        self.x, self.v, self.force, self.initial_energy = values[1:]
+        self._origin, self._steps, self._grid = clock
         self.u = u
         self.account[:] = account
         self._record()
@@ -662,18 +710,35 @@ class Element(OutputMemo):
         u = None
         if self.u is not None:
             u = self.u[:stack.used(self.u)].copy() if self.branch_kernel == "stack" else self.u.copy()
-        return (self.time, self.x, self.v, self.force, u, self.account.copy(), self._out.copy(),
-                self._energy_row.copy())
+        return ((self._origin, self._steps, self._grid), self.x, self.v, self.force, u, self.account.copy(),
+                self._out.copy(), self._energy_row.copy())
 
     def rollback(self, checkpoint) -> None:
         """Return to a :meth:`checkpoint`, exactly."""
-        self.time, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
+        clock, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
+        self._origin, self._steps, self._grid = clock
         self._touch()
         if u is not None:
             self.u[:u.shape[0]] = u
         self.account[:] = account
         self._out[:] = out
         self._energy_row[:] = energy_row
+
+
+def _clock(saved, time: float) -> tuple:
+    """(origin, steps, grid) of a saved element clock ``[origin, steps, h]`` (h = 0: none yet); a state
+    without one (an older FMU's) starts a grid at its time. ValueError unless it is consistent with ``time``."""
+    if saved is None:
+        return time, 0, None
+    values = number_list(saved, "clock")
+    if values.shape[0] != 3 or values[1] < 0 or values[1] != int(values[1]) or values[2] < 0 \
+            or (values[1] > 0 and values[2] == 0):
+        raise ValueError(f"state has clock = {saved!r:.80}, not [origin, steps, step]")
+    origin, steps, grid = float(values[0]), int(values[1]), float(values[2]) or None
+    now = origin + steps * grid if steps else origin
+    if now != time:
+        raise ValueError(f"state has time = {time!r} but its clock says {now!r}")
+    return origin, steps, grid
 
 
 def plain_number(value, what: str) -> float:

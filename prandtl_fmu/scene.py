@@ -36,6 +36,9 @@ from .resources import ResourceError, check_memory
 BYTES_PER_BRANCH = 256
 # More steps than this cannot be counted exactly in a double (t_p = p h): refused, never truncated.
 MAX_STEPS = 2**53
+# A step (or stop time) shorter than this is refused: the implicit steps divide by h^2, which underflows to 0
+# below about 1e-160 s.
+SHORTEST_STEP = 1e-150
 
 Load = Union[ConstantLoad, HarmonicLoad, TableLoad, RandomLoad]
 
@@ -577,6 +580,9 @@ def _check_solver(solver: Solver, source: str, where: str) -> None:
         value = getattr(solver, key)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise SceneError(f"{source}: {where}{key}: must be a finite number > 0, got {value!r}")
+        if value < SHORTEST_STEP:
+            raise SceneError(f"{source}: {where}{key}: must be >= {SHORTEST_STEP:g} s (a step's square underflows), "
+                             f"got {value!r}")
     ratio = solver.output_interval / solver.step
     steps = solver.stop_time / solver.step
     if not (ratio < MAX_STEPS and steps < MAX_STEPS):

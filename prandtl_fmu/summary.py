@@ -31,7 +31,7 @@ from typing import Iterable, Optional
 import numpy as np
 
 from .driver import (ElementError, OutputGrid, choose_branch_kernel, compile_loop, compile_model,
-                     initial_state, split_duration, _failure, _smooth_model)
+                     initial_state, _failure, _smooth_model)
 from .kernels import batch as packed
 from .loads import HarmonicLoad
 from .resources import check_memory
@@ -166,12 +166,10 @@ class _Job:
         self.load = scene.load.compile()
         self.x, self.v, self.u = initial_state(scene, self.model, self.load)
 
-        self.grid = grid = OutputGrid(solver.stop_time, solver.output_interval)
-        self.full_steps = (grid.rows - 1 - grid.last_is_short) * per_row
-        self.tail_steps, self.rest = 0, 0.0
-        if grid.last_is_short:  # the last, shorter output interval up to stop_time, as driver._advance takes it
-            last = grid.times(grid.rows - 2, 2)
-            self.tail_steps, self.rest = split_duration(last[1] - last[0], h)
+        self.grid = grid = OutputGrid(solver.stop_time, solver.output_interval, solver.step)
+        self.full_steps = grid.full * per_row
+        # the last, shorter output interval up to stop_time, on the step grid as the driver takes it
+        self.tail_steps, self.rest = grid.tail(h)
         # loop_area: the account after step `mark`, one period of the load before the end
         self.mark = -1
         if "loop_area" in quantities:

@@ -408,3 +408,93 @@ def test_every_field_of_a_saved_fmu_state_is_checked_before_it_is_applied(trust_
         assert all(np.isfinite(slave.get("x", "v", "reaction")))
     finally:
         slave.close()
+
+
+# ------------------------------------------------ issue 23, items 10 and 12: cut independence to the bit
+
+
+FIXED_STEP = ["projected", "implicit", "symplectic", "verlet"]
+
+
+@pytest.mark.parametrize("stepper", FIXED_STEP + ["exact"])
+def test_the_final_state_depends_on_stop_time_and_step_only_not_on_the_output_interval(stepper):
+    """stop_time = 1 + 5e-11 with h = 1e-3: whether the last 5e-11 s step was taken depended on the output
+    interval (x differed by 1.8e-11). The run is cut on the step grid now: the same last row whatever the
+    interval, bit for bit (exact: one step per output interval, other phases, the same motion to rounding)."""
+    from prandtl_fmu import simulate
+
+    scene = make_scene(cubic=None if stepper == "exact" else {"k3": 0.05},
+                       solver={"stepper": stepper, "step": 1e-3, "stop_time": 1.0 + 5e-11, "output_interval": 0.1})
+    finals = []
+    for interval in (0.1, 0.01, 0.001, 0.5):
+        result = simulate(scene.with_solver(output_interval=interval))
+        assert result.time[-1] == 1.0 + 5e-11 and result.time[-2] == 1.0
+        finals.append((result.x[-1], result.v[-1]))
+    if stepper == "exact":
+        assert np.max(np.abs(np.array(finals) - finals[0])) <= 1e-13
+    else:
+        assert all(final == finals[0] for final in finals), finals
+    assert finals[0] != (simulate(scene.with_solver(stop_time=1.0)).x[-1],) * 2
+
+
+@pytest.mark.parametrize("stepper", FIXED_STEP)
+def test_advances_cut_anywhere_on_the_grid_with_the_scene_load_equal_one_run(stepper):
+    """Element.advance(..., scene_load=True) cut into pieces differed by 7e-16 (time += duration drifted, and
+    the load was evaluated at the drifted times). The clock is origin + steps h: the pieces, an advance from a
+    time a master computed with drift, and simulate give the same bits."""
+    from prandtl_fmu import Element, simulate
+
+    scene = make_scene(solver={"stepper": stepper, "step": 1e-3, "stop_time": 3.0, "output_interval": 1e-3})
+    reference = simulate(scene)
+    rng = np.random.default_rng(3)
+    cuts = rng.integers(1, 60, 200)
+    cuts = cuts[np.cumsum(cuts) <= 3000]
+    element, master_clock = Element(scene), 0.0
+    for steps in cuts:
+        element.time = master_clock  # a master's clock: the sum of its step sizes, drifting by ulps
+        element.advance(int(steps) * 1e-3, 0.0, scene_load=True)
+        master_clock += int(steps) * 1e-3
+    done = int(np.sum(cuts))
+    assert (element.x, element.v) == (reference.x[done], reference.v[done])
+    assert element.time == done * 1e-3
+
+
+@pytest.mark.parametrize("stop_time", [1e-12, 3e-7, 1e-149])
+def test_a_stop_time_shorter_than_a_step_is_one_short_step(stop_time):
+    """stop_time = 1e-12 wrote one row labelled 1e-12 holding the initial state, and a tinier one NaN in the
+    time column. Now: a row at t = 0 and a row at stop_time after one step of stop_time."""
+    from prandtl_fmu import Element, simulate
+
+    scene = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 1.0},
+                       solver={"stepper": "implicit", "step": 1e-3, "stop_time": stop_time,
+                               "output_interval": 1e-3})
+    result = simulate(scene)
+    assert list(result.time) == [0.0, stop_time]
+    element = Element(scene)
+    element.advance(stop_time, 0.0, scene_load=True)
+    assert result.x[1] == element.x  # one step of stop_time
+    assert result.x[1] > 0.0  # it moved (v0 = 1)
+    assert np.all(np.isfinite(result.time)) and np.all(np.isfinite(result.x))
+
+
+def test_a_stop_time_below_the_shortest_step_is_refused_in_one_line():
+    from prandtl_fmu.scene import SceneError
+
+    with pytest.raises(SceneError, match="stop_time: must be >= 1e-150 s"):
+        make_scene(solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1e-300, "output_interval": 1e-3})
+
+
+@pytest.mark.parametrize("stepper", FIXED_STEP)
+def test_a_dissipation_never_decreases(stepper):
+    """Issue 23, item 11: symplectic booked c v_new dx with dx = h v_old for its dashpot, negative at every
+    reversal (by up to 1e-3 J). Every step of every stepper: both dissipations non-decreasing, through many
+    reversals of a damped element with sliders, and the residual still small."""
+    from prandtl_fmu import simulate
+
+    scene = make_scene(damper={"c": 0.8}, load={"kind": "harmonic", "amplitude": 1.5, "omega": 3.0, "offset": 0.1},
+                       solver={"stepper": stepper, "step": 2e-3, "stop_time": 20.0, "output_interval": 2e-3})
+    result = simulate(scene, energy=True)
+    assert np.sum(np.diff(np.sign(result.v)) != 0) >= 19  # it reverses often
+    for column in ("dissipated_damper", "dissipated_sliders"):
+        assert np.all(np.diff(result.energy[column]) >= 0.0), (column, np.diff(result.energy[column]).min())
+    assert abs(result.energy["energy_residual"][-1]) < 0.02 * result.energy["work"].max()

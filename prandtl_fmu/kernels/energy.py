@@ -18,10 +18,19 @@ from .smooth import elastic_energy
 @kernel
 def book(energy, force, dx, c, velocity):
     """Add the load's work F dx and the dashpot's c v dx to an energy account."""
+    book_apart(energy, force, dx, c, velocity, dx)
+
+
+@kernel
+def book_apart(energy, force, dx, c, velocity, distance):
+    """Add F dx and the dashpot's c v ``distance``: for a scheme whose dashpot acts at another velocity than
+    the one that moves x (symplectic: x moves by h v_old, the dashpot's force is c v_new), booked over the
+    distance that velocity covers, h v_new, so that a dissipation never decreases (c v_new h v_old < 0 at a
+    reversal)."""
     if energy is None:
         return
     energy[0] += force * dx
-    _book_damper(energy, c, velocity, dx)
+    _book_damper(energy, c, velocity, distance)
 
 
 @kernel
