@@ -45,6 +45,26 @@ def test_a_fit_on_a_grid_holding_the_true_ranges_recovers_the_element(seed):
     assert result.k0 == pytest.approx(k0, rel=1e-6)
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_a_noise_free_loop_of_a_discrete_element_is_recovered_with_its_true_branches_off_the_grid(seed):
+    """Issue 23, item 14: with the ranges fixed on its grid the fit kept 14 branches for a 5-branch element
+    whose ranges are not on the grid, with a force error of 3e-4 of the range. The ranges are now moved (variable
+    projection from the NNLS solution): the true number of branches, the force to 1e-8 of its range, the ranges
+    and stiffnesses to 1e-6."""
+    rng = np.random.default_rng(100 + seed)
+    n = 5
+    k = rng.uniform(0.3, 1.5, n)
+    eta = np.sort(rng.uniform(0.03, 0.6, n))
+    t, x = history(rng)
+    force = displacement_response(connector(k, eta, 0.2), x)
+    result = fit(x, force, time=t)
+    assert len(result.k) == n, (result.eta, eta)
+    assert result.relative_max <= 1e-8
+    np.testing.assert_allclose(result.eta, eta, rtol=1e-6)
+    np.testing.assert_allclose(result.k, k, rtol=1e-6)
+    assert abs(result.k0 - 0.2) <= 1e-6
+
+
 def test_with_one_percent_noise_the_residual_is_the_noise():
     rng = np.random.default_rng(42)
     k, eta, k0 = rng.uniform(0.2, 2, 5), np.sort(rng.uniform(0.05, 0.9, 5)), 0.3
