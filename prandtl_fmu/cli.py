@@ -252,6 +252,16 @@ def _main(argv) -> int:
     return 2
 
 
+def require_extras(needs: dict) -> None:
+    """For scripts (the examples): ``needs`` maps what is asked for (``"--plot"``) to ``(modules, extra)``; a
+    missing module is one line naming the ``pip install`` that adds it, exit status 2, before any work."""
+    for what, (modules, extra) in needs.items():
+        missing = _missing(*modules)
+        if missing:
+            print(f"error: {what} needs {', '.join(missing)}: pip install 'prandtl_fmu[{extra}]'", file=sys.stderr)
+            raise SystemExit(2)
+
+
 def _missing(*modules) -> list:
     """The modules of an extra that cannot be imported (an install without that extra)."""
     import importlib.util

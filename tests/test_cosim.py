@@ -195,3 +195,18 @@ def test_omsimulator_runs_the_connector_system_as_a_gauss_seidel_master(tmp_path
     for column in ("x", "v", "force"):
         np.testing.assert_allclose(oms[column], expected[column], rtol=1e-10, atol=1e-11)
     assert np.abs(oms["force"]).max() > 0.1
+
+
+@pytest.mark.parametrize("script", ["examples/cosim/run_cosim.py", "examples/cosim/connector/run_connector.py"])
+def test_an_example_without_the_plot_extra_says_so_in_one_line(tmp_path, script):
+    """--plot on a machine without matplotlib ended with a traceback after the whole run (issue 23, item 15)."""
+    import subprocess
+    import sys
+
+    hide = ("import runpy, sys; sys.modules['matplotlib'] = None; sys.argv = sys.argv[1:]; "
+            "runpy.run_path(sys.argv[0], run_name='__main__')")
+    done = subprocess.run([sys.executable, "-c", hide, str(ROOT / script), "--plot", str(tmp_path / "p.png"),
+                           "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2
+    assert done.stderr.strip() == "error: --plot needs matplotlib: pip install 'prandtl_fmu[plot]'"
+    assert not (tmp_path / "out").exists()

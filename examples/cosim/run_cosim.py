@@ -16,9 +16,11 @@ import shutil
 import sys
 from pathlib import Path
 
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT))
+from prandtl_fmu.cli import require_extras  # noqa: E402  (the checkout's package first)
 
 NANOSECONDS = 1_000_000_000
 
@@ -92,6 +94,8 @@ def main():
     parser.add_argument("--stop-time", type=float, default=100.0)
     parser.add_argument("--plot")
     args = parser.parse_args()
+    require_extras({"the co-simulation": (["libcosimpy"], "cosim")}
+                   | ({"--plot": (["matplotlib"], "plot")} if args.plot else {}))
     structure = build(args.out, args.scene)
     columns = run(structure, args.stop_time)
     path = os.path.join(args.out, "cosim.csv")

@@ -29,9 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
 sys.path.insert(0, str(ROOT))
+from prandtl_fmu.cli import require_extras  # noqa: E402  (the checkout's package first)
 
 NANOSECONDS = 1_000_000_000
 STEPS = (0.1, 0.05, 0.025, 0.0125, 0.00625)
@@ -349,6 +351,9 @@ def main():
     parser.add_argument("--omsimulator", default="OMSimulator", help="path of the OMSimulator binary")
     parser.add_argument("--plot", help="PNG of the force-displacement loop, co-simulated against the reference")
     args = parser.parse_args()
+    masters = {"libcosim": (["libcosimpy"], "cosim"), "ecos": (["ecospy"], "ecos")}
+    require_extras(({f"--master {args.master}": masters[args.master]} if args.master in masters else {})
+                   | ({"--plot": (["matplotlib"], "plot")} if args.plot else {}))
     folder = build(args.out)
     rows = master_rows(args.master, folder, args.stop_time, args.omsimulator)
     path = os.path.join(args.out, "convergence.csv" if args.master == "libcosim" else f"convergence-{args.master}.csv")
