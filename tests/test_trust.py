@@ -498,3 +498,43 @@ def test_a_dissipation_never_decreases(stepper):
     for column in ("dissipated_damper", "dissipated_sliders"):
         assert np.all(np.diff(result.energy[column]) >= 0.0), (column, np.diff(result.energy[column]).min())
     assert abs(result.energy["energy_residual"][-1]) < 0.02 * result.energy["work"].max()
+
+
+def test_outputs_read_from_the_memo_are_those_of_the_state_after_every_kind_of_change():
+    """Issue 23, item 3: the outputs are computed once per state (a master reads a dozen per step). After each
+    kind of change (advance, rollback, set_state, coefficients, stepper, reset) the memoized energy account and
+    stiffness equal a fresh computation from the state."""
+    from prandtl_fmu import Element
+    from prandtl_fmu.connector import Connector
+    from prandtl_fmu.driver import _energy_columns
+    from prandtl_fmu.kernels.drive import tangent
+
+    element = Element(make_scene())
+
+    def fresh():
+        columns = _energy_columns(element.initial_energy, element._energy_row)
+        return ({name: float(values[0]) for name, values in columns.items()},
+                float(tangent(element.model, element.x, element.u, -1.0 if element.v < 0 else 1.0)))
+
+    def check():
+        assert (element.energy(), element.stiffness()) == fresh()
+
+    check()
+    saved, point = element.get_state(), element.checkpoint()
+    for change in (lambda: element.advance(0.7, 0.4), lambda: element.rollback(point),
+                   lambda: element.advance(0.3, -0.6), lambda: element.set_state(saved),
+                   lambda: element.set_coefficients(k0=0.5), lambda: element.advance(0.2, 0.1),
+                   lambda: element.set_stepper("implicit"), lambda: element.advance(0.2, 0.9),
+                   lambda: element.reset(0.2)):
+        element.energy(), element.stiffness()  # memoized before the change
+        change()
+        check()
+    connector = Connector(make_scene(mass=None, load=None, fmu={"causality": "displacement"}))
+    for x in (0.1, 0.3, -0.2):
+        before = connector.force
+        connector.move_to(x, 0.0)
+        assert connector.force != before
+        assert connector.force == connector.copy().force
+    connector.set_coefficients(k0=2.0)
+    assert connector.stored_energy() == connector.copy().stored_energy() and connector.energy()["stored_energy"] \
+        == connector.stored_energy()

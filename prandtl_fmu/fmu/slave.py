@@ -83,6 +83,7 @@ class PrandtlElement(SlaveBase):
         self.scene_load = False
         self.stepper = self.element.stepper
         self.step = self.element.h
+        self._handed_over = None  # (parameters, stepper, step) as last handed to the element
         self.parameters = dict(self.element.coefficients())
         self._register()
 
@@ -116,7 +117,7 @@ class PrandtlElement(SlaveBase):
         ]
         for name, key, table, text in energy:
             if table is None or getattr(self.scene, table) is not None:
-                outputs.append((name, "J", text, lambda key=key: self.element.energy()[key]))
+                outputs.append((name, "J", text, lambda key=key: self.element.energy_of(key)))
         for name, unit, text, getter in outputs:
             self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous, description=text, getter=getter))
@@ -170,6 +171,7 @@ class PrandtlElement(SlaveBase):
         if problem is not None:
             self._fail(f"initialization refused: {problem}")
         self.element.time = self.start_time
+        self._handed_over = None  # the next step compares the settings again
         self.initialized = True
         self._warn_if_unstable()
 
@@ -213,12 +215,17 @@ class PrandtlElement(SlaveBase):
         return True
 
     def _apply_settings(self) -> bool:
-        """Hand the parameters the master set to the element; False (logged) if one is refused."""
+        """Hand the parameters the master set to the element; False (logged) if one is refused. Nothing to do
+        (the usual step) when they are those handed over last."""
+        settings = (tuple(self.parameters.values()), self.stepper, self.step)
+        if settings == self._handed_over:
+            return True
         element = self.element
         before = (element.coefficients(), element.stepper, element.h)
         accepted = self._hand_over_settings()
         if accepted and (element.coefficients(), element.stepper, element.h) != before:
             self._warn_if_unstable()
+        self._handed_over = settings if accepted else None
         return accepted
 
     def _warn_if_unstable(self):
@@ -228,8 +235,8 @@ class PrandtlElement(SlaveBase):
 
     def _hand_over_settings(self) -> bool:
         element = self.element
-        changed = {name: value for name, value in self.parameters.items()
-                   if value != element.coefficients()[name]}
+        current = element.coefficients()
+        changed = {name: value for name, value in self.parameters.items() if value != current[name]}
         if changed:
             try:
                 element.set_coefficients(**changed)
@@ -281,3 +288,4 @@ class PrandtlElement(SlaveBase):
         self.F, self.step, self.stepper, self.start_time = values
         self.scene_load = settings["scene_load"]
         self.parameters = parameters
+        self._handed_over = None
