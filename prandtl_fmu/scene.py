@@ -581,8 +581,8 @@ def _check_solver(solver: Solver, source: str, where: str) -> None:
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise SceneError(f"{source}: {where}{key}: must be a finite number > 0, got {value!r}")
         if value < SHORTEST_STEP:
-            raise SceneError(f"{source}: {where}{key}: must be >= {SHORTEST_STEP:g} s (a step's square underflows), "
-                             f"got {value!r}")
+            raise SceneError(f"{source}: {where}{key}: {value!r} s is too small: must be >= {SHORTEST_STEP:g} s (an "
+                             "implicit step divides by h^2, which underflows)")
     ratio = solver.output_interval / solver.step
     steps = solver.stop_time / solver.step
     if not (ratio < MAX_STEPS and steps < MAX_STEPS):

@@ -480,7 +480,7 @@ def test_a_stop_time_shorter_than_a_step_is_one_short_step(stop_time):
 def test_a_stop_time_below_the_shortest_step_is_refused_in_one_line():
     from prandtl_fmu.scene import SceneError
 
-    with pytest.raises(SceneError, match="stop_time: must be >= 1e-150 s"):
+    with pytest.raises(SceneError, match="stop_time: 1e-300 s is too small: must be >= 1e-150 s"):
         make_scene(solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1e-300, "output_interval": 1e-3})
 
 
@@ -538,3 +538,23 @@ def test_outputs_read_from_the_memo_are_those_of_the_state_after_every_kind_of_c
     connector.set_coefficients(k0=2.0)
     assert connector.stored_energy() == connector.copy().stored_energy() and connector.energy()["stored_energy"] \
         == connector.stored_energy()
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("x", "0.1", "x = '0.1'"), ("v", [0.0], "v = [0.0]"), ("x", 1e308, "not finite"),
+    ("energy_account", [0.0, "a", 0.0], "energy_account"), ("u", [0.05, -0.1, 5.0], "elastic range"),
+    ("coefficients", "k0", "no table of coefficients"), ("direction", 0.5, "does not fit"),
+])
+def test_a_tampered_connector_state_is_refused_and_changes_nothing(field, value, words):
+    """Issue 23, item 6, for the connector: every field checked before any is applied."""
+    from prandtl_fmu.connector import Connector
+
+    connector = Connector(make_scene(mass=None, load=None, cubic=None, fmu={"causality": "displacement"}))
+    connector.move_to(0.2, 0.1, 1.0)
+    good = connector.get_state()
+    before = (connector.x, connector.v, connector.force, connector.stored_energy())
+    with pytest.raises(ValueError, match=words.replace("[", "\\[").replace("]", "\\]")):
+        connector.set_state(dict(good, **{field: value}))
+    assert (connector.x, connector.v, connector.force, connector.stored_energy()) == before
+    connector.set_state(good)
+    assert connector.force == before[2]
