@@ -14,7 +14,9 @@ and the median per communication step is reported, with the ratio measured in
 the same run. With H = h the FMU also reads every output after each step
 (one getReal of all of them, as a master's observer does): ``read_all_us`` is
 what that read adds to a step, each output computed once per step however
-many are read.
+many are read. ``read_x_warm_us`` and ``read_all_warm_us`` time one getReal
+of x alone and of every output when they are already computed: the hosts'
+own cost per call and per variable.
 
     python benchmarks/fmu_overhead.py [--repeat 7] [--out out/fmu_overhead.csv]
 """
@@ -64,6 +66,16 @@ def fmu_run(slave, size, count, read=()):
     return (time.perf_counter() - start) / count
 
 
+def warm_read(slave, refs, count=20000):
+    """Seconds per getReal of ``refs`` with the outputs already computed (no step in between)."""
+    fmu = slave.fmu
+    fmu.getReal(refs)
+    start = time.perf_counter()
+    for _ in range(count):
+        fmu.getReal(refs)
+    return (time.perf_counter() - start) / count
+
+
 def outputs(slave):
     """The value references of every output of the FMU."""
     return [v.valueReference for v in slave.md.modelVariables if v.causality == "output"]
@@ -92,13 +104,18 @@ def main():
                         reading.append(fmu_run(slave, size, count, read=outputs(slave)))
                 lib_s, fmu_s = np.median(lib), np.median(ours)
                 read_s = np.median(reading) - fmu_s if reading else float("nan")
+                warm = [(warm_read(slave, [slave.vr["x"]]), warm_read(slave, outputs(slave))) for _ in range(3)] \
+                    if reading else [(float("nan"), float("nan"))]
+                warm_x, warm_all = np.median([w[0] for w in warm]), np.median([w[1] for w in warm])
                 rows.append({"stepper": stepper, "internal_steps": internal,
                              "library_us": f"{lib_s * 1e6:.2f}", "fmu_us": f"{fmu_s * 1e6:.2f}",
                              "overhead_us": f"{(fmu_s - lib_s) * 1e6:.2f}", "ratio": f"{fmu_s / lib_s:.3f}",
-                             "outputs": len(outputs(slave)), "read_all_us": f"{read_s * 1e6:.2f}"})
+                             "outputs": len(outputs(slave)), "read_all_us": f"{read_s * 1e6:.2f}",
+                             "read_x_warm_us": f"{warm_x * 1e6:.2f}", "read_all_warm_us": f"{warm_all * 1e6:.2f}"})
                 print(f"{stepper:9s} H = {internal:4d} h: library {lib_s * 1e6:9.2f} us, FMU {fmu_s * 1e6:9.2f} us"
                       f"  (x{fmu_s / lib_s:.3f}, +{(fmu_s - lib_s) * 1e6:.1f} us per doStep)"
-                      + (f"; reading all {len(outputs(slave))} outputs +{read_s * 1e6:.1f} us" if reading else ""))
+                      + (f"; reading all {len(outputs(slave))} outputs +{read_s * 1e6:.1f} us (already computed: x "
+                         f"{warm_x * 1e6:.1f} us, all {warm_all * 1e6:.1f} us)" if reading else ""))
             slave.close()
     write_rows(args.out, rows)
 
