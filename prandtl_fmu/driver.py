@@ -256,7 +256,11 @@ def output_grid(stop_time: float, interval: float) -> np.ndarray:
 
 
 def _energy_columns(initial_energy: float, table: np.ndarray) -> dict:
-    kinetic_, stored_, work, sliders, damper = table.T
+    return _account_columns(initial_energy, *table.T)
+
+
+def _account_columns(initial_energy, kinetic_, stored_, work, sliders, damper) -> dict:
+    """The energy columns with the balance residual, for arrays of rows or for one row of floats."""
     residual = work - sliders - damper - (kinetic_ + stored_ - initial_energy)
     return dict(zip(ENERGY_COLUMNS, (kinetic_, stored_, work, sliders, damper, residual)))
 
@@ -545,9 +549,7 @@ class Element(OutputMemo):
 
     def _account(self) -> dict:
         """_energy_columns for the one row of the element, in floats (numpy on a row of 5 costs 10 us)."""
-        kinetic_, stored_, work, sliders, damper = self._energy_row[0].tolist()
-        residual = work - sliders - damper - (kinetic_ + stored_ - self.initial_energy)
-        return dict(zip(ENERGY_COLUMNS, (kinetic_, stored_, work, sliders, damper, residual)))
+        return _account_columns(self.initial_energy, *self._energy_row[0].tolist())
 
     def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
         """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is

@@ -8,7 +8,7 @@ from prandtl_fmu import parse_scene
 from prandtl_fmu.driver import Element
 
 from .conftest import base_tables, scene_text
-from .native_host import Extracted, compile_host, python_recipe, run_host
+from .native_host import Extracted, compile_host, run_host
 
 OK, DISCARD, ERROR = 0, 2, 3
 DECLARED = {"logStatusWarning", "logStatusDiscard", "logStatusError", "logStatusFatal", "logAll"}
@@ -115,8 +115,3 @@ def test_the_binary_in_a_native_host_gives_the_library_numbers(host, element):
     assert code == 0, out
     assert [value for _, value in values] == expected
 
-
-def test_the_recipe_is_what_the_readme_says():
-    """The environment the tests give a native host is the README's recipe (libpython, PYTHONPATH)."""
-    env = python_recipe()
-    assert "libpython" in env["LD_PRELOAD"] and env["PYTHONPATH"]
