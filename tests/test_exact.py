@@ -200,3 +200,20 @@ def test_the_element_at_rest_with_a_zero_elastic_range_is_a_fixed_point_of_exact
                        solver={"stepper": "exact", "step": 0.1, "stop_time": 1.0, "output_interval": 0.1})
     result = simulate(scene)
     assert np.all(result.x == 0.5) and np.all(result.v == 0.0) and np.all(result.reaction == 0.5)
+
+
+def test_a_start_at_rest_to_rounding_under_a_large_force_finds_its_level_in_one_long_step():
+    """v0 = 5e-93 against a net force of -3.9 N: the first zero of v is ~1e-93 s after the start, the next one
+    within rounding of half a period later, where the sign test alone found no zero; the branch's level was
+    then missed (x = -1.4612 in one step of 1.262 s, -1.5616 in 1262 steps). Found by the property test of
+    the output interval."""
+    scene = make_scene(mass={"m": 0.7745983084962722, "x0": 1e-100, "v0": 5.263085279548564e-93}, spring=None,
+                       cubic=None, damper=None,
+                       branches={"k": [2.5378744241832147, 2.809112197623408],
+                                 "eta": [0.99999, 0.9385506565966586],
+                                 "u0": [0.6538038510445731, 0.10032773834488834]},
+                       load={"kind": "constant", "value": -1.9951778712575408},
+                       solver={"stepper": "exact", "step": 1.262, "stop_time": 1.262, "output_interval": 1.262})
+    one = simulate(scene)
+    fine = simulate(scene.with_solver(step=1e-3, output_interval=1e-3))
+    assert abs(one.x[-1] - fine.x[-1]) <= 1e-12 and abs(one.v[-1] - fine.v[-1]) <= 1e-12

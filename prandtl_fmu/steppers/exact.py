@@ -406,9 +406,17 @@ def _next_zero_free(a, y0, m, c, stiffness, lo, hi, sign, at_zero):
             if _leaves(a, y0, b, sign):
                 return _refine(a, y0, lo + 0.5 * half, b, 1, 0.0, sign)
             return b  # only rounding can leave v on its side past lo + half, and only when b = hi
-        b = min(hi, lo + half)  # exactly one zero in (lo, lo + half]
+        # exactly one zero in (lo, lo + half]. First the sign at lo + half/2, where v is far from 0 unless the zero
+        # is there: a zero within rounding of lo (v(lo) = 5e-93 under a large force) puts the next one within
+        # rounding of lo + half, where the sign test alone said "no zero", and a level crossing was missed.
+        middle = min(hi, lo + 0.5 * half)
+        if _leaves(a, y0, middle, sign):
+            return _refine(a, y0, lo, middle, 1, 0.0, sign)
+        if middle == hi:
+            return -1.0
+        b = min(hi, lo + half)
         if _leaves(a, y0, b, sign):
-            return _refine(a, y0, lo, b, 1, 0.0, sign)
+            return _refine(a, y0, middle, b, 1, 0.0, sign)
         if b == hi:
             return -1.0
         b2 = min(hi, lo + 1.5 * half)  # the zero is at lo + half within rounding
