@@ -82,7 +82,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", help="CSV file to write (default: standard output)")
     run.add_argument("--states", action="store_true", help="add the columns u[1]..u[n]")
     run.add_argument("--energy", action="store_true",
-                     help="add the energy account: " + ", ".join(ENERGY_COLUMNS))
+                     help="add the energy account: " + ", ".join(ENERGY_COLUMNS)
+                     + " (and dissipated_friction before the residual, with [friction])")
     run.add_argument("--plot", help="PNG file: hysteresis loop (reaction against x) and x(t)")
     build = commands.add_parser("build", help="build the FMI 2.0 co-simulation FMU of a scene")
     build.add_argument("scene", help=_SCENE_HELP)
@@ -387,7 +388,7 @@ def _sweep(args) -> int:
 
 
 def _run(args) -> int:
-    from .driver import ENERGY_COLUMNS, ElementError, simulate_chunks
+    from .driver import ElementError, energy_columns, simulate_chunks
     from .resources import ResourceError, check_disk
 
     try:
@@ -400,7 +401,7 @@ def _run(args) -> int:
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
         _check_image_path(args.plot, "--plot")
         if args.out:
-            columns = 4 + (_branch_count(scene) if args.states else 0) + (len(ENERGY_COLUMNS) if args.energy else 0)
+            columns = 4 + (_branch_count(scene) if args.states else 0) + (len(energy_columns(scene)) if args.energy else 0)
             rows = scene.solver.stop_time / scene.solver.output_interval + 2
             check_disk(rows * columns * 24.0, _folder(args.out), f"--out {args.out} ({rows:.3g} rows x {columns} "
                        "columns)")

@@ -10,6 +10,9 @@ with the branches moved by the exact play update along x. Between two
 samples x is taken linear; the play operator is rate independent, so one
 monotone move per sample is exact whatever the time between the samples (a
 master that gives only the end value of a step gets the linear interpolant).
+Branches with series dashpots (``[branches] c``) are rate dependent: they
+relax over the time between the samples, exactly along the linear path
+(``kernels/series.py``).
 The element starts at x = 0 with the scene's initial elongations u0; a first
 sample x(0) != 0 moves it there monotonically (a virgin loading).
 
@@ -25,7 +28,8 @@ from typing import Optional
 
 import numpy as np
 
-from .driver import OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model, restore_branch_state, _smooth_model
+from .driver import (OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model,
+                     restore_branch_state, with_scene_coefficients, _smooth_model)
 from .kernels import stack
 from .kernels.drive import drive, preview, tangent
 from .kernels.play import branch_force, write_elongations
@@ -54,10 +58,11 @@ def _initial_u(scene: Scene, model):
     return np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None
 
 
-def displacement_response(scene: Scene, x, v=None, energy: bool = False):
+def displacement_response(scene: Scene, x, v=None, energy: bool = False, time=None):
     """The force at each sample of a displacement history ``x`` (m), from x = 0 and the scene's u0.
 
-    ``v`` (m/s) feeds the dashpot (zeros when None; a scene with a dashpot needs it). Returns the forces,
+    ``v`` (m/s) feeds the dashpot (zeros when None; a scene with a dashpot needs it); ``time`` (s, from 0,
+    non-decreasing) the series dashpots of the branches (a scene with them needs it). Returns the forces,
     or ``(forces, dissipated_sliders)`` with ``energy=True``. One compiled call for the whole history.
     """
     _require_massless(scene)
@@ -72,11 +77,21 @@ def displacement_response(scene: Scene, x, v=None, energy: bool = False):
         vs = np.ascontiguousarray(v, dtype=float).reshape(-1)
         if vs.shape != xs.shape or not np.all(np.isfinite(vs)):
             raise ValueError("v must be finite and as long as x")
+    durations = np.zeros_like(xs)
+    if time is None:
+        if scene.has_series_dashpots:
+            raise ValueError("the branches have series dashpots (rate dependent): give the times of the samples")
+    else:
+        times = np.ascontiguousarray(time, dtype=float).reshape(-1)
+        if times.shape != xs.shape or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0) \
+                or (times.size and times[0] < 0):
+            raise ValueError("time must be finite, non-decreasing from >= 0 and as long as x")
+        durations = np.diff(times, prepend=0.0)
     model = compile_model(scene, _branch_kernel(scene))
     u = _initial_u(scene, model)
     forces = np.empty_like(xs)
     account = np.zeros(3) if energy else None
-    drive(model, u, 0.0, xs, vs, forces, account)
+    drive(model, u, 0.0, xs, vs, durations, forces, account)
     return (forces, float(account[SLIDERS])) if energy else forces
 
 
@@ -108,7 +123,7 @@ class Connector(OutputMemo):
     @property
     def force(self) -> float:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N) at the committed sample."""
-        m, k0, k3, c, k, eta = self.model
+        m, k0, k3, c, k, eta, cs, friction = self.model
         return self._memo("force", lambda: float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)))
 
     def preview(self, x: float, v: float) -> float:
@@ -127,7 +142,7 @@ class Connector(OutputMemo):
 
     def stored_energy(self) -> float:
         """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""
-        m, k0, k3, c, k, eta = self.model
+        m, k0, k3, c, k, eta, cs, friction = self.model
         return self._memo("stored_energy", lambda: float(stored(self.x, k0, k3, k, self.u)))
 
     def energy(self) -> dict:
@@ -166,7 +181,8 @@ class Connector(OutputMemo):
             raise ValueError(f"time {time!r} goes back (the connector is at t = {self.time!r})")
         dx = x - self.x
         self._touch()
-        drive(self.model, self.u, self.x, np.array([x]), np.array([float(v)]), np.empty(1), self.account)
+        drive(self.model, self.u, self.x, np.array([x]), np.array([float(v)]), np.array([time - self.time]),
+              np.empty(1), self.account)
         c = self.model[3]
         if c is not None:
             self.account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
@@ -176,11 +192,11 @@ class Connector(OutputMemo):
 
     def set_coefficients(self, **values) -> None:
         """Change k0, k3 or c (ValueError names the culprit, nothing changed)."""
-        unknown = set(values) - {"k0", "k3", "c"}
+        unknown = {name for name in values if name not in ("k0", "k3", "c") and not name.startswith("c_branch")}
         if unknown:
-            raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c)")
+            raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c, c_branch)")
         self.scene = with_coefficients(self.scene, **values)
-        self.model = _smooth_model(self.scene) + self.model[4:]
+        self.model = with_scene_coefficients(self.scene, self.model)
         self._touch()
 
     def coefficients(self) -> dict:
@@ -210,8 +226,8 @@ class Connector(OutputMemo):
         if not isinstance(state["coefficients"], dict):
             raise ValueError("state has no table of coefficients")
         scene = with_coefficients(self.scene, **state["coefficients"])
-        model = _smooth_model(scene) + model
-        m, k0, k3, c, k, eta = model
+        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
+        m, k0, k3, c, k, eta, cs, friction = model
         x, v = values[1], values[2]
         outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, restored), stored(x, k0, k3, k, restored))
         if not all(math.isfinite(value) for value in outputs):

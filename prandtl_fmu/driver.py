@@ -25,6 +25,7 @@ from .kernels.energy import kinetic, stored
 from .kernels.increment import solve_increment
 from .kernels import stack
 from .kernels.drive import tangent
+from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force, smooth_force
 from .loads import force_at, held, plus
@@ -37,6 +38,16 @@ from .steppers import get_stepper
 _CHUNK_WORK = 20_000_000
 
 ENERGY_COLUMNS = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
+# the column a scene with [friction] adds, before energy_residual
+FRICTION_COLUMN = "dissipated_friction"
+
+
+def energy_columns(scene: Scene) -> tuple:
+    """The energy columns of ``scene``: :data:`ENERGY_COLUMNS`, with ``dissipated_friction`` before the residual
+    when the mass has friction on the ground."""
+    if scene.friction is None:
+        return ENERGY_COLUMNS
+    return ENERGY_COLUMNS[:-1] + (FRICTION_COLUMN, ENERGY_COLUMNS[-1])
 
 
 class ElementError(RuntimeError):
@@ -51,24 +62,53 @@ STACK_FROM = 64
 
 
 def compile_model(scene: Scene, branch_kernel: str = "play"):
-    """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta)``, ``None`` where absent.
+    """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta, cs, friction)``, ``None`` where absent.
 
     With ``branch_kernel="stack"``, ``k`` holds the memory stack's parameters
     and ``eta`` is None (see :func:`choose_branch_kernel`); the continuum
-    always takes the stack (its parameters are a tuple).
+    always takes the stack (its parameters are a tuple). ``cs``: the series
+    dashpots of the branches (an array, O(n) kernel only); ``friction``:
+    :func:`friction_model`.
     """
-    m, k0, k3, c = _smooth_model(scene)
+    return _smooth_model(scene) + _branch_model(scene, branch_kernel) + (friction_model(scene),)
+
+
+def _branch_model(scene: Scene, branch_kernel: str) -> tuple:
+    """``(k, eta, cs)``: the branch part of :func:`compile_model`."""
     branches = scene.branches
     if branches is None:
-        return (m, k0, k3, c, None, None)
+        return (None, None, None)
     if branches.continuum:
-        return (m, k0, k3, c, branches.params, None)
+        return (branches.params, None, None)
     k = np.ascontiguousarray(branches.stiffness, dtype=float)
     eta = np.ascontiguousarray(branches.yield_displacement, dtype=float)
+    if branches.damping is not None:
+        if branch_kernel == "stack":
+            raise ValueError("series dashpots run on the O(n) kernel only: a relaxing branch has no memory stack")
+        return (k, eta, np.ascontiguousarray(branches.damping, dtype=float))
     if branch_kernel == "stack":
         params, _ = stack.prepare(k, eta, branches.u0)
-        return (m, k0, k3, c, params, None)
-    return (m, k0, k3, c, k, eta)
+        return (params, None, None)
+    return (k, eta, None)
+
+
+def friction_model(scene: Scene):
+    """The kernel form of ``[friction]``: ``(alpha, alpha_kinetic, stribeck_velocity, belt_velocity)``, or None
+    (``kernels/friction.py``)."""
+    friction = scene.friction
+    if friction is None:
+        return None
+    stribeck = friction.stribeck_velocity if friction.stribeck_velocity is not None else 1.0
+    return (float(friction.alpha), float(friction.alpha_kinetic), float(stribeck), float(friction.belt_velocity))
+
+
+def with_scene_coefficients(scene: Scene, model: tuple) -> tuple:
+    """``model`` with the coefficients of ``scene`` (after a change of coefficients): its smooth part, its series
+    dashpots and its friction; the branch kernel's parameters and state stay."""
+    cs = model[6]
+    if cs is not None:
+        cs = np.ascontiguousarray(scene.branches.damping, dtype=float)
+    return _smooth_model(scene) + model[4:6] + (cs, friction_model(scene))
 
 
 def _smooth_model(scene: Scene):
@@ -88,6 +128,8 @@ def choose_branch_kernel(scene: Scene, stepper: str) -> str:
         return "play"
     if branches.continuum:
         return "stack"
+    if branches.damping is not None:  # series dashpots: the O(n) kernel only (kernels/series.py)
+        return "play"
     if branches.n < STACK_FROM or not getattr(get_stepper(stepper), "BRANCH_STACK", False):
         return "play"
     order = np.argsort(branches.yield_displacement, kind="stable")
@@ -120,7 +162,7 @@ def initial_state(scene: Scene, model, load):
     the element jumps at t = 0 to the equilibrium with F(0) (the play
     operator moves the branches) and v = 0. ElementError if none exists.
     """
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     if stack.is_stack(k):  # the memory stack: its state stands for the elongations
         u = stack.fresh_state(k, _initial_x(scene))
     else:
@@ -130,7 +172,7 @@ def initial_state(scene: Scene, model, load):
     force = force_at(load, 0.0)
     if c is not None:
         return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / c, u
-    w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, u)
+    w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, None, u, 0.0)  # an instant: no dashpot relaxes
     if not math.isfinite(w):
         raise ElementError(_collapse_message(scene, 0.0, force) if not _hardening(scene) else
                            f"{scene.source}: the equilibrium with F = {float(force)!r} N at t = 0 overflows")
@@ -255,14 +297,17 @@ def output_grid(stop_time: float, interval: float) -> np.ndarray:
     return grid.times(0, grid.rows)
 
 
-def _energy_columns(initial_energy: float, table: np.ndarray) -> dict:
-    return _account_columns(initial_energy, *table.T)
+def _energy_columns(scene: Scene, initial_energy: float, table: np.ndarray) -> dict:
+    return _account_columns(scene, initial_energy, *table.T)
 
 
-def _account_columns(initial_energy, kinetic_, stored_, work, sliders, damper) -> dict:
-    """The energy columns with the balance residual, for arrays of rows or for one row of floats."""
-    residual = work - sliders - damper - (kinetic_ + stored_ - initial_energy)
-    return dict(zip(ENERGY_COLUMNS, (kinetic_, stored_, work, sliders, damper, residual)))
+def _account_columns(scene, initial_energy, kinetic_, stored_, work, sliders, damper, friction) -> dict:
+    """The energy columns of ``scene`` (:func:`energy_columns`) with the balance residual, for arrays of rows or
+    for one row of floats."""
+    residual = work - sliders - damper - friction - (kinetic_ + stored_ - initial_energy)
+    if scene.friction is None:
+        return dict(zip(ENERGY_COLUMNS, (kinetic_, stored_, work, sliders, damper, residual)))
+    return dict(zip(energy_columns(scene), (kinetic_, stored_, work, sliders, damper, friction, residual)))
 
 
 def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = False, energy: bool = False,
@@ -281,7 +326,7 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     """
     from .resources import check_memory
 
-    columns = 4 + (_state_count(scene) if states else 0) + (len(ENERGY_COLUMNS) if energy else 0)
+    columns = 4 + (_state_count(scene) if states else 0) + (len(energy_columns(scene)) if energy else 0)
     rows = _row_count(scene)
     check_memory(2 * rows * columns * 8, f"{scene.source}: the output ({rows:.0f} rows x {columns} columns)",
                  hint="write it to a file with the CLI, which streams the rows")
@@ -293,10 +338,10 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
         parts = [getattr(chunk, name) for chunk in chunks]
         return None if parts[0] is None else np.concatenate(parts)
 
-    energy_columns = None
+    energy_table = None
     if energy:
-        energy_columns = {key: np.concatenate([chunk.energy[key] for chunk in chunks]) for key in first.energy}
-    return Result(joined("time"), joined("x"), joined("v"), joined("reaction"), joined("u"), energy_columns,
+        energy_table = {key: np.concatenate([chunk.energy[key] for chunk in chunks]) for key in first.energy}
+    return Result(joined("time"), joined("x"), joined("v"), joined("reaction"), joined("u"), energy_table,
                   first.stepper, scene)
 
 
@@ -344,27 +389,27 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
     rows = grid.rows
     n = _state_count(scene)
     n_out = n if states else 0
-    account = np.zeros(3) if energy else None
+    account = np.zeros(4) if energy else None
     x, v, u = initial_state(scene, model, load)
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
 
     def piece(first, count):
         """Empty output arrays for rows first .. first + count - 1."""
         out = np.empty((count, 3))
         out_u = np.empty((count, n)) if n_out else None
-        out_energy = np.zeros((count, 5)) if energy else None
+        out_energy = np.zeros((count, 6)) if energy else None
         return out, out_u, out_energy
 
     def result(first, out, out_u, out_energy):
         count = out.shape[0]
-        energy_columns = None
+        energy_table = None
         if energy:
-            energy_columns = _energy_columns(initial_energy, out_energy)
+            energy_table = _energy_columns(scene, initial_energy, out_energy)
         return Result(grid.times(first, count), out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out_u,
-                      energy_columns, name, scene)
+                      energy_table, name, scene)
 
     out, out_u, out_energy = piece(0, 1)
-    out[0] = (x, v, smooth_force(x, v, k0, k3, c) + branch_force(k, u))
+    out[0] = (x, v, reaction(model, load, 0.0, x, v, branch_force(k, u)))
     if out_u is not None:
         write_elongations(k, u, out_u[0])
     initial_energy = 0.0
@@ -479,8 +524,9 @@ class Element(OutputMemo):
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
         self._out = np.empty((1, 3))
-        self._energy_row = np.empty((1, 5))
-        self.account = np.zeros(3)
+        self._energy_row = np.empty((1, 6))
+        self.account = np.zeros(4)
+        self._load = held(0.0)  # the load of the last advance: the reaction's F(t)
         self.reset()
 
     def reset(self, force: float = 0.0) -> None:
@@ -490,7 +536,8 @@ class Element(OutputMemo):
         self.force = float(force)
         self.branch_kernel = self._forced_kernel or choose_branch_kernel(self.scene, self.stepper)
         self.model = compile_model(self.scene, self.branch_kernel)
-        self.x, self.v, self.u = initial_state(self.scene, self.model, held(self.force))
+        self._load = held(self.force)
+        self.x, self.v, self.u = initial_state(self.scene, self.model, self._load)
         self.account[:] = 0.0
         self._record()
         self.initial_energy = float(self._energy_row[0, 0] + self._energy_row[0, 1])
@@ -514,13 +561,15 @@ class Element(OutputMemo):
 
     def _record(self) -> None:
         self._touch()
-        m, k0, k3, c, k, eta = self.model
-        self._out[0] = (self.x, self.v, smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u))
+        m, k0, k3, c, k, eta, cs, friction = self.model
+        self._out[0] = (self.x, self.v, reaction(self.model, self._load, self.time, self.x, self.v,
+                                                 branch_force(k, self.u)))
         self._energy_row[0] = (kinetic(m, self.v), stored(self.x, k0, k3, k, self.u), *self.account)
 
     @property
     def reaction(self) -> float:
-        """k0 x + k3 x^3 + c v + sum_i k_i u_i (N)."""
+        """k0 x + k3 x^3 + c v + sum_i k_i u_i (N), plus the friction on the mass (the force that holds it
+        while it sticks: then the reaction is F)."""
         return float(self._out[0, 2])
 
     def stiffness(self) -> float:
@@ -549,7 +598,7 @@ class Element(OutputMemo):
 
     def _account(self) -> dict:
         """_energy_columns for the one row of the element, in floats (numpy on a row of 5 costs 10 us)."""
-        return _account_columns(self.initial_energy, *self._energy_row[0].tolist())
+        return _account_columns(self.scene, self.initial_energy, *self._energy_row[0].tolist())
 
     def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
         """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is
@@ -577,7 +626,7 @@ class Element(OutputMemo):
                              "cannot be counted exactly; advance by shorter durations or with a larger step")
         saved = self.checkpoint()
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
-        self.force = float(force)
+        self.force, self._load = float(force), load
         self._touch()  # the compiled loop writes the state and the outputs in place
         if self._grid != h:  # a new step: the grid starts again at the current time
             self._origin, self._steps, self._grid = self.time, 0, h
@@ -601,7 +650,7 @@ class Element(OutputMemo):
         """
         scene = with_coefficients(self.scene, **values)
         loop = compile_loop(scene, self.stepper)  # c -> 0 on a massless element: 'projected' no longer applies
-        self.scene, self.model, self._loop = scene, _smooth_model(scene) + self.model[4:], loop
+        self.scene, self.model, self._loop = scene, with_scene_coefficients(scene, self.model), loop
         self._record()
 
     def set_stepper(self, name: str) -> None:
@@ -635,13 +684,13 @@ class Element(OutputMemo):
         if kind == "play":
             u = np.empty(branches.n)
             write_elongations(self.model[4], self.u, u)
-            branch_model = compile_model(self.scene, "play")[4:]
+            branch_model = compile_model(self.scene, "play")[4:7]
         else:  # one initial piece that refers to the elongations now: u = (x - x_now) + u_now
             params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, self.u)
             u = stack.fresh_state(params, self.x)
-            branch_model = (params, None)
+            branch_model = (params, None, None)
         self.branch_kernel = kind
-        self.model = self.model[:4] + branch_model
+        self.model = self.model[:4] + branch_model + self.model[7:]
         self.u = u
         self._record()
 
@@ -682,8 +731,8 @@ class Element(OutputMemo):
         values = [plain_number(state[key], key) for key in ("time", "x", "v", "force", "initial_energy")]
         clock = _clock(state.get("clock"), values[0])
         account = number_list(state["energy_account"], "energy_account")
-        if account.shape[0] != 3:
-            raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 3")
+        if account.shape[0] != 4:
+            raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 4")
         kind = state.get("branch_kernel", "play")
         if not isinstance(kind, str):
             raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
@@ -697,10 +746,11 @@ class Element(OutputMemo):
         loop = compile_loop(scene, stepper)
         if not step > 0:
             raise ValueError(f"state has step = {step!r}, must be > 0")
-        model = _smooth_model(scene) + model
-        m, k0, k3, c, k, eta = model
-        _, x, v, _, _ = values
-        outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, u), kinetic(m, v), stored(x, k0, k3, k, u))
+        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
+        m, k0, k3, c, k, eta, cs, friction = model
+        _, x, v, force, _ = values
+        outputs = (reaction(model, held(force), values[0], x, v, branch_force(k, u)), kinetic(m, v),
+                   stored(x, k0, k3, k, u))
         if not all(math.isfinite(value) for value in outputs):
             raise ValueError(f"state has x = {x!r}, v = {v!r}: its reaction or energy is not finite")
         self.set_step(step)
@@ -708,6 +758,7 @@ class Element(OutputMemo):
         self.model = model
         self._loop, self.stepper = loop, stepper
         self.x, self.v, self.force, self.initial_energy = values[1:]
+        self._load = held(self.force)
         self._origin, self._steps, self._grid = clock
         self.u = u
         self.account[:] = account
@@ -790,7 +841,7 @@ def restore_branch_state(scene: Scene, k, kind: str, u, reference):
     if branches is None:
         if u.size:
             raise ValueError(f"state has {u.shape[0]} branch values, the element has no branches")
-        return (None, None), None
+        return (None, None, None), None
     if kind == "stack":
         if branches.continuum:
             params = k
@@ -799,14 +850,14 @@ def restore_branch_state(scene: Scene, k, kind: str, u, reference):
                 raise ValueError(f"state has {reference.shape[0]} reference elongations, the element has "
                                  f"{branches.n} branches")
             params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, reference)
-        return (params, None), stack.restore(params, u)
+        return (params, None, None), stack.restore(params, u)
     if kind != "play" or branches.continuum:
         raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")
     if u.shape[0] != branches.n:
         raise ValueError(f"state has {u.shape[0]} branch elongations, the element has {branches.n}")
     if np.any(np.abs(u) > branches.yield_displacement):
         raise ValueError("state has an elongation outside its elastic range")
-    return compile_model(scene, "play")[4:], u
+    return compile_model(scene, "play")[4:7], u
 
 
 class _NoBar:

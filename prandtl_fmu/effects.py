@@ -18,6 +18,7 @@ compiles it away, so an absent effect costs nothing in the time loop.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -52,6 +53,46 @@ class Damper:
     c: float
 
 
+@dataclass(frozen=True)
+class Friction:
+    """Dry friction of the mass on the ground (the parallel model, eq. 14 of 004; Stribeck's law, eq. 16).
+
+    The ground moves at ``belt_velocity`` v_b (m/s; 0: fixed ground) and the
+    friction force on the mass is -A(v - v_b), A a maximal monotone graph plus
+    a smooth part:
+
+        A(w) = alpha sigma(w) + Psi(w),   sigma the sign graph (sigma(0) = [-1, 1]),
+        A(w) = sign(w) (alpha_kinetic + (alpha - alpha_kinetic) exp(-|w| / stribeck_velocity))   (w != 0),
+
+    so that the mass sticks (v = v_b) while the other forces on it stay within
+    [-alpha, alpha], and slides against a force that falls from ``alpha``
+    (N, > 0, the static threshold alpha_S) at rest to ``alpha_kinetic`` (N,
+    0 <= alpha_kinetic <= alpha) at speed, over ``stribeck_velocity`` (m/s,
+    > 0; None for plain Coulomb friction, alpha_kinetic = alpha). Psi(w) =
+    sign(w) (alpha_kinetic - alpha) (1 - exp(-|w| / stribeck_velocity)) is C^1
+    with Psi(0) = 0 and slope -(alpha - alpha_kinetic) / stribeck_velocity at 0.
+    """
+
+    alpha: float
+    alpha_kinetic: float
+    stribeck_velocity: Optional[float] = None
+    belt_velocity: float = 0.0
+
+    @property
+    def drop_slope(self) -> float:
+        """(alpha - alpha_kinetic) / stribeck_velocity (N s/m): the steepest negative slope of the sliding force,
+        a negative damping where the mass slides slowly (0 for plain Coulomb friction)."""
+        if self.stribeck_velocity is None:
+            return 0.0
+        return (self.alpha - self.alpha_kinetic) / self.stribeck_velocity
+
+    def sliding_force(self, w):
+        """The force against a relative velocity ``w`` != 0 (m/s), in magnitude (N)."""
+        if self.stribeck_velocity is None:
+            return self.alpha + 0.0 * np.abs(w)
+        return self.alpha_kinetic + (self.alpha - self.alpha_kinetic) * np.exp(-np.abs(w) / self.stribeck_velocity)
+
+
 @dataclass(frozen=True, eq=False)
 class Branches:
     """n Prandtl branches: a spring k_i in series with a Coulomb slider.
@@ -65,11 +106,23 @@ class Branches:
 
     Arrays of shape (n,): ``stiffness`` k_i > 0 (N/m),
     ``yield_displacement`` eta_i >= 0 (m), ``u0`` initial elongations (m).
+
+    ``damping`` (N s/m, shape (n,), > 0; None: none) puts a dashpot c_i in
+    series with each branch's spring and slider: the series model (eq. 15 of
+    004), a rate-dependent hysteresis. Then
+
+        u_i' + d psi_[-eta_i, eta_i](u_i) ∋ v - (k_i / c_i) u_i,
+
+    the spring relaxes through the dashpot at the rate lambda_i = k_i / c_i,
+    which dissipates (k_i u_i)^2 / c_i; c_i -> infinity is the Prandtl branch.
+    ``shared_damping``: the scene gave one c for every branch (``count = n``).
     """
 
     stiffness: np.ndarray
     yield_displacement: np.ndarray
     u0: np.ndarray
+    damping: Optional[np.ndarray] = None
+    shared_damping: bool = False
 
     continuum = False
 

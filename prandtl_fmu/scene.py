@@ -26,7 +26,8 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .effects import SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Mass, Spring, sample_spectrum
+from .effects import (SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
+                      sample_spectrum)
 from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad
 from .resources import ResourceError, check_memory
 
@@ -76,6 +77,7 @@ class Scene:
     solver: Solver
     source: str = "<scene>"
     causality: str = "force"  # of its FMU: see CAUSALITIES
+    friction: Optional[Friction] = None  # of the mass on the ground: ``[friction]``
 
     def with_solver(self, **overrides) -> "Scene":
         """A copy with some solver settings replaced (``None`` values are ignored), checked."""
@@ -95,8 +97,13 @@ class Scene:
     @property
     def effects(self) -> list[str]:
         """Names of the tables present, in contract order."""
-        names = ["mass", "spring", "cubic", "damper", "branches"]
+        names = ["mass", "friction", "spring", "cubic", "damper", "branches"]
         return [name for name in names if getattr(self, name) is not None]
+
+    @property
+    def has_series_dashpots(self) -> bool:
+        """Whether the branches carry dashpots in series (the series model, rate-dependent)."""
+        return self.branches is not None and not self.branches.continuum and self.branches.damping is not None
 
 
 # Coefficients a running element may change (an FMU's parameters): the
@@ -108,7 +115,21 @@ COEFFICIENTS = {
     "k0": ("spring", ">= 0"),
     "k3": ("cubic", ">= 0"),
     "c": ("damper", ">= 0"),
+    "alpha": ("friction", "> 0"),
+    "alpha_kinetic": ("friction", ">= 0"),
+    "stribeck_velocity": ("friction", "> 0"),
+    "belt_velocity": ("friction", "finite"),
+    "c_branch": ("branches", "> 0"),
 }
+# Branch dashpots are coefficients too: ``c_branch`` (one for every branch, a scene with ``count = n``) or
+# ``c_branch[i]`` (i = 1..n, a scene that lists its branches).
+
+
+def _coefficient_key(name: str) -> str:
+    """The COEFFICIENTS key of a coefficient name (``c_branch[3]`` -> ``c_branch``)."""
+    if name.startswith("c_branch[") and name.endswith("]"):
+        return "c_branch"
+    return name
 
 
 def coefficients_of(scene: "Scene") -> dict:
@@ -122,12 +143,24 @@ def coefficients_of(scene: "Scene") -> dict:
         values["k3"] = scene.cubic.k3
     if scene.damper is not None:
         values["c"] = scene.damper.c
+    friction = scene.friction
+    if friction is not None:
+        values["alpha"] = friction.alpha
+        if friction.stribeck_velocity is not None:  # plain Coulomb: alpha_kinetic is alpha
+            values.update(alpha_kinetic=friction.alpha_kinetic, stribeck_velocity=friction.stribeck_velocity)
+        values["belt_velocity"] = friction.belt_velocity
+    if scene.has_series_dashpots:
+        damping = scene.branches.damping
+        if scene.branches.shared_damping:
+            values["c_branch"] = float(damping[0])
+        else:
+            values.update({f"c_branch[{i + 1}]": float(value) for i, value in enumerate(damping)})
     return values
 
 
 def coefficient_problem(name: str, value) -> Optional[str]:
     """Why ``value`` is not a valid coefficient ``name`` (see COEFFICIENTS), or None."""
-    rule = COEFFICIENTS[name][1]
+    rule = COEFFICIENTS[_coefficient_key(name)][1]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"must be a number, got {value!r}"
     if not math.isfinite(value):
@@ -144,16 +177,40 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 
     Only effects present in the scene can be changed: an absent effect has no coefficient.
     """
+    present = coefficients_of(scene)
     for name, value in values.items():
-        if name not in COEFFICIENTS:
+        if _coefficient_key(name) not in COEFFICIENTS:
             raise ValueError(f"{name}: not a coefficient (known: {', '.join(COEFFICIENTS)})")
-        table = COEFFICIENTS[name][0]
+        table = COEFFICIENTS[_coefficient_key(name)][0]
         if getattr(scene, table) is None:
             raise ValueError(f"{name}: the scene has no [{table}]")
+        if name not in present:
+            raise ValueError(f"{name}: not a coefficient of this scene (its coefficients: {', '.join(present)})")
         problem = coefficient_problem(name, value)
         if problem:
             raise ValueError(f"{name}: {problem}")
     mass, spring, cubic, damper = scene.mass, scene.spring, scene.cubic, scene.damper
+    friction, branches = scene.friction, scene.branches
+    if friction is not None:
+        alpha = float(values.get("alpha", friction.alpha))
+        stribeck = friction.stribeck_velocity
+        kinetic = alpha if stribeck is None else float(values.get("alpha_kinetic", friction.alpha_kinetic))
+        if stribeck is not None:
+            stribeck = float(values.get("stribeck_velocity", stribeck))
+        if kinetic > alpha:
+            culprit = "alpha_kinetic" if "alpha_kinetic" in values else "alpha"
+            raise ValueError(f"{culprit}: alpha_kinetic must be <= alpha, got alpha_kinetic = {kinetic!r} and "
+                             f"alpha = {alpha!r}")
+        friction = Friction(alpha, kinetic, stribeck, float(values.get("belt_velocity", friction.belt_velocity)))
+    if scene.has_series_dashpots and any(_coefficient_key(name) == "c_branch" for name in values):
+        damping = branches.damping.copy()
+        if branches.shared_damping:
+            damping[:] = float(values.get("c_branch", damping[0]))
+        else:
+            for i in range(damping.shape[0]):
+                damping[i] = float(values.get(f"c_branch[{i + 1}]", damping[i]))
+        damping.setflags(write=False)
+        branches = replace(branches, damping=damping)
     if mass is not None:
         mass = Mass(float(values.get("m", mass.m)), float(values.get("x0", mass.x0)), float(values.get("v0", mass.v0)))
     if spring is not None:
@@ -162,12 +219,12 @@ def with_coefficients(scene: Scene, **values) -> Scene:
         cubic = CubicSpring(float(values.get("k3", cubic.k3)))
     if damper is not None:
         damper = Damper(float(values.get("c", damper.c)))
-    return replace(scene, mass=mass, spring=spring, cubic=cubic, damper=damper)
+    return replace(scene, mass=mass, spring=spring, cubic=cubic, damper=damper, friction=friction, branches=branches)
 
 
 # ---------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "mass", "spring", "cubic", "damper", "branches", "load", "solver", "fmu"}
+_TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "load", "solver", "fmu"}
 # How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
 # with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
 CAUSALITIES = ("force", "displacement")
@@ -359,6 +416,7 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
         damper = Damper(r.number("c", minimum=0.0))
     if "branches" in doc:
         branches = _branches(source, doc["branches"])
+    friction = _friction(source, doc["friction"], mass) if "friction" in doc else None
     load = _load(source, doc["load"]) if "load" in doc else ConstantLoad(0.0)
     if "solver" not in doc:
         raise SceneError(f"{source}: [solver]: missing (required: step, stop_time, output_interval)")
@@ -371,7 +429,7 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
         if causality == "displacement" and mass is not None:
             r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
                    "remove [mass] (the bodies hold the inertia) or use \"force\"")
-    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality)
+    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality, friction)
     if check_stepper and causality == "force":  # the connector takes no time steps: no stepper to check
         _check_stepper_applies(scene, where="[solver] ")
     return scene
@@ -383,15 +441,48 @@ def _mass(source, data) -> Mass:
     return Mass(m=r.number("m", positive=True), x0=r.number("x0", 0.0), v0=r.number("v0", 0.0))
 
 
+def _friction(source, data, mass) -> Friction:
+    r = _Reader(source, "friction", data)
+    r.only({"alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity"})
+    if mass is None:
+        r.fail(None, "friction of the mass on the ground needs [mass] (a massless element has no mass to hold)")
+    alpha = r.number("alpha", positive=True)
+    kinetic = r.number("alpha_kinetic", alpha, minimum=0.0)
+    if kinetic > alpha:
+        r.fail("alpha_kinetic", f"must be <= alpha = {alpha!r} (the sliding force falls from alpha at rest to "
+               f"alpha_kinetic at speed), got {kinetic!r}")
+    stribeck = None
+    if "stribeck_velocity" in r.data:
+        stribeck = r.number("stribeck_velocity", positive=True)
+    elif kinetic < alpha:
+        r.fail("stribeck_velocity", "missing (required when alpha_kinetic < alpha: the speed over which the "
+               "sliding force falls)")
+    return Friction(alpha, kinetic, stribeck, r.number("belt_velocity", 0.0))
+
+
+def _series_damping(r, n: int, shared: bool):
+    """The branch dashpots ``c`` (None if absent): a list of n values, or one value for every branch."""
+    if "c" not in r.data:
+        return None
+    if shared and not isinstance(r.data["c"], list):
+        value = r._check_number("c", r.data["c"], None, True)
+        return np.full(n, value)
+    if shared:
+        r.fail("c", "give one value for every branch with count = n, got a list")
+    return r.numbers("c", positive=True, length=n)
+
+
 def _branches(source, data):
     r = _Reader(source, "branches", data)
-    listed = {"k", "eta", "alpha", "u0"}
-    sampled = {"count", "k_total", "eta_range", "u0", "sampling"}
+    listed = {"k", "eta", "alpha", "u0", "c"}
+    sampled = {"count", "k_total", "eta_range", "u0", "sampling", "c"}
     continuous = {"continuum", "k_total", "eta_range"}
     if "continuum" in r.data:
         if not isinstance(r.data["continuum"], bool):
             r.fail("continuum", f"must be true or false, got {_kind(r.data['continuum'])}")
         if r.data["continuum"]:
+            if "c" in r.data:
+                r.fail("c", "series dashpots are not available with continuum = true (sample it with count = n)")
             if "density" in r.data:
                 r.only({"continuum", "density"})
                 return _density(r)
@@ -399,12 +490,16 @@ def _branches(source, data):
             return _continuum(r)
         r = _Reader(source, "branches", {key: v for key, v in data.items() if key != "continuum"})
     if "density" in r.data:
-        r.only({"count", "density", "sampling"})
+        r.only({"count", "density", "sampling", "c"})
         if "count" not in r.data:
             r.fail("density", "give count = n for n sampled branches, or continuum = true for the continuum")
         n = _branch_count(r)
         rule = r.string("sampling", "mean", choices=SAMPLING_RULES + ("mean",))
-        return _density(r).sample(n, rule)
+        sampled_branches = _density(r).sample(n, rule)
+        damping = _series_damping(r, sampled_branches.n, shared=True)
+        if damping is None:
+            return sampled_branches
+        return replace(sampled_branches, damping=damping, shared_damping=True)
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
         r.only(sampled)
         n = _branch_count(r)
@@ -431,9 +526,11 @@ def _branches(source, data):
     if bad.size:
         i = int(bad[0])
         r.fail(f"u0[{i + 1}]", f"|u0| must be <= eta = {float(eta[i])!r}, got {float(u0[i])!r}")
-    for array in (stiffness, eta, u0):
+    shared = "count" in r.data
+    damping = _series_damping(r, n, shared)
+    for array in (stiffness, eta, u0) + ((damping,) if damping is not None else ()):
         array.setflags(write=False)
-    return Branches(stiffness, eta, u0)
+    return Branches(stiffness, eta, u0, damping, shared)
 
 
 def _branch_count(r) -> int:

@@ -12,6 +12,19 @@ massless element with a dashpot: h K / c > 2): beyond that the output is
 garbage. ``symplectic`` and ``verlet`` (leapfrog type) are stable for
 omega h < 2. ``implicit`` is unconditionally stable, and ``exact`` has no
 step to speak of.
+
+Two more checks, for every stepper that takes steps:
+
+* series dashpots in ``projected`` (explicit relaxation u <- u (1 - h k_i/c_i)):
+  unstable for h k_i / c_i > 2;
+* Stribeck friction (``[friction]`` with alpha_kinetic < alpha): the
+  sliding force falls with the slip speed at up to (alpha -
+  alpha_kinetic) / stribeck_velocity, a negative damping. When that exceeds
+  m/h + c, the implicit step's equation is not monotone (several roots:
+  ``implicit`` takes the one of least slip) and the explicit ones amplify
+  slow slips by more than a factor 2 per step: the step is too long to
+  resolve the drop, and the continuous problem itself is sensitive to its
+  data there (Bastien & Schatzman, ZAMM 88, 2008).
 """
 from __future__ import annotations
 
@@ -111,6 +124,39 @@ def step_limit(m: Optional[float], c: float, stiffness: float) -> float:
 
 def stability_problem(scene, stepper: str, h: float, x: Optional[float] = None) -> Optional[str]:
     """A one-line explanation when ``stepper`` with step ``h`` is unstable for ``scene``, else None."""
+    return _smooth_problem(scene, stepper, h, x) or _friction_problem(scene, stepper, h) \
+        or _series_problem(scene, stepper, h)
+
+
+def _friction_problem(scene, stepper, h):
+    """The Stribeck drop against m/h + c (see the module docstring)."""
+    friction = scene.friction
+    if friction is None or stepper == "exact" or friction.drop_slope == 0.0:
+        return None
+    inertia = scene.mass.m / h + (scene.damper.c if scene.damper is not None else 0.0)
+    if friction.drop_slope <= inertia:
+        return None
+    limit = scene.mass.m / max(friction.drop_slope - (scene.damper.c if scene.damper is not None else 0.0), 1e-300)
+    return (f"[friction]: the Stribeck drop (alpha - alpha_kinetic) / stribeck_velocity = {friction.drop_slope:.6g} "
+            f"N.s/m exceeds m/h + c = {inertia:.6g} N.s/m: the step cannot resolve it (the implicit step may have "
+            f"several roots; 'implicit' takes the least slip); use h < {limit:.3g} s")
+
+
+def _series_problem(scene, stepper, h):
+    """The explicit relaxation of series dashpots in 'projected'."""
+    if stepper != "projected" or not scene.has_series_dashpots:
+        return None
+    branches = scene.branches
+    rates = branches.stiffness / branches.damping
+    fastest = float(rates.max())
+    if h * fastest <= 2.0:
+        return None
+    return (f"stepper 'projected' relaxes the series dashpots explicitly and is unstable here: h k_i / c_i = "
+            f"{h * fastest:.3g} > 2 (branch {int(rates.argmax()) + 1}); use 'implicit', 'verlet' or "
+            f"h <= {2.0 / fastest:.3g} s")
+
+
+def _smooth_problem(scene, stepper, h, x):
     if stepper in ("symplectic", "verlet"):
         return _leapfrog_problem(scene, stepper, h, x)
     if stepper != "projected":

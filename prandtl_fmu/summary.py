@@ -15,8 +15,11 @@ The quantities (``SUMMARIES``):
   largest |x|, |v|, |reaction| at t = 0 and after every internal step (for
   ``exact``, whose steps are the output rows, after every output row);
 * ``final_x``, ``final_v``, ``final_reaction``: the state at stop_time;
-* ``work`` (J): the work of the load F; ``dissipated_sliders``,
-  ``dissipated_damper`` and their sum ``dissipated`` (J) over the run;
+* ``work`` (J): the work of the load F (and of a moving ground, ``[friction]
+  belt_velocity``); ``dissipated_sliders``, ``dissipated_damper`` (the
+  dashpot and the branches' series dashpots), ``dissipated_friction`` (the
+  friction of the mass on the ground) and their sum ``dissipated`` (J) over
+  the run;
 * ``loop_area`` (J): the energy dissipated over the last period 2 pi / omega
   of a harmonic load (the last whole number of steps closest to it): once the
   loop closes (the steady state), the area of the (x, reaction) loop.
@@ -31,7 +34,7 @@ from typing import Iterable, Optional
 import numpy as np
 
 from .driver import (ElementError, OutputGrid, choose_branch_kernel, compile_loop, compile_model,
-                     initial_state, _failure, _smooth_model)
+                     friction_model, initial_state, _failure, _smooth_model)
 from .kernels import batch as packed
 from .loads import HarmonicLoad
 from .resources import check_memory
@@ -46,13 +49,15 @@ SUMMARIES = {
     "final_x": "x at stop_time (m)",
     "final_v": "v at stop_time (m/s)",
     "final_reaction": "reaction at stop_time (N)",
-    "work": "work of the load over the run (J)",
-    "dissipated": "energy dissipated by the sliders and the dashpot over the run (J)",
+    "work": "work of the load (and of a moving ground) over the run (J)",
+    "dissipated": "energy dissipated by the sliders, the dashpots and the friction on the mass over the run (J)",
     "dissipated_sliders": "energy dissipated by the sliders over the run (J)",
-    "dissipated_damper": "energy dissipated by the dashpot over the run (J)",
+    "dissipated_damper": "energy dissipated by the dashpot and the branches' series dashpots over the run (J)",
+    "dissipated_friction": "energy dissipated by the friction of the mass on the ground over the run (J)",
     "loop_area": "energy dissipated over the last period of the harmonic load (J): the steady loop's area",
 }
-ENERGY_SUMMARIES = ("work", "dissipated", "dissipated_sliders", "dissipated_damper", "loop_area")
+ENERGY_SUMMARIES = ("work", "dissipated", "dissipated_sliders", "dissipated_damper", "dissipated_friction",
+                    "loop_area")
 HISTORY_COLUMNS = ("time", "x", "v", "reaction")
 
 # The branch states and output rows of one compiled call hold at most this many bytes (a continuum's state
@@ -162,7 +167,8 @@ class _Job:
         self.h, self.per_row = h, per_row
         problem = stability_problem(scene, name, h)
         self.warning = f"{scene.source}: {problem}" if problem else ""
-        self.model = _smooth_model(scene) + _branch_model(scene, name, branch_kernel, branch_models)
+        self.model = _smooth_model(scene) + _branch_model(scene, name, branch_kernel, branch_models) \
+            + (friction_model(scene),)
         self.load = scene.load.compile()
         self.x, self.v, self.u = initial_state(scene, self.model, self.load)
 
@@ -184,19 +190,20 @@ class _Job:
         """What fixes the compiled code of a run: its loop, the effects present, the branch kernel."""
         k = self.model[4]
         kind = None if k is None else "continuum" if isinstance(k, tuple) else k.ndim
-        return self.kernel, tuple(value is None for value in self.model[:4]), kind, self.u is None
+        return (self.kernel, tuple(value is None for value in self.model[:4] + self.model[6:]), kind,
+                self.u is None)
 
 
 def _branch_model(scene: Scene, name: str, branch_kernel: Optional[str], known: dict):
-    """The branch part ``(k, eta)`` of :func:`driver.compile_model`, shared by the runs whose branches are
+    """The branch part ``(k, eta, c)`` of :func:`driver.compile_model`, shared by the runs whose branches are
     equal (the kernels only read it): a sweep that varies the load prepares its memory stack once."""
     branches = scene.branches
     if branches is None or branches.continuum:
-        return compile_model(scene)[4:]
+        return compile_model(scene)[4:7]
     key = (name, branch_kernel, branches.stiffness.tobytes(), branches.yield_displacement.tobytes(),
-           branches.u0.tobytes())
+           branches.u0.tobytes(), None if branches.damping is None else branches.damping.tobytes())
     if key not in known:
-        known[key] = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))[4:]
+        known[key] = compile_model(scene, branch_kernel or choose_branch_kernel(scene, name))[4:7]
     return known[key]
 
 
@@ -205,10 +212,10 @@ class _Batch:
 
     def __init__(self, job: _Job, energy: bool):
         self.kernel = job.kernel
-        self.template = (job.model, job.u, np.zeros(3) if energy else None)
+        self.template = (job.model, job.u, np.zeros(4) if energy else None)
         self.jobs, self.positions = [], []
         self.real, self.index = [], []
-        self.branch, self.eta, self.tables, self.states = [], [], [], []
+        self.branch, self.eta, self.damping, self.tables, self.states = [], [], [], [], []
         self.ends = {"branch": 0, "table": 0, "state": 0, "history": 0}
         self.packed = {}  # id of a branch parameter array -> its range in branch_data
         self.nbytes = 0
@@ -219,9 +226,10 @@ class _Batch:
         return start, start + size
 
     def add(self, position: int, job: _Job):
-        m, k0, k3, c, k, eta = job.model
+        m, k0, k3, c, k, eta, cs, friction = job.model
         kind, offset, amplitude, omega, table_time, table_force = job.load
         real = [m, k0, k3, c, job.x, job.v, job.h, job.rest, offset, amplitude, omega]
+        real += list(friction) if friction is not None else [0.0] * 4
         real[:4] = [0.0 if value is None else value for value in real[:4]]
         branch_a = branch_b = rows = cols = 0
         if k is not None:
@@ -231,6 +239,7 @@ class _Batch:
                 self.packed[id(values)] = self._extend("branch", values.size)
                 self.branch.append(values.ravel())
                 self.eta.append(eta if eta is not None else np.zeros(values.size))
+                self.damping.append(cs if cs is not None else np.zeros(values.size))
             branch_a, branch_b = self.packed[id(values)]
         table_a, table_b = self._extend("table", table_time.shape[0])
         _, table_c = self._extend("table", table_force.shape[0])
@@ -258,9 +267,9 @@ class _Batch:
         real = np.array(self.real, dtype=float).reshape(count, packed.REAL_COLUMNS)
         index = np.array(self.index, dtype=np.int64).reshape(count, packed.INDEX_COLUMNS)
         history = np.zeros(self.ends["history"])
-        accounts, marks = np.zeros((count, 3)), np.zeros((count, 3))
+        accounts, marks = np.zeros((count, 4)), np.zeros((count, 4))
         out = np.zeros((count, packed.OUT_COLUMNS))
-        self.kernel(self.template, (real, index, flat(self.branch), flat(self.eta), flat(self.tables),
+        self.kernel(self.template, (real, index, flat(self.branch), flat(self.eta), flat(self.damping), flat(self.tables),
                                     flat(self.states), history, accounts, marks, out))
         for j, (job, position) in enumerate(zip(self.jobs, self.positions)):
             row = out[j]
@@ -274,7 +283,8 @@ class _Batch:
                 "max_abs_reaction": row[packed.PEAK_REACTION], "final_x": row[packed.FINAL_X],
                 "final_v": row[packed.FINAL_V], "final_reaction": row[packed.FINAL_REACTION],
                 "work": account[0], "dissipated_sliders": account[1], "dissipated_damper": account[2],
-                "dissipated": account[1] + account[2], "loop_area": (account[1] + account[2]) - (mark[1] + mark[2]),
+                "dissipated_friction": account[3], "dissipated": account[1] + account[2] + account[3],
+                "loop_area": (account[1] + account[2] + account[3]) - (mark[1] + mark[2] + mark[3]),
             }
             result = {q: float(values[q]) for q in quantities}
             if job.history_rows:

@@ -31,7 +31,7 @@ from pythonfmu import Fmi2Causality, Fmi2Variability, Integer
 from .. import __version__
 from ..connector import Connector
 from ..scene import coefficient_problem
-from .common import DBL_MAX, SlaveBase, finite_number
+from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
 from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
@@ -83,19 +83,25 @@ class PrandtlConnector(SlaveBase):
         if self.scene.branches is not None:
             outputs.append(("dissipated_sliders", "J", "work dissipated by the sliders since the start: "
                             "sum alpha_i |slip_i|", lambda: self._current().energy()["dissipated_sliders"]))
-        if self.scene.damper is not None:
-            outputs.append(("dissipated_damper", "J", "work dissipated by the dashpot up to the last doStep "
-                            "(v linear between communication points)",
+        if self.scene.damper is not None or self.scene.has_series_dashpots:
+            outputs.append(("dissipated_damper", "J", "work dissipated by the dashpot and the branches' series "
+                            "dashpots up to the last doStep (v linear between communication points)",
                             lambda: self.connector.energy()["dissipated_damper"]))
         for name, unit, text, getter in outputs:
             self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous, description=text, getter=getter))
-        for name, table, unit, text in PARAMETERS:
-            if getattr(self.scene, table) is None:
+        parameters = list(PARAMETERS)
+        for name in self.parameters:
+            if name.startswith("c_branch"):
+                which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
+                parameters.append((name, "branches", "N.s/m", f"dashpot in series with the spring and slider of "
+                                   f"{which} (the force relaxes over the time between samples); must be > 0"))
+        for name, table, unit, text in parameters:
+            if name not in self.parameters:
                 continue  # an absent effect has no parameter
             self.register_variable(real(
                 name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-                min=0.0, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
+                min=SMALLEST if name.startswith("c_branch") else 0.0, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
                 setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
         self.register_variable(Integer(
             "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,

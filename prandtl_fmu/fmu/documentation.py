@@ -17,14 +17,21 @@ def _terms(scene, spring, cubic, dashpot, branches, continuum):
 
 
 def reaction_formula(scene) -> str:
-    """The reaction k0 x + k3 x^3 + c v + sum_i k_i u_i, with the terms of the effects present only."""
-    return " + ".join(_terms(scene, "k0 x", "k3 x^3", "c v", "sum_i k_i u_i", "integral of k(s) u(s) ds")) or "0"
+    """The reaction k0 x + k3 x^3 + c v + sum_i k_i u_i (+ the friction on the mass), with the terms of the
+    effects present only."""
+    terms = _terms(scene, "k0 x", "k3 x^3", "c v", "sum_i k_i u_i", "integral of k(s) u(s) ds")
+    if scene.friction is not None:
+        terms.append("A(v - v_b)")
+    return " + ".join(terms) or "0"
 
 
 def stiffness_formula(scene) -> str:
     """The tangent dF/dx, with the terms of the effects present only."""
-    return " + ".join(_terms(scene, "k0", "3 k3 x^2", None, "the k_i of the sticking branches",
+    text = " + ".join(_terms(scene, "k0", "3 k3 x^2", None, "the k_i of the sticking branches",
                              "the integral of k(s) over the sticking branches")) or "0"
+    if scene.friction is not None:
+        text += " (the friction on the mass depends on v only: it adds no stiffness, stuck or sliding)"
+    return text
 
 
 def stored_energy_formula(scene) -> str:
@@ -46,10 +53,13 @@ def equations(scene) -> str:
         lines += [f"c x' = F - ({elastic})        (massless: the dashpot sets the rate)"]
     else:
         lines += [f"0 = F - ({reaction})        (massless, no dashpot: quasi-static equilibrium at every instant)"]
-    if branches is not None and branches.continuum:
-        lines.append("u(s)' + d psi_[-eta(s), eta(s)](u(s)) ∋ x'   (|u(s)| <= eta(s), s in [0, 1])")
-    elif branches is not None:
-        lines.append(f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x'        (|u_i| <= eta_i, i = 1..{branches.n})")
+    lines += _branch_lines(branches)
+    if scene.friction is not None:
+        lines.append("A(w) = alpha sigma(w) + Psi(w), sigma the sign graph (the mass sticks, v = v_b, while "
+                     "|F - the other forces| <= alpha)")
+        if scene.friction.stribeck_velocity is not None:
+            lines.append("A(w) = sign(w) (alpha_kinetic + (alpha - alpha_kinetic) exp(-|w| / stribeck_velocity))"
+                         "  for w != 0 (Stribeck)")
     lines.append(f"reaction = {reaction}" + ("  (= F - m v')" if scene.mass is not None else ""))
     return "\n".join(lines)
 
@@ -57,12 +67,19 @@ def equations(scene) -> str:
 def connector_equations(scene) -> str:
     """The connector's equations (x, v given), with the terms of the effects present only."""
     branches = scene.branches
-    lines = [f"force = {reaction_formula(scene)}        (x, v: the inputs)"]
-    if branches is not None and branches.continuum:
-        lines.append("u(s)' + d psi_[-eta(s), eta(s)](u(s)) ∋ x'   (|u(s)| <= eta(s), s in [0, 1])")
-    elif branches is not None:
-        lines.append(f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x'        (|u_i| <= eta_i, i = 1..{branches.n})")
+    lines = [f"force = {reaction_formula(scene)}        (x, v: the inputs)"] + _branch_lines(branches)
     return "\n".join(lines)
+
+
+def _branch_lines(branches) -> list:
+    if branches is None:
+        return []
+    if branches.continuum:
+        return ["u(s)' + d psi_[-eta(s), eta(s)](u(s)) ∋ x'   (|u(s)| <= eta(s), s in [0, 1])"]
+    if branches.damping is not None:
+        return [f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x' - (k_i / c_i) u_i   (|u_i| <= eta_i, i = 1..{branches.n}; "
+                "a dashpot c_i in series)"]
+    return [f"u_i' + d psi_[-eta_i, eta_i](u_i) ∋ x'        (|u_i| <= eta_i, i = 1..{branches.n})"]
 
 
 def _effect_text(scene) -> str:
@@ -78,6 +95,12 @@ def _effect_text(scene) -> str:
         parts.append(f"a cubic spring k3 = {scene.cubic.k3:.6g} N/m3")
     if scene.has_dashpot:
         parts.append(f"a dashpot c = {scene.damper.c:.6g} N s/m")
+    friction = scene.friction
+    if friction is not None:
+        law = (f"Stribeck's law down to alpha_kinetic = {friction.alpha_kinetic:.6g} N over "
+               f"{friction.stribeck_velocity:.6g} m/s" if friction.stribeck_velocity is not None else "Coulomb's law")
+        ground = f" moving at {friction.belt_velocity:.6g} m/s" if friction.belt_velocity else ""
+        parts.append(f"friction on the ground{ground}: threshold alpha = {friction.alpha:.6g} N, {law}")
     if branches is None:
         parts.append("no friction branches")
     elif branches.continuum:
@@ -87,7 +110,8 @@ def _effect_text(scene) -> str:
         parts.append(f"{branches.n} Prandtl branches (a spring k_i in series with a Coulomb slider of threshold "
                      f"alpha_i = k_i eta_i): stiffness sum {branches.stiffness.sum():.6g} N/m, elastic ranges "
                      f"{branches.yield_displacement.min():.6g} to {branches.yield_displacement.max():.6g} m, "
-                     f"strength sum alpha_i = {branches.strength:.6g} N")
+                     f"strength sum alpha_i = {branches.strength:.6g} N"
+                     + (", each with a dashpot in series" if branches.damping is not None else ""))
     return "; ".join(parts)
 
 

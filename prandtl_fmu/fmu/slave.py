@@ -47,7 +47,19 @@ EFFECT_PARAMETERS = [
     ("k0", "spring", "N/m", 0.0, Fmi2Variability.tunable, "stiffness of the linear spring: force k0 x"),
     ("k3", "cubic", "N/m3", 0.0, Fmi2Variability.tunable, "coefficient of the cubic spring: force k3 x^3"),
     ("c", "damper", "N.s/m", 0.0, Fmi2Variability.tunable, "dashpot coefficient: force c v"),
+    ("alpha", "friction", "N", SMALLEST, Fmi2Variability.tunable,
+     "friction of the mass on the ground: static threshold alpha_S; must be > 0 and >= alpha_kinetic"),
+    ("alpha_kinetic", "friction", "N", 0.0, Fmi2Variability.tunable,
+     "friction of the mass on the ground: sliding force at speed (Stribeck); must be <= alpha"),
+    ("stribeck_velocity", "friction", "m/s", SMALLEST, Fmi2Variability.tunable,
+     "friction of the mass on the ground: the slip speed over which the sliding force falls from alpha to "
+     "alpha_kinetic; must be > 0"),
+    ("belt_velocity", "friction", "m/s", -DBL_MAX, Fmi2Variability.tunable,
+     "velocity of the ground the mass rubs on (a moving belt); 0: fixed ground"),
 ]
+# The branches' series dashpots: c_branch (one for every branch) or c_branch[i], as the scene gives them.
+SERIES_DASHPOT = ("N.s/m", SMALLEST, Fmi2Variability.tunable,
+                  "dashpot in series with the spring and slider of {which}: relaxation rate k_i / c_i; must be > 0")
 
 
 def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None":
@@ -111,18 +123,28 @@ class PrandtlElement(SlaveBase):
             ("work", "work", None, "work done by F since the start (as the stepper books it)"),
             ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
             ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
+            ("dissipated_friction", "dissipated_friction", "friction",
+             "work dissipated by the friction of the mass on the ground"),
             ("energy_residual", "energy_residual", None,
              "work - dissipated - change of kinetic and stored energy: dissipated (> 0) or created (< 0) by the "
              "scheme itself"),
         ]
         for name, key, table, text in energy:
+            if name == "dissipated_damper" and self.scene.has_series_dashpots:
+                table, text = None, "work dissipated by the dashpot and the branches' series dashpots"
             if table is None or getattr(self.scene, table) is not None:
                 outputs.append((name, "J", text, lambda key=key: self.element.energy_of(key)))
         for name, unit, text, getter in outputs:
             self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous, description=text, getter=getter))
-        for name, table, unit, low, variability, text in EFFECT_PARAMETERS:
-            if getattr(self.scene, table) is None:
+        parameters = list(EFFECT_PARAMETERS)
+        for name in self.parameters:
+            if name.startswith("c_branch"):
+                unit, low, variability, text = SERIES_DASHPOT
+                which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
+                parameters.append((name, "branches", unit, low, variability, text.format(which=which)))
+        for name, table, unit, low, variability, text in parameters:
+            if name not in self.parameters:
                 continue  # an absent effect has no parameter
             self.register_variable(real(
                 name, unit=unit, causality=Fmi2Causality.parameter, variability=variability,

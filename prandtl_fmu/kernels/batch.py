@@ -12,8 +12,9 @@ Run i of a batch is described by row i of two tables:
 
 * ``real[i]`` (float): ``M, K0, K3, C`` (0 where the effect is absent: the
   batch's *template* says which are), the initial ``X0, V0``, the step ``H``,
-  the remainder ``REST`` of the last output interval (0: none), and the load's
-  ``OFFSET, AMPLITUDE, OMEGA``;
+  the remainder ``REST`` of the last output interval (0: none), the load's
+  ``OFFSET, AMPLITUDE, OMEGA`` and the friction on the mass ``ALPHA,
+  ALPHA_KINETIC, STRIBECK, BELT`` (unused without);
 * ``index[i]`` (int): the load's ``LOAD_KIND``; ``FULL_STEPS`` (steps of h up
   to the last whole output interval), ``PER_ROW`` (steps per output row),
   ``MARK_STEP`` (after which step the energy account is copied to ``marks[i]``;
@@ -21,14 +22,14 @@ Run i of a batch is described by row i of two tables:
   ``LAST_IS_SHORT`` (1 if the output grid ends with a shorter interval); and
   the ranges [A, B) of the run's slices of the flat data arrays:
   ``BRANCH_A, BRANCH_B`` (with ``BRANCH_ROWS, BRANCH_COLS``, the shape of the memory
-  stack's parameters) in ``branch_data`` and ``eta_data``, ``TABLE_A, TABLE_B,
+  stack's parameters) in ``branch_data``, ``eta_data`` and ``damping_data`` (the series dashpots), ``TABLE_A, TABLE_B,
   TABLE_C`` in ``table_data`` (the load's time and force), ``STATE_A,
   STATE_B`` in ``state_data`` (the branches' state, advanced in place),
   ``HISTORY_A, HISTORY_B`` in ``history_data`` (the output rows, 3 values
   each; an empty range keeps none).
 
 The arrays travel as one tuple, ``batch = (real, index, branch_data, eta_data,
-table_data, state_data, history_data, accounts, marks, out)``; the template
+damping_data, table_data, state_data, history_data, accounts, marks, out)``; the template
 ``(model, state, account)`` is the first run's model tuple, its
 branch state (or None) and an energy account (or None: no account kept): it
 carries the types only, so that every run of the batch compiles to the same
@@ -40,11 +41,11 @@ from numba.core import types
 from numba.extending import overload
 
 from .play import branch_force
-from .smooth import smooth_force
+from .friction import reaction as reaction_of
 
 # columns of ``real``
-M, K0, K3, C, X0, V0, H, REST, OFFSET, AMPLITUDE, OMEGA = range(11)
-REAL_COLUMNS = 11
+M, K0, K3, C, X0, V0, H, REST, OFFSET, AMPLITUDE, OMEGA, ALPHA, ALPHA_KINETIC, STRIBECK, BELT = range(15)
+REAL_COLUMNS = 15
 # columns of ``index``
 (LOAD_KIND, FULL_STEPS, PER_ROW, MARK_STEP, TAIL_STEPS, LAST_IS_SHORT, BRANCH_A, BRANCH_B, BRANCH_ROWS,
  BRANCH_COLS, TABLE_A, TABLE_B, TABLE_C, STATE_A, STATE_B, HISTORY_A, HISTORY_B) = range(17)
@@ -99,15 +100,16 @@ def summary_loop(step):
         ``REST`` from (FULL_STEPS + TAIL_STEPS) h, as :func:`driver._advance`
         does. Watches every step: ``out[i]`` receives the peaks (the initial
         state counts) and the final state, ``accounts[i]`` the energy account
-        (work, dissipated by the sliders, by the dashpot; when the template has
-        one), ``marks[i]`` the account after step MARK_STEP, and the output rows
+        (work, dissipated by the sliders, by the dashpots, by the friction on the mass; when the
+        template has one), ``marks[i]`` the account after step MARK_STEP, and the output rows
         (after every PER_ROW steps up to FULL_STEPS, then the final state if the
         last interval is short) go to the run's history range. A step that
         cannot be taken (non-finite state) ends that run: ``out[i]`` then holds
         its start time and size, the values before it.
         """
         model_template, state_template, account_template = template
-        real, index, branch_data, eta_data, table_data, state_data, history_data, accounts, marks, out = batch
+        real, index, branch_data, eta_data, damping_data, table_data, state_data, history_data, accounts, marks, out \
+            = batch
         for i in range(real.shape[0]):
             k, eta = branch_part(model_template[4], branch_data, eta_data, index[i, BRANCH_A], index[i, BRANCH_B],
                                  index[i, BRANCH_ROWS], index[i, BRANCH_COLS])
@@ -115,7 +117,10 @@ def summary_loop(step):
             k0 = present(model_template[1], real[i, K0])
             k3 = present(model_template[2], real[i, K3])
             c = present(model_template[3], real[i, C])
-            model = (m, k0, k3, c, k, eta)
+            cs = present(model_template[6], damping_data[index[i, BRANCH_A]:index[i, BRANCH_B]])
+            friction = present(model_template[7], (real[i, ALPHA], real[i, ALPHA_KINETIC], real[i, STRIBECK],
+                                                   real[i, BELT]))
+            model = (m, k0, k3, c, k, eta, cs, friction)
             load = (index[i, LOAD_KIND], real[i, OFFSET], real[i, AMPLITUDE], real[i, OMEGA],
                     table_data[index[i, TABLE_A]:index[i, TABLE_B]], table_data[index[i, TABLE_B]:index[i, TABLE_C]])
             u = present(state_template, state_data[index[i, STATE_A]:index[i, STATE_B]])
@@ -126,7 +131,7 @@ def summary_loop(step):
 
             x, v = real[i, X0], real[i, V0]
             s = branch_force(k, u)
-            reaction = smooth_force(x, v, k0, k3, c) + s
+            reaction = reaction_of(model, load, 0.0, x, v, s)
             peak_x, peak_v, peak_reaction = abs(x), abs(v), abs(reaction)
             rows = 0
             if history.shape[0] > 0:
@@ -150,7 +155,7 @@ def summary_loop(step):
                     break
                 x, v, s = x1, v1, s1
                 p += 1
-                reaction = smooth_force(x, v, k0, k3, c) + s
+                reaction = reaction_of(model, load, t + size, x, v, s)
                 peak_x = max(peak_x, abs(x))
                 peak_v = max(peak_v, abs(v))
                 peak_reaction = max(peak_reaction, abs(reaction))

@@ -5,6 +5,8 @@ increment w = x1 - x of the displacement,
 
     G(w) = linear w + offset + k0 (x+w) + k3 (x+w)^3 + sum_i k_i clip(u_i + w, -eta_i, eta_i) = 0,
 
+(with series dashpots, the branch terms are k_i clip((u_i + w) / (1 + h k_i / c_i)): the same shape),
+
 with ``linear`` >= 0 (m/h^2 + c/h for backward Euler; 0 for the quasi-static
 massless element). G is non-decreasing and smooth between the kinks
 w = ±eta_i - u_i (piecewise linear without the cubic spring).
@@ -15,10 +17,14 @@ the solver jumps over all kinks below the piece's Newton point at once when G
 is still short of zero there, or else moves to the next kink. No tolerance is
 involved except rounding.
 """
+import math
+
 import numpy as np
 
 from .._jit import kernel
-from .play import branch_count, piece
+from .play import branch_count
+from .friction import sliding_force
+from .series import branch_piece
 from .smooth import elastic_force
 
 
@@ -48,15 +54,16 @@ def _cubic_change(x, a, b, k3):
 
 
 @kernel
-def residual(w, x, linear, offset, k0, k3, k, eta, u, direction):
-    """G(w); the stiffness of the branches sticking beyond w in ``direction``; the room to the next kink."""
-    branches, sticking, room = piece(k, eta, u, w, direction)
+def residual(w, x, linear, offset, k0, k3, k, eta, cs, u, h, direction):
+    """G(w); the stiffness of the branches sticking beyond w in ``direction``; the room to the next kink.
+    ``cs``: the series dashpots of the branches (None: plain branches), taken by the BACKWARD rule over h."""
+    branches, sticking, room = branch_piece(k, eta, cs, u, w, h, direction)
     g = linear * w + offset + elastic_force(x + w, k0, k3) + branches
     return g, sticking, room
 
 
 @kernel
-def solve_increment(x, linear, offset, k0, k3, k, eta, u):
+def solve_increment(x, linear, offset, k0, k3, k, eta, cs, u, h):
     """The root w of G(w) = linear w + offset + k0 (x+w) + k3 (x+w)^3 + sum k_i clip(u_i + w).
 
     ``linear`` >= 0. The returned w is exact to rounding. G is non-decreasing;
@@ -65,12 +72,12 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
     the result is NaN.
     """
     direction = 1.0
-    g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
+    g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)
     if g == 0.0:
         return 0.0
     if g > 0.0:
         direction = -1.0
-        g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, u, direction)
+        g, sticking, room = residual(0.0, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)
     if g != g:
         return np.nan
     lo = 0.0  # direction * G(lo) < 0: the root lies beyond lo
@@ -121,7 +128,7 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
         # without the cubic spring: G is concave in the direction of motion).
         jump = lo - g / (slope_linear + _cubic_stiffness(x + lo, k3))
         if direction * (jump - end) > 0.0 and direction * (jump - hi) < 0.0:
-            g_jump, sticking_jump, room_jump = residual(jump, x, linear, offset, k0, k3, k, eta, u, direction)
+            g_jump, sticking_jump, room_jump = residual(jump, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)
             if g_jump == 0.0:
                 return jump
             if direction * g_jump < 0.0:
@@ -129,12 +136,12 @@ def solve_increment(x, linear, offset, k0, k3, k, eta, u):
                 continue
             hi = jump
         lo = end
-        g, sticking, room = residual(lo, x, linear, offset, k0, k3, k, eta, u, direction)
-    return _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi)
+        g, sticking, room = residual(lo, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)
+    return _bisect(x, linear, offset, k0, k3, k, eta, cs, u, h, direction, lo, hi)
 
 
 @kernel
-def _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi):
+def _bisect(x, linear, offset, k0, k3, k, eta, cs, u, h, direction, lo, hi):
     """The root beyond ``lo`` by bisection on the doubles: direction G(lo) < 0, direction G(hi) > 0 (hi may
     be infinite: a bracket is found by doubling first). NaN when G has no root (collapse) or is not
     representable. Always terminates: at most ~2100 doublings and ~2100 halvings."""
@@ -144,7 +151,7 @@ def _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi):
             trial = lo + direction * width
             if not abs(trial) < np.inf:
                 return np.nan  # G stays short of zero up to the largest double: no representable root
-            g = residual(trial, x, linear, offset, k0, k3, k, eta, u, direction)[0]
+            g = residual(trial, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)[0]
             if g != g:
                 return np.nan
             if direction * g >= 0.0:
@@ -156,7 +163,7 @@ def _bisect(x, linear, offset, k0, k3, k, eta, u, direction, lo, hi):
         middle = lo + 0.5 * (hi - lo)
         if middle == lo or middle == hi:
             return lo
-        g = residual(middle, x, linear, offset, k0, k3, k, eta, u, direction)[0]
+        g = residual(middle, x, linear, offset, k0, k3, k, eta, cs, u, h, direction)[0]
         if g != g:
             return np.nan
         if g == 0.0:
@@ -204,3 +211,98 @@ def _cubic_only_root(x, lo, g, k3):
     if k3 == 0.0:
         return np.nan
     return np.cbrt((x + lo) ** 3 - g / k3) - x
+
+
+_EPS = 2.220446049250313e-16
+
+
+@kernel
+def solve_held_increment(x, linear, offset, k0, k3, k, eta, cs, u, h, friction):
+    """The increment w of an implicit step of a mass with friction on the ground: ``(w, resisted, stuck)``.
+
+    w solves G(w) + A(w / h - v_b) ∋ 0 (G of :func:`solve_increment`, ``linear`` > 0: the mass's m / h^2 at
+    least; A the friction law of ``kernels/friction.py``, all of it at the new velocity); ``resisted`` is the
+    value of A taken (N; the friction force on the mass is its opposite).
+
+    * The mass sticks, w = h v_b, when |G(h v_b)| <= alpha (then A = -G(h v_b)).
+    * Otherwise it slides in the direction d = -sign G(h v_b). With plain Coulomb friction A = d alpha
+      is a constant: :func:`solve_increment` with the offset moved by d alpha, exact to rounding.
+    * With Stribeck's drop, phi(r) = d G(h v_b + d r) + g(r / h) (g the sliding force, r >= 0 the slip over
+      the step) starts below 0 and is increasing wherever the drop g' is gentler than ``linear``: beyond
+      r_c = h v_S ln((alpha - alpha_kinetic) / (v_S h linear)), always; below r_c it may cross 0 several
+      times. **The rule: the root of least slip** (the first crossing from the stick, what a mass that
+      starts to slide meets first). Below r_c it is found by bounds that are proofs: on [a, b],
+      phi >= d G(a') + g(b / h) and phi <= d G(b') + g(a / h) (d G increases, g decreases), so an interval
+      whose upper bound is < 0 holds no root and is skipped; one that may hold one is halved down to the
+      rounding of w. Beyond r_c (or from the start when the drop is never steeper than ``linear``, the case
+      the stability check does not warn about) the root is unique: bracketed, then Illinois to rounding.
+    """
+    alpha, kinetic, stribeck, belt = friction
+    stuck_at = h * belt
+    g_stuck = residual(stuck_at, x, linear, offset, k0, k3, k, eta, cs, u, h, 1.0)[0]
+    if abs(g_stuck) <= alpha:
+        return stuck_at, -g_stuck, True
+    if g_stuck != g_stuck:
+        return np.nan, 0.0, False
+    d = -math.copysign(1.0, g_stuck)
+    if kinetic == alpha:
+        w = solve_increment(x, linear, offset + d * alpha, k0, k3, k, eta, cs, u, h)
+        if d * (w - stuck_at) < 0.0:  # rounding only: the root is within an ulp of the stick
+            w = stuck_at
+        return w, d * alpha, False
+    drop = (alpha - kinetic) / (stribeck * h)  # the steepest slope of g(r / h) in r
+    a = 0.0
+    phi_a = -abs(g_stuck) + alpha
+    if drop > linear:
+        r_c = h * stribeck * math.log(drop / linear)
+        length = r_c / 16.0
+        while a < r_c:
+            b = min(a + length, r_c)
+            p_b = d * residual(stuck_at + d * b, x, linear, offset, k0, k3, k, eta, cs, u, h, d)[0]
+            if p_b + sliding_force(friction, a / h) < 0.0:  # phi < 0 on all of [a, b]
+                a, phi_a = b, p_b + sliding_force(friction, b / h)
+                length *= 2.0
+                continue
+            if b - a <= 4.0 * _EPS * max(abs(stuck_at + d * b), b):  # at the rounding of w
+                phi_b = p_b + sliding_force(friction, b / h)
+                if phi_b >= 0.0:
+                    return stuck_at + d * b, d * sliding_force(friction, b / h), False
+                a, phi_a = b, phi_b
+                length = 4.0 * _EPS * max(abs(stuck_at + d * b), b) + 1e-300
+                continue
+            length = 0.5 * (b - a)
+    # phi increases on [a, inf) and phi(a) < 0: bracket the root by doubling, then Illinois
+    lo, phi_lo = a, phi_a
+    length = max(-phi_a / linear, 1e-300)
+    while True:
+        hi = lo + length
+        if not hi < np.inf:
+            return np.nan, 0.0, False
+        phi_hi = d * residual(stuck_at + d * hi, x, linear, offset, k0, k3, k, eta, cs, u, h, d)[0] \
+            + sliding_force(friction, hi / h)
+        if phi_hi != phi_hi:
+            return np.nan, 0.0, False
+        if phi_hi >= 0.0:
+            break
+        lo, phi_lo = hi, phi_hi
+        length *= 2.0
+    side = 0
+    while hi - lo > 4.0 * _EPS * max(abs(stuck_at + d * hi), hi):
+        middle = (lo * phi_hi - hi * phi_lo) / (phi_hi - phi_lo) if phi_hi != phi_lo else 0.5 * (lo + hi)
+        if not (lo < middle < hi):
+            middle = 0.5 * (lo + hi)
+        if not (lo < middle < hi):
+            break
+        phi_middle = d * residual(stuck_at + d * middle, x, linear, offset, k0, k3, k, eta, cs, u, h, d)[0] \
+            + sliding_force(friction, middle / h)
+        if phi_middle >= 0.0:
+            hi, phi_hi = middle, phi_middle
+            if side == 1:
+                phi_lo *= 0.5
+            side = 1
+        else:
+            lo, phi_lo = middle, phi_middle
+            if side == -1:
+                phi_hi *= 0.5
+            side = -1
+    return stuck_at + d * hi, d * sliding_force(friction, hi / h), False

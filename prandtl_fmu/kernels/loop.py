@@ -27,7 +27,7 @@ import numpy as np
 from .._jit import generic_kernel
 from .energy import kinetic, stored
 from .play import branch_force, write_elongations
-from .smooth import smooth_force
+from .friction import reaction
 
 
 def time_loop(step):
@@ -43,14 +43,14 @@ def time_loop(step):
 
         After every ``steps_per_row`` steps, row j of ``out`` (shape (rows, 3))
         receives x, v and the reaction, row j of ``out_u`` (shape (rows, n), or
-        ``None``) the elongations and row j of ``out_energy`` (shape (rows, 5),
+        ``None``) the elongations and row j of ``out_energy`` (shape (rows, 6),
         or ``None``) the kinetic and stored energy and the account ``energy``
-        (work, dissipated by the sliders, by the dashpot). ``u`` and ``energy``
+        (work, dissipated by the sliders, by the dashpots, by the friction on the mass). ``u`` and ``energy``
         are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
         of steps taken, fewer than asked if a step failed (non-finite result; the
         state returned is the one before that step).
         """
-        m, k0, k3, c, k, eta = model
+        m, k0, k3, c, k, eta, cs, friction = model
         s = branch_force(k, u)
         p = 0
         for j in range(out.shape[0]):
@@ -62,7 +62,7 @@ def time_loop(step):
                 p += 1
             out[j, 0] = x
             out[j, 1] = v
-            out[j, 2] = smooth_force(x, v, k0, k3, c) + s
+            out[j, 2] = reaction(model, load, t_base + (first_step + p) * h, x, v, s)
             if out_u is not None:
                 write_elongations(k, u, out_u[j])
             if out_energy is not None:
@@ -71,6 +71,7 @@ def time_loop(step):
                 out_energy[j, 2] = energy[0]
                 out_energy[j, 3] = energy[1]
                 out_energy[j, 4] = energy[2]
+                out_energy[j, 5] = energy[3]
         return x, v, p
 
     loop.__qualname__ = f"time_loop.<locals>.loop_{step.__module__.rpartition('.')[2]}_{step.__name__}"

@@ -53,3 +53,11 @@ def damped(v, c, h, m):
     if c is None:
         return v
     return v / (1.0 + h * c / m)
+
+
+@kernel
+def plus_damping(value, c):
+    """value + c (N s/m): an inertia m/h with the dashpot taken implicitly; just value without a dashpot."""
+    if c is None:
+        return value
+    return value + c

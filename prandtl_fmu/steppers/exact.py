@@ -49,6 +49,15 @@ come from the rule above, so a sliding phase of any length also costs O(1).
 There is no cap on the number of phases: each ends at an event, a load kink
 or the end of the step.
 
+Friction on the mass (``[friction]``, plain Coulomb on a fixed ground): a
+sliding phase adds the constant force -alpha sign(v) to the linear ODE, and
+a reversal is then always an event. At rest the mass sticks (x, v and the
+branches frozen) while |F(t) - reaction| <= alpha; the phase ends when the
+load takes the net force out of that band, in closed form (a line for a
+piece of a table, an arccos for a harmonic load; a constant load holds it
+for ever), and the mass slides from there. Stribeck's drop and a moving belt
+are not linear between events and are refused.
+
 Progress. At rest with no net force (v = 0, F = reaction) the direction of
 the coming motion is the sign of the first nonzero derivative of v,
 (A^p y0)[1] for p = 1..5 with the all-sticking phase matrix; when all of
@@ -96,6 +105,13 @@ def loop_for(scene):
     if scene.branches is not None and scene.branches.continuum:
         raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
+    if scene.has_series_dashpots:
+        raise ValueError("'exact' does not follow branches with series dashpots (each adds a state that relaxes "
+                         "between events): use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
+    friction = scene.friction
+    if friction is not None and (friction.alpha_kinetic != friction.alpha or friction.belt_velocity != 0.0):
+        raise ValueError("'exact' follows plain Coulomb friction on a fixed ground; Stribeck's drop and a moving "
+                         "belt are not linear between events: use 'implicit', 'verlet', 'symplectic' or 'projected'")
     if scene.load.compile()[0] == RANDOM:
         raise ValueError("'exact' follows constant, harmonic and table loads; a random load is a sum of many "
                          "harmonics: use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
@@ -165,8 +181,9 @@ def _matvec(a, y):
 
 
 @kernel
-def _phase(m, k0, c, k, eta, load, t, x, u, direction):
+def _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha):
     """The system matrix A, y(0) and the phase's levels, for the state at time t (v set by the caller).
+    ``alpha``: the threshold of the friction on the mass (0: none), a constant force against ``direction``.
 
     Returns (A, y0, stiffness, up, down, any_sliding): ``up``/``down`` are
     the distances x can move up/down before a sticking branch reaches its
@@ -197,6 +214,7 @@ def _phase(m, k0, c, k, eta, load, t, x, u, direction):
     a[1, 1] = -_damping(c) / m
     a[1, 2] = 1.0  # the varying part of the load's acceleration (state 2)
     a[1, 4] = 1.0  # its constant part (state 4)
+    reaction += alpha * direction  # the mass slides: the friction resists with alpha
     if kind == HARMONIC:  # states 2, 3: (amplitude / m) (cos, sin)(omega t), rotating
         a[2, 3] = -omega
         a[3, 2] = omega
@@ -278,22 +296,38 @@ NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL = -1, 0, 1, 2
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
+    alpha = _threshold(friction)
     end = t + h
     stalled = 0
     stall_limit = 16 + 2 * _branch_count(k)
+    released = False  # a stick phase just ended with the net force at the threshold: slide now
     while t < end:  # phases; each ends at an event, a load kink or t + h
-        direction = _direction(k0, k, load, t, x, v, u)
-        a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction)
-        y0[1] = v
         span = min(end, _next_break(load, t)) - t
+        direction = _direction(k0, k, load, t, x, v, u)
+        if alpha > 0.0 and v == 0.0:  # the mass is at rest: it sticks while |F - reaction| <= alpha
+            push = force_at(load, t) - (_linear_spring(k0) * x + branch_force(k, u))
+            if released or abs(push) > alpha:
+                direction = math.copysign(1.0, push)
+            else:
+                tau = _stick_end(load, t, span, push, alpha)
+                released = tau < span
+                stalled = stalled + 1 if t + tau <= t else 0
+                if stalled > stall_limit:
+                    return np.nan, np.nan, branch_force(k, u)
+                t = t + tau if released else t + span
+                continue
+        released = False
+        a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
+        y0[1] = v
+        sliding = sliding or alpha > 0.0  # with friction on the mass, a reversal is an event (it may stick)
         if direction == 0.0:
             direction = _leaving_direction(a, y0)
             if direction == 0.0:  # a fixed point: nothing moves until the load changes
                 t = t + span
                 stalled = 0
                 continue
-            a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction)
+            a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
             y0[1] = v
         tau_hit, hit = _first_event(a, y0, load, t, m, _damping(c), stiffness, span, direction, up, down,
                                     sliding)
@@ -313,6 +347,53 @@ def step(model, load, t, h, x, v, s, u, energy):
             return np.nan, np.nan, branch_force(k, u)  # reported by the driver: never a silent stop
         t = t_next
     return x, v, branch_force(k, u)
+
+
+@kernel
+def _threshold(friction):
+    """alpha of the friction on the mass, 0 without."""
+    if friction is None:
+        return 0.0
+    return friction[0]
+
+
+@kernel
+def _stick_end(load, t, span, push, alpha):
+    """How long a mass at rest stays stuck from t: the first tau in [0, span] where the net force F(t + tau) -
+    reaction leaves [-alpha, alpha] outwards (``push`` its value at t; the reaction is constant while nothing
+    moves), or ``span``. Closed forms: a constant load never leaves; a piece of a table is a line; a harmonic
+    load offset + A cos(omega t) crosses a level at +-arccos of it, an exit where it moves outwards."""
+    kind, offset, amplitude, omega, times, forces = load
+    if kind == CONSTANT:
+        return span
+    if kind == TABLE:
+        j = np.searchsorted(times, t, side="right")
+        if not 0 < j < times.shape[0]:
+            return span
+        slope = (forces[j] - forces[j - 1]) / (times[j] - times[j - 1])
+        if slope == 0.0:
+            return span
+        room = alpha - push if slope > 0.0 else -alpha - push  # F - reaction moves toward +-alpha
+        return min(max(room / slope, 0.0), span)
+    if amplitude == 0.0 or omega == 0.0:
+        return span
+    rest = force_at(load, t) - push  # the reaction, with F's offset: exits at cos(omega s) = (rest +- alpha - offset) / A
+    theta0 = np.fmod(abs(omega) * t, 2.0 * math.pi)
+    best = span
+    for level, outward in ((rest + alpha, 1.0), (rest - alpha, -1.0)):
+        c = (level - offset) / amplitude
+        if abs(c) > 1.0:
+            continue
+        root = math.acos(c)
+        for theta in (root, 2.0 * math.pi - root):
+            # F'(s) = -A |omega| sin(|omega| s): an exit where F moves outwards through the level
+            if outward * -amplitude * math.sin(theta) <= 0.0:
+                continue
+            delta = np.fmod(theta - theta0 + 4.0 * math.pi, 2.0 * math.pi)
+            if delta > 2.0 * math.pi - 1e-12:  # the root at theta0 itself, by rounding
+                delta = 0.0
+            best = min(best, delta / abs(omega))
+    return best
 
 
 @kernel

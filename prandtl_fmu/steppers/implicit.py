@@ -25,6 +25,15 @@ and with a load the energy balance residual (work - dissipated - change of
 energy) is never negative: the scheme dissipates m (v1 - v)^2/2
 + k0 w^2/2 + sum_i k_i (u1_i - u_i)^2/2 (+ a cubic term >= 0) per step.
 
+Friction on the mass (``[friction]``): the friction law A(v1 - v_b) joins G,
+all of it at the new velocity; the mass sticks exactly while |G(h v_b)| <=
+alpha. With Stribeck's drop steeper than m/h + c the equation may have
+several roots: the one of least slip is taken
+(:func:`~prandtl_fmu.kernels.increment.solve_held_increment`), and the
+stability check warns. Series dashpots in the branches (``[branches] c``):
+u1_i = clip((u_i + w) / (1 + h k_i / c_i)), backward Euler on the
+relaxation (``kernels/series.py``); G keeps its shape.
+
 Massless element (no [mass]): the same equation without the m terms. With a
 dashpot it is backward Euler on c x' = F - ...; without, the quasi-static
 element F(t_{p+1}) = k0 x + k3 x^3 + sum_i k_i u_i, i.e. the inverse of the
@@ -36,10 +45,11 @@ import numpy as np
 
 from .._jit import kernel
 from ..kernels.energy import book
-from ..kernels.increment import solve_increment
+from ..kernels.friction import book_friction
+from ..kernels.increment import solve_held_increment, solve_increment
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
-from ..kernels.play import move
+from ..kernels.series import BACKWARD, move_branches
 from ..loads import force_at
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
@@ -58,16 +68,28 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t + h)
     linear = _plus_damping(_inertia(m, h), c, h)
-    w = solve_increment(x, linear, _momentum(m, v, h) - force, k0, k3, k, eta, u)
+    w, v1, f = _increment(friction, x, linear, _momentum(m, v, h) - force, k0, k3, k, eta, cs, u, h)
     if not abs(w) < np.inf:  # no equilibrium: plastic collapse
         return np.nan, np.nan, s
-    v1 = w / h
     book(energy, force, w, c, v1)
-    s = move(k, eta, u, w, energy)
+    book_friction(energy, friction, f, h, v1)
+    s = move_branches(k, eta, cs, u, w, h, BACKWARD, energy)
     return x + w, v1, s
+
+
+@kernel
+def _increment(friction, x, linear, offset, k0, k3, k, eta, cs, u, h):
+    """(w, v1, f): the increment, the new velocity and the friction force on the mass (0 without friction)."""
+    if friction is None:
+        w = solve_increment(x, linear, offset, k0, k3, k, eta, cs, u, h)
+        return w, w / h, 0.0
+    w, resisted, stuck = solve_held_increment(x, linear, offset, k0, k3, k, eta, cs, u, h, friction)
+    if stuck:
+        return w, friction[3], -resisted  # exactly the belt's velocity (w / h may differ by an ulp)
+    return w, w / h, -resisted
 
 
 @kernel

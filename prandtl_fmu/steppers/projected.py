@@ -14,6 +14,13 @@ The papers call this "the implicit Euler scheme" because it is implicit in the
 multivalued term d psi_K only (the projection); it is explicit in everything
 else. (Our ``implicit`` stepper is implicit in every term.)
 
+Friction on the mass (``[friction]``, eq. 14 and 16 of 004) joins the
+multivalued term: v <- v_b + w1 with w1 = sign(q) max(|q| - h alpha / m, 0),
+q = v + h a - v_b - h Psi(v - v_b) / m (the sign graph implicit, Stribeck's
+smooth part Psi explicit: ``kernels/friction.py``), so the mass sticks
+exactly. Series dashpots (``[branches] c``): u_i <- clip(u_i + h (v - k_i u_i / c_i)),
+stable for h k_i / c_i <= 2 (``kernels/series.py``).
+
 Order 1, with a constant uniform in the number of branches n in the max norm
 (Bastien & Schatzman, Prop. 6.3 and eq. 7.20).
 
@@ -34,7 +41,8 @@ from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
-from ..kernels.play import move
+from ..kernels.friction import book_friction, held_velocity
+from ..kernels.series import EXPLICIT, move_branches
 from ..kernels.smooth import elastic_force, smooth_force
 from ..loads import force_at
 
@@ -54,23 +62,25 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t)
     a = (force - smooth_force(x, v, k0, k3, c) - s) / m
     dx = h * v
     book(energy, force, dx, c, v)
-    s = move(k, eta, u, dx, energy)
-    return x + dx, v + h * a, s
+    v1, f = held_velocity(friction, m / h, v + h * a, v)
+    book_friction(energy, friction, f, h, v1)
+    s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
+    return x + dx, v1, s
 
 
 @kernel
 def step_massless(model, load, t, h, x, v, s, u, energy):
     """Massless element with a dashpot: ``v`` is the rate of the current state."""
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t)
     dx = h * v
     book(energy, force, dx, c, v)
-    s = move(k, eta, u, dx, energy)
+    s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
     x = x + dx
     return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s) / c, s
 

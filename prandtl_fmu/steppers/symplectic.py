@@ -12,14 +12,19 @@ energy instead of multiplying the energy by 1 + (omega h)^2 per step, so
 its error does not grow exponentially in time and its constant is much
 smaller. Stable for omega h < 2 (omega^2 = stiffness / m).
 
+Friction on the mass: v is taken as above with the friction's sign graph
+implicit (``kernels/friction.py``: inertia m/h + c); series dashpots follow
+the exact flow along the step's straight path (``kernels/series.py``).
+
 Massless elements: not applicable (use ``implicit``, or ``projected`` with a dashpot).
 """
 from .._jit import kernel
 from ..kernels.energy import book_apart
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
-from ..kernels.play import move
-from ..kernels.smooth import damped, elastic_force
+from ..kernels.friction import book_friction, held_velocity
+from ..kernels.series import FLOW, move_branches
+from ..kernels.smooth import damped, elastic_force, plus_damping
 from ..loads import force_at
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
@@ -35,13 +40,15 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     dx = h * v
-    s = move(k, eta, u, dx, energy)
+    s = move_branches(k, eta, cs, u, dx, h, FLOW, energy)
     x = x + dx
     force = force_at(load, t + h)
-    v1 = damped(v + h * (force - elastic_force(x, k0, k3) - s) / m, c, h, m)
+    v1, f = held_velocity(friction, plus_damping(m / h, c), damped(v + h * (force - elastic_force(x, k0, k3) - s) / m,
+                                                                  c, h, m), v)
     book_apart(energy, force, dx, c, v1, h * v1)  # the dashpot: c v1^2 h >= 0 (see book_apart)
+    book_friction(energy, friction, f, h, v1)
     return x, v1, s
 
 

@@ -25,14 +25,21 @@ acceleration is continuous), so the global order stays 2. It would drop to 1
 if the play update were not exact (e.g. a projected elongation from a
 predicted velocity) or if the load had jumps (a table load with a jump).
 
+Friction on the mass: each half step takes the friction's sign graph
+implicitly and Stribeck's part at the velocity it starts from
+(``kernels/friction.py``); the stick-slip switches make it order 1 there.
+Series dashpots follow the exact flow along the straight path
+(``kernels/series.py``), which keeps the argument above.
+
 Stable for omega h < 2 (omega^2 = stiffness / m). Massless elements: not applicable.
 """
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
-from ..kernels.play import move
-from ..kernels.smooth import damped, elastic_force, smooth_force
+from ..kernels.friction import book_friction, held_velocity
+from ..kernels.series import FLOW, move_branches
+from ..kernels.smooth import damped, elastic_force, plus_damping, smooth_force
 from ..loads import force_at
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
@@ -48,15 +55,18 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta = model
+    m, k0, k3, c, k, eta, cs, friction = model
     force0 = force_at(load, t)
-    half = v + 0.5 * h * (force0 - smooth_force(x, v, k0, k3, c) - s) / m
+    half, f0 = held_velocity(friction, 2.0 * m / h, v + 0.5 * h * (force0 - smooth_force(x, v, k0, k3, c) - s) / m, v)
     dx = h * half
-    s = move(k, eta, u, dx, energy)
+    s = move_branches(k, eta, cs, u, dx, h, FLOW, energy)
     x = x + dx
     force1 = force_at(load, t + h)
-    v1 = damped(half + 0.5 * h * (force1 - elastic_force(x, k0, k3) - s) / m, c, 0.5 * h, m)
+    v1, f1 = held_velocity(friction, plus_damping(2.0 * m / h, c),
+                           damped(half + 0.5 * h * (force1 - elastic_force(x, k0, k3) - s) / m, c, 0.5 * h, m), half)
     book(energy, 0.5 * (force0 + force1), dx, c, half)
+    book_friction(energy, friction, f0, 0.5 * h, half)
+    book_friction(energy, friction, f1, 0.5 * h, v1)
     return x, v1, s
 
 
