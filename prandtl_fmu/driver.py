@@ -572,6 +572,19 @@ class Element(OutputMemo):
         while it sticks: then the reaction is F)."""
         return float(self._out[0, 2])
 
+    def reaction_under(self, force: float, scene_load: bool = False) -> float:
+        """The reaction in the current state under the force ``force`` (N; plus the scene's [load] at the
+        element's time with ``scene_load``). It differs from :attr:`reaction` (under the force of the last
+        advance) only with friction on the mass: while the mass sticks, the friction holds it against the force
+        of now, so the reaction is that force (up to alpha): what an FMU output shows once the master has set
+        a new F."""
+        if self.scene.friction is None:
+            return self.reaction
+        key = ("reaction_under", force, scene_load)
+        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        return self._memo(key, lambda: float(reaction(self.model, load, self.time, self.x, self.v,
+                                                       branch_force(self.model[4], self.u))))
+
     def stiffness(self) -> float:
         """The tangent dF/dx (N/m) of the reaction at the current state, for a motion in the direction of v
         (of increasing x when v = 0): k0 + 3 k3 x^2 + the stiffnesses of the branches that stick (a branch

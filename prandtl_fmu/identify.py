@@ -44,6 +44,12 @@ The continuous families (:func:`fit_continuum`, ``--continuum MODEL``):
   ``scipy.optimize.least_squares`` moves the shape (bounded), started from
   the best of a coarse grid of shapes.
 
+What it does not fit: rate-dependent branches (a dashpot in series with a
+branch, ``[branches] c``) and friction of a mass on the ground
+(``[friction]``): the fitted scene is the rate-independent connector, plus a
+parallel dashpot with ``dashpot``. Every report says so
+(:data:`NOT_FITTED`).
+
 Needs scipy (the ``[fit]`` extra).
 """
 from __future__ import annotations
@@ -56,6 +62,11 @@ import numpy as np
 from .kernels.drive import play_basis, spectrum_drive
 
 CONTINUUM_MODELS = ("piecewise", "iwan", "linear")
+
+
+# What every fit report says it left out (the module docstring).
+NOT_FITTED = ("fit identifies rate-independent branches only: it does not fit series dashpots in the branches "
+              "([branches] c, a rate-dependent loop) nor friction of a mass on the ground ([friction])")
 
 
 class FitError(ValueError):
@@ -104,6 +115,7 @@ class Fit:
                 f"[{self.density['eta_range'][0]:.6g}, {self.density['eta_range'][1]:.6g}] m")
 
     def report(self) -> str:
+        """One line of what was fitted and how well, the notes, and what fit never fits (:data:`NOT_FITTED`)."""
         head = (f"{len(self.k)} branches kept of {self.grid_size} candidates" if self.model is None
                 else f"{self.label} ({self.grid_size} candidate {'segments' if self.model == 'piecewise' else 'shapes'})")
         return (f"{head}; k0 = {self.k0:.6g}"
@@ -111,7 +123,7 @@ class Fit:
                 + (f", c = {self.c:.6g}" if self.effects.get("dashpot") else "")
                 + f"; residual RMS {self.residual_rms:.3g} N ({100 * self.relative_rms:.3g} % of the force range "
                 f"{self.force_range:.3g} N), max {self.residual_max:.3g} N ({100 * self.relative_max:.3g} %)"
-                + "".join(f"\nnote: {note}" for note in self.notes))
+                + "".join(f"\nnote: {note}" for note in self.notes + [NOT_FITTED]))
 
     def scene_text(self, name: str, time: Optional[np.ndarray] = None) -> str:
         """A scene in the contract's format: the connector ([fmu] causality = "displacement"); add [mass] and

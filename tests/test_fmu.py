@@ -12,7 +12,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from prandtl_fmu import Element, load_scene, parse_scene, simulate
-from prandtl_fmu.driver import ENERGY_COLUMNS
+from prandtl_fmu.driver import ENERGY_COLUMNS, energy_columns
 from prandtl_fmu.fmu.build import build_fmu
 from prandtl_fmu.fmu.documentation import equations
 from prandtl_fmu.steppers import STEPPERS
@@ -29,6 +29,11 @@ EFFECT_SETS = {
     "iwan": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
                         branches={"continuum": True, "density": {"kind": "iwan", "F_S": 0.5, "K_T": 2.0,
                                                                  "chi": -0.5, "beta": 0.3}}),
+    # friction on the mass (Stribeck, a moving belt) and series dashpots in the branches (issue 25)
+    "stribeck-series": base_tables(cubic=None, friction={"alpha": 0.25, "alpha_kinetic": 0.15,
+                                                         "stribeck_velocity": 0.1, "belt_velocity": 0.05},
+                                   branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]}),
+    "coulomb": base_tables(cubic=None, friction={"alpha": 0.2}),
 }
 
 
@@ -66,11 +71,17 @@ def test_model_description_is_valid_and_complete(fmus, name):
     expected |= {"k0"} if scene.spring else set()
     expected |= {"k3"} if scene.cubic else set()
     expected |= {"c"} if scene.damper else set()
+    if scene.friction:
+        expected |= {"alpha", "belt_velocity"} | ({"alpha_kinetic", "stribeck_velocity"}
+                                                  if scene.friction.stribeck_velocity else set())
+    if scene.has_series_dashpots:
+        expected |= {f"c_branch[{i + 1}]" for i in range(scene.branches.n)}
     assert {v.name for v in md.modelVariables if v.causality == "parameter"} == expected
     n = -1 if scene.branches.continuum else scene.branches.n
     assert variables["n"].variability == "constant" and int(variables["n"].start) == n
     energy_outputs = {v.name for v in md.modelVariables if v.causality == "output" and v.unit == "J"}
-    assert {"kinetic_energy", "stored_energy", "work"} <= energy_outputs <= set(ENERGY_COLUMNS)  # as in the CSV
+    assert {"kinetic_energy", "stored_energy", "work"} <= energy_outputs <= set(energy_columns(scene))  # as the CSV
+    assert ("dissipated_friction" in energy_outputs) == (scene.friction is not None)
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
     assert md.coSimulation.canHandleVariableCommunicationStepSize
     assert md.defaultExperiment.stopTime == str(scene.solver.stop_time) or \
@@ -80,7 +91,11 @@ def test_model_description_is_valid_and_complete(fmus, name):
         doc = html.unescape(archive.read("documentation/index.html").decode())
         names = archive.namelist()
     outputs = root.find("ModelStructure/Outputs")
-    assert all(u.get("dependencies") == "" for u in outputs)  # no direct feedthrough of F
+    # no direct feedthrough of F, except the reaction with friction on the mass (a stuck mass: reaction = F)
+    feedthrough = {str(i + 1) for i, v in enumerate(root.find("ModelVariables")) if v.get("name") == "F"}
+    reaction_index = next(str(i + 1) for i, v in enumerate(root.find("ModelVariables")) if v.get("name") == "reaction")
+    assert all(u.get("dependencies") == ("".join(feedthrough) if scene.friction and u.get("index") == reaction_index
+                                         else "") for u in outputs)
     assert len(root.find("ModelStructure/InitialUnknowns")) == len(outputs) >= 3
     # the page describes this FMU: the equations of its effects only, every stepper, readable bounds
     assert equations(scene) in doc
@@ -94,11 +109,14 @@ def test_model_description_is_valid_and_complete(fmus, name):
 
 
 def element_run(scene_path, stepper, times, forces):
+    """The library's Element driven as FMPy drives the FMU: F set at each communication point, then the outputs
+    read (with friction on the mass the reaction holds a stuck mass against the F set now), then a step."""
     element = Element(load_scene(scene_path), stepper=stepper)
-    rows = [(element.x, element.v, element.reaction)]
+    element.reset(forces[0])
+    rows = [(element.x, element.v, element.reaction_under(forces[0]))]
     for k in range(len(times) - 1):
         element.advance(times[k + 1] - times[k], forces[k])
-        rows.append((element.x, element.v, element.reaction))
+        rows.append((element.x, element.v, element.reaction_under(forces[k + 1])))
     return np.array(rows)
 
 
@@ -119,14 +137,14 @@ def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
 
 
 @pytest.mark.parametrize("stepper", ["projected", "implicit", "verlet", "exact"])
-@pytest.mark.parametrize("name", ["paper", "all-effects"])
+@pytest.mark.parametrize("name", ["paper", "all-effects", "stribeck-series", "coulomb"])
 def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name, stepper):
     """The README route: simulate_fmu with no input and scene_load = true is the library's run of the scene
     (the load evaluated at every internal step), not F held per communication step."""
     fmu, scene_path = fmus[name]
     scene = load_scene(scene_path)
-    if stepper == "exact" and scene.cubic is not None:
-        pytest.skip("exact does not apply to a cubic spring")
+    if stepper == "exact" and (scene.cubic is not None or scene.has_series_dashpots):
+        pytest.skip("exact does not apply to a cubic spring nor to series dashpots (refused: tests/test_friction.py)")
     stop = min(scene.solver.stop_time, 60.0)
     library = simulate(scene.with_solver(stop_time=stop), stepper=stepper)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,

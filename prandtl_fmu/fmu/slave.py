@@ -111,8 +111,10 @@ class PrandtlElement(SlaveBase):
             ("x", "m", "displacement of the point", lambda: self.element.x),
             ("v", "m/s", "velocity of the point", lambda: self.element.v),
             ("reaction", "N", f"force of the element on the point: {reaction_formula(self.scene)}"
-             + (" (= F - m v')" if self.scene.mass is not None else ""),
-             lambda: self.element.reaction),
+             + (" (= F - m v')" if self.scene.mass is not None else "")
+             + ("; while the mass sticks, the friction holds it against the F set now" if self.scene.friction
+                else ""),
+             lambda: self.element.reaction_under(self.F, bool(self.scene_load))),
             ("stiffness", "N/m", "tangent stiffness d(reaction)/dx at the current state for a motion in the "
              f"direction of v (of increasing x when v = 0): {stiffness_formula(self.scene)}",
              self.element.stiffness),
@@ -173,8 +175,11 @@ class PrandtlElement(SlaveBase):
     def to_xml(self, model_options=dict()):
         root = super().to_xml(model_options)
         # No output depends directly on the input F: x, v and the branch
-        # elongations are states, and the reaction is a function of them.
-        return complete(root, list(self.vars.values()), output_dependencies={})
+        # elongations are states, and the reaction is a function of them;
+        # except with friction on the mass, which holds a stuck mass against F
+        # (then the reaction is F itself).
+        dependencies = {"reaction": ["F"]} if self.scene.friction is not None else {}
+        return complete(root, list(self.vars.values()), output_dependencies=dependencies)
 
     # ------------------------------------------------------------ stepping
 

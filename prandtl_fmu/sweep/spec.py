@@ -23,8 +23,8 @@
     runs_per_task = 2000                # default: the runs split into about 8 tasks per worker, at most 2000 each
 
 A key is a scene key, ``table.key`` (``spring.k0``, ``load.amplitude``,
-``branches.k_total``, ``solver.step``, ...) or one value of a list,
-``table.key[i]`` (1-based: ``branches.k[2]``, ``branches.eta_range[2]``).
+``branches.k_total``, ``friction.alpha``, ``solver.step``, ...) or one value of a list,
+``table.key[i]`` (1-based: ``branches.k[2]``, ``branches.c[2]``, ``branches.eta_range[2]``).
 Setting a key of a table the scene lacks adds the table (``spring.k0`` on a
 scene without [spring] adds the spring); every run's scene is checked by the
 rules of the scene format. Run r combines grid point r // samples with random
@@ -242,9 +242,10 @@ def _check_key(key, where, fail):
         fail(where.rsplit(" ", 1)[0] + f" {key!r}", "not a scene key: write table.key, table.key[i] or "
              "table.key.key (e.g. \"spring.k0\", \"branches.k[2]\", \"branches.density.chi\")")
     table = match.group(1)
-    if table in ("fmu",) or table not in ("mass", "spring", "cubic", "damper", "branches", "load", "solver"):
-        fail(where, f"[{table}] is not a table a sweep can vary (mass, spring, cubic, damper, branches, load, "
-             "solver)")
+    if table in ("fmu",) or table not in ("mass", "friction", "spring", "cubic", "damper", "branches", "load",
+                                          "solver"):
+        fail(where, f"[{table}] is not a table a sweep can vary (mass, friction, spring, cubic, damper, branches, "
+             "load, solver)")
     if match.group(3) is not None and int(match.group(3)) < 1:
         fail(where, "list positions count from 1")
 
