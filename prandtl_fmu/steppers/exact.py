@@ -106,11 +106,11 @@ def loop_for(scene):
         raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
     if scene.has_series_dashpots:
-        raise ValueError("'exact' does not follow branches with series dashpots (each adds a state that relaxes "
+        raise ValueError("'exact' needs branches without series dashpots (each adds a state that relaxes "
                          "between events): use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
     friction = scene.friction
     if friction is not None and (friction.alpha_kinetic != friction.alpha or friction.belt_velocity != 0.0):
-        raise ValueError("'exact' follows plain Coulomb friction on a fixed ground; Stribeck's drop and a moving "
+        raise ValueError("'exact' needs plain Coulomb friction on a fixed ground: Stribeck's drop and a moving "
                          "belt are not linear between events: use 'implicit', 'verlet', 'symplectic' or 'projected'")
     if scene.load.compile()[0] == RANDOM:
         raise ValueError("'exact' follows constant, harmonic and table loads; a random load is a sum of many "

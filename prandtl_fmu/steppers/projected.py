@@ -18,7 +18,9 @@ Friction on the mass (``[friction]``, eq. 14 and 16 of 004) joins the
 multivalued term: v <- v_b + w1 with w1 = sign(q) max(|q| - h alpha / m, 0),
 q = v + h a - v_b - h Psi(v - v_b) / m (the sign graph implicit, Stribeck's
 smooth part Psi explicit: ``kernels/friction.py``), so the mass sticks
-exactly. Series dashpots (``[branches] c``): u_i <- clip(u_i + h (v - k_i u_i / c_i)),
+exactly. Its energy account books the friction at the new velocity (so that
+the dissipation never decreases) while x moves at the old one: with friction
+the balance residual may take either sign. Series dashpots (``[branches] c``): u_i <- clip(u_i + h (v - k_i u_i / c_i)),
 stable for h k_i / c_i <= 2 (``kernels/series.py``).
 
 Order 1, with a constant uniform in the number of branches n in the max norm
