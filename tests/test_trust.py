@@ -188,9 +188,9 @@ def test_stability_warning_only_when_unstable():
 def test_implicit_solve_terminates_for_huge_forces():
     k = np.array([1.0, 2.0]); eta = np.array([0.5, 0.1]); u = np.zeros(2)
     for force in (1e307, 1.7e308, -1.7e308):
-        w = solve_increment(0.0, 1e6, -force, 1.0, None, k, eta, u.copy())
+        w = solve_increment(0.0, 1e6, -force, 1.0, None, k, eta, None, u.copy(), 1.0)
         assert math.isnan(w) or (math.isfinite(w) and w * force > 0)
-    w = solve_increment(0.0, 0.0, -1.0, 1.0, None, k, eta, u.copy())  # an ordinary step still exact
+    w = solve_increment(0.0, 0.0, -1.0, 1.0, None, k, eta, None, u.copy(), 1.0)  # an ordinary step still exact
     assert abs(w - 0.4) < 1e-15  # G(w) = -1 + k0 w + k1 w + k2 eta2 = 2 w - 0.8 on [0.1, 0.5]
 
 
@@ -512,7 +512,7 @@ def test_outputs_read_from_the_memo_are_those_of_the_state_after_every_kind_of_c
     element = Element(make_scene())
 
     def fresh():
-        columns = _energy_columns(element.initial_energy, element._energy_row)
+        columns = _energy_columns(element.scene, element.initial_energy, element._energy_row)
         return ({name: float(values[0]) for name, values in columns.items()},
                 float(tangent(element.model, element.x, element.u, -1.0 if element.v < 0 else 1.0)))
 
