@@ -27,7 +27,7 @@ from .kernels import stack
 from .kernels.drive import tangent
 from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
-from .kernels.smooth import elastic_force, smooth_force
+from .kernels.smooth import elastic_force
 from .loads import force_at, held, plus
 from .scene import MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem

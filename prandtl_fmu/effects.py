@@ -86,12 +86,6 @@ class Friction:
             return 0.0
         return (self.alpha - self.alpha_kinetic) / self.stribeck_velocity
 
-    def sliding_force(self, w):
-        """The force against a relative velocity ``w`` != 0 (m/s), in magnitude (N)."""
-        if self.stribeck_velocity is None:
-            return self.alpha + 0.0 * np.abs(w)
-        return self.alpha_kinetic + (self.alpha - self.alpha_kinetic) * np.exp(-np.abs(w) / self.stribeck_velocity)
-
 
 @dataclass(frozen=True, eq=False)
 class Branches:

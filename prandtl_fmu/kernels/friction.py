@@ -95,16 +95,6 @@ def book_friction(energy, friction, f, h, v1):
 
 
 @kernel
-def steep_for(friction, inertia):
-    """Whether the Stribeck drop is steeper than ``inertia`` (N s/m): (alpha - alpha_kinetic) / stribeck_velocity
-    > inertia, when an implicit step may have several roots."""
-    if friction is None:
-        return False
-    alpha, kinetic, stribeck, belt = friction
-    return (alpha - kinetic) / stribeck > inertia
-
-
-@kernel
 def reaction(model, load, t, x, v, s):
     """The force of the effects on the point (N) in the state (x, v, branch force ``s``) at time t:
     k0 x + k3 x^3 + c v + s, plus the friction's :func:`resistance` against the load F(t) (= F - m v'
