@@ -56,7 +56,9 @@ branches frozen) while |F(t) - reaction| <= alpha; the phase ends when the
 load takes the net force out of that band, in closed form (a line for a
 piece of a table, an arccos for a harmonic load; a constant load holds it
 for ever), and the mass slides from there. Stribeck's drop and a moving belt
-are not linear between events and are refused.
+are not linear between events and are refused. Branches with series dashpots
+relax between events: their scenes take ``exact_series.py`` (a phase system of
+dimension 6 + n), with this module's matrix exponential.
 
 Progress. At rest with no net force (v = 0, F = reaction) the direction of
 the coming motion is the sign of the first nonzero derivative of v,
@@ -105,9 +107,6 @@ def loop_for(scene):
     if scene.branches is not None and scene.branches.continuum:
         raise ValueError("'exact' follows each branch's events and the continuum has infinitely many: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
-    if scene.has_series_dashpots:
-        raise ValueError("'exact' needs branches without series dashpots (each adds a state that relaxes "
-                         "between events): use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
     friction = scene.friction
     if friction is not None and (friction.alpha_kinetic != friction.alpha or friction.belt_velocity != 0.0):
         raise ValueError("'exact' needs plain Coulomb friction on a fixed ground: Stribeck's drop and a moving "
@@ -115,28 +114,33 @@ def loop_for(scene):
     if scene.load.compile()[0] == RANDOM:
         raise ValueError("'exact' follows constant, harmonic and table loads; a random load is a sum of many "
                          "harmonics: use 'verlet' (order 2), 'symplectic', 'implicit' or 'projected'")
+    if scene.has_series_dashpots:  # each branch adds a state that relaxes between events
+        return exact_series.run
     return run
 
 
 @kernel
 def _matmul(a, b):
-    out = np.zeros((6, 6))
-    for i in range(6):
-        for k in range(6):
+    size = a.shape[0]
+    out = np.zeros((size, size))
+    for i in range(size):
+        for k in range(size):
             aik = a[i, k]
             if aik != 0.0:
-                for j in range(6):
+                for j in range(size):
                     out[i, j] += aik * b[k, j]
     return out
 
 
 @kernel
 def _expm_times(a, tau, y):
-    """expm(a tau) @ y for a 6x6 a: Taylor series after scaling, then squaring."""
+    """expm(a tau) @ y for a square a (6x6 here; 6 + n with series dashpots, ``exact_series.py``): Taylor
+    series after scaling, then squaring."""
+    size = a.shape[0]
     norm = 0.0
-    for j in range(6):
+    for j in range(size):
         column = 0.0
-        for i in range(6):
+        for i in range(size):
             column += abs(a[i, j])
         norm = max(norm, column)
     norm *= tau
@@ -145,8 +149,8 @@ def _expm_times(a, tau, y):
         squarings = int(math.ceil(math.log2(norm / 0.25)))
     scale = tau / 2.0**squarings
     b = a * scale
-    result = np.eye(6)
-    term = np.eye(6)
+    result = np.eye(size)
+    term = np.eye(size)
     for k in range(1, 30):
         term = _matmul(term, b) / k
         result += term
@@ -162,8 +166,8 @@ def _converged(term, result):
     """Whether every entry of the Taylor series has converged to rounding, entry by entry: for a tiny tau the
     entries of order tau^2 (how v leaves 0 when v = v' = 0, e.g. from rest on a ramp) are far below the
     identity's, and a test on the largest entry dropped them (v(tau) came out exactly 0, a false reversal)."""
-    for i in range(6):
-        for j in range(6):
+    for i in range(term.shape[0]):
+        for j in range(term.shape[1]):
             if abs(term[i, j]) > 1e-18 * abs(result[i, j]):
                 return False
     return True
@@ -171,10 +175,11 @@ def _converged(term, result):
 
 @kernel
 def _matvec(a, y):
-    out = np.zeros(6)
-    for i in range(6):
+    size = a.shape[0]
+    out = np.zeros(size)
+    for i in range(size):
         total = 0.0
-        for j in range(6):
+        for j in range(size):
             total += a[i, j] * y[j]
         out[i] = total
     return out
@@ -661,5 +666,7 @@ def run_summary(template, batch):
     _summary(template, batch)
 
 
+from . import exact_series  # noqa: E402  (its kernels use this module's: imported once they are defined)
+
 # the summary loop of each time loop that loop_for gives
-SUMMARY_LOOPS = {run: run_summary}
+SUMMARY_LOOPS = {run: run_summary, exact_series.run: exact_series.run_summary}
