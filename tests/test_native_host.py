@@ -13,6 +13,11 @@ from .native_host import Extracted, compile_host, run_host
 OK, DISCARD, ERROR = 0, 2, 3
 DECLARED = {"logStatusWarning", "logStatusDiscard", "logStatusError", "logStatusFatal", "logAll"}
 TABLES = base_tables(solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
+# friction on the mass (Stribeck) and series dashpots (issue 25)
+FRICTION_TABLES = base_tables(
+    cubic=None, friction={"alpha": 0.3, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1},
+    branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]},
+    solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
 
 
 @pytest.fixture(scope="module")
@@ -20,14 +25,22 @@ def host(tmp_path_factory):
     return compile_host(tmp_path_factory.mktemp("c_host"))
 
 
-@pytest.fixture(scope="module")
-def element(tmp_path_factory):
+def _built(folder, tables):
     from prandtl_fmu.fmu.build import build_fmu
 
-    folder = tmp_path_factory.mktemp("native_host")
     scene = folder / "element.toml"
-    scene.write_text(scene_text(TABLES))
+    scene.write_text(scene_text(tables))
     return Extracted(build_fmu(scene, folder / "element.fmu"), folder / "element")
+
+
+@pytest.fixture(scope="module")
+def element(tmp_path_factory):
+    return _built(tmp_path_factory.mktemp("native_host"), TABLES)
+
+
+@pytest.fixture(scope="module")
+def friction_element(tmp_path_factory):
+    return _built(tmp_path_factory.mktemp("native_host_friction"), FRICTION_TABLES)
 
 
 def categories_declared(logs):
@@ -97,13 +110,17 @@ def test_the_fmi2_call_sequence_is_enforced(host, element):
     assert len(values) == 1
 
 
-def test_the_binary_in_a_native_host_gives_the_library_numbers(host, element):
-    """Steps of random sizes under random forces, read after each: bit for bit Element.advance."""
+@pytest.mark.parametrize("which", ["element", "friction_element"])
+def test_the_binary_in_a_native_host_gives_the_library_numbers(host, which, request):
+    """Steps of random sizes under random forces, read after each: bit for bit Element.advance (also with
+    friction on the mass, which sticks and slips here, and series dashpots)."""
+    element = request.getfixturevalue(which)
     rng = np.random.default_rng(5)
     sizes = [float(size) for size in rng.choice([0.013, 0.05, 0.1, 0.0371], 12)]
     forces = [float(force) for force in rng.uniform(-1, 1, 12)]
     commands, t = ["setup", "enter", "exit"], 0.0
-    reference = Element(parse_scene(scene_text(TABLES), "element.toml"))
+    tables = FRICTION_TABLES if which == "friction_element" else TABLES
+    reference = Element(parse_scene(scene_text(tables), "element.toml"))
     expected = []
     for size, force in zip(sizes, forces):
         commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}", "getr:x", "getr:v", "getr:reaction"]
@@ -115,3 +132,18 @@ def test_the_binary_in_a_native_host_gives_the_library_numbers(host, element):
     assert code == 0, out
     assert [value for _, value in values] == expected
 
+
+
+@pytest.mark.parametrize("logging", [False, True])
+def test_a_friction_parameter_out_of_its_rule_is_refused_and_logged(host, friction_element, logging):
+    """alpha_kinetic > alpha: initialization fails with fmi2Error and the reason names both, logged with logging
+    off too; set right, the instance initializes and steps."""
+    code, calls, logs, values, out = run_host(host, friction_element, [
+        "setup", "enter", "setr:alpha_kinetic:0.5", "exit", "setr:alpha_kinetic:0.25", "exit", "step:0:0.1",
+        "getr:x", "term", "free"], logging=logging)
+    assert code == 0, out
+    assert calls["exit"] == [str(ERROR), str(OK)], out
+    refusals = [entry for entry in logs if entry[0] == ERROR]
+    assert refusals and "alpha_kinetic" in refusals[0][2] and "alpha" in refusals[0][2], logs
+    assert categories_declared(logs), logs
+    assert len(values) == 1 and np.isfinite(values[0][1])

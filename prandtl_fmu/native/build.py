@@ -1,0 +1,247 @@
+"""``build_native_fmu``: an FMI 2.0 co-simulation FMU of a scene whose binary holds no Python.
+
+The FMU has the PythonFMU FMU's model description (the same variables, names, value references, units,
+causalities, documentation: it is built first, in a scratch folder, and its ``modelDescription.xml`` is
+taken with ``needsExecutionTool="false"``) and a binary linked from
+
+* the scene's kernels, compiled by numba from the library's own sources (``kernels.py``), as objects;
+* ``stubs.c``, generated here: numba's error path, which a kernel reaches only when it raises, sets a
+  flag instead of calling Python (and ``numba_nextafter`` is C's ``nextafter``);
+* ``fmi2.c``, the FMI layer, with the generated ``scene.h``.
+
+It needs a C compiler and linker (``cc`` or ``gcc``, or ``$CC``); without one the build stops with one line
+saying what to install.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from . import kernels
+
+HERE = Path(__file__).resolve().parent
+FMI_HEADERS = HERE.parent / "fmu" / "loader" / "src" / "fmi"
+ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+            "dissipated_friction", "energy_residual")
+TYPES = {"Real": "T_REAL", "Integer": "T_INTEGER", "Boolean": "T_BOOLEAN", "String": "T_STRING"}
+
+
+class NativeBuildError(ValueError):
+    """A native FMU cannot be built (one line: the scene or the machine, and what to do)."""
+
+
+def compiler() -> str:
+    found = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if found is None:
+        raise NativeBuildError("a native FMU needs a C compiler and linker (cc or gcc, or set CC): install one "
+                               "(Debian/Ubuntu: apt-get install gcc; macOS: xcode-select --install)")
+    return found
+
+
+def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
+    """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it."""
+    from ..fmu.build import build_fmu
+    from ..scene import load_scene
+
+    if fmi != 2:
+        raise NativeBuildError(f"the native runtime builds FMI 2.0 FMUs only so far (asked: FMI {fmi}.0); FMI 3.0 "
+                               "is not built yet")
+    scene = load_scene(scene_path)
+    if scene.causality == "displacement":
+        raise NativeBuildError("the connector ([fmu] causality = \"displacement\") is not in the native runtime "
+                               "yet: build it with --runtime python")
+    if scene.mass is None and scene.damper is None:
+        raise NativeBuildError("a massless element without a dashpot is not in the native runtime yet: build it "
+                               "with --runtime python")
+    problem = kernels.unsupported(scene)
+    if problem:
+        raise NativeBuildError(problem)
+    cc = compiler()
+    out = Path(out)
+    with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
+        scratch = Path(scratch)
+        python_fmu = build_fmu(scene_path, scratch / "python.fmu")
+        with zipfile.ZipFile(python_fmu) as archive:
+            description = archive.read("modelDescription.xml").decode("utf-8")
+            kept = {name: archive.read(name) for name in archive.namelist()
+                    if name.startswith("documentation/") or name == "resources/scene.toml"
+                    or name.endswith("_OspModelDescription.xml")}
+        root = ET.fromstring(description)
+        identifier = root.find("CoSimulation").get("modelIdentifier")
+        steppers = kernels.applicable(scene)
+        if not steppers:
+            raise NativeBuildError("no stepper of the native runtime applies to this scene")
+        compiled = kernels.compile_kernels(scene, steppers)
+        objects = kernels.emit_objects(compiled, scratch)
+        (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path))
+        (scratch / "stubs.c").write_text(_stubs(objects))
+        library = scratch / f"{identifier}.so"
+        exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
+        exports.write_text("{ global: fmi2*; local: *; };\n")
+        command = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
+                   f"-I{scratch}", f"-I{FMI_HEADERS}", str(HERE / "fmi2.c"), str(scratch / "stubs.c"),
+                   *map(str, objects), "-o", str(library), "-lm", "-Wl,--no-undefined",
+                   f"-Wl,--version-script={exports}"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
+            raise NativeBuildError(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
+        native_description = _native_description(description)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        partial = out.with_name(out.name + ".partial")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("modelDescription.xml", native_description)
+            archive.write(library, f"binaries/linux64/{identifier}.so")
+            for name, data in kept.items():
+                archive.writestr(name, data)
+        os.replace(partial, out)
+    return out
+
+
+def _native_description(description: str) -> str:
+    text = description.replace('needsExecutionTool="true"', 'needsExecutionTool="false"')
+    return re.sub(r'generationTool="[^"]*"', 'generationTool="prandtl_fmu (native runtime)"', text, count=1)
+
+
+def _c_array(values) -> str:
+    values = list(values) or [0.0]
+    return "{" + ", ".join(repr(float(value)) for value in values) + "}"
+
+
+def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
+    from ..driver import friction_model  # noqa: F401  (the same convention: see kernels.structure)
+
+    branches = scene.branches
+    n = 0 if branches is None else branches.n
+    values = dict.fromkeys(kernels.PARAMETERS, 0.0)
+    present = dict.fromkeys(kernels.PARAMETERS, 0)
+    from ..scene import coefficients_of
+
+    for name, value in coefficients_of(scene).items():
+        if name in values:
+            values[name], present[name] = float(value), 1
+    rules = {"m": 1, "x0": 3, "v0": 3, "k0": 2, "k3": 2, "c": 2, "alpha": 1, "alpha_kinetic": 2,
+             "stribeck_velocity": 1, "belt_velocity": 3}
+    friction = scene.friction
+    if friction is not None and friction.stribeck_velocity is None:
+        values["alpha_kinetic"] = float(friction.alpha)
+    load = scene.load.compile()
+    kind, offset, amplitude, omega, times, forces = load
+    symbols = {name: function.native_name for name, function in compiled}
+    guid = root.get("guid")
+    digest = hashlib.sha256(Path(scene_path).read_bytes() + guid.encode()).hexdigest()
+    lines = [
+        "/* generated by prandtl_fmu.native.build for one scene: do not edit */",
+        "#include <stdint.h>",
+        f"#define NB {n}",
+        f"#define NB_ARR {max(n, 1)}",
+        f"#define HAS_MASS {int(scene.mass is not None)}",
+        f"#define HAS_DAMPER {int(scene.damper is not None)}",
+        f"#define HAS_FRICTION {int(friction is not None)}",
+        f"#define HAS_STRIBECK {int(friction is not None and friction.stribeck_velocity is not None)}",
+        f"#define HAS_SERIES {int(scene.has_series_dashpots)}",
+        f'static const char GUID[] = "{guid}";',
+        f'static const char DIGEST[] = "{digest}";',
+        f"static const double P_SCENE[10] = {_c_array(values.values())};",
+        f"static const int P_PRESENT[10] = {{{', '.join(str(v) for v in present.values())}}};",
+        f"static const int P_RULE[10] = {{{', '.join(str(rules[name]) for name in kernels.PARAMETERS)}}};",
+        f"static const double K[NB_ARR] = {_c_array(branches.stiffness if n else [])};",
+        f"static const double ETA[NB_ARR] = {_c_array(branches.yield_displacement if n else [])};",
+        f"static const double U0[NB_ARR] = {_c_array(branches.u0 if n else [])};",
+        f"static const double CS_SCENE[NB_ARR] = "
+        f"{_c_array(branches.damping if scene.has_series_dashpots else [1.0] * max(n, 1))};",
+        f"static const int64_t LOAD_KIND = {int(kind)};",
+        f"static const double LOAD_LK[3] = {_c_array([offset, amplitude, omega])};",
+        f"static const double LOAD_T[{max(len(times), 1)}] = {_c_array(times)};",
+        f"static const double LOAD_F[{max(len(forces), 1)}] = {_c_array(forces)};",
+        f"static const int64_t LOAD_N = {len(times)};",
+        f"#define N_STEPPERS {len(steppers)}",
+        "static const char* STEPPER_NAMES[] = {" + ", ".join(f'"{name}"' for name in steppers) + "};",
+        f'static const char STEPPER_LIST[] = "{", ".join(steppers)}";',
+        f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
+        f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
+        f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",
+        "typedef double* P;",
+        "typedef int64_t (*advance_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        "double, int64_t);",
+    ]
+    variants = [suffix for suffix, _ in kernels.variants(scene)]
+    declarations = {
+        "advance": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+                   "int64_t)",
+        "record": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double)",
+        "stiffness": "double {name}(P, P, P, P, P, P)",
+        "initial": "int64_t {name}(P, P, P, P, P, P, int64_t, P, P, P, int64_t)",
+    }
+    for name, symbol in symbols.items():
+        if name == "force_at":
+            lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) __asm__("{symbol}");')
+        else:
+            lines.append(declarations[name.split("_")[0]].format(name=name) + f' __asm__("{symbol}");')
+    for suffix in ("c", "n"):
+        chosen = suffix if suffix in variants else variants[0]
+        lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{"
+                     + ", ".join(f"advance_{name}_{chosen}" for name in steppers) + "};")
+        for function in ("record", "stiffness", "initial"):
+            lines.append(f"#define {function}_{suffix} {function}_{chosen}")
+    lines += [
+        "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
+        "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "
+        "W_STEPPER, W_N };",
+        "typedef struct { unsigned vr; int type; int what; int index; } Var;",
+        "static const Var VARS[] = {",
+    ]
+    count = 0
+    for variable in root.find("ModelVariables"):
+        name = variable.get("name")
+        vr = int(variable.get("valueReference"))
+        type_name = next(child.tag for child in variable if child.tag in TYPES)
+        what, index = _what(name)
+        lines.append(f"    {{{vr}, {TYPES[type_name]}, {what}, {index}}}, /* {name} */")
+        count += 1
+    lines += ["};", f"#define N_VARS {count}", ""]
+    return "\n".join(lines)
+
+
+def _what(name: str) -> tuple:
+    fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS",
+             "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N"}
+    if name in fixed:
+        return fixed[name], 0
+    if name in ENERGIES:
+        return "W_ENERGY", ENERGIES.index(name)
+    if name in kernels.PARAMETERS:
+        return "W_PARAM", kernels.PARAMETERS.index(name)
+    if name == "c_branch":
+        return "W_CBRANCH", -1
+    match = re.fullmatch(r"c_branch\[(\d+)\]", name)
+    if match:
+        return "W_CBRANCH", int(match.group(1)) - 1
+    raise NativeBuildError(f"the native runtime does not know the FMU variable {name!r}")
+
+
+def _stubs(objects) -> str:
+    """C definitions of what the objects need from Python and numba (see the module docstring)."""
+    undefined = set()
+    for path in objects:
+        listing = subprocess.run(["nm", "-u", str(path)], capture_output=True, text=True, check=True).stdout
+        undefined.update(line.split()[-1] for line in listing.splitlines() if line.strip())
+    lines = ["/* generated: numba's error path without Python (prandtl_fmu.native.build) */", "#include <math.h>",
+             "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
+    for symbol in sorted(undefined):
+        if symbol == "numba_nextafter":
+            lines.append("double numba_nextafter(double a, double b) { return nextafter(a, b); }")
+        elif symbol.startswith("PyExc_"):
+            lines.append(f"void* {symbol} = dummy;")
+        elif symbol.startswith(("Py", "_Py", "NRT_", "numba_")):
+            lines.append(f"void* {symbol}(void) {{ prandtl_kernel_failed = 1; return dummy; }}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,223 @@
+"""The library's compiled kernels as C functions of one scene, in one object file (no Python inside).
+
+For a scene, :func:`compile_kernels` writes a few small Python functions (their source is generated here,
+with the scene's structure written into it: which effects are present, the number of branches) that
+unpack C pointers into arrays (``numba.carray``) and the model tuple of the library
+(``driver.compile_model``), and call the library's own compiled kernels: each stepper's time loop
+``run``, ``reaction``, ``kinetic``, ``stored``, ``tangent``, the massless equilibrium. numba compiles each
+into a ``cfunc``; their LLVM modules are emitted as object files by llvmlite. The numerics in the native
+FMU are therefore the library's, not a copy: the same source compiled by the same compiler for the same
+types, bit for bit (tests/test_native.py).
+
+What the objects need besides libm is numba's error path (a kernel that raises: Python's C API with the GIL)
+and ``numba_nextafter``: ``stubs.c`` provides them; the error path sets a flag that the FMI layer reads
+(the step is refused), it never touches Python.
+
+The C signatures (every pointer to doubles; ``kind`` the load's kind, ``lk`` = offset, amplitude, omega of
+the load, ``lt``/``lf``/``nl`` its table):
+
+* ``advance(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t_base, first, h, steps)`` -> steps
+  taken (``kernels/loop.py``: out = x, v, reaction; erow = the energy row);
+* ``record(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t)``: the outputs of the state;
+* ``stiffness(p, k, eta, cs, u, xv)`` -> the tangent stiffness;
+* ``initial(p, k, eta, cs, u, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
+  equilibrium (``driver.initial_state``);
+* ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``).
+
+``p`` holds the coefficients in :data:`PARAMETERS` order. A scene with ``[damper]`` gets every function
+twice, with c and without (c = 0 is no dashpot at all in the library's model: ``driver._smooth_model``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+PARAMETERS = ("m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity")
+NATIVE_STEPPERS = ("projected", "implicit", "symplectic", "verlet")
+
+_PTR = "types.CPointer(types.float64)"
+_SIGNATURES = {
+    "advance": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
+               "types.float64, types.int64, types.float64, types.int64)",
+    "record": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64)",
+    "stiffness": f"types.float64({', '.join([_PTR] * 6)})",
+    "initial": f"types.int64({', '.join([_PTR] * 6)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
+    "force_at": f"types.float64(types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, {_PTR})",
+}
+
+_TEMPLATE = '''
+def _model(p, kp, etap, csp):
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+
+
+def _load(kind, lk, lt, lf, nl):
+    return (kind, lk[0], lk[1], lk[2], carray(lt, (nl,)), carray(lf, (nl,)))
+
+
+def advance(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps):
+    x, v, taken = run(_model(p, kp, etap, csp), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base, first,
+                      h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
+    xv[0] = x
+    xv[1] = v
+    return taken
+
+
+def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t):
+    model = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction = model
+    u = {u}
+    x = xv[0]
+    v = xv[1]
+    outp[0] = x
+    outp[1] = v
+    outp[2] = reaction(model, _load(kind, lk, lt, lf, nl), t, x, v, branch_force(k, u))
+    erowp[0] = kinetic(m, v)
+    erowp[1] = stored(x, k0, k3, k, u)
+    for j in range(4):
+        erowp[2 + j] = accountp[j]
+    return 0
+
+
+def stiffness(p, kp, etap, csp, up, xv):
+    direction = -1.0 if xv[1] < 0 else 1.0
+    return tangent(_model(p, kp, etap, csp), xv[0], {u}, direction)
+
+
+def force_at_c(kind, lk, lt, lf, nl, t, unused):
+    return force_at(_load(kind, lk, lt, lf, nl), t)
+
+
+def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
+    model = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction = model
+    u = {u}
+    if {massive}:
+        xv[0] = p[1]
+        xv[1] = p[2]
+        return 1
+    force = force_at(_load(kind, lk, lt, lf, nl), 0.0)
+    if {damped}:
+        xv[0] = 0.0
+        xv[1] = (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / p[5]
+        return 1
+    w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, None, u, 0.0)
+    if not (abs(w) < np.inf):
+        return 0
+    move(k, eta, u, w, None)
+    xv[0] = w
+    xv[1] = 0.0
+    return 1
+'''
+
+
+def structure(scene) -> dict:
+    """The scene's structure as the generated source needs it (which effects, how many branches)."""
+    branches = scene.branches
+    n = 0 if branches is None else branches.n
+    friction = scene.friction
+    if friction is None:
+        friction_source = "None"
+    else:
+        stribeck = "p[8]" if friction.stribeck_velocity is not None else "1.0"
+        kinetic = "p[7]" if friction.stribeck_velocity is not None else "p[6]"
+        friction_source = f"(p[6], {kinetic}, {stribeck}, p[9])"
+    return {
+        "n": n,
+        "m": "p[0]" if scene.mass is not None else "None",
+        "k0": "p[3]" if scene.spring is not None else "None",
+        "k3": "p[4]" if scene.cubic is not None else "None",
+        "k": f"carray(kp, ({n},))" if n else "None",
+        "eta": f"carray(etap, ({n},))" if n else "None",
+        "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
+        "u": f"carray(up, ({n},))" if n else "None",
+        "friction": friction_source,
+        "massive": "True" if scene.mass is not None else "False",
+    }
+
+
+def unsupported(scene) -> str | None:
+    """Why the native runtime cannot take ``scene`` yet, or None."""
+    branches = scene.branches
+    if branches is not None and branches.continuum:
+        return "the continuum (the memory stack) is not in the native runtime yet: build with --runtime python"
+    from ..driver import choose_branch_kernel
+
+    for name in NATIVE_STEPPERS:
+        if branches is not None and choose_branch_kernel(scene, name) == "stack":
+            return (f"{branches.n} branches run on the memory stack, which is not in the native runtime yet: build "
+                    "with --runtime python")
+    return None
+
+
+def variants(scene) -> list:
+    """("c" | "n", with_dashpot): the dashpot variants of the scene's functions (see the module docstring)."""
+    if scene.damper is None:
+        return [("n", False)]
+    return [("c", True), ("n", False)]
+
+
+def applicable(scene) -> list:
+    """The native steppers that apply to ``scene`` (``loop_for`` accepts it)."""
+    from ..steppers import get_stepper
+
+    names = []
+    for name in NATIVE_STEPPERS:
+        try:
+            get_stepper(name).loop_for(scene)
+        except ValueError:
+            continue
+        names.append(name)
+    return names
+
+
+def compile_kernels(scene, steppers) -> list:
+    """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``: ``advance_<stepper>_<variant>``,
+    ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``."""
+    from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
+
+    from ..kernels.drive import tangent
+    from ..kernels.energy import kinetic, stored
+    from ..kernels.friction import reaction
+    from ..kernels.increment import solve_increment
+    from ..kernels.play import branch_force, move
+    from ..kernels.smooth import elastic_force
+    from ..loads import force_at
+    from ..steppers import get_stepper
+
+    shape = structure(scene)
+    compiled = []
+    compiled_force = False
+    for suffix, damped in variants(scene):
+        source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False", **shape)
+        for stepper in list(steppers) + [None]:
+            namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
+                             tangent=tangent, branch_force=branch_force, move=move, solve_increment=solve_increment,
+                             elastic_force=elastic_force, force_at=force_at,
+                             run=get_stepper(stepper).loop_for(scene) if stepper else None)
+            exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
+            for helper in ("_model", "_load"):  # inlined into each C function
+                namespace[helper] = njit(inline="always")(namespace[helper])
+            names = ["advance"] if stepper else ["record", "stiffness", "initial"]
+            if stepper is None and not compiled_force:
+                names.append("force_at")  # the scene's load alone: once
+                compiled_force = True
+            for name in names:
+                signature = eval(_SIGNATURES[name], {"types": types})
+                function = cfunc(signature, error_model="numpy")(namespace["force_at_c" if name == "force_at" else name])
+                c_name = (f"advance_{stepper}_{suffix}" if stepper else
+                          "force_at" if name == "force_at" else f"{name}_{suffix}")
+                compiled.append((c_name, function))
+    return compiled
+
+
+def emit_objects(compiled, folder) -> list:
+    """One object file per C function (position-independent, for a shared library); returns their paths."""
+    import llvmlite.binding as llvm
+
+    machine = llvm.Target.from_default_triple().create_target_machine(reloc="pic", codemodel="default", opt=3)
+    paths = []
+    for c_name, function in compiled:
+        module = llvm.parse_assembly(str(function._library._final_module))
+        path = folder / f"{c_name}.o"
+        path.write_bytes(machine.emit_object(module))
+        paths.append(path)
+    return paths
