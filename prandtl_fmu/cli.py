@@ -3,6 +3,7 @@
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp] [--loader prandtl|pythonfmu]
+                      [--runtime python|native] [--fmi 2|3]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
@@ -99,6 +100,11 @@ def _parser() -> argparse.ArgumentParser:
                        help="the FMU's native library on Linux x86-64: prandtl (default), PythonFMU 0.7.0's loader "
                             "patched (a refused call is fmi2Error, the instance stays usable; no leaks), or "
                             "pythonfmu, its stock loader (refusals fmi2Fatal)")
+    build.add_argument("--runtime", choices=("python", "native"), default="python",
+                       help="python (default): PythonFMU, runs in the host's Python; native: the scene's compiled "
+                            "kernels and a C FMI layer, no Python in the host (needs a C compiler to build; the "
+                            "element, FMI 2.0)")
+    build.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (3: not built yet)")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
@@ -276,7 +282,8 @@ def _build(args) -> int:
     if _missing("pythonfmu"):
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
-        path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader)
+        path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader,
+                         runtime=args.runtime, fmi=args.fmi)
     except (SceneError, ValueError, RuntimeError) as exc:
         return _error(exc)
     except OSError as exc:

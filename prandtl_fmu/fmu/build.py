@@ -50,7 +50,8 @@ def file_stem(name: str) -> str:
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
-              causality: Optional[str] = None, osp: bool = False, loader: str = "prandtl") -> Path:
+              causality: Optional[str] = None, osp: bool = False, loader: str = "prandtl",
+              runtime: str = "python", fmi: int = 2) -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
 
@@ -61,7 +62,25 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     0.7.0's patched (``loader/``: a refused call is fmi2Error and the instance stays usable), or "pythonfmu",
     PythonFMU's own (refusals fmi2Fatal); the other platforms always get PythonFMU's own. The scene is checked
     first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
+
+    ``runtime="native"``: an FMU whose binary holds the scene's compiled kernels and a C FMI layer, no Python
+    (``prandtl_fmu/native``: the element, FMI 2.0; ``fmi`` must be 2); ``loader`` does not apply to it.
     """
+    if runtime not in ("python", "native"):
+        raise ValueError(f"--runtime: must be python or native, got {runtime!r}")
+    if runtime == "native":
+        from ..native.build import build_native_fmu
+
+        if causality == "displacement" or osp:
+            raise ValueError("the native runtime builds the element (force in) without --osp so far: build the "
+                             "connector and OSP descriptions with --runtime python")
+        native_scene = load_scene(scene_path)
+        target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
+        if target.is_dir():
+            raise ValueError(f"{target}: is a directory")
+        return build_native_fmu(resolve_scene(scene_path), target, fmi=fmi)
+    if fmi != 2:
+        raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
     from pythonfmu import FmuBuilder
 
     from . import loader as native

@@ -74,14 +74,23 @@ static void say(Instance* c, fmi2Status status, const char* format, ...)
 {
     static const char* categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
                                        "logStatusFatal", "logAll"};
-    char text[1024];
+    char text[1024], message[2048];
+    size_t i, j;
     va_list args;
     if (c->cb.logger == NULL || (status == fmi2OK && !c->logging))
         return;
     va_start(args, format);
     vsnprintf(text, sizeof text, format, args);
     va_end(args);
-    c->cb.logger(c->cb.componentEnvironment, c->name ? c->name : "", status, categories[status], "%s", text);
+    /* the message is the logger's format: every % doubled (a host that formats it prints the text, one that
+       does not still gets the words) */
+    for (i = 0, j = 0; text[i] && j + 2 < sizeof message; i++) {
+        if (text[i] == '%')
+            message[j++] = '%';
+        message[j++] = text[i];
+    }
+    message[j] = 0;
+    c->cb.logger(c->cb.componentEnvironment, c->name ? c->name : "", status, categories[status], message);
 }
 
 /* ------------------------------------------------------------------ the element */

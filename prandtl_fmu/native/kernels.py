@@ -152,6 +152,8 @@ def variants(scene) -> list:
     """("c" | "n", with_dashpot): the dashpot variants of the scene's functions (see the module docstring)."""
     if scene.damper is None:
         return [("n", False)]
+    if scene.mass is None:  # the dashpot of a massless element sets its rate: c stays > 0 (fmi2.c)
+        return [("c", True)]
     return [("c", True), ("n", False)]
 
 

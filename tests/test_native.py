@@ -1,0 +1,268 @@
+"""The native FMU (``--runtime native``, issue 24): the library's kernels and a C FMI layer, no Python in the binary.
+
+Bit for bit the library (every native stepper, random communication steps, every output), in FMPy and in the
+small C host of tests/c_host run with no Python at all; a binary that names no Python symbol; refusals as the
+PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import zipfile
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import load_scene, parse_scene, simulate
+from prandtl_fmu.driver import Element
+from prandtl_fmu.native.kernels import NATIVE_STEPPERS
+
+from .conftest import base_tables, scene_text
+from .native_host import Extracted, compile_host, run_host
+
+pytest.importorskip("fmpy")
+if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+    pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
+
+ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+            "dissipated_friction", "energy_residual")
+SOLVER = {"stepper": "implicit", "step": 0.01, "stop_time": 10.0, "output_interval": 0.1}
+SCENES = {
+    # mass, spring, dashpot, branches, a harmonic load (cubic: the default tables have one)
+    "smooth": base_tables(mass={"m": 1.0, "x0": 0.05, "v0": 0.0}, solver=SOLVER,
+                          load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3}),
+    # friction on the mass (Stribeck, a belt) and series dashpots, a table load
+    "friction": base_tables(cubic=None, solver=SOLVER,
+                            friction={"alpha": 0.3, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1,
+                                      "belt_velocity": 0.05},
+                            branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]},
+                            load={"kind": "table", "time": [0.0, 3.0, 6.0, 10.0], "force": [0.0, 0.6, -0.5, 0.2]}),
+    # massless: the dashpot sets the rate
+    "massless": base_tables(mass=None, cubic=None, solver=dict(SOLVER, stepper="implicit"),
+                            load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
+}
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("native")
+    built = {}
+    for name, tables in SCENES.items():
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(tables))
+        built[name] = (build_fmu(path, folder / f"{name}.fmu", runtime="native"), path)
+    return built
+
+
+def steppers_of(scene):
+    from prandtl_fmu.native.kernels import applicable
+
+    return applicable(scene)
+
+
+def outputs(slave, names):
+    return slave.fmu.getReal([slave.vr[name] for name in names])
+
+
+def expected(element, names):
+    values = {"x": element.x, "v": element.v, "reaction": element.reaction, "stiffness": element.stiffness()}
+    return [values[name] if name in values else element.energy_of(name) for name in names]
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
+    """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
+    reaction, the stiffness and the energy account equal Element.advance's to the bit."""
+    from .fmu_tools import Slave
+
+    fmu, scene_path = fmus[name]
+    scene = load_scene(scene_path)
+    tried = steppers_of(scene)
+    assert tried
+    for stepper in tried:
+        slave = Slave(fmu, start_values={"stepper": stepper})
+        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
+        element = Element(scene, stepper=stepper)
+        rng = np.random.default_rng(7)
+        try:
+            for _ in range(40):
+                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert outputs(slave, names) == expected(element, names), (stepper, time)
+        finally:
+            slave.close()
+        assert abs(element.x) > 1e-3  # it moved
+
+
+def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):
+    from fmpy import simulate_fmu
+
+    fmu, scene_path = fmus["friction"]
+    scene = load_scene(scene_path)
+    library = simulate(scene)
+    result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True}, output=["x", "v", "reaction"])
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column))
+
+
+def test_the_binary_holds_no_python(fmus, tmp_path):
+    fmu, _ = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    assert not (tmp_path / "x" / "resources" / "prandtl_fmu").exists()  # no library copy, no Python source
+    needed = subprocess.run(["ldd", str(extracted.library)], capture_output=True, text=True).stdout
+    assert "python" not in needed.lower(), needed
+    undefined = subprocess.run(["nm", "-D", "--undefined-only", str(extracted.library)], capture_output=True,
+                               text=True).stdout.split()
+    assert not [s for s in undefined if s.startswith(("Py", "_Py", "numba", "NRT"))], undefined
+    defined = subprocess.run(["nm", "-D", "--defined-only", str(extracted.library)], capture_output=True,
+                             text=True).stdout.split()[2::3]
+    assert defined and all(symbol.startswith("fmi2") for symbol in defined), defined
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'needsExecutionTool="false"' in description
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    return compile_host(tmp_path_factory.mktemp("c_host"))
+
+
+NO_PYTHON = {"PATH": os.environ.get("PATH", "/usr/bin:/bin")}  # no LD_PRELOAD, no PYTHONPATH
+
+
+def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tmp_path):
+    fmu, scene_path = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    rng = np.random.default_rng(3)
+    commands, t = ["setup", "enter", "exit"], 0.0
+    element = Element(load_scene(scene_path))
+    reference = []
+    for _ in range(25):
+        size, force = float(rng.choice([0.013, 0.05, 0.1])), float(rng.uniform(-1, 1))
+        commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}", "getr:x", "getr:v", "getr:reaction"]
+        element.time = t
+        element.advance(size, force)
+        reference += [element.x, element.v, element.reaction]
+        t += size
+    code, calls, logs, values, out = run_host(host, extracted, commands + ["term", "free"], env=NO_PYTHON)
+    assert code == 0, out
+    assert [value for _, value in values] == reference
+
+
+@pytest.mark.parametrize("logging", [False, True])
+def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, logging):
+    """A bad start value: fmi2Error at fmi2ExitInitializationMode, its reason logged (logging off too) under a
+    declared category; set right, the instance initializes; a non-finite F: fmi2Discard, then a good step."""
+    fmu, _ = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    code, calls, logs, values, out = run_host(host, extracted, [
+        "setup", "enter", "setr:alpha_kinetic:0.5", "exit", "setr:alpha_kinetic:0.25", "exit",
+        "setr:F:inf", "step:0:0.1", "setr:F:0.5", "step:0:0.1", "getr:x", "term", "free"],
+        logging=logging, env=NO_PYTHON)
+    assert code == 0, out
+    assert calls["exit"] == ["3", "0"], out
+    assert calls["step:0:0.1"] == ["2", "0"], out
+    errors = [entry for entry in logs if entry[0] == 3]
+    assert errors and "alpha_kinetic" in errors[0][2] and errors[0][1] == "logStatusError", logs
+    assert [entry for entry in logs if entry[0] == 2 and "F = inf" in entry[2]], logs
+    assert all(category.startswith("log") for _, category, _ in logs), logs
+    assert len(values) == 1 and np.isfinite(values[0][1])
+
+
+def test_the_fmu_state_is_a_checked_blob(fmus):
+    """Get, step, set back, step again: the same numbers. A serialized state with one byte changed, one of another
+    scene and garbage are refused with fmi2Error and their reason; the instance is unchanged."""
+    from fmpy.fmi1 import FMICallException
+
+    from .fmu_tools import Slave
+
+    slave = Slave(fmus["friction"][0])
+    other = Slave(fmus["smooth"][0])
+    try:
+        slave.step(0.3, 0.4)
+        state = slave.fmu.getFMUstate()
+        slave.step(0.2, -0.3)
+        after = slave.get("x", "v", "reaction")
+        slave.fmu.setFMUstate(state)
+        slave.time -= 0.2
+        slave.step(0.2, -0.3)
+        assert slave.get("x", "v", "reaction") == after
+        blob = bytearray(slave.fmu.serializeFMUstate(state))
+        restored = slave.fmu.deSerializeFMUstate(bytes(blob))
+        slave.fmu.setFMUstate(restored)
+        blob[len(blob) // 2] ^= 0x01
+        foreign = other.fmu.serializeFMUstate(other.fmu.getFMUstate())
+        for bad, reason in ((bytes(blob), "checksum"), (foreign, "another scene"), (b"garbage", "not a serialized")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException) as refused:
+                slave.fmu.deSerializeFMUstate(bad)
+            assert refused.value.status == 3
+            assert any(reason in message for _, message in slave.messages), (reason, slave.messages)
+        slave.step(0.1, 0.2)  # still usable
+    finally:
+        slave.close()
+        other.close()
+
+
+def test_two_instances_on_two_threads_give_the_library_numbers(fmus):
+    """ctypes lets go of the GIL in a foreign call: both instances step at once, each its own numbers."""
+    from .fmu_tools import Slave
+
+    fmu, scene_path = fmus["smooth"]
+    scene = load_scene(scene_path)
+    results, errors = {}, []
+
+    def drive(seed):
+        try:
+            slave = Slave(fmu, name=f"element{seed}")
+            element = Element(scene)
+            rng = np.random.default_rng(seed)
+            for _ in range(300):
+                size, force = float(rng.choice([0.01, 0.05])), float(rng.uniform(-1, 1))
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert slave.get("x", "v") == [element.x, element.v]
+            slave.close()
+            results[seed] = element.x
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=drive, args=(seed,)) for seed in (1, 2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not errors, errors
+    assert len(results) == 2 and results[1] != results[2]
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--fmi", "3"], "FMI 3.0"),
+    (["--causality", "displacement"], "native runtime"),
+])
+def test_what_the_native_runtime_does_not_build_is_refused_in_one_line(tmp_path, arguments, culprit):
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(base_tables(mass=None, cubic=None, damper=None)) if "--causality" in arguments
+                    else scene_text(SCENES["smooth"]))
+    out = tmp_path / "out.fmu"
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "--runtime", "native",
+                           "-o", str(out), *arguments], capture_output=True, text=True)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert culprit in done.stderr and not out.exists()
+
+
+def test_the_cli_builds_a_native_fmu(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(SCENES["smooth"]))
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "--runtime", "native",
+                           "-o", str(tmp_path / "element.fmu")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == str(tmp_path / "element.fmu")
+    assert parse_scene(scene_text(SCENES["smooth"]), "s.toml").solver.stepper in NATIVE_STEPPERS
