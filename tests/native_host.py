@@ -57,6 +57,7 @@ class Extracted:
         self.library = folder / "binaries" / "linux64" / f"{identifier}.so"
         self.resources = (folder / "resources").as_uri()
         self.vr = {v.get("name"): int(v.get("valueReference")) for v in root.iter("ScalarVariable")}
+        self.outputs = [v.get("name") for v in root.iter("ScalarVariable") if v.get("causality") == "output"]
 
 
 def run_host(host: Path, fmu: Extracted, commands, logging: bool = False, env=None, timeout=300):

@@ -17,13 +17,14 @@ from prandtl_fmu import load_scene, parse_scene, simulate
 from prandtl_fmu.driver import Element
 from prandtl_fmu.native.kernels import NATIVE_STEPPERS
 
-from .conftest import base_tables, scene_text
+from .conftest import SCENES as SCENE_FOLDER, base_tables, scene_text
 from .native_host import Extracted, compile_host, run_host
 
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
     pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
 
+PAPER = SCENE_FOLDER / "paper-section-8.toml"
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
             "dissipated_friction", "energy_residual")
 SOLVER = {"stepper": "implicit", "step": 0.01, "stop_time": 10.0, "output_interval": 0.1}
@@ -40,6 +41,8 @@ SCENES = {
     # massless: the dashpot sets the rate
     "massless": base_tables(mass=None, cubic=None, solver=dict(SOLVER, stepper="implicit"),
                             load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
+    # the paper's section 8: 100 branches on the memory stack
+    "paper": None,
 }
 
 
@@ -51,7 +54,7 @@ def fmus(tmp_path_factory):
     built = {}
     for name, tables in SCENES.items():
         path = folder / f"{name}.toml"
-        path.write_text(scene_text(tables))
+        path.write_text(scene_text(tables) if tables else PAPER.read_text())
         built[name] = (build_fmu(path, folder / f"{name}.fmu", runtime="native"), path)
     return built
 

@@ -33,7 +33,7 @@ enum { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED };
 
 typedef struct {
     double p[N_PARAMS];   /* the coefficients in use */
-    double cs[NB_ARR];    /* the series dashpots in use */
+    double cs[NB_CS];    /* the series dashpots in use */
     int stepper;          /* index into STEPPER_NAMES */
     double h;
     double x, v, u[NB_ARR];
@@ -49,7 +49,7 @@ typedef struct {
     uint32_t version, size;
     char digest[65];
     Element element;
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_ARR];
+    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
     int scene_load, stepper_valid, initialized;
     char stepper[32];
     uint64_t checksum;
@@ -61,7 +61,7 @@ typedef struct {
     int logging, phase, last_step_failed;
     Element el;
     /* what the master set */
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_ARR];
+    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
     int scene_load, initialized;
     char stepper[32];
     int stepper_valid; /* the string fitted in the buffer */
@@ -755,7 +755,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           isfinite(s->F) && isfinite(s->start_time) && e->steps >= 0 && e->stepper >= 0 && e->stepper < N_STEPPERS &&
           isfinite(e->h) && e->h > 0))
         return "it holds a non-finite or out-of-range value";
-    for (i = 0; i < NB; i++) {
+    for (i = 0; i < (STACK ? 0 : NB); i++) { /* the stack's state: checked by the checksum */
         if (!(fabs(e->u[i]) <= ETA[i])) {
             snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);
             return buffer;

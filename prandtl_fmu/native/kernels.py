@@ -90,6 +90,18 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
     model = _model(p, kp, etap, csp)
     m, k0, k3, c, k, eta, cs, friction = model
     u = {u}
+    if {stack}:  # stack.fresh_state(params, x0) in place: one sticking piece, u_i = x - x0 + u0_i
+        x_start = p[1] if {massive} else 0.0
+        for i in range(u.shape[0]):
+            u[i] = 0.0
+        u[STACK_X] = x_start
+        u[STACK_COUNT] = 1.0
+        u[STACK_HEADER] = 0.0
+        u[STACK_HEADER + 1] = k.shape[1] - 1
+        u[STACK_HEADER + 2] = -x_start
+        u[STACK_HEADER + 3] = 0.0
+        u[STACK_HEADER + 4] = 1.0
+        resync(k, u)
     if {massive}:
         xv[0] = p[1]
         xv[1] = p[2]
@@ -113,6 +125,7 @@ def structure(scene) -> dict:
     """The scene's structure as the generated source needs it (which effects, how many branches)."""
     branches = scene.branches
     n = 0 if branches is None else branches.n
+    on_stack = is_stack_scene(scene)
     friction = scene.friction
     if friction is None:
         friction_source = "None"
@@ -125,10 +138,11 @@ def structure(scene) -> dict:
         "m": "p[0]" if scene.mass is not None else "None",
         "k0": "p[3]" if scene.spring is not None else "None",
         "k3": "p[4]" if scene.cubic is not None else "None",
-        "k": f"carray(kp, ({n},))" if n else "None",
-        "eta": f"carray(etap, ({n},))" if n else "None",
+        "k": f"carray(kp, (10, {n + 1}))" if on_stack else f"carray(kp, ({n},))" if n else "None",
+        "eta": "None" if on_stack else f"carray(etap, ({n},))" if n else "None",
         "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
-        "u": f"carray(up, ({n},))" if n else "None",
+        "u": f"carray(up, ({state_size(scene)},))" if on_stack else f"carray(up, ({n},))" if n else "None",
+        "stack": "True" if on_stack else "False",
         "friction": friction_source,
         "massive": "True" if scene.mass is not None else "False",
     }
@@ -138,14 +152,25 @@ def unsupported(scene) -> str | None:
     """Why the native runtime cannot take ``scene`` yet, or None."""
     branches = scene.branches
     if branches is not None and branches.continuum:
-        return "the continuum (the memory stack) is not in the native runtime yet: build with --runtime python"
+        return ("the continuum (its spectra on the memory stack) is not in the native runtime yet: build with "
+                "--runtime python")
+    return None
+
+
+def is_stack_scene(scene) -> bool:
+    """Whether the scene's branches run on the memory stack (``driver.choose_branch_kernel``: many branches with an
+    admissible initial state; every native stepper takes it, so one kernel serves them all)."""
     from ..driver import choose_branch_kernel
 
-    for name in NATIVE_STEPPERS:
-        if branches is not None and choose_branch_kernel(scene, name) == "stack":
-            return (f"{branches.n} branches run on the memory stack, which is not in the native runtime yet: build "
-                    "with --runtime python")
-    return None
+    return scene.branches is not None and choose_branch_kernel(scene, NATIVE_STEPPERS[0]) == "stack"
+
+
+def state_size(scene) -> int:
+    """The length of the branches' state: n elongations, or the memory stack's state (``stack.fresh_state``)."""
+    from ..kernels import stack
+
+    n = 0 if scene.branches is None else scene.branches.n
+    return stack.HEADER + stack.ROW * (n + 1) if is_stack_scene(scene) else n
 
 
 def variants(scene) -> list:
@@ -182,6 +207,7 @@ def compile_kernels(scene, steppers) -> list:
     from ..kernels.increment import solve_increment
     from ..kernels.play import branch_force, move
     from ..kernels.smooth import elastic_force
+    from ..kernels.stack import COUNT, HEADER, X, resync
     from ..loads import force_at
     from ..steppers import get_stepper
 
@@ -193,7 +219,8 @@ def compile_kernels(scene, steppers) -> list:
         for stepper in list(steppers) + [None]:
             namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
                              tangent=tangent, branch_force=branch_force, move=move, solve_increment=solve_increment,
-                             elastic_force=elastic_force, force_at=force_at,
+                             elastic_force=elastic_force, force_at=force_at, resync=resync, STACK_X=X,
+                             STACK_COUNT=COUNT, STACK_HEADER=HEADER,
                              run=get_stepper(stepper).loop_for(scene) if stepper else None)
             exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
             for helper in ("_model", "_load"):  # inlined into each C function
