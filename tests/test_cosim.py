@@ -34,6 +34,18 @@ def test_libcosim_run_of_the_shipped_example_agrees_with_fmpy(tmp_path):
     assert np.abs(cosim["x"]).max() > 0.5  # the branches yielded: x reaches the plastic range
 
 
+def test_libcosim_runs_the_native_element_as_the_pythonfmu_one_bit_for_bit(tmp_path):
+    """The native FMU (no Python in its binary, no recipe) in libcosim: the same run, to the bit."""
+    if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: a native FMU cannot be built here")
+    stop = 10.0
+    runs = {runtime: run_cosim.run(run_cosim.build(tmp_path / runtime, runtime=runtime), stop)
+            for runtime in ("python", "native")}
+    for name in ("x", "v", "reaction"):
+        assert runs["native"][name] == runs["python"][name]
+    assert np.abs(np.array(runs["native"]["x"])).max() > 0.5
+
+
 def test_fmpy_example_script_runs_the_fmu_as_the_library(tmp_path):
     from prandtl_fmu import Element, load_scene
     from prandtl_fmu.fmu.build import build_fmu

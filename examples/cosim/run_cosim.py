@@ -25,8 +25,9 @@ from prandtl_fmu.cli import require_extras  # noqa: E402  (the checkout's packag
 NANOSECONDS = 1_000_000_000
 
 
-def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml"):
-    """Build both FMUs and the system structure into ``folder``; return the structure's path."""
+def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml", runtime="python"):
+    """Build both FMUs and the system structure into ``folder``; return the structure's path. ``runtime``: the
+    element's ("native": no Python in its binary, README "Which FMU to build")."""
     from pythonfmu import FmuBuilder
 
     from prandtl_fmu.fmu.build import build_fmu
@@ -34,7 +35,7 @@ def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml"):
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    build_fmu(scene, folder / "PrandtlElement.fmu")
+    build_fmu(scene, folder / "PrandtlElement.fmu", runtime=runtime)
     source = HERE / "prandtl_example_harmonic_force.py"
     try:
         FmuBuilder.build_FMU(source, dest=folder / "HarmonicForce.fmu")
@@ -93,10 +94,12 @@ def main():
     parser.add_argument("--out", default=str(ROOT / "out" / "cosim"))
     parser.add_argument("--stop-time", type=float, default=100.0)
     parser.add_argument("--plot")
+    parser.add_argument("--runtime", choices=("python", "native"), default="python",
+                        help="the element FMU's runtime (native: no Python in its binary)")
     args = parser.parse_args()
     require_extras({"the co-simulation": (["libcosimpy"], "cosim")}
                    | ({"--plot": (["matplotlib"], "plot")} if args.plot else {}))
-    structure = build(args.out, args.scene)
+    structure = build(args.out, args.scene, runtime=args.runtime)
     columns = run(structure, args.stop_time)
     path = os.path.join(args.out, "cosim.csv")
     with open(path, "w", newline="") as fh:
