@@ -1,385 +1,14 @@
-/* The native FMU's FMI 2.0 co-simulation layer: glue only, no numerics.
- *
- * Every number comes from the library's kernels, compiled by numba for this scene (native/kernels.py)
- * and declared in the generated "scene.h" with the scene's constants, the variables of the FMU (the same
- * names and value references as the PythonFMU FMU of the scene) and the kernels' symbols. This file does
- * what fmu/slave.py and driver.Element do around them, in the same order of floating-point operations:
- * the element's clock (origin + steps * grid), a duration split into whole steps and a last shorter one,
- * the parameters handed over at a step, the refusals (fmi2Discard for a bad input or a step that fails,
- * the state unchanged; fmi2Error for a bad start value or a bad FMU state, logged even with logging off,
- * never a NULL category).
- */
-#include <math.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
+/* The native FMU's FMI 2.0 co-simulation layer over the element (element.h). */
 #include "fmi2Functions.h"
-#include "scene.h"
+#define FMI "fmi2"
+#include "element.h"
 
-/* set by the stubs of numba's error path (stubs.c): a kernel raised */
-extern __thread int prandtl_kernel_failed;
-
-#define MAX_STEPS 9007199254740992.0 /* 2^53 */
-#define SHORTEST_STEP 1e-150
-#define STATE_MAGIC "PRANDTL-FMU-STATE"
-#define STATE_VERSION 1
-
-enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
-enum { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED };
-
-typedef struct {
-    double p[N_PARAMS];   /* the coefficients in use */
-    double cs[NB_CS];    /* the series dashpots in use */
-    int stepper;          /* index into STEPPER_NAMES */
-    double h;
-    double x, v, u[NB_ARR];
-    double account[4], out[3], erow[6], initial_energy;
-    double origin, grid;  /* the clock: time = origin + steps * grid (grid 0: none yet) */
-    int64_t steps;
-    double force;         /* the load of the last advance: force, plus the scene's [load] with scene_load */
-    int scene_load;
-} Element;
-
-typedef struct {
-    char header[24];
-    uint32_t version, size;
-    char digest[65];
-    Element element;
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int scene_load, stepper_valid, initialized;
-    char stepper[32];
-    uint64_t checksum;
-} State;
-
-typedef struct {
-    fmi2CallbackFunctions cb;
-    char* name;
-    int logging, phase, last_step_failed;
-    Element el;
-    /* what the master set */
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int scene_load, initialized;
-    char stepper[32];
-    int stepper_valid; /* the string fitted in the buffer */
-    int handed;        /* the settings were handed over and nothing changed since */
-} Instance;
-
-/* ------------------------------------------------------------------ logging */
-
-static void say(Instance* c, fmi2Status status, const char* format, ...)
+static void emit(Instance* c, int status, const char* category, const char* message)
 {
-    static const char* categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
-                                       "logStatusFatal", "logAll"};
-    char text[1024], message[2048];
-    size_t i, j;
-    va_list args;
-    if (c->cb.logger == NULL || (status == fmi2OK && !c->logging))
-        return;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    /* the message is the logger's format: every % doubled (a host that formats it prints the text, one that
-       does not still gets the words) */
-    for (i = 0, j = 0; text[i] && j + 2 < sizeof message; i++) {
-        if (text[i] == '%')
-            message[j++] = '%';
-        message[j++] = text[i];
-    }
-    message[j] = 0;
-    c->cb.logger(c->cb.componentEnvironment, c->name ? c->name : "", status, categories[status], message);
+    fmi2CallbackLogger logger = (fmi2CallbackLogger)c->logger;
+    logger((fmi2ComponentEnvironment)c->env, c->name ? c->name : "", (fmi2Status)status, category, message);
 }
 
-/* ------------------------------------------------------------------ the element */
-
-static double element_time(const Element* e) { return e->steps ? e->origin + (double)e->steps * e->grid : e->origin; }
-
-static void set_time(Element* e, double value)
-{
-    if (e->grid != 0.0 && fabs(value - element_time(e)) <= 1e-9 * e->grid)
-        return;
-    e->origin = value;
-    e->steps = 0;
-}
-
-static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
-
-/* the load of an advance: the force held, or the scene's [load] plus it */
-typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
-static const double NO_TABLE[1] = {0.0};
-
-static Load load_of(double force, int scene_load)
-{
-    Load l;
-    if (scene_load) {
-        l.kind = LOAD_KIND;
-        l.lk[0] = LOAD_LK[0] + force;
-        l.lk[1] = LOAD_LK[1];
-        l.lk[2] = LOAD_LK[2];
-        l.t = LOAD_T;
-        l.f = LOAD_F;
-        l.n = LOAD_N;
-    } else {
-        l.kind = 0;
-        l.lk[0] = force;
-        l.lk[1] = 0.0;
-        l.lk[2] = 0.0;
-        l.t = NO_TABLE;
-        l.f = NO_TABLE;
-        l.n = 1;
-    }
-    return l;
-}
-
-static void record(Element* e, double t)
-{
-    Load l = load_of(e->force, e->scene_load);
-    double xv[2] = {e->x, e->v};
-    (damped(e) ? record_c : record_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, e->account, e->out, e->erow,
-                                        l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, t);
-}
-
-/* Element.reset(force): the initial state under the force held; 0 when a massless element has no equilibrium */
-static int reset(Element* e, double force)
-{
-    Load l = load_of(force, 0);
-    double xv[2];
-    int ok;
-    e->origin = 0.0;
-    e->steps = 0;
-    e->grid = 0.0;
-    e->force = force;
-    e->scene_load = 0;
-    memcpy(e->u, U0, sizeof e->u);
-    ok = (int)(damped(e) ? initial_c : initial_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, l.kind, l.lk,
-                                                    (double*)l.t, (double*)l.f, l.n);
-    if (!ok || prandtl_kernel_failed)
-        return 0;
-    e->x = xv[0];
-    e->v = xv[1];
-    memset(e->account, 0, sizeof e->account);
-    record(e, 0.0);
-    e->initial_energy = e->erow[0] + e->erow[1];
-    return 1;
-}
-
-/* driver.split_duration */
-static void split_duration(double duration, double h, double* whole, double* rest)
-{
-    double ratio = duration / h, nearest = nearbyint(ratio);
-    if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
-        *whole = nearest;
-        *rest = 0.0;
-        return;
-    }
-    *whole = floor(ratio);
-    *rest = duration - *whole * h;
-}
-
-static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first, double h, int64_t steps)
-{
-    double xv[2] = {e->x, e->v};
-    int64_t taken = (damped(e) ? ADVANCE_C : ADVANCE_N)[e->stepper](
-        e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, e->account, e->out, e->erow, l->kind, (double*)l->lk,
-        (double*)l->t, (double*)l->f, l->n, t_base, first, h, steps);
-    if (prandtl_kernel_failed)
-        return -1;
-    e->x = xv[0];
-    e->v = xv[1];
-    return taken;
-}
-
-/* Element.advance: NULL, or why the step was not taken (the element then is as it was: the caller rolls back) */
-static const char* advance(Element* e, double duration, double force, int scene_load, double* failed_at)
-{
-    double h = e->h, whole, rest, t_base;
-    int64_t first, taken;
-    Load l;
-    *failed_at = NAN;
-    if (duration == 0.0)
-        return NULL;
-    if (duration < SHORTEST_STEP)
-        return "the duration is shorter than 1e-150 s (a step's square underflows)";
-    if (!(duration / h < MAX_STEPS))
-        return "the duration is more than 2^53 internal steps: advance by shorter durations or with a larger step";
-    l = load_of(force, scene_load);
-    e->force = force;
-    e->scene_load = scene_load;
-    if (e->grid != h) {
-        e->origin = element_time(e);
-        e->steps = 0;
-        e->grid = h;
-    }
-    split_duration(duration, h, &whole, &rest);
-    t_base = e->origin;
-    first = e->steps;
-    if (whole > 0) {
-        taken = integrate(e, &l, t_base, first, h, (int64_t)whole);
-        if (taken < (int64_t)whole) {
-            *failed_at = taken < 0 ? t_base : t_base + (double)(first + (taken < 0 ? 0 : taken)) * h;
-            return "a step could not be taken (it would leave a non-finite state)";
-        }
-    }
-    if (rest > 0) {
-        double start = t_base + (double)(first + (int64_t)whole) * h;
-        taken = integrate(e, &l, start, 0, rest, 1);
-        if (taken < 1) {
-            *failed_at = start;
-            return "a step could not be taken (it would leave a non-finite state)";
-        }
-        e->origin = e->origin + (double)(e->steps + (int64_t)whole) * h + rest;
-        e->steps = 0;
-    } else {
-        e->steps += (int64_t)whole;
-    }
-    return NULL;
-}
-
-/* ------------------------------------------------------------------ parameters */
-
-static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
-                                            "stribeck_velocity", "belt_velocity"};
-
-/* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
-static const char* parameter_problem(const Instance* c, char* buffer, size_t size)
-{
-    int i;
-    for (i = 0; i < N_PARAMS; i++) {
-        double value = c->par[i];
-        if (!P_PRESENT[i])
-            continue;
-        if (!isfinite(value)) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-        if (P_RULE[i] == 1 && !(value > 0)) {
-            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-        if (P_RULE[i] == 2 && value < 0) {
-            snprintf(buffer, size, "parameter %s: must be >= 0, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-    }
-    for (i = 0; i < (HAS_SERIES ? NB : 0); i++) {
-        if (!(isfinite(c->cbranch[i]) && c->cbranch[i] > 0)) {
-            snprintf(buffer, size, "parameter c_branch: must be finite and > 0, got %.17g", c->cbranch[i]);
-            return buffer;
-        }
-    }
-    if (HAS_STRIBECK && c->par[P_ALPHA_KINETIC] > c->par[P_ALPHA]) {
-        snprintf(buffer, size, "parameter alpha_kinetic = %.17g: must be <= alpha = %.17g",
-                 c->par[P_ALPHA_KINETIC], c->par[P_ALPHA]);
-        return buffer;
-    }
-    if (!HAS_MASS && HAS_DAMPER && !(c->par[P_C] > 0)) {
-        snprintf(buffer, size, "parameter c = %.17g: the native runtime keeps the dashpot of a massless element "
-                 "(c > 0)", c->par[P_C]);
-        return buffer;
-    }
-    return NULL;
-}
-
-static int stepper_index(const char* name)
-{
-    int i;
-    for (i = 0; i < N_STEPPERS; i++)
-        if (strcmp(name, STEPPER_NAMES[i]) == 0)
-            return i;
-    return -1;
-}
-
-static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
-{
-    if (!c->stepper_valid || stepper_index(c->stepper) < 0) {
-        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the native runtime; 'exact' and the "
-                 "steppers that do not apply to this scene are not in it)", c->stepper_valid ? c->stepper : "?",
-                 STEPPER_LIST);
-        return buffer;
-    }
-    if (!(isfinite(c->step) && c->step > 0)) {
-        snprintf(buffer, size, "parameter step = %.17g: must be finite and > 0", c->step);
-        return buffer;
-    }
-    return NULL;
-}
-
-/* slave._hand_over_settings: the coefficients, stepper and step the master set go to the element */
-static void hand_over(Instance* c)
-{
-    Element* e = &c->el;
-    int changed = memcmp(e->p, c->par, sizeof e->p) != 0 || memcmp(e->cs, c->cbranch, sizeof e->cs) != 0;
-    memcpy(e->p, c->par, sizeof e->p);
-    if (!HAS_STRIBECK)
-        e->p[P_ALPHA_KINETIC] = e->p[P_ALPHA];
-    memcpy(e->cs, c->cbranch, sizeof e->cs);
-    e->stepper = stepper_index(c->stepper);
-    e->h = c->step;
-    if (changed)
-        record(e, element_time(e));
-    c->handed = 1;
-}
-
-static const char* settings_problem(Instance* c, char* buffer, size_t size)
-{
-    const char* problem = parameter_problem(c, buffer, size);
-    return problem ? problem : stepper_problem(c, buffer, size);
-}
-
-/* ------------------------------------------------------------------ outputs */
-
-static double reaction_now(Instance* c)
-{
-    Element copy;
-    if (!HAS_FRICTION)
-        return c->el.out[2];
-    copy = c->el; /* the reaction under the F set now: a stuck mass is held against it */
-    copy.force = c->F;
-    copy.scene_load = c->scene_load;
-    record(&copy, element_time(&c->el));
-    return copy.out[2];
-}
-
-static double energy(const Element* e, int which)
-{
-    const double* r = e->erow;
-    if (which < 6)
-        return r[which];
-    return r[2] - r[3] - r[4] - r[5] - (r[0] + r[1] - e->initial_energy);
-}
-
-static double real_value(Instance* c, const Var* var)
-{
-    Element* e = &c->el;
-    double xv[2] = {e->x, e->v};
-    switch (var->what) {
-    case W_F: return c->F;
-    case W_X: return e->x;
-    case W_V: return e->v;
-    case W_REACTION: return reaction_now(c);
-    case W_STIFFNESS:
-        return (damped(e) ? stiffness_c : stiffness_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv);
-    case W_ENERGY: return energy(e, var->index);
-    case W_PARAM: return c->par[var->index];
-    case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
-    case W_STEP: return c->step;
-    }
-    return NAN;
-}
-
-static const Var* find(fmi2ValueReference vr, int type)
-{
-    int i;
-    for (i = 0; i < N_VARS; i++)
-        if (VARS[i].vr == vr && VARS[i].type == type)
-            return &VARS[i];
-    return NULL;
-}
-
-/* ------------------------------------------------------------------ FMI 2.0 */
 
 const char* fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char* fmi2GetVersion(void) { return fmi2Version; }
@@ -388,26 +17,6 @@ fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean on, size_t n, con
 {
     ((Instance*)comp)->logging = on ? 1 : 0;
     return fmi2OK;
-}
-
-static void defaults(Instance* c)
-{
-    memcpy(c->par, P_SCENE, sizeof c->par);
-    memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
-    snprintf(c->stepper, sizeof c->stepper, "%s", DEFAULT_STEPPER);
-    c->stepper_valid = 1;
-    c->step = DEFAULT_STEP;
-    c->F = 0.0;
-    c->scene_load = 0;
-    c->start_time = 0.0;
-    c->initialized = 0;
-    c->handed = 0;
-    c->phase = INSTANTIATED;
-    c->last_step_failed = 0;
-    memset(&c->el, 0, sizeof c->el);
-    hand_over(c);
-    prandtl_kernel_failed = 0;
-    reset(&c->el, 0.0);
 }
 
 fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String resources,
@@ -419,7 +28,8 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
     c = (Instance*)calloc(1, sizeof(Instance));
     if (c == NULL)
         return NULL;
-    memcpy((void*)&c->cb, functions, sizeof c->cb);
+    c->env = functions->componentEnvironment;
+    c->logger = (void*)functions->logger;
     c->name = strdup(name ? name : "");
     c->logging = logging ? 1 : 0;
     if (type != fmi2CoSimulation) {
@@ -472,43 +82,12 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
-    Instance* c = (Instance*)comp;
-    char buffer[512];
-    const char* problem;
-    double force;
-    if (c->phase != INITIALIZING) {
-        say(c, fmi2Error, "fmi2ExitInitializationMode refused: not in initialization mode");
-        return fmi2Error;
-    }
-    problem = settings_problem(c, buffer, sizeof buffer);
-    if (problem == NULL && !isfinite(c->F)) {
-        snprintf(buffer, sizeof buffer, "F = %.17g refused: the force must be finite", c->F);
-        problem = buffer;
-    }
-    if (problem == NULL) {
-        Load l = load_of(0.0, 1);
-        hand_over(c);
-        force = c->F;
-        if (c->scene_load) { /* F plus the scene's load at the start time */
-            double xv[2] = {0.0, 0.0};
-            force = c->F + scene_force_at(l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time, xv);
-        }
-        prandtl_kernel_failed = 0;
-        if (!reset(&c->el, force)) {
-            snprintf(buffer, sizeof buffer, "no equilibrium exists at t = 0 under F = %.17g N (a massless element "
-                     "with no hardening spring beyond its strength)", force);
-            problem = buffer;
-        }
-    }
-    if (problem != NULL) {
-        say(c, fmi2Error, "initialization refused: %s", problem);
-        return fmi2Error;
-    }
-    set_time(&c->el, c->start_time);
-    c->handed = 0;
-    c->initialized = 1;
-    c->phase = STEPPING;
-    return fmi2OK;
+    return (fmi2Status)core_exit_initialization((Instance*)comp);
+}
+
+fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real H, fmi2Boolean no_prior)
+{
+    return (fmi2Status)core_do_step((Instance*)comp, t, H);
 }
 
 fmi2Status fmi2Terminate(fmi2Component comp)
@@ -521,51 +100,6 @@ fmi2Status fmi2Terminate(fmi2Component comp)
 fmi2Status fmi2Reset(fmi2Component comp)
 {
     defaults((Instance*)comp);
-    return fmi2OK;
-}
-
-fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real H, fmi2Boolean no_prior)
-{
-    Instance* c = (Instance*)comp;
-    Element saved;
-    char buffer[512];
-    const char* problem;
-    double failed_at;
-    if (c->phase != STEPPING) {
-        say(c, fmi2Error, "fmi2DoStep refused: not allowed before fmi2ExitInitializationMode nor after "
-            "fmi2Terminate");
-        return fmi2Error;
-    }
-    c->last_step_failed = 1;
-    if (!c->handed) {
-        problem = settings_problem(c, buffer, sizeof buffer);
-        if (problem != NULL) {
-            say(c, fmi2Discard, "%s; steps are refused until it is set right", problem);
-            return fmi2Discard;
-        }
-        hand_over(c);
-    }
-    if (!isfinite(c->F)) {
-        say(c, fmi2Discard, "F = %.17g refused: the force must be finite; step not taken", c->F);
-        return fmi2Discard;
-    }
-    if (!(isfinite(H) && H >= 0)) {
-        say(c, fmi2Discard, "communication step %.17g refused: it must be finite and >= 0", H);
-        return fmi2Discard;
-    }
-    saved = c->el;
-    set_time(&c->el, t);
-    prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->scene_load, &failed_at);
-    if (problem == NULL && !(isfinite(c->el.x) && isfinite(c->el.v) && isfinite(c->el.out[2])))
-        problem = "it would leave a non-finite state";
-    if (problem != NULL) {
-        c->el = saved;
-        say(c, fmi2Discard, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g; try "
-            "'implicit')", t, c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h);
-        return fmi2Discard;
-    }
-    c->last_step_failed = 0;
     return fmi2OK;
 }
 
@@ -632,37 +166,11 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
 {
     Instance* c = (Instance*)comp;
     size_t i;
-    for (i = 0; i < n; i++) {
-        const Var* var = find(vr[i], T_REAL);
-        if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP)) {
-            say(c, fmi2Error, "fmi2SetReal refused: value reference %u is not a Real input or parameter", vr[i]);
+    for (i = 0; i < n; i++) /* all or nothing */
+        if (core_check_float(c, find(vr[i], T_REAL), vr[i], value[i]) != ST_OK)
             return fmi2Error;
-        }
-        if (var->what == W_PARAM && c->initialized && (var->index == P_X0 || var->index == P_V0) &&
-            value[i] != c->par[var->index]) {
-            say(c, fmi2Error, "parameter %s = %.17g refused: %s is fixed (the initial state) and cannot change after "
-                "initialization; the element is unchanged", PARAM_NAMES[var->index], value[i], PARAM_NAMES[var->index]);
-            return fmi2Error;
-        }
-    }
-    for (i = 0; i < n; i++) {
-        const Var* var = find(vr[i], T_REAL);
-        if (var->what == W_F)
-            c->F = value[i];
-        else if (var->what == W_PARAM) {
-            c->par[var->index] = value[i];
-            c->handed = 0;
-        } else if (var->what == W_CBRANCH) {
-            int j;
-            for (j = 0; j < NB; j++)
-                if (var->index < 0 || var->index == j)
-                    c->cbranch[j] = value[i];
-            c->handed = 0;
-        } else {
-            c->step = value[i];
-            c->handed = 0;
-        }
-    }
+    for (i = 0; i < n; i++)
+        core_set_float(c, find(vr[i], T_REAL), value[i]);
     return fmi2OK;
 }
 
@@ -697,72 +205,53 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
             return fmi2Error;
         }
     }
-    for (i = 0; i < n; i++) {
-        c->stepper_valid = strlen(value[i]) < sizeof c->stepper;
-        snprintf(c->stepper, sizeof c->stepper, "%s", c->stepper_valid ? value[i] : "");
-        c->handed = 0;
-    }
+    for (i = 0; i < n; i++)
+        core_set_stepper(c, value[i]);
     return fmi2OK;
 }
 
+/* ------------------------------------------------------------------ the rest of FMI 2.0 co-simulation */
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[], size_t nu,
+                                        const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[])
+{
+    say((Instance*)comp, fmi2Error, "fmi2GetDirectionalDerivative: not provided (read the output stiffness)");
+    return fmi2Error;
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                                       const fmi2Integer order[], const fmi2Real value[])
+{
+    say((Instance*)comp, fmi2Error, "fmi2SetRealInputDerivatives: the FMU holds its input over a step");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                                        const fmi2Integer order[], fmi2Real value[])
+{
+    say((Instance*)comp, fmi2Error, "fmi2GetRealOutputDerivatives: not provided");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status* value) { return fmi2Discard; }
+fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real* value)
+{
+    if (s != fmi2LastSuccessfulTime)
+        return fmi2Discard;
+    *value = element_time(&((Instance*)comp)->el);
+    return fmi2OK;
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer* value) { return fmi2Discard; }
+fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean* value)
+{
+    if (s != fmi2Terminated)
+        return fmi2Discard;
+    *value = ((Instance*)comp)->last_step_failed ? fmi2True : fmi2False;
+    return fmi2OK;
+}
+fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String* value) { return fmi2Discard; }
+
 /* ------------------------------------------------------------------ FMU state: a checked blob */
-
-static uint64_t fnv1a(const unsigned char* bytes, size_t size)
-{
-    uint64_t hash = 1469598103934665603ULL;
-    size_t i;
-    for (i = 0; i < size; i++) {
-        hash ^= bytes[i];
-        hash *= 1099511628211ULL;
-    }
-    return hash;
-}
-
-static void capture(const Instance* c, State* s)
-{
-    memset(s, 0, sizeof *s);
-    snprintf(s->header, sizeof s->header, "%s", STATE_MAGIC);
-    s->version = STATE_VERSION;
-    s->size = (uint32_t)sizeof *s;
-    snprintf(s->digest, sizeof s->digest, "%s", DIGEST);
-    s->element = c->el;
-    s->F = c->F;
-    s->step = c->step;
-    s->start_time = c->start_time;
-    memcpy(s->par, c->par, sizeof s->par);
-    memcpy(s->cbranch, c->cbranch, sizeof s->cbranch);
-    s->scene_load = c->scene_load;
-    s->stepper_valid = c->stepper_valid;
-    s->initialized = c->initialized;
-    memcpy(s->stepper, c->stepper, sizeof s->stepper);
-    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
-}
-
-/* why a state cannot be restored here, or NULL */
-static const char* state_problem(const State* s, char* buffer, size_t size)
-{
-    const Element* e = &s->element;
-    int i;
-    if (memcmp(s->header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
-        return "not a serialized state of a prandtl_fmu native FMU";
-    if (s->version != STATE_VERSION || s->size != sizeof *s)
-        return "a state of another version of the native runtime";
-    if (strncmp(s->digest, DIGEST, sizeof s->digest) != 0)
-        return "a state of another scene (its digest differs)";
-    if (s->checksum != fnv1a((const unsigned char*)s, offsetof(State, checksum)))
-        return "its checksum does not match: the state was altered";
-    if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->origin) && isfinite(e->grid) && isfinite(e->force) &&
-          isfinite(s->F) && isfinite(s->start_time) && e->steps >= 0 && e->stepper >= 0 && e->stepper < N_STEPPERS &&
-          isfinite(e->h) && e->h > 0))
-        return "it holds a non-finite or out-of-range value";
-    for (i = 0; i < (STACK ? 0 : NB); i++) { /* the stack's state: checked by the checksum */
-        if (!(fabs(e->u[i]) <= ETA[i])) {
-            snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);
-            return buffer;
-        }
-    }
-    return NULL;
-}
 
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate* state)
 {
@@ -777,39 +266,6 @@ fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate* state)
     return fmi2OK;
 }
 
-static fmi2Status restore(Instance* c, const State* s)
-{
-    char buffer[256];
-    Instance trial;
-    const char* problem = state_problem(s, buffer, sizeof buffer);
-    if (problem == NULL) {
-        memcpy((void*)&trial, c, sizeof trial);
-        memcpy(trial.par, s->par, sizeof trial.par);
-        memcpy(trial.cbranch, s->cbranch, sizeof trial.cbranch);
-        trial.stepper_valid = s->stepper_valid;
-        memcpy(trial.stepper, s->stepper, sizeof trial.stepper);
-        trial.stepper[sizeof trial.stepper - 1] = 0;
-        trial.step = s->step;
-        problem = settings_problem(&trial, buffer, sizeof buffer);
-    }
-    if (problem != NULL) {
-        say(c, fmi2Error, "FMU state refused (%s); the instance is unchanged", problem);
-        return fmi2Error;
-    }
-    c->el = s->element;
-    c->F = s->F;
-    c->step = s->step;
-    c->start_time = s->start_time;
-    memcpy(c->par, s->par, sizeof c->par);
-    memcpy(c->cbranch, s->cbranch, sizeof c->cbranch);
-    c->scene_load = s->scene_load;
-    c->stepper_valid = s->stepper_valid;
-    memcpy(c->stepper, s->stepper, sizeof c->stepper);
-    c->stepper[sizeof c->stepper - 1] = 0;
-    c->handed = 0;
-    return fmi2OK;
-}
-
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
 {
     Instance* c = (Instance*)comp;
@@ -817,7 +273,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
         say(c, fmi2Error, "FMU state refused (NULL); the instance is unchanged");
         return fmi2Error;
     }
-    return restore(c, (const State*)state);
+    return (fmi2Status)restore(c, (const State*)state);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate* state)
@@ -870,43 +326,3 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], s
     return fmi2OK;
 }
 
-/* ------------------------------------------------------------------ the rest of FMI 2.0 co-simulation */
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[], size_t nu,
-                                        const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[])
-{
-    say((Instance*)comp, fmi2Error, "fmi2GetDirectionalDerivative: not provided (read the output stiffness)");
-    return fmi2Error;
-}
-
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
-                                       const fmi2Integer order[], const fmi2Real value[])
-{
-    say((Instance*)comp, fmi2Error, "fmi2SetRealInputDerivatives: the FMU holds its input over a step");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
-                                        const fmi2Integer order[], fmi2Real value[])
-{
-    say((Instance*)comp, fmi2Error, "fmi2GetRealOutputDerivatives: not provided");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status* value) { return fmi2Discard; }
-fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real* value)
-{
-    if (s != fmi2LastSuccessfulTime)
-        return fmi2Discard;
-    *value = element_time(&((Instance*)comp)->el);
-    return fmi2OK;
-}
-fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer* value) { return fmi2Discard; }
-fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean* value)
-{
-    if (s != fmi2Terminated)
-        return fmi2Discard;
-    *value = ((Instance*)comp)->last_step_failed ? fmi2True : fmi2False;
-    return fmi2OK;
-}
-fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String* value) { return fmi2Discard; }
