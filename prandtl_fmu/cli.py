@@ -103,8 +103,9 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--runtime", choices=("python", "native"), default="python",
                        help="python (default): PythonFMU, runs in the host's Python; native: the scene's compiled "
                             "kernels and a C FMI layer, no Python in the host (needs a C compiler to build; the "
-                            "element, FMI 2.0)")
-    build.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (3: not built yet)")
+                            "element, FMI 2.0 or 3.0)")
+    build.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                       help="FMI version: 2 (default) or 3 (the native runtime only)")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")

@@ -247,16 +247,16 @@ def test_two_instances_on_two_threads_give_the_library_numbers(fmus):
 
 
 @pytest.mark.parametrize("arguments, culprit", [
-    (["--fmi", "3"], "FMI 3.0"),
-    (["--causality", "displacement"], "native runtime"),
+    (["--runtime", "python", "--fmi", "3"], "FMI 2.0"),
+    (["--runtime", "native", "--causality", "displacement"], "native runtime"),
 ])
-def test_what_the_native_runtime_does_not_build_is_refused_in_one_line(tmp_path, arguments, culprit):
+def test_what_a_runtime_does_not_build_is_refused_in_one_line(tmp_path, arguments, culprit):
     path = tmp_path / "scene.toml"
     path.write_text(scene_text(base_tables(mass=None, cubic=None, damper=None)) if "--causality" in arguments
                     else scene_text(SCENES["smooth"]))
     out = tmp_path / "out.fmu"
-    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "--runtime", "native",
-                           "-o", str(out), *arguments], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(out), *arguments],
+                          capture_output=True, text=True)
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
     assert culprit in done.stderr and not out.exists()
 
@@ -269,3 +269,83 @@ def test_the_cli_builds_a_native_fmu(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == str(tmp_path / "element.fmu")
     assert parse_scene(scene_text(SCENES["smooth"]), "s.toml").solver.stepper in NATIVE_STEPPERS
+
+
+# ---------------------------------------------------------------- FMI 3.0
+
+
+@pytest.fixture(scope="module")
+def fmus3(fmus, tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("native3")
+    return {name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3), fmus[name][1])
+            for name in ("friction", "paper")}
+
+
+@pytest.mark.parametrize("name", ["friction", "paper"])
+def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmus3, name):
+    """FMPy's validator finds nothing; simulate_fmu with the scene's load gives the library's x, v, reaction and the
+    array u (n elongations, sized by the structural parameter n) bit for bit."""
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    fmu, scene_path = fmus3[name]
+    assert validate_fmu(str(fmu)) == []
+    description = read_model_description(str(fmu))
+    assert description.fmiVersion == "3.0"
+    by_name = {v.name: v for v in description.modelVariables}
+    scene = load_scene(scene_path)
+    assert by_name["n"].causality == "structuralParameter" and int(by_name["n"].start) == scene.branches.n
+    assert by_name["u"].dimensions[0].valueReference == by_name["n"].valueReference
+    stop = min(scene.solver.stop_time, 20.0)
+    library = simulate(scene.with_solver(stop_time=stop), states=True)
+    result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True}, output=["x", "v", "reaction", "u"])
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column))
+    np.testing.assert_array_equal(np.stack(result["u"]), library.u)
+
+
+def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu, scene_path = fmus3["friction"]
+    description = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
+    messages = []
+
+    def log(env, status, category, message):
+        messages.append(message.decode())
+
+    slave = FMU3Slave(guid=description.instantiationToken, unzipDirectory=extract(str(fmu)),
+                      modelIdentifier=description.coSimulation.modelIdentifier)
+    slave.instantiate(loggingOn=False, logMessage=log)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    element = Element(load_scene(scene_path))
+    rng = np.random.default_rng(11)
+    t = 0.0
+    try:
+        for _ in range(30):
+            size, force = float(rng.choice([0.013, 0.05, 0.1])), float(rng.uniform(-1, 1))
+            slave.setFloat64([vr["F"]], [force])
+            slave.doStep(t, size)
+            element.time = t
+            element.advance(size, force)
+            t += size
+            assert slave.getFloat64([vr["x"], vr["v"], vr["reaction"]]) == [element.x, element.v, element.reaction]
+            assert slave.getFloat64([vr["u"]], nValues=3) == element.elongations().tolist()
+        state = slave.getFMUState()
+        blob = bytearray(slave.serializeFMUState(state))
+        blob[-12] ^= 0x40
+        with pytest.raises(FMICallException):
+            slave.deserializeFMUState(bytes(blob))
+        assert any("checksum" in message or "altered" in message for message in messages), messages
+        slave.setFMUState(state)
+        assert slave.getFloat64([vr["x"]]) == [element.x]
+    finally:
+        slave.terminate()
+        slave.freeInstance()

@@ -64,7 +64,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
 
     ``runtime="native"``: an FMU whose binary holds the scene's compiled kernels and a C FMI layer, no Python
-    (``prandtl_fmu/native``: the element, FMI 2.0; ``fmi`` must be 2); ``loader`` does not apply to it.
+    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); ``loader`` does not apply to it.
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")

@@ -52,9 +52,8 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
     from ..fmu.build import build_fmu
     from ..scene import load_scene
 
-    if fmi != 2:
-        raise NativeBuildError(f"the native runtime builds FMI 2.0 FMUs only so far (asked: FMI {fmi}.0); FMI 3.0 "
-                               "is not built yet")
+    if fmi not in (2, 3):
+        raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path)
     if scene.causality == "displacement":
         raise NativeBuildError("the connector ([fmu] causality = \"displacement\") is not in the native runtime "
@@ -83,24 +82,30 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
         compiled = kernels.compile_kernels(scene, steppers)
         objects = kernels.emit_objects(compiled, scratch)
         (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path))
+        vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
         (scratch / "stubs.c").write_text(_stubs(objects))
         library = scratch / f"{identifier}.so"
         exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
-        exports.write_text("{ global: fmi2*; local: *; };\n")
+        exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
+        headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
+        n_vr = next(int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n")
         command = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
-                   f"-I{scratch}", f"-I{FMI_HEADERS}", str(HERE / "fmi2.c"), str(scratch / "stubs.c"),
+                   f"-DVR_U={vr_u}", f"-DVR_N={n_vr}", f"-DVR_TIME={vr_u + 1}",
+                   f"-I{scratch}", f"-I{headers}", str(HERE / f"fmi{fmi}.c"), str(scratch / "stubs.c"),
                    *map(str, objects), "-o", str(library), "-lm", "-Wl,--no-undefined",
                    f"-Wl,--version-script={exports}"]
         done = subprocess.run(command, capture_output=True, text=True)
         if done.returncode != 0:
             errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
             raise NativeBuildError(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
-        native_description = _native_description(description)
+        native_description = (_native_description(description) if fmi == 2
+                              else fmi3_description(root, scene, vr_u))
+        platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
             archive.writestr("modelDescription.xml", native_description)
-            archive.write(library, f"binaries/linux64/{identifier}.so")
+            archive.write(library, f"binaries/{platform}/{identifier}.so")
             for name, data in kept.items():
                 archive.writestr(name, data)
         os.replace(partial, out)
@@ -194,6 +199,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "record": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double)",
         "stiffness": "double {name}(P, P, P, P, P, P)",
         "initial": "int64_t {name}(P, P, P, P, P, P, int64_t, P, P, P, int64_t)",
+        "elongations": "int64_t {name}(P, P, P, P, P, P)",
     }
     for name, symbol in symbols.items():
         if name == "force_at":
@@ -204,7 +210,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         chosen = suffix if suffix in variants else variants[0]
         lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{"
                      + ", ".join(f"advance_{name}_{chosen}" for name in steppers) + "};")
-        for function in ("record", "stiffness", "initial"):
+        for function in ("record", "stiffness", "initial", "elongations"):
             lines.append(f"#define {function}_{suffix} {function}_{chosen}")
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
@@ -258,3 +264,84 @@ def _stubs(objects) -> str:
         elif symbol.startswith(("Py", "_Py", "NRT_", "numba_")):
             lines.append(f"void* {symbol}(void) {{ prandtl_kernel_failed = 1; return dummy; }}")
     return "\n".join(lines) + "\n"
+
+
+def fmi3_description(root, scene, vr_u) -> str:
+    """The FMI 3.0 model description from the FMI 2.0 one: the same scalars (Real -> Float64, with their value
+    references, units, causalities, variabilities, start values), n as a fixed structural parameter (UInt64) and
+    the elongations u, an array of n Float64 outputs (none without branches)."""
+    n = 0 if scene.branches is None else scene.branches.n
+    top = ET.Element("fmiModelDescription", {
+        "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
+        "description": root.get("description", ""), "author": root.get("author", ""),
+        "version": root.get("version", ""), "generationTool": "prandtl_fmu (native runtime)",
+        "variableNamingConvention": "structured"})
+    cosim = root.find("CoSimulation")
+    ET.SubElement(top, "CoSimulation", {
+        "modelIdentifier": cosim.get("modelIdentifier"), "needsExecutionTool": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
+        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
+        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
+        "hasEventMode": "false"})
+    for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
+        if root.find(name) is not None:
+            top.append(root.find(name))
+    variables = ET.SubElement(top, "ModelVariables")
+    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(vr_u + 1), "causality": "independent",
+                                         "variability": "continuous", "unit": "s",
+                                         "description": "the element's time"})
+    scalars = list(root.find("ModelVariables"))
+    index_to_vr = {}
+    outputs = []
+    for position, variable in enumerate(scalars, start=1):
+        name, vr = variable.get("name"), variable.get("valueReference")
+        index_to_vr[position] = vr
+        kind = next(child for child in variable if child.tag in TYPES)
+        attributes = {"name": name, "valueReference": vr}
+        if variable.get("description"):
+            attributes["description"] = variable.get("description")
+        if name == "n":
+            ET.SubElement(variables, "UInt64", dict(attributes, causality="structuralParameter", variability="fixed",
+                                                    start=str(n)))
+            continue
+        for key in ("causality", "variability", "initial"):
+            if variable.get(key):
+                attributes[key] = variable.get(key)
+        if kind.tag == "String":
+            element = ET.SubElement(variables, "String", attributes)
+            if kind.get("start") is not None:
+                ET.SubElement(element, "Start", {"value": kind.get("start")})
+            continue
+        tag = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}[kind.tag]
+        for key in ("start", "unit", "min", "max"):
+            if kind.get(key) is not None:
+                attributes[key] = kind.get(key)
+        ET.SubElement(variables, tag, attributes)
+        if variable.get("causality") == "output":
+            outputs.append(vr)
+    if n:
+        u = ET.SubElement(variables, "Float64", {
+            "name": "u", "valueReference": str(vr_u), "causality": "output", "variability": "continuous",
+            "unit": "m", "description": "elongations u_i of the springs of the Prandtl branches, in the scene's order"})
+        n_vr = next(v.get("valueReference") for v in scalars if v.get("name") == "n")
+        ET.SubElement(u, "Dimension", {"valueReference": n_vr})
+        outputs.append(str(vr_u))
+    structure = ET.SubElement(top, "ModelStructure")
+    dependencies = {}
+    old = root.find("ModelStructure/Outputs")
+    for unknown in (old if old is not None else []):
+        vr = index_to_vr[int(unknown.get("index"))]
+        if unknown.get("dependencies") is not None:
+            dependencies[vr] = " ".join(index_to_vr[int(i)] for i in unknown.get("dependencies").split())
+    for vr in outputs:
+        attributes = {"valueReference": vr}
+        if vr in dependencies:
+            attributes["dependencies"] = dependencies[vr]
+        ET.SubElement(structure, "Output", attributes)
+    for vr in outputs:
+        attributes = {"valueReference": vr}
+        if vr in dependencies:
+            attributes["dependencies"] = dependencies[vr]
+        ET.SubElement(structure, "InitialUnknown", attributes)
+    ET.indent(top)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(top, encoding="unicode") + "\n"

@@ -22,7 +22,8 @@ the load, ``lt``/``lf``/``nl`` its table):
 * ``stiffness(p, k, eta, cs, u, xv)`` -> the tangent stiffness;
 * ``initial(p, k, eta, cs, u, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
   equilibrium (``driver.initial_state``);
-* ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``).
+* ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``);
+* ``elongations(p, k, eta, cs, u, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``).
 
 ``p`` holds the coefficients in :data:`PARAMETERS` order. A scene with ``[damper]`` gets every function
 twice, with c and without (c = 0 is no dashpot at all in the library's model: ``driver._smooth_model``).
@@ -42,6 +43,7 @@ _SIGNATURES = {
     "stiffness": f"types.float64({', '.join([_PTR] * 6)})",
     "initial": f"types.int64({', '.join([_PTR] * 6)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
     "force_at": f"types.float64(types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, {_PTR})",
+    "elongations": f"types.int64({', '.join([_PTR] * 6)})",
 }
 
 _TEMPLATE = '''
@@ -80,6 +82,12 @@ def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl
 def stiffness(p, kp, etap, csp, up, xv):
     direction = -1.0 if xv[1] < 0 else 1.0
     return tangent(_model(p, kp, etap, csp), xv[0], {u}, direction)
+
+
+def elongations(p, kp, etap, csp, up, outp):
+    if {has_branches}:
+        write_elongations(_model(p, kp, etap, csp)[4], {u}, carray(outp, ({n},)))
+    return 0
 
 
 def force_at_c(kind, lk, lt, lf, nl, t, unused):
@@ -143,6 +151,7 @@ def structure(scene) -> dict:
         "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
         "u": f"carray(up, ({state_size(scene)},))" if on_stack else f"carray(up, ({n},))" if n else "None",
         "stack": "True" if on_stack else "False",
+        "has_branches": "True" if n else "False",
         "friction": friction_source,
         "massive": "True" if scene.mass is not None else "False",
     }
@@ -205,7 +214,7 @@ def compile_kernels(scene, steppers) -> list:
     from ..kernels.energy import kinetic, stored
     from ..kernels.friction import reaction
     from ..kernels.increment import solve_increment
-    from ..kernels.play import branch_force, move
+    from ..kernels.play import branch_force, move, write_elongations
     from ..kernels.smooth import elastic_force
     from ..kernels.stack import COUNT, HEADER, X, resync
     from ..loads import force_at
@@ -219,13 +228,14 @@ def compile_kernels(scene, steppers) -> list:
         for stepper in list(steppers) + [None]:
             namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
                              tangent=tangent, branch_force=branch_force, move=move, solve_increment=solve_increment,
+                             write_elongations=write_elongations,
                              elastic_force=elastic_force, force_at=force_at, resync=resync, STACK_X=X,
                              STACK_COUNT=COUNT, STACK_HEADER=HEADER,
                              run=get_stepper(stepper).loop_for(scene) if stepper else None)
             exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
             for helper in ("_model", "_load"):  # inlined into each C function
                 namespace[helper] = njit(inline="always")(namespace[helper])
-            names = ["advance"] if stepper else ["record", "stiffness", "initial"]
+            names = ["advance"] if stepper else ["record", "stiffness", "initial", "elongations"]
             if stepper is None and not compiled_force:
                 names.append("force_at")  # the scene's load alone: once
                 compiled_force = True
