@@ -43,6 +43,11 @@ SCENES = {
                             load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
     # the paper's section 8: 100 branches on the memory stack
     "paper": None,
+    # the continuum (a spectrum on the memory stack)
+    "continuum": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
+                             branches={"continuum": True, "k_total": 1.0, "eta_range": [0.0, 1.0]},
+                             solver=dict(SOLVER, stepper="verlet"),
+                             load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3}),
 }
 
 
@@ -280,10 +285,10 @@ def fmus3(fmus, tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("native3")
     return {name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3), fmus[name][1])
-            for name in ("friction", "paper")}
+            for name in ("friction", "paper", "continuum")}
 
 
-@pytest.mark.parametrize("name", ["friction", "paper"])
+@pytest.mark.parametrize("name", ["friction", "paper", "continuum"])
 def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmus3, name):
     """FMPy's validator finds nothing; simulate_fmu with the scene's load gives the library's x, v, reaction and the
     array u (n elongations, sized by the structural parameter n) bit for bit."""
@@ -296,15 +301,21 @@ def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmu
     assert description.fmiVersion == "3.0"
     by_name = {v.name: v for v in description.modelVariables}
     scene = load_scene(scene_path)
-    assert by_name["n"].causality == "structuralParameter" and int(by_name["n"].start) == scene.branches.n
-    assert by_name["u"].dimensions[0].valueReference == by_name["n"].valueReference
+    continuum = scene.branches.continuum
+    if continuum:  # no elongation per branch: n is -1, a local constant, as in FMI 2.0, and there is no u
+        assert by_name["n"].causality == "local" and int(by_name["n"].start) == -1 and "u" not in by_name
+    else:
+        assert by_name["n"].causality == "structuralParameter" and int(by_name["n"].start) == scene.branches.n
+        assert by_name["u"].dimensions[0].valueReference == by_name["n"].valueReference
     stop = min(scene.solver.stop_time, 20.0)
     library = simulate(scene.with_solver(stop_time=stop), states=True)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
-                          start_values={"scene_load": True}, output=["x", "v", "reaction", "u"])
+                          start_values={"scene_load": True},
+                          output=["x", "v", "reaction"] + ([] if continuum else ["u"]))
     for column in ("x", "v", "reaction"):
         np.testing.assert_array_equal(result[column], getattr(library, column))
-    np.testing.assert_array_equal(np.stack(result["u"]), library.u)
+    if not continuum:
+        np.testing.assert_array_equal(np.stack(result["u"]), library.u)
 
 
 def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):

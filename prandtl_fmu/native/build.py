@@ -128,10 +128,13 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     from ..kernels import stack
 
     branches = scene.branches
-    n = 0 if branches is None else branches.n
+    continuum = branches is not None and branches.continuum
+    n = 0 if branches is None or continuum else branches.n
     on_stack = kernels.is_stack_scene(scene)
     size = kernels.state_size(scene)
-    if on_stack:  # the stack's parameters, (10, n + 1), and a state that initial() fills
+    if continuum:  # the spectrum's table and a state that initial() fills
+        k_values, eta_values, u0_values = branches.params[0].ravel(), [], [0.0] * size
+    elif on_stack:  # the stack's parameters, (10, n + 1), and a state that initial() fills
         k_values = stack.prepare(branches.stiffness, branches.yield_displacement, branches.u0)[0].ravel()
         eta_values, u0_values = [], [0.0] * size
     else:
@@ -270,7 +273,8 @@ def fmi3_description(root, scene, vr_u) -> str:
     """The FMI 3.0 model description from the FMI 2.0 one: the same scalars (Real -> Float64, with their value
     references, units, causalities, variabilities, start values), n as a fixed structural parameter (UInt64) and
     the elongations u, an array of n Float64 outputs (none without branches)."""
-    n = 0 if scene.branches is None else scene.branches.n
+    continuum = scene.branches is not None and scene.branches.continuum
+    n = 0 if scene.branches is None or continuum else scene.branches.n
     top = ET.Element("fmiModelDescription", {
         "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
         "description": root.get("description", ""), "author": root.get("author", ""),
@@ -300,7 +304,7 @@ def fmi3_description(root, scene, vr_u) -> str:
         attributes = {"name": name, "valueReference": vr}
         if variable.get("description"):
             attributes["description"] = variable.get("description")
-        if name == "n":
+        if name == "n" and not continuum:
             ET.SubElement(variables, "UInt64", dict(attributes, causality="structuralParameter", variability="fixed",
                                                     start=str(n)))
             continue

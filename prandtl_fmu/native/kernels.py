@@ -105,10 +105,10 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
         u[STACK_X] = x_start
         u[STACK_COUNT] = 1.0
         u[STACK_HEADER] = 0.0
-        u[STACK_HEADER + 1] = k.shape[1] - 1
+        u[STACK_HEADER + 1] = {stack_end}
         u[STACK_HEADER + 2] = -x_start
         u[STACK_HEADER + 3] = 0.0
-        u[STACK_HEADER + 4] = 1.0
+        u[STACK_HEADER + 4] = {stack_gamma}
         resync(k, u)
     if {massive}:
         xv[0] = p[1]
@@ -132,7 +132,8 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
 def structure(scene) -> dict:
     """The scene's structure as the generated source needs it (which effects, how many branches)."""
     branches = scene.branches
-    n = 0 if branches is None else branches.n
+    continuum = branches is not None and branches.continuum
+    n = 0 if branches is None or continuum else branches.n
     on_stack = is_stack_scene(scene)
     friction = scene.friction
     if friction is None:
@@ -146,11 +147,15 @@ def structure(scene) -> dict:
         "m": "p[0]" if scene.mass is not None else "None",
         "k0": "p[3]" if scene.spring is not None else "None",
         "k3": "p[4]" if scene.cubic is not None else "None",
-        "k": f"carray(kp, (10, {n + 1}))" if on_stack else f"carray(kp, ({n},))" if n else "None",
+        "k": (f"(carray(kp, {branches.params[0].shape}),)" if continuum else f"carray(kp, (10, {n + 1}))"
+              if on_stack else f"carray(kp, ({n},))" if n else "None"),
         "eta": "None" if on_stack else f"carray(etap, ({n},))" if n else "None",
         "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
         "u": f"carray(up, ({state_size(scene)},))" if on_stack else f"carray(up, ({n},))" if n else "None",
         "stack": "True" if on_stack else "False",
+        # the first piece of a fresh stack (stack.fresh_state): the continuum is virgin, n branches start at u0
+        "stack_end": "1.0" if continuum else f"{float(n)!r}",
+        "stack_gamma": "0.0" if continuum else "1.0",
         "has_branches": "True" if n else "False",
         "friction": friction_source,
         "massive": "True" if scene.mass is not None else "False",
@@ -159,10 +164,6 @@ def structure(scene) -> dict:
 
 def unsupported(scene) -> str | None:
     """Why the native runtime cannot take ``scene`` yet, or None."""
-    branches = scene.branches
-    if branches is not None and branches.continuum:
-        return ("the continuum (its spectra on the memory stack) is not in the native runtime yet: build with "
-                "--runtime python")
     return None
 
 
@@ -178,7 +179,10 @@ def state_size(scene) -> int:
     """The length of the branches' state: n elongations, or the memory stack's state (``stack.fresh_state``)."""
     from ..kernels import stack
 
-    n = 0 if scene.branches is None else scene.branches.n
+    branches = scene.branches
+    if branches is not None and branches.continuum:
+        return stack.HEADER + stack.ROW * (stack.CONTINUUM_PIECES + 1)
+    n = 0 if branches is None else branches.n
     return stack.HEADER + stack.ROW * (n + 1) if is_stack_scene(scene) else n
 
 
