@@ -80,10 +80,10 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
         if not steppers:
             raise NativeBuildError("no stepper of the native runtime applies to this scene")
         compiled = kernels.compile_kernels(scene, steppers)
-        objects = kernels.emit_objects(compiled, scratch)
+        objects, external = kernels.emit_objects(compiled, scratch)
         (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path))
         vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
-        (scratch / "stubs.c").write_text(_stubs(objects))
+        (scratch / "stubs.c").write_text(_stubs(external))
         library = scratch / f"{identifier}.so"
         exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
         exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
@@ -251,12 +251,9 @@ def _what(name: str) -> tuple:
     raise NativeBuildError(f"the native runtime does not know the FMU variable {name!r}")
 
 
-def _stubs(objects) -> str:
-    """C definitions of what the objects need from Python and numba (see the module docstring)."""
-    undefined = set()
-    for path in objects:
-        listing = subprocess.run(["nm", "-u", str(path)], capture_output=True, text=True, check=True).stdout
-        undefined.update(line.split()[-1] for line in listing.splitlines() if line.strip())
+def _stubs(undefined) -> str:
+    """C definitions of what the objects need from Python and numba (see the module docstring); ``undefined``:
+    the symbols the kernels' modules declare."""
     lines = ["/* generated: numba's error path without Python (prandtl_fmu.native.build) */", "#include <math.h>",
              "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
     for symbol in sorted(undefined):

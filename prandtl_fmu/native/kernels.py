@@ -252,15 +252,18 @@ def compile_kernels(scene, steppers) -> list:
     return compiled
 
 
-def emit_objects(compiled, folder) -> list:
-    """One object file per C function (position-independent, for a shared library); returns their paths."""
+def emit_objects(compiled, folder) -> tuple:
+    """One object file per C function (position-independent, for a shared library). Returns their paths and the
+    symbols the modules declare without defining (what the link must provide: libm's, numba's error path)."""
     import llvmlite.binding as llvm
 
     machine = llvm.Target.from_default_triple().create_target_machine(reloc="pic", codemodel="default", opt=3)
-    paths = []
+    paths, external = [], set()
     for c_name, function in compiled:
         module = llvm.parse_assembly(str(function._library._final_module))
+        external.update(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
+        external.update(g.name for g in module.global_variables if g.is_declaration)
         path = folder / f"{c_name}.o"
         path.write_bytes(machine.emit_object(module))
         paths.append(path)
-    return paths
+    return paths, external
