@@ -11,28 +11,7 @@
  */
 #ifndef PRANDTL_ELEMENT_H
 #define PRANDTL_ELEMENT_H
-#include <math.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "scene.h"
-
-/* set by the stubs of numba's error path (stubs.c): a kernel raised */
-extern __thread int prandtl_kernel_failed;
-
-#define MAX_STEPS 9007199254740992.0 /* 2^53 */
-#define SHORTEST_STEP 1e-150
-#define STATE_MAGIC "PRANDTL-FMU-STATE"
-#define STATE_VERSION 1
-
-enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
-enum { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED };
-/* statuses: the same numbers in FMI 2.0 and 3.0 */
-enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
+#include "common.h"
 
 typedef struct {
     double p[N_PARAMS];   /* the coefficients in use */
@@ -71,34 +50,6 @@ typedef struct {
     int stepper_valid; /* the string fitted in the buffer */
     int handed;        /* the settings were handed over and nothing changed since */
 } Instance;
-
-/* ------------------------------------------------------------------ logging */
-
-/* the FMI version's layer: hands a message to the host's logger */
-static void emit(Instance* c, int status, const char* category, const char* message);
-
-static void say(Instance* c, int status, const char* format, ...)
-{
-    static const char* categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
-                                       "logStatusFatal", "logAll"};
-    char text[1024], message[2048];
-    size_t i, j;
-    va_list args;
-    if (c->logger == NULL || (status == ST_OK && !c->logging))
-        return;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    /* the message is the logger's format: every % doubled (a host that formats it prints the text, one that
-       does not still gets the words) */
-    for (i = 0, j = 0; text[i] && j + 2 < sizeof message; i++) {
-        if (text[i] == '%')
-            message[j++] = '%';
-        message[j++] = text[i];
-    }
-    message[j] = 0;
-    emit(c, status, categories[status], message);
-}
 
 /* ------------------------------------------------------------------ the element */
 
@@ -247,49 +198,6 @@ static const char* advance(Element* e, double duration, double force, int scene_
 
 /* ------------------------------------------------------------------ parameters */
 
-static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
-                                            "stribeck_velocity", "belt_velocity"};
-
-/* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
-static const char* parameter_problem(const Instance* c, char* buffer, size_t size)
-{
-    int i;
-    for (i = 0; i < N_PARAMS; i++) {
-        double value = c->par[i];
-        if (!P_PRESENT[i])
-            continue;
-        if (!isfinite(value)) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-        if (P_RULE[i] == 1 && !(value > 0)) {
-            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-        if (P_RULE[i] == 2 && value < 0) {
-            snprintf(buffer, size, "parameter %s: must be >= 0, got %.17g", PARAM_NAMES[i], value);
-            return buffer;
-        }
-    }
-    for (i = 0; i < (HAS_SERIES ? NB : 0); i++) {
-        if (!(isfinite(c->cbranch[i]) && c->cbranch[i] > 0)) {
-            snprintf(buffer, size, "parameter c_branch: must be finite and > 0, got %.17g", c->cbranch[i]);
-            return buffer;
-        }
-    }
-    if (HAS_STRIBECK && c->par[P_ALPHA_KINETIC] > c->par[P_ALPHA]) {
-        snprintf(buffer, size, "parameter alpha_kinetic = %.17g: must be <= alpha = %.17g",
-                 c->par[P_ALPHA_KINETIC], c->par[P_ALPHA]);
-        return buffer;
-    }
-    if (!HAS_MASS && HAS_DAMPER && !(c->par[P_C] > 0)) {
-        snprintf(buffer, size, "parameter c = %.17g: the native runtime keeps the dashpot of a massless element "
-                 "(c > 0)", c->par[P_C]);
-        return buffer;
-    }
-    return NULL;
-}
-
 static int stepper_index(const char* name)
 {
     int i;
@@ -332,7 +240,7 @@ static void hand_over(Instance* c)
 
 static const char* settings_problem(Instance* c, char* buffer, size_t size)
 {
-    const char* problem = parameter_problem(c, buffer, size);
+    const char* problem = parameter_problem(c->par, c->cbranch, buffer, size);
     return problem ? problem : stepper_problem(c, buffer, size);
 }
 
@@ -377,15 +285,6 @@ static double real_value(Instance* c, const Var* var)
     return NAN;
 }
 
-static const Var* find(unsigned vr, int type)
-{
-    int i;
-    for (i = 0; i < N_VARS; i++)
-        if (VARS[i].vr == vr && VARS[i].type == type)
-            return &VARS[i];
-    return NULL;
-}
-
 static void defaults(Instance* c)
 {
     memcpy(c->par, P_SCENE, sizeof c->par);
@@ -407,17 +306,6 @@ static void defaults(Instance* c)
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
-
-static uint64_t fnv1a(const unsigned char* bytes, size_t size)
-{
-    uint64_t hash = 1469598103934665603ULL;
-    size_t i;
-    for (i = 0; i < size; i++) {
-        hash ^= bytes[i];
-        hash *= 1099511628211ULL;
-    }
-    return hash;
-}
 
 static void capture(const Instance* c, State* s)
 {

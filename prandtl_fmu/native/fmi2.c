@@ -1,10 +1,16 @@
 /* The native FMU's FMI 2.0 co-simulation layer over the element (element.h). */
 #include "fmi2Functions.h"
 #define FMI "fmi2"
+#include "scene.h"
+#if CONNECTOR
+#include "connector.h"
+#else
 #include "element.h"
+#endif
 
-static void emit(Instance* c, int status, const char* category, const char* message)
+static void emit(void* instance, int status, const char* category, const char* message)
 {
+    Instance* c = (Instance*)instance;
     fmi2CallbackLogger logger = (fmi2CallbackLogger)c->logger;
     logger((fmi2ComponentEnvironment)c->env, c->name ? c->name : "", (fmi2Status)status, category, message);
 }

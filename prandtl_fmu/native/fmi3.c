@@ -4,10 +4,16 @@
  * clocks and event mode are refused with a logged reason. */
 #include "fmi3Functions.h"
 #define FMI "fmi3"
+#include "scene.h"
+#if CONNECTOR
+#include "connector.h"
+#else
 #include "element.h"
+#endif
 
-static void emit(Instance* c, int status, const char* category, const char* message)
+static void emit(void* instance, int status, const char* category, const char* message)
 {
+    Instance* c = (Instance*)instance;
     fmi3LogMessageCallback logger = (fmi3LogMessageCallback)c->logger;
     logger((fmi3InstanceEnvironment)c->env, (fmi3Status)status, category, message);
 }

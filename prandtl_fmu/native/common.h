@@ -1,0 +1,123 @@
+/* What the native FMU's element (element.h) and connector (connector.h) share: logging, the parameters'
+ * rules, the variables' table, the checksum of a state. Glue only, no numerics. */
+#ifndef PRANDTL_COMMON_H
+#define PRANDTL_COMMON_H
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene.h"
+
+/* set by the stubs of numba's error path (stubs.c): a kernel raised */
+extern __thread int prandtl_kernel_failed;
+
+#define MAX_STEPS 9007199254740992.0 /* 2^53 */
+#define SHORTEST_STEP 1e-150
+#define STATE_MAGIC "PRANDTL-FMU-STATE"
+#define STATE_VERSION 1
+
+enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
+enum { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED };
+/* statuses: the same numbers in FMI 2.0 and 3.0 */
+enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
+
+
+/* ------------------------------------------------------------------ logging */
+
+/* the FMI version's layer: hands a message to the host's logger (``instance`` is its Instance) */
+static void emit(void* instance, int status, const char* category, const char* message);
+
+/* log a message: every status but OK reaches the logger, logging on or off, under a declared category */
+#define say(c, ...) say_to((c), (c)->logger, (c)->logging, __VA_ARGS__)
+
+static void say_to(void* instance, void* logger, int logging, int status, const char* format, ...)
+{
+    static const char* categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
+                                       "logStatusFatal", "logAll"};
+    char text[1024], message[2048];
+    size_t i, j;
+    va_list args;
+    if (logger == NULL || (status == ST_OK && !logging))
+        return;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    /* the message is the logger's format: every % doubled (a host that formats it prints the text, one that
+       does not still gets the words) */
+    for (i = 0, j = 0; text[i] && j + 2 < sizeof message; i++) {
+        if (text[i] == '%')
+            message[j++] = '%';
+        message[j++] = text[i];
+    }
+    message[j] = 0;
+    emit(instance, status, categories[status], message);
+}
+
+static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
+                                            "stribeck_velocity", "belt_velocity"};
+
+/* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
+static const char* parameter_problem(const double* par, const double* cbranch, char* buffer, size_t size)
+{
+    int i;
+    for (i = 0; i < N_PARAMS; i++) {
+        double value = par[i];
+        if (!P_PRESENT[i])
+            continue;
+        if (!isfinite(value)) {
+            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
+            return buffer;
+        }
+        if (P_RULE[i] == 1 && !(value > 0)) {
+            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
+            return buffer;
+        }
+        if (P_RULE[i] == 2 && value < 0) {
+            snprintf(buffer, size, "parameter %s: must be >= 0, got %.17g", PARAM_NAMES[i], value);
+            return buffer;
+        }
+    }
+    for (i = 0; i < (HAS_SERIES ? NB : 0); i++) {
+        if (!(isfinite(cbranch[i]) && cbranch[i] > 0)) {
+            snprintf(buffer, size, "parameter c_branch: must be finite and > 0, got %.17g", cbranch[i]);
+            return buffer;
+        }
+    }
+    if (HAS_STRIBECK && par[P_ALPHA_KINETIC] > par[P_ALPHA]) {
+        snprintf(buffer, size, "parameter alpha_kinetic = %.17g: must be <= alpha = %.17g",
+                 par[P_ALPHA_KINETIC], par[P_ALPHA]);
+        return buffer;
+    }
+    if (!CONNECTOR && !HAS_MASS && HAS_DAMPER && !(par[P_C] > 0)) {
+        snprintf(buffer, size, "parameter c = %.17g: the native runtime keeps the dashpot of a massless element "
+                 "(c > 0)", par[P_C]);
+        return buffer;
+    }
+    return NULL;
+}
+
+static const Var* find(unsigned vr, int type)
+{
+    int i;
+    for (i = 0; i < N_VARS; i++)
+        if (VARS[i].vr == vr && VARS[i].type == type)
+            return &VARS[i];
+    return NULL;
+}
+
+static uint64_t fnv1a(const unsigned char* bytes, size_t size)
+{
+    uint64_t hash = 1469598103934665603ULL;
+    size_t i;
+    for (i = 0; i < size; i++) {
+        hash ^= bytes[i];
+        hash *= 1099511628211ULL;
+    }
+    return hash;
+}
+
+#endif
