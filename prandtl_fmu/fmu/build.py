@@ -71,14 +71,14 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if runtime == "native":
         from ..native.build import build_native_fmu
 
-        if causality == "displacement" or osp:
-            raise ValueError("the native runtime builds the element (force in) without --osp so far: build the "
-                             "connector and OSP descriptions with --runtime python")
-        native_scene = load_scene(scene_path)
+        if osp:
+            raise ValueError("the native runtime writes no OSP description beside the FMU yet (it is inside, in "
+                             "resources/): build with --runtime python for --osp")
+        native_scene = load_scene(scene_path, check_stepper=False)
         target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
         if target.is_dir():
             raise ValueError(f"{target}: is a directory")
-        return build_native_fmu(resolve_scene(scene_path), target, fmi=fmi)
+        return build_native_fmu(resolve_scene(scene_path), target, fmi=fmi, causality=causality)
     if fmi != 2:
         raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
     from pythonfmu import FmuBuilder

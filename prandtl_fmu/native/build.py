@@ -47,18 +47,20 @@ def compiler() -> str:
     return found
 
 
-def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
+def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it."""
     from ..fmu.build import build_fmu
     from ..scene import load_scene
 
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
-    scene = load_scene(scene_path)
-    if scene.causality == "displacement":
-        raise NativeBuildError("the connector ([fmu] causality = \"displacement\") is not in the native runtime "
-                               "yet: build it with --runtime python")
-    if scene.mass is None and scene.damper is None:
+    scene = load_scene(scene_path, check_stepper=False)
+    if causality is not None and causality != scene.causality:
+        from ..fmu.build import _with_causality
+
+        scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
+    connector = scene.causality == "displacement"
+    if scene.mass is None and scene.damper is None and not connector:
         raise NativeBuildError("a massless element without a dashpot is not in the native runtime yet: build it "
                                "with --runtime python")
     problem = kernels.unsupported(scene)
@@ -68,7 +70,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
-        python_fmu = build_fmu(scene_path, scratch / "python.fmu")
+        python_fmu = build_fmu(scene_path, scratch / "python.fmu", causality=causality)
         with zipfile.ZipFile(python_fmu) as archive:
             description = archive.read("modelDescription.xml").decode("utf-8")
             kept = {name: archive.read(name) for name in archive.namelist()
@@ -76,8 +78,8 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
                     or name.endswith("_OspModelDescription.xml")}
         root = ET.fromstring(description)
         identifier = root.find("CoSimulation").get("modelIdentifier")
-        steppers = kernels.applicable(scene)
-        if not steppers:
+        steppers = [] if connector else kernels.applicable(scene)
+        if not steppers and not connector:
             raise NativeBuildError("no stepper of the native runtime applies to this scene")
         compiled = kernels.compile_kernels(scene, steppers)
         objects, external = kernels.emit_objects(compiled, scratch)
@@ -88,7 +90,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2) -> Path:
         exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
         exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
         headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
-        n_vr = next(int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n")
+        n_vr = next((int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n"), 0)
         command = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
                    f"-DVR_U={vr_u}", f"-DVR_N={n_vr}", f"-DVR_TIME={vr_u + 1}",
                    f"-I{scratch}", f"-I{headers}", str(HERE / f"fmi{fmi}.c"), str(scratch / "stubs.c"),
@@ -206,22 +208,31 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "stiffness": "double {name}(P, P, P, P, P, P)",
         "initial": "int64_t {name}(P, P, P, P, P, P, int64_t, P, P, P, int64_t)",
         "elongations": "int64_t {name}(P, P, P, P, P, P)",
+        "move": "int64_t {name}(P, P, P, P, P, double, P, P, P, P, P)",
+        "cforce": "double {name}(P, P, P, P, P, double, double)",
+        "ctangent": "double {name}(P, P, P, P, P, double, double)",
+        "cstored": "double {name}(P, P, P, P, P, double)",
+        "cinitial": "int64_t {name}(P, P, P, P, P)",
     }
     for name, symbol in symbols.items():
         if name == "force_at":
             lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) __asm__("{symbol}");')
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' __asm__("{symbol}");')
+    connector = scene.causality == "displacement"
+    functions = (("move", "cforce", "ctangent", "cstored", "cinitial", "elongations") if connector
+                 else ("record", "stiffness", "initial", "elongations"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]
-        lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{"
-                     + ", ".join(f"advance_{name}_{chosen}" for name in steppers) + "};")
-        for function in ("record", "stiffness", "initial", "elongations"):
+        if not connector:
+            lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{"
+                         + ", ".join(f"advance_{name}_{chosen}" for name in steppers) + "};")
+        for function in functions:
             lines.append(f"#define {function}_{suffix} {function}_{chosen}")
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
         "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "
-        "W_STEPPER, W_N };",
+        "W_STEPPER, W_N, W_FORCE };",
         "typedef struct { unsigned vr; int type; int what; int index; } Var;",
         "static const Var VARS[] = {",
     ]
@@ -238,7 +249,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
 
 
 def _what(name: str) -> tuple:
-    fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS",
+    fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS", "force": "W_FORCE",
              "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N"}
     if name in fixed:
         return fixed[name], 0

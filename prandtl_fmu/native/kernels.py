@@ -129,6 +129,59 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
 '''
 
 
+_CONNECTOR_TEMPLATE = '''
+def _model(p, kp, etap, csp):
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+
+
+def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
+    drive(_model(p, kp, etap, csp), {u}, x_start, carray(xp, (1,)), carray(vp, (1,)), carray(dp, (1,)),
+          carray(fp, (1,)), carray(accountp, (3,)))
+    return 0
+
+
+def cforce(p, kp, etap, csp, up, x, v):
+    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    return smooth_force(x, v, k0, k3, c) + branch_force(k, {u})
+
+
+def ctangent(p, kp, etap, csp, up, x, direction):
+    return tangent(_model(p, kp, etap, csp), x, {u}, direction)
+
+
+def cstored(p, kp, etap, csp, up, x):
+    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    return stored(x, k0, k3, k, {u})
+
+
+def cinitial(p, kp, etap, csp, up):
+    k = _model(p, kp, etap, csp)[4]
+    u = {u}
+    if {stack}:  # stack.fresh_state(params, 0.0) in place
+        for i in range(u.shape[0]):
+            u[i] = 0.0
+        u[STACK_COUNT] = 1.0
+        u[STACK_HEADER + 1] = {stack_end}
+        u[STACK_HEADER + 4] = {stack_gamma}
+        resync(k, u)
+    return 1
+
+
+def elongations(p, kp, etap, csp, up, outp):
+    if {has_branches}:
+        write_elongations(_model(p, kp, etap, csp)[4], {u}, carray(outp, ({n},)))
+    return 0
+'''
+_CONNECTOR_SIGNATURES = {
+    "move": f"types.int64({', '.join([_PTR] * 5)}, types.float64, {', '.join([_PTR] * 5)})",
+    "cforce": f"types.float64({', '.join([_PTR] * 5)}, types.float64, types.float64)",
+    "ctangent": f"types.float64({', '.join([_PTR] * 5)}, types.float64, types.float64)",
+    "cstored": f"types.float64({', '.join([_PTR] * 5)}, types.float64)",
+    "cinitial": f"types.int64({', '.join([_PTR] * 5)})",
+    "elongations": f"types.int64({', '.join([_PTR] * 6)})",
+}
+
+
 def structure(scene) -> dict:
     """The scene's structure as the generated source needs it (which effects, how many branches)."""
     branches = scene.branches
@@ -190,8 +243,8 @@ def variants(scene) -> list:
     """("c" | "n", with_dashpot): the dashpot variants of the scene's functions (see the module docstring)."""
     if scene.damper is None:
         return [("n", False)]
-    if scene.mass is None:  # the dashpot of a massless element sets its rate: c stays > 0 (fmi2.c)
-        return [("c", True)]
+    if scene.mass is None and scene.causality != "displacement":  # the dashpot of a massless element sets its
+        return [("c", True)]                                           # rate: c stays > 0 (common.h)
     return [("c", True), ("n", False)]
 
 
@@ -227,6 +280,8 @@ def compile_kernels(scene, steppers) -> list:
     shape = structure(scene)
     compiled = []
     compiled_force = False
+    if scene.causality == "displacement":
+        return _compile_connector(scene, shape)
     for suffix, damped in variants(scene):
         source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False", **shape)
         for stepper in list(steppers) + [None]:
@@ -267,3 +322,28 @@ def emit_objects(compiled, folder) -> tuple:
         path.write_bytes(machine.emit_object(module))
         paths.append(path)
     return paths, external
+
+
+def _compile_connector(scene, shape) -> list:
+    """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cforce``, ``ctangent``, ``cstored``,
+    ``cinitial``, ``elongations``, each ``_<variant>``."""
+    from numba import carray, cfunc, njit, types
+
+    from ..kernels.drive import drive, tangent
+    from ..kernels.energy import stored
+    from ..kernels.play import branch_force, write_elongations
+    from ..kernels.smooth import smooth_force
+    from ..kernels.stack import COUNT, HEADER, resync
+
+    compiled = []
+    for suffix, damped in variants(scene):
+        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", **shape)
+        namespace = dict(carray=carray, drive=drive, tangent=tangent, stored=stored, branch_force=branch_force,
+                         write_elongations=write_elongations, smooth_force=smooth_force, resync=resync,
+                         STACK_COUNT=COUNT, STACK_HEADER=HEADER)
+        exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)
+        namespace["_model"] = njit(inline="always")(namespace["_model"])
+        for name, signature in _CONNECTOR_SIGNATURES.items():
+            function = cfunc(eval(signature, {"types": types}), error_model="numpy")(namespace[name])
+            compiled.append((f"{name}_{suffix}", function))
+    return compiled

@@ -1,0 +1,277 @@
+/* The native FMU's connector (a massless scene between two bodies: x, v in, force out), shared by its FMI 2.0
+ * (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
+ *
+ * What fmu/connector_slave.py and connector.Connector do around the library's kernels (compiled for this scene,
+ * declared in "scene.h"), in the same order of floating-point operations: the outputs show the element moved to
+ * the inputs set last without committing (a preview: a copy of the state moved there); fmi2DoStep commits the
+ * input sample at the communication point (the branches follow the exact play update along the line from the
+ * last committed x, series dashpots relax over the time between samples, the dashpot dissipates
+ * c (v0^2 + v0 v + v^2) dt / 3); initialization moves the element from x = 0 to the first input.
+ */
+#ifndef PRANDTL_CONNECTOR_H
+#define PRANDTL_CONNECTOR_H
+#include "common.h"
+
+typedef struct {
+    double p[N_PARAMS]; /* the coefficients in use (k0, k3, c) */
+    double cs[NB_CS];   /* the series dashpots in use */
+    double x, v, time, direction; /* the committed sample; the direction of the last motion */
+    double u[NB_ARR];
+    double account[3];  /* [1] the sliders, [2] the dashpots (connector.SLIDERS, DAMPER) */
+} Element;
+
+typedef struct {
+    char header[24];
+    uint32_t version, size;
+    char digest[65];
+    Element element;
+    double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
+    int initialized;
+    uint64_t checksum;
+} State;
+
+typedef struct {
+    char* name;
+    void* env; /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
+    void* logger;
+    int logging, phase, last_step_failed;
+    Element el;
+    /* what the master set */
+    double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
+    int initialized;
+    int scene_load;   /* none here: what the FMI layers' Boolean and String calls refuse */
+    char stepper[32];
+} Instance;
+
+static double element_time(const Element* e) { return e->time; }
+
+static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
+
+/* Connector.move_to: commit (x, v) at ``time`` */
+static void move_to(Element* e, double x, double v, double time)
+{
+    double dx = x - e->x, xs = x, vs = v, duration = time - e->time, force;
+    (damped(e) ? move_c : move_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, e->x, &xs, &vs, &duration, &force,
+                                  e->account);
+    if (damped(e))
+        e->account[2] += e->p[P_C] * (e->v * e->v + e->v * v + v * v) * (time - e->time) / 3.0;
+    if (dx != 0)
+        e->direction = copysign(1.0, dx);
+    e->x = x;
+    e->v = v;
+    e->time = time;
+}
+
+/* Connector.reset: x = 0, v = 0, the scene's u0 (or a fresh memory stack), time 0 */
+static void reset(Element* e)
+{
+    memcpy(e->u, U0, sizeof e->u);
+    (damped(e) ? cinitial_c : cinitial_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u);
+    e->x = e->v = e->time = 0.0;
+    e->direction = 1.0;
+    memset(e->account, 0, sizeof e->account);
+}
+
+static void hand_over(Instance* c)
+{
+    memcpy(c->el.p, c->par, sizeof c->el.p);
+    memcpy(c->el.cs, c->cbranch, sizeof c->el.cs);
+}
+
+/* the outputs: the element at the inputs set last, not committed (connector_slave._current) */
+static double real_value(Instance* c, const Var* var)
+{
+    Element preview;
+    double direction;
+    switch (var->what) {
+    case W_X: return c->x_in;
+    case W_V: return c->v_in;
+    case W_PARAM: return c->par[var->index];
+    case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
+    }
+    if (var->what == W_ENERGY && var->index == 4)
+        return c->el.account[2]; /* the dashpots: up to the last doStep */
+    if (!(isfinite(c->x_in) && isfinite(c->v_in)))
+        return NAN;
+    preview = c->el;
+    move_to(&preview, c->x_in, c->v_in, preview.time);
+    switch (var->what) {
+    case W_FORCE:
+        return (damped(&preview) ? cforce_c : cforce_n)(preview.p, (double*)K, (double*)ETA, preview.cs, preview.u,
+                                                        preview.x, preview.v);
+    case W_STIFFNESS:
+        direction = preview.v == 0 ? preview.direction : copysign(1.0, preview.v);
+        return (damped(&preview) ? ctangent_c : ctangent_n)(preview.p, (double*)K, (double*)ETA, preview.cs,
+                                                            preview.u, preview.x, direction);
+    case W_ENERGY:
+        if (var->index == 1)
+            return (damped(&preview) ? cstored_c : cstored_n)(preview.p, (double*)K, (double*)ETA, preview.cs,
+                                                              preview.u, preview.x);
+        return preview.account[1]; /* dissipated_sliders */
+    }
+    return NAN;
+}
+
+static void defaults(Instance* c)
+{
+    memcpy(c->par, P_SCENE, sizeof c->par);
+    memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
+    c->x_in = c->v_in = 0.0;
+    c->start_time = 0.0;
+    c->initialized = 0;
+    c->phase = INSTANTIATED;
+    c->last_step_failed = 0;
+    memset(&c->el, 0, sizeof c->el);
+    hand_over(c);
+    reset(&c->el);
+}
+
+/* ------------------------------------------------------------------ FMU state: a checked blob */
+
+static void capture(const Instance* c, State* s)
+{
+    memset(s, 0, sizeof *s);
+    snprintf(s->header, sizeof s->header, "%s", STATE_MAGIC);
+    s->version = STATE_VERSION;
+    s->size = (uint32_t)sizeof *s;
+    snprintf(s->digest, sizeof s->digest, "%s", DIGEST);
+    s->element = c->el;
+    s->x_in = c->x_in;
+    s->v_in = c->v_in;
+    s->start_time = c->start_time;
+    memcpy(s->par, c->par, sizeof s->par);
+    memcpy(s->cbranch, c->cbranch, sizeof s->cbranch);
+    s->initialized = c->initialized;
+    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+}
+
+static const char* state_problem(const State* s, char* buffer, size_t size)
+{
+    const Element* e = &s->element;
+    const char* problem;
+    int i;
+    if (memcmp(s->header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
+        return "not a serialized state of a prandtl_fmu native FMU";
+    if (s->version != STATE_VERSION || s->size != sizeof *s)
+        return "a state of another version of the native runtime";
+    if (strncmp(s->digest, DIGEST, sizeof s->digest) != 0)
+        return "a state of another scene (its digest differs)";
+    if (s->checksum != fnv1a((const unsigned char*)s, offsetof(State, checksum)))
+        return "its checksum does not match: the state was altered";
+    if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
+          isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0)))
+        return "it holds a non-finite or out-of-range value";
+    for (i = 0; i < (STACK ? 0 : NB); i++) {
+        if (!(fabs(e->u[i]) <= ETA[i])) {
+            snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);
+            return buffer;
+        }
+    }
+    problem = parameter_problem(s->par, s->cbranch, buffer, size);
+    return problem;
+}
+
+static int restore(Instance* c, const State* s)
+{
+    char buffer[256];
+    const char* problem = state_problem(s, buffer, sizeof buffer);
+    if (problem != NULL) {
+        say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
+        return ST_ERROR;
+    }
+    c->el = s->element;
+    c->x_in = s->x_in;
+    c->v_in = s->v_in;
+    c->start_time = s->start_time;
+    memcpy(c->par, s->par, sizeof c->par);
+    memcpy(c->cbranch, s->cbranch, sizeof c->cbranch);
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------------ stepping */
+
+static int core_exit_initialization(Instance* c)
+{
+    char buffer[512];
+    const char* problem;
+    if (c->phase != INITIALIZING) {
+        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
+        return ST_ERROR;
+    }
+    problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
+    if (problem == NULL && !(isfinite(c->x_in) && isfinite(c->v_in))) {
+        snprintf(buffer, sizeof buffer, "input x = %.17g, v = %.17g refused: the motion must be finite", c->x_in,
+                 c->v_in);
+        problem = buffer;
+    }
+    if (problem != NULL) {
+        say(c, ST_ERROR, "initialization refused: %s", problem);
+        return ST_ERROR;
+    }
+    hand_over(c);
+    reset(&c->el);
+    c->el.time = c->start_time;
+    move_to(&c->el, c->x_in, c->v_in, c->el.time); /* from x = 0 to the first input, monotonically */
+    c->initialized = 1;
+    c->phase = STEPPING;
+    return ST_OK;
+}
+
+static int core_do_step(Instance* c, double t, double H)
+{
+    char buffer[512];
+    const char* problem;
+    if (c->phase != STEPPING) {
+        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
+            "Terminate");
+        return ST_ERROR;
+    }
+    c->last_step_failed = 1;
+    problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
+    if (problem != NULL) {
+        say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
+        return ST_DISCARD;
+    }
+    if (!(isfinite(c->x_in) && isfinite(c->v_in))) {
+        say(c, ST_DISCARD, "input x = %.17g, v = %.17g refused: the motion must be finite; step not taken", c->x_in,
+            c->v_in);
+        return ST_DISCARD;
+    }
+    if (!(isfinite(H) && H >= 0)) {
+        say(c, ST_DISCARD, "communication step %.17g refused: it must be finite and >= 0", H);
+        return ST_DISCARD;
+    }
+    hand_over(c);
+    /* the input sample belongs to the communication point: commit it (the master's clock only moves forward) */
+    move_to(&c->el, c->x_in, c->v_in, t > c->el.time ? t : c->el.time);
+    c->last_step_failed = 0;
+    return ST_OK;
+}
+
+static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
+{
+    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_PARAM || var->what == W_CBRANCH)) {
+        say(c, ST_ERROR, FMI "SetReal refused: value reference %u is not a Real input or parameter", vr);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static void core_set_float(Instance* c, const Var* var, double value)
+{
+    int j;
+    if (var->what == W_X)
+        c->x_in = value;
+    else if (var->what == W_V)
+        c->v_in = value;
+    else if (var->what == W_PARAM)
+        c->par[var->index] = value;
+    else
+        for (j = 0; j < NB; j++)
+            if (var->index < 0 || var->index == j)
+                c->cbranch[j] = value;
+}
+
+static void core_set_stepper(Instance* c, const char* value) { (void)c; (void)value; }
+
+#endif
