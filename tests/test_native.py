@@ -253,12 +253,11 @@ def test_two_instances_on_two_threads_give_the_library_numbers(fmus):
 
 @pytest.mark.parametrize("arguments, culprit", [
     (["--runtime", "python", "--fmi", "3"], "FMI 2.0"),
-    (["--runtime", "native", "--causality", "displacement"], "native runtime"),
+    (["--runtime", "native", "--osp"], "OSP"),
 ])
 def test_what_a_runtime_does_not_build_is_refused_in_one_line(tmp_path, arguments, culprit):
     path = tmp_path / "scene.toml"
-    path.write_text(scene_text(base_tables(mass=None, cubic=None, damper=None)) if "--causality" in arguments
-                    else scene_text(SCENES["smooth"]))
+    path.write_text(scene_text(SCENES["smooth"]))
     out = tmp_path / "out.fmu"
     done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(out), *arguments],
                           capture_output=True, text=True)
@@ -360,3 +359,77 @@ def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
     finally:
         slave.terminate()
         slave.freeInstance()
+
+
+# ---------------------------------------------------------------- the connector
+
+
+CONNECTORS = {
+    # spring, dashpot, branches with series dashpots: the O(n) kernel
+    "series": base_tables(mass=None, cubic=None, solver=SOLVER, fmu={"causality": "displacement"},
+                          branches={"k": [1.0, 0.6, 2.0], "eta": [0.1, 0.3, 0.05], "c": [0.5, 2.0, 8.0]}),
+    # 80 branches on the memory stack, a cubic spring
+    "stack": base_tables(mass=None, damper=None, solver=SOLVER, fmu={"causality": "displacement"},
+                         branches={"k": [0.02] * 80, "eta": np.linspace(0.01, 0.8, 80).tolist()}),
+}
+
+
+@pytest.fixture(scope="module")
+def connectors(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("connectors")
+    built = {}
+    for name, tables in CONNECTORS.items():
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(tables))
+        built[name] = {runtime: build_fmu(path, folder / f"{name}-{runtime}.fmu", runtime=runtime)
+                       for runtime in ("python", "native")}
+        built[name]["fmi3"] = build_fmu(path, folder / f"{name}-3.fmu", runtime="native", fmi=3)
+    return built
+
+
+@pytest.mark.parametrize("name", list(CONNECTORS))
+def test_the_native_connector_is_the_pythonfmu_connector_bit_for_bit(connectors, name):
+    """Random inputs, read before and after each step (the preview of an input set but not stepped, then the
+    committed sample), steps of random sizes, c set to 0 and back where there is a dashpot: every output to
+    the bit (the PythonFMU connector is the library's Connector, tests/test_connector.py)."""
+    from .fmu_tools import Slave
+
+    python, native = (Slave(connectors[name][runtime], start_values={"x": 0.02}) for runtime in ("python", "native"))
+    names = [v.name for v in python.md.modelVariables if v.causality == "output"]
+    assert names == [v.name for v in native.md.modelVariables if v.causality == "output"]
+    rng = np.random.default_rng(4)
+    try:
+        for j in range(150):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            for slave in (python, native):
+                slave.set("x", x)
+                slave.set("v", v)
+                if j == 50 and "c" in slave.vr:
+                    slave.set("c", 0.0)
+                if j == 100 and "c" in slave.vr:
+                    slave.set("c", 0.3)
+            assert native.get(*names) == python.get(*names), j
+            size = float(rng.choice([0.01, 0.05, 0.1]))
+            python.step(size)
+            native.step(size)
+            assert native.get(*names) == python.get(*names), j
+    finally:
+        python.close()
+        native.close()
+
+
+def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(connectors):
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    fmus = connectors["series"]
+    assert validate_fmu(str(fmus["fmi3"])) == []
+    t = np.arange(0, 5.0 + 1e-9, 0.05)
+    signal = np.zeros(len(t), dtype=[("time", float), ("x", float), ("v", float)])
+    signal["time"], signal["x"], signal["v"] = t, 0.3 * np.sin(t), 0.3 * np.cos(t)
+    three = simulate_fmu(str(fmus["fmi3"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force", "u"])
+    two = simulate_fmu(str(fmus["python"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force"])
+    np.testing.assert_array_equal(three["force"], two["force"])
+    assert np.ptp(three["force"]) > 0.1 and np.stack(three["u"]).shape == (len(t), 3)

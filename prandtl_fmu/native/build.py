@@ -301,6 +301,12 @@ def fmi3_description(root, scene, vr_u) -> str:
     for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
         if root.find(name) is not None:
             top.append(root.find(name))
+        if name == "UnitDefinitions":  # the independent variable's unit
+            units = top.find("UnitDefinitions")
+            if units is None:
+                units = ET.SubElement(top, "UnitDefinitions")
+            if not any(unit.get("name") == "s" for unit in units):
+                ET.SubElement(ET.SubElement(units, "Unit", {"name": "s"}), "BaseUnit", {"s": "1"})
     variables = ET.SubElement(top, "ModelVariables")
     ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(vr_u + 1), "causality": "independent",
                                          "variability": "continuous", "unit": "s",
