@@ -2,7 +2,8 @@
 
 Problem: the paper's section 8 scene (n = 100 branches, h = 1e-3), run for
 ``--steps`` steps with each stepper, alone and with a dashpot and/or a cubic
-spring added, both with zero coefficients and with real ones. A table with a
+spring added, both with zero coefficients and with real ones, and with friction
+on the mass or series dashpots in the branches. A table with a
 zero coefficient is simulated (it is present); an absent table is not
 compiled at all, so the base scene must cost the same as itself and less than
 any scene that adds an effect.
@@ -25,7 +26,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from common import write_rows  # noqa: E402
 from prandtl_fmu import parse_scene, simulate  # noqa: E402
-from prandtl_fmu.effects import CubicSpring, Damper  # noqa: E402
+from prandtl_fmu.effects import CubicSpring, Damper, Friction  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 
@@ -38,6 +39,10 @@ def variants(scene):
         "+ dashpot c = 0.05": replace(scene, damper=Damper(0.05)),
         "+ cubic k3 = 0.05": replace(scene, cubic=CubicSpring(0.05)),
         "+ both": replace(scene, damper=Damper(0.05), cubic=CubicSpring(0.05)),
+        # issue 25's effects, present: Coulomb friction on the mass, and series dashpots (the O(n) kernel)
+        "+ friction alpha = 0.01": replace(scene, friction=Friction(0.01, 0.01, None, 0.0)),
+        "+ series dashpots c = 1e3": replace(scene, branches=replace(
+            scene.branches, damping=np.full(scene.branches.n, 1e3))),
     }
 
 
