@@ -128,6 +128,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     from ..driver import friction_model  # noqa: F401  (the same convention: see kernels.structure)
 
     from ..kernels import stack
+    from ..steppers import get_stepper
 
     branches = scene.branches
     continuum = branches is not None and branches.continuum
@@ -193,6 +194,8 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"#define N_STEPPERS {len(steppers)}",
         "static const char* STEPPER_NAMES[] = {" + ", ".join(f'"{name}"' for name in steppers) + "};",
         f'static const char STEPPER_LIST[] = "{", ".join(steppers)}";',
+        "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
+            [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",
@@ -265,12 +268,49 @@ def _what(name: str) -> tuple:
     raise NativeBuildError(f"the native runtime does not know the FMU variable {name!r}")
 
 
+# numba's runtime for the arrays a kernel allocates (exact's matrix exponential): the few functions the modules call,
+# with numba's MemInfo layout (numba/core/runtime/nrt.cpp, 0.58-0.68: refct, dtor, dtor_info, data, size,
+# external allocator; the modules define NRT_incref/NRT_decref themselves and read refct and data in place)
+NRT_PROVIDED = {"NRT_Allocate", "NRT_Free", "NRT_MemInfo_alloc", "NRT_MemInfo_alloc_aligned",
+                "NRT_MemInfo_alloc_safe_aligned", "NRT_MemInfo_call_dtor"}
+NRT = """
+#include <stdint.h>
+typedef void (*NRT_dtor_function)(void* data, size_t size, void* info);
+typedef struct { size_t refct; NRT_dtor_function dtor; void* dtor_info; void* data; size_t size; void* allocator; } NRT_MemInfo;
+void* NRT_Allocate(size_t size) { return malloc(size); }
+void NRT_Free(void* ptr) { free(ptr); }
+static NRT_MemInfo* meminfo(size_t size, unsigned align)
+{
+    NRT_MemInfo* mi = (NRT_MemInfo*)malloc(sizeof(NRT_MemInfo) + size + 2 * (size_t)align);
+    uintptr_t data;
+    if (mi == NULL) { prandtl_kernel_failed = 1; return NULL; }
+    data = (uintptr_t)(mi + 1);
+    if (align > 1 && data % align)
+        data += align - data % align;
+    mi->refct = 1; mi->dtor = NULL; mi->dtor_info = NULL; mi->data = (void*)data; mi->size = size; mi->allocator = NULL;
+    return mi;
+}
+NRT_MemInfo* NRT_MemInfo_alloc(size_t size) { return meminfo(size, 0); }
+NRT_MemInfo* NRT_MemInfo_alloc_aligned(size_t size, unsigned align) { return meminfo(size, align); }
+NRT_MemInfo* NRT_MemInfo_alloc_safe_aligned(size_t size, unsigned align) { return meminfo(size, align); }
+void NRT_MemInfo_call_dtor(NRT_MemInfo* mi)
+{
+    if (mi->dtor) mi->dtor(mi->data, mi->size, mi->dtor_info);
+    free(mi);
+}
+"""
+
+
 def _stubs(undefined) -> str:
     """C definitions of what the objects need from Python and numba (see the module docstring); ``undefined``:
     the symbols the kernels' modules declare."""
     lines = ["/* generated: numba's error path without Python (prandtl_fmu.native.build) */", "#include <math.h>",
-             "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
+             "#include <stdlib.h>", "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
+    if any(symbol.startswith("NRT_") for symbol in undefined):
+        lines.append(NRT)
     for symbol in sorted(undefined):
+        if symbol in NRT_PROVIDED:
+            continue
         if symbol == "numba_nextafter":
             lines.append("double numba_nextafter(double a, double b) { return nextafter(a, b); }")
         elif symbol.startswith("PyExc_"):

@@ -159,6 +159,11 @@ static const char* advance(Element* e, double duration, double force, int scene_
     *failed_at = NAN;
     if (duration == 0.0)
         return NULL;
+    if (STEP_IS_OUTPUT[e->stepper]) { /* one step per advance (exact) ... */
+        h = duration;
+        if (e->grid != 0.0 && fabs(duration - e->grid) <= 1e-9 * e->grid)
+            h = e->grid; /* ... of the grid's step when it is that to rounding */
+    }
     if (duration < SHORTEST_STEP)
         return "the duration is shorter than 1e-150 s (a step's square underflows)";
     if (!(duration / h < MAX_STEPS))

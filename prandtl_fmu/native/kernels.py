@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 PARAMETERS = ("m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity")
-NATIVE_STEPPERS = ("projected", "implicit", "symplectic", "verlet")
+NATIVE_STEPPERS = ("projected", "implicit", "symplectic", "verlet", "exact")
 
 _PTR = "types.CPointer(types.float64)"
 _SIGNATURES = {
@@ -222,10 +222,10 @@ def unsupported(scene) -> str | None:
 
 def is_stack_scene(scene) -> bool:
     """Whether the scene's branches run on the memory stack (``driver.choose_branch_kernel``: many branches with an
-    admissible initial state; every native stepper takes it, so one kernel serves them all)."""
+    admissible initial state; every native stepper but exact takes it, so one kernel serves them all)."""
     from ..driver import choose_branch_kernel
 
-    return scene.branches is not None and choose_branch_kernel(scene, NATIVE_STEPPERS[0]) == "stack"
+    return scene.branches is not None and choose_branch_kernel(scene, "projected") == "stack"
 
 
 def state_size(scene) -> int:
@@ -254,6 +254,8 @@ def applicable(scene) -> list:
 
     names = []
     for name in NATIVE_STEPPERS:
+        if name == "exact" and is_stack_scene(scene):
+            continue  # exact follows each branch: the library unfolds the memory stack for it, the native FMU cannot
         try:
             get_stepper(name).loop_for(scene)
         except ValueError:
