@@ -157,6 +157,28 @@ def test_ecos_runs_the_connector_system_as_libcosim(tmp_path):
     assert np.abs(ecos["force"]).max() > 0.1
 
 
+def test_libcosim_and_ecos_run_the_native_connector_as_the_pythonfmu_one(tmp_path):
+    """The connector system with the bushing built --runtime native (no Python in its binary, no recipe):
+    libcosim's and ecos' runs are those of the PythonFMU bushing, to the bit."""
+    if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: a native FMU cannot be built here")
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folders = {runtime: run_connector.build(tmp_path / runtime) for runtime in ("python", "native")}
+    build_fmu(run_connector.HERE / "bushing.toml", folders["native"] / "bushing.fmu", runtime="native")
+    masters = {"libcosim": lambda folder: run_connector.run(run_connector.write_structure(folder, 0.02), 6.0)}
+    try:
+        import ecospy  # noqa: F401  (loads Debian's libtbb12)
+        masters["ecos"] = lambda folder: run_connector.run_ecos(folder, 0.02, 6.0)
+    except (ImportError, OSError):
+        pass  # libcosim alone (test_ecos_runs_the_connector_system_as_libcosim says why ecos is absent)
+    for master, run in masters.items():
+        python, native = run(folders["python"]), run(folders["native"])
+        for column in ("x", "v", "force"):
+            np.testing.assert_array_equal(np.asarray(native[column]), np.asarray(python[column]), err_msg=master)
+        assert np.abs(np.asarray(native["force"])).max() > 0.1
+
+
 def gauss_seidel(folder, step, stop_time):
     """An independent Gauss-Seidel master over FMPy: the mass steps with the force of the previous step, then
     the connector with the mass's new x, v; returns the arrays time, x, v, force after every step."""
