@@ -437,3 +437,34 @@ def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(co
     two = simulate_fmu(str(fmus["python"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force"])
     np.testing.assert_array_equal(three["force"], two["force"])
     assert np.ptp(three["force"]) > 0.1 and np.stack(three["u"]).shape == (len(t), 3)
+
+
+@pytest.mark.parametrize("name, settings", [
+    ("smooth", {"stepper": "projected", "step": 0.5}),
+    ("smooth", {"stepper": "verlet", "step": 3.0}),
+    ("friction", {"stepper": "projected", "step": 0.9}),
+    ("friction", {"stepper": "implicit", "step": 2.0}),
+    ("massless", {"stepper": "projected", "step": 1.0}),
+    ("smooth", {"stepper": "implicit", "step": 0.5}),
+])
+def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, settings):
+    """The same one-line warning (or none) as the PythonFMU FMU of the scene, at initialization and when a
+    setting changes during the run."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .fmu_tools import Slave
+
+    native_fmu, scene_path = fmus[name]
+    python_fmu = build_fmu(scene_path, tmp_path / "python.fmu")
+    warnings = {}
+    for runtime, fmu in (("python", python_fmu), ("native", native_fmu)):
+        slave = Slave(fmu, start_values=settings)
+        try:
+            slave.step(0.01, 0.1)
+            slave.set("step", settings["step"] * 1.5)  # a change during the run: warned again
+            slave.step(0.01, 0.1)
+            warnings[runtime] = [message for status, message in slave.messages if status == 1]
+        finally:
+            slave.close()
+    assert warnings["native"] == warnings["python"]
+    assert bool(warnings["native"]) == (settings["stepper"] != "implicit" or name == "friction")

@@ -173,6 +173,11 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"#define NB_CS {max(n, 1)}",
         f"#define HAS_MASS {int(scene.mass is not None)}",
         f"#define HAS_DAMPER {int(scene.damper is not None)}",
+        f"#define HAS_SPRING {int(scene.spring is not None)}",
+        f"#define HAS_CUBIC {int(scene.cubic is not None)}",
+        f"#define K_SUM {float(branches.stiffness_sum) if branches is not None else 0.0!r} /* the branches' "
+        "stiffness, all sticking */",
+        f"static const double K_BRANCH[] = {_c_array(branches.stiffness if n else [])};",
         f"#define HAS_FRICTION {int(friction is not None)}",
         f"#define HAS_STRIBECK {int(friction is not None and friction.stribeck_velocity is not None)}",
         f"#define HAS_SERIES {int(scene.has_series_dashpots)}",

@@ -11,6 +11,8 @@
  */
 #ifndef PRANDTL_ELEMENT_H
 #define PRANDTL_ELEMENT_H
+#include <complex.h>
+
 #include "common.h"
 
 typedef struct {
@@ -391,6 +393,162 @@ static int restore(Instance* c, const State* s)
     return ST_OK;
 }
 
+
+/* ------------------------------------------------------------------ stability warnings (stability.py) */
+
+/* log of explicit Euler's amplitude factor of the stiffest mode per period (per step without oscillation) */
+static double log_growth_per_period(int massive, double m, double c, double K, double h)
+{
+    double worst = -INFINITY, sigma, omega_sq, scale;
+    double complex modes[2], root;
+    int count, i;
+    if (!massive) {
+        double factor;
+        if (!(c > 0))
+            return 0.0;
+        factor = fabs(1.0 - h * (K / c));
+        return factor > 0 ? log(factor) : -INFINITY;
+    }
+    sigma = c / (2.0 * m);
+    omega_sq = K / m;
+    if (!(isfinite(sigma) && isfinite(omega_sq)))
+        return INFINITY;
+    scale = fmax(sigma, sqrt(omega_sq));
+    if (scale == 0.0) {
+        modes[0] = 0.0;
+        count = 1;
+    } else {
+        root = scale * csqrt((sigma / scale) * (sigma / scale) - omega_sq / scale / scale + 0.0 * I);
+        modes[0] = -sigma + root;
+        modes[1] = -sigma - root;
+        count = 2;
+    }
+    for (i = 0; i < count; i++) {
+        double factor = cabs(1.0 + h * modes[i]), log_factor, frequency;
+        if (!isfinite(creal(modes[i])) || !isfinite(cimag(modes[i])) || !isfinite(factor))
+            return INFINITY;
+        log_factor = factor > 0 ? log(factor) : -INFINITY;
+        frequency = fabs(cimag(modes[i]));
+        if (frequency > 0.0 && log_factor > 0.0)
+            log_factor *= fmax(1.0, 2.0 * 3.141592653589793 / (frequency * h));
+        worst = fmax(worst, log_factor);
+    }
+    return worst;
+}
+
+static double allowed_growth(int massive, double m, double c, double K)
+{
+    double sigma, omega_sq, scale;
+    if (!massive)
+        return 1.0;
+    sigma = c / (2.0 * m);
+    omega_sq = K / m;
+    if (!(isfinite(sigma) && isfinite(omega_sq)))
+        return 1.0;
+    scale = fmax(sigma, sqrt(omega_sq));
+    if (scale == 0.0)
+        return 1.0;
+    return (sigma / scale) * (sigma / scale) - omega_sq / scale / scale < 0 ? 2.0 : 1.0; /* oscillates */
+}
+
+static double step_limit(int massive, double m, double c, double K)
+{
+    double log_limit = log(allowed_growth(massive, m, c, K)) + 1e-12, low = -745.0, high = 709.0;
+    int i;
+    if (log_growth_per_period(massive, m, c, K, exp(high)) <= log_limit)
+        return INFINITY;
+    if (log_growth_per_period(massive, m, c, K, exp(low)) > log_limit)
+        return 0.0;
+    for (i = 0; i < 200; i++) {
+        double middle = 0.5 * (low + high);
+        if (log_growth_per_period(massive, m, c, K, exp(middle)) <= log_limit)
+            low = middle;
+        else
+            high = middle;
+    }
+    return exp(low);
+}
+
+/* stability.stability_problem for the element's stepper and step at its state: the message, or NULL */
+static const char* stability_problem(const Element* e, char* buffer, size_t size)
+{
+    const char* stepper = STEPPER_NAMES[e->stepper];
+    double h = e->h, m = e->p[P_M], c = HAS_DAMPER ? e->p[P_C] : 0.0;
+    double K = (HAS_SPRING ? e->p[P_K0] : 0.0) + (HAS_CUBIC ? 3.0 * e->p[P_K3] * e->x * e->x : 0.0) + K_SUM;
+    int i;
+    if (strcmp(stepper, "symplectic") == 0 || strcmp(stepper, "verlet") == 0) {
+        double omega;
+        if (HAS_MASS) {
+            omega = sqrt(K / m);
+            if (omega * h >= 2.0) {
+                snprintf(buffer, size, "stepper '%s' is beyond its stability limit: omega h = %.3g >= 2 (omega = "
+                         "sqrt(K/m) = %.6g rad/s with every branch sticking); use 'implicit' or h < %.3g s",
+                         stepper, omega * h, omega, 2.0 / omega);
+                return buffer;
+            }
+        }
+    } else if (strcmp(stepper, "projected") == 0 && (HAS_MASS || c != 0.0) && K != 0.0 &&
+               log_growth_per_period(HAS_MASS, m, c, K, h) > log(allowed_growth(HAS_MASS, m, c, K)) + 1e-12) {
+        double limit = step_limit(HAS_MASS, m, c, K);
+        char advice[128];
+        if (limit > 0)
+            snprintf(advice, sizeof advice, "use 'implicit' or h <= %.3g s", limit);
+        else
+            snprintf(advice, sizeof advice, "use 'implicit' (no step is small enough)");
+        if (!HAS_MASS) {
+            snprintf(buffer, size, "stepper 'projected' is unstable here: h K / c = %.3g > 2 (K = %.6g N/m with "
+                     "every branch sticking); %s", h * K / c, K, advice);
+        } else {
+            double omega = sqrt(K / m), log_growth = log_growth_per_period(1, m, c, K, h);
+            char growth[64];
+            if (log_growth < 709.0 && isfinite(exp(log_growth)))
+                snprintf(growth, sizeof growth, "x%.3g", exp(log_growth));
+            else
+                snprintf(growth, sizeof growth, "beyond any float");
+            snprintf(buffer, size, "stepper 'projected' is beyond its stability limit: omega h = %.3g (omega = "
+                     "sqrt(K/m) = %.6g rad/s with every branch sticking) makes the amplitude grow %s per period; %s",
+                     omega * h, omega, growth, advice);
+        }
+        return buffer;
+    }
+    if (HAS_STRIBECK && strcmp(stepper, "exact") != 0) {
+        double drop = (e->p[P_ALPHA] - e->p[P_ALPHA_KINETIC]) / e->p[P_STRIBECK], inertia = m / h + c;
+        if (drop != 0.0 && drop > inertia) {
+            snprintf(buffer, size, "[friction]: the Stribeck drop (alpha - alpha_kinetic) / stribeck_velocity = %.6g "
+                     "N.s/m exceeds m/h + c = %.6g N.s/m: the step cannot resolve it (the implicit step may have "
+                     "several roots; 'implicit' takes the least slip); use h < %.3g s", drop, inertia,
+                     m / fmax(drop - c, 1e-300));
+            return buffer;
+        }
+    }
+    if (HAS_SERIES && strcmp(stepper, "projected") == 0) {
+        double fastest = -INFINITY;
+        int which = 0;
+        for (i = 0; i < NB; i++) {
+            double rate = K_BRANCH[i] / e->cs[i];
+            if (rate > fastest) {
+                fastest = rate;
+                which = i;
+            }
+        }
+        if (h * fastest > 2.0) {
+            snprintf(buffer, size, "stepper 'projected' relaxes the series dashpots explicitly and is unstable here: "
+                     "h k_i / c_i = %.3g > 2 (branch %d); use 'implicit', 'verlet' or h <= %.3g s", h * fastest,
+                     which + 1, 2.0 / fastest);
+            return buffer;
+        }
+    }
+    return NULL;
+}
+
+static void warn_if_unstable(Instance* c)
+{
+    char buffer[512];
+    const char* problem = stability_problem(&c->el, buffer, sizeof buffer);
+    if (problem != NULL)
+        say(c, ST_WARNING, "%s", problem);
+}
+
 /* fmi2/3ExitInitializationMode: the settings checked and handed over, the element reset */
 static int core_exit_initialization(Instance* c)
 {
@@ -429,6 +587,7 @@ static int core_exit_initialization(Instance* c)
     c->handed = 0;
     c->initialized = 1;
     c->phase = STEPPING;
+    warn_if_unstable(c);
     return ST_OK;
 }
 
@@ -451,7 +610,13 @@ static int core_do_step(Instance* c, double t, double H)
             say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
             return ST_DISCARD;
         }
-        hand_over(c);
+        {
+            Element before = c->el;
+            hand_over(c);
+            if (memcmp(before.p, c->el.p, sizeof before.p) != 0 || memcmp(before.cs, c->el.cs, sizeof before.cs) != 0
+                || before.stepper != c->el.stepper || before.h != c->el.h)
+                warn_if_unstable(c); /* slave._apply_settings: on a change only */
+        }
     }
     if (!isfinite(c->F)) {
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
