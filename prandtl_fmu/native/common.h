@@ -120,4 +120,28 @@ static uint64_t fnv1a(const unsigned char* bytes, size_t size)
     return hash;
 }
 
+/* the head of a state blob (the first fields of the element's and the connector's State) */
+#define FILL_HEAD(s)                                                        \
+    do {                                                                    \
+        snprintf((s)->header, sizeof (s)->header, "%s", STATE_MAGIC);       \
+        (s)->version = STATE_VERSION;                                       \
+        (s)->size = (uint32_t)sizeof *(s);                                  \
+        snprintf((s)->digest, sizeof (s)->digest, "%s", DIGEST);            \
+    } while (0)
+
+/* what every state is checked for first: the magic, the version and size, the scene's digest, the checksum */
+static const char* head_problem(const char* header, uint32_t version, uint32_t size, size_t expected,
+                                const char* digest, uint64_t checksum, uint64_t computed)
+{
+    if (memcmp(header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
+        return "not a serialized state of a prandtl_fmu native FMU";
+    if (version != STATE_VERSION || size != expected)
+        return "a state of another version of the native runtime";
+    if (strncmp(digest, DIGEST, 65) != 0)
+        return "a state of another scene (its digest differs)";
+    if (checksum != computed)
+        return "its checksum does not match: the state was altered";
+    return NULL;
+}
+
 #endif

@@ -131,10 +131,7 @@ static void defaults(Instance* c)
 static void capture(const Instance* c, State* s)
 {
     memset(s, 0, sizeof *s);
-    snprintf(s->header, sizeof s->header, "%s", STATE_MAGIC);
-    s->version = STATE_VERSION;
-    s->size = (uint32_t)sizeof *s;
-    snprintf(s->digest, sizeof s->digest, "%s", DIGEST);
+    FILL_HEAD(s);
     s->element = c->el;
     s->x_in = c->x_in;
     s->v_in = c->v_in;
@@ -150,14 +147,10 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const Element* e = &s->element;
     const char* problem;
     int i;
-    if (memcmp(s->header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
-        return "not a serialized state of a prandtl_fmu native FMU";
-    if (s->version != STATE_VERSION || s->size != sizeof *s)
-        return "a state of another version of the native runtime";
-    if (strncmp(s->digest, DIGEST, sizeof s->digest) != 0)
-        return "a state of another scene (its digest differs)";
-    if (s->checksum != fnv1a((const unsigned char*)s, offsetof(State, checksum)))
-        return "its checksum does not match: the state was altered";
+    const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
+                                    fnv1a((const unsigned char*)s, offsetof(State, checksum)));
+    if (head != NULL)
+        return head;
     if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
           isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0)))
         return "it holds a non-finite or out-of-range value";

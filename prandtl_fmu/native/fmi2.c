@@ -7,6 +7,7 @@
 #else
 #include "element.h"
 #endif
+#include "state.h"
 
 static void emit(void* instance, int status, const char* category, const char* message)
 {
@@ -261,33 +262,17 @@ fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2S
 
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate* state)
 {
-    Instance* c = (Instance*)comp;
-    State* s = *state ? (State*)*state : (State*)malloc(sizeof(State));
-    if (s == NULL) {
-        say(c, fmi2Error, "fmi2GetFMUstate failed: out of memory");
-        return fmi2Error;
-    }
-    capture(c, s);
-    *state = s;
-    return fmi2OK;
+    return (fmi2Status)core_get_state((Instance*)comp, state);
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
 {
-    Instance* c = (Instance*)comp;
-    if (state == NULL) {
-        say(c, fmi2Error, "FMU state refused (NULL); the instance is unchanged");
-        return fmi2Error;
-    }
-    return (fmi2Status)restore(c, (const State*)state);
+    return (fmi2Status)core_set_state((Instance*)comp, state);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate* state)
 {
-    if (state != NULL) {
-        free(*state);
-        *state = NULL;
-    }
+    core_free_state(state);
     return fmi2OK;
 }
 
@@ -299,36 +284,11 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, si
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte bytes[], size_t size)
 {
-    if (size < sizeof(State)) {
-        say((Instance*)comp, fmi2Error, "fmi2SerializeFMUstate refused: %zu bytes given, %zu needed", size,
-            sizeof(State));
-        return fmi2Error;
-    }
-    memcpy(bytes, state, sizeof(State));
-    return fmi2OK;
+    return (fmi2Status)core_serialize((Instance*)comp, state, bytes, size);
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], size_t size, fmi2FMUstate* state)
 {
-    Instance* c = (Instance*)comp;
-    char buffer[256];
-    const char* problem;
-    State* s;
-    if (size != sizeof(State)) {
-        say(c, fmi2Error, "FMU state refused (%zu bytes: not a serialized state of this FMU, which has %zu)", size,
-            sizeof(State));
-        return fmi2Error;
-    }
-    problem = state_problem((const State*)bytes, buffer, sizeof buffer);
-    if (problem != NULL) {
-        say(c, fmi2Error, "FMU state refused (%s)", problem);
-        return fmi2Error;
-    }
-    s = (State*)malloc(sizeof(State));
-    if (s == NULL)
-        return fmi2Error;
-    memcpy(s, bytes, sizeof(State));
-    *state = s;
-    return fmi2OK;
+    return (fmi2Status)core_deserialize((Instance*)comp, bytes, size, state);
 }
 

@@ -10,6 +10,7 @@
 #else
 #include "element.h"
 #endif
+#include "state.h"
 
 static void emit(void* instance, int status, const char* category, const char* message)
 {
@@ -262,33 +263,17 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* state)
 {
-    Instance* c = (Instance*)instance;
-    State* s = *state ? (State*)*state : (State*)malloc(sizeof(State));
-    if (s == NULL) {
-        say(c, ST_ERROR, "fmi3GetFMUState failed: out of memory");
-        return fmi3Error;
-    }
-    capture(c, s);
-    *state = s;
-    return fmi3OK;
+    return (fmi3Status)core_get_state((Instance*)instance, state);
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state)
 {
-    Instance* c = (Instance*)instance;
-    if (state == NULL) {
-        say(c, ST_ERROR, "FMU state refused (NULL); the instance is unchanged");
-        return fmi3Error;
-    }
-    return (fmi3Status)restore(c, (const State*)state);
+    return (fmi3Status)core_set_state((Instance*)instance, state);
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* state)
 {
-    if (state != NULL) {
-        free(*state);
-        *state = NULL;
-    }
+    core_free_state(state);
     return fmi3OK;
 }
 
@@ -300,37 +285,12 @@ fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state,
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState state, fmi3Byte bytes[], size_t size)
 {
-    if (size < sizeof(State)) {
-        say((Instance*)instance, ST_ERROR, "fmi3SerializeFMUState refused: %zu bytes given, %zu needed", size,
-            sizeof(State));
-        return fmi3Error;
-    }
-    memcpy(bytes, state, sizeof(State));
-    return fmi3OK;
+    return (fmi3Status)core_serialize((Instance*)instance, state, (char*)bytes, size);
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte bytes[], size_t size, fmi3FMUState* state)
 {
-    Instance* c = (Instance*)instance;
-    char buffer[256];
-    const char* problem;
-    State* s;
-    if (size != sizeof(State)) {
-        say(c, ST_ERROR, "FMU state refused (%zu bytes: not a serialized state of this FMU, which has %zu)", size,
-            sizeof(State));
-        return fmi3Error;
-    }
-    problem = state_problem((const State*)bytes, buffer, sizeof buffer);
-    if (problem != NULL) {
-        say(c, ST_ERROR, "FMU state refused (%s)", problem);
-        return fmi3Error;
-    }
-    s = (State*)malloc(sizeof(State));
-    if (s == NULL)
-        return fmi3Error;
-    memcpy(s, bytes, sizeof(State));
-    *state = s;
-    return fmi3OK;
+    return (fmi3Status)core_deserialize((Instance*)instance, (const char*)bytes, size, state);
 }
 
 /* ------------------------------------------------------------------ what a co-simulation FMU does not provide */
