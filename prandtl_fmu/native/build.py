@@ -1,13 +1,16 @@
-"""``build_native_fmu``: an FMI 2.0 co-simulation FMU of a scene whose binary holds no Python.
+"""``build_native_fmu``: an FMI 2.0 or 3.0 co-simulation FMU of a scene (the element or the connector) whose
+binary holds no Python.
 
 The FMU has the PythonFMU FMU's model description (the same variables, names, value references, units,
 causalities, documentation: it is built first, in a scratch folder, and its ``modelDescription.xml`` is
-taken with ``needsExecutionTool="false"``) and a binary linked from
+taken with ``needsExecutionTool="false"``; FMI 3.0's is derived from it) and a binary linked from
 
 * the scene's kernels, compiled by numba from the library's own sources (``kernels.py``), as objects;
 * ``stubs.c``, generated here: numba's error path, which a kernel reaches only when it raises, sets a
-  flag instead of calling Python (and ``numba_nextafter`` is C's ``nextafter``);
-* ``fmi2.c``, the FMI layer, with the generated ``scene.h``.
+  flag instead of calling Python; the few functions of numba's runtime that ``exact``'s arrays call
+  (:data:`NRT`); ``numba_nextafter`` is C's ``nextafter``;
+* ``fmi2.c`` or ``fmi3.c``, the FMI layer, over ``element.h`` or ``connector.h`` (with ``common.h``,
+  ``state.h``) and the generated ``scene.h``.
 
 It needs a C compiler and linker (``cc`` or ``gcc``, or ``$CC``); without one the build stops with one line
 saying what to install.
@@ -23,8 +26,6 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-
-import numpy as np
 
 from . import kernels
 
@@ -63,9 +64,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     if scene.mass is None and scene.damper is None and not connector:
         raise NativeBuildError("a massless element without a dashpot is not in the native runtime yet: build it "
                                "with --runtime python")
-    problem = kernels.unsupported(scene)
-    if problem:
-        raise NativeBuildError(problem)
     cc = compiler()
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
@@ -125,8 +123,6 @@ def _c_array(values) -> str:
 
 
 def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
-    from ..driver import friction_model  # noqa: F401  (the same convention: see kernels.structure)
-
     from ..kernels import stack
     from ..steppers import get_stepper
 

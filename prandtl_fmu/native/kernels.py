@@ -215,11 +215,6 @@ def structure(scene) -> dict:
     }
 
 
-def unsupported(scene) -> str | None:
-    """Why the native runtime cannot take ``scene`` yet, or None."""
-    return None
-
-
 def is_stack_scene(scene) -> bool:
     """Whether the scene's branches run on the memory stack (``driver.choose_branch_kernel``: many branches with an
     admissible initial state; every native stepper but exact takes it, so one kernel serves them all)."""
