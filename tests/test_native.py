@@ -45,7 +45,10 @@ SCENES = {
     # massless: the dashpot sets the rate
     "massless": base_tables(mass=None, cubic=None, solver=dict(SOLVER, stepper="implicit"),
                             load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
-    # the paper's section 8: 100 branches on the memory stack
+    # massless and no dashpot: x is the equilibrium of F at every step (implicit only)
+    "rigid": base_tables(mass=None, damper=None, solver=dict(SOLVER, stepper="implicit"),
+                         load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
+    # the paper's section 8: 100 branches on the memory stack (unfolded to 100 elongations for exact)
     "paper": None,
     # the continuum (a spectrum on the memory stack)
     "continuum": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
@@ -92,7 +95,7 @@ def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
     fmu, scene_path = fmus[name]
     scene = load_scene(scene_path)
     tried = steppers_of(scene)
-    assert tried and ("exact" in tried) == (name in ("coulomb",))
+    assert tried and ("exact" in tried) == (name in ("coulomb", "paper"))
     for stepper in tried:
         slave = Slave(fmu, start_values={"stepper": stepper})
         names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
@@ -109,6 +112,53 @@ def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
         finally:
             slave.close()
         assert abs(element.x) > 1e-3  # it moved
+
+
+def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
+    """The paper's 100 branches run on the memory stack, which exact does not take: switching to exact unfolds
+    them to 100 elongations and switching back folds them into a stack that refers to the elongations of then
+    (driver.Element._use_branch_kernel); every output stays the library's to the bit, through every switch and
+    an FMU state saved while unfolded."""
+    from .fmu_tools import Slave
+
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    plan = ["projected", "exact", "implicit", "exact", "exact", "verlet", "symplectic", "exact", "projected"]
+    slave = Slave(fmu, start_values={"stepper": plan[0], "step": 0.01})
+    element = Element(scene, stepper=plan[0], step=0.01)
+    names = ["x", "v", "reaction", "stiffness", "stored_energy", "dissipated_sliders", "energy_residual"]
+    rng = np.random.default_rng(3)
+    kernels, saved = [], None
+    try:
+        for k, stepper in enumerate(plan):
+            if k:
+                slave.fmu.setString([slave.vr["stepper"]], [stepper])
+                element.set_stepper(stepper)
+            kernels.append(element.branch_kernel)
+            for _ in range(12):
+                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert outputs(slave, names) == expected(element, names), (stepper, time)
+            if k == 3:  # unfolded: the state holds the elongations and the stack's parameters as folded last
+                saved, checkpoint, at = slave.fmu.getFMUstate(), element.get_state(), slave.time
+        assert kernels == ["stack", "play", "stack", "play", "play", "stack", "stack", "play", "stack"]
+        slave.fmu.setFMUstate(saved)
+        element.set_state(checkpoint)
+        slave.time = at
+        for stepper in ("exact", "projected"):  # the saved stepper runs on, then a fold from the restored state
+            slave.fmu.setString([slave.vr["stepper"]], [stepper])
+            element.set_stepper(stepper)
+            for size, force in ((0.05, 0.3), (0.1, -0.7)):
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert outputs(slave, names) == expected(element, names), stepper
+    finally:
+        slave.close()
 
 
 def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):

@@ -84,25 +84,61 @@ def prepare(stiffness, yield_displacement, u0):
     n + 1) K, M, C, the order, and the prefix sums of k eta^2, k eta c, k c^2
     (one array rather than a tuple of ten: the steppers pass it on every
     step). ValueError if u0 is not admissible (then the O(n) kernel must be
-    used).
+    used). The rows of u0 are written by :func:`refer`.
     """
     order = np.argsort(yield_displacement, kind="stable")
     k = np.ascontiguousarray(stiffness[order], dtype=float)
     eta = np.ascontiguousarray(yield_displacement[order], dtype=float)
-    c = np.asarray(u0, dtype=float)[order]
-    if not admissible(eta, c):
-        raise ValueError("the initial elongations are not 1-Lipschitz in eta: the memory stack does not apply")
 
     def prefix(values):
         return np.concatenate([[0.0], np.cumsum(values)])
 
     n = len(k)
     params = np.zeros((10, n + 1))
-    params[K_ROW, :n], params[ETA_ROW, :n], params[C_ROW, :n] = k, eta, c
-    params[K_SUM], params[M_SUM], params[C_SUM] = prefix(k), prefix(k * eta), prefix(k * c)
+    params[K_ROW, :n], params[ETA_ROW, :n] = k, eta
+    params[K_SUM], params[M_SUM] = prefix(k), prefix(k * eta)
     params[ORDER_ROW, :n] = order
-    params[E_SUM], params[D_SUM], params[G_SUM] = prefix(k * eta * eta), prefix(k * eta * c), prefix(k * c * c)
+    params[E_SUM] = prefix(k * eta * eta)
+    if not refer(params, np.ascontiguousarray(u0, dtype=float)):
+        raise ValueError("the initial elongations are not 1-Lipschitz in eta: the memory stack does not apply")
     return params, order
+
+
+@kernel
+def refer(params, u0):
+    """Make the elongations ``u0`` (the scene's order) those the initial piece refers to: the row c = u0 in eta
+    order and the prefix sums of k c, k eta c, k c^2 of :func:`prepare`'s ``params``, in place (what a switch
+    back to the stack from the O(n) kernel does, ``driver.Element``). False, ``params`` unchanged, when u0 is
+    not admissible (:func:`admissible`)."""
+    n = params.shape[1] - 1
+    if not _admissible(params[ETA_ROW], u0, params[ORDER_ROW], n):
+        return False
+    c_sum = d_sum = g_sum = 0.0
+    params[C_SUM, 0] = params[D_SUM, 0] = params[G_SUM, 0] = 0.0
+    for j in range(n):
+        k, eta, c = params[K_ROW, j], params[ETA_ROW, j], u0[int(params[ORDER_ROW, j])]
+        params[C_ROW, j] = c
+        if j == 0:  # numpy's cumsum starts from the first term (not 0.0 + it: the sign of a zero)
+            c_sum, d_sum, g_sum = k * c, k * eta * c, k * c * c
+        else:
+            c_sum, d_sum, g_sum = c_sum + k * c, d_sum + k * eta * c, g_sum + k * c * c
+        params[C_SUM, j + 1], params[D_SUM, j + 1], params[G_SUM, j + 1] = c_sum, d_sum, g_sum
+    return True
+
+
+@kernel
+def _admissible(eta, u, order, n):
+    """:func:`admissible` for ``eta`` sorted and ``u[order[j]]`` the elongation of the branch at position j."""
+    largest = 0.0
+    for j in range(n):
+        if abs(u[int(order[j])]) > eta[j]:
+            return False
+        largest = max(largest, eta[j])
+    tolerance = 1e-12 * max(1.0, largest)
+    for j in range(n - 1):
+        if not abs(u[int(order[j + 1])] - u[int(order[j])]) <= (eta[j + 1] - eta[j]) + tolerance:
+            return False
+    return True
 
 
 def continuum(k_total, eta_min, eta_max):
@@ -184,16 +220,24 @@ def capacity(params) -> int:
 
 
 def fresh_state(params, x0):
-    """The initial state at x = x0: one sticking piece, u = u0 (+ x - x0 as x moves)."""
-    state = np.zeros(HEADER + ROW * capacity(params))
+    """The initial state at x = x0: one sticking piece, u = u0 (+ x - x0 as x moves); see :func:`start`."""
+    state = np.empty(HEADER + ROW * capacity(params))
+    start(params, float(x0), state)
+    return state
+
+
+@kernel
+def start(params, x0, state):
+    """Make ``state`` the initial state at x = x0, in place: one sticking piece, u = u0 + x - x0 (n branches)
+    or u(s) = x - x0 (the continuum, virgin)."""
+    state[:] = 0.0
     state[X] = x0
     state[COUNT] = 1.0
-    if isinstance(params, tuple):
-        state[HEADER:HEADER + ROW] = (0.0, 1.0, -x0, 0.0, 0.0)  # virgin: u(s) = x - x0
-    else:
-        state[HEADER:HEADER + ROW] = (0.0, params.shape[1] - 1, -x0, 0.0, 1.0)  # u_i = x - x0 + u0_i
+    end, gamma = _first_piece(params)
+    state[HEADER + 1] = end
+    state[HEADER + 2] = -x0
+    state[HEADER + 4] = gamma
     resync(params, state)
-    return state
 
 
 def used(state) -> int:
@@ -264,10 +308,8 @@ def _check_admissible(params, saved, rows):
 
 def admissible(eta, u):
     """|u_i| <= eta_i and |u_i - u_j| <= eta_j - eta_i for eta sorted (to rounding)."""
-    if np.any(np.abs(u) > eta):
-        return False
-    tolerance = 1e-12 * max(1.0, float(np.max(eta, initial=0.0)))
-    return bool(np.all(np.abs(np.diff(u)) <= np.diff(eta) + tolerance))
+    eta, u = np.ascontiguousarray(eta, dtype=float), np.ascontiguousarray(u, dtype=float)
+    return bool(_admissible(eta, u, np.arange(len(eta), dtype=float), len(eta)))
 
 
 # ------------------------------------------------ the continuum's segments (closed forms)
@@ -381,6 +423,18 @@ def _split(params, state, row, x, s):
 
 def _is_discrete(params):
     return isinstance(params, types.Array)
+
+
+def _first_piece(params):
+    """(end, gamma) of a fresh state's one piece: all n branches referring to u0, or the virgin continuum."""
+    raise NotImplementedError
+
+
+@overload(_first_piece, inline="always")
+def _first_piece_overload(params):
+    if _is_discrete(params):
+        return lambda params: (float(params.shape[1] - 1), 1.0)
+    return lambda params: (1.0, 0.0)
 
 
 @overload(_sums, inline="always")

@@ -61,9 +61,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
 
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
-    if scene.mass is None and scene.damper is None and not connector:
-        raise NativeBuildError("a massless element without a dashpot is not in the native runtime yet: build it "
-                               "with --runtime python")
     cc = compiler()
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
@@ -140,6 +137,9 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         k_values = branches.stiffness if n else []
         eta_values = branches.yield_displacement if n else []
         u0_values = branches.u0 if n else []
+    folds = kernels.folds(scene)  # the O(n) kernel's arrays too (exact)
+    play_k, play_eta, play_u0 = ((branches.stiffness, branches.yield_displacement, branches.u0) if folds
+                                 else ([], [], []))
     values = dict.fromkeys(kernels.PARAMETERS, 0.0)
     present = dict.fromkeys(kernels.PARAMETERS, 0)
     from ..scene import coefficients_of
@@ -165,6 +165,12 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"#define NB {n}",
         f"#define NB_ARR {max(size, 1)} /* the branches' state: n elongations or the memory stack's */",
         f"#define STACK {int(on_stack)}",
+        f"#define FOLDS {int(folds)} /* the stack unfolds to n elongations for exact (kernels.folds) */",
+        f"#define NB_PLAY {max(n, 1) if folds else 1}",
+        f"#define K_LEN {10 * (n + 1) if folds else 1}",
+        f"static const double K_PLAY[] = {_c_array(play_k)};",
+        f"static const double ETA_PLAY[] = {_c_array(play_eta)};",
+        f"static const double U0_PLAY[] = {_c_array(play_u0)};",
         f"#define CONNECTOR {int(scene.causality == 'displacement')}",
         f"#define NB_CS {max(n, 1)}",
         f"#define HAS_MASS {int(scene.mass is not None)}",
@@ -195,6 +201,8 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"#define N_STEPPERS {len(steppers)}",
         "static const char* STEPPER_NAMES[] = {" + ", ".join(f'"{name}"' for name in steppers) + "};",
         f'static const char STEPPER_LIST[] = "{", ".join(steppers)}";',
+        "static const int TAKES_STACK[] = {" + ", ".join(
+            [str(int(kernels.takes_stack(name))) for name in steppers] + ["0"]) + "};",
         "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
             [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
@@ -218,9 +226,13 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "cstored": "double {name}(P, P, P, P, P, double)",
         "cinitial": "int64_t {name}(P, P, P, P, P)",
     }
+    if not folds:
+        lines.append("#define stack_fold(k, u, x, state) 0")
     for name, symbol in symbols.items():
         if name == "force_at":
             lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) __asm__("{symbol}");')
+        elif name == "fold":
+            lines.append(f'int64_t stack_fold(P, P, double, P) __asm__("{symbol}");')
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' __asm__("{symbol}");')
     connector = scene.causality == "displacement"
@@ -228,11 +240,17 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
                  else ("record", "stiffness", "initial", "elongations"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]
+        unfolded = chosen + "p" if folds else chosen  # the O(n) kernel's functions: what exact runs on
         if not connector:
-            lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{"
-                         + ", ".join(f"advance_{name}_{chosen}" for name in steppers) + "};")
+            lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}[N_STEPPERS] = {{" + ", ".join(
+                f"advance_{name}_{chosen if kernels.takes_stack(name) or not folds else unfolded}"
+                for name in steppers) + "};")
+            lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}P[N_STEPPERS] = {{"
+                         + ", ".join(f"advance_{name}_{unfolded}" for name in steppers) + "};")
         for function in functions:
             lines.append(f"#define {function}_{suffix} {function}_{chosen}")
+            if not connector:
+                lines.append(f"#define {function}_{suffix}p {function}_{unfolded}")
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
         "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "

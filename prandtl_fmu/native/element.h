@@ -21,6 +21,9 @@ typedef struct {
     int stepper;          /* index into STEPPER_NAMES */
     double h;
     double x, v, u[NB_ARR];
+    int play;             /* FOLDS: the stack unfolded to the n elongations up (a stepper that does not take it) */
+    double up[NB_PLAY];
+    double kst[K_LEN];    /* FOLDS: the stack's parameters, referring to the elongations of the last fold */
     double account[4], out[3], erow[6], initial_energy;
     double origin, grid;  /* the clock: time = origin + steps * grid (grid 0: none yet) */
     int64_t steps;
@@ -67,6 +70,14 @@ static void set_time(Element* e, double value)
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
+/* The branches' arrays of the kernel in use (driver.Element's model[4:6] and u): the scene's (n elongations, or
+ * the memory stack), or with FOLDS the stack's parameters as last folded, or the O(n) kernel's when unfolded. */
+static double* kernel_k(Element* e) { return e->play ? (double*)K_PLAY : FOLDS ? e->kst : (double*)K; }
+static double* kernel_eta(Element* e) { return e->play ? (double*)ETA_PLAY : (double*)ETA; }
+static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
+#define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e)
+#define KERNEL(e, name) ((e)->play ? (damped(e) ? name##_cp : name##_np) : (damped(e) ? name##_c : name##_n))
+
 /* the load of an advance: the force held, or the scene's [load] plus it */
 typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
 static const double NO_TABLE[1] = {0.0};
@@ -98,8 +109,8 @@ static void record(Element* e, double t)
 {
     Load l = load_of(e->force, e->scene_load);
     double xv[2] = {e->x, e->v};
-    (damped(e) ? record_c : record_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, e->account, e->out, e->erow,
-                                        l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, t);
+    KERNEL(e, record)(BRANCHES(e), xv, e->account, e->out, e->erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
+                      t);
 }
 
 /* Element.reset(force): the initial state under the force held; 0 when a massless element has no equilibrium */
@@ -113,9 +124,12 @@ static int reset(Element* e, double force)
     e->grid = 0.0;
     e->force = force;
     e->scene_load = 0;
+    e->play = FOLDS && !TAKES_STACK[e->stepper]; /* driver.choose_branch_kernel */
+    if (FOLDS)
+        memcpy(e->kst, K, sizeof e->kst);
     memcpy(e->u, U0, sizeof e->u);
-    ok = (int)(damped(e) ? initial_c : initial_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, l.kind, l.lk,
-                                                    (double*)l.t, (double*)l.f, l.n);
+    memcpy(e->up, U0_PLAY, sizeof e->up);
+    ok = (int)KERNEL(e, initial)(BRANCHES(e), xv, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n);
     if (!ok || prandtl_kernel_failed)
         return 0;
     e->x = xv[0];
@@ -142,9 +156,9 @@ static void split_duration(double duration, double h, double* whole, double* res
 static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first, double h, int64_t steps)
 {
     double xv[2] = {e->x, e->v};
-    int64_t taken = (damped(e) ? ADVANCE_C : ADVANCE_N)[e->stepper](
-        e->p, (double*)K, (double*)ETA, e->cs, e->u, xv, e->account, e->out, e->erow, l->kind, (double*)l->lk,
-        (double*)l->t, (double*)l->f, l->n, t_base, first, h, steps);
+    int64_t taken = (e->play ? (damped(e) ? ADVANCE_CP : ADVANCE_NP) : (damped(e) ? ADVANCE_C : ADVANCE_N))[e->stepper](
+        BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n,
+        t_base, first, h, steps);
     if (prandtl_kernel_failed)
         return -1;
     e->x = xv[0];
@@ -217,9 +231,8 @@ static int stepper_index(const char* name)
 static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
 {
     if (!c->stepper_valid || stepper_index(c->stepper) < 0) {
-        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the native runtime; 'exact' and the "
-                 "steppers that do not apply to this scene are not in it)", c->stepper_valid ? c->stepper : "?",
-                 STEPPER_LIST);
+        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers that apply to this "
+                 "scene)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
         return buffer;
     }
     if (!(isfinite(c->step) && c->step > 0)) {
@@ -229,19 +242,44 @@ static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
     return NULL;
 }
 
+/* Element._use_branch_kernel("play"): the stack's n elongations, for a stepper that does not take it */
+static void unfold(Element* e)
+{
+    (damped(e) ? elongations_c : elongations_n)(e->p, e->kst, (double*)ETA, e->cs, e->u, e->up);
+    e->play = 1;
+    record(e, element_time(e));
+}
+
+/* Element._use_branch_kernel("stack") when the elongations are admissible (Element._can_fold); else the O(n)
+ * kernel stays */
+static void fold_back(Element* e)
+{
+    if (!stack_fold(e->kst, e->up, e->x, e->u))
+        return;
+    e->play = 0;
+    record(e, element_time(e));
+}
+
 /* slave._hand_over_settings: the coefficients, stepper and step the master set go to the element */
 static void hand_over(Instance* c)
 {
     Element* e = &c->el;
+    int stepper = stepper_index(c->stepper);
     int changed = memcmp(e->p, c->par, sizeof e->p) != 0 || memcmp(e->cs, c->cbranch, sizeof e->cs) != 0;
     memcpy(e->p, c->par, sizeof e->p);
     if (!HAS_STRIBECK)
         e->p[P_ALPHA_KINETIC] = e->p[P_ALPHA];
     memcpy(e->cs, c->cbranch, sizeof e->cs);
-    e->stepper = stepper_index(c->stepper);
-    e->h = c->step;
     if (changed)
         record(e, element_time(e));
+    if (FOLDS && c->initialized && stepper != e->stepper) { /* Element.set_stepper (reset chooses afresh) */
+        if (!TAKES_STACK[stepper] && !e->play)
+            unfold(e);
+        else if (TAKES_STACK[stepper] && e->play)
+            fold_back(e);
+    }
+    e->stepper = stepper;
+    e->h = c->step;
     c->handed = 1;
 }
 
@@ -283,7 +321,7 @@ static double real_value(Instance* c, const Var* var)
     case W_V: return e->v;
     case W_REACTION: return reaction_now(c);
     case W_STIFFNESS:
-        return (damped(e) ? stiffness_c : stiffness_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, xv);
+        return KERNEL(e, stiffness)(BRANCHES(e), xv);
     case W_ENERGY: return energy(e, var->index);
     case W_PARAM: return c->par[var->index];
     case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
@@ -344,11 +382,22 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           isfinite(s->F) && isfinite(s->start_time) && e->steps >= 0 && e->stepper >= 0 && e->stepper < N_STEPPERS &&
           isfinite(e->h) && e->h > 0))
         return "it holds a non-finite or out-of-range value";
-    for (i = 0; i < (STACK ? 0 : NB); i++) { /* the stack's state: checked by the checksum */
-        if (!(fabs(e->u[i]) <= ETA[i])) {
-            snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);
+    if (e->play != 0 && !(FOLDS && e->play == 1))
+        return "it holds a non-finite or out-of-range value";
+    if (FOLDS && !e->play && !TAKES_STACK[e->stepper])
+        return "its stepper runs on the branches' elongations, which it does not hold";
+    for (i = 0; i < (STACK && !e->play ? 0 : NB); i++) { /* the stack's state: checked by the checksum */
+        double u = e->play ? e->up[i] : e->u[i], eta = e->play ? ETA_PLAY[i] : ETA[i];
+        if (!(fabs(u) <= eta)) {
+            snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, u, eta);
             return buffer;
         }
+    }
+    if (FOLDS) { /* the stack's parameters: only the rows of the elongations folded last may differ from K */
+        static const int fixed[] = {0, 1, 3, 4, 6, 7}; /* k, eta, their prefix sums, the order, sum k eta^2 */
+        for (i = 0; i < 6; i++)
+            if (memcmp(e->kst + fixed[i] * (NB + 1), K + fixed[i] * (NB + 1), (NB + 1) * sizeof(double)) != 0)
+                return "its memory-stack parameters are not this scene's";
     }
     return NULL;
 }

@@ -119,7 +119,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 H, fmi3B
 static void elongations(Instance* c, double* out)
 {
     Element* e = &c->el;
+#if CONNECTOR
     (damped(e) ? elongations_c : elongations_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, out);
+#else
+    KERNEL(e, elongations)(BRANCHES(e), out);
+#endif
 }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],

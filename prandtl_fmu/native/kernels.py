@@ -99,17 +99,7 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
     m, k0, k3, c, k, eta, cs, friction = model
     u = {u}
     if {stack}:  # stack.fresh_state(params, x0) in place: one sticking piece, u_i = x - x0 + u0_i
-        x_start = p[1] if {massive} else 0.0
-        for i in range(u.shape[0]):
-            u[i] = 0.0
-        u[STACK_X] = x_start
-        u[STACK_COUNT] = 1.0
-        u[STACK_HEADER] = 0.0
-        u[STACK_HEADER + 1] = {stack_end}
-        u[STACK_HEADER + 2] = -x_start
-        u[STACK_HEADER + 3] = 0.0
-        u[STACK_HEADER + 4] = {stack_gamma}
-        resync(k, u)
+        start(k, p[1] if {massive} else 0.0, u)
     if {massive}:
         xv[0] = p[1]
         xv[1] = p[2]
@@ -158,12 +148,7 @@ def cinitial(p, kp, etap, csp, up):
     k = _model(p, kp, etap, csp)[4]
     u = {u}
     if {stack}:  # stack.fresh_state(params, 0.0) in place
-        for i in range(u.shape[0]):
-            u[i] = 0.0
-        u[STACK_COUNT] = 1.0
-        u[STACK_HEADER + 1] = {stack_end}
-        u[STACK_HEADER + 4] = {stack_gamma}
-        resync(k, u)
+        start(k, 0.0, u)
     return 1
 
 
@@ -182,12 +167,13 @@ _CONNECTOR_SIGNATURES = {
 }
 
 
-def structure(scene) -> dict:
-    """The scene's structure as the generated source needs it (which effects, how many branches)."""
+def structure(scene, unfolded=False) -> dict:
+    """The scene's structure as the generated source needs it (which effects, how many branches); ``unfolded``:
+    the O(n) kernel of a scene whose branches are on the memory stack (see :func:`folds`)."""
     branches = scene.branches
     continuum = branches is not None and branches.continuum
     n = 0 if branches is None or continuum else branches.n
-    on_stack = is_stack_scene(scene)
+    on_stack = is_stack_scene(scene) and not unfolded
     friction = scene.friction
     if friction is None:
         friction_source = "None"
@@ -206,9 +192,6 @@ def structure(scene) -> dict:
         "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
         "u": f"carray(up, ({state_size(scene)},))" if on_stack else f"carray(up, ({n},))" if n else "None",
         "stack": "True" if on_stack else "False",
-        # the first piece of a fresh stack (stack.fresh_state): the continuum is virgin, n branches start at u0
-        "stack_end": "1.0" if continuum else f"{float(n)!r}",
-        "stack_gamma": "0.0" if continuum else "1.0",
         "has_branches": "True" if n else "False",
         "friction": friction_source,
         "massive": "True" if scene.mass is not None else "False",
@@ -217,10 +200,25 @@ def structure(scene) -> dict:
 
 def is_stack_scene(scene) -> bool:
     """Whether the scene's branches run on the memory stack (``driver.choose_branch_kernel``: many branches with an
-    admissible initial state; every native stepper but exact takes it, so one kernel serves them all)."""
+    admissible initial state, or the continuum)."""
     from ..driver import choose_branch_kernel
 
     return scene.branches is not None and choose_branch_kernel(scene, "projected") == "stack"
+
+
+def takes_stack(stepper) -> bool:
+    """Whether the stepper runs on the memory stack (every one but ``exact``)."""
+    from ..steppers import get_stepper
+
+    return bool(getattr(get_stepper(stepper), "BRANCH_STACK", False))
+
+
+def folds(scene) -> bool:
+    """Whether the scene's n branches are on the memory stack, which ``exact`` does not take: as
+    ``driver.Element`` does, the native FMU then unfolds them to n elongations for exact (the O(n) kernel's
+    functions, suffix ``p``) and folds them back for another stepper when they are admissible
+    (``fold``: ``stack.refer`` and ``stack.start``)."""
+    return is_stack_scene(scene) and not scene.branches.continuum
 
 
 def state_size(scene) -> int:
@@ -249,8 +247,6 @@ def applicable(scene) -> list:
 
     names = []
     for name in NATIVE_STEPPERS:
-        if name == "exact" and is_stack_scene(scene):
-            continue  # exact follows each branch: the library unfolds the memory stack for it, the native FMU cannot
         try:
             get_stepper(name).loop_for(scene)
         except ValueError:
@@ -260,8 +256,10 @@ def applicable(scene) -> list:
 
 
 def compile_kernels(scene, steppers) -> list:
-    """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``: ``advance_<stepper>_<variant>``,
-    ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``."""
+    """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``:
+    ``advance_<stepper>_<variant>``, ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``,
+    ``elongations_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
+    (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
 
     from ..kernels.drive import tangent
@@ -270,38 +268,65 @@ def compile_kernels(scene, steppers) -> list:
     from ..kernels.increment import solve_increment
     from ..kernels.play import branch_force, move, write_elongations
     from ..kernels.smooth import elastic_force
-    from ..kernels.stack import COUNT, HEADER, X, resync
+    from ..kernels.stack import start
     from ..loads import force_at
     from ..steppers import get_stepper
 
-    shape = structure(scene)
+    if scene.causality == "displacement":
+        return _compile_connector(scene, structure(scene))
     compiled = []
     compiled_force = False
-    if scene.causality == "displacement":
-        return _compile_connector(scene, shape)
+    kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
     for suffix, damped in variants(scene):
-        source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False", **shape)
-        for stepper in list(steppers) + [None]:
-            namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
-                             tangent=tangent, branch_force=branch_force, move=move, solve_increment=solve_increment,
-                             write_elongations=write_elongations,
-                             elastic_force=elastic_force, force_at=force_at, resync=resync, STACK_X=X,
-                             STACK_COUNT=COUNT, STACK_HEADER=HEADER,
-                             run=get_stepper(stepper).loop_for(scene) if stepper else None)
-            exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
-            for helper in ("_model", "_load"):  # inlined into each C function
-                namespace[helper] = njit(inline="always")(namespace[helper])
-            names = ["advance"] if stepper else ["record", "stiffness", "initial", "elongations"]
-            if stepper is None and not compiled_force:
-                names.append("force_at")  # the scene's load alone: once
-                compiled_force = True
-            for name in names:
-                signature = eval(_SIGNATURES[name], {"types": types})
-                function = cfunc(signature, error_model="numpy")(namespace["force_at_c" if name == "force_at" else name])
-                c_name = (f"advance_{stepper}_{suffix}" if stepper else
-                          "force_at" if name == "force_at" else f"{name}_{suffix}")
-                compiled.append((c_name, function))
+        for unfolded, shape in kernels:
+            source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False", **shape)
+            for stepper in list(steppers) + [None]:
+                if stepper and shape["stack"] == "True" and not takes_stack(stepper):
+                    continue  # on the O(n) kernel only (the element unfolds the stack for it)
+                namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
+                                 tangent=tangent, branch_force=branch_force, move=move,
+                                 solve_increment=solve_increment, write_elongations=write_elongations,
+                                 elastic_force=elastic_force, force_at=force_at, start=start,
+                                 run=get_stepper(stepper).loop_for(scene) if stepper else None)
+                exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
+                for helper in ("_model", "_load"):  # inlined into each C function
+                    namespace[helper] = njit(inline="always")(namespace[helper])
+                names = ["advance"] if stepper else ["record", "stiffness", "initial", "elongations"]
+                if stepper is None and not compiled_force:
+                    names.append("force_at")  # the scene's load alone: once
+                    compiled_force = True
+                for name in names:
+                    signature = eval(_SIGNATURES[name], {"types": types})
+                    function = cfunc(signature, error_model="numpy")(
+                        namespace["force_at_c" if name == "force_at" else name])
+                    c_name = (f"advance_{stepper}_{suffix}{unfolded}" if stepper else
+                              "force_at" if name == "force_at" else f"{name}_{suffix}{unfolded}")
+                    compiled.append((c_name, function))
+    if folds(scene):
+        compiled.append(("fold", _compile_fold(scene)))
     return compiled
+
+
+def _compile_fold(scene):
+    """``fold(kp, u, x, state)`` -> 1, or 0 when the n elongations ``u`` are not admissible: the stack's
+    parameters ``kp`` refer to ``u`` and ``state`` is the fresh stack at x (``driver.Element._use_branch_kernel``:
+    ``stack.prepare`` then ``stack.fresh_state``)."""
+    from numba import carray, cfunc, types
+
+    from ..kernels.stack import refer, start
+
+    n, size = scene.branches.n, state_size(scene)
+
+    def fold(kp, up, x, statep):
+        params = carray(kp, (10, n + 1))
+        if not refer(params, carray(up, (n,))):
+            return 0
+        start(params, x, carray(statep, (size,)))
+        return 1
+
+    signature = types.int64(types.CPointer(types.float64), types.CPointer(types.float64), types.float64,
+                            types.CPointer(types.float64))
+    return cfunc(signature, error_model="numpy")(fold)
 
 
 def emit_objects(compiled, folder) -> tuple:
@@ -330,14 +355,13 @@ def _compile_connector(scene, shape) -> list:
     from ..kernels.energy import stored
     from ..kernels.play import branch_force, write_elongations
     from ..kernels.smooth import smooth_force
-    from ..kernels.stack import COUNT, HEADER, resync
+    from ..kernels.stack import start
 
     compiled = []
     for suffix, damped in variants(scene):
         source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", **shape)
         namespace = dict(carray=carray, drive=drive, tangent=tangent, stored=stored, branch_force=branch_force,
-                         write_elongations=write_elongations, smooth_force=smooth_force, resync=resync,
-                         STACK_COUNT=COUNT, STACK_HEADER=HEADER)
+                         write_elongations=write_elongations, smooth_force=smooth_force, start=start)
         exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)
         namespace["_model"] = njit(inline="always")(namespace["_model"])
         for name, signature in _CONNECTOR_SIGNATURES.items():
