@@ -179,6 +179,71 @@ def test_libcosim_and_ecos_run_the_native_connector_as_the_pythonfmu_one(tmp_pat
         assert np.abs(np.asarray(native["force"])).max() > 0.1
 
 
+ALONE = """<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription name="prandtl_native_alone" version="1.0"
+    xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+    xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues">
+  <ssd:System name="alone">
+    <ssd:Elements>
+      <ssd:Component name="element" type="application/x-fmu-sharedlibrary" source="element.fmu">
+        <ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues>
+          <ssv:ParameterSet version="1.0" name="initialValues"><ssv:Parameters>
+            <ssv:Parameter name="scene_load"><ssv:Boolean value="true"/></ssv:Parameter>
+            <ssv:Parameter name="stepper"><ssv:String value="{stepper}"/></ssv:Parameter>
+          </ssv:Parameters></ssv:ParameterSet>
+        </ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings>
+      </ssd:Component>
+    </ssd:Elements>
+  </ssd:System>
+</ssd:SystemStructureDescription>
+"""
+
+
+@pytest.mark.parametrize("stepper", ["exact", "implicit"])
+def test_ecos_own_binary_runs_the_native_fmu_with_no_python(tmp_path, stepper):
+    """ecos' command-line binary (C++: no Python in the process, no LD_PRELOAD, no PYTHONPATH, no recipe) runs the
+    native FMU of the paper's scene (100 branches on the memory stack; exact unfolds them) from an SSD that sets
+    scene_load and the stepper: its CSV (6 decimals) is the library's run of the scene."""
+    if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: a native FMU cannot be built here")
+    try:
+        import ecospy
+    except (ImportError, OSError) as exc:
+        pytest.skip(f"ecospy cannot load ({exc}): pip install 'prandtl_fmu[ecos]' and apt install libtbb12")
+    import subprocess
+
+    from prandtl_fmu import load_scene, simulate
+    from prandtl_fmu.fmu.build import build_fmu
+
+    shipped = Path(ecospy.__file__).parent / "binaries" / "ecos"
+    if not shipped.exists():
+        pytest.skip(f"ecospy {ecospy.__file__} ships no ecos binary for this platform")
+    binary = tmp_path / "ecos"  # the wheel loses the run bit of its binaries
+    shutil.copyfile(shipped, binary)
+    binary.chmod(0o755)
+    system = tmp_path / "system"
+    system.mkdir()
+    build_fmu(ROOT / "scenes" / "paper-section-8.toml", system / "element.fmu", runtime="native")
+    (system / "SystemStructure.ssd").write_text(ALONE.format(stepper=stepper))
+    step, stop = 0.05, 20.0
+    done = subprocess.run([str(binary), "simulate", "--path", str(system), "--stepSize", str(step), "--stopTime",
+                           str(stop), "--parameterSet", "initialValues"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = (tmp_path / "system.csv").read_text().splitlines()
+    header = [name.strip() for name in lines[0].split(",")]
+    rows = [line.split(",") for line in lines[1:]]
+    column = {name: np.array([float(row[j]) for row in rows]) for j, name in enumerate(header)
+              if name.endswith("[REAL]") or name == "time"}
+    scene = load_scene(ROOT / "scenes" / "paper-section-8.toml")
+    library = simulate(scene.with_solver(stop_time=stop, output_interval=step), stepper=stepper)
+    assert len(rows) == len(library.time) - 1  # ecos writes the rows from t = 0 to stop - step
+    np.testing.assert_allclose(column["time"], library.time[:-1], rtol=0, atol=1e-9)
+    for name in ("x", "v", "reaction"):  # %f: 6 decimals
+        np.testing.assert_allclose(column[f"element::{name}[REAL]"], getattr(library, name)[:-1], rtol=0, atol=6e-7)
+    assert np.abs(library.x).max() > 1.0
+
+
 def gauss_seidel(folder, step, stop_time):
     """An independent Gauss-Seidel master over FMPy: the mass steps with the force of the previous step, then
     the connector with the mass's new x, v; returns the arrays time, x, v, force after every step."""

@@ -126,6 +126,29 @@ def test_exact_refuses_what_it_cannot_do():
     assert math.isinf(get_stepper("exact").ORDER)
 
 
+@pytest.mark.parametrize("series", [False, True])
+def test_the_element_s_energy_account_is_nan_not_zero_once_exact_has_run(series):
+    """exact books no work nor dissipation: an element (and so an FMU output) shows NaN for them and for the
+    residual, not a 0 that reads as a broken balance, through a switch back to a stepper that books, until a
+    reset; kinetic and stored energy stay numbers."""
+    from prandtl_fmu.driver import Element
+
+    branches = {"k": [0.5, 0.3], "eta": [0.1, 0.3], "c": [0.4, 2.0]} if series else None
+    element = Element(make_scene(cubic=None, **({"branches": branches} if branches else {})), stepper="implicit")
+    element.advance(0.5, 0.8)
+    assert math.isfinite(element.energy_of("work")) and element.energy_of("work") != 0.0
+    element.set_stepper("exact")
+    element.advance(0.5, 0.8)
+    for name in ("work", "dissipated_sliders", "dissipated_damper", "energy_residual"):
+        assert math.isnan(element.energy_of(name)), name
+    assert element.energy_of("kinetic_energy") > 0 and math.isfinite(element.energy_of("stored_energy"))
+    element.set_stepper("implicit")
+    element.advance(0.5, 0.8)
+    assert math.isnan(element.energy_of("work"))
+    element.reset()
+    assert element.energy_of("work") == 0.0 and element.energy_of("energy_residual") == 0.0
+
+
 # Run in a child process with a time limit: a regression of the event loop would spin for ever in compiled code
 # (SIGINT does not reach it), and a test must fail, not hang the suite.
 _REST_FUZZ = r'''

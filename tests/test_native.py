@@ -86,6 +86,11 @@ def expected(element, names):
     return [values[name] if name in values else element.energy_of(name) for name in names]
 
 
+def same(got, want):
+    """To the bit, NaN as NaN (exact keeps no energy account: NaN)."""
+    return len(got) == len(want) and all(a == b or (a != a and b != b) for a, b in zip(got, want))
+
+
 @pytest.mark.parametrize("name", list(SCENES))
 def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
     """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
@@ -108,7 +113,7 @@ def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
                 slave.step(size, force)
                 element.time = time
                 element.advance(size, force)
-                assert outputs(slave, names) == expected(element, names), (stepper, time)
+                assert same(outputs(slave, names), expected(element, names)), (stepper, time)
         finally:
             slave.close()
         assert abs(element.x) > 1e-3  # it moved
@@ -141,7 +146,7 @@ def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
                 slave.step(size, force)
                 element.time = time
                 element.advance(size, force)
-                assert outputs(slave, names) == expected(element, names), (stepper, time)
+                assert same(outputs(slave, names), expected(element, names)), (stepper, time)
             if k == 3:  # unfolded: the state holds the elongations and the stack's parameters as folded last
                 saved, checkpoint, at = slave.fmu.getFMUstate(), element.get_state(), slave.time
         assert kernels == ["stack", "play", "stack", "play", "play", "stack", "stack", "play", "stack"]
@@ -156,7 +161,7 @@ def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
                 slave.step(size, force)
                 element.time = time
                 element.advance(size, force)
-                assert outputs(slave, names) == expected(element, names), stepper
+                assert same(outputs(slave, names), expected(element, names)), stepper
     finally:
         slave.close()
 

@@ -122,7 +122,8 @@ class PrandtlElement(SlaveBase):
         energy = [  # the energy account, for the effects present
             ("kinetic_energy", "kinetic_energy", "mass", "kinetic energy m v^2/2"),
             ("stored_energy", "stored_energy", None, f"elastic energy {stored_energy_formula(self.scene)}"),
-            ("work", "work", None, "work done by F since the start (as the stepper books it)"),
+            ("work", "work", None, "work done by F since the start (as the stepper books it; NaN, as the "
+             "dissipated work and the residual, once 'exact', which keeps no energy account, has run)"),
             ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
             ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
             ("dissipated_friction", "dissipated_friction", "friction",

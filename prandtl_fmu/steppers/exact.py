@@ -81,7 +81,7 @@ with the number of events, about n per half cycle of the load for n branches
 (every branch starts to slip once per half cycle), each costing a few dozen
 6x6 matrix exponentials (under a harmonic load, also with the number of
 periods a phase spans); the step h only sets where the state is reported
-(the driver takes one exact step per output interval). No energy account.
+(the driver takes one exact step per output interval). No energy account (:func:`unbooked`: NaN).
 """
 import math
 
@@ -300,8 +300,18 @@ NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL = -1, 0, 1, 2
 
 
 @kernel
+def unbooked(energy):
+    """No energy account: its entries (work, dissipated) become NaN, never a silent 0 (the element's account,
+    which a switch from another stepper brings, stays NaN until a reset)."""
+    if energy is not None:
+        for j in range(energy.shape[0]):
+            energy[j] = np.nan
+
+
+@kernel
 def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta, cs, friction = model
+    unbooked(energy)
     alpha = _threshold(friction)
     end = t + h
     stalled = 0
