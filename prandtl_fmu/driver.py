@@ -732,7 +732,9 @@ class Element(OutputMemo):
             "time": self.time, "clock": [self._origin, self._steps, self._grid or 0.0],
             "x": self.x, "v": self.v, "force": self.force,
             "branch_kernel": self.branch_kernel, "u": [], "u_reference": [],
-            "energy_account": self.account.tolist(), "initial_energy": self.initial_energy,
+            # None: not booked (NaN, since exact ran): plain JSON has no NaN
+            "energy_account": [None if math.isnan(value) else value for value in self.account.tolist()],
+            "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
         state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
@@ -743,7 +745,11 @@ class Element(OutputMemo):
         the branch state, finite outputs) before changing anything: ValueError naming what does not fit."""
         values = [plain_number(state[key], key) for key in ("time", "x", "v", "force", "initial_energy")]
         clock = _clock(state.get("clock"), values[0])
-        account = number_list(state["energy_account"], "energy_account")
+        booked = state["energy_account"]
+        if not isinstance(booked, (list, tuple)):
+            raise ValueError(f"state has energy_account = {booked!r:.60}, not a list of numbers")
+        account = np.array([math.nan if value is None else plain_number(value, "energy_account")
+                            for value in booked], dtype=float)
         if account.shape[0] != 4:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 4")
         kind = state.get("branch_kernel", "play")

@@ -278,15 +278,20 @@ def gauss_seidel(folder, step, stop_time):
     return {name: np.array(values) for name, values in columns.items()}
 
 
-def test_omsimulator_runs_the_connector_system_as_a_gauss_seidel_master(tmp_path):
+@pytest.mark.parametrize("runtime", ["python", "native"])
+def test_omsimulator_runs_the_connector_system_as_a_gauss_seidel_master(tmp_path, runtime):
     """The SSD packed into an SSP archive in OMSimulator's binary (when one is installed: OMSIMULATOR=path or
     OMSimulator on PATH; CI has none, it takes ~15 min to build): with the mass's outputs declared free of
     direct feedthrough it steps the mass, then the connector on the mass's new x, v: a Gauss-Seidel master,
-    equal to an FMPy loop doing that to the 12 digits of its CSV."""
+    equal to an FMPy loop doing that to the 12 digits of its CSV. With the native bushing, no recipe for it."""
     binary = shutil.which(os.environ.get("OMSIMULATOR", "OMSimulator"))
     if binary is None:
         pytest.skip("no OMSimulator binary (set OMSIMULATOR=path; README: building it from source)")
     folder = run_connector.build(tmp_path)
+    if runtime == "native":
+        from prandtl_fmu.fmu.build import build_fmu
+
+        build_fmu(run_connector.HERE / "bushing.toml", folder / "bushing.fmu", runtime="native")
     oms = run_connector.run_omsimulator(folder, 0.05, 8.0, binary)
     expected = gauss_seidel(folder, 0.05, 8.0)
     assert len(oms["time"]) == len(expected["time"]) == 160

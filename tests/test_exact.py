@@ -1,4 +1,5 @@
 """The exact stepper against a high-order ODE solver, and every other stepper's order against it."""
+import json
 import math
 
 import numpy as np
@@ -145,6 +146,10 @@ def test_the_element_s_energy_account_is_nan_not_zero_once_exact_has_run(series)
     element.set_stepper("implicit")
     element.advance(0.5, 0.8)
     assert math.isnan(element.energy_of("work"))
+    state = json.loads(json.dumps(element.get_state(), allow_nan=False))  # plain JSON: not booked is null
+    other = Element(element.scene)
+    other.set_state(state)
+    assert math.isnan(other.energy_of("work")) and other.x == element.x
     element.reset()
     assert element.energy_of("work") == 0.0 and element.energy_of("energy_residual") == 0.0
 

@@ -173,8 +173,8 @@ def test_element_moves_between_the_kernels_when_the_stepper_changes():
             fast.advance(0.5, force)
             slow.advance(0.5, force)
         assert fast.x == pytest.approx(slow.x, abs=1e-10) and fast.reaction == pytest.approx(slow.reaction, abs=1e-10)
-        for name, value in slow.energy().items():
-            assert fast.energy()[name] == pytest.approx(value, rel=1e-9, abs=1e-10), name
+        for name, value in slow.energy().items():  # exact books no energy: NaN from then on, in both
+            assert fast.energy()[name] == pytest.approx(value, rel=1e-9, abs=1e-10, nan_ok=True), name
     # plain-data state of the stack: restored into another element, the same continuation bit for bit
     state = fast.get_state()
     other = Element(scene, stepper="verlet")

@@ -71,14 +71,19 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if runtime == "native":
         from ..native.build import build_native_fmu
 
-        if osp:
-            raise ValueError("the native runtime writes no OSP description beside the FMU yet (it is inside, in "
-                             "resources/): build with --runtime python for --osp")
+        from .osp import file_name, osp_model_description
+
         native_scene = load_scene(scene_path, check_stepper=False)
         target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
         if target.is_dir():
             raise ValueError(f"{target}: is a directory")
-        return build_native_fmu(resolve_scene(scene_path), target, fmi=fmi, causality=causality)
+        if osp:
+            _check_osp_name(native_scene.name)
+        built = build_native_fmu(resolve_scene(scene_path), target, fmi=fmi, causality=causality)
+        if osp:
+            write_atomically(target.parent / file_name(native_scene.name),
+                             osp_model_description(causality or native_scene.causality).encode("utf-8"))
+        return built
     if fmi != 2:
         raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
     from pythonfmu import FmuBuilder
@@ -102,10 +107,8 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if not out.parent.is_dir():
         raise ValueError(f"{out}: the folder {out.parent} does not exist")
     sidecar = out.parent / file_name(scene.name) if osp else None
-    if osp and file_stem(scene.name) != scene.name:
-        raise ValueError(f"--osp: the scene name {scene.name!r} is not a plain file name, and libcosim looks for "
-                         "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
-                         "'-', '_' and '.'")
+    if osp:
+        _check_osp_name(scene.name)
     identifier = MODEL_IDENTIFIERS[scene.causality]
     module = f"prandtl_slave_{_digest(scene_bytes, loader)}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
@@ -143,6 +146,13 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if sidecar is not None:
         write_atomically(sidecar, osp_model_description(scene.causality).encode("utf-8"))
     return out
+
+
+def _check_osp_name(name: str) -> None:
+    if file_stem(name) != name:
+        raise ValueError(f"--osp: the scene name {name!r} is not a plain file name, and libcosim looks for "
+                         "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
+                         "'-', '_' and '.'")
 
 
 def _with_causality(scene, scene_bytes: bytes, causality: str):
