@@ -165,6 +165,8 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"#define NB {n}",
         f"#define NB_ARR {max(size, 1)} /* the branches' state: n elongations or the memory stack's */",
         f"#define STACK {int(on_stack)}",
+        f"#define STACK_HEADER {stack.HEADER} /* the memory stack's state: header, then rows of pieces */",
+        f"#define STACK_ROW {stack.ROW}",
         f"#define FOLDS {int(folds)} /* the stack unfolds to n elongations for exact (kernels.folds) */",
         f"#define NB_PLAY {max(n, 1) if folds else 1}",
         f"#define K_LEN {10 * (n + 1) if folds else 1}",

@@ -42,6 +42,16 @@ typedef struct {
     uint64_t checksum;
 } State;
 
+/* what an advance changes (driver.Element.checkpoint): a step that fails is rolled back from it; the branches'
+ * state is copied in its part in use only (the memory stack's pieces), into the instance's buffer */
+typedef struct {
+    double x, v, account[4], out[3], erow[6], origin, grid, force;
+    int64_t steps;
+    int scene_load;
+    size_t used;
+} Checkpoint;
+#define SAVED_U (NB_ARR > NB_PLAY ? NB_ARR : NB_PLAY)
+
 typedef struct {
     char* name;
     void* env;         /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
@@ -54,6 +64,8 @@ typedef struct {
     char stepper[32];
     int stepper_valid; /* the string fitted in the buffer */
     int handed;        /* the settings were handed over and nothing changed since */
+    Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
+    double saved_u[SAVED_U];
 } Instance;
 
 /* ------------------------------------------------------------------ the element */
@@ -293,14 +305,17 @@ static const char* settings_problem(Instance* c, char* buffer, size_t size)
 
 static double reaction_now(Instance* c)
 {
-    Element copy;
+    Element* e = &c->el;
+    double xv[2], out[3], erow[6];
+    Load l;
     if (!HAS_FRICTION)
-        return c->el.out[2];
-    copy = c->el; /* the reaction under the F set now: a stuck mass is held against it */
-    copy.force = c->F;
-    copy.scene_load = c->scene_load;
-    record(&copy, element_time(&c->el));
-    return copy.out[2];
+        return e->out[2];
+    l = load_of(c->F, c->scene_load); /* the reaction under the F set now: a stuck mass is held against it */
+    xv[0] = e->x;
+    xv[1] = e->v;
+    KERNEL(e, record)(BRANCHES(e), xv, e->account, out, erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
+                      element_time(e));
+    return out[2];
 }
 
 static double energy(const Element* e, int which)
@@ -405,17 +420,20 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
 static int restore(Instance* c, const State* s)
 {
     char buffer[256];
-    Instance trial;
+    Instance* trial; /* the settings of the state, checked as the master's are (on the heap: an instance is large) */
     const char* problem = state_problem(s, buffer, sizeof buffer);
-    if (problem == NULL) {
-        memcpy((void*)&trial, c, sizeof trial);
-        memcpy(trial.par, s->par, sizeof trial.par);
-        memcpy(trial.cbranch, s->cbranch, sizeof trial.cbranch);
-        trial.stepper_valid = s->stepper_valid;
-        memcpy(trial.stepper, s->stepper, sizeof trial.stepper);
-        trial.stepper[sizeof trial.stepper - 1] = 0;
-        trial.step = s->step;
-        problem = settings_problem(&trial, buffer, sizeof buffer);
+    if (problem == NULL && (trial = (Instance*)malloc(sizeof *trial)) == NULL)
+        problem = "out of memory";
+    else if (problem == NULL) {
+        memcpy((void*)trial, c, sizeof *trial);
+        memcpy(trial->par, s->par, sizeof trial->par);
+        memcpy(trial->cbranch, s->cbranch, sizeof trial->cbranch);
+        trial->stepper_valid = s->stepper_valid;
+        memcpy(trial->stepper, s->stepper, sizeof trial->stepper);
+        trial->stepper[sizeof trial->stepper - 1] = 0;
+        trial->step = s->step;
+        problem = settings_problem(trial, buffer, sizeof buffer);
+        free(trial);
     }
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
@@ -633,10 +651,56 @@ static int core_exit_initialization(Instance* c)
     return ST_OK;
 }
 
+/* the length of the branches' state in use: the memory stack's header and pieces (stack.used), or n */
+static size_t used_length(const Element* e)
+{
+    size_t used;
+    if (e->play)
+        return NB;
+    if (!STACK)
+        return NB;
+    used = STACK_HEADER + STACK_ROW * (size_t)(e->u[0] > 0 ? e->u[0] : 0); /* u[0]: the count of pieces */
+    return used < NB_ARR ? used : NB_ARR;
+}
+
+static void checkpoint(Instance* c)
+{
+    const Element* e = &c->el;
+    Checkpoint* k = &c->saved;
+    k->x = e->x;
+    k->v = e->v;
+    memcpy(k->account, e->account, sizeof k->account);
+    memcpy(k->out, e->out, sizeof k->out);
+    memcpy(k->erow, e->erow, sizeof k->erow);
+    k->origin = e->origin;
+    k->grid = e->grid;
+    k->force = e->force;
+    k->steps = e->steps;
+    k->scene_load = e->scene_load;
+    k->used = used_length(e);
+    memcpy(c->saved_u, e->play ? e->up : e->u, k->used * sizeof(double));
+}
+
+static void rollback(Instance* c)
+{
+    Element* e = &c->el;
+    const Checkpoint* k = &c->saved;
+    e->x = k->x;
+    e->v = k->v;
+    memcpy(e->account, k->account, sizeof k->account);
+    memcpy(e->out, k->out, sizeof k->out);
+    memcpy(e->erow, k->erow, sizeof k->erow);
+    e->origin = k->origin;
+    e->grid = k->grid;
+    e->force = k->force;
+    e->steps = k->steps;
+    e->scene_load = k->scene_load;
+    memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
+}
+
 /* fmi2/3DoStep: one communication step (slave.do_step) */
 static int core_do_step(Instance* c, double t, double H)
 {
-    Element saved;
     char buffer[512];
     const char* problem;
     double failed_at;
@@ -653,10 +717,13 @@ static int core_do_step(Instance* c, double t, double H)
             return ST_DISCARD;
         }
         {
-            Element before = c->el;
+            double p[N_PARAMS], cs[NB_CS], h = c->el.h;
+            int stepper = c->el.stepper;
+            memcpy(p, c->el.p, sizeof p);
+            memcpy(cs, c->el.cs, sizeof cs);
             hand_over(c);
-            if (memcmp(before.p, c->el.p, sizeof before.p) != 0 || memcmp(before.cs, c->el.cs, sizeof before.cs) != 0
-                || before.stepper != c->el.stepper || before.h != c->el.h)
+            if (memcmp(p, c->el.p, sizeof p) != 0 || memcmp(cs, c->el.cs, sizeof cs) != 0 ||
+                stepper != c->el.stepper || h != c->el.h)
                 warn_if_unstable(c); /* slave._apply_settings: on a change only */
         }
     }
@@ -668,14 +735,14 @@ static int core_do_step(Instance* c, double t, double H)
         say(c, ST_DISCARD, "communication step %.17g refused: it must be finite and >= 0", H);
         return ST_DISCARD;
     }
-    saved = c->el;
+    checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     set_time(&c->el, t);
     prandtl_kernel_failed = 0;
     problem = advance(&c->el, H, c->F, c->scene_load, &failed_at);
     if (problem == NULL && !(isfinite(c->el.x) && isfinite(c->el.v) && isfinite(c->el.out[2])))
         problem = "it would leave a non-finite state";
     if (problem != NULL) {
-        c->el = saved;
+        rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g; try "
             "'implicit')", t, c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h);
         return ST_DISCARD;

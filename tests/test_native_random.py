@@ -1,0 +1,126 @@
+"""The native FMU on random scenes (issue 24's evidence): every effect, branch kernel and load, the element and the
+connector, bit for bit the library (a file of its own: the suite's workers take a file each)."""
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import load_scene, parse_scene
+from prandtl_fmu.driver import Element
+
+from .conftest import base_tables, scene_text
+from .test_native import ENERGIES, SOLVER, expected, outputs, same, steppers_of
+
+pytest.importorskip("fmpy")
+if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+    pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
+
+
+def random_tables(seed, connector=False):
+    """A random scene (independent of the fixed ones above): a random subset of the effects (a mass or none, the
+    springs, a dashpot, friction on the mass with or without Stribeck and a belt), branches on any kernel (a few
+    with or without series dashpots, 70 on the memory stack, the continuum, an Iwan spectrum), any load; the
+    connector's when ``connector``. Redrawn while the scene format refuses the combination (bounded: fails
+    loudly)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        n = int(rng.integers(1, 6))
+        kinds = {
+            "play": {"k": rng.uniform(0.2, 1.5, n).tolist(), "eta": rng.uniform(0.02, 0.5, n).tolist()},
+            "series": {"k": rng.uniform(0.2, 1.5, n).tolist(), "eta": rng.uniform(0.02, 0.5, n).tolist(),
+                       "c": rng.uniform(0.3, 5.0, n).tolist()},
+            "stack": {"count": 70, "k_total": float(rng.uniform(0.5, 2.0)),
+                      "eta_range": sorted(rng.uniform(0.0, 0.8, 2).tolist())},
+            "continuum": {"continuum": True, "k_total": float(rng.uniform(0.5, 2.0)),
+                          "eta_range": sorted(rng.uniform(0.0, 0.8, 2).tolist())},
+            "iwan": {"count": 80, "density": {"kind": "iwan", "F_S": float(rng.uniform(0.2, 1.0)), "K_T": 2.0,
+                                              "chi": -0.5, "beta": 0.1}},
+        }
+        massive = not connector and rng.uniform() < 0.75
+        loads = [{"kind": "harmonic", "amplitude": float(rng.uniform(0.3, 1.2)), "omega": float(rng.uniform(0.3, 2))},
+                 {"kind": "table", "time": [0.0, 2.0, 5.0, 10.0], "force": rng.uniform(-1, 1, 4).tolist()},
+                 {"kind": "constant", "value": float(rng.uniform(-0.8, 0.8))}]
+        stribeck = rng.uniform() < 0.5
+        kind = str(rng.choice(list(kinds)))
+        tables = base_tables(
+            mass={"m": float(rng.uniform(0.5, 2.0)), "x0": float(rng.uniform(-0.05, 0.05)), "v0": 0.0}
+            if massive else None,
+            spring={"k0": float(rng.uniform(0.1, 1.0))} if rng.uniform() < 0.7 else None,
+            cubic={"k3": float(rng.uniform(0.01, 0.2))} if rng.uniform() < 0.4 else None,
+            damper={"c": float(rng.uniform(0.3, 1.0))} if rng.uniform() < 0.6 else None,
+            branches=kinds[kind],
+            friction=({"alpha": float(rng.uniform(0.05, 0.3))} | (
+                {"alpha_kinetic": 0.03, "stribeck_velocity": 0.1, "belt_velocity": 0.02} if stribeck else {}))
+            if massive and rng.uniform() < 0.4 else None,
+            load=loads[int(rng.integers(0, 3))],
+            solver=dict(SOLVER, stepper="verlet") if kind == "continuum" else SOLVER,  # implicit: not the continuum
+            fmu={"causality": "displacement"} if connector else None)
+        try:
+            parse_scene(scene_text(tables), "random.toml")
+        except ValueError:
+            continue
+        return tables
+    raise AssertionError(f"no scene the format accepts in 200 draws of seed {seed}")
+
+
+@pytest.mark.parametrize("seed", [7, 1, 4, 32, 2])  # together: every effect, kernel and load (drawn here)
+def test_a_random_scene_s_native_fmu_is_the_library_bit_for_bit(tmp_path, seed):
+    """Every stepper that applies, random communication steps and forces, the dashpot set to 0 and back (the
+    functions without c and with it): every output equals Element's to the bit."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .fmu_tools import Slave
+
+    path = tmp_path / "random.toml"
+    path.write_text(scene_text(random_tables(seed)))
+    fmu = build_fmu(path, tmp_path / "random.fmu", runtime="native")
+    scene = load_scene(path)
+    rng = np.random.default_rng(seed)
+    for stepper in steppers_of(scene):
+        slave = Slave(fmu, start_values={"stepper": stepper})
+        element = Element(scene, stepper=stepper)
+        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
+        try:
+            for j in range(30):
+                if j in (10, 20) and "c" in slave.vr and scene.mass is not None:
+                    c = 0.0 if j == 10 else 0.4
+                    slave.set("c", c)
+                    element.set_coefficients(c=c)
+                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert same(outputs(slave, names), expected(element, names)), (stepper, j)
+        finally:
+            slave.close()
+
+
+@pytest.mark.parametrize("seed", [12, 1])  # series dashpots (massless, a cubic spring); the stack
+def test_a_random_connector_s_native_fmu_is_the_pythonfmu_one_bit_for_bit(tmp_path, seed):
+    """A random connector scene: random motions read before and after each step, every output to the bit."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .fmu_tools import Slave
+
+    path = tmp_path / "random.toml"
+    path.write_text(scene_text(random_tables(seed, connector=True)))
+    python, native = (Slave(build_fmu(path, tmp_path / f"{runtime}.fmu", runtime=runtime)) for runtime in
+                      ("python", "native"))
+    names = [v.name for v in python.md.modelVariables if v.causality == "output"]
+    rng = np.random.default_rng(seed)
+    try:
+        for j in range(60):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            for slave in (python, native):
+                slave.set("x", x)
+                slave.set("v", v)
+            assert same(native.get(*names), python.get(*names)), j
+            size = float(rng.choice([0.01, 0.05, 0.1]))
+            python.step(size)
+            native.step(size)
+            assert same(native.get(*names), python.get(*names)), j
+    finally:
+        python.close()
+        native.close()
