@@ -107,8 +107,32 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
                 return None  # the root was writable at import: only a full disk gets here
             return self
 
+    DigestLocator.prandtl_fmu = True
     impl._locator_classes.insert(0, DigestLocator)
+    _refuse_unimportable_entries()
     return True
+
+
+def _refuse_unimportable_entries() -> None:
+    """Never cache code of ours whose module was not importable when it compiled. A copy of the library imported
+    for an FMU's build and then dropped from ``sys.modules`` (``fmu/build.py``) can still compile a kernel
+    later; numba then records its module as "<dynamic>", and every later process that loads the entry fails with
+    "No module named '<dynamic>'" (an FMU's getReal refused). Such code compiles every time instead."""
+    results = getattr(caching, "CompileResultCacheImpl", None)
+    if results is None or getattr(results.check_cachable, "prandtl_fmu", False):
+        return
+    original = results.check_cachable
+
+    def check_cachable(self, cres):
+        if getattr(getattr(self, "_locator", None), "prandtl_fmu", False):
+            environment = getattr(cres, "environment", None)
+            name = getattr(environment, "globals", {}).get("__name__") if environment is not None else None
+            if name is None or name == "<dynamic>":
+                return False
+        return original(self, cres)
+
+    check_cachable.prandtl_fmu = True
+    results.check_cachable = check_cachable
 
 
 def _cache_enabled() -> bool:

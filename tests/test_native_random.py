@@ -9,7 +9,7 @@ import pytest
 from prandtl_fmu import load_scene, parse_scene
 from prandtl_fmu.driver import Element
 
-from .conftest import base_tables, scene_text
+from .conftest import ROOT, base_tables, scene_text
 from .test_native import ENERGIES, SOLVER, expected, outputs, same, steppers_of
 
 pytest.importorskip("fmpy")
@@ -124,3 +124,37 @@ def test_a_random_connector_s_native_fmu_is_the_pythonfmu_one_bit_for_bit(tmp_pa
     finally:
         python.close()
         native.close()
+
+
+def test_building_both_runtimes_in_one_process_leaves_no_cache_entry_a_later_process_cannot_load(tmp_path):
+    """The PythonFMU FMU and the native FMU of a connector built in one process, then the PythonFMU one stepped
+    there: a kernel of the FMU's library copy compiled once that copy had left sys.modules was cached under the
+    module "<dynamic>", and the next process's getReal failed ("No module named '<dynamic>'"). In a fresh cache:
+    no such entry, and a second process reads the outputs."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "both.py"
+    script.write_text(f"""
+import pathlib, sys
+sys.path.insert(0, {str(ROOT)!r})
+from tests.fmu_tools import Slave
+from tests.test_native_random import test_a_random_connector_s_native_fmu_is_the_pythonfmu_one_bit_for_bit as run
+folder = pathlib.Path({str(tmp_path)!r})
+if sys.argv[1] == "build":
+    run(folder, 12)  # builds python.fmu and native.fmu there, steps both
+slave = Slave(folder / "python.fmu")
+slave.set("x", 0.1)
+slave.set("v", 0.2)
+slave.step(0.05)
+print(slave.get("force", "stiffness", "stored_energy", "dissipated_sliders"))
+slave.close()
+""")
+    environment = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [subprocess.run([sys.executable, str(script), stage], capture_output=True, text=True, timeout=600,
+                           env=environment) for stage in ("build", "load")]
+    for run in runs:
+        assert run.returncode == 0, run.stderr[-2000:]
+    assert runs[0].stdout == runs[1].stdout
+    poisoned = [entry.name for entry in (tmp_path / "cache").rglob("*.nbc") if b"<dynamic>" in entry.read_bytes()]
+    assert not poisoned, poisoned

@@ -41,6 +41,7 @@ typedef struct {
     int initialized;
     int scene_load;   /* none here: what the FMI layers' Boolean and String calls refuse */
     char stepper[32];
+    Element preview;  /* the outputs' state (on the heap with the instance, never a large copy on the host's stack) */
 } Instance;
 
 static double element_time(const Element* e) { return e->time; }
@@ -78,10 +79,29 @@ static void hand_over(Instance* c)
     memcpy(c->el.cs, c->cbranch, sizeof c->el.cs);
 }
 
+/* the committed element moved to the inputs set last, in c->preview: the branches' state copied in its part in
+ * use only (the memory stack's pieces, as stack.used) */
+static Element* previewed(Instance* c)
+{
+    const Element* e = &c->el;
+    Element* p = &c->preview;
+    size_t used = STACK ? STACK_HEADER + STACK_ROW * (size_t)(e->u[0] > 0 ? e->u[0] : 0) : NB;
+    memcpy(p->p, e->p, sizeof p->p);
+    memcpy(p->cs, e->cs, sizeof p->cs);
+    p->x = e->x;
+    p->v = e->v;
+    p->time = e->time;
+    p->direction = e->direction;
+    memcpy(p->account, e->account, sizeof p->account);
+    memcpy(p->u, e->u, (used < NB_ARR ? used : NB_ARR) * sizeof(double));
+    move_to(p, c->x_in, c->v_in, p->time);
+    return p;
+}
+
 /* the outputs: the element at the inputs set last, not committed (connector_slave._current) */
 static double real_value(Instance* c, const Var* var)
 {
-    Element preview;
+    Element* preview;
     double direction;
     switch (var->what) {
     case W_X: return c->x_in;
@@ -93,21 +113,20 @@ static double real_value(Instance* c, const Var* var)
         return c->el.account[2]; /* the dashpots: up to the last doStep */
     if (!(isfinite(c->x_in) && isfinite(c->v_in)))
         return NAN;
-    preview = c->el;
-    move_to(&preview, c->x_in, c->v_in, preview.time);
+    preview = previewed(c);
     switch (var->what) {
     case W_FORCE:
-        return (damped(&preview) ? cforce_c : cforce_n)(preview.p, (double*)K, (double*)ETA, preview.cs, preview.u,
-                                                        preview.x, preview.v);
+        return (damped(preview) ? cforce_c : cforce_n)(preview->p, (double*)K, (double*)ETA, preview->cs, preview->u,
+                                                       preview->x, preview->v);
     case W_STIFFNESS:
-        direction = preview.v == 0 ? preview.direction : copysign(1.0, preview.v);
-        return (damped(&preview) ? ctangent_c : ctangent_n)(preview.p, (double*)K, (double*)ETA, preview.cs,
-                                                            preview.u, preview.x, direction);
+        direction = preview->v == 0 ? preview->direction : copysign(1.0, preview->v);
+        return (damped(preview) ? ctangent_c : ctangent_n)(preview->p, (double*)K, (double*)ETA, preview->cs,
+                                                           preview->u, preview->x, direction);
     case W_ENERGY:
         if (var->index == 1)
-            return (damped(&preview) ? cstored_c : cstored_n)(preview.p, (double*)K, (double*)ETA, preview.cs,
-                                                              preview.u, preview.x);
-        return preview.account[1]; /* dissipated_sliders */
+            return (damped(preview) ? cstored_c : cstored_n)(preview->p, (double*)K, (double*)ETA, preview->cs,
+                                                             preview->u, preview->x);
+        return preview->account[1]; /* dissipated_sliders */
     }
     return NAN;
 }
