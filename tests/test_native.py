@@ -91,6 +91,17 @@ def same(got, want):
     return len(got) == len(want) and all(a == b or (a != a and b != b) for a, b in zip(got, want))
 
 
+def step_both(slave, element, rng, names, label):
+    """One random communication step (not always a multiple of the step) under a random force, in the FMU and
+    in the library's Element; every output in ``names`` to the bit."""
+    size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
+    time = slave.time
+    slave.step(size, force)
+    element.time = time
+    element.advance(size, force)
+    assert same(outputs(slave, names), expected(element, names)), (label, time)
+
+
 @pytest.mark.parametrize("name", list(SCENES))
 def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
     """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
@@ -108,12 +119,7 @@ def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
         rng = np.random.default_rng(7)
         try:
             for _ in range(40):
-                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
-                time = slave.time
-                slave.step(size, force)
-                element.time = time
-                element.advance(size, force)
-                assert same(outputs(slave, names), expected(element, names)), (stepper, time)
+                step_both(slave, element, rng, names, stepper)
         finally:
             slave.close()
         assert abs(element.x) > 1e-3  # it moved
@@ -141,12 +147,7 @@ def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
                 element.set_stepper(stepper)
             kernels.append(element.branch_kernel)
             for _ in range(12):
-                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
-                time = slave.time
-                slave.step(size, force)
-                element.time = time
-                element.advance(size, force)
-                assert same(outputs(slave, names), expected(element, names)), (stepper, time)
+                step_both(slave, element, rng, names, stepper)
             if k == 3:  # unfolded: the state holds the elongations and the stack's parameters as folded last
                 saved, checkpoint, at = slave.fmu.getFMUstate(), element.get_state(), slave.time
         assert kernels == ["stack", "play", "stack", "play", "play", "stack", "stack", "play", "stack"]

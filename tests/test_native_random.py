@@ -10,7 +10,7 @@ from prandtl_fmu import load_scene, parse_scene
 from prandtl_fmu.driver import Element
 
 from .conftest import ROOT, base_tables, scene_text
-from .test_native import ENERGIES, SOLVER, expected, outputs, same, steppers_of
+from .test_native import ENERGIES, SOLVER, same, step_both, steppers_of
 
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
@@ -87,12 +87,7 @@ def test_a_random_scene_s_native_fmu_is_the_library_bit_for_bit(tmp_path, seed):
                     c = 0.0 if j == 10 else 0.4
                     slave.set("c", c)
                     element.set_coefficients(c=c)
-                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
-                time = slave.time
-                slave.step(size, force)
-                element.time = time
-                element.advance(size, force)
-                assert same(outputs(slave, names), expected(element, names)), (stepper, j)
+                step_both(slave, element, rng, names, stepper)
         finally:
             slave.close()
 

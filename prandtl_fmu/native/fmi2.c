@@ -1,6 +1,7 @@
 /* The native FMU's FMI 2.0 co-simulation layer over the element (element.h). */
 #include "fmi2Functions.h"
 #define FMI "fmi2"
+#define FMU_STATE "FMUstate" /* fmi2GetFMUstate; FMI 3.0 writes fmi3GetFMUState */
 #include "scene.h"
 #if CONNECTOR
 #include "connector.h"

@@ -4,6 +4,7 @@
  * clocks and event mode are refused with a logged reason. */
 #include "fmi3Functions.h"
 #define FMI "fmi3"
+#define FMU_STATE "FMUState"
 #include "scene.h"
 #if CONNECTOR
 #include "connector.h"

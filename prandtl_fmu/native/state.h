@@ -7,7 +7,7 @@ static int core_get_state(Instance* c, void** state)
 {
     State* s = *state ? (State*)*state : (State*)malloc(sizeof(State));
     if (s == NULL) {
-        say(c, ST_ERROR, FMI "GetFMUstate failed: out of memory");
+        say(c, ST_ERROR, FMI "Get" FMU_STATE " failed: out of memory");
         return ST_ERROR;
     }
     capture(c, s);
