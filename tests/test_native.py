@@ -167,6 +167,44 @@ def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
         slave.close()
 
 
+def test_a_state_whose_memory_stack_parameters_are_not_the_scene_s_is_refused(fmus):
+    """The element's state holds the stack's parameters as folded last (their rows of the elongations change at a
+    fold, the others are the scene's): a blob whose eta row was changed, its checksum made right, is refused
+    with fmi2Error and its reason; the instance steps on."""
+    import struct
+
+    from fmpy.fmi1 import FMICallException
+
+    from .fmu_tools import Slave
+
+    from prandtl_fmu.kernels import stack
+
+    fmu, scene_path = fmus["paper"]
+    branches = load_scene(scene_path).branches
+    params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, branches.u0)
+    slave = Slave(fmu)
+    try:
+        slave.step(0.3, 0.4)
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        row = params[stack.ETA_ROW].tobytes()
+        at = bytes(blob).find(row)
+        assert at > 0 and bytes(blob).find(row, at + 1) < 0
+        blob[at + 8 * 5:at + 8 * 6] = struct.pack("<d", params[stack.ETA_ROW, 5] * 1.5)
+        digest = 1469598103934665603
+        for byte in blob[:-8]:  # common.h's fnv1a: the checksum is the blob's last field
+            digest = ((digest ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+        blob[-8:] = struct.pack("<Q", digest)
+        slave.messages.clear()
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.deSerializeFMUstate(bytes(blob))
+        assert refused.value.status == 3
+        assert any("memory-stack parameters are not this scene's" in message for _, message in slave.messages), \
+            slave.messages
+        slave.step(0.1, 0.2)
+    finally:
+        slave.close()
+
+
 def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):
     from fmpy import simulate_fmu
 
