@@ -244,6 +244,41 @@ def test_ecos_own_binary_runs_the_native_fmu_with_no_python(tmp_path, stepper):
     assert np.abs(library.x).max() > 1.0
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_fmusim_runs_the_native_fmu_as_the_library(tmp_path, fmi):
+    """Reference-FMUs' fmusim (the C program, where one is installed: FMUSIM=path or fmusim on PATH; CI has none,
+    README), a host with no Python, runs the native FMU of the paper's scene (exact: the stack unfolded) with
+    scene_load from its command line: its CSV (16 digits) is simulate's run."""
+    import subprocess
+
+    binary = shutil.which(os.environ.get("FMUSIM", "fmusim"))
+    if binary is None:
+        pytest.skip("no fmusim binary (set FMUSIM=path; README: the C fmusim of Reference-FMUs)")
+    usage = subprocess.run([binary, "--help"], capture_output=True, text=True, timeout=60).stdout
+    if "--interface-type" not in usage or "--start-value" not in usage:
+        pytest.skip(f"{binary} is not the C fmusim of Reference-FMUs (another command line)")
+    if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: a native FMU cannot be built here")
+    from prandtl_fmu import load_scene, simulate
+    from prandtl_fmu.fmu.build import build_fmu
+
+    scene_path = ROOT / "scenes" / "paper-section-8.toml"
+    fmu = build_fmu(scene_path, tmp_path / "element.fmu", runtime="native", fmi=fmi)
+    out = tmp_path / "out.csv"
+    done = subprocess.run([binary, "--interface-type", "cs", "--stop-time", "20", "--output-interval", "0.05",
+                           "--start-value", "scene_load", "true", "--start-value", "stepper", "exact",
+                           "--output-variable", "x", "--output-variable", "v", "--output-variable", "reaction",
+                           "--output-file", str(out), str(fmu)], capture_output=True, text=True, timeout=300,
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stdout + done.stderr
+    result = np.genfromtxt(out, delimiter=",", names=True)
+    library = simulate(load_scene(scene_path).with_solver(stop_time=20.0, output_interval=0.05), stepper="exact")
+    assert len(result) == len(library.time)
+    for name in ("x", "v", "reaction"):  # %.16g
+        np.testing.assert_allclose(result[name], getattr(library, name), rtol=1e-15, atol=1e-15)
+    assert np.abs(library.x).max() > 1.0
+
+
 def gauss_seidel(folder, step, stop_time):
     """An independent Gauss-Seidel master over FMPy: the mass steps with the force of the previous step, then
     the connector with the mass's new x, v; returns the arrays time, x, v, force after every step."""
