@@ -244,11 +244,8 @@ def test_ecos_own_binary_runs_the_native_fmu_with_no_python(tmp_path, stepper):
     assert np.abs(library.x).max() > 1.0
 
 
-@pytest.mark.parametrize("fmi", [2, 3])
-def test_fmusim_runs_the_native_fmu_as_the_library(tmp_path, fmi):
-    """Reference-FMUs' fmusim (the C program, where one is installed: FMUSIM=path or fmusim on PATH; CI has none,
-    README), a host with no Python, runs the native FMU of the paper's scene (exact: the stack unfolded) with
-    scene_load from its command line: its CSV (16 digits) is simulate's run."""
+def fmusim_binary():
+    """Reference-FMUs' fmusim, the C program (FMUSIM=path or fmusim on PATH; CI has none, README), or skip."""
     import subprocess
 
     binary = shutil.which(os.environ.get("FMUSIM", "fmusim"))
@@ -259,6 +256,16 @@ def test_fmusim_runs_the_native_fmu_as_the_library(tmp_path, fmi):
         pytest.skip(f"{binary} is not the C fmusim of Reference-FMUs (another command line)")
     if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler: a native FMU cannot be built here")
+    return binary
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_fmusim_runs_the_native_fmu_as_the_library(tmp_path, fmi):
+    """fmusim, a host with no Python, runs the native FMU of the paper's scene (exact: the stack unfolded) with
+    scene_load from its command line: its CSV (16 digits) is simulate's run."""
+    import subprocess
+
+    binary = fmusim_binary()
     from prandtl_fmu import load_scene, simulate
     from prandtl_fmu.fmu.build import build_fmu
 
@@ -277,6 +284,35 @@ def test_fmusim_runs_the_native_fmu_as_the_library(tmp_path, fmi):
     for name in ("x", "v", "reaction"):  # %.16g
         np.testing.assert_allclose(result[name], getattr(library, name), rtol=1e-15, atol=1e-15)
     assert np.abs(library.x).max() > 1.0
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_fmusim_runs_the_native_connector_as_fmpy(tmp_path, fmi):
+    """The native bushing in fmusim, its motion x(t), v(t) from an input file on the output grid: the force of
+    FMPy's run of the same FMU with the same input, to fmusim's 16 digits."""
+    import subprocess
+
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu.fmu.build import build_fmu
+
+    binary = fmusim_binary()
+    fmu = build_fmu(run_connector.HERE / "bushing.toml", tmp_path / "bushing.fmu", runtime="native", fmi=fmi)
+    signal = np.zeros(101, dtype=[("time", float), ("x", float), ("v", float)])
+    signal["time"] = np.round(np.arange(101) * 0.05, 10)
+    signal["x"], signal["v"] = 0.3 * np.sin(1.3 * signal["time"]), 0.39 * np.cos(1.3 * signal["time"])
+    rows = ['"time","x","v"'] + [",".join(repr(float(value)) for value in row) for row in signal]
+    (tmp_path / "in.csv").write_text("\n".join(rows) + "\n")
+    done = subprocess.run([binary, "--interface-type", "cs", "--stop-time", "5", "--output-interval", "0.05",
+                           "--input-file", str(tmp_path / "in.csv"), "--output-variable", "force",
+                           "--output-file", str(tmp_path / "out.csv"), str(fmu)], capture_output=True, text=True,
+                          timeout=300, env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stdout + done.stderr
+    result = np.genfromtxt(tmp_path / "out.csv", delimiter=",", names=True)
+    fmpy = simulate_fmu(str(fmu), stop_time=5.0, output_interval=0.05, input=signal, output=["force"])
+    assert len(result) == len(fmpy) == 101
+    np.testing.assert_allclose(result["force"], fmpy["force"], rtol=1e-15, atol=1e-15)
+    assert np.ptp(fmpy["force"]) > 0.3
 
 
 def gauss_seidel(folder, step, stop_time):
