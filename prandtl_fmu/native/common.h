@@ -109,6 +109,16 @@ static const Var* find(unsigned vr, int type)
     return NULL;
 }
 
+/* the length of the branches' state in use (stack.used): the memory stack's header and pieces, or n elongations */
+static size_t branch_state_used(const double* u)
+{
+    size_t used;
+    if (!STACK)
+        return NB;
+    used = STACK_HEADER + STACK_ROW * (size_t)(u[0] > 0 ? u[0] : 0); /* u[0]: the count of pieces */
+    return used < NB_ARR ? used : NB_ARR;
+}
+
 static uint64_t fnv1a(const unsigned char* bytes, size_t size)
 {
     uint64_t hash = 1469598103934665603ULL;

@@ -85,7 +85,6 @@ static Element* previewed(Instance* c)
 {
     const Element* e = &c->el;
     Element* p = &c->preview;
-    size_t used = STACK ? STACK_HEADER + STACK_ROW * (size_t)(e->u[0] > 0 ? e->u[0] : 0) : NB;
     memcpy(p->p, e->p, sizeof p->p);
     memcpy(p->cs, e->cs, sizeof p->cs);
     p->x = e->x;
@@ -93,7 +92,7 @@ static Element* previewed(Instance* c)
     p->time = e->time;
     p->direction = e->direction;
     memcpy(p->account, e->account, sizeof p->account);
-    memcpy(p->u, e->u, (used < NB_ARR ? used : NB_ARR) * sizeof(double));
+    memcpy(p->u, e->u, branch_state_used(e->u) * sizeof(double));
     move_to(p, c->x_in, c->v_in, p->time);
     return p;
 }

@@ -136,7 +136,7 @@ static int reset(Element* e, double force)
     e->grid = 0.0;
     e->force = force;
     e->scene_load = 0;
-    e->play = FOLDS && !TAKES_STACK[e->stepper]; /* driver.choose_branch_kernel */
+    e->play = FOLDS && e->stepper >= 0 && !TAKES_STACK[e->stepper]; /* driver.choose_branch_kernel */
     if (FOLDS)
         memcpy(e->kst, K, sizeof e->kst);
     memcpy(e->u, U0, sizeof e->u);
@@ -651,18 +651,6 @@ static int core_exit_initialization(Instance* c)
     return ST_OK;
 }
 
-/* the length of the branches' state in use: the memory stack's header and pieces (stack.used), or n */
-static size_t used_length(const Element* e)
-{
-    size_t used;
-    if (e->play)
-        return NB;
-    if (!STACK)
-        return NB;
-    used = STACK_HEADER + STACK_ROW * (size_t)(e->u[0] > 0 ? e->u[0] : 0); /* u[0]: the count of pieces */
-    return used < NB_ARR ? used : NB_ARR;
-}
-
 static void checkpoint(Instance* c)
 {
     const Element* e = &c->el;
@@ -677,7 +665,7 @@ static void checkpoint(Instance* c)
     k->force = e->force;
     k->steps = e->steps;
     k->scene_load = e->scene_load;
-    k->used = used_length(e);
+    k->used = e->play ? NB : branch_state_used(e->u);
     memcpy(c->saved_u, e->play ? e->up : e->u, k->used * sizeof(double));
 }
 
