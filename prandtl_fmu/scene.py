@@ -40,6 +40,16 @@ MAX_STEPS = 2**53
 # A step (or stop time) shorter than this is refused: the implicit steps divide by h^2, which underflows to 0
 # below about 1e-160 s.
 SHORTEST_STEP = 1e-150
+# The magnitudes a physical number of a scene (a coefficient, an initial value, a load's parameter) may have:
+# 0, or |value| in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE]. Outside, the number means nothing physical
+# (a subnormal mass, a stiffness of 1e308) and the products the kernels form (k x^3, k h^2 / m, c / m) underflow
+# or overflow: refused by the scene reader and by every FMU's setters. Six such factors stay within a double.
+SMALLEST_MAGNITUDE = 1e-50
+LARGEST_MAGNITUDE = 1e50
+# The most internal steps one advance of an element (an FMU's doStep) takes: a communication step that needs
+# more is refused (fmi2Discard, ElementError) with the count, never run for hours. About 10 s of the paper's
+# 100-branch scene on the stack (~100 ns a step); a master splits a longer interval into several doSteps.
+ADVANCE_BUDGET = 100_000_000
 
 Load = Union[ConstantLoad, HarmonicLoad, TableLoad, RandomLoad]
 
@@ -158,6 +168,14 @@ def coefficients_of(scene: "Scene") -> dict:
     return values
 
 
+def magnitude_problem(value: float) -> Optional[str]:
+    """Why the finite number ``value`` has no physical magnitude (see SMALLEST_MAGNITUDE), or None."""
+    if value != 0 and not SMALLEST_MAGNITUDE <= abs(value) <= LARGEST_MAGNITUDE:
+        return (f"|{value!r}| is outside [{SMALLEST_MAGNITUDE:g}, {LARGEST_MAGNITUDE:g}] (or 0): "
+                "no physical magnitude, its products in a step would underflow or overflow")
+    return None
+
+
 def coefficient_problem(name: str, value) -> Optional[str]:
     """Why ``value`` is not a valid coefficient ``name`` (see COEFFICIENTS), or None."""
     rule = COEFFICIENTS[_coefficient_key(name)][1]
@@ -165,6 +183,8 @@ def coefficient_problem(name: str, value) -> Optional[str]:
         return f"must be a number, got {value!r}"
     if not math.isfinite(value):
         return f"must be finite, got {value!r}"
+    if magnitude_problem(value):
+        return magnitude_problem(value)
     if rule == "> 0" and not value > 0:
         return f"must be > 0, got {value!r}"
     if rule == ">= 0" and value < 0:
@@ -264,6 +284,8 @@ class _Reader:
             self.fail(key, "must be finite, got an integer beyond the range of a double")
         if not math.isfinite(value):
             self.fail(key, f"must be finite, got {value}")
+        if self.table != "solver" and magnitude_problem(value):  # the solver's times have their own rules
+            self.fail(key, magnitude_problem(value))
         if positive and not value > 0:
             self.fail(key, f"must be > 0, got {value!r}")
         if minimum is not None and value < minimum:
