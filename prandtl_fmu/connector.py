@@ -28,7 +28,7 @@ from typing import Optional
 
 import numpy as np
 
-from .driver import (OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model,
+from .driver import (ElementError, OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model,
                      restore_branch_state, with_scene_coefficients, _smooth_model)
 from .kernels import stack
 from .kernels.drive import drive, preview, tangent
@@ -173,19 +173,31 @@ class Connector(OutputMemo):
         """Commit the sample (x, v) at ``time`` (s; default: the committed time). The branches follow the
         exact play update along the line from the committed x; the dashpot dissipates c (v0^2 + v0 v + v^2)
         (time - t0) / 3 (v linear in between). ValueError (nothing changed) for a non-finite value or a time
-        that goes back."""
+        that goes back; ElementError (nothing changed) when an output (force, energies) would overflow."""
         time = self.time if time is None else float(time)
         if not (math.isfinite(x) and math.isfinite(v)):
             raise ValueError(f"the motion must be finite, got x = {x!r}, v = {v!r}")
         if not (math.isfinite(time) and time >= self.time):
             raise ValueError(f"time {time!r} goes back (the connector is at t = {self.time!r})")
         dx = x - self.x
+        u, account, force = self.u, self.account.copy(), np.empty(1)
+        saved = None if u is None else u[:stack.used(u)].copy() if stack.is_stack(self.model[4]) else u.copy()
         self._touch()
-        drive(self.model, self.u, self.x, np.array([x]), np.array([float(v)]), np.array([time - self.time]),
-              np.empty(1), self.account)
+        drive(self.model, u, self.x, np.array([x]), np.array([float(v)]), np.array([time - self.time]), force,
+              account)
         c = self.model[3]
         if c is not None:
-            self.account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
+            account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
+        m, k0, k3, c, k, eta, cs, friction = self.model
+        outputs = {"force": float(force[0]), "stored_energy": float(stored(x, k0, k3, k, u)),
+                   "dissipated_sliders": float(account[SLIDERS]), "dissipated_damper": float(account[DAMPER])}
+        for name, value in outputs.items():
+            if not math.isfinite(value):
+                if saved is not None:
+                    u[:saved.shape[0]] = saved
+                raise ElementError(f"the sample x = {x!r}, v = {v!r} at t = {time!r} s refused: {name} would not "
+                                   "be finite (an overflow); the connector is unchanged")
+        self.account[:] = account
         if dx != 0:
             self.direction = math.copysign(1.0, dx)
         self.x, self.v, self.time = float(x), float(v), time

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from time import perf_counter
 import warnings
 from dataclasses import dataclass
 from typing import Optional
@@ -29,13 +30,13 @@ from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force
 from .loads import force_at, held, plus
-from .scene import MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
+from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
-# How many branch updates one compiled call does at most, between two
-# progress-bar updates (about 10 ms).
-_CHUNK_WORK = 20_000_000
+# About how long one compiled call of simulate_chunks runs (s): Python, and so a signal's handler and the
+# progress bar, runs between two calls only.
+_CHUNK_SECONDS = 0.05
 
 ENERGY_COLUMNS = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
 # the column a scene with [friction] adds, before energy_residual
@@ -402,6 +403,7 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
 
     def result(first, out, out_u, out_energy):
         count = out.shape[0]
+        _check_finite(scene, name, grid.times(first, count), out, out_energy)
         energy_table = None
         if energy:
             energy_table = _energy_columns(scene, initial_energy, out_energy)
@@ -420,18 +422,24 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
 
     last_is_short = grid.last_is_short
     full_rows = rows - 1 - last_is_short  # row 0 is the initial state
-    work_per_step = 8 if stack.is_stack(k) else max(n, 8)
-    chunk = max(1, min(_CHUNK_WORK // max(1, per_row * work_per_step), _CHUNK_VALUES // (8 + n_out)))
+    most = max(1, _CHUNK_VALUES // (8 + n_out))  # rows of one chunk, for memory
+    chunk = 1  # rows of the next chunk: grown to about _CHUNK_SECONDS of compiled work (see below)
     bar = _progress_bar(progress, total=rows - 1, label=f"{scene.name} [{name}]")
     try:
         j = 0
         while j < full_rows:
             count = min(chunk, full_rows - j)
+            started = perf_counter()
             out, out_u, out_energy = piece(1 + j, count)
             x, v, taken = integrate(loop, model, load, x, v, u, 0.0, j * per_row, h, per_row, out, out_u, account,
                                     out_energy)
             if taken < per_row * count:
                 raise _failure(scene, name, load, (j * per_row + taken) * h, h)
+            # Python (a signal's handler, the progress bar) runs between chunks only: each chunk is sized from
+            # the last one's measured speed to take about _CHUNK_SECONDS, whatever a step of this stepper costs
+            # (an event-driven step can cost 1000x a projected one), so SIGINT/SIGTERM stop a run at once.
+            elapsed = perf_counter() - started
+            chunk = min(most, max(1, int(count * min(_CHUNK_SECONDS / max(elapsed, 1e-9), 8.0))))
             yield result(1 + j, out, out_u, out_energy)
             j += count
             bar.update(count)
@@ -445,6 +453,21 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
             bar.update(1)
     finally:
         bar.close()
+
+
+def _check_finite(scene: Scene, stepper: str, times, out, out_energy) -> None:
+    """ElementError naming the first output column and time where ``out`` (x, v, reaction) or the energy rows
+    are not finite: no output is ever NaN or inf (an energy account a stepper does not book is NaN, not inf)."""
+    bad = ~np.isfinite(out)
+    tables = [(("x", "v", "reaction"), bad)]
+    if out_energy is not None:
+        tables.append((("kinetic_energy", "stored_energy"), ~np.isfinite(out_energy[:, :2])))
+        tables.append((ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,), np.isinf(out_energy[:, 2:])))
+    for names, bad in tables:
+        if bad.any():
+            row, column = np.argwhere(bad)[0]
+            raise ElementError(f"{scene.source}: {names[column]} at t = {float(times[row])!r} s would not be finite "
+                               f"(an overflow) with stepper {stepper!r}: the run is refused there")
 
 
 def split_duration(duration: float, h: float) -> tuple:
@@ -555,6 +578,8 @@ class Element(OutputMemo):
         the same instant (a master's clock that adds up its steps drifts by ulps) and keeps the grid; another
         starts a new grid there."""
         value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(f"time must be finite, got {value!r}")
         if self._grid is not None and abs(value - self.time) <= 1e-9 * self._grid:
             return
         self._origin, self._steps = value, 0
@@ -637,13 +662,17 @@ class Element(OutputMemo):
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is {duration / h:.3g} steps of h = {h!r} s: more than 2^53 "
                              "cannot be counted exactly; advance by shorter durations or with a larger step")
+        whole, rest = split_duration(duration, h)
+        if whole + (rest > 0) > ADVANCE_BUDGET:
+            raise ElementError(f"{self.scene.source}: an advance of {duration!r} s takes {whole + (rest > 0):.4g} "
+                               f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
+                               "advance: advance by shorter durations (communication steps) or with a larger step")
         saved = self.checkpoint()
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
         self.force, self._load = float(force), load
         self._touch()  # the compiled loop writes the state and the outputs in place
         if self._grid != h:  # a new step: the grid starts again at the current time
             self._origin, self._steps, self._grid = self.time, 0, h
-        whole, rest = split_duration(duration, h)
         x, v, failed_at = _advance(self._loop, self.model, load, self.x, self.v, self.u, self._origin,
                                          self._steps, whole, rest, h, self._out, None, self.account,
                                          self._energy_row)
@@ -655,6 +684,24 @@ class Element(OutputMemo):
             self._origin, self._steps = self._origin + (self._steps + whole) * h + rest, 0
         else:
             self._steps += whole
+        overflowed = self._overflowed()
+        if overflowed:
+            time = self.time
+            self.rollback(saved)
+            raise ElementError(f"{self.scene.source}: the advance to t = {time!r} s with F = {float(force)!r} N "
+                               f"refused: {overflowed} would not be finite (an overflow); the state is unchanged")
+
+    def _overflowed(self) -> Optional[str]:
+        """The first output of the current state that is not a finite number (x, v, reaction, an energy), or
+        None. A non-booked energy account (NaN: 'exact' books none) is not an overflow."""
+        names = ("x", "v", "reaction", "kinetic_energy", "stored_energy")
+        for name, value in zip(names, (*self._out[0].tolist(), *self._energy_row[0, :2].tolist())):
+            if not math.isfinite(value):
+                return name
+        for name, value in zip(ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,), self._energy_row[0, 2:].tolist()):
+            if math.isinf(value):
+                return name
+        return None
 
     def set_coefficients(self, **values) -> None:
         """Change coefficients (m, k0, k3, c; x0 and v0 take effect at :meth:`reset`).

@@ -1,0 +1,182 @@
+"""Trust, round three (issue 31), the library and the command line: bounded work, no meaningless magnitude, no
+non-finite output with a success, the CLI stopped at once by a signal. The FMUs' side of the same rules is in
+tests/test_native_trust*.py and tests/test_pythonfmu_trust*.py; exact's event searches in tests/test_exact_*.py."""
+import math
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import parse_scene
+from prandtl_fmu.connector import Connector
+from prandtl_fmu.driver import Element, ElementError, simulate
+from prandtl_fmu.scene import (ADVANCE_BUDGET, LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE, SceneError, with_coefficients)
+
+from .conftest import base_tables, make_scene, scene_text
+
+IMPLICIT = {"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.01}
+
+
+# ------------------------------------------------------------------ item 3: magnitudes
+
+@pytest.mark.parametrize("table, key, value", [
+    ("mass", "m", 1e-320), ("mass", "m", 1e-51), ("damper", "c", 1e-320), ("spring", "k0", 1e308),
+    ("spring", "k0", 2e50), ("cubic", "k3", 1e60), ("mass", "x0", -1e300), ("load", "amplitude", 1e307),
+])
+def test_the_scene_reader_refuses_a_magnitude_with_no_physical_meaning(table, key, value):
+    tables = base_tables()
+    tables[table] = dict(tables[table], **{key: value})
+    with pytest.raises(SceneError, match=rf"\[{table}\] {key}: .*outside \[1e-50, 1e\+50\]"):
+        parse_scene(scene_text(tables), "test.toml")
+
+
+def test_the_edges_of_the_magnitudes_and_zero_are_accepted():
+    scene = make_scene(mass={"m": SMALLEST_MAGNITUDE, "x0": 0.0, "v0": 0.0}, spring={"k0": LARGEST_MAGNITUDE},
+                       damper={"c": 0.0}, solver=IMPLICIT)
+    assert scene.mass.m == 1e-50 and scene.spring.k0 == 1e50 and scene.damper.c == 0.0
+
+
+@pytest.mark.parametrize("name, value", [("m", 1e-320), ("c", 5e-324), ("k0", 1e308), ("k3", -1e-60)])
+def test_a_coefficient_set_on_a_running_element_is_refused_the_same_way(name, value):
+    scene = make_scene(solver=IMPLICIT)
+    with pytest.raises(ValueError, match=rf"^{name}: "):
+        with_coefficients(scene, **{name: value})
+    element = Element(scene)
+    before = element.get_state()
+    with pytest.raises(ValueError, match=rf"^{name}: "):
+        element.set_coefficients(**{name: value})
+    assert element.get_state() == before
+
+
+# ------------------------------------------------------------------ item 4: the budget of an advance
+
+@pytest.mark.parametrize("duration", [1e7, 1e12, (ADVANCE_BUDGET + 1) * 1e-3])
+def test_an_advance_beyond_the_budget_is_refused_at_once_and_changes_nothing(duration):
+    element = Element(make_scene(solver=IMPLICIT))
+    element.advance(0.05, 0.3)
+    before = element.get_state()
+    started = time.monotonic()
+    with pytest.raises(ElementError, match=r"more than the budget of 1e\+08 steps of one advance"):
+        element.advance(duration, 0.3)
+    assert time.monotonic() - started < 1.0
+    assert element.get_state() == before
+    element.advance(0.05, 0.3)  # and it goes on
+
+
+# ------------------------------------------------------------------ item 9: non-finite times
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_a_non_finite_clock_is_refused(value):
+    element = Element(make_scene(solver=IMPLICIT))
+    with pytest.raises(ValueError, match="time must be finite"):
+        element.time = value
+    assert element.time == 0.0
+
+
+# ------------------------------------------------------------------ item 10: no non-finite output with success
+
+def _connector_scene():
+    tables = base_tables(mass=None, cubic=None, load=None, fmu={"causality": "displacement"}, solver=IMPLICIT)
+    tables["branches"] = {"k": [1.0, 2.0], "eta": [0.1, 0.2]}
+    tables["damper"] = {"c": 1.0}
+    return parse_scene(scene_text(tables), "connector.toml")
+
+
+@pytest.mark.parametrize("x, v, culprit", [(0.02, 1e308, "dissipated_damper"), (1e200, 0.0, "stored_energy")])
+def test_the_connector_refuses_a_sample_whose_outputs_overflow_and_is_unchanged(x, v, culprit):
+    connector = Connector(_connector_scene())
+    connector.move_to(0.01, 0.1, 0.1)
+    before = connector.get_state()
+    with pytest.raises(ElementError, match=rf"{culprit} would not be finite"):
+        connector.move_to(x, v, 0.2)
+    assert connector.get_state() == before
+    connector.move_to(0.015, 0.05, 0.2)
+    assert all(math.isfinite(value) for value in (connector.force, *connector.energy().values()))
+
+
+def test_an_advance_whose_energy_overflows_is_refused_and_rolled_back():
+    """A force a master sets (no scene rule bounds it) makes v^2 overflow while x and v stay finite: the
+    kinetic energy would be inf; refused with the quantity, nothing changed."""
+    scene = make_scene(mass={"m": 1e50, "x0": 0.0, "v0": 0.0}, cubic=None, spring={"k0": 0.0}, solver=IMPLICIT)
+    element = Element(scene)
+    before = element.get_state()
+    with pytest.raises(ElementError, match="kinetic_energy would not be finite"):
+        element.advance(1e-3, 1e300)
+    assert element.get_state() == before
+    element.advance(1e-3, 1.0)
+    assert all(math.isfinite(value) for value in element.energy().values())
+
+
+UNSTABLE = base_tables(cubic=None, damper=None, branches=None, spring={"k0": 1.0}, load={"kind": "constant", "value": 1.0},
+                       solver={"stepper": "symplectic", "step": 3.0, "stop_time": 3e4, "output_interval": 3.0})
+
+
+def test_a_run_that_blows_up_hands_out_no_non_finite_row_before_it_is_refused():
+    """An unstable explicit run grows until x^2 overflows (x still finite): every row handed out is finite,
+    then the run is refused (the energy column used to read inf, the CSV written, exit 0)."""
+    from prandtl_fmu.driver import simulate_chunks
+
+    scene = parse_scene(scene_text(UNSTABLE), "unstable.toml")
+    pieces = []
+    with pytest.warns(Warning), pytest.raises(ElementError, match="would not be finite|became non-finite"):
+        for piece in simulate_chunks(scene, energy=True):
+            pieces.append(piece)
+    assert pieces, "the run should hand out its first rows"
+    for piece in pieces:
+        assert np.all(np.isfinite(piece.x)) and np.all(np.isfinite(piece.v))
+        assert np.all(np.isfinite(piece.reaction))
+        assert all(np.all(np.isfinite(piece.energy[key])) for key in piece.energy)
+
+
+def test_the_cli_exits_2_with_one_line_and_no_file_when_a_run_blows_up(tmp_path):
+    scene = tmp_path / "unstable.toml"
+    scene.write_text(scene_text(UNSTABLE))
+    out = tmp_path / "out.csv"
+    run = subprocess.run([sys.executable, "-m", "prandtl_fmu", "run", str(scene), "--energy", "--out", str(out)],
+                         capture_output=True, text=True, timeout=300)
+    lines = [line for line in run.stderr.splitlines() if line.strip() and "warning" not in line.lower()]
+    assert run.returncode == 2 and len(lines) == 1 and "not be finite" in lines[0] or "non-finite" in lines[0], \
+        run.stderr
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ the CLI stops at once
+
+def test_sigterm_stops_a_run_of_costly_steps_at_once(tmp_path):
+    """A run's compiled calls are sized by time, not by a guess of a step's cost: exact's steps cost ~1000x
+    projected's, and one call of them used to run for tens of seconds with the signal waiting."""
+    tables = base_tables(cubic=None, load={"kind": "harmonic", "amplitude": 0.8, "omega": 0.7, "offset": 0.0},
+                         solver={"stepper": "exact", "step": 1e-2, "stop_time": 1e5, "output_interval": 1e-2})
+    scene = tmp_path / "long.toml"
+    scene.write_text(scene_text(tables))
+    out = tmp_path / "long.csv"
+    run = subprocess.Popen([sys.executable, "-m", "prandtl_fmu", "run", str(scene), "--out", str(out)],
+                           cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and run.poll() is None and \
+            not any(p.name.startswith(".prandtl-") for p in tmp_path.iterdir()):
+        time.sleep(0.05)
+    time.sleep(1.0)  # well into the run
+    assert run.poll() is None, run.stderr.read()
+    sent = time.monotonic()
+    run.send_signal(signal.SIGTERM)
+    _, err = run.communicate(timeout=60)
+    assert time.monotonic() - sent < 3.0, "the signal waited for a long compiled call"
+    assert run.returncode == 128 + signal.SIGTERM, err
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".prandtl-")]
+
+
+def test_the_output_does_not_depend_on_how_the_run_is_cut_into_calls(monkeypatch):
+    """The compiled calls are sized by a clock; the numbers must not be: a run cut into calls of one row each
+    gives the same bits as a run cut by the clock."""
+    from prandtl_fmu import driver
+
+    scene = make_scene(solver={"stepper": "projected", "step": 1e-3, "stop_time": 2.0, "output_interval": 0.01})
+    by_clock = simulate(scene, energy=True)
+    monkeypatch.setattr(driver, "_CHUNK_SECONDS", 0.0)
+    by_row = simulate(scene, energy=True)
+    assert np.array_equal(by_clock.x, by_row.x) and np.array_equal(by_clock.reaction, by_row.reaction)
+    assert all(np.array_equal(by_clock.energy[key], by_row.energy[key]) for key in by_clock.energy)
