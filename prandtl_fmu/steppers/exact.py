@@ -95,7 +95,7 @@ from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
 
 ORDER = math.inf
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
-ENERGY_ACCOUNT = False
+ENERGY_ACCOUNT = True  # booked exactly, phase by phase (:func:`_book`)
 
 
 def loop_for(scene):
@@ -144,6 +144,8 @@ def _expm_times(a, tau, y):
             column += abs(a[i, j])
         norm = max(norm, column)
     norm *= tau
+    if not norm < np.inf:  # an overflow: no squaring count (the step fails on the non-finite state)
+        return np.full(size, np.nan)
     squarings = 0
     if norm > 0.25:
         squarings = int(math.ceil(math.log2(norm / 0.25)))
@@ -159,6 +161,52 @@ def _expm_times(a, tau, y):
     for _ in range(squarings):
         result = _matmul(result, result)
     return _matvec(result, y)
+
+
+@kernel
+def _expm_gramian(a, tau, y0):
+    """(expm(a tau) y0, int_0^tau y(s) y(s)^T ds) with y(s) = expm(a s) y0 (Van Loan's integral, by scaling and
+    squaring). The exponential is :func:`_expm_times`'s, operation for operation (the same y to the bit). On
+    the scaled step sigma = tau / 2^q, W(sigma) = sum_k sigma^(k+1) L^k(M) / (k+1)!, L(X) = A X + X A^T,
+    M = y0 y0^T: with B = A sigma, W = sum_k T_k, T_0 = sigma M, T_k = (B T_(k-1) + T_(k-1) B^T) / (k + 1); then
+    W(2 s) = W(s) + E(s) W(s) E(s)^T, E(2 s) = E(s)^2 (no growing exponential: stable wherever expm is)."""
+    size = a.shape[0]
+    norm = 0.0
+    for j in range(size):
+        column = 0.0
+        for i in range(size):
+            column += abs(a[i, j])
+        norm = max(norm, column)
+    norm *= tau
+    if not norm < np.inf:
+        return np.full(size, np.nan), np.full((size, size), np.nan)
+    squarings = 0
+    if norm > 0.25:
+        squarings = int(math.ceil(math.log2(norm / 0.25)))
+    scale = tau / 2.0**squarings
+    b = a * scale
+    result = np.eye(size)
+    term = np.eye(size)
+    for k in range(1, 30):
+        term = _matmul(term, b) / k
+        result += term
+        if _converged(term, result):
+            break
+    outer = np.empty((size, size))
+    for i in range(size):
+        for j in range(size):
+            outer[i, j] = y0[i] * y0[j]
+    piece = outer * scale
+    gramian = piece.copy()
+    for k in range(1, 40):
+        piece = (_matmul(b, piece) + _matmul(piece, b.T)) / (k + 1)
+        gramian += piece
+        if _converged(piece, gramian):
+            break
+    for _ in range(squarings):
+        gramian = gramian + _matmul(_matmul(result, gramian), result.T)
+        result = _matmul(result, result)
+    return _matvec(result, y0), gramian
 
 
 @kernel
@@ -190,9 +238,9 @@ def _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha):
     """The system matrix A, y(0) and the phase's levels, for the state at time t (v set by the caller).
     ``alpha``: the threshold of the friction on the mass (0: none), a constant force against ``direction``.
 
-    Returns (A, y0, stiffness, up, down, any_sliding): ``up``/``down`` are
+    Returns (A, y0, stiffness, up, down, any_sliding, reaction): ``up``/``down`` are
     the distances x can move up/down before a sticking branch reaches its
-    threshold (inf if none).
+    threshold (inf if none), ``reaction`` R = k0 x + sum k_i u_i + alpha direction (F = m y2 + R).
     """
     stiffness = _linear_spring(k0)
     reaction = stiffness * x
@@ -211,30 +259,33 @@ def _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha):
                 down = min(down, eta[i] + u[i])
     # Every entry of A is a rate (1/s): the forcing's size goes into y0, so that
     # lengths and forces of any scale give the same matrix exponential.
+    # State 2 is the net load (F(t) - R) / m, R the phase's reaction with the friction: its value at the start
+    # is one number, so that a release (net force exactly at the threshold) can start from exactly 0, and the
+    # load's work is R dx + m int y2 v (see step).
     kind, offset, amplitude, omega, times, forces = load
     a = np.zeros((6, 6))
     y0 = np.zeros(6)
     a[0, 1] = 1.0
     a[1, 0] = -stiffness / m
     a[1, 1] = -_damping(c) / m
-    a[1, 2] = 1.0  # the varying part of the load's acceleration (state 2)
-    a[1, 4] = 1.0  # its constant part (state 4)
+    a[1, 2] = 1.0
     reaction += alpha * direction  # the mass slides: the friction resists with alpha
-    if kind == HARMONIC:  # states 2, 3: (amplitude / m) (cos, sin)(omega t), rotating
+    if kind == HARMONIC:  # y2 = (A cos(omega t) + offset - R) / m, y3 = A sin(omega t) / m, y4 = (offset - R) / m
         a[2, 3] = -omega
         a[3, 2] = omega
-        y0[2] = amplitude / m * math.cos(omega * t)
+        a[3, 4] = -omega
+        y0[2] = (force_at(load, t) - reaction) / m
         y0[3] = amplitude / m * math.sin(omega * t)
         y0[4] = (offset - reaction) / m
     elif kind == CONSTANT:
-        y0[4] = (offset - reaction) / m
-    else:  # a piece of a table: states 2, 3: the ramp (slope / m) tau and its rate
+        y0[2] = (offset - reaction) / m
+    else:  # a piece of a table: y2 = (F(t_e) - R) / m + (slope / m) tau, y3 = slope / m
         j = np.searchsorted(times, t, side="right")
         if 0 < j < times.shape[0]:
             y0[3] = (forces[j] - forces[j - 1]) / (times[j] - times[j - 1]) / m
         a[2, 3] = 1.0
-        y0[4] = (force_at(load, t) - reaction) / m
-    return a, y0, stiffness, up, down, any_sliding
+        y0[2] = (force_at(load, t) - reaction) / m
+    return a, y0, stiffness, up, down, any_sliding, reaction
 
 
 @kernel
@@ -296,28 +347,49 @@ def _leaving_direction(a, y0):
 
 
 _EPS = 2.220446049250313e-16
-NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL = -1, 0, 1, 2
+NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL, EXHAUSTED = -1, 0, 1, 2, 3
 
-
-@kernel
-def unbooked(energy):
-    """No energy account: its entries (work, dissipated) become NaN, never a silent 0 (the element's account,
-    which a switch from another stepper brings, stays NaN until a reset)."""
-    if energy is not None:
-        for j in range(energy.shape[0]):
-            energy[j] = np.nan
+# The bounds on the work of one step (issue 31): a step that needs more fails (the loop returns fewer steps,
+# the driver's ElementError / fmi2Discard; :func:`failure_reason` says which bound ran out), never a loop.
+PHASE_BUDGET = 100_000  # phases (events) in one step
+WALK_BUDGET = 100_000  # intervals of one validated subdivision (one event search)
+ILLINOIS_LIMIT = 64  # Illinois iterations of one root refinement, then bisection ...
+REFINE_LIMIT = 64 + 1200  # ... which reaches adjacent doubles from any bracket within 1200 halvings
+# why a step failed (:func:`attempt`)
+TOOK_STEP, TOO_MANY_PHASES, STALLED, SEARCH_EXHAUSTED, NOT_FINITE = 0, 1, 2, 3, 4
 
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
+    """One exact step from t to t + h (:func:`attempt`); a failed step returns a non-finite x with u and the
+    energy account as they were."""
+    x1, v1, failure, when = attempt(model, load, t, h, x, v, u, energy)
+    if failure != TOOK_STEP:
+        return np.nan, np.nan, branch_force(model[4], u)  # reported by the driver: never a silent stop
+    return x1, v1, branch_force(model[4], u)
+
+
+@kernel
+def attempt(model, load, t, h, x, v, u, energy):
+    """The exact motion from t to t + h, phase by phase: (x, v, failure, when). ``failure`` is TOOK_STEP, or
+    why the step could not be taken at time ``when`` (then u and ``energy`` are restored): more than
+    PHASE_BUDGET phases, more than 16 + 2 n phases in a row that do not advance t, an event search over its
+    budget, a non-finite state. Books the energy account exactly (:func:`_book`)."""
     m, k0, k3, c, k, eta, cs, friction = model
-    unbooked(energy)
+    saved_u = _saved(u)
+    saved_energy = _saved(energy)
     alpha = _threshold(friction)
     end = t + h
     stalled = 0
     stall_limit = 16 + 2 * _branch_count(k)
     released = False  # a stick phase just ended with the net force at the threshold: slide now
+    failure = TOOK_STEP
+    phases = 0
     while t < end:  # phases; each ends at an event, a load kink or t + h
+        phases += 1
+        if phases > PHASE_BUDGET:
+            failure = TOO_MANY_PHASES
+            break
         span = min(end, _next_break(load, t)) - t
         direction = _direction(k0, k, load, t, x, v, u)
         if alpha > 0.0 and v == 0.0:  # the mass is at rest: it sticks while |F - reaction| <= alpha
@@ -329,12 +401,16 @@ def step(model, load, t, h, x, v, s, u, energy):
                 released = tau < span
                 stalled = stalled + 1 if t + tau <= t else 0
                 if stalled > stall_limit:
-                    return np.nan, np.nan, branch_force(k, u)
+                    failure = STALLED
+                    break
                 t = t + tau if released else t + span
                 continue
+        releasing = released
         released = False
-        a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
+        a, y0, stiffness, up, down, sliding, reaction = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
         y0[1] = v
+        if releasing:
+            y0[2] = 0.0  # the stick ended where the net force is exactly +-alpha: it leaves the band from there
         sliding = sliding or alpha > 0.0  # with friction on the mass, a reversal is an event (it may stick)
         if direction == 0.0:
             direction = _leaving_direction(a, y0)
@@ -342,11 +418,15 @@ def step(model, load, t, h, x, v, s, u, energy):
                 t = t + span
                 stalled = 0
                 continue
-            a, y0, stiffness, up, down, sliding = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
+            a, y0, stiffness, up, down, sliding, reaction = _phase(m, k0, c, k, eta, load, t, x, u, direction,
+                                                                  alpha)
             y0[1] = v
         tau_hit, hit = _first_event(a, y0, load, t, m, _damping(c), stiffness, span, direction, up, down,
                                     sliding)
-        y = _expm_times(a, tau_hit, y0)
+        if hit == EXHAUSTED:
+            failure = SEARCH_EXHAUSTED
+            break
+        y, gramian = _motion(a, tau_hit, y0, energy)
         moved, v = y[0], y[1]
         if hit == LEVEL_UP:
             moved = up  # x is exactly at the level
@@ -354,14 +434,85 @@ def step(model, load, t, h, x, v, s, u, energy):
             moved = -down
         elif hit == REVERSAL:
             v = 0.0  # exactly at rest: every branch sticks again
+        _book(energy, gramian, m, c, reaction, moved, k, eta, u, direction, alpha)
         x = x + moved
         _move_branches(k, eta, u, direction, hit, up, down, moved)
         t_next = t + tau_hit if hit != NO_EVENT else t + span
         stalled = stalled + 1 if t_next <= t else 0
-        if stalled > stall_limit or not (abs(x) < np.inf and abs(v) < np.inf):
-            return np.nan, np.nan, branch_force(k, u)  # reported by the driver: never a silent stop
+        if stalled > stall_limit:
+            failure = STALLED
+            break
+        if not (abs(x) < np.inf and abs(v) < np.inf):
+            failure = NOT_FINITE
+            break
         t = t_next
-    return x, v, branch_force(k, u)
+    if failure != TOOK_STEP:
+        _restore(u, saved_u)
+        _restore(energy, saved_energy)
+    return x, v, failure, t
+
+
+@kernel
+def _saved(values):
+    """A copy of an optional array (u, the energy account), to restore after a failed step."""
+    if values is None:
+        return None
+    return values.copy()
+
+
+@kernel
+def _restore(values, saved):
+    if values is None or saved is None:
+        return
+    values[:] = saved
+
+
+def failure_reason(model, load, t: float, h: float, x: float, v: float, u) -> str:
+    """Why the exact step from t (state x, v, u) cannot be taken, in words, or "" if it can: the step is
+    taken again on copies (bounded work: every loop of the step has its budget)."""
+    u_copy = None if u is None else np.array(u, dtype=float)
+    x1, v1, failure, when = attempt(model, load, float(t), float(h), float(x), float(v), u_copy, None)
+    return explain(int(failure), float(when))
+
+
+def explain(failure: int, when: float) -> str:
+    """The line that says which bound of the step ran out (``failure``, from :func:`attempt`) at time ``when``."""
+    return {TOOK_STEP: "",
+            TOO_MANY_PHASES: f"more than {PHASE_BUDGET} events in one step, at t = {when!r} s (a step of 'exact' "
+                             "takes at most that many: output more often, or use another stepper)",
+            STALLED: f"more than 16 + 2 n events at one instant t = {when!r} s (events that do not advance time)",
+            SEARCH_EXHAUSTED: f"an event search took more than {WALK_BUDGET} intervals at t = {when!r} s",
+            NOT_FINITE: f"the state became non-finite at t = {when!r} s"}.get(failure, f"failure {failure}")
+
+
+@kernel
+def _motion(a, tau, y0, energy):
+    """y(tau) = expm(A tau) y0 and, when an energy account is kept, the Gramian int_0^tau y y^T (else a
+    1 x 1 placeholder). y is the same to the bit either way."""
+    if energy is None:
+        return _expm_times(a, tau, y0), np.zeros((1, 1))
+    return _expm_gramian(a, tau, y0)
+
+
+@kernel
+def _book(energy, gramian, m, c, reaction, moved, k, eta, u, direction, alpha):
+    """Book a phase exactly. With F = m y2 + R (R the phase's reaction with the friction, y2 = (F - R) / m),
+    the load's work is int F v = R dx + m int y2 v; the dashpot's c int v^2; a sliding branch (u_i =
+    direction eta_i: v keeps its sign in such a phase, a reversal is an event) k_i eta_i |dx|; the friction
+    alpha |dx|. The integrals of products are entries of the Gramian (``gramian[1, 2]``, ``gramian[1, 1]``).
+    ``u``: the elongations at the phase's start."""
+    if energy is None:
+        return
+    energy[0] += reaction * moved + m * gramian[1, 2]
+    strength = 0.0
+    if k is not None:
+        for i in range(k.shape[0]):
+            if direction != 0.0 and u[i] == direction * eta[i]:
+                strength += k[i] * eta[i]
+    energy[1] += strength * abs(moved)
+    if c is not None:
+        energy[2] += c * max(gramian[1, 1], 0.0)
+    energy[3] += alpha * abs(moved)
 
 
 @kernel
@@ -413,7 +564,8 @@ def _stick_end(load, t, span, push, alpha):
 
 @kernel
 def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sliding):
-    """(tau, which) of the first event of the phase in (0, span], or (span, NO_EVENT).
+    """(tau, which) of the first event of the phase in (0, span], or (span, NO_EVENT); (span, EXHAUSTED) when
+    the search ran out of its budget (:data:`WALK_BUDGET`).
 
     x is monotone between zeros of v: the search walks from one zero of v to
     the next (:func:`_next_zero`) and checks the levels on each monotone
@@ -429,7 +581,7 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         sign = math.copysign(1.0, y0[1])
     if sign == 0.0:
         sign = math.copysign(1.0, _row_times(a, y0, 1))  # at rest: v leaves zero with the acceleration
-    while True:
+    for _ in range(WALK_BUDGET):  # from one zero of v to the next
         y_lo = _expm_times(a, lo, y0)
         if not sliding and _cannot_reach(y_lo, load, t + lo, m, c, stiffness, up, down):
             return span, NO_EVENT
@@ -441,6 +593,8 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
             zero, crossed = _walk_validated(a, y0, lo, span, sign, level, rho, weights, norm)
             if crossed:
                 return zero, reached
+            if math.isnan(zero):
+                return span, EXHAUSTED
         final = zero < 0.0
         z = span if final else zero
         if sign * (_expm_times(a, z, y0)[0] - level) >= 0.0:  # x is monotone on [lo, z]
@@ -450,6 +604,7 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         if sliding:
             return z, REVERSAL
         lo, sign, at_zero = z, -sign, True
+    return span, EXHAUSTED  # more than WALK_BUDGET zeros of v in one phase
 
 
 @kernel
@@ -530,7 +685,8 @@ def _next_zero_free(a, y0, m, c, stiffness, lo, hi, sign, at_zero):
 def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
     """The next zero of v in (lo, hi] by validated subdivision (see the module docstring), stopping early
     where x reaches ``level``: returns (tau, crossed), tau = -1 when v keeps its sign up to hi and x does
-    not reach the level (checked at every point the walk passes: x is monotone in between).
+    not reach the level (checked at every point the walk passes: x is monotone in between), tau = NaN when
+    the walk took :data:`WALK_BUDGET` intervals without reaching hi.
     """
     a2 = _matmul(a, a)
     bound1 = 0.0  # |row 1 of A| and |row 1 of A^2| in the weighted norm
@@ -538,30 +694,40 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
     for j in range(6):
         bound1 += abs(a[1, j]) / weights[j]
         bound2 += abs(a2[1, j]) / weights[j]
+    bound0 = 1.0 / weights[1]  # |v| <= bound0 |y|
     longest = 1.0 / max(norm, 1e-300)
     start = lo
     previous = lo
     length = min(hi - lo, longest)
     if not np.any(_matvec(a, _expm_times(a, lo, y0))):
         return -1.0, False  # a fixed point: nothing moves until the phase ends
-    while lo < hi:
+    for _ in range(WALK_BUDGET):
+        if not lo < hi:
+            break
         y = _expm_times(a, lo, y0)
         if lo > start and sign * (y[0] - level) >= 0.0:
             return _refine(a, y0, previous, lo, 0, level, -sign), True
         b = min(hi, lo + length)
         length = b - lo
+        # v^(p)(lo + s) = row 1 of A^p e^(A s) y = row 1 of A^(p-1) e^(A s) (A y): bounded through |y| or through
+        # |A y|, whichever is smaller (|A y| is small where the state barely moves, e.g. near a rest)
         size = 0.0
+        rate = 0.0
+        ay = _matvec(a, y)
         for j in range(6):
             size = max(size, abs(y[j]) * weights[j])
-        growth = math.exp(norm * length) * size
+            rate = max(rate, abs(ay[j]) * weights[j])
+        spread = math.exp(norm * length)
+        first = spread * min(bound1 * size, bound0 * rate)  # bounds |v'| on [lo, b]
+        second = spread * min(bound2 * size, bound1 * rate)  # bounds |v''|
         v = y[1]
-        acc = _row_times(a, y, 1)
-        if sign * v > 0.0 and abs(v) > length * bound1 * growth:
+        acc = ay[1]
+        if sign * v > 0.0 and abs(v) > length * first:
             previous, lo = lo, b  # no zero in [lo, b]
             length = min(2.0 * length, longest)
             continue
         rounding = 8.0 * _EPS * (abs(lo) + 1.0 / rho)
-        if (abs(acc) > length * bound2 * growth and (lo > start or sign * acc > 0.0 or v != 0.0)) \
+        if (abs(acc) > length * second and (lo > start or sign * acc > 0.0 or v != 0.0)) \
                 or length <= rounding:
             # v monotone on [lo, b] (or [lo, b] at the rounding level): a zero iff v leaves its sign at b
             if _leaves(a, y0, b, sign):
@@ -572,6 +738,8 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
             length = min(2.0 * length, longest)
             continue
         length *= 0.5
+    if lo < hi:
+        return np.nan, False  # the walk's budget ran out: the step fails (see step)
     if lo > start and sign * (_expm_times(a, lo, y0)[0] - level) >= 0.0:
         return _refine(a, y0, previous, lo, 0, level, -sign), True
     return -1.0, False
@@ -590,7 +758,8 @@ def _cannot_reach(y, load, t, m, c, stiffness, up, down):
     if stiffness <= 0.0 or (kind == TABLE and y[3] != 0.0):
         return False
     omega0_sq = stiffness / m
-    centre = y[4] / omega0_sq  # the constant part of the load over K (relative to the phase's start)
+    # the constant part of the load over K (relative to the phase's start): y4 for a harmonic load, else y2
+    centre = (y[4] if kind == HARMONIC else y[2]) / omega0_sq
     amplitude = 0.0
     p0 = 0.0
     p1 = 0.0
@@ -599,7 +768,7 @@ def _cannot_reach(y, load, t, m, c, stiffness, up, down):
         denominator = complex(omega0_sq - omega * omega, c / m * omega)
         if denominator == 0.0:
             return False  # resonance: the response grows without bound
-        forcing = complex(y[2], y[3])  # (amplitude / m) exp(i omega t)
+        forcing = complex(y[2] - y[4], y[3])  # (amplitude / m) exp(i omega t)
         response = forcing / denominator
         p0 = response.real
         p1 = (1j * omega * response).real
@@ -615,14 +784,19 @@ def _cannot_reach(y, load, t, m, c, stiffness, up, down):
 def _refine(a, y0, lo, hi, component, level, sign):
     """The tau in (lo, hi] where sign * (y[component] - level) stops being > 0, to rounding (Illinois).
 
-    sign * (y[component](lo) - level) > 0 (or = 0 at the start of a search) and <= 0 at hi.
+    sign * (y[component](lo) - level) > 0 (or = 0 at the start of a search) and <= 0 at hi. Bounded:
+    Illinois for :data:`ILLINOIS_LIMIT` iterations, then bisection, which halves (hi - lo) and so reaches
+    4 eps hi (or two adjacent doubles) within REFINE_LIMIT iterations from any bracket of doubles; hi always
+    keeps the sign change.
     """
     g_lo = sign * (_expm_times(a, lo, y0)[component] - level)
     g_hi = sign * (_expm_times(a, hi, y0)[component] - level)
     side = 0
-    while hi - lo > 4.0 * _EPS * hi:
+    for iteration in range(REFINE_LIMIT):
+        if not hi - lo > 4.0 * _EPS * hi:
+            break
         mid = 0.5 * (lo + hi)
-        if g_hi != g_lo:
+        if g_hi != g_lo and iteration < ILLINOIS_LIMIT:
             mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
         if not (lo < mid < hi):
             mid = 0.5 * (lo + hi)

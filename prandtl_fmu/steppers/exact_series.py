@@ -49,7 +49,7 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, force_at
-from .exact import _EPS, _damping, _expm_times, _linear_spring, _next_break, _threshold, unbooked
+from .exact import _EPS, _damping, _expm_times, _linear_spring, _next_break, _threshold
 
 XI, V, LOAD_VARYING, LOAD_RATE, LOAD_CONSTANT, FRICTION, BRANCH0 = 0, 1, 2, 3, 4, 5, 6
 # what an event does: a sticking branch slips (up, down), a slipping one sticks, the mass stops, it is released
@@ -306,7 +306,6 @@ def _slipping(k, eta, rate, m, c, k0, load, t, x, v, u, direction, alpha, stuck)
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta, cs, friction = model
-    unbooked(energy)
     alpha = _threshold(friction)
     n = k.shape[0]
     rate = k / cs
