@@ -38,7 +38,8 @@ reports as a failed step: never a silent stop.
 
 The cost of a phase is a few dozen (6 + n)-square matrix exponentials per interval of the walk, whose length
 is at most 1 / |A| (no energy bound for long quiet stretches here, unlike the 6 x 6 case): O(n^3) per
-exponential, meant for the few branches a series model has. No energy account (as ``exact``: NaN).
+exponential, meant for the few branches a series model has. The energy account is booked exactly, phase by
+phase, from the Gramian int y y^T of the phase (:func:`_book`).
 """
 import math
 
@@ -49,11 +50,14 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, force_at
-from .exact import _EPS, _damping, _expm_times, _linear_spring, _next_break, _threshold
+from .exact import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, PHASE_BUDGET, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
+                    TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, _damping, _expm_times, _linear_spring, _motion,
+                    _next_break, _restore, _saved, _threshold, explain)
 
 XI, V, LOAD_VARYING, LOAD_RATE, LOAD_CONSTANT, FRICTION, BRANCH0 = 0, 1, 2, 3, 4, 5, 6
 # what an event does: a sticking branch slips (up, down), a slipping one sticks, the mass stops, it is released
 UP, DOWN, STOPS, REVERSAL, RELEASE = 0, 1, 2, 3, 4
+EXHAUSTED = -2  # an event search over its budget
 
 
 @kernel
@@ -170,7 +174,8 @@ def _excess(ell, j, y, level):
 @kernel
 def _first_event(a, y0, ell, level, t, span, rho):
     """(tau, j): the first sign change of ``ell[j] . y - level[j]`` (beyond rounding: :func:`_excess`) in
-    (0, span], or (span, -1). ``t``: the phase's start (the rounding level of tau), ``rho`` its rate (1/s)."""
+    (0, span], or (span, -1); (span, EXHAUSTED) after WALK_BUDGET intervals. ``t``: the phase's start (the
+    rounding level of tau), ``rho`` its rate (1/s)."""
     count, size = ell.shape
     if count == 0:
         return span, -1
@@ -198,31 +203,48 @@ def _first_event(a, y0, ell, level, t, span, rho):
             bound1[j] += abs(slope[j, i]) / weights[i]
             bound2[j] += abs(curve[j, i]) / weights[i]
             bound3[j] += abs(third[j, i]) / weights[i]
+    bound0 = np.zeros(count)  # |l_j| in the weighted norm: g_j^(p) = l_j A^(p-1) e^(A s) (A y) also bounds
+    for j in range(count):
+        for i in range(size):
+            bound0[j] += abs(ell[j, i]) / weights[i]
     longest = 1.0 / max(norm, 1e-300)
     lo = 0.0
     length = min(span, longest)
-    while lo < span:
+    if not np.any(_matvec(a, y0)):
+        return span, -1  # a fixed point (A y0 = 0): every g_j is constant, nothing happens in the phase
+    for _ in range(WALK_BUDGET):
+        if not lo < span:
+            break
         y = _expm_times(a, lo, y0)
         b = min(span, lo + length)
         length = b - lo
+        ay = _matvec(a, y)
         size_y = 0.0
+        rate_y = 0.0
         for i in range(size):
             size_y = max(size_y, abs(y[i]) * weights[i])
-        growth = math.exp(norm * length) * size_y
+            rate_y = max(rate_y, abs(ay[i]) * weights[i])
+        spread = math.exp(norm * length)
         rounding = 8.0 * _EPS * (abs(t) + lo + 1.0 / rho)
         decided = True
         for j in range(count):
+            # bounds of the first three derivatives of g_j on [lo, b], through |y| or |A y|, whichever is smaller
+            # (|A y| vanishes where the state barely moves: a net force tending to the threshold as branches relax)
+            first = spread * min(bound1[j] * size_y, bound0[j] * rate_y)
+            second = spread * min(bound2[j] * size_y, bound1[j] * rate_y)
+            third = spread * min(bound3[j] * size_y, bound2[j] * rate_y)
             g = _value(ell, j, y) - level[j]
-            if g < -length * bound1[j] * growth:
+            if g < -length * first:
                 continue  # no zero of g_j on [lo, b]
-            d1 = _value(slope, j, y)
-            if abs(d1) > length * bound2[j] * growth or length <= rounding:
+            d1 = _beyond_rounding(slope, j, y)
+            if abs(d1) > length * second or length <= rounding:
                 continue  # g_j monotone on [lo, b] (or the interval is at rounding): its sign at b decides
             d2 = _value(curve, j, y)
-            if abs(d2) > length * bound3[j] * growth and ((d2 < 0.0 and g <= 0.0 and d1 <= 0.0) or d2 * d1 >= 0.0):
+            if abs(d2) > length * third and ((d2 < 0.0 and g <= 0.0 and d1 <= 0.0) or d2 * d1 >= 0.0):
                 # the curvature keeps its sign on [lo, b]: concave from g <= 0 going down, g stays <= 0 (a
                 # functional that starts on its level and leaves it inwards: a branch that has just stuck on its
-                # threshold); a slope that grows away from 0 keeps its sign (monotone: the sign at b decides)
+                # threshold, the mass released at net force +-alpha); a slope that grows away from 0 keeps its
+                # sign (monotone: the sign at b decides)
                 continue
             decided = False
             break
@@ -240,7 +262,35 @@ def _first_event(a, y0, ell, level, t, span, rho):
             return best, which
         lo = b
         length = min(2.0 * length, longest)
+    if lo < span:
+        return span, EXHAUSTED  # the walk's budget ran out: the step fails
     return span, -1
+
+
+@kernel
+def _matvec(a, y):
+    out = np.zeros(a.shape[0])
+    for i in range(a.shape[0]):
+        total = 0.0
+        for j in range(a.shape[1]):
+            total += a[i, j] * y[j]
+        out[i] = total
+    return out
+
+
+@kernel
+def _beyond_rounding(rows, j, y):
+    """rows[j] . y, or 0 when it is within the rounding of its terms (8 ulps): the slope of a functional at
+    a release from a stick (net force +-alpha to rounding) is 0, not the noise of its sum."""
+    total = 0.0
+    size = 0.0
+    for i in range(y.shape[0]):
+        term = rows[j, i] * y[i]
+        total += term
+        size += abs(term)
+    if abs(total) <= 8.0 * _EPS * size:
+        return 0.0
+    return total
 
 
 @kernel
@@ -261,9 +311,11 @@ def _refine(a, y0, ell, j, level, lo, hi):
     g_lo = _excess(ell, j, _expm_times(a, lo, y0), level)
     g_hi = _excess(ell, j, _expm_times(a, hi, y0), level)
     side = 0
-    while hi - lo > 4.0 * _EPS * hi:
+    for iteration in range(REFINE_LIMIT):  # Illinois, then bisection: bounded (see exact._refine)
+        if not hi - lo > 4.0 * _EPS * hi:
+            break
         mid = 0.5 * (lo + hi)
-        if g_hi != g_lo:
+        if g_hi != g_lo and iteration < ILLINOIS_LIMIT:
             mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
         if not (lo < mid < hi):
             mid = 0.5 * (lo + hi)
@@ -296,7 +348,12 @@ def _slipping(k, eta, rate, m, c, k0, load, t, x, v, u, direction, alpha, stuck)
     for i in range(n):
         if abs(u[i]) < eta[i]:
             continue
+        # on its threshold; u = 0 only for eta = 0, whose side is where the flow goes: v, else v'
         sign = 1.0 if u[i] > 0.0 else -1.0
+        if u[i] == 0.0:
+            if v == 0.0 and acceleration == 0.0:
+                continue  # no flow: it sticks (and carries nothing, u = 0)
+            sign = math.copysign(1.0, v if v != 0.0 else acceleration)
         inflow = sign * (v - rate[i] * u[i])
         if inflow > 0.0 or (inflow == 0.0 and sign * acceleration > 0.0):
             out[i] = 1 if sign > 0.0 else -1
@@ -305,7 +362,21 @@ def _slipping(k, eta, rate, m, c, k0, load, t, x, v, u, direction, alpha, stuck)
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
+    """One exact step from t to t + h (:func:`attempt`); a failed step returns a non-finite x with u and the
+    energy account as they were."""
+    x1, v1, failure, when = attempt(model, load, t, h, x, v, u, energy)
+    if failure != TOOK_STEP:
+        return np.nan, np.nan, branch_force(model[4], u)  # reported by the driver: never a silent stop
+    return x1, v1, branch_force(model[4], u)
+
+
+@kernel
+def attempt(model, load, t, h, x, v, u, energy):
+    """The exact motion from t to t + h: (x, v, failure, when), as ``exact.attempt`` (the same budgets and
+    failures; at most 16 + 4 n phases in a row that do not advance t)."""
     m, k0, k3, c, k, eta, cs, friction = model
+    saved_u = _saved(u)
+    saved_energy = _saved(energy)
     alpha = _threshold(friction)
     n = k.shape[0]
     rate = k / cs
@@ -313,7 +384,13 @@ def step(model, load, t, h, x, v, s, u, energy):
     stalled = 0
     stall_limit = 16 + 4 * n
     released = False  # a stick just ended with the net force at the threshold: slide now
+    failure = TOOK_STEP
+    phases = 0
     while t < end:  # phases; each ends at an event, a load kink or t + h
+        phases += 1
+        if phases > PHASE_BUDGET:
+            failure = TOO_MANY_PHASES
+            break
         span = min(end, _next_break(load, t)) - t
         stuck = False
         direction = 0.0
@@ -336,7 +413,11 @@ def step(model, load, t, h, x, v, s, u, energy):
             relaxation += rate[i]
         rho = math.sqrt(stiffness / m) + _damping(c) / m + abs(load[3]) + relaxation  # > 0: every k_i > 0
         tau, fired = _first_event(a, y0, ell, level, t, span, rho)
-        y = _expm_times(a, tau, y0)
+        if fired == EXHAUSTED:
+            failure = SEARCH_EXHAUSTED
+            break
+        y, gramian = _motion(a, tau, y0, energy)
+        _book(energy, gramian, y, y0, tau, m, c, k, eta, rate, _linear_spring(k0) * x, stuck, slipping, alpha)
         x = x + y[XI]
         v = y[V]
         for i in range(n):
@@ -355,10 +436,48 @@ def step(model, load, t, h, x, v, s, u, energy):
                     released = True
         t_next = t + tau if fired >= 0 else t + span
         stalled = stalled + 1 if t_next <= t else 0
-        if stalled > stall_limit or not (abs(x) < np.inf and abs(v) < np.inf):
-            return np.nan, np.nan, branch_force(k, u)  # reported by the driver: never a silent stop
+        if stalled > stall_limit:
+            failure = STALLED
+            break
+        if not (abs(x) < np.inf and abs(v) < np.inf):
+            failure = NOT_FINITE
+            break
         t = t_next
-    return x, v, branch_force(k, u)
+    if failure != TOOK_STEP:
+        _restore(u, saved_u)
+        _restore(energy, saved_energy)
+    return x, v, failure, t
+
+
+def failure_reason(model, load, t: float, h: float, x: float, v: float, u) -> str:
+    """Why the exact step from t cannot be taken, in words, or "" (``exact.failure_reason`` for this module)."""
+    u_copy = np.array(u, dtype=float)
+    x1, v1, failure, when = attempt(model, load, float(t), float(h), float(x), float(v), u_copy, None)
+    return explain(int(failure), float(when))
+
+
+@kernel
+def _book(energy, gramian, y, y0, tau, m, c, k, eta, rate, spring, stuck, slipping, alpha):
+    """Book a phase exactly. F = m (y2 + y4) + k0 x_e (x_e the phase's start; y4 constant), so the load's work
+    is k0 x_e dx + m (int y2 v + y4 dx); the dashpot's c int v^2; a sticking branch's series dashpot
+    (k_i u_i)^2 / c_i = k_i lambda_i u_i^2, integrated; a slipping one (u_i = s eta_i fixed): its dashpot
+    k_i lambda_i eta_i^2 tau, its slider k_i eta_i (s dx - lambda_i eta_i tau) (the inflow, >= 0); the
+    friction alpha |dx| (v keeps its sign: a reversal is an event). Integrals from the Gramian int y y^T."""
+    if energy is None:
+        return
+    moved = y[XI]
+    if not stuck:
+        energy[0] += spring * moved + m * (gramian[V, LOAD_VARYING] + y0[LOAD_CONSTANT] * moved)
+        if c is not None:
+            energy[2] += c * max(gramian[V, V], 0.0)
+        energy[3] += alpha * abs(moved)
+    for i in range(k.shape[0]):
+        if slipping[i]:
+            sign = float(slipping[i])
+            energy[1] += k[i] * eta[i] * max(sign * moved - rate[i] * eta[i] * tau, 0.0)
+            energy[2] += k[i] * rate[i] * eta[i] * eta[i] * tau
+        else:
+            energy[2] += k[i] * rate[i] * max(gramian[BRANCH0 + i, BRANCH0 + i], 0.0)
 
 
 _loop = time_loop(step)
