@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from pythonfmu import Fmi2Slave
+from pythonfmu import Boolean, Fmi2Slave, Integer, Real, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
@@ -50,7 +50,100 @@ class SlaveBase(Fmi2Slave):
         self.n = 0 if branches is None else -1 if branches.continuum else branches.n
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        if not finite_number(start_time):
+            self._fail(f"fmi2SetupExperiment refused: start time {start_time!r} must be finite")
         self.start_time = float(start_time)
+
+    def _communication_problem(self, current_time, step_size):
+        """Why a doStep from ``current_time`` by ``step_size`` is refused (fmi2Error: illegal arguments, FMI 2.0
+        2.1.3), or None. The FMU's own loader refuses these before the slave sees them; PythonFMU's does not."""
+        if not finite_number(current_time):
+            return f"fmi2DoStep refused: communication point {current_time!r} must be finite"
+        if not (finite_number(step_size) and step_size >= 0 and math.isfinite(current_time + step_size)):
+            return f"fmi2DoStep refused: communication step {step_size!r} must be finite and >= 0 (from t = {current_time!r})"
+        return None
+
+    # ------------------------------------------------------------ getters and setters
+    #
+    # PythonFMU's own raise a bare exception for an unknown value reference or a wrong type (the stock loader then
+    # freed the instance's objects: no ``_fail``), set the variables before the bad one, and hand out whatever a
+    # getter returns. These check every reference before anything changes, fail through ``_fail`` with the
+    # reason, and never hand out a non-finite Real with fmi2OK (an output that is not a number is refused).
+
+    def _variables(self, vrs, kind, function):
+        variables = []
+        for vr in vrs:
+            var = self.vars.get(vr)
+            if var is None:
+                self._fail(f"{function} refused: no variable has value reference {vr}")
+            if not isinstance(var, kind):
+                self._fail(f"{function} refused: {var.name} (value reference {vr}) is not a {kind.__name__}")
+            variables.append(var)
+        return variables
+
+    def _read(self, var, function):
+        try:
+            return var.getter()
+        except Refused:
+            raise
+        except Exception as exc:  # e.g. the library's ElementError: a reason, never a bare exception
+            self._fail(f"{function} refused: {var.name} cannot be read ({exc.__class__.__name__}: {exc})")
+
+    def _write(self, var, value, function):
+        if var.setter is None:
+            self._fail(f"{function} refused: {var.name} cannot be set (its causality is "
+                       f"{getattr(var.causality, 'name', None)}, its variability {getattr(var.variability, 'name', None)})")
+        try:
+            var.setter(value)
+        except Refused:
+            raise
+        except Exception as exc:
+            self._fail(f"{function} refused: {var.name} = {value!r} ({exc.__class__.__name__}: {exc})")
+
+    def get_real(self, vrs):
+        values = []
+        for var in self._variables(vrs, Real, "fmi2GetReal"):
+            value = self._read(var, "fmi2GetReal")
+            try:
+                value = float(value)
+            except (TypeError, ValueError, OverflowError):
+                value = math.nan
+            if not math.isfinite(value):
+                self._fail(f"fmi2GetReal refused: {var.name} = {value!r} is not a finite number (no value is handed "
+                           "out as valid that is not one)")
+            values.append(value)
+        return values
+
+    def get_integer(self, vrs):
+        return [int(self._read(var, "fmi2GetInteger")) for var in self._variables(vrs, Integer, "fmi2GetInteger")]
+
+    def get_boolean(self, vrs):
+        return [bool(self._read(var, "fmi2GetBoolean")) for var in self._variables(vrs, Boolean, "fmi2GetBoolean")]
+
+    def get_string(self, vrs):
+        return [str(self._read(var, "fmi2GetString")) for var in self._variables(vrs, String, "fmi2GetString")]
+
+    def _set(self, vrs, values, kind, function):
+        variables = self._variables(vrs, kind, function)
+        values = list(values)
+        if len(values) != len(variables):
+            self._fail(f"{function} refused: {len(variables)} value references, {len(values)} values")
+        for var, value in zip(variables, values):
+            self._write(var, value, function)
+
+    def set_real(self, vrs, values):
+        self._set(vrs, values, Real, "fmi2SetReal")
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, Integer, "fmi2SetInteger")
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, Boolean, "fmi2SetBoolean")
+
+    def set_string(self, vrs, values):
+        if not all(isinstance(value, str) for value in values):  # PythonFMU's loader hands None for NULL
+            self._fail("fmi2SetString refused: a value is not a string (NULL)")
+        self._set(vrs, values, String, "fmi2SetString")
 
     def _fail(self, message):
         """Log ``message`` and fail the current call (fmi2Error; fmi2Fatal under PythonFMU's stock loader, see

@@ -24,12 +24,12 @@ Refusals: a non-finite input at ``doStep`` is logged and the step returns
 fmi2Discard with the state unchanged; a bad parameter or input at
 ``fmi2ExitInitializationMode`` fails that call with the logged reason.
 """
-import math
 
 from pythonfmu import Fmi2Causality, Fmi2Variability, Integer
 
 from .. import __version__
 from ..connector import Connector
+from ..driver import ElementError
 from ..scene import coefficient_problem
 from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
@@ -122,8 +122,9 @@ class PrandtlConnector(SlaveBase):
         """The connector moved to the inputs set last, without committing (cached per input)."""
         key = (self.x, self.v, self.connector._memo("revision", object))  # a new object per state
         if key != self._preview_key:
-            if not (finite_number(self.x) and finite_number(self.v)):
-                return _NotFinite()
+            if not (finite_number(self.x) and finite_number(self.v)):  # no output is handed out for it
+                self._fail(f"input x = {self.x!r}, v = {self.v!r}: the outputs at a motion that is not finite are "
+                           "not numbers (a doStep would be refused)")
             preview = self.connector.copy()
             preview.move_to(self.x, self.v)
             self._preview_key, self._preview = key, preview
@@ -139,7 +140,11 @@ class PrandtlConnector(SlaveBase):
             self._fail(f"initialization refused: {problem}")
         self.connector.reset()
         self.connector.time = self.start_time
-        self.connector.move_to(self.x, self.v)  # from x = 0 to the first input, monotonically
+        try:
+            self.connector.move_to(self.x, self.v)  # from x = 0 to the first input, monotonically
+        except (ElementError, ValueError) as exc:
+            self.connector.reset()
+            self._fail(f"initialization refused: {exc}")
 
     def _hand_over_parameters(self):
         """None, or why a parameter set by the master is refused (nothing changed then)."""
@@ -154,17 +159,21 @@ class PrandtlConnector(SlaveBase):
         return None
 
     def do_step(self, current_time, step_size):
+        problem = self._communication_problem(current_time, step_size)
+        if problem:
+            self._fail(f"{problem}; the instance is unchanged")
         problem = self._hand_over_parameters()
         if problem is not None:
             return self._refuse(f"{problem}; steps are refused until it is set right")
         if not (finite_number(self.x) and finite_number(self.v)):
             return self._refuse(f"input x = {self.x!r}, v = {self.v!r} refused: the motion must be finite; "
                                 "step not taken")
-        if not (math.isfinite(step_size) and step_size >= 0):
-            return self._refuse(f"communication step {step_size!r} refused: it must be finite and >= 0")
         connector = self.connector
         # the input sample belongs to current_time: commit it (the master's clock may only move forward)
-        connector.move_to(self.x, self.v, max(float(current_time), connector.time))
+        try:
+            connector.move_to(self.x, self.v, max(float(current_time), connector.time))
+        except ElementError as exc:  # an output would overflow: fmi2Discard, the connector unchanged
+            return self._refuse(f"step from t = {current_time!r} refused: {exc}")
         self._preview_key = None
         return True
 
@@ -192,23 +201,9 @@ class PrandtlConnector(SlaveBase):
                 if problem:
                     raise ValueError(f"parameter {name}: {problem}")
             self.connector.set_state(state["connector"])  # checks everything before changing anything
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        except Exception as exc:  # any malformed or forged content (IndexError, OverflowError, ...): a reason
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.x, self.v, self.start_time = values
         self.parameters = parameters
         self._preview_key = None
 
-
-class _NotFinite:
-    """What the outputs show for a non-finite input (before doStep refuses it): NaN, never an exception."""
-
-    force = math.nan
-
-    def stiffness(self):
-        return math.nan
-
-    def stored_energy(self):
-        return math.nan
-
-    def energy(self):
-        return {"dissipated_sliders": math.nan}

@@ -220,21 +220,26 @@ class PrandtlElement(SlaveBase):
         return settings_problem(self.parameters, self.stepper, self.step, self.scene_load)
 
     def do_step(self, current_time, step_size):
+        problem = self._communication_problem(current_time, step_size)
+        if problem:
+            self._fail(f"{problem}; the instance is unchanged")
         if not self._apply_settings():
             return False
         force = self.F
         if not finite_number(force):
             return self._refuse(f"F = {force!r} refused: the force must be finite; step not taken")
-        if not (math.isfinite(step_size) and step_size >= 0):
-            return self._refuse(f"communication step {step_size!r} refused: it must be finite and >= 0")
         element = self.element
         saved = element.checkpoint()
-        element.time = current_time
         try:
+            element.time = current_time
             element.advance(step_size, force, scene_load=bool(self.scene_load))
-        except Exception as exc:  # never fatal for the host: refuse the step (ElementError: already rolled back)
+        except ElementError as exc:  # the step cannot be taken (budget, a non-finite result): fmi2Discard
             element.rollback(saved)
             return self._refuse(f"step from t = {current_time!r} with F = {force!r} refused: {exc}")
+        except Exception as exc:  # a bad input the checks above missed: fmi2Error, the element as it was
+            element.rollback(saved)
+            self._fail(f"step from t = {current_time!r} with F = {force!r} refused ({exc.__class__.__name__}: "
+                       f"{exc}); the instance is unchanged")
         if not (math.isfinite(element.x) and math.isfinite(element.v) and math.isfinite(element.reaction)):
             element.rollback(saved)
             return self._refuse(
@@ -311,7 +316,7 @@ class PrandtlElement(SlaveBase):
             if problem:
                 raise ValueError(problem)
             self.element.set_state(state["element"])  # checks everything before changing anything
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        except Exception as exc:  # any malformed or forged content (IndexError, OverflowError, ...): a reason
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.F, self.step, self.stepper, self.start_time = values
         self.scene_load = settings["scene_load"]

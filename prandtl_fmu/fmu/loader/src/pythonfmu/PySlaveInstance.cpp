@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cstring>
 #include <functional>
 #include <mutex>
 #include <regex>
@@ -280,8 +281,12 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[doStep] PyObject_CallMethod", gilState);
             }
-            status = static_cast<bool>(PyObject_IsTrue(f));
+            const int accepted = PyObject_IsTrue(f);
             Py_DECREF(f);
+            if (accepted < 0) { // prandtl_fmu: the stock loader took an exception for "accepted"
+                handle_py_exception("[doStep] PyObject_IsTrue", gilState);
+            }
+            status = accepted != 0;
             clearLogBuffer();
         });
 
@@ -313,7 +318,7 @@ public:
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
                 PyList_SetItem(refs, i, Py_BuildValue("d", values[i]));
             }
 
@@ -334,7 +339,7 @@ public:
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
                 PyList_SetItem(refs, i, Py_BuildValue("i", values[i]));
             }
 
@@ -355,7 +360,7 @@ public:
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
                 PyList_SetItem(refs, i, PyBool_FromLong(values[i]));
             }
 
@@ -376,8 +381,15 @@ public:
             PyObject* vrs = PyList_New(nvr);
             PyObject* refs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
-                PyList_SetItem(refs, i, Py_BuildValue("s", values[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
+                // prandtl_fmu: a string that is not UTF-8 fails the call (the stock loader put NULL in the list)
+                PyObject* text = PyUnicode_DecodeUTF8(values[i], static_cast<Py_ssize_t>(std::strlen(values[i])), "strict");
+                if (text == nullptr) {
+                    Py_DECREF(vrs);
+                    Py_DECREF(refs);
+                    handle_py_exception("[setString] value " + std::to_string(i) + " is not UTF-8", gilState);
+                }
+                PyList_SetItem(refs, i, text);
             }
 
             auto f = PyObject_CallMethod(pInstance_, "set_string", "(OO)", vrs, refs);
@@ -396,7 +408,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
             }
 
             auto refs = PyObject_CallMethod(pInstance_, "get_real", "O", vrs);
@@ -421,7 +433,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_integer", "O", vrs);
             Py_DECREF(vrs);
@@ -445,7 +457,7 @@ public:
         py_safe_run([this, &vr, nvr, &values](PyGILState_STATE gilState) {
             PyObject* vrs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_boolean", "O", vrs);
             Py_DECREF(vrs);
@@ -470,7 +482,7 @@ public:
             clearStrBuffer();
             PyObject* vrs = PyList_New(nvr);
             for (std::size_t i = 0; i < nvr; i++) {
-                PyList_SetItem(vrs, i, Py_BuildValue("i", vr[i]));
+                PyList_SetItem(vrs, i, PyLong_FromUnsignedLong(vr[i]));
             }
             auto refs = PyObject_CallMethod(pInstance_, "get_string", "O", vrs);
             Py_DECREF(vrs);
@@ -538,7 +550,12 @@ public:
             if (pyStateBytes == nullptr) {
                 handle_py_exception("[SerializedFMUstateSize] PyObject_CallMethod", gilState);
             }
-            size = PyBytes_Size(pyStateBytes);
+            if (!PyBytes_Check(pyStateBytes)) { // prandtl_fmu: the stock loader answered (size_t)-1
+                Py_DECREF(pyStateBytes);
+                PyErr_SetString(PyExc_TypeError, "_fmu_state_to_bytes did not return bytes");
+                handle_py_exception("[SerializedFMUstateSize] PyBytes_Size", gilState);
+            }
+            size = static_cast<size_t>(PyBytes_Size(pyStateBytes));
             Py_DECREF(pyStateBytes);
             clearLogBuffer();
         });
@@ -573,7 +590,11 @@ public:
     void DeSerializeFMUstate(const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) override
     {
         py_safe_run([this, &bytes, size, &state](PyGILState_STATE gilState) {
-            PyObject* pyStateBytes = PyBytes_FromStringAndSize(bytes, size);
+            if (size > static_cast<size_t>(PY_SSIZE_T_MAX)) {
+                PyErr_SetString(PyExc_OverflowError, "the serialized state's size is larger than any state");
+                handle_py_exception("[DeSerializeFMUstate] size", gilState);
+            }
+            PyObject* pyStateBytes = PyBytes_FromStringAndSize(bytes, static_cast<Py_ssize_t>(size));
             if (pyStateBytes == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
             }
@@ -582,6 +603,8 @@ public:
             if (pyState == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
             }
+            // prandtl_fmu: a state passed in (one returned earlier) is released, as by GetFMUstate
+            Py_XDECREF(reinterpret_cast<PyObject*>(state));
             state = reinterpret_cast<fmi2FMUstate*>(pyState);
             clearLogBuffer();
         });
