@@ -37,7 +37,7 @@ HOSTILE_SCENES = {
     "stability overflow": (base_tables(mass={"m": 1.0}, damper={"c": 2.0}, spring={"k0": 1.0000000001}, cubic=None,
                                        branches=None, solver={"stepper": "projected", "step": 3.0,
                                                               "stop_time": 3000.0, "output_interval": 3.0}), None, None),
-    "m = 1e308": (base_tables(mass={"m": 1e308}), 0, None),
+    "m = 1e308": (base_tables(mass={"m": 1e308}), 2, "[mass] m: |1e+308| is outside [1e-50, 1e+50]"),
     "F = 1e307 implicit": (base_tables(load={"kind": "constant", "value": 1e307}, solver=SOLVER), None, None),
     "F = 1.7e308 implicit": (base_tables(load={"kind": "constant", "value": 1.7e308}, solver=SOLVER), None, None),
     "count = 10**12": (base_tables(branches={"count": 10**12, "k_total": 1.0, "eta_range": [0.1, 1.1]}), 2,

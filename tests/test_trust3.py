@@ -167,16 +167,3 @@ def test_sigterm_stops_a_run_of_costly_steps_at_once(tmp_path):
     assert time.monotonic() - sent < 3.0, "the signal waited for a long compiled call"
     assert run.returncode == 128 + signal.SIGTERM, err
     assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".prandtl-")]
-
-
-def test_the_output_does_not_depend_on_how_the_run_is_cut_into_calls(monkeypatch):
-    """The compiled calls are sized by a clock; the numbers must not be: a run cut into calls of one row each
-    gives the same bits as a run cut by the clock."""
-    from prandtl_fmu import driver
-
-    scene = make_scene(solver={"stepper": "projected", "step": 1e-3, "stop_time": 2.0, "output_interval": 0.01})
-    by_clock = simulate(scene, energy=True)
-    monkeypatch.setattr(driver, "_CHUNK_SECONDS", 0.0)
-    by_row = simulate(scene, energy=True)
-    assert np.array_equal(by_clock.x, by_row.x) and np.array_equal(by_clock.reaction, by_row.reaction)
-    assert all(np.array_equal(by_clock.energy[key], by_row.energy[key]) for key in by_clock.energy)
