@@ -87,3 +87,139 @@ def run_host(host: Path, fmu: Extracted, commands, logging: bool = False, env=No
             _, vr, value = line.split(" ")
             values.append((int(vr), float(value)))
     return done.returncode, calls, logs, values, done.stdout + done.stderr
+
+
+# ------------------------------------------------------------------ the trust host (issue 31)
+
+TRUST_SOURCE = HERE / "c_host" / "trust_host.c"
+FMI3_HEADERS = HERE.parent / "prandtl_fmu" / "native" / "fmi3"
+SANITIZERS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+# a leak, an invalid access or undefined behaviour ends the process with an error: the tests see it
+SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:exitcode=86", "UBSAN_OPTIONS": "halt_on_error=1:exitcode=87"}
+
+
+def _compiler() -> str:
+    compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler (cc or gcc) to build the test host")
+    return compiler
+
+
+def sanitizers() -> list:
+    """The sanitizer flags where the compiler has them and a sanitized program runs here, else []."""
+    if "sanitizers" not in _BUILT:
+        import tempfile
+
+        flags = []
+        with tempfile.TemporaryDirectory() as folder:
+            probe = Path(folder) / "probe.c"
+            probe.write_text("#include <stdlib.h>\nint main(void) { free(malloc(8)); return 0; }\n")
+            built = subprocess.run([_compiler(), *SANITIZERS, str(probe), "-o", str(Path(folder) / "probe")],
+                                   capture_output=True)
+            if built.returncode == 0 and subprocess.run([str(Path(folder) / "probe")], capture_output=True,
+                                                        env=dict(os.environ, **SANITIZER_ENV)).returncode == 0:
+                flags = SANITIZERS
+        _BUILT["sanitizers"] = flags
+    return _BUILT["sanitizers"]
+
+
+def compile_trust_host(folder: Path, fmi: int) -> Path:
+    """tests/c_host/trust_host.c for FMI ``fmi`` (2 or 3), with the sanitizers where they run."""
+    key = f"trust{fmi}"
+    if key not in _BUILT:
+        out = Path(folder) / f"trust_host{fmi}"
+        headers = FMI_HEADERS if fmi == 2 else FMI3_HEADERS
+        subprocess.run([_compiler(), "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-O1", "-Wall", "-Werror",
+                        f"-DFMI_VERSION={fmi}", *sanitizers(), f"-I{headers}", str(TRUST_SOURCE), "-o", str(out),
+                        "-ldl"], check=True, capture_output=True)
+        _BUILT[key] = out
+    return _BUILT[key]
+
+
+class Native:
+    """A native FMU (FMI 2.0 or 3.0) built with the sanitizers where they run, unpacked: its library, token (GUID),
+    value references by name and outputs."""
+
+    def __init__(self, fmu: Path, folder: Path, fmi: int):
+        folder.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(fmu) as archive:
+            archive.extractall(folder)
+        root = ET.parse(folder / "modelDescription.xml").getroot()
+        self.fmi = fmi
+        self.guid = root.get("guid") if fmi == 2 else root.get("instantiationToken")
+        identifier = root.find("CoSimulation").get("modelIdentifier")
+        platform = "linux64" if fmi == 2 else "x86_64-linux"
+        self.library = folder / "binaries" / platform / f"{identifier}.so"
+        variables = list(root.iter("ScalarVariable")) if fmi == 2 else list(root.find("ModelVariables"))
+        self.vr = {v.get("name"): int(v.get("valueReference")) for v in variables}
+        self.outputs = [v.get("name") for v in variables if v.get("causality") == "output"]
+
+
+def built_native(name: str, tables: dict, fmi: int, folder: Path) -> Native:
+    """The native FMU of ``tables`` for FMI ``fmi``, built once per test process (with the sanitizers' flags where
+    they run: $PRANDTL_NATIVE_CFLAGS) and shared by the test modules."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .conftest import scene_text
+
+    key = ("native", name, fmi)
+    if key not in _BUILT:
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        scene = folder / f"{name}.toml"
+        scene.write_text(scene_text(tables))
+        saved = os.environ.get("PRANDTL_NATIVE_CFLAGS")
+        os.environ["PRANDTL_NATIVE_CFLAGS"] = " ".join(sanitizers())
+        try:
+            fmu = build_fmu(scene, folder / f"{name}-{fmi}.fmu", runtime="native", fmi=fmi)
+        finally:
+            if saved is None:
+                del os.environ["PRANDTL_NATIVE_CFLAGS"]
+            else:
+                os.environ["PRANDTL_NATIVE_CFLAGS"] = saved
+        _BUILT[key] = Native(fmu, folder / f"{name}-{fmi}", fmi)
+    return _BUILT[key]
+
+
+class Run:
+    """What the trust host did: its return code, the statuses of the calls in order [(command, status)], the logs
+    [(status, category, message)], the values read [(vr, value)], its whole output."""
+
+    def __init__(self, done, written):
+        self.code, self.calls, self.logs, self.values = done.returncode, [], [], []
+        self.out = done.stdout + done.stderr
+        for line in done.stdout.splitlines():
+            if line.startswith("CALL "):
+                command, _, status = line[5:].rpartition(" ")
+                self.calls.append((written.get(command, command), status))
+            elif line.startswith("LOG "):
+                status, category, message = line[4:].split(" ", 2)
+                self.logs.append((int(status), category, message))
+            elif line.startswith("VALUE "):
+                _, vr, value = line.split(" ")
+                self.values.append((int(vr), float(value)))
+        self.ended = done.stdout.rstrip().endswith("END")
+
+    def status(self, command, which=0) -> int:
+        """The status of the ``which``-th call of ``command``."""
+        return int([status for name, status in self.calls if name == command][which])
+
+    def said(self, words) -> list:
+        """The logged messages with ``words`` in them."""
+        return [message for _, _, message in self.logs if words in message]
+
+
+def run_trust(host: Path, fmu: Native, commands, logging: bool = False, timeout: float = 120) -> Run:
+    """Run the trust host on ``fmu``; commands may name variables (``setr:m:-1``, ``getr:x``, ``sets:stepper:NULL``,
+    ``nulla:stepper``). The process must end by itself: a crash or a sanitizer's report is a failure the caller
+    asserts (``run.code == 0 and run.ended``)."""
+    argv = [str(host), str(fmu.library), fmu.guid, "1" if logging else "0"]
+    written = {}  # the command as the host prints it -> as the caller wrote it
+    for command in commands:
+        parts = command.split(":")
+        if parts[0] in ("setr", "getr", "geta", "sets", "nulla") and len(parts) > 1 and parts[1] in fmu.vr:
+            parts[1] = str(fmu.vr[parts[1]])
+        argv.append(":".join(parts))
+        written[argv[-1]] = command
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), **SANITIZER_ENV}  # no Python in the host
+    return Run(subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env), written)

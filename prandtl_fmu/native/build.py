@@ -13,7 +13,8 @@ taken with ``needsExecutionTool="false"``; FMI 3.0's is derived from it) and a b
   ``state.h``) and the generated ``scene.h``.
 
 It needs a C compiler and linker (``cc`` or ``gcc``, or ``$CC``); without one the build stops with one line
-saying what to install.
+saying what to install. ``$PRANDTL_NATIVE_CFLAGS`` adds flags to the compile (the tests build with
+``-fsanitize=address,undefined``: such a binary runs only in a host that loads the sanitizers' runtime).
 """
 from __future__ import annotations
 
@@ -88,6 +89,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
         n_vr = next((int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n"), 0)
         command = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
                    f"-DVR_U={vr_u}", f"-DVR_N={n_vr}", f"-DVR_TIME={vr_u + 1}",
+                   *os.environ.get("PRANDTL_NATIVE_CFLAGS", "").split(),  # e.g. a sanitizer, for the tests
                    f"-I{scratch}", f"-I{headers}", str(HERE / f"fmi{fmi}.c"), str(scratch / "stubs.c"),
                    *map(str, objects), "-o", str(library), "-lm", "-Wl,--no-undefined",
                    f"-Wl,--version-script={exports}"]
@@ -120,6 +122,7 @@ def _c_array(values) -> str:
 
 
 def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
+    from .. import scene as library_rules
     from ..kernels import stack
     from ..steppers import get_stepper
 
@@ -163,6 +166,12 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "#define PRANDTL_SCENE_H",
         "#include <stdint.h>",
         f"#define NB {n}",
+        # the library's rules (prandtl_fmu.scene), never written twice
+        f"#define ADVANCE_BUDGET {float(library_rules.ADVANCE_BUDGET)!r} /* the most internal steps of one doStep */",
+        f"#define SMALLEST_MAGNITUDE {float(library_rules.SMALLEST_MAGNITUDE)!r} /* a nonzero coefficient's |value| */",
+        f"#define LARGEST_MAGNITUDE {float(library_rules.LARGEST_MAGNITUDE)!r}",
+        f"#define MAX_STEPS {float(library_rules.MAX_STEPS)!r} /* steps counted exactly */",
+        f"#define SHORTEST_STEP {float(library_rules.SHORTEST_STEP)!r}",
         f"#define NB_ARR {max(size, 1)} /* the branches' state: n elongations or the memory stack's */",
         f"#define STACK {int(on_stack)}",
         f"#define STACK_HEADER {stack.HEADER} /* the memory stack's state: header, then rows of pieces */",
@@ -230,11 +239,17 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     }
     if not folds:
         lines.append("#define stack_fold(k, u, x, state) 0")
+    if "state_check" not in symbols:
+        lines.append("#define state_check(k, state, scratch) 0")
+    lines.append("static const char* STATE_CHECK_REASONS[] = {"
+                 + ", ".join(f'"{reason}"' for reason in kernels.STATE_CHECK_REASONS[1:]) + "};")
     for name, symbol in symbols.items():
         if name == "force_at":
             lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) __asm__("{symbol}");')
         elif name == "fold":
             lines.append(f'int64_t stack_fold(P, P, double, P) __asm__("{symbol}");')
+        elif name == "state_check":
+            lines.append(f'int64_t state_check(P, P, P) __asm__("{symbol}");')
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' __asm__("{symbol}");')
     connector = scene.causality == "displacement"
@@ -257,7 +272,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
         "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "
         "W_STEPPER, W_N, W_FORCE };",
-        "typedef struct { unsigned vr; int type; int what; int index; } Var;",
+        "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
         "static const Var VARS[] = {",
     ]
     count = 0
@@ -266,7 +281,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         vr = int(variable.get("valueReference"))
         type_name = next(child.tag for child in variable if child.tag in TYPES)
         what, index = _what(name)
-        lines.append(f"    {{{vr}, {TYPES[type_name]}, {what}, {index}}}, /* {name} */")
+        lines.append(f'    {{{vr}, {TYPES[type_name]}, {what}, {index}, "{name}"}},')
         count += 1
     lines += ["};", f"#define N_VARS {count}", "#endif", ""]
     return "\n".join(lines)

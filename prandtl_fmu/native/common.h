@@ -15,13 +15,16 @@
 /* set by the stubs of numba's error path (stubs.c): a kernel raised */
 extern __thread int prandtl_kernel_failed;
 
-#define MAX_STEPS 9007199254740992.0 /* 2^53 */
-#define SHORTEST_STEP 1e-150
+/* MAX_STEPS, SHORTEST_STEP, ADVANCE_BUDGET and the magnitudes of a coefficient: scene.h, from prandtl_fmu.scene */
 #define STATE_MAGIC "PRANDTL-FMU-STATE"
 #define STATE_VERSION 1
+/* the scratch of state_check (a memory-stack state and n elongations) */
+#define STATE_SCRATCH (NB_ARR + NB)
 
 enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
-enum { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED };
+/* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
+enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8 };
+#define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
 /* statuses: the same numbers in FMI 2.0 and 3.0 */
 enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
 
@@ -60,18 +63,41 @@ static void say_to(void* instance, void* logger, int logging, int status, const 
 static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
                                             "stribeck_velocity", "belt_velocity"};
 
+/* scene.magnitude_problem: a finite nonzero coefficient's |value| lies in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE] */
+static const char* magnitude_problem(const char* name, double value, char* buffer, size_t size)
+{
+    if (value != 0 && !(fabs(value) >= SMALLEST_MAGNITUDE && fabs(value) <= LARGEST_MAGNITUDE)) {
+        char shortest[32];
+        int digits = 1;
+        do /* the shortest that reads back as the value: Python's repr, as the library's message writes it */
+            snprintf(shortest, sizeof shortest, "%.*g", digits, value);
+        while (strtod(shortest, NULL) != value && ++digits <= 17);
+        snprintf(buffer, size, "parameter %s: |%s| is outside [%g, %g] (or 0): no physical magnitude, its products "
+                 "in a step would underflow or overflow", name, shortest, SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE);
+        return buffer;
+    }
+    return NULL;
+}
+
 /* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
 static const char* parameter_problem(const double* par, const double* cbranch, char* buffer, size_t size)
 {
     int i;
     for (i = 0; i < N_PARAMS; i++) {
         double value = par[i];
-        if (!P_PRESENT[i])
+        if (!P_PRESENT[i]) {
+            if (!isfinite(value)) { /* never read by a kernel, but a state must hold no such number */
+                snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
+                return buffer;
+            }
             continue;
+        }
         if (!isfinite(value)) {
             snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
             return buffer;
         }
+        if (magnitude_problem(PARAM_NAMES[i], value, buffer, size))
+            return buffer;
         if (P_RULE[i] == 1 && !(value > 0)) {
             snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
             return buffer;
@@ -82,8 +108,16 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
         }
     }
     for (i = 0; i < (HAS_SERIES ? NB : 0); i++) {
-        if (!(isfinite(cbranch[i]) && cbranch[i] > 0)) {
-            snprintf(buffer, size, "parameter c_branch: must be finite and > 0, got %.17g", cbranch[i]);
+        char name[32];
+        snprintf(name, sizeof name, "c_branch[%d]", i + 1);
+        if (!isfinite(cbranch[i])) {
+            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", name, cbranch[i]);
+            return buffer;
+        }
+        if (magnitude_problem(name, cbranch[i], buffer, size))
+            return buffer;
+        if (!(cbranch[i] > 0)) {
+            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", name, cbranch[i]);
             return buffer;
         }
     }

@@ -42,6 +42,7 @@ typedef struct {
     int scene_load;   /* none here: what the FMI layers' Boolean and String calls refuse */
     char stepper[32];
     Element preview;  /* the outputs' state (on the heap with the instance, never a large copy on the host's stack) */
+    Element saved;    /* core_do_step's checkpoint: a step whose outputs overflow is rolled back */
 } Instance;
 
 static double element_time(const Element* e) { return e->time; }
@@ -79,20 +80,24 @@ static void hand_over(Instance* c)
     memcpy(c->el.cs, c->cbranch, sizeof c->el.cs);
 }
 
-/* the committed element moved to the inputs set last, in c->preview: the branches' state copied in its part in
- * use only (the memory stack's pieces, as stack.used) */
+/* a copy of an element, its branches' state in the part in use only (the memory stack's pieces, as stack.used) */
+static void copy_element(Element* to, const Element* from)
+{
+    memcpy(to->p, from->p, sizeof to->p);
+    memcpy(to->cs, from->cs, sizeof to->cs);
+    to->x = from->x;
+    to->v = from->v;
+    to->time = from->time;
+    to->direction = from->direction;
+    memcpy(to->account, from->account, sizeof to->account);
+    memcpy(to->u, from->u, branch_state_used(from->u) * sizeof(double));
+}
+
+/* the committed element moved to the inputs set last, in c->preview */
 static Element* previewed(Instance* c)
 {
-    const Element* e = &c->el;
     Element* p = &c->preview;
-    memcpy(p->p, e->p, sizeof p->p);
-    memcpy(p->cs, e->cs, sizeof p->cs);
-    p->x = e->x;
-    p->v = e->v;
-    p->time = e->time;
-    p->direction = e->direction;
-    memcpy(p->account, e->account, sizeof p->account);
-    memcpy(p->u, e->u, branch_state_used(e->u) * sizeof(double));
+    copy_element(p, &c->el);
     move_to(p, c->x_in, c->v_in, p->time);
     return p;
 }
@@ -160,6 +165,8 @@ static void capture(const Instance* c, State* s)
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
+/* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
+ * values (a checksum detects accidents, not edits: a blob with a recomputed one is checked field by field) */
 static const char* state_problem(const State* s, char* buffer, size_t size)
 {
     const Element* e = &s->element;
@@ -170,15 +177,34 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (head != NULL)
         return head;
     if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
-          isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0)))
+          isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0) &&
+          (s->initialized == 0 || s->initialized == 1)))
         return "it holds a non-finite or out-of-range value";
+    for (i = 0; i < 3; i++)
+        if (!isfinite(e->account[i]))
+            return "its energy account is not finite";
     for (i = 0; i < (STACK ? 0 : NB); i++) {
         if (!(fabs(e->u[i]) <= ETA[i])) {
             snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);
             return buffer;
         }
     }
-    problem = parameter_problem(s->par, s->cbranch, buffer, size);
+    problem = parameter_problem(e->p, e->cs, buffer, size); /* the coefficients in use, as the setters' */
+    if (problem == NULL)
+        problem = parameter_problem(s->par, s->cbranch, buffer, size);
+    if (problem == NULL && STACK) { /* the memory stack: stack.restore's rules, compiled (state_check) */
+        double* scratch = (double*)malloc(STATE_SCRATCH * sizeof(double));
+        int64_t code;
+        if (scratch == NULL)
+            return "out of memory";
+        prandtl_kernel_failed = 0;
+        code = state_check((double*)K, (double*)e->u, scratch);
+        free(scratch);
+        if (prandtl_kernel_failed)
+            return "its memory stack could not be checked";
+        if (code != 0)
+            return STATE_CHECK_REASONS[code - 1];
+    }
     return problem;
 }
 
@@ -228,13 +254,39 @@ static int core_exit_initialization(Instance* c)
     return ST_OK;
 }
 
+/* whether an output's value may be shown (the connector books every energy: finite) */
+static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
+
+/* the first output (force, stiffness, an energy) that is not a number to show at the inputs set last, or NULL */
+static const Var* unshowable_output(Instance* c, double* value)
+{
+    int i;
+    for (i = 0; i < N_VARS; i++) {
+        const Var* var = &VARS[i];
+        if (var->what != W_FORCE && var->what != W_STIFFNESS && var->what != W_ENERGY)
+            continue;
+        *value = real_value(c, var);
+        if (!showable(var, *value))
+            return var;
+    }
+    return NULL;
+}
+
+/* fmi2/3DoStep; the FMI layer checked the call sequence */
 static int core_do_step(Instance* c, double t, double H)
 {
     char buffer[512];
     const char* problem;
+    const Var* overflowed;
+    double value;
     if (c->phase != STEPPING) {
         say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
             "Terminate");
+        return ST_ERROR;
+    }
+    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
+        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
+            ">= 0 (and their sum finite)", t, H);
         return ST_ERROR;
     }
     c->last_step_failed = 1;
@@ -248,13 +300,19 @@ static int core_do_step(Instance* c, double t, double H)
             c->v_in);
         return ST_DISCARD;
     }
-    if (!(isfinite(H) && H >= 0)) {
-        say(c, ST_DISCARD, "communication step %.17g refused: it must be finite and >= 0", H);
-        return ST_DISCARD;
-    }
+    copy_element(&c->saved, &c->el);
     hand_over(c);
     /* the input sample belongs to the communication point: commit it (the master's clock only moves forward) */
     move_to(&c->el, c->x_in, c->v_in, t > c->el.time ? t : c->el.time);
+    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    if (overflowed != NULL || !(isfinite(c->el.x) && isfinite(c->el.v))) {
+        double time = c->el.time;
+        copy_element(&c->el, &c->saved);
+        say(c, ST_DISCARD, "the step to t = %.17g with x = %.17g, v = %.17g refused: %s would be %.17g, not finite "
+            "(an overflow); the state is unchanged", time, c->x_in, c->v_in,
+            overflowed != NULL ? overflowed->name : "the state", overflowed != NULL ? value : NAN);
+        return ST_DISCARD;
+    }
     c->last_step_failed = 0;
     return ST_OK;
 }

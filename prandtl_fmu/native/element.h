@@ -178,8 +178,10 @@ static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first
     return taken;
 }
 
-/* Element.advance: NULL, or why the step was not taken (the element then is as it was: the caller rolls back) */
-static const char* advance(Element* e, double duration, double force, int scene_load, double* failed_at)
+/* Element.advance: NULL, or why the step was not taken (the element then is as it was: the caller rolls back);
+ * ``failed_at`` NaN: refused before any step (a duration of too many steps) */
+static const char* advance(Element* e, double duration, double force, int scene_load, double* failed_at,
+                           char* buffer, size_t size)
 {
     double h = e->h, whole, rest, t_base;
     int64_t first, taken;
@@ -196,6 +198,13 @@ static const char* advance(Element* e, double duration, double force, int scene_
         return "the duration is shorter than 1e-150 s (a step's square underflows)";
     if (!(duration / h < MAX_STEPS))
         return "the duration is more than 2^53 internal steps: advance by shorter durations or with a larger step";
+    split_duration(duration, h, &whole, &rest);
+    if (whole + (rest > 0) > ADVANCE_BUDGET) { /* Element.advance: ElementError, never run for days */
+        snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
+                 "steps of one advance: advance by shorter durations (communication steps) or with a larger step",
+                 duration, whole + (rest > 0), h, ADVANCE_BUDGET);
+        return buffer;
+    }
     l = load_of(force, scene_load);
     e->force = force;
     e->scene_load = scene_load;
@@ -204,7 +213,6 @@ static const char* advance(Element* e, double duration, double force, int scene_
         e->steps = 0;
         e->grid = h;
     }
-    split_duration(duration, h, &whole, &rest);
     t_base = e->origin;
     first = e->steps;
     if (whole > 0) {
@@ -384,24 +392,48 @@ static void capture(const Instance* c, State* s)
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
-/* why a state cannot be restored here, or NULL */
+/* whether an output's value may be shown: finite, or the NaN of an energy account that was not booked (a stepper
+ * with ENERGY_ACCOUNT = False, exact, leaves it NaN; then it stays NaN: driver.Element._overflowed) -- never inf */
+static int showable(const Var* var, double value)
+{
+    return isfinite(value) || (isnan(value) && var->what == W_ENERGY && var->index >= 2);
+}
+
+/* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
+ * values (a checksum detects accidents, not edits: a blob with a recomputed one is checked field by field) */
 static const char* state_problem(const State* s, char* buffer, size_t size)
 {
     const Element* e = &s->element;
+    const char* problem;
     int i;
     const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
                                     fnv1a((const unsigned char*)s, offsetof(State, checksum)));
     if (head != NULL)
         return head;
-    if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->origin) && isfinite(e->grid) && isfinite(e->force) &&
-          isfinite(s->F) && isfinite(s->start_time) && e->steps >= 0 && e->stepper >= 0 && e->stepper < N_STEPPERS &&
-          isfinite(e->h) && e->h > 0))
+    if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
+          isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) &&
+          (e->play == 0 || (FOLDS && e->play == 1)) && (e->scene_load == 0 || e->scene_load == 1) &&
+          (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
+          (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
         return "it holds a non-finite or out-of-range value";
-    if (e->play != 0 && !(FOLDS && e->play == 1))
+    /* the clock: time = origin + steps * grid, grid 0 before the first advance */
+    if (!(isfinite(e->origin) && isfinite(e->grid) && e->grid >= 0 && e->steps >= 0 &&
+          (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
+        return "its clock is not a finite time (origin, steps and grid)";
+    problem = parameter_problem(e->p, e->cs, buffer, size); /* the coefficients in use, as the setters' */
+    if (problem != NULL)
+        return problem;
+    if (!HAS_STRIBECK && e->p[P_ALPHA_KINETIC] != e->p[P_ALPHA])
         return "it holds a non-finite or out-of-range value";
+    for (i = 0; i < 4; i++) /* finite, or NaN: not booked */
+        if (isinf(e->account[i]) || isinf(e->erow[2 + i]))
+            return "its energy account is not finite (nor the NaN of an account not booked)";
+    if (!(isfinite(e->out[0]) && isfinite(e->out[1]) && isfinite(e->out[2]) && isfinite(e->erow[0]) &&
+          isfinite(e->erow[1]) && isfinite(e->initial_energy)))
+        return "its outputs are not finite";
     if (FOLDS && !e->play && !TAKES_STACK[e->stepper])
         return "its stepper runs on the branches' elongations, which it does not hold";
-    for (i = 0; i < (STACK && !e->play ? 0 : NB); i++) { /* the stack's state: checked by the checksum */
+    for (i = 0; i < (STACK && !e->play ? 0 : NB); i++) { /* n elongations: |u_i| <= eta_i */
         double u = e->play ? e->up[i] : e->u[i], eta = e->play ? ETA_PLAY[i] : ETA[i];
         if (!(fabs(u) <= eta)) {
             snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, u, eta);
@@ -413,6 +445,19 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         for (i = 0; i < 6; i++)
             if (memcmp(e->kst + fixed[i] * (NB + 1), K + fixed[i] * (NB + 1), (NB + 1) * sizeof(double)) != 0)
                 return "its memory-stack parameters are not this scene's";
+    }
+    if (STACK && !e->play) { /* the memory stack: stack.restore's rules, compiled (state_check) */
+        double* scratch = (double*)malloc(STATE_SCRATCH * sizeof(double));
+        int64_t code;
+        if (scratch == NULL)
+            return "out of memory";
+        prandtl_kernel_failed = 0;
+        code = state_check(FOLDS ? (double*)e->kst : (double*)K, (double*)e->u, scratch);
+        free(scratch);
+        if (prandtl_kernel_failed)
+            return "its memory stack could not be checked";
+        if (code != 0)
+            return STATE_CHECK_REASONS[code - 1];
     }
     return NULL;
 }
@@ -686,15 +731,37 @@ static void rollback(Instance* c)
     memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
 }
 
-/* fmi2/3DoStep: one communication step (slave.do_step) */
+/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show, or NULL */
+static const Var* unshowable_output(Instance* c, double* value)
+{
+    int i;
+    for (i = 0; i < N_VARS; i++) {
+        const Var* var = &VARS[i];
+        if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_STIFFNESS &&
+            var->what != W_ENERGY)
+            continue;
+        *value = real_value(c, var);
+        if (!showable(var, *value))
+            return var;
+    }
+    return NULL;
+}
+
+/* fmi2/3DoStep: one communication step (slave.do_step); the FMI layer checked the call sequence */
 static int core_do_step(Instance* c, double t, double H)
 {
     char buffer[512];
     const char* problem;
-    double failed_at;
+    const Var* overflowed;
+    double failed_at, value;
     if (c->phase != STEPPING) {
         say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
             "Terminate");
+        return ST_ERROR;
+    }
+    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
+        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
+            ">= 0 (and their sum finite)", t, H);
         return ST_ERROR;
     }
     c->last_step_failed = 1;
@@ -719,20 +786,29 @@ static int core_do_step(Instance* c, double t, double H)
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
         return ST_DISCARD;
     }
-    if (!(isfinite(H) && H >= 0)) {
-        say(c, ST_DISCARD, "communication step %.17g refused: it must be finite and >= 0", H);
-        return ST_DISCARD;
-    }
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     set_time(&c->el, t);
     prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->scene_load, &failed_at);
+    problem = advance(&c->el, H, c->F, c->scene_load, &failed_at, buffer, sizeof buffer);
+    if (problem != NULL && isnan(failed_at)) { /* refused before any step */
+        rollback(c);
+        say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
+        return ST_DISCARD;
+    }
     if (problem == NULL && !(isfinite(c->el.x) && isfinite(c->el.v) && isfinite(c->el.out[2])))
         problem = "it would leave a non-finite state";
     if (problem != NULL) {
         rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g; try "
             "'implicit')", t, c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h);
+        return ST_DISCARD;
+    }
+    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    if (overflowed != NULL) {
+        double time = element_time(&c->el);
+        rollback(c);
+        say(c, ST_DISCARD, "the step to t = %.17g with F = %.17g refused: %s would be %.17g, not finite (an "
+            "overflow); the state is unchanged", time, c->F, overflowed->name, value);
         return ST_DISCARD;
     }
     c->last_step_failed = 0;

@@ -1,10 +1,16 @@
-/* The native FMU's FMI 3.0 co-simulation layer over the element (element.h): the scalars of the FMI 2.0
- * FMU (Float64 for Real, the same value references), the structural parameter n (UInt64, fixed) and the
- * branch elongations u, an array of n Float64 (VR_U). The functions of model exchange, scheduled execution,
- * clocks and event mode are refused with a logged reason. */
+/* The native FMU's FMI 3.0 co-simulation layer over the element (element.h) or the connector (connector.h): the
+ * scalars of the FMI 2.0 FMU (Float64 for Real, the same value references), the structural parameter n (UInt64,
+ * fixed) and the branch elongations u, an array of n Float64 (VR_U). The functions of model exchange, scheduled
+ * execution, clocks and event mode are refused with a logged reason.
+ *
+ * Every function first checks its instance (NULL: fmi3Error, nothing logged: there is no logger), the call
+ * sequence (calls.h: the phases it is allowed in, FMI 3.0's state machine for co-simulation without event mode)
+ * and its pointers (NULL: fmi3Error with the reason logged). A refusal leaves the instance as it was. */
 #include "fmi3Functions.h"
 #define FMI "fmi3"
 #define FMU_STATE "FMUState"
+#define STANDARD "FMI 3.0"
+#define STEPPING_NAME "step mode"
 #include "scene.h"
 #if CONNECTOR
 #include "connector.h"
@@ -12,6 +18,7 @@
 #include "element.h"
 #endif
 #include "state.h"
+#include "calls.h"
 
 static void emit(void* instance, int status, const char* category, const char* message)
 {
@@ -20,11 +27,42 @@ static void emit(void* instance, int status, const char* category, const char* m
     logger((fmi3InstanceEnvironment)c->env, (fmi3Status)status, category, message);
 }
 
+/* the phases of FMI 3.0 co-simulation a function is allowed in (Reference-FMUs' MASK_fmi3..., this FMU having no
+ * event mode, no configuration mode and no clocks; a setter is refused after fmi3Terminate) */
+#define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
+#define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
+
+/* the instance of a call, or return fmi3Error: NULL, or a call not allowed in its phase */
+#define BEGIN(function, mask)                                                                                  \
+    Instance* c = (Instance*)instance;                                                                         \
+    if (c == NULL)                                                                                             \
+        return fmi3Error;                                                                                      \
+    if (!allowed(c, (mask), #function))                                                                        \
+        return fmi3Error
+
+/* a function this co-simulation FMU does not provide: fmi3Error, with the reason */
+static fmi3Status not_provided(fmi3Instance instance, const char* message)
+{
+    if (instance != NULL)
+        say((Instance*)instance, ST_ERROR, "%s", message);
+    return fmi3Error;
+}
+
 const char* fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n, const fmi3String categories[])
 {
-    ((Instance*)instance)->logging = on ? 1 : 0;
+    size_t i;
+    BEGIN(fmi3SetDebugLogging, ANY_PHASE);
+    if (n > 0 && !given(c, categories, "fmi3SetDebugLogging", "categories"))
+        return fmi3Error;
+    for (i = 0; i < n; i++) {
+        if (categories[i] == NULL) {
+            say(c, ST_ERROR, "fmi3SetDebugLogging refused: categories[%zu] is NULL", i);
+            return fmi3Error;
+        }
+    }
+    c->logging = on ? 1 : 0;
     return fmi3OK;
 }
 
@@ -41,6 +79,10 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
     c->logger = (void*)logger;
     c->name = strdup(name ? name : "");
     c->logging = logging ? 1 : 0;
+    if (c->name == NULL) {
+        free(c);
+        return NULL;
+    }
     if (token == NULL || strcmp(token, GUID) != 0) {
         say(c, ST_ERROR, "fmi3InstantiateCoSimulation refused: instantiation token %s is not this FMU's (%s)",
             token ? token : "(null)", GUID);
@@ -70,11 +112,9 @@ void fmi3FreeInstance(fmi3Instance instance)
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tol_defined, fmi3Float64 tol,
                                        fmi3Float64 start, fmi3Boolean stop_defined, fmi3Float64 stop)
 {
-    Instance* c = (Instance*)instance;
-    if (c->phase != INSTANTIATED) {
-        say(c, ST_ERROR, "fmi3EnterInitializationMode refused: only once, after fmi3InstantiateCoSimulation");
+    BEGIN(fmi3EnterInitializationMode, INSTANTIATED);
+    if (!experiment_valid(c, start, stop_defined, stop, "fmi3EnterInitializationMode"))
         return fmi3Error;
-    }
     c->start_time = start;
     c->phase = INITIALIZING;
     return fmi3OK;
@@ -82,20 +122,27 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tol_de
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
-    return (fmi3Status)core_exit_initialization((Instance*)instance);
+    BEGIN(fmi3ExitInitializationMode, INITIALIZING);
+    return (fmi3Status)core_exit_initialization(c);
 }
 
-fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return fmi3OK; }
+fmi3Status fmi3EnterStepMode(fmi3Instance instance)
+{
+    BEGIN(fmi3EnterStepMode, 0); /* from event mode only, which this FMU has not: step mode follows initialization */
+    return fmi3Error;
+}
 
 fmi3Status fmi3Terminate(fmi3Instance instance)
 {
-    ((Instance*)instance)->phase = TERMINATED;
+    BEGIN(fmi3Terminate, STEPPING);
+    c->phase = TERMINATED;
     return fmi3OK;
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance)
 {
-    defaults((Instance*)instance);
+    BEGIN(fmi3Reset, ANY_PHASE);
+    defaults(c);
     return fmi3OK;
 }
 
@@ -103,16 +150,18 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 H, fmi3B
                       fmi3Boolean* event_handling_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
                       fmi3Float64* last_successful_time)
 {
-    Instance* c = (Instance*)instance;
-    int status = core_do_step(c, t, H);
-    if (event_handling_needed)
-        *event_handling_needed = fmi3False;
-    if (terminate)
-        *terminate = fmi3False;
-    if (early_return)
-        *early_return = fmi3False;
-    if (last_successful_time)
-        *last_successful_time = status == ST_OK ? t + H : t;
+    int status;
+    BEGIN(fmi3DoStep, STEPPING);
+    if (!given(c, event_handling_needed, "fmi3DoStep", "eventHandlingNeeded") ||
+        !given(c, terminate, "fmi3DoStep", "terminateSimulation") ||
+        !given(c, early_return, "fmi3DoStep", "earlyReturn") ||
+        !given(c, last_successful_time, "fmi3DoStep", "lastSuccessfulTime"))
+        return fmi3Error;
+    status = core_do_step(c, t, H);
+    *event_handling_needed = fmi3False;
+    *terminate = fmi3False;
+    *early_return = fmi3False;
+    *last_successful_time = status == ST_OK ? t + H : t;
     return (fmi3Status)status;
 }
 
@@ -130,8 +179,11 @@ static void elongations(Instance* c, double* out)
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
                           size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
-    size_t i, at = 0;
+    size_t i, j, at = 0;
+    BEGIN(fmi3GetFloat64, MASK_GET);
+    if (!(nvr == 0 || given(c, vr, "fmi3GetFloat64", "valueReferences")) ||
+        !(nvalues == 0 || given(c, values, "fmi3GetFloat64", "values")))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         const Var* var;
         if (vr[i] == VR_U && NB > 0) {
@@ -140,6 +192,13 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
                 return fmi3Error;
             }
             elongations(c, values + at);
+            for (j = 0; j < (size_t)NB; j++) {
+                if (!isfinite(values[at + j])) {
+                    say(c, ST_ERROR, "fmi3GetFloat64 refused: u[%zu] is %.17g, not a finite number", j + 1,
+                        values[at + j]);
+                    return fmi3Error;
+                }
+            }
             at += NB;
             continue;
         }
@@ -153,7 +212,10 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
                 "values)", vr[i]);
             return fmi3Error;
         }
-        values[at++] = real_value(c, var);
+        values[at] = real_value(c, var);
+        if (!shown(c, var, values[at], "fmi3GetFloat64"))
+            return fmi3Error;
+        at++;
     }
     return fmi3OK;
 }
@@ -161,12 +223,14 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3SetFloat64, MASK_SET);
     if (nvalues != nvr) {
         say(c, ST_ERROR, "fmi3SetFloat64 refused: %zu values for %zu scalar variables", nvalues, nvr);
         return fmi3Error;
     }
+    if (!arrays_given(c, nvr, vr, values, "fmi3SetFloat64"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) /* all or nothing */
         if (core_check_float(c, find(vr[i], T_REAL), vr[i], values[i]) != ST_OK)
             return fmi3Error;
@@ -178,8 +242,10 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 values[],
                          size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3GetUInt64, MASK_GET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3GetUInt64"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         if (vr[i] != VR_N || i >= nvalues) {
             say(c, ST_ERROR, "fmi3GetUInt64 refused: value reference %u is not n", vr[i]);
@@ -193,8 +259,10 @@ fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
 fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const fmi3UInt64 values[], size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3SetUInt64, MASK_SET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3SetUInt64"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         if (vr[i] != VR_N || i >= nvalues || values[i] != (fmi3UInt64)NB) {
             say(c, ST_ERROR, "fmi3SetUInt64 refused: n is the scene's number of branches, %d", NB);
@@ -207,8 +275,10 @@ fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
                           size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3GetBoolean, MASK_GET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3GetBoolean"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         if (find(vr[i], T_BOOLEAN) == NULL || i >= nvalues) {
             say(c, ST_ERROR, "fmi3GetBoolean refused: no Boolean variable has value reference %u", vr[i]);
@@ -222,8 +292,10 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Boolean values[], size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3SetBoolean, MASK_SET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3SetBoolean"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         if (find(vr[i], T_BOOLEAN) == NULL || i >= nvalues) {
             say(c, ST_ERROR, "fmi3SetBoolean refused: no Boolean variable has value reference %u", vr[i]);
@@ -238,8 +310,10 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3String values[],
                          size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3GetString, MASK_GET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3GetString"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
         if (find(vr[i], T_STRING) == NULL || i >= nvalues) {
             say(c, ST_ERROR, "fmi3GetString refused: no String variable has value reference %u", vr[i]);
@@ -253,11 +327,17 @@ fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const fmi3String values[], size_t nvalues)
 {
-    Instance* c = (Instance*)instance;
     size_t i;
+    BEGIN(fmi3SetString, MASK_SET);
+    if (!arrays_given(c, nvr, vr, values, "fmi3SetString"))
+        return fmi3Error;
     for (i = 0; i < nvr; i++) {
-        if (find(vr[i], T_STRING) == NULL || i >= nvalues || values[i] == NULL) {
+        if (find(vr[i], T_STRING) == NULL || i >= nvalues) {
             say(c, ST_ERROR, "fmi3SetString refused: value reference %u is not the String parameter stepper", vr[i]);
+            return fmi3Error;
+        }
+        if (values[i] == NULL) {
+            say(c, ST_ERROR, "fmi3SetString refused: values[%zu] is NULL (a stepper's name is needed)", i);
             return fmi3Error;
         }
     }
@@ -268,34 +348,52 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* state)
 {
-    return (fmi3Status)core_get_state((Instance*)instance, state);
+    BEGIN(fmi3GetFMUState, ANY_PHASE);
+    if (!given(c, state, "fmi3GetFMUState", "FMUState"))
+        return fmi3Error;
+    return (fmi3Status)core_get_state(c, state);
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state)
 {
-    return (fmi3Status)core_set_state((Instance*)instance, state);
+    BEGIN(fmi3SetFMUState, ANY_PHASE);
+    return (fmi3Status)core_set_state(c, state);
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* state)
 {
+    BEGIN(fmi3FreeFMUState, ANY_PHASE);
+    if (!given(c, state, "fmi3FreeFMUState", "FMUState"))
+        return fmi3Error;
     core_free_state(state);
     return fmi3OK;
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state, size_t* size)
 {
+    BEGIN(fmi3SerializedFMUStateSize, ANY_PHASE);
+    if (!given(c, state, "fmi3SerializedFMUStateSize", "FMUState") ||
+        !given(c, size, "fmi3SerializedFMUStateSize", "size"))
+        return fmi3Error;
     *size = sizeof(State);
     return fmi3OK;
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState state, fmi3Byte bytes[], size_t size)
 {
-    return (fmi3Status)core_serialize((Instance*)instance, state, (char*)bytes, size);
+    BEGIN(fmi3SerializeFMUState, ANY_PHASE);
+    if (!given(c, state, "fmi3SerializeFMUState", "FMUState") || !given(c, bytes, "fmi3SerializeFMUState", "bytes"))
+        return fmi3Error;
+    return (fmi3Status)core_serialize(c, state, (char*)bytes, size);
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte bytes[], size_t size, fmi3FMUState* state)
 {
-    return (fmi3Status)core_deserialize((Instance*)instance, (const char*)bytes, size, state);
+    BEGIN(fmi3DeserializeFMUState, ANY_PHASE);
+    if (!given(c, bytes, "fmi3DeserializeFMUState", "bytes") || !given(c, state, "fmi3DeserializeFMUState",
+                                                                        "FMUState"))
+        return fmi3Error;
+    return (fmi3Status)core_deserialize(c, (const char*)bytes, size, state);
 }
 
 /* ------------------------------------------------------------------ what a co-simulation FMU does not provide */
@@ -312,46 +410,43 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3EnterEventMode: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3EnterEventMode: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetFloat32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Float32 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetFloat32: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetFloat32: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetInt8(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int8 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetInt8: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetInt8: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetUInt8(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt8 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetUInt8: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetUInt8: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetInt16(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int16 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetInt16: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetInt16: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetUInt16(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt16 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetUInt16: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetUInt16: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int32 values[], size_t nValues)
 {
     size_t i; /* n of the continuum: -1, a local constant (there is no array u then) */
+    BEGIN(fmi3GetInt32, MASK_GET);
+    if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3GetInt32"))
+        return fmi3Error;
     for (i = 0; i < nValueReferences; i++) {
         if (find(valueReferences[i], T_INTEGER) == NULL || i >= nValues) {
-            say((Instance*)instance, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not n", valueReferences[i]);
+            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not n", valueReferences[i]);
             return fmi3Error;
         }
         values[i] = N_VALUE;
@@ -361,252 +456,210 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 
 fmi3Status fmi3GetUInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt32 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetUInt32: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetUInt32: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int64 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetInt64: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetInt64: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, size_t valueSizes[], fmi3Binary values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetBinary: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetBinary: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Clock values[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetClock: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetClock: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetFloat32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Float32 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetFloat32: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetFloat32: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetInt8(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int8 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetInt8: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetInt8: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetUInt8(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt8 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetUInt8: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetUInt8: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetInt16(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int16 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetInt16: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetInt16: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetUInt16(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt16 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetUInt16: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetUInt16: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetInt32: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetInt32: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetUInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt32 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetUInt32: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetUInt32: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int64 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetInt64: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetInt64: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const size_t valueSizes[], const fmi3Binary values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetBinary: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetBinary: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Clock values[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetClock: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetClock: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference, size_t* nDependencies)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetNumberOfVariableDependencies: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetNumberOfVariableDependencies: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent, size_t elementIndicesOfDependent[], fmi3ValueReference independents[], size_t elementIndicesOfIndependents[], fmi3DependencyKind dependencyKinds[], size_t nDependencies)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetVariableDependencies: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetVariableDependencies: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetDirectionalDerivative: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetDirectionalDerivative: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetAdjointDerivative: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetAdjointDerivative: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3EnterConfigurationMode: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3EnterConfigurationMode: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3ExitConfigurationMode: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3ExitConfigurationMode: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetIntervalDecimal: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetIntervalDecimal: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[], fmi3IntervalQualifier qualifiers[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetIntervalFraction: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetIntervalFraction: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Float64 shifts[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetShiftDecimal: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetShiftDecimal: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetShiftFraction: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetShiftFraction: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Float64 intervals[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetIntervalDecimal: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetIntervalDecimal: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetIntervalFraction: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetIntervalFraction: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Float64 shifts[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetShiftDecimal: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetShiftDecimal: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetShiftFraction: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetShiftFraction: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3EvaluateDiscreteStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3EvaluateDiscreteStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discreteStatesNeedUpdate, fmi3Boolean* terminateSimulation, fmi3Boolean* nominalsOfContinuousStatesChanged, fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined, fmi3Float64* nextEventTime)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3UpdateDiscreteStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3UpdateDiscreteStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3EnterContinuousTimeMode: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3EnterContinuousTimeMode: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint, fmi3Boolean* enterEventMode, fmi3Boolean* terminateSimulation)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3CompletedIntegratorStep: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3CompletedIntegratorStep: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetTime: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetTime: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[], size_t nContinuousStates)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3SetContinuousStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3SetContinuousStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t nContinuousStates)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetContinuousStateDerivatives: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetContinuousStateDerivatives: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetEventIndicators: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetEventIndicators: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetContinuousStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetContinuousStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nContinuousStates)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetNominalsOfContinuousStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetNominalsOfContinuousStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t* nEventIndicators)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetNumberOfEventIndicators: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetNumberOfEventIndicators: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t* nContinuousStates)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetNumberOfContinuousStates: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetNumberOfContinuousStates: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3GetOutputDerivatives: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3GetOutputDerivatives: not provided by this co-simulation FMU");
 }
 
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference, fmi3Float64 activationTime)
 {
-    say((Instance*)instance, ST_ERROR, "fmi3ActivateModelPartition: not provided by this co-simulation FMU");
-    return fmi3Error;
+    return not_provided(instance, "fmi3ActivateModelPartition: not provided by this co-simulation FMU");
 }

@@ -23,7 +23,9 @@ the load, ``lt``/``lf``/``nl`` its table):
 * ``initial(p, k, eta, cs, u, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
   equilibrium (``driver.initial_state``);
 * ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``);
-* ``elongations(p, k, eta, cs, u, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``).
+* ``elongations(p, k, eta, cs, u, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``);
+* ``state_check(k, state, scratch)`` (memory-stack scenes): why a restored stack state is not one, or 0
+  (:func:`compile_state_check`).
 
 ``p`` holds the coefficients in :data:`PARAMETERS` order. A scene with ``[damper]`` gets every function
 twice, with c and without (c = 0 is no dashpot at all in the library's model: ``driver._smooth_model``).
@@ -272,8 +274,9 @@ def compile_kernels(scene, steppers) -> list:
     from ..loads import force_at
     from ..steppers import get_stepper
 
+    checks = [("state_check", compile_state_check(scene))] if is_stack_scene(scene) else []
     if scene.causality == "displacement":
-        return _compile_connector(scene, structure(scene))
+        return _compile_connector(scene, structure(scene)) + checks
     compiled = []
     compiled_force = False
     kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
@@ -304,7 +307,7 @@ def compile_kernels(scene, steppers) -> list:
                     compiled.append((c_name, function))
     if folds(scene):
         compiled.append(("fold", _compile_fold(scene)))
-    return compiled
+    return compiled + checks
 
 
 def _compile_fold(scene):
@@ -368,3 +371,151 @@ def _compile_connector(scene, shape) -> list:
             function = cfunc(eval(signature, {"types": types}), error_model="numpy")(namespace[name])
             compiled.append((f"{name}_{suffix}", function))
     return compiled
+
+
+# why a memory-stack state cannot be restored (stack.restore's ValueError, in order), by the code state_check returns
+STATE_CHECK_REASONS = (
+    None,
+    "not a memory-stack state (a header or piece is not finite)",
+    "memory-stack state: wrong count of pieces",
+    "memory-stack state: the pieces do not tile the branches",
+    "memory-stack state: branches slid in no direction",
+    "memory-stack state: an elongation outside its elastic range",
+    "memory-stack state: the elongations are not admissible (|u_i - u_j| > |eta_i - eta_j|)",
+    "memory-stack state: the running totals do not match the pieces",
+    "its memory-stack parameters are not this scene's",
+)
+
+
+def compile_state_check(scene):
+    """``state_check(kp, state, scratch)`` -> 0, or the index in :data:`STATE_CHECK_REASONS` of why the memory-stack
+    ``state`` (its full array, ``state_size``) over the stack's parameters ``kp`` is not one the library would restore
+    (``stack.restore`` and ``_check_admissible``, the same rules and tolerances; with n branches also that ``kp``'s
+    rows of the elongations referred to are what ``stack.refer`` makes of them). ``scratch``: ``state_size + n``
+    doubles. The FMU state a master hands back is checked with it before anything runs on it."""
+    import math
+
+    from numba import carray, cfunc, njit, types
+
+    from ..kernels import stack
+
+    branches = scene.branches
+    continuum = branches.continuum
+    size = state_size(scene)
+    n = 0 if continuum else branches.n
+    shape = branches.params[0].shape if continuum else (10, n + 1)
+    header, row_len, resync_every = stack.HEADER, stack.ROW, stack.RESYNC
+    COUNT, TOP, DIRECTION, SK, S0, MOVES, X = range(header)
+    end = 1.0 if continuum else float(n)
+    limit = (stack.CONTINUUM_PIECES + 1 - 2) if continuum else n
+    eta_at, refer, resync = stack._eta_at, stack.refer, stack.resync
+    ETA_ROW, C_ROW, ORDER_ROW = stack.ETA_ROW, stack.C_ROW, stack.ORDER_ROW
+
+    @njit
+    def tiles(state, count):
+        if not (state[DIRECTION] == -1.0 or state[DIRECTION] == 0.0 or state[DIRECTION] == 1.0):
+            return False
+        if not (0.0 <= state[TOP] <= end):
+            return False
+        bound = end
+        for j in range(count):
+            row = header + row_len * j
+            lo, hi = state[row], state[row + 1]
+            if hi != bound or lo > hi or abs(state[row + 3]) > 1.0:
+                return False
+            if not continuum and lo != math.floor(lo):  # n branches: positions are branch indices
+                return False
+            bound = lo
+        return bound == state[TOP]  # the last piece ends at the top (no piece: the top is the end)
+
+    @njit
+    def admissible(params, state, count, u):
+        x = state[X]
+        size_ = abs(x)
+        for j in range(count):
+            size_ = max(size_, abs(x) + abs(state[header + row_len * j + 2]))
+        if continuum:
+            table = params[0]
+            for j in range(count):
+                row = header + row_len * j
+                for position in (state[row], state[row + 1]):
+                    eta = eta_at(table, position)
+                    if abs(state[row + 2] + x + state[row + 3] * eta) > eta + 1e-12 * max(1.0, eta, size_):
+                        return 5
+            return 0
+        largest = 0.0
+        for i in range(n):
+            largest = max(largest, params[ETA_ROW, i])
+        top = int(state[TOP])
+        for i in range(top):
+            u[i] = state[DIRECTION] * params[ETA_ROW, i]
+        for j in range(count):
+            row = header + row_len * j
+            a, beta, gamma = state[row + 2], state[row + 3], state[row + 4]
+            for i in range(int(state[row]), int(state[row + 1])):
+                u[i] = a + x + beta * params[ETA_ROW, i] + gamma * params[C_ROW, i]
+        tolerance = 1e-12 * max(1.0, largest, size_)
+        for i in range(n):
+            if abs(u[i]) > params[ETA_ROW, i] + tolerance:
+                return 5
+        for i in range(n - 1):
+            if not abs(u[i + 1] - u[i]) <= (params[ETA_ROW, i + 1] - params[ETA_ROW, i]) + tolerance:
+                return 6
+        return 0
+
+    @njit
+    def referred(params, u0):
+        """stack.refer makes of kp's own rows of u0 exactly kp (bit for bit)."""
+        work = np.empty((10, n + 1))  # numba's runtime (stubs.c): a reshape of the scratch would need numba's helper
+        for i in range(n):
+            u0[int(params[ORDER_ROW, i])] = params[C_ROW, i]
+        for r in range(10):
+            for i in range(n + 1):
+                work[r, i] = params[r, i]
+        if not refer(work, u0):
+            return False
+        for r in range(10):
+            for i in range(n + 1):
+                if not work[r, i] == params[r, i]:
+                    return False
+        return True
+
+    def state_check(kp, statep, scratchp):
+        table = carray(kp, shape)
+        params = (table,) if continuum else table
+        state = carray(statep, (size,))
+        scratch = carray(scratchp, (size + n,))
+        if not continuum:
+            for r in range(10):
+                for i in range(n + 1):
+                    if not math.isfinite(table[r, i]):
+                        return 8
+            if not referred(table, scratch[size:size + n]):
+                return 8
+        for i in range(header):
+            if not math.isfinite(state[i]):
+                return 1
+        count = int(state[COUNT]) if 0.0 <= state[COUNT] <= limit else -1
+        if count < 0 or state[COUNT] != count:
+            return 2
+        for i in range(header, header + row_len * count):
+            if not math.isfinite(state[i]):
+                return 1
+        if not tiles(state, count):
+            return 3
+        if state[DIRECTION] == 0.0 and state[TOP] != 0.0:
+            return 4
+        problem = admissible(params, state, count, scratch)
+        if problem:
+            return problem
+        for i in range(header + row_len * count):
+            scratch[i] = state[i]
+        resync(params, scratch)  # the totals are those of the pieces (to rounding)
+        scale = 1.0 + abs(scratch[SK]) + abs(scratch[S0])
+        if (abs(scratch[SK] - state[SK]) + abs(scratch[S0] - state[S0]) > 1e-9 * scale
+                or not 0.0 <= state[MOVES] < resync_every):
+            return 7
+        return 0
+
+    pointer = types.CPointer(types.float64)
+    return cfunc(types.int64(pointer, pointer, pointer), error_model="numpy")(state_check)

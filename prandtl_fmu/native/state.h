@@ -42,6 +42,8 @@ static int core_serialize(Instance* c, const void* state, char* bytes, size_t si
     return ST_OK;
 }
 
+/* a blob of bytes (of any alignment) into a state, checked whole before it is one: into *state when the master
+ * hands one (FMI: overwritten), else into a new one */
 static int core_deserialize(Instance* c, const char* bytes, size_t size, void** state)
 {
     char buffer[256];
@@ -52,16 +54,24 @@ static int core_deserialize(Instance* c, const char* bytes, size_t size, void** 
             sizeof(State));
         return ST_ERROR;
     }
-    problem = state_problem((const State*)bytes, buffer, sizeof buffer);
+    s = (State*)malloc(sizeof(State));
+    if (s == NULL) {
+        say(c, ST_ERROR, "FMU state refused: out of memory");
+        return ST_ERROR;
+    }
+    memcpy(s, bytes, sizeof(State));
+    problem = state_problem(s, buffer, sizeof buffer);
     if (problem != NULL) {
+        free(s);
         say(c, ST_ERROR, "FMU state refused (%s)", problem);
         return ST_ERROR;
     }
-    s = (State*)malloc(sizeof(State));
-    if (s == NULL)
-        return ST_ERROR;
-    memcpy(s, bytes, sizeof(State));
-    *state = s;
+    if (*state != NULL) {
+        memcpy(*state, s, sizeof(State));
+        free(s);
+    } else {
+        *state = s;
+    }
     return ST_OK;
 }
 
