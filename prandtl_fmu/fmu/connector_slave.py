@@ -20,9 +20,11 @@ may set x several times at one communication point (iterations) without
 moving the element: only ``doStep`` commits the input sample. Initialization
 takes the element from x = 0 (the scene's u0) to the first input x.
 
-Refusals: a non-finite input at ``doStep`` is logged and the step returns
-fmi2Discard with the state unchanged; a bad parameter or input at
-``fmi2ExitInitializationMode`` fails that call with the logged reason.
+Refusals: a non-finite input at ``doStep``, or a sample whose outputs would
+overflow, is logged and the step returns fmi2Discard with the state
+unchanged; the outputs at a non-finite input are refused (fmi2Error, never
+NaN with fmi2OK); a bad parameter or input at ``fmi2ExitInitializationMode``
+fails that call with the logged reason.
 """
 
 from pythonfmu import Fmi2Causality, Fmi2Variability, Integer

@@ -24,7 +24,12 @@ initialization where it is set, and a state of another FMU or a tampered
 blob at ``fmi2SetFMUstate``/``fmi2DeSerializeFMUstate``: the reason is logged
 and the call fails, so that a master such as FMPy raises with that reason.
 Such a call fails with fmi2Error under the FMU's own loader (fmi2Fatal under
-PythonFMU's stock one, see ``common.py``); the instance stays intact.
+PythonFMU's stock one, see ``common.py``); the instance stays intact. So
+does a non-finite clock or a negative communication step (``fmi2DoStep``),
+an unknown value reference, a variable of another type, and a getter whose
+value is not a finite number: no Real is handed out with fmi2OK unless it is
+finite. A step the library cannot take (``ElementError``: its step budget, a
+non-finite result) is a Discard with the library's reason.
 """
 import math
 

@@ -17,7 +17,17 @@ these changes, each marked ``prandtl_fmu:`` in the code:
    it to NULL (FMI 2.0, 2.1.8);
 4. the GIL is released on every path, an exception's included;
 5. getters check the slave's answer (length, types) instead of reading past it;
-6. ``fmi2Terminated`` reports the last step (the stock loader kept it true after the first Discard).
+6. ``fmi2Terminated`` reports the last step (the stock loader kept it true after the first Discard);
+7. every FMI function given a NULL, unknown or freed instance returns fmi2Error (``fmi2FreeInstance``:
+   nothing), and no C++ exception reaches the host; NULL argument pointers (with nvr > 0), a NULL
+   string, a string that is not UTF-8 and a state pointer this library did not return (or has freed)
+   are refused with fmi2Error and the reason logged (the stock loader dereferenced them);
+8. FMI 2.0's co-simulation call sequence, for every function (the Reference-FMUs' masks): a call the
+   instance's mode does not allow is refused with fmi2Error, 'not allowed <where>' logged; a refused
+   call changes nothing, so the instance stays usable;
+9. a non-finite start time or communication point, a negative or non-finite communication step (or
+   one whose end is not finite) is refused with fmi2Error and the reason; ``fmi2LastSuccessfulTime``
+   is the start time before any step (the stock loader: NaN).
 
 The slave is told by the ``pythonfmu_loader`` keyword argument (``fmu/common.py``) and the
 ``__prandtl_loader__`` mark in its script's globals (``fmu/entry.py``) that it runs under this
