@@ -460,3 +460,69 @@ def test_an_exact_run_reads_only_finite_outputs_or_refuses(binaries):
             assert (status == OK and math.isfinite(value)) or status == ERROR, (name, status, value)
     finally:
         instance.free()
+
+
+# ---------------------------------------------------------------- the library's refusals reach the master
+
+@pytest.mark.parametrize("kind, name, value, time, step, words", [
+    # more internal steps than scene.ADVANCE_BUDGET in one doStep: refused at once
+    ("element", None, None, 0.1, 1e7, ["more than the budget of 1e+08 steps"]),
+    # a force whose step would overflow an output (x, v finite): the library names the quantity
+    ("element", "F", 1e300, 0.1, 1e-3, ["would not be finite"]),
+    # a coefficient outside the physical magnitudes (scene.coefficient_problem)
+    ("element", "k0", 1e51, 0.1, 0.1, ["k0", "|1e+51| is outside [1e-50, 1e+50]"]),
+    ("connector", "x", 1e200, 0.1, 0.1, ["stored_energy would not be finite"]),
+    ("connector", "c", 1e-51, 0.1, 0.1, ["parameter c", "|1e-51| is outside"]),
+])
+def test_a_step_the_library_refuses_is_a_discard_with_its_reason_and_changes_nothing(binaries, kind, name, value,
+                                                                                     time, step, words):
+    """Element.advance's budget and its refusal of a non-finite output, the connector's refusal of an overflowing
+    sample, and scene.coefficient_problem's magnitudes: fmi2Discard with the library's reason, the outputs as
+    they were, and a good value and step after it are taken."""
+    binary = binaries[kind]
+    instance = binary.instantiate().initialized()
+    try:
+        assert instance.call("DoStep", 0.0, 0.1, 1) == OK
+        outputs = instance.get(*binary.outputs)
+        good = None if name is None else instance.get(name)[1][0]
+        if name is not None:
+            assert instance.set(name, value) == OK
+        before = len(instance.messages)
+        assert instance.call("DoStep", time, step, 1) == DISCARD
+        reasons = [text for status, category, text in instance.messages[before:]
+                   if status == DISCARD and category == "logStatusDiscard"]
+        assert reasons and all(word in reasons[0] for word in words), instance.messages[before:]
+        if name is not None:
+            assert instance.set(name, good) == OK
+        assert instance.get(*binary.outputs) == outputs
+        assert instance.call("DoStep", 0.1, 0.1, 1) == OK
+    finally:
+        instance.free()
+
+
+@pytest.mark.parametrize("kind, name, value", [("element", "k0", 1e51), ("element", "m", 1e-51),
+                                               ("connector", "k0", 1e60)])
+def test_a_magnitude_outside_the_physical_range_is_refused_at_initialization(binaries, kind, name, value):
+    instance = binaries[kind].instantiate()
+    try:
+        assert instance.call("SetupExperiment", 0, 0.0, 0.0, 0, 0.0) == OK
+        assert instance.call("EnterInitializationMode") == OK
+        assert instance.set(name, value) == OK
+        assert instance.call("ExitInitializationMode") == ERROR
+        assert any(f"parameter {name}: |{value:g}| is outside [1e-50, 1e+50]" in text
+                   for status, _, text in instance.messages if status == ERROR), instance.messages
+    finally:
+        instance.free()
+
+
+def test_an_output_the_connector_cannot_show_is_refused_not_handed_out(binaries):
+    """A sample whose energy would overflow: the preview refuses (fmi2Error with the library's reason) instead of
+    showing inf; a doStep would be a Discard."""
+    instance = binaries["connector"].instantiate().initialized()
+    try:
+        assert instance.set("x", 1e200) == OK
+        status, _ = instance.get("stored_energy")
+        assert status == ERROR
+        assert "stored_energy would not be finite" in instance.messages[-2][2] + instance.messages[-1][2]
+    finally:
+        instance.free()
