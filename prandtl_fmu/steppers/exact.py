@@ -352,7 +352,7 @@ NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL, EXHAUSTED = -1, 0, 1, 2, 3
 # The bounds on the work of one step (issue 31): a step that needs more fails (the loop returns fewer steps,
 # the driver's ElementError / fmi2Discard; :func:`failure_reason` says which bound ran out), never a loop.
 PHASE_BUDGET = 100_000  # phases (events) in one step
-WALK_BUDGET = 100_000  # intervals of one validated subdivision (one event search)
+WALK_BUDGET = 100_000  # intervals of the validated subdivisions (and zeros of v walked over) of one step
 ILLINOIS_LIMIT = 64  # Illinois iterations of one root refinement, then bisection ...
 REFINE_LIMIT = 64 + 1200  # ... which reaches adjacent doubles from any bracket within 1200 halvings
 # why a step failed (:func:`attempt`)
@@ -385,6 +385,7 @@ def attempt(model, load, t, h, x, v, u, energy):
     released = False  # a stick phase just ended with the net force at the threshold: slide now
     failure = TOOK_STEP
     phases = 0
+    budget = np.full(1, WALK_BUDGET)  # the intervals the event searches of this step may take
     while t < end:  # phases; each ends at an event, a load kink or t + h
         phases += 1
         if phases > PHASE_BUDGET:
@@ -422,7 +423,7 @@ def attempt(model, load, t, h, x, v, u, energy):
                                                                   alpha)
             y0[1] = v
         tau_hit, hit = _first_event(a, y0, load, t, m, _damping(c), stiffness, span, direction, up, down,
-                                    sliding)
+                                    sliding, budget)
         if hit == EXHAUSTED:
             failure = SEARCH_EXHAUSTED
             break
@@ -481,7 +482,9 @@ def explain(failure: int, when: float) -> str:
             TOO_MANY_PHASES: f"more than {PHASE_BUDGET} events in one step, at t = {when!r} s (a step of 'exact' "
                              "takes at most that many: output more often, or use another stepper)",
             STALLED: f"more than 16 + 2 n events at one instant t = {when!r} s (events that do not advance time)",
-            SEARCH_EXHAUSTED: f"an event search took more than {WALK_BUDGET} intervals at t = {when!r} s",
+            SEARCH_EXHAUSTED: f"the event searches of one step took more than {WALK_BUDGET} intervals, at t = "
+                              f"{when!r} s (a step of 'exact' takes at most that many: output more often, or "
+                              "use another stepper)",
             NOT_FINITE: f"the state became non-finite at t = {when!r} s"}.get(failure, f"failure {failure}")
 
 
@@ -563,9 +566,9 @@ def _stick_end(load, t, span, push, alpha):
 
 
 @kernel
-def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sliding):
+def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sliding, budget):
     """(tau, which) of the first event of the phase in (0, span], or (span, NO_EVENT); (span, EXHAUSTED) when
-    the search ran out of its budget (:data:`WALK_BUDGET`).
+    the step's ``budget`` (intervals of the walk and zeros of v, counted down from :data:`WALK_BUDGET`) ran out.
 
     x is monotone between zeros of v: the search walks from one zero of v to
     the next (:func:`_next_zero`) and checks the levels on each monotone
@@ -581,7 +584,10 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         sign = math.copysign(1.0, y0[1])
     if sign == 0.0:
         sign = math.copysign(1.0, _row_times(a, y0, 1))  # at rest: v leaves zero with the acceleration
-    for _ in range(WALK_BUDGET):  # from one zero of v to the next
+    while True:  # from one zero of v to the next
+        budget[0] -= 1
+        if budget[0] < 0:
+            return span, EXHAUSTED
         y_lo = _expm_times(a, lo, y0)
         if not sliding and _cannot_reach(y_lo, load, t + lo, m, c, stiffness, up, down):
             return span, NO_EVENT
@@ -590,7 +596,7 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         if load[0] == CONSTANT or (load[0] == TABLE and y0[3] == 0.0):  # a flat piece of a table is constant
             zero = _next_zero_free(a, y0, m, c, stiffness, lo, span, sign, at_zero)
         else:
-            zero, crossed = _walk_validated(a, y0, lo, span, sign, level, rho, weights, norm)
+            zero, crossed = _walk_validated(a, y0, lo, span, sign, level, rho, weights, norm, budget)
             if crossed:
                 return zero, reached
             if math.isnan(zero):
@@ -604,7 +610,6 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         if sliding:
             return z, REVERSAL
         lo, sign, at_zero = z, -sign, True
-    return span, EXHAUSTED  # more than WALK_BUDGET zeros of v in one phase
 
 
 @kernel
@@ -682,11 +687,11 @@ def _next_zero_free(a, y0, m, c, stiffness, lo, hi, sign, at_zero):
 
 
 @kernel
-def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
+def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm, budget):
     """The next zero of v in (lo, hi] by validated subdivision (see the module docstring), stopping early
     where x reaches ``level``: returns (tau, crossed), tau = -1 when v keeps its sign up to hi and x does
     not reach the level (checked at every point the walk passes: x is monotone in between), tau = NaN when
-    the walk took :data:`WALK_BUDGET` intervals without reaching hi.
+    the step's ``budget`` of intervals (one entry, counted down) ran out.
     """
     a2 = _matmul(a, a)
     bound1 = 0.0  # |row 1 of A| and |row 1 of A^2| in the weighted norm
@@ -701,9 +706,10 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
     length = min(hi - lo, longest)
     if not np.any(_matvec(a, _expm_times(a, lo, y0))):
         return -1.0, False  # a fixed point: nothing moves until the phase ends
-    for _ in range(WALK_BUDGET):
-        if not lo < hi:
-            break
+    while lo < hi:
+        budget[0] -= 1
+        if budget[0] < 0:
+            return np.nan, False  # the step's budget ran out: the step fails (see attempt)
         y = _expm_times(a, lo, y0)
         if lo > start and sign * (y[0] - level) >= 0.0:
             return _refine(a, y0, previous, lo, 0, level, -sign), True
@@ -738,8 +744,6 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm):
             length = min(2.0 * length, longest)
             continue
         length *= 0.5
-    if lo < hi:
-        return np.nan, False  # the walk's budget ran out: the step fails (see step)
     if lo > start and sign * (_expm_times(a, lo, y0)[0] - level) >= 0.0:
         return _refine(a, y0, previous, lo, 0, level, -sign), True
     return -1.0, False

@@ -172,10 +172,10 @@ def _excess(ell, j, y, level):
 
 
 @kernel
-def _first_event(a, y0, ell, level, t, span, rho):
+def _first_event(a, y0, ell, level, t, span, rho, budget):
     """(tau, j): the first sign change of ``ell[j] . y - level[j]`` (beyond rounding: :func:`_excess`) in
-    (0, span], or (span, -1); (span, EXHAUSTED) after WALK_BUDGET intervals. ``t``: the phase's start (the
-    rounding level of tau), ``rho`` its rate (1/s)."""
+    (0, span], or (span, -1); (span, EXHAUSTED) when the step's ``budget`` of intervals (counted down) ran
+    out. ``t``: the phase's start (the rounding level of tau), ``rho`` its rate (1/s)."""
     count, size = ell.shape
     if count == 0:
         return span, -1
@@ -212,9 +212,10 @@ def _first_event(a, y0, ell, level, t, span, rho):
     length = min(span, longest)
     if not np.any(_matvec(a, y0)):
         return span, -1  # a fixed point (A y0 = 0): every g_j is constant, nothing happens in the phase
-    for _ in range(WALK_BUDGET):
-        if not lo < span:
-            break
+    while lo < span:
+        budget[0] -= 1
+        if budget[0] < 0:
+            return span, EXHAUSTED  # the step's budget ran out: the step fails
         y = _expm_times(a, lo, y0)
         b = min(span, lo + length)
         length = b - lo
@@ -262,8 +263,6 @@ def _first_event(a, y0, ell, level, t, span, rho):
             return best, which
         lo = b
         length = min(2.0 * length, longest)
-    if lo < span:
-        return span, EXHAUSTED  # the walk's budget ran out: the step fails
     return span, -1
 
 
@@ -386,6 +385,7 @@ def attempt(model, load, t, h, x, v, u, energy):
     released = False  # a stick just ended with the net force at the threshold: slide now
     failure = TOOK_STEP
     phases = 0
+    budget = np.full(1, WALK_BUDGET)  # the intervals the event searches of this step may take
     while t < end:  # phases; each ends at an event, a load kink or t + h
         phases += 1
         if phases > PHASE_BUDGET:
@@ -412,7 +412,7 @@ def attempt(model, load, t, h, x, v, u, energy):
             stiffness += k[i]
             relaxation += rate[i]
         rho = math.sqrt(stiffness / m) + _damping(c) / m + abs(load[3]) + relaxation  # > 0: every k_i > 0
-        tau, fired = _first_event(a, y0, ell, level, t, span, rho)
+        tau, fired = _first_event(a, y0, ell, level, t, span, rho, budget)
         if fired == EXHAUSTED:
             failure = SEARCH_EXHAUSTED
             break
