@@ -12,8 +12,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from prandtl_fmu import simulate
-from prandtl_fmu.driver import Element, ElementError, compile_model
-from prandtl_fmu.steppers import exact, exact_series
+from prandtl_fmu.driver import Element, ElementError
+from prandtl_fmu.steppers import exact
 
 from .conftest import ROOT, make_scene
 
