@@ -30,11 +30,19 @@ the rounding level of t where signs decide. Among
 the functionals that change sign on the interval, each zero is located by Illinois' method and the first is
 the event; every functional positive there fires with it (branches of equal thresholds).
 
+The bounds are also taken through |A y(a)| (g_j^(p) = l_j A^(p-1) e^(A s) A y(a)), whichever is smaller: where
+the state barely moves (a net force that tends to the threshold as the branches relax, a fixed point) they
+vanish with the motion, and the walk takes O(1) intervals per relaxation time instead of crawling at the
+rounding of the load's size (issue 31, item 2). A phase with A y0 = 0 is a fixed point: no event.
+
 The mode of a branch on its threshold at the start of a phase: it slips if its inflow is positive, or zero
-with a positive derivative (sign(u_i) v' > 0); otherwise it sticks. An event is a sign change beyond the rounding of g_j's terms (8 ulps), so
-a branch that has just stuck on its threshold, or creeps exactly at v = lambda_i eta_i, fires nothing. Events at one instant are finitely many: more
-than 16 + 4 n phases in a row that do not advance t end the step with a non-finite state, which the driver
-reports as a failed step: never a silent stop.
+with a positive derivative (sign(u_i) v' > 0); otherwise it sticks. A branch of elastic range 0 (u_i = 0 on
+both thresholds) slips to the side of v, else of v', and sticks only with no flow (issue 31, item 1: it
+stuck, fired its level at once, stuck again, ... for ever). An event is a sign change beyond the rounding of
+g_j's terms (8 ulps), so a branch that has just stuck on its threshold, or creeps exactly at v = lambda_i eta_i,
+fires nothing. Events at one instant are finitely many: more than 16 + 4 n phases in a row that do not
+advance t fail the step, as do the budgets of ``exact.py`` (phases, walk intervals of the step, refinement
+iterations): the driver reports a failed step, never a silent stop, never a loop.
 
 The cost of a phase is a few dozen (6 + n)-square matrix exponentials per interval of the walk, whose length
 is at most 1 / |A| (no energy bound for long quiet stretches here, unlike the 6 x 6 case): O(n^3) per
