@@ -4,9 +4,8 @@
 #include "fmi/fmi2Functions.h"
 #include "fmu_except.hpp"
 
+#include <charconv>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <map>
 #include <memory>
@@ -128,17 +127,12 @@ struct refused : std::runtime_error
     { }
 };
 
-// the shortest text that reads back as `value` (as Python's repr: 0.1, not 0.10000000000000001)
+// the shortest text that reads back as `value`, whatever the host's locale (as Python's repr: 0.1, 1e+51, nan)
 std::string number(double value)
 {
     char text[32];
-    for (int digits = 15; digits <= 17; ++digits) {
-        std::snprintf(text, sizeof text, "%.*g", digits, value);
-        if (std::strtod(text, nullptr) == value) {
-            break;
-        }
-    }
-    return text;
+    const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+    return std::string(text, end);
 }
 
 void requireNotNull(const void* pointer, const char* function, const char* argument)
