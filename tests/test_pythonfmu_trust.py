@@ -103,13 +103,13 @@ SIGNATURES = {
 }
 
 
-def build(folder, scene_text, stem):
-    """Build the scene's PythonFMU FMU (our loader) into ``folder``; its path."""
+def build(folder, scene_text, stem, loader="prandtl"):
+    """Build the scene's PythonFMU FMU (our loader, or PythonFMU's stock one) into ``folder``; its path."""
     from prandtl_fmu.fmu.build import build_fmu
 
     scene = Path(folder) / f"{stem}.toml"
     scene.write_text(scene_text)
-    return str(build_fmu(scene, Path(folder) / f"{stem}.fmu"))
+    return str(build_fmu(scene, Path(folder) / f"{stem}.fmu", loader=loader))
 
 
 class Binary:
@@ -182,7 +182,8 @@ def run_child(script, *arguments, timeout=300):
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     folder = tmp_path_factory.mktemp("pythonfmu_trust")
-    return {"element": build(folder, ELEMENT_SCENE, "element"), "connector": build(folder, CONNECTOR_SCENE, "connector")}
+    return {"element": build(folder, ELEMENT_SCENE, "element"),
+            "connector": build(folder, CONNECTOR_SCENE, "connector")}
 
 
 @pytest.fixture(scope="module")
@@ -329,6 +330,41 @@ def test_a_non_finite_time_or_a_negative_step_is_refused_and_the_clock_stays(bin
         assert instance.call("DoStep", 0.1, 0.1, 1) == OK
     finally:
         instance.free()
+
+
+STOCK_CLOCK = """
+import json, sys
+from tests.test_pythonfmu_trust import Binary
+for kind, path in zip(("element", "connector"), sys.argv[1:3]):
+    instance = Binary(path).instantiate(logging=True).initialized()  # the stock loader logs nothing without
+    for time, step in ((float("nan"), 0.1), (0.0, float("inf")), (0.0, -0.1)):
+        status = instance.call("DoStep", time, step, 1)
+        print(json.dumps([kind, status, [text for _, _, text in instance.messages if "fmi2DoStep refused" in text]]))
+        instance.messages.clear()
+    status = instance.call("DoStep", 0.0, 0.1, 1)
+    print(json.dumps([kind, status, instance.get(*instance.binary.outputs)]), flush=True)
+    instance.call("Terminate")
+    instance.free()
+"""
+
+
+def test_under_the_stock_loader_the_slaves_refuse_a_bad_clock_and_survive(tmp_path):
+    """PythonFMU's stock loader passes NaN, inf and negative steps on: the slaves refuse them (fmi2Fatal there, as
+    every refusal, see fmu/common.py) with the reason, and step on. The element used to raise outside its step's
+    guard (the library's 'time must be finite'), a bare exception for which that loader freed the instance's
+    objects, and took a negative step as a Discard."""
+    paths = [build(tmp_path, ELEMENT_SCENE, "element", loader="pythonfmu"),
+             build(tmp_path, CONNECTOR_SCENE, "connector", loader="pythonfmu")]
+    done = run_child(STOCK_CLOCK, *paths)
+    results = [json.loads(line) for line in done.stdout.splitlines()]
+    assert len(results) == 8, (results, done.stderr[-2000:])  # the process may die at exit (test_loader.py)
+    for kind in ("element", "connector"):
+        *refusals, (_, status, (got, outputs)) = [r for r in results if r[0] == kind]
+        assert [status for _, status, _ in refusals] == [FATAL] * 3, refusals
+        assert all(len(reasons) == 1 for _, _, reasons in refusals), refusals
+        assert "communication point nan must be finite" in refusals[0][2][0]
+        assert "communication step -0.1 must be finite and >= 0" in refusals[2][2][0]
+        assert status == OK and got == OK and all(math.isfinite(value) for value in outputs)
 
 
 @pytest.mark.parametrize("start, stop_defined, stop, culprit", [

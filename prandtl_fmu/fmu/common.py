@@ -60,7 +60,8 @@ class SlaveBase(Fmi2Slave):
         if not finite_number(current_time):
             return f"fmi2DoStep refused: communication point {current_time!r} must be finite"
         if not (finite_number(step_size) and step_size >= 0 and math.isfinite(current_time + step_size)):
-            return f"fmi2DoStep refused: communication step {step_size!r} must be finite and >= 0 (from t = {current_time!r})"
+            return (f"fmi2DoStep refused: communication step {step_size!r} must be finite and >= 0 "
+                    f"(from t = {current_time!r})")
         return None
 
     # ------------------------------------------------------------ getters and setters
@@ -91,8 +92,9 @@ class SlaveBase(Fmi2Slave):
 
     def _write(self, var, value, function):
         if var.setter is None:
-            self._fail(f"{function} refused: {var.name} cannot be set (its causality is "
-                       f"{getattr(var.causality, 'name', None)}, its variability {getattr(var.variability, 'name', None)})")
+            causality, variability = (getattr(kind, "name", None) for kind in (var.causality, var.variability))
+            self._fail(f"{function} refused: {var.name} cannot be set (causality {causality}, variability "
+                       f"{variability})")
         try:
             var.setter(value)
         except Refused:
