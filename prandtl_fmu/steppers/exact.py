@@ -355,6 +355,21 @@ def _direction(k0, k, load, t, x, v, u):
 
 
 @kernel
+def _balanced(k0, k, load, t, x, u):
+    """Whether the net force F(t) - k0 x - sum k_i u_i is within the rounding of its terms (8 ulps of their sum
+    of magnitudes): an element built in equilibrium stays there exactly."""
+    force = force_at(load, t)
+    spring = _linear_spring(k0) * x
+    push = force - spring
+    size = abs(force) + abs(spring)
+    if k is not None:
+        for i in range(k.shape[0]):
+            push -= k[i] * u[i]
+            size += abs(k[i] * u[i])
+    return abs(push) <= 8.0 * _EPS * size
+
+
+@kernel
 def _leaving_direction(a, y0):
     """At rest with no net force: the sign of the first nonzero derivative of v, (A^p y0)[1], p = 1..5;
     0 when all vanish (then v = 0 for ever: a fixed point)."""
@@ -428,10 +443,15 @@ def attempt(model, load, t, h, x, v, u, energy):
                 continue
         releasing = released
         released = False
+        balanced = v == 0.0 and alpha == 0.0 and _balanced(k0, k, load, t, x, u)
+        if balanced:
+            direction = 0.0  # at rest with a net force at the rounding of its terms: in equilibrium
         a, y0, stiffness, up, down, sliding, reaction = _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha)
         y0[1] = v
-        if releasing:
-            y0[2] = 0.0  # the stick ended where the net force is exactly +-alpha: it leaves the band from there
+        if releasing or balanced:
+            # a release: the stick ended where the net force is exactly +-alpha, it leaves the band from there;
+            # an equilibrium: the net force is 0, not the rounding of F - R (which set it creeping at 1e-18 m/s)
+            y0[2] = 0.0
         sliding = sliding or alpha > 0.0  # with friction on the mass, a reversal is an event (it may stick)
         if direction == 0.0:
             direction = _leaving_direction(a, y0)
