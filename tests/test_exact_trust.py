@@ -13,6 +13,7 @@ from scipy.optimize import brentq
 
 from prandtl_fmu import simulate
 from prandtl_fmu.driver import Element, ElementError
+from prandtl_fmu.loads import plus
 from prandtl_fmu.steppers import exact
 
 from .conftest import ROOT, make_scene
@@ -269,3 +270,8 @@ def test_a_failed_step_leaves_the_element_as_it_was():
     with pytest.raises(ElementError):
         element.advance(1e6, 0.0, scene_load=True)  # 1e6 s in one step: ~1e6 events under the harmonic load
     assert (element.x, element.v, element.elongations().tolist(), element.energy()) == before
+    # what the driver can add to its line (see the report of issue 31): which bound ran out, and when
+    reason = exact.failure_reason(element.model, plus(scene.load.compile(), 0.0), element.time, 1e6, element.x,
+                                  element.v, element.elongations())
+    assert reason.startswith(f"the event searches of one step took more than {exact.WALK_BUDGET} intervals") or \
+        reason.startswith(f"more than {exact.PHASE_BUDGET} events in one step"), reason
