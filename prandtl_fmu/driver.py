@@ -457,12 +457,11 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
 
 def _check_finite(scene: Scene, stepper: str, times, out, out_energy) -> None:
     """ElementError naming the first output column and time where ``out`` (x, v, reaction) or the energy rows
-    are not finite: no output is ever NaN or inf (an energy account a stepper does not book is NaN, not inf)."""
-    bad = ~np.isfinite(out)
-    tables = [(("x", "v", "reaction"), bad)]
+    are not finite: no output is ever NaN or inf."""
+    tables = [(("x", "v", "reaction"), ~np.isfinite(out))]
     if out_energy is not None:
-        tables.append((("kinetic_energy", "stored_energy"), ~np.isfinite(out_energy[:, :2])))
-        tables.append((ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,), np.isinf(out_energy[:, 2:])))
+        names = ("kinetic_energy", "stored_energy") + ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,)
+        tables.append((names, ~np.isfinite(out_energy)))
     for names, bad in tables:
         if bad.any():
             row, column = np.argwhere(bad)[0]
@@ -693,13 +692,10 @@ class Element(OutputMemo):
 
     def _overflowed(self) -> Optional[str]:
         """The first output of the current state that is not a finite number (x, v, reaction, an energy), or
-        None. A non-booked energy account (NaN: 'exact' books none) is not an overflow."""
-        names = ("x", "v", "reaction", "kinetic_energy", "stored_energy")
-        for name, value in zip(names, (*self._out[0].tolist(), *self._energy_row[0, :2].tolist())):
+        None."""
+        names = ("x", "v", "reaction", "kinetic_energy", "stored_energy") + ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,)
+        for name, value in zip(names, (*self._out[0].tolist(), *self._energy_row[0].tolist())):
             if not math.isfinite(value):
-                return name
-        for name, value in zip(ENERGY_COLUMNS[2:5] + (FRICTION_COLUMN,), self._energy_row[0, 2:].tolist()):
-            if math.isinf(value):
                 return name
         return None
 
@@ -779,8 +775,7 @@ class Element(OutputMemo):
             "time": self.time, "clock": [self._origin, self._steps, self._grid or 0.0],
             "x": self.x, "v": self.v, "force": self.force,
             "branch_kernel": self.branch_kernel, "u": [], "u_reference": [],
-            # None: not booked (NaN, since exact ran): plain JSON has no NaN
-            "energy_account": [None if math.isnan(value) else value for value in self.account.tolist()],
+            "energy_account": self.account.tolist(),
             "initial_energy": self.initial_energy,
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
@@ -795,8 +790,7 @@ class Element(OutputMemo):
         booked = state["energy_account"]
         if not isinstance(booked, (list, tuple)):
             raise ValueError(f"state has energy_account = {booked!r:.60}, not a list of numbers")
-        account = np.array([math.nan if value is None else plain_number(value, "energy_account")
-                            for value in booked], dtype=float)
+        account = np.array([plain_number(value, "energy_account") for value in booked], dtype=float)
         if account.shape[0] != 4:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 4")
         kind = state.get("branch_kernel", "play")
