@@ -2,7 +2,10 @@
 
 A host that is not a Python process meets what FMPy forgives (a NULL log category aborts OMSimulator, a refusal
 must reach a logger that was instantiated with logging off). A PythonFMU FMU in such a host needs the host's
-libpython preloaded and the environment's packages on PYTHONPATH (the README's recipe): :func:`python_recipe`."""
+libpython preloaded and the environment's packages on PYTHONPATH (the README's recipe): :func:`python_recipe`.
+
+The trust host of ``tests/c_host/trust_host.c`` (FMI 2.0 or 3.0, with the sanitizers where they run) calls a native
+FMU as nobody should (issue 31): :func:`compile_trust_host`, :func:`built_native`, :func:`run_trust`."""
 import os
 import shutil
 import subprocess

@@ -1,5 +1,5 @@
 """Random FMI call sequences through the native FMU (issue 31): seeded, reproducible, bounded (a few seconds per
-FMU once it is built).
+FMU once it is built; the FMUs are those of test_native_trust.py, built once per process).
 
 Each sequence runs in its own process, the C host of tests/c_host/trust_host.c built with the sanitizers where
 they run (the FMU too): calls in any order, NULL instances and pointers, NaN, inf, huge and subnormal values for
@@ -16,13 +16,14 @@ import pytest
 from .native_host import built_native, compile_trust_host, run_trust
 from .test_native_trust import DECLARED, SCENES, START, forged
 
-SEQUENCES = 40  # per FMU: 4 FMUs, a few seconds each in all
+SEQUENCES = 120  # per FMU: about 3 s each once it is built
 LENGTH = 80
 REALS = [math.nan, math.inf, -math.inf, 1e308, -1e308, 5e-324, 1e-60, 1e60, 0.0, -0.0, 1.0, -1.0, 0.3, 1e-3, 2.0]
 POINTS = [0.0, 0.1, 0.3, -1.0, 1e6, math.nan, math.inf, 1e308]
 STEPS = [0.1, 0.01, 1e-3, 0.0, -0.1, math.nan, math.inf, 1e7, 1e12, 1e-160, 1e308]
 INTERNAL_STEPS = [1e-3, 1e-2, 1e-6, 1e-200, 0.0, -1.0, math.nan]  # never more than 1e5 internal steps a doStep
-NAMES = ["NULL", "implicit", "verlet", "projected", "symplectic", "exact", "nonsense", "x" * 100, ""]
+# not 'exact': its energy account is NaN by design ("not booked"; the library's rule), which a getter shows
+NAMES = ["NULL", "implicit", "verlet", "projected", "symplectic", "nonsense", "x" * 100, ""]
 
 
 def blobs(host, fmu, folder, rng):

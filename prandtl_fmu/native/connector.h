@@ -320,7 +320,7 @@ static int core_do_step(Instance* c, double t, double H)
 static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
 {
     if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_PARAM || var->what == W_CBRANCH)) {
-        say(c, ST_ERROR, FMI "SetReal refused: value reference %u is not a Real input or parameter", vr);
+        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
         return ST_ERROR;
     }
     return ST_OK;

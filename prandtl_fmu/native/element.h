@@ -194,10 +194,15 @@ static const char* advance(Element* e, double duration, double force, int scene_
         if (e->grid != 0.0 && fabs(duration - e->grid) <= 1e-9 * e->grid)
             h = e->grid; /* ... of the grid's step when it is that to rounding */
     }
-    if (duration < SHORTEST_STEP)
-        return "the duration is shorter than 1e-150 s (a step's square underflows)";
-    if (!(duration / h < MAX_STEPS))
-        return "the duration is more than 2^53 internal steps: advance by shorter durations or with a larger step";
+    if (duration < SHORTEST_STEP) {
+        snprintf(buffer, size, "the duration is shorter than %g s (a step's square underflows)", SHORTEST_STEP);
+        return buffer;
+    }
+    if (!(duration / h < MAX_STEPS)) {
+        snprintf(buffer, size, "the duration is more than %.17g internal steps (2^53): advance by shorter durations "
+                 "or with a larger step", MAX_STEPS);
+        return buffer;
+    }
     split_duration(duration, h, &whole, &rest);
     if (whole + (rest > 0) > ADVANCE_BUDGET) { /* Element.advance: ElementError, never run for days */
         snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
@@ -425,8 +430,9 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         return problem;
     if (!HAS_STRIBECK && e->p[P_ALPHA_KINETIC] != e->p[P_ALPHA])
         return "it holds a non-finite or out-of-range value";
-    for (i = 0; i < 4; i++) /* finite, or NaN: not booked */
-        if (isinf(e->account[i]) || isinf(e->erow[2 + i]))
+    for (i = 0; i < 4; i++) /* finite, or NaN all four: not booked (a stepper with ENERGY_ACCOUNT = False ran) */
+        if (!(isfinite(e->account[i]) || isnan(e->account[0])) || !(isnan(e->account[i]) == isnan(e->account[0])) ||
+            !(isnan(e->erow[2 + i]) == isnan(e->account[0])) || isinf(e->erow[2 + i]))
             return "its energy account is not finite (nor the NaN of an account not booked)";
     if (!(isfinite(e->out[0]) && isfinite(e->out[1]) && isfinite(e->out[2]) && isfinite(e->erow[0]) &&
           isfinite(e->erow[1]) && isfinite(e->initial_energy)))
@@ -731,17 +737,21 @@ static void rollback(Instance* c)
     memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
 }
 
-/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show, or NULL */
+/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show after a step, or NULL: an
+ * energy account may be NaN only when not booked (a stepper with ENERGY_ACCOUNT = False, or NaN before the step):
+ * a stepper that books it never makes it NaN */
 static const Var* unshowable_output(Instance* c, double* value)
 {
-    int i;
+    int i, unbooked = !ENERGY_ACCOUNT[c->el.stepper];
+    for (i = 0; i < 4; i++)
+        unbooked = unbooked || isnan(c->saved.account[i]);
     for (i = 0; i < N_VARS; i++) {
         const Var* var = &VARS[i];
         if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_STIFFNESS &&
             var->what != W_ENERGY)
             continue;
         *value = real_value(c, var);
-        if (!showable(var, *value))
+        if (!showable(var, *value) || (isnan(*value) && !unbooked))
             return var;
     }
     return NULL;
@@ -819,7 +829,7 @@ static int core_do_step(Instance* c, double t, double H)
 static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
 {
     if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP)) {
-        say(c, ST_ERROR, FMI "SetReal refused: value reference %u is not a Real input or parameter", vr);
+        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
         return ST_ERROR;
     }
     if (var->what == W_PARAM && c->initialized && (var->index == P_X0 || var->index == P_V0) &&

@@ -6,6 +6,7 @@
 #include "fmi2Functions.h"
 #define FMI "fmi2"
 #define FMU_STATE "FMUstate" /* fmi2GetFMUstate; FMI 3.0 writes fmi3GetFMUState */
+#define FLOAT_SETTER "fmi2SetReal"
 #define STANDARD "FMI 2.0"
 #define STEPPING_NAME "stepComplete"
 #include "scene.h"

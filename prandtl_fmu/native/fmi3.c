@@ -9,6 +9,7 @@
 #include "fmi3Functions.h"
 #define FMI "fmi3"
 #define FMU_STATE "FMUState"
+#define FLOAT_SETTER "fmi3SetFloat64"
 #define STANDARD "FMI 3.0"
 #define STEPPING_NAME "step mode"
 #include "scene.h"
