@@ -216,8 +216,6 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
             [str(int(kernels.takes_stack(name))) for name in steppers] + ["0"]) + "};",
         "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
             [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
-        "static const int ENERGY_ACCOUNT[] = {" + ", ".join(  # 0: a stepper that books no energy account (NaN)
-            [str(int(getattr(get_stepper(name), "ENERGY_ACCOUNT", True))) for name in steppers] + ["1"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",

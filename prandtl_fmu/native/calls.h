@@ -56,8 +56,7 @@ static int experiment_valid(Instance* c, double start, int stop_defined, double 
     return 1;
 }
 
-/* a Real/Float64 a getter hands out: never NaN or inf with an OK status (the energy a stepper does not book is its
- * documented NaN); logs the refusal */
+/* a Real/Float64 a getter hands out: never NaN or inf with an OK status; logs the refusal */
 static int shown(Instance* c, const Var* var, double value, const char* function)
 {
     if (showable(var, value))

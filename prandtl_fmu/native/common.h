@@ -134,6 +134,9 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
     return NULL;
 }
 
+/* whether an output's value may be shown: finite (every stepper books its energy account, as driver.Element) */
+static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
+
 static const Var* find(unsigned vr, int type)
 {
     int i;

@@ -254,9 +254,6 @@ static int core_exit_initialization(Instance* c)
     return ST_OK;
 }
 
-/* whether an output's value may be shown (the connector books every energy: finite) */
-static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
-
 /* the first output (force, stiffness, an energy) that is not a number to show at the inputs set last, or NULL */
 static const Var* unshowable_output(Instance* c, double* value)
 {

@@ -397,13 +397,6 @@ static void capture(const Instance* c, State* s)
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
-/* whether an output's value may be shown: finite, or the NaN of an energy account that was not booked (a stepper
- * with ENERGY_ACCOUNT = False, exact, leaves it NaN; then it stays NaN: driver.Element._overflowed) -- never inf */
-static int showable(const Var* var, double value)
-{
-    return isfinite(value) || (isnan(value) && var->what == W_ENERGY && var->index >= 2);
-}
-
 /* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
  * values (a checksum detects accidents, not edits: a blob with a recomputed one is checked field by field) */
 static const char* state_problem(const State* s, char* buffer, size_t size)
@@ -430,10 +423,9 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         return problem;
     if (!HAS_STRIBECK && e->p[P_ALPHA_KINETIC] != e->p[P_ALPHA])
         return "it holds a non-finite or out-of-range value";
-    for (i = 0; i < 4; i++) /* finite, or NaN all four: not booked (a stepper with ENERGY_ACCOUNT = False ran) */
-        if (!(isfinite(e->account[i]) || isnan(e->account[0])) || !(isnan(e->account[i]) == isnan(e->account[0])) ||
-            !(isnan(e->erow[2 + i]) == isnan(e->account[0])) || isinf(e->erow[2 + i]))
-            return "its energy account is not finite (nor the NaN of an account not booked)";
+    for (i = 0; i < 4; i++) /* numbers only, as the library's saved state */
+        if (!(isfinite(e->account[i]) && isfinite(e->erow[2 + i])))
+            return "its energy account is not finite";
     if (!(isfinite(e->out[0]) && isfinite(e->out[1]) && isfinite(e->out[2]) && isfinite(e->erow[0]) &&
           isfinite(e->erow[1]) && isfinite(e->initial_energy)))
         return "its outputs are not finite";
@@ -737,21 +729,17 @@ static void rollback(Instance* c)
     memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
 }
 
-/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show after a step, or NULL: an
- * energy account may be NaN only when not booked (a stepper with ENERGY_ACCOUNT = False, or NaN before the step):
- * a stepper that books it never makes it NaN */
+/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show after a step, or NULL */
 static const Var* unshowable_output(Instance* c, double* value)
 {
-    int i, unbooked = !ENERGY_ACCOUNT[c->el.stepper];
-    for (i = 0; i < 4; i++)
-        unbooked = unbooked || isnan(c->saved.account[i]);
+    int i;
     for (i = 0; i < N_VARS; i++) {
         const Var* var = &VARS[i];
         if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_STIFFNESS &&
             var->what != W_ENERGY)
             continue;
         *value = real_value(c, var);
-        if (!showable(var, *value) || (isnan(*value) && !unbooked))
+        if (!showable(var, *value))
             return var;
     }
     return NULL;
