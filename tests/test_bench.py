@@ -7,6 +7,9 @@ import pytest
 from prandtl_fmu import STEPPERS
 from prandtl_fmu.cli import main
 
+# the quick benchmark run (minutes of compiling and timing): run by .ci/run after the quick suite
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def quick_bench(tmp_path_factory):

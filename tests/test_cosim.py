@@ -11,6 +11,9 @@ from fmpy import simulate_fmu
 from .conftest import ROOT
 from .fmu_tools import held_input
 
+# the masters (libcosim, ecos, fmusim, OMSimulator) running the FMUs: run by .ci/run after the quick suite
+pytestmark = pytest.mark.slow
+
 spec = importlib.util.spec_from_file_location("run_cosim", ROOT / "examples" / "cosim" / "run_cosim.py")
 run_cosim = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(run_cosim)

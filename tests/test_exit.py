@@ -105,6 +105,7 @@ def test_no_memory_error_in_the_loader_at_exit_under_valgrind(tmp_path):
     assert ours == [], "\n".join(ours)
 
 
+@pytest.mark.slow
 def test_scripted_fmpy_runs_exit_with_status_0_beside_busy_processes(tmp_path):
     """20 fresh processes run simulate_fmu on the FMU and exit normally (no os._exit), 5 at a time beside two
     CPU-bound processes; half import numba and the library before the FMU is loaded. Every exit status is 0

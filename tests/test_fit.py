@@ -105,6 +105,7 @@ def bouc_wen_loop():
     return t, x, 0.1 * x + 0.9 * z
 
 
+@pytest.mark.slow
 def test_a_loop_of_another_model_is_fitted_honestly_and_the_fitted_scene_reproduces_the_fit(tmp_path):
     from fmpy import simulate_fmu
 
@@ -134,6 +135,7 @@ def _cli(*args, cwd=None):
                           text=True, cwd=cwd)
 
 
+@pytest.mark.slow
 def test_the_command_writes_a_scene_an_fmu_and_a_plot(tmp_path):
     rng = np.random.default_rng(9)
     t, x = history(rng, count=800)
@@ -176,6 +178,7 @@ def test_the_library_refuses_bad_data_naming_it():
         fit(np.sin(np.arange(20.0)), np.arange(20.0), dashpot=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options", [[], ["--continuum", "iwan"]])
 def test_the_example_goes_from_a_csv_to_a_scene_an_fmu_and_a_plot(tmp_path, options):
     from .conftest import ROOT
@@ -304,6 +307,7 @@ def test_a_bouc_wen_loop_fitted_by_each_continuum_reports_its_residual_honestly(
     assert f"{100 * result.relative_rms:.3g} %" in result.report()
 
 
+@pytest.mark.slow
 def test_the_command_fits_an_iwan_continuum_and_builds_its_fmu(tmp_path):
     from fmpy import simulate_fmu
 

@@ -12,6 +12,9 @@ from fmpy.fmi1 import FMICallException
 from .conftest import SCENES
 from .fmu_tools import Slave
 
+# the hard scenes through the FMU: run by .ci/run after the quick suite
+pytestmark = pytest.mark.slow
+
 HARD = SCENES / "hard"
 
 

@@ -265,6 +265,7 @@ def random_series_scene(rng, load_kind):
     return make(tables)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, load_kind", [(1, "harmonic"), (2, "constant"), (3, "table"), (4, "harmonic"),
                                              (5, "table")])
 def test_exact_with_series_dashpots_is_what_the_schemes_converge_to(seed, load_kind):
@@ -389,6 +390,7 @@ def random_scene(rng, stepper):
     return make(tables)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stepper", STEPPING)
 def test_random_scenes_with_friction_and_series_dashpots_against_straightforward_code(stepper):
     rng = np.random.default_rng(25 + STEPPING.index(stepper))

@@ -12,6 +12,9 @@ from prandtl_fmu.driver import Element
 from .conftest import ROOT, base_tables, scene_text
 from .test_native import ENERGIES, SOLVER, same, step_both, steppers_of
 
+# random scenes, a native FMU built for each (minutes): run by .ci/run after the quick suite
+pytestmark = pytest.mark.slow
+
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
     pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)

@@ -13,6 +13,9 @@ from prandtl_fmu.steppers import STEPPERS, get_stepper
 
 from .conftest import make_scene
 
+# property-based runs of many scenes (hypothesis): run by .ci/run after the quick suite
+pytestmark = pytest.mark.slow
+
 H = 1e-3
 # no shrinking: a failure is reported with the example as drawn (shrinking random scenes takes minutes)
 SETTINGS = settings(max_examples=25, deadline=None, derandomize=True, database=None,

@@ -196,6 +196,7 @@ BLAS_PROBE = textwrap.dedent("""\
 """)
 
 
+@pytest.mark.slow
 def test_numba_does_not_import_scipy_linalg_for_our_kernels_and_nothing_else_changes(tmp_path):
     """_jit.skip_blas_probe: numba probes BLAS by importing scipy.linalg (0.2-0.4 s) when it loads its numpy
     implementations; our kernels need none. With the probe skipped, scipy.linalg is not imported by a run,

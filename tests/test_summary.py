@@ -101,6 +101,7 @@ def alone(scene, stepper):
     return values, result
 
 
+@pytest.mark.slow
 def test_random_scenes_of_every_structure_packed_together_equal_simulate_run_alone_bit_for_bit():
     rng = np.random.default_rng(22)  # every stepper, every branch kind, massless runs, in 8 runs
     runs = []
