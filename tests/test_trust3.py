@@ -167,3 +167,38 @@ def test_sigterm_stops_a_run_of_costly_steps_at_once(tmp_path):
     assert time.monotonic() - sent < 3.0, "the signal waited for a long compiled call"
     assert run.returncode == 128 + signal.SIGTERM, err
     assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".prandtl-")]
+
+
+# ------------------------------------------------------------------ item 13: advice names something to do
+
+@pytest.mark.parametrize("stepper", ["implicit", "exact", "projected", "verlet"])
+def test_a_refused_step_never_advises_the_stepper_already_in_use(stepper):
+    """A force that overflows the state: the refusal advised "try 'implicit'" to a user of 'implicit'."""
+    scene = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, cubic=None, damper={"c": 0.5}, spring={"k0": 1.0},
+                       branches=None, solver=dict(IMPLICIT, stepper=stepper))
+    element = Element(scene)
+    with pytest.raises(ElementError) as refused:
+        element.advance(1.0, 1.7e308)
+    message = str(refused.value)
+    assert f"use '{stepper}'" not in message and f"try '{stepper}'" not in message, message
+    assert "F = 1.7e+308 N" in message, message  # it names the culprit
+
+
+def test_the_fmu_s_refusal_of_an_overflowing_step_gives_the_library_s_reason(tmp_path):
+    pytest.importorskip("fmpy")
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .fmu_tools import Slave
+
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(base_tables(cubic=None, branches=None, solver=IMPLICIT)))
+    slave = Slave(build_fmu(path, tmp_path / "element.fmu"))
+    slave.set("F", 1.7e308)
+    with pytest.raises(Exception):
+        slave.step(1.0)
+    refusals = [message for status, message in slave.messages if status >= 2]
+    assert refusals and "try 'implicit'" not in refusals[-1] and "F = 1.7e+308" in refusals[-1], refusals
+    slave.set("F", 0.5)
+    slave.step(0.01)  # and it steps on
+    assert math.isfinite(slave.get("x"))
+    slave.close()
