@@ -96,8 +96,9 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--osp", action="store_true",
                        help="also write <modelName>_OspModelDescription.xml beside the FMU (libcosim reads it "
                             "from there: mechanical ports for powerBond and ECCO); its path is printed second")
-    build.add_argument("--loader", choices=("prandtl", "pythonfmu"), default="prandtl",
-                       help="the FMU's native library on Linux x86-64: prandtl (default), PythonFMU 0.7.0's loader "
+    build.add_argument("--loader", choices=("prandtl", "pythonfmu"),
+                       help="PythonFMU runtime only: the FMU's native library on Linux x86-64: prandtl (default), "
+                            "PythonFMU 0.7.0's loader "
                             "patched (a refused call is fmi2Error, the instance stays usable; no leaks), or "
                             "pythonfmu, its stock loader (refusals fmi2Fatal)")
     build.add_argument("--runtime", choices=("python", "native"), default="python",

@@ -202,3 +202,14 @@ def test_the_fmu_s_refusal_of_an_overflowing_step_gives_the_library_s_reason(tmp
     slave.step(0.01)  # and it steps on
     assert math.isfinite(slave.get("x"))
     slave.close()
+
+
+def test_a_loader_with_the_native_runtime_is_refused_in_one_line(tmp_path, capsys):
+    """Issue 33, item 5: `--runtime native --loader pythonfmu` was accepted and meant nothing."""
+    from prandtl_fmu.cli import main
+
+    out = tmp_path / "native.fmu"
+    status = main(["build", "paper-section-8", "-o", str(out), "--runtime", "native", "--loader", "pythonfmu"])
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert status == 2 and len(lines) == 1 and "--loader pythonfmu" in lines[0] and "native" in lines[0], lines
+    assert not out.exists()

@@ -50,7 +50,7 @@ def file_stem(name: str) -> str:
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
-              causality: Optional[str] = None, osp: bool = False, loader: str = "prandtl",
+              causality: Optional[str] = None, osp: bool = False, loader: Optional[str] = None,
               runtime: str = "python", fmi: int = 2) -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
@@ -58,16 +58,19 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     ``causality`` ("force" or "displacement", the connector) overrides a scene without an ``[fmu]`` table
     (SceneError if the scene's table says otherwise). With ``osp``, also write
     ``<modelName>_OspModelDescription.xml`` beside the FMU, where libcosim looks for it (it is always inside
-    the FMU, in ``resources/``). ``loader`` is the FMU's native library on Linux x86-64: "prandtl", PythonFMU
-    0.7.0's patched (``loader/``: a refused call is fmi2Error and the instance stays usable), or "pythonfmu",
+    the FMU, in ``resources/``). ``loader`` is the FMU's native library on Linux x86-64: "prandtl" (None: the
+    default), PythonFMU 0.7.0's patched (``loader/``: a refused call is fmi2Error and the instance stays usable), or "pythonfmu",
     PythonFMU's own (refusals fmi2Fatal); the other platforms always get PythonFMU's own. The scene is checked
     first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
 
     ``runtime="native"``: an FMU whose binary holds the scene's compiled kernels and a C FMI layer, no Python
-    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); ``loader`` does not apply to it.
+    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); a ``loader`` is refused with it.
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")
+    if runtime == "native" and loader is not None:
+        raise ValueError(f"--loader {loader}: the native runtime has no PythonFMU loader (its binary is the FMU's "
+                         "own C layer): drop --loader, or build with --runtime python")
     if runtime == "native":
         from ..native.build import build_native_fmu
 
@@ -91,6 +94,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     from . import loader as native
     from .osp import MODEL_IDENTIFIERS, file_name, osp_model_description
 
+    loader = "prandtl" if loader is None else loader
     if loader not in native.LOADERS:
         raise ValueError(f"--loader: must be one of {', '.join(native.LOADERS)}, got {loader!r}")
     if loader == "prandtl" and native.stale():
