@@ -1,7 +1,8 @@
 """The native FMU trusts nothing it is handed (issue 31, the native part): FMI 2.0 and 3.0, the element (on the
-memory stack; a continuum too for the forged stack) and the connector (series dashpots), each in the small C host of tests/c_host/trust_host.c built
-with the sanitizers where the compiler has them (the FMU too): a crash, an invalid access, undefined behaviour or
-a leak ends the host with an error, and every test asserts that the host ran to its end.
+memory stack; a continuum too for the forged stack) and the connector (series dashpots), each in the small C host
+of tests/c_host/trust_host.c built with the sanitizers where the compiler has them (the FMU too): a crash, an
+invalid access, undefined behaviour or a leak ends the host with an error, and every test asserts that the host ran
+to its end.
 
 Item by item: a communication step of more internal steps than ADVANCE_BUDGET is discarded at once (4);
 coefficients without a physical magnitude are refused in the library's words (3); a NULL instance (6) or NULL

@@ -1,5 +1,6 @@
 /* What the native FMU's element (element.h) and connector (connector.h) share: logging, the parameters'
- * rules, the variables' table, the checksum of a state. Glue only, no numerics. */
+ * rules (the library's magnitudes included, from scene.h), the variables' table, which values may be shown, the
+ * checksum of a state. Glue only, no numerics. */
 #ifndef PRANDTL_COMMON_H
 #define PRANDTL_COMMON_H
 #include <math.h>
