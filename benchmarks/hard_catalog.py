@@ -39,7 +39,7 @@ def main():
             except ValueError:
                 continue
             states = scene.branches.n <= 1000
-            energy = getattr(get_stepper(stepper), "ENERGY_ACCOUNT", True)
+            energy = True
             try:  # compile
                 simulate(scene.with_solver(stop_time=scene.solver.step * 10, output_interval=scene.solver.step),
                          stepper, energy=energy, states=states)

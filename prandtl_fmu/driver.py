@@ -194,11 +194,20 @@ def _hardening(scene: Scene) -> bool:
     return (scene.spring is not None and scene.spring.k0 > 0) or (scene.cubic is not None and scene.cubic.k3 > 0)
 
 
-def _failure(scene: Scene, stepper: str, load, time: float, h: float) -> ElementError:
-    """The error for a step from ``time`` that could not be taken."""
+def _failure(scene: Scene, stepper: str, load, time: float, h: float, start=None) -> ElementError:
+    """The error for a step from ``time`` that could not be taken; ``start``: ``(model, x, v, u)`` at the step's
+    start, for a stepper that says why (``failure_reason_for(scene)``: which bound of an event search ran out)."""
     force = float(force_at(load, time + h))
     if scene.mass is None and not scene.has_dashpot and not _hardening(scene):
         return ElementError(_collapse_message(scene, time + h, force))
+    reason_for = getattr(get_stepper(stepper), "failure_reason_for", None)
+    if reason_for is not None and start is not None:
+        model, x, v, u = start
+        reason = reason_for(scene)(model, load, float(time), float(h), float(x), float(v),
+                                   None if u is None else u.copy())
+        if reason:
+            return ElementError(f"{scene.source}: the step from t = {float(time)!r} s with stepper {stepper!r} "
+                                f"refused: {reason}")
     problem = stability_problem(scene, stepper, h)
     hint = f" ({problem})" if problem else f" (F = {force!r} N: an overflow?)" if abs(force) > 1e150 else ""
     return ElementError(f"{scene.source}: the state became non-finite in the step from t = {float(time)!r} s with "
@@ -367,9 +376,6 @@ def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool
     name = stepper or solver.stepper
     loop = compile_loop(scene, name)
     module = get_stepper(name)
-    if energy and not getattr(module, "ENERGY_ACCOUNT", True):
-        raise ValueError(f"{scene.source}: stepper {name!r} keeps no energy account (drop --energy, or use "
-                         "another stepper)")
     if states and scene.branches is not None and scene.branches.continuum:
         raise ValueError(f"{scene.source}: [branches] continuum: the continuum has no list of elongations to "
                          "output (states): sample it with [branches] count = n instead")
@@ -431,10 +437,15 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
             count = min(chunk, full_rows - j)
             started = perf_counter()
             out, out_u, out_energy = piece(1 + j, count)
+            x_start, v_start = x, v
             x, v, taken = integrate(loop, model, load, x, v, u, 0.0, j * per_row, h, per_row, out, out_u, account,
                                     out_energy)
             if taken < per_row * count:
-                raise _failure(scene, name, load, (j * per_row + taken) * h, h)
+                start = None  # the state where the failed step began: known when a step is a row (exact)
+                if per_row == 1:
+                    x_start, v_start = (out[taken - 1, 0], out[taken - 1, 1]) if taken else (x_start, v_start)
+                    start = (model, x_start, v_start, u)
+                raise _failure(scene, name, load, (j * per_row + taken) * h, h, start)
             # Python (a signal's handler, the progress bar) runs between chunks only: each chunk is sized from
             # the last one's measured speed to take about _CHUNK_SECONDS, whatever a step of this stepper costs
             # (an event-driven step can cost 1000x a projected one), so SIGINT/SIGTERM stop a run at once.
@@ -677,7 +688,9 @@ class Element(OutputMemo):
                                          self._energy_row)
         if failed_at is not None:
             self.rollback(saved)
-            raise _failure(self.scene, self.stepper, load, failed_at, self.h)
+            first = failed_at == self.time  # then the state rolled back to is the failed step's start
+            raise _failure(self.scene, self.stepper, load, failed_at, h if whole else rest,
+                           (self.model, self.x, self.v, self.u) if first else None)
         self.x, self.v = x, v
         if rest:  # a short last step: the grid starts again where it ends
             self._origin, self._steps = self._origin + (self._steps + whole) * h + rest, 0

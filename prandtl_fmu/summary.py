@@ -71,8 +71,6 @@ def summary_problem(scene: Scene, stepper: str, quantities: Iterable[str]) -> Op
     unknown = [q for q in quantities if q not in SUMMARIES]
     if unknown:
         return f"unknown summary {unknown[0]!r} (known: {', '.join(SUMMARIES)})"
-    if any(q in ENERGY_SUMMARIES for q in quantities) and not getattr(get_stepper(stepper), "ENERGY_ACCOUNT", True):
-        return f"stepper {stepper!r} keeps no energy account: drop {', '.join(q for q in quantities if q in ENERGY_SUMMARIES)}"
     if "loop_area" in quantities:
         load = scene.load
         if not isinstance(load, HarmonicLoad) or load.omega == 0:

@@ -87,7 +87,7 @@ def expected(element, names):
 
 
 def same(got, want):
-    """To the bit, NaN as NaN (exact keeps no energy account: NaN)."""
+    """To the bit, NaN as NaN (a NaN output would itself be a refusal the test reports elsewhere)."""
     return len(got) == len(want) and all(a == b or (a != a and b != b) for a, b in zip(got, want))
 
 

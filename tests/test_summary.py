@@ -11,7 +11,7 @@ from prandtl_fmu import summary as summary_module
 from prandtl_fmu.driver import ElementError, simulate
 from prandtl_fmu.scene import SceneError
 from prandtl_fmu.stability import StabilityWarning
-from prandtl_fmu.steppers import STEPPERS, get_stepper
+from prandtl_fmu.steppers import STEPPERS
 from prandtl_fmu.summary import SUMMARIES, summarize, summarize_many
 from prandtl_fmu.sweep.runs import run_batch
 
@@ -86,18 +86,16 @@ def scene_and_stepper(rng):
 
 def alone(scene, stepper):
     """The summaries from simulate's own time loop, one run alone (every step is an output row)."""
-    energy = getattr(get_stepper(stepper), "ENERGY_ACCOUNT", True)
-    result = simulate(scene, stepper, energy=energy)
+    result = simulate(scene, stepper, energy=True)
     values = {
         "max_abs_x": np.abs(result.x).max(), "max_abs_v": np.abs(result.v).max(),
         "max_abs_reaction": np.abs(result.reaction).max(), "final_x": result.x[-1], "final_v": result.v[-1],
         "final_reaction": result.reaction[-1],
     }
-    if energy:
-        e = result.energy
-        values.update(work=e["work"][-1], dissipated_sliders=e["dissipated_sliders"][-1],
-                      dissipated_damper=e["dissipated_damper"][-1],
-                      dissipated=e["dissipated_sliders"][-1] + e["dissipated_damper"][-1])
+    e = result.energy
+    values.update(work=e["work"][-1], dissipated_sliders=e["dissipated_sliders"][-1],
+                  dissipated_damper=e["dissipated_damper"][-1],
+                  dissipated=e["dissipated_sliders"][-1] + e["dissipated_damper"][-1])
     return values, result
 
 
@@ -113,12 +111,9 @@ def test_random_scenes_of_every_structure_packed_together_equal_simulate_run_alo
                   for scene, stepper in runs}
     assert len(structures) >= 6  # the batch mixes many structures, every branch kind among them
     assert {kind for _, _, kind, _ in structures} == {None, 1, 2, "continuum"}
-    # one batch with the energy account: exact keeps none, and that run alone is refused, in one line
+    # one batch with the energy account (every stepper books it, exact exactly)
     outcomes = summarize_many(runs, STATE + ENERGY, history=True)
-    exact = [position for position, (_, stepper) in enumerate(runs) if stepper == "exact"]
-    assert exact and all("keeps no energy account" in str(outcomes[j].error) for j in exact)
-    for position, outcome in zip(exact, summarize_many([runs[j] for j in exact], STATE, history=True)):
-        outcomes[position] = outcome
+    assert any(stepper == "exact" for _, stepper in runs)
     for (scene, stepper), outcome in zip(runs, outcomes):
         expected, result = alone(scene, stepper)
         assert outcome.error is None, outcome.error

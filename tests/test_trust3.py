@@ -12,7 +12,7 @@ import pytest
 
 from prandtl_fmu import parse_scene
 from prandtl_fmu.connector import Connector
-from prandtl_fmu.driver import Element, ElementError, simulate
+from prandtl_fmu.driver import Element, ElementError
 from prandtl_fmu.scene import (ADVANCE_BUDGET, LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE, SceneError, with_coefficients)
 
 from .conftest import base_tables, make_scene, scene_text
@@ -212,4 +212,32 @@ def test_a_loader_with_the_native_runtime_is_refused_in_one_line(tmp_path, capsy
     status = main(["build", "paper-section-8", "-o", str(out), "--runtime", "native", "--loader", "pythonfmu"])
     lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
     assert status == 2 and len(lines) == 1 and "--loader pythonfmu" in lines[0] and "native" in lines[0], lines
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ exact: a bound that runs out is named
+
+EXACT = base_tables(cubic=None, solver={"stepper": "exact", "step": 1e5, "stop_time": 1e6, "output_interval": 1e5})
+
+
+def test_an_exact_advance_beyond_its_event_budget_is_refused_naming_the_bound_and_changes_nothing():
+    element = Element(parse_scene(scene_text(EXACT), "exact.toml"))
+    element.advance(0.5, 0.0, scene_load=True)
+    before = element.get_state()
+    started = time.monotonic()
+    with pytest.raises(ElementError, match=r"refused: more than \d+ events in one step|took more than \d+ interv"):
+        element.advance(1e6, 0.0, scene_load=True)
+    assert time.monotonic() - started < 120
+    assert element.get_state() == before
+
+
+def test_the_cli_names_the_bound_an_exact_run_reached(tmp_path):
+    scene = tmp_path / "exact.toml"
+    scene.write_text(scene_text(EXACT))
+    out = tmp_path / "out.csv"
+    run = subprocess.run([sys.executable, "-m", "prandtl_fmu", "run", str(scene), "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    lines = [line for line in run.stderr.splitlines() if line.strip()]
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert "events in one step" in lines[0] or "intervals" in lines[0], lines
     assert not out.exists()

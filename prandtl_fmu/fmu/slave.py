@@ -31,7 +31,6 @@ value is not a finite number: no Real is handed out with fmi2OK unless it is
 finite. A step the library cannot take (``ElementError``: its step budget, a
 non-finite result) is a Discard with the library's reason.
 """
-import math
 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, String
 from pythonfmu.enums import Fmi2Status
@@ -127,8 +126,7 @@ class PrandtlElement(SlaveBase):
         energy = [  # the energy account, for the effects present
             ("kinetic_energy", "kinetic_energy", "mass", "kinetic energy m v^2/2"),
             ("stored_energy", "stored_energy", None, f"elastic energy {stored_energy_formula(self.scene)}"),
-            ("work", "work", None, "work done by F since the start (as the stepper books it; NaN, as the "
-             "dissipated work and the residual, once 'exact', which keeps no energy account, has run)"),
+            ("work", "work", None, "work done by F since the start (as the stepper books it; 'exact' exactly)"),
             ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
             ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
             ("dissipated_friction", "dissipated_friction", "friction",

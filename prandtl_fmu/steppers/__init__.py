@@ -17,8 +17,9 @@ A stepper module defines
 * ``loop_for(scene)``: the loop of the step that fits the scene (ValueError if none);
 * ``ORDER``: the order of convergence in h (``math.inf`` for ``exact``);
 * optionally ``STEP_IS_OUTPUT = True`` (the driver then takes one step per
-  output interval: h does not set the accuracy) and ``ENERGY_ACCOUNT = False``
-  (the stepper keeps no energy account);
+  output interval: h does not set the accuracy) and ``failure_reason_for(scene)`` (a function that says in
+  words why a step that failed could not be taken: which bound of an event search ran out);
+* every stepper books the energy account (``kernels/energy.py``): no output is ever NaN;
 * a docstring with the update formula and the stability of the scheme.
 
 To add a scheme: write one such module and add it to ``STEPPERS`` below.

@@ -115,7 +115,6 @@ from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
 
 ORDER = math.inf
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
-ENERGY_ACCOUNT = True  # booked exactly, phase by phase (:func:`_book`)
 
 
 def loop_for(scene):
@@ -506,6 +505,12 @@ def _restore(values, saved):
     if values is None or saved is None:
         return
     values[:] = saved
+
+
+def failure_reason_for(scene):
+    """The :func:`failure_reason` of the loop :func:`loop_for` gives ``scene`` (the driver's hook: a stepper
+    module may say why a step failed)."""
+    return exact_series.failure_reason if scene.has_series_dashpots else failure_reason
 
 
 def failure_reason(model, load, t: float, h: float, x: float, v: float, u) -> str:
