@@ -798,8 +798,9 @@ static int core_do_step(Instance* c, double t, double H)
         problem = "it would leave a non-finite state";
     if (problem != NULL) {
         rollback(c);
-        say(c, ST_DISCARD, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g; try "
-            "'implicit')", t, c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h);
+        int implicit = strcmp(STEPPER_NAMES[c->el.stepper], "implicit") == 0; /* advise nothing already done */
+        say(c, ST_DISCARD, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g%s)", t,
+            c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h, implicit ? "" : "; try 'implicit'");
         return ST_DISCARD;
     }
     overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
