@@ -56,7 +56,9 @@ def test_ctrl_c_while_the_modules_load_is_one_line_and_exit_130(tmp_path, delay)
     _, err = run.communicate(timeout=60)
     lines = [line for line in err.splitlines() if line.strip()]
     assert run.returncode == 130, err
-    assert lines == ["error: interrupted"], err
+    # the one line of an interrupt while loading, or (the modules loaded within the delay: a warm cache on a
+    # quick machine) of an interrupted run
+    assert lines in (["error: interrupted"], ["error: interrupted; no output written"]), err
     assert _partial_files(tmp_path) == []
 
 
