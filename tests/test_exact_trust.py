@@ -217,7 +217,9 @@ def _energy_scene(case):
     return make_scene(**tables)
 
 
-@pytest.mark.parametrize("case", list(ENERGY_SCENES))
+# three cases in the quick suite (the plain oscillator, the richest and friction), the others under slow
+@pytest.mark.parametrize("case", [case if case in ("oscillator", "series-friction-table", "friction")
+                                  else pytest.param(case, marks=pytest.mark.slow) for case in ENERGY_SCENES])
 def test_exact_books_its_energy_exactly(case):
     """Item 11: work = kinetic + stored + every dissipation, to rounding of the energy that flowed, at every row;
     dissipations never negative nor decreasing; and implicit's account converges to exact's as h -> 0 (its

@@ -139,7 +139,9 @@ def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
     assert np.abs(expected[:, 0]).max() > 1e-2  # it moved
 
 
-@pytest.mark.parametrize("stepper", ["projected", "implicit", "verlet", "exact"])
+# exact's runs through the FMU take half a minute each: under the slow marker (tests/test_native.py and
+# test_every_stepper_runs_inside_the_fmu keep exact in the quick suite)
+@pytest.mark.parametrize("stepper", ["projected", "implicit", "verlet", pytest.param("exact", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("name", ["paper", "all-effects", "stribeck-series", "coulomb-series"])
 def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name, stepper):
     """The README route: simulate_fmu with no input and scene_load = true is the library's run of the scene
