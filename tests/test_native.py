@@ -591,3 +591,56 @@ def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, setting
             slave.close()
     assert warnings["native"] == warnings["python"]
     assert bool(warnings["native"]) == (settings["stepper"] != "implicit" or name == "friction")
+
+
+# ------------------------------------------------------------------ the package (issue 33, items 2-4)
+
+def _entries(path):
+    import zipfile
+
+    with zipfile.ZipFile(path) as archive:
+        return {info.filename: ((info.external_attr >> 16) & 0o777, archive.read(info)) for info in archive.infolist()}
+
+
+def test_every_entry_of_every_fmu_is_readable_by_all(fmus, fmus3, connectors, tmp_path):
+    """Entries were written 0600 (ZipFile.writestr's default): unpacked, a master running as another user could
+    not read them. 0644 as every FMU has, the binary 0755."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    python_fmu = build_fmu(fmus["smooth"][1], tmp_path / "python.fmu")
+    paths = [fmus["smooth"][0], fmus3["paper"][0], connectors["series"]["fmi3"], python_fmu]
+    for path in paths:
+        for name, (mode, _) in _entries(path).items():
+            if not name.endswith("/"):
+                assert mode & 0o644 == 0o644 and not mode & 0o022, (path.name, name, oct(mode))
+
+
+def test_the_native_fmu_s_page_describes_the_native_fmu_and_its_own_variables(fmus, fmus3):
+    for path in (fmus["paper"][0], fmus3["paper"][0]):
+        entries = _entries(path)
+        page = entries["documentation/index.html"][1].decode("utf-8")
+        assert "native" in page and "no Python" in page and "LD_PRELOAD=&lt;" not in page, path.name
+        assert "PythonFMU's own binary" not in page
+        description = entries["modelDescription.xml"][1].decode("utf-8")
+        version = "fmi3" if 'fmiVersion="3.0"' in description else "fmi2"
+        assert f"{version}Discard" in page
+        if version == "fmi3":
+            assert "fmi2" not in page
+        if version == "fmi3":
+            assert "<td>u</td>" in page and "<td>Float64</td>" in page
+
+
+def test_the_fmi3_description_speaks_fmi3_and_gives_every_output_its_dependencies(fmus3):
+    import xml.etree.ElementTree as ET
+
+    from prandtl_fmu import load_scene
+
+    for name in ("paper", "friction"):
+        root = ET.fromstring(_entries(fmus3[name][0])["modelDescription.xml"][1])
+        categories = [category.get("description", "") for category in root.find("LogCategories")]
+        assert categories and not any("fmi2" in text for text in categories), categories
+        for unknown in root.find("ModelStructure"):
+            assert unknown.get("dependencies") is not None, ET.tostring(unknown)
+        n = root.find("ModelVariables/UInt64[@name='n']")
+        scene = load_scene(fmus3[name][1])
+        assert n is not None and int(n.get("start")) == scene.branches.n >= 0

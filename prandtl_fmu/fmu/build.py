@@ -174,6 +174,16 @@ def _with_causality(scene, scene_bytes: bytes, causality: str):
     return parse_scene(text, scene.source), text
 
 
+def add_entry(archive: zipfile.ZipFile, name: str, data, mode: int = 0o644) -> None:
+    """Write ``data`` (bytes or text) as the regular file ``name`` of ``archive``, deflated, with ``mode`` (0644:
+    what every FMU has; ZipFile.writestr with a bare name writes 0600, which a master running as another user
+    cannot read once unpacked)."""
+    info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+    info.compress_type = zipfile.ZIP_DEFLATED
+    info.external_attr = (0o100000 | mode) << 16
+    archive.writestr(info, data)
+
+
 def _finish(fmu: Path, scene, loader: str) -> None:
     """Name the model after the scene (``modelName``; the ``modelIdentifier``, which names the binaries,
     stays :data:`MODEL_IDENTIFIER`), put the patched loader in place of PythonFMU's where there is one (with
@@ -198,5 +208,5 @@ def _finish(fmu: Path, scene, loader: str) -> None:
             if loader == "prandtl":
                 data = native.replacement(info.filename) or data
             archive.writestr(info, data)
-        archive.write(native.LICENSE, "documentation/licenses/PythonFMU.txt")
-        archive.writestr("documentation/index.html", index_html(model_description, scene))
+        add_entry(archive, "documentation/licenses/PythonFMU.txt", native.LICENSE.read_bytes())
+        add_entry(archive, "documentation/index.html", index_html(model_description, scene))

@@ -139,23 +139,46 @@ def _bound(text: str) -> str:
         return text
 
 
-def index_html(model_description: bytes, scene) -> str:
-    """The page, from the FMU's own modelDescription.xml and its scene."""
+def index_html(model_description: bytes, scene, runtime: str = "python") -> str:
+    """The page, from the FMU's own modelDescription.xml (FMI 2.0 or 3.0) and its scene; ``runtime``: "python"
+    (PythonFMU) or "native" (no Python in the host)."""
     root = ET.fromstring(model_description)
+    fmi3 = root.get("fmiVersion", "").startswith("3")
     rows = []
     for var in root.find("ModelVariables"):
-        typed = var[0]
+        typed = var if fmi3 else var[0]  # FMI 3.0: the type is the element; 2.0: its child
+        start = typed.get("start", "")
+        if fmi3 and typed.find("Start") is not None:
+            start = typed.find("Start").get("value", "")
         rows.append("<tr>" + "".join(f"<td>{html.escape(str(cell))}</td>" for cell in (
             var.get("name"), var.get("causality", "local"), var.get("variability", "continuous"),
-            typed.tag, typed.get("unit", ""), typed.get("start", ""), _bound(typed.get("min", "")),
+            typed.tag, typed.get("unit", ""), start, _bound(typed.get("min", "")),
             _bound(typed.get("max", "")), var.get("description", ""))) + "</tr>")
     name = html.escape(scene.name)
-    if scene.causality == "displacement":
-        return _page(name, rows, _connector_body(scene))
-    return _page(name, rows, _element_body(scene))
+    version = "fmi3" if fmi3 else "fmi2"
+    if runtime == "native":
+        refusal = f"{version}Error"
+        requirements = _NATIVE_REQUIREMENTS.format(version="3.0" if fmi3 else "2.0")
+    else:
+        refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
+        requirements = _PYTHON_REQUIREMENTS
+    body = _connector_body(scene, refusal) if scene.causality == "displacement" else _element_body(scene, refusal)
+    return _page(name, rows, body.replace("fmi2Discard", f"{version}Discard"), requirements)
 
 
-def _connector_body(scene) -> str:
+_PYTHON_REQUIREMENTS = """<p>A PythonFMU FMU runs in the host's Python: the host process needs Python 3 with numpy, numba and pythonfmu
+(<code>pip install prandtl_fmu</code> installs them). A host that is not itself Python (OMSimulator's or ecos'
+binaries) needs <code>LD_PRELOAD=&lt;libpython3.X.so&gt;</code> and <code>PYTHONPATH=&lt;the site-packages that
+hold numpy and numba&gt;</code>: see the project's README.</p>"""
+
+_NATIVE_REQUIREMENTS = """<p>This is the <b>native</b> FMU (FMI {version}): its binary holds the scene's kernels, compiled by numba
+from the library's sources, and a C layer that only marshals values, validates calls and calls the kernels. It
+needs no Python, no <code>LD_PRELOAD</code> and no <code>PYTHONPATH</code> in the host: any FMI {version}
+co-simulation master loads it as it is. Its binary is built for Linux x86-64 (the libc and libm of the machine
+that built it). Every refusal is logged with a declared category, whatever the logging setting.</p>"""
+
+
+def _connector_body(scene, refusal: str) -> str:
     return f"""<p>This FMU is the element as a <b>connector</b> between two bodies that other FMUs hold: it takes the
 relative displacement <code>x</code> and velocity <code>v</code> of its two flanges and returns the force
 <code>force</code> it transmits. It holds {html.escape(_effect_text(scene))}. Effects the scene leaves out are
@@ -172,13 +195,12 @@ Initialization takes the element from x = 0 (elongations u0) to the first input 
 <code>stiffness</code> is the tangent dF/dx for a motion in the direction of v (of the last motion when
 v = 0): a master can choose a stable communication step from it, or build a coupling Jacobian.</p>
 <p>A non-finite input at doStep is refused: fmi2Discard, a logged message, the state unchanged. A bad parameter
-value is refused at fmi2ExitInitializationMode with a logged reason (fmi2Error; fmi2Fatal where the FMU runs on
-PythonFMU's own binary: Windows, macOS), or by a Discard during stepping. The instance stays usable. The
+value is refused at initialization with a logged reason ({refusal}), or by a Discard during stepping. The instance stays usable. The
 whole state can be saved, restored and serialized. OSP: <code>resources/PrandtlConnector_OspModelDescription.xml</code>
 declares a LinearMechanicalPort (force out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
 
 
-def _element_body(scene) -> str:
+def _element_body(scene, refusal: str) -> str:
     return f"""<p>This FMU holds {html.escape(_effect_text(scene))}, under the input force F. Effects the scene leaves out are
 absent: they have no parameter and no term below. Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7),
 with the dashpot and cubic spring of the related models; the scene is <code>resources/scene.toml</code>.</p>
@@ -195,14 +217,13 @@ last shorter step for the remainder. The parameter <code>stepper</code> chooses 
 <p><code>projected</code> is the scheme (5.1) of the paper, which the paper calls "the implicit Euler scheme"
 because it is implicit in the friction term only; our <code>implicit</code> is implicit in every term.</p>
 <p>A non-finite F or a step that would leave a non-finite state is refused: fmi2Discard, a logged message naming
-the culprit, the state unchanged. A bad parameter value is refused where it is set or at
-fmi2ExitInitializationMode with a logged reason (fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own
-binary: Windows, macOS); the instance stays usable. The whole state can be saved, restored and serialized. OSP:
+the culprit, the state unchanged. A bad parameter value is refused where it is set or at initialization with a
+logged reason ({refusal}); the instance stays usable. The whole state can be saved, restored and serialized. OSP:
 <code>resources/PrandtlElement_OspModelDescription.xml</code> declares a LinearMechanicalPort (F in, v out) and a
 LinearMechanicalQuasiPort (F in, x out).</p>"""
 
 
-def _page(name, rows, body) -> str:
+def _page(name, rows, body, requirements) -> str:
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{name}: Prandtl element</title>
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}
@@ -216,9 +237,6 @@ table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style><
 {chr(10).join(rows)}
 </table>
 <h2>Requirements</h2>
-<p>A PythonFMU FMU runs in the host's Python: the host process needs Python 3 with numpy, numba and pythonfmu
-(<code>pip install prandtl_fmu</code> installs them). A host that is not itself Python (OMSimulator's or ecos'
-binaries) needs <code>LD_PRELOAD=&lt;libpython3.X.so&gt;</code> and <code>PYTHONPATH=&lt;the site-packages that
-hold numpy and numba&gt;</code>: see the project's README.</p>
+{requirements}
 </body></html>
 """

@@ -51,7 +51,8 @@ def compiler() -> str:
 
 def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it."""
-    from ..fmu.build import build_fmu
+    from ..fmu.build import add_entry, build_fmu
+    from ..fmu.documentation import index_html
     from ..scene import load_scene
 
     if fmi not in (2, 3):
@@ -102,11 +103,12 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
         platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
+        kept["documentation/index.html"] = index_html(native_description.encode("utf-8"), scene, runtime="native")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            archive.writestr("modelDescription.xml", native_description)
-            archive.write(library, f"binaries/{platform}/{identifier}.so")
+            add_entry(archive, "modelDescription.xml", native_description)
+            add_entry(archive, f"binaries/{platform}/{identifier}.so", library.read_bytes(), mode=0o755)
             for name, data in kept.items():
-                archive.writestr(name, data)
+                add_entry(archive, name, data)
         os.replace(partial, out)
     return out
 
@@ -377,6 +379,10 @@ def fmi3_description(root, scene, vr_u) -> str:
     for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
         if root.find(name) is not None:
             top.append(root.find(name))
+        if name == "LogCategories" and top.find(name) is not None:  # the statuses are FMI 3.0's
+            for category in top.find(name):
+                if category.get("description"):
+                    category.set("description", category.get("description").replace("fmi2", "fmi3"))
         if name == "UnitDefinitions":  # the independent variable's unit
             units = top.find("UnitDefinitions")
             if units is None:
@@ -430,6 +436,8 @@ def fmi3_description(root, scene, vr_u) -> str:
         vr = index_to_vr[int(unknown.get("index"))]
         if unknown.get("dependencies") is not None:
             dependencies[vr] = " ".join(index_to_vr[int(i)] for i in unknown.get("dependencies").split())
+    if n:
+        dependencies[str(vr_u)] = ""  # the elongations are states: no direct dependency on an input
     for vr in outputs:
         attributes = {"valueReference": vr}
         if vr in dependencies:
