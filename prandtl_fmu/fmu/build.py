@@ -207,6 +207,8 @@ def _finish(fmu: Path, scene, loader: str) -> None:
                 model_description = data
             if loader == "prandtl":
                 data = native.replacement(info.filename) or data
+            if not info.is_dir():  # PythonFMU writes some entries 0600: readable by all, as every FMU's
+                info.external_attr = (0o100000 | (0o755 if (info.external_attr >> 16) & 0o111 else 0o644)) << 16
             archive.writestr(info, data)
         add_entry(archive, "documentation/licenses/PythonFMU.txt", native.LICENSE.read_bytes())
         add_entry(archive, "documentation/index.html", index_html(model_description, scene))
