@@ -40,12 +40,16 @@ MAX_STEPS = 2**53
 # A step (or stop time) shorter than this is refused: the implicit steps divide by h^2, which underflows to 0
 # below about 1e-160 s.
 SHORTEST_STEP = 1e-150
-# The magnitudes a physical number of a scene (a coefficient, an initial value, a load's parameter) may have:
-# 0, or |value| in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE]. Outside, the number means nothing physical
+# The magnitudes a physical number of a scene may have. A coefficient (a mass, a stiffness, a dashpot, a
+# threshold...) is 0 or has |value| in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE]: outside, it means nothing physical
 # (a subnormal mass, a stiffness of 1e308) and the products the kernels form (k x^3, k h^2 / m, c / m) underflow
-# or overflow: refused by the scene reader and by every FMU's setters. Six such factors stay within a double.
+# or overflow. A value (an initial state, a belt's speed, a load's number: VALUES) only has the upper bound: a
+# tiny one is as good as 0. Refused by the scene reader and by every FMU's setters. Six such factors stay within
+# a double.
 SMALLEST_MAGNITUDE = 1e-50
 LARGEST_MAGNITUDE = 1e50
+# the coefficients (FMU parameters) and scene keys that are values, not coefficients (with every key of [load])
+VALUES = ("x0", "v0", "u0", "belt_velocity")
 # The most internal steps one advance of an element (an FMU's doStep) takes: a communication step that needs
 # more is refused (fmi2Discard, ElementError) with the count, never run for hours. About 10 s of the paper's
 # 100-branch scene on the stack (~100 ns a step); a master splits a longer interval into several doSteps.
@@ -168,11 +172,15 @@ def coefficients_of(scene: "Scene") -> dict:
     return values
 
 
-def magnitude_problem(value: float) -> Optional[str]:
-    """Why the finite number ``value`` has no physical magnitude (see SMALLEST_MAGNITUDE), or None."""
-    if value != 0 and not SMALLEST_MAGNITUDE <= abs(value) <= LARGEST_MAGNITUDE:
+def magnitude_problem(value: float, coefficient: bool = True) -> Optional[str]:
+    """Why the finite number ``value``, a coefficient or (``coefficient=False``) a value, has no physical
+    magnitude (see SMALLEST_MAGNITUDE), or None."""
+    if coefficient and value != 0 and not SMALLEST_MAGNITUDE <= abs(value) <= LARGEST_MAGNITUDE:
         return (f"|{value!r}| is outside [{SMALLEST_MAGNITUDE:g}, {LARGEST_MAGNITUDE:g}] (or 0): "
                 "no physical magnitude, its products in a step would underflow or overflow")
+    if not coefficient and not abs(value) <= LARGEST_MAGNITUDE:
+        return (f"|{value!r}| is above {LARGEST_MAGNITUDE:g}: no physical magnitude, its products in a step would "
+                "overflow")
     return None
 
 
@@ -183,8 +191,9 @@ def coefficient_problem(name: str, value) -> Optional[str]:
         return f"must be a number, got {value!r}"
     if not math.isfinite(value):
         return f"must be finite, got {value!r}"
-    if magnitude_problem(value):
-        return magnitude_problem(value)
+    problem = magnitude_problem(value, coefficient=name not in VALUES)
+    if problem:
+        return problem
     if rule == "> 0" and not value > 0:
         return f"must be > 0, got {value!r}"
     if rule == ">= 0" and value < 0:
@@ -284,8 +293,10 @@ class _Reader:
             self.fail(key, "must be finite, got an integer beyond the range of a double")
         if not math.isfinite(value):
             self.fail(key, f"must be finite, got {value}")
-        if self.table != "solver" and magnitude_problem(value):  # the solver's times have their own rules
-            self.fail(key, magnitude_problem(value))
+        if self.table != "solver":  # the solver's times have their own rules
+            problem = magnitude_problem(value, coefficient=self.table != "load" and key.split("[")[0] not in VALUES)
+            if problem:
+                self.fail(key, problem)
         if positive and not value > 0:
             self.fail(key, f"must be > 0, got {value!r}")
         if minimum is not None and value < minimum:

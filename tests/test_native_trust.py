@@ -107,6 +107,20 @@ def test_a_coefficient_without_a_physical_magnitude_is_refused_in_the_library_s_
     assert words and len(run.said(f"parameter {culprit}: {words}")) == 2, (words, run.logs)
 
 
+@both
+@pytest.mark.parametrize("value, refused", [(1e-60, False), (-5e-324, False), (1e60, True)])
+def test_a_value_has_only_the_upper_bound_as_in_the_library(fmus, fmi, value, refused):
+    """x0 is a value (scene.VALUES): a tiny one is as good as 0 and accepted, a huge one refused in the library's
+    words, as the scene reader and the PythonFMU FMU do."""
+    host, fmu = fmus["element", fmi]
+    run = ran(run_trust(host, fmu, ["setup:0", "enter", f"setr:x0:{value!r}", "exit"]))
+    assert [status for command, status in run.calls if command == "exit"] == [str(ERROR if refused else OK)], run.out
+    words = rules.magnitude_problem(value, coefficient=False)
+    assert (words is not None) == refused
+    if refused:
+        assert run.said(f"parameter x0: {words}"), run.logs
+
+
 # ------------------------------------------------------------------ 6 and 7: NULL instance, NULL pointers
 
 

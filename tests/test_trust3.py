@@ -29,7 +29,8 @@ IMPLICIT = {"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_inter
 def test_the_scene_reader_refuses_a_magnitude_with_no_physical_meaning(table, key, value):
     tables = base_tables()
     tables[table] = dict(tables[table], **{key: value})
-    with pytest.raises(SceneError, match=rf"\[{table}\] {key}: .*outside \[1e-50, 1e\+50\]"):
+    rule = r"is above 1e\+50" if key in ("x0", "amplitude") else r"outside \[1e-50, 1e\+50\]"
+    with pytest.raises(SceneError, match=rf"\[{table}\] {key}: .*{rule}"):
         parse_scene(scene_text(tables), "test.toml")
 
 
@@ -241,3 +242,17 @@ def test_the_cli_names_the_bound_an_exact_run_reached(tmp_path):
     assert run.returncode == 2 and len(lines) == 1, run.stderr
     assert "events in one step" in lines[0] or "intervals" in lines[0], lines
     assert not out.exists()
+
+
+@pytest.mark.parametrize("table, key, value", [("mass", "x0", 1e-150), ("mass", "v0", -5e-324),
+                                               ("load", "amplitude", 1e-137), ("branches", "u0", [1e-249, 0.0, 0.0])])
+def test_a_tiny_value_is_as_good_as_zero_and_accepted(table, key, value):
+    """Values (initial states, loads) have only the upper bound: a tiny one is harmless; coefficients both."""
+    tables = base_tables(solver=IMPLICIT)
+    tables[table] = dict(tables[table], **{key: value})
+    scene = parse_scene(scene_text(tables), "test.toml")
+    element = Element(scene)
+    element.advance(0.01, 0.0, scene_load=True)
+    assert math.isfinite(element.x)
+    with pytest.raises(ValueError, match=r"^x0: \|1e\+60\| is above 1e\+50"):
+        with_coefficients(scene, x0=1e60)

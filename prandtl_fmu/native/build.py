@@ -201,6 +201,8 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f"static const double P_SCENE[10] = {_c_array(values.values())};",
         f"static const int P_PRESENT[10] = {{{', '.join(str(v) for v in present.values())}}};",
         f"static const int P_RULE[10] = {{{', '.join(str(rules[name]) for name in kernels.PARAMETERS)}}};",
+        # 1: a value (scene.VALUES: the upper magnitude bound only), 0: a coefficient
+        f"static const int P_VALUE[10] = {{{', '.join(str(int(name in library_rules.VALUES)) for name in kernels.PARAMETERS)}}};",
         f"static const double K[] = {_c_array(k_values)};",
         f"static const double ETA[] = {_c_array(eta_values)};",
         f"static const double U0[NB_ARR] = {_c_array(u0_values)};",

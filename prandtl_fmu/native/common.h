@@ -64,17 +64,25 @@ static void say_to(void* instance, void* logger, int logging, int status, const 
 static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
                                             "stribeck_velocity", "belt_velocity"};
 
-/* scene.magnitude_problem: a finite nonzero coefficient's |value| lies in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE] */
-static const char* magnitude_problem(const char* name, double value, char* buffer, size_t size)
+/* scene.magnitude_problem: a finite nonzero coefficient's |value| lies in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE];
+   a value's (is_value: scene.VALUES) is at most LARGEST_MAGNITUDE */
+static const char* magnitude_problem(const char* name, double value, int is_value, char* buffer, size_t size)
 {
-    if (value != 0 && !(fabs(value) >= SMALLEST_MAGNITUDE && fabs(value) <= LARGEST_MAGNITUDE)) {
+    int coefficient_out = !is_value && value != 0
+                          && !(fabs(value) >= SMALLEST_MAGNITUDE && fabs(value) <= LARGEST_MAGNITUDE);
+    if (coefficient_out || (is_value && !(fabs(value) <= LARGEST_MAGNITUDE))) {
         char shortest[32];
         int digits = 1;
         do /* the shortest that reads back as the value: Python's repr, as the library's message writes it */
             snprintf(shortest, sizeof shortest, "%.*g", digits, value);
         while (strtod(shortest, NULL) != value && ++digits <= 17);
-        snprintf(buffer, size, "parameter %s: |%s| is outside [%g, %g] (or 0): no physical magnitude, its products "
-                 "in a step would underflow or overflow", name, shortest, SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE);
+        if (is_value)
+            snprintf(buffer, size, "parameter %s: |%s| is above %g: no physical magnitude, its products in a step "
+                     "would overflow", name, shortest, LARGEST_MAGNITUDE);
+        else
+            snprintf(buffer, size, "parameter %s: |%s| is outside [%g, %g] (or 0): no physical magnitude, its "
+                     "products in a step would underflow or overflow", name, shortest, SMALLEST_MAGNITUDE,
+                     LARGEST_MAGNITUDE);
         return buffer;
     }
     return NULL;
@@ -97,7 +105,7 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
             snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
             return buffer;
         }
-        if (magnitude_problem(PARAM_NAMES[i], value, buffer, size))
+        if (magnitude_problem(PARAM_NAMES[i], value, P_VALUE[i], buffer, size))
             return buffer;
         if (P_RULE[i] == 1 && !(value > 0)) {
             snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
@@ -115,7 +123,7 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
             snprintf(buffer, size, "parameter %s: must be finite, got %.17g", name, cbranch[i]);
             return buffer;
         }
-        if (magnitude_problem(name, cbranch[i], buffer, size))
+        if (magnitude_problem(name, cbranch[i], 0, buffer, size))
             return buffer;
         if (!(cbranch[i] > 0)) {
             snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", name, cbranch[i]);
