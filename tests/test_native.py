@@ -58,17 +58,39 @@ SCENES = {
 }
 
 
+class Built(dict):
+    """FMUs built on first use (``build(name)``): a run of the quick suite builds only the scenes it tests."""
+
+    def __init__(self, build):
+        super().__init__()
+        self.build = build
+
+    def __missing__(self, name):
+        self[name] = self.build(name)
+        return self[name]
+
+
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     from prandtl_fmu.fmu.build import build_fmu
 
     folder = tmp_path_factory.mktemp("native")
-    built = {}
-    for name, tables in SCENES.items():
+
+    def build(name):
         path = folder / f"{name}.toml"
-        path.write_text(scene_text(tables) if tables else PAPER.read_text())
-        built[name] = (build_fmu(path, folder / f"{name}.fmu", runtime="native"), path)
-    return built
+        path.write_text(scene_text(SCENES[name]) if SCENES[name] else PAPER.read_text())
+        return build_fmu(path, folder / f"{name}.fmu", runtime="native"), path
+
+    return Built(build)
+
+
+# the scenes whose FMU comparisons run in the quick suite; the others (also covered by the random native scenes)
+# under the slow marker
+QUICK = ("smooth", "friction", "coulomb", "paper")
+
+
+def quick_or_slow(names):
+    return [name if name in QUICK else pytest.param(name, marks=pytest.mark.slow) for name in names]
 
 
 def steppers_of(scene):
@@ -102,7 +124,7 @@ def step_both(slave, element, rng, names, label):
     assert same(outputs(slave, names), expected(element, names)), (label, time)
 
 
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", quick_or_slow(SCENES))
 def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
     """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
     reaction, the stiffness and the energy account equal Element.advance's to the bit."""
@@ -387,11 +409,11 @@ def fmus3(fmus, tmp_path_factory):
     from prandtl_fmu.fmu.build import build_fmu
 
     folder = tmp_path_factory.mktemp("native3")
-    return {name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3), fmus[name][1])
-            for name in ("friction", "paper", "continuum")}
+    return Built(lambda name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3),
+                               fmus[name][1]))
 
 
-@pytest.mark.parametrize("name", ["friction", "paper", "continuum"])
+@pytest.mark.parametrize("name", quick_or_slow(["friction", "paper", "continuum"]))
 def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmus3, name):
     """FMPy's validator finds nothing; simulate_fmu with the scene's load gives the library's x, v, reaction and the
     array u (n elongations, sized by the structural parameter n) bit for bit."""
@@ -567,7 +589,7 @@ def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(co
     ("smooth", {"stepper": "verlet", "step": 3.0}),
     ("friction", {"stepper": "projected", "step": 0.9}),
     ("friction", {"stepper": "implicit", "step": 2.0}),
-    ("massless", {"stepper": "projected", "step": 1.0}),
+    pytest.param("massless", {"stepper": "projected", "step": 1.0}, marks=pytest.mark.slow),
     ("smooth", {"stepper": "implicit", "step": 0.5}),
 ])
 def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, settings):

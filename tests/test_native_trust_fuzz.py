@@ -16,6 +16,10 @@ import pytest
 from .native_host import built_native, compile_trust_host, run_trust
 from .test_native_trust import DECLARED, SCENES, START, forged
 
+# seeded random call sequences in child processes (a minute or two with their builds): run by .ci/run after
+# the quick suite, as `pytest -m slow`
+pytestmark = pytest.mark.slow
+
 SEQUENCES = 120  # per FMU: about 3 s each once it is built
 LENGTH = 80
 REALS = [math.nan, math.inf, -math.inf, 1e308, -1e308, 5e-324, 1e-60, 1e60, 0.0, -0.0, 1.0, -1.0, 0.3, 1e-3, 2.0]

@@ -20,6 +20,10 @@ import pytest
 from .test_pythonfmu_trust import (CONNECTOR_SCENE, ELEMENT_SCENE, ERROR, LAST_SUCCESSFUL_TIME, OK, TERMINATED,
                                    Binary, build, run_child)
 
+# seeded random call sequences in child processes (a minute or two with their builds): run by .ci/run after
+# the quick suite, as `pytest -m slow`
+pytestmark = pytest.mark.slow
+
 CALLS = 2500  # per FMU and seed: ~5 s per seed here (more the first time numba compiles a stepper)
 SEEDS = [11, 2026, 31, 7]
 
