@@ -22,6 +22,10 @@ from prandtl_fmu import scene as rules
 from .conftest import base_tables
 from .native_host import built_native, compile_trust_host, run_trust
 
+# the native FMUs rebuilt with AddressSanitizer and UBSan for a C host (about two minutes of building, cold):
+# run by .ci/run after the quick suite, as `pytest -m slow`; tests/test_native_host.py keeps a C host in the quick one
+pytestmark = pytest.mark.slow
+
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
     pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
 
