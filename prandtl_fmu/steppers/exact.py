@@ -156,6 +156,20 @@ def _expm_times(a, tau, y):
     """expm(a tau) @ y for a square a (6x6 here; 6 + n with series dashpots, ``exact_series.py``): Taylor
     series after scaling, then squaring."""
     size = a.shape[0]
+    result, b, scale, squarings = _scaled_taylor(a, tau)
+    if squarings < 0:  # an overflow: no squaring count (the step fails on the non-finite state)
+        return np.full(size, np.nan)
+    for _ in range(squarings):
+        result = _matmul(result, result)
+    return _matvec(result, y)
+
+
+@kernel
+def _scaled_taylor(a, tau):
+    """``(expm(b), b, scale, q)``: b = a scale with scale = tau / 2^q, q the squarings that bring |a tau|_1 to
+    <= 1/4, expm(b) by its Taylor series; q = -1 when |a tau| overflows. What :func:`_expm_times` and
+    :func:`_expm_gramian` share, so that both compute the same exponential, operation for operation."""
+    size = a.shape[0]
     norm = 0.0
     for j in range(size):
         column = 0.0
@@ -163,8 +177,8 @@ def _expm_times(a, tau, y):
             column += abs(a[i, j])
         norm = max(norm, column)
     norm *= tau
-    if not norm < np.inf:  # an overflow: no squaring count (the step fails on the non-finite state)
-        return np.full(size, np.nan)
+    if not norm < np.inf:
+        return np.eye(size), a * 0.0, 0.0, -1
     squarings = 0
     if norm > 0.25:
         squarings = int(math.ceil(math.log2(norm / 0.25)))
@@ -177,9 +191,7 @@ def _expm_times(a, tau, y):
         result += term
         if _converged(term, result):
             break
-    for _ in range(squarings):
-        result = _matmul(result, result)
-    return _matvec(result, y)
+    return result, b, scale, squarings
 
 
 @kernel
@@ -190,27 +202,9 @@ def _expm_gramian(a, tau, y0):
     M = y0 y0^T: with B = A sigma, W = sum_k T_k, T_0 = sigma M, T_k = (B T_(k-1) + T_(k-1) B^T) / (k + 1); then
     W(2 s) = W(s) + E(s) W(s) E(s)^T, E(2 s) = E(s)^2 (no growing exponential: stable wherever expm is)."""
     size = a.shape[0]
-    norm = 0.0
-    for j in range(size):
-        column = 0.0
-        for i in range(size):
-            column += abs(a[i, j])
-        norm = max(norm, column)
-    norm *= tau
-    if not norm < np.inf:
+    result, b, scale, squarings = _scaled_taylor(a, tau)
+    if squarings < 0:
         return np.full(size, np.nan), np.full((size, size), np.nan)
-    squarings = 0
-    if norm > 0.25:
-        squarings = int(math.ceil(math.log2(norm / 0.25)))
-    scale = tau / 2.0**squarings
-    b = a * scale
-    result = np.eye(size)
-    term = np.eye(size)
-    for k in range(1, 30):
-        term = _matmul(term, b) / k
-        result += term
-        if _converged(term, result):
-            break
     outer = np.empty((size, size))
     for i in range(size):
         for j in range(size):
