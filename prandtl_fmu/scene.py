@@ -254,6 +254,7 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 # ---------------------------------------------------------------- parsing
 
 _TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "load", "solver", "fmu"}
+# (a scene with [network] or [chain] is a network: network/model.py reads it)
 # How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
 # with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
 CAUSALITIES = ("force", "displacement")
@@ -426,6 +427,10 @@ def scene_from_document(doc: dict, source: str = "<scene>", check_stepper: bool 
 
 
 def _scene_from_document(doc, source, check_stepper) -> Scene:
+    if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
+        from .network.model import network_scene
+
+        return network_scene(doc, source, check_stepper)
     for key in doc:
         if key not in _TOP_KEYS:
             raise SceneError(f"{source}: {key}: unknown key (allowed at top level: {', '.join(sorted(_TOP_KEYS))})")

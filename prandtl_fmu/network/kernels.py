@@ -1,0 +1,858 @@
+"""The compiled steps of a network: ``implicit`` (an exact active-set method) and ``projected``.
+
+A compiled network is the tuple ``model = (mass, kind, ends, coef, load_node, has_cubic)``:
+
+* ``mass[j]`` (kg, 0: a massless node) for the nodes j = 0 .. n-1;
+* element e has ``kind[e]`` (SPRING, DASHPOT, SLIDER, BRANCH, CUBIC), ``ends[e] = (i, j)`` with i a node and
+  j a node or GROUND (-1), and ``coef[e] = (a, eta, c)``: a = k, c, alpha, k or k3 by kind; eta and c the
+  elastic range and the series dashpot of a branch (c = 0: none);
+* ``load_node``: the node the load F acts on (or whose motion is imposed: the connector).
+
+The state is x, v (per node), ``u[e]`` the elongation of branch e (0 for the other kinds) and ``piece[e]``
+(which piece of its law element e was on at the last step: the warm start of the next one).
+
+``implicit``: backward Euler on everything. With the increment d = x1 - x of every node, v1 = d / h, and
+delta_e = d_i - d_j the relative increment of element e, the step is the minimiser of the strictly convex
+
+    J(d) = sum_j m_j / (2 h^2) (d_j - h v_j)^2 - F(t+h) d_L
+         + sum_springs k/2 (e_e + delta_e)^2 + sum_cubic k3/4 (e_e + delta_e)^4 + sum_dashpots c/(2h) delta_e^2
+         + sum_sliders alpha |delta_e| + sum_branches Phi_e(delta_e)
+
+(e_e = x_i - x_j; Phi_e the convex potential whose derivative is the branch force k clip(r (u_e + delta),
+-eta, eta), r = 1 / (1 + h k / c), i.e. u1 = clip(r (u + delta), -eta, eta)). J is piecewise quadratic (plus
+quartic terms) over regions cut by the kinks: a slider's delta = 0 and a branch's r (u + delta) = +-eta.
+
+:func:`implicit_step` minimises J by a primal active-set method, the finite method of convex quadratic
+programming applied to the pieces: a stuck slider or a branch at its kink is an equality constraint
+(delta_e = its value), every other element sits on one piece of its law. On the current working set the
+piece's quadratic is minimised exactly (the stuck elements merge their nodes into clusters; a linear solve
+over the clusters: banded LDL^T, tridiagonal for a chain); the step towards that minimiser stops at the first
+kink it meets, which joins the working set; at a minimiser of the working set, the forces the constraints
+carry (the multipliers, from the equilibrium of each cluster's tree of constraints) say which constraint to
+release: a stuck slider whose force exceeds alpha slips, a branch at its kink goes to the piece its force
+asks for. J decreases strictly from working set to working set, so no working set repeats and the search
+ends; the result is exact up to rounding (no tolerance but rounding's in the comparisons). With cubic
+springs the piece's quadratic is their Newton model, and the step is taken with an exact line search along
+it: Newton's iteration, converged to rounding. Every search has a stated budget (:func:`search_budget`); past
+it the step fails (NaN) and the driver says so.
+
+``projected`` (where every node has a mass and all plasticity is in branches): the paper's scheme
+(M2AN 2002, eq. 5.1) on the network, every force at the old state:
+
+    u_e <- clip(u_e + h (v_i - v_j) - h k_e u_e / c_e, -eta_e, eta_e),   x <- x + h v,   v <- v + h a(old).
+"""
+import numpy as np
+
+from .._jit import generic_kernel, kernel
+from ..loads import force_at
+
+SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
+GROUND = -1
+# pieces: a slider 0 (stuck: a constraint), +1 / -1 (slipping forwards / backwards); a branch 0 (elastic),
+# +1 / -1 (clipped at +eta / -eta), +2 / -2 (at its kink +eta / -eta: a constraint)
+STUCK, ELASTIC = 0, 0
+KINK = 2
+
+# Budget of one implicit step: active-set iterations per element and node, plus this constant.
+SEARCH_PER_TERM = 8
+SEARCH_CONSTANT = 200
+LINE_SEARCH_LIMIT = 200  # bisection/Newton iterations of one line search along a cubic spring's Newton step
+SINGULAR = 1e-12  # a pivot below this fraction of its diagonal: the cluster is floppy (no stiffness, no mass)
+ROUNDING = 64.0 * np.finfo(np.float64).eps  # relative size of a rounding error in a force balance
+
+
+@kernel
+def search_budget(n, elements):
+    """The most active-set iterations one implicit step may take before it is refused."""
+    return SEARCH_PER_TERM * (n + elements) + SEARCH_CONSTANT
+
+
+@kernel
+def workspace(n, elements):
+    """Arrays an implicit step works in (allocated once per run)."""
+    return (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64),
+            np.zeros(elements), np.zeros(n + 1), np.zeros(n + 2, np.int64), np.zeros(2 * elements + 2, np.int64),
+            np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64), np.zeros(n))
+
+
+@kernel
+def _ratio(coef, e, h):
+    """r = 1 / (1 + h k / c) of branch e (1 without a series dashpot)."""
+    c = coef[e, 2]
+    if c > 0.0:
+        return 1.0 / (1.0 + h * coef[e, 0] / c)
+    return 1.0
+
+
+@kernel
+def is_constraint(kind, piece, e):
+    if kind[e] == SLIDER:
+        return piece[e] == STUCK
+    if kind[e] == BRANCH:
+        return abs(piece[e]) == KINK
+    return False
+
+
+@kernel
+def _relative(ends, d, e):
+    """d_i - d_j of element e (d of the ground: 0)."""
+    j = ends[e, 1]
+    if j == GROUND:
+        return d[ends[e, 0]]
+    return d[ends[e, 0]] - d[j]
+
+
+@kernel
+def _relative_x(ends, x, e):
+    j = ends[e, 1]
+    if j == GROUND:
+        return x[ends[e, 0]]
+    return x[ends[e, 0]] - x[j]
+
+
+@kernel
+def term_force(kind, coef, piece, e, rel_x, delta, u_e, h):
+    """(force, curvature) of element e on its piece at the relative increment delta: force the derivative of
+    its potential in delta (the pull on node i towards j), curvature the second derivative (0 on a flat
+    piece). A constraint's force here is its piece's value (0 for a stuck slider, +-k eta at a kink): the
+    multiplier comes on top (:func:`_multipliers`)."""
+    kd = kind[e]
+    a = coef[e, 0]
+    if kd == SPRING:
+        return a * (rel_x + delta), a
+    if kd == DASHPOT:
+        return a * delta / h, a / h
+    if kd == CUBIC:
+        y = rel_x + delta
+        return a * y * y * y, 3.0 * a * y * y
+    if kd == SLIDER:
+        if piece[e] == STUCK:
+            return 0.0, 0.0
+        return a * piece[e], 0.0
+    # branch
+    p = piece[e]
+    if p == ELASTIC:
+        r = _ratio(coef, e, h)
+        return a * r * (u_e + delta), a * r
+    if p > 0:
+        return a * coef[e, 1], 0.0
+    return -a * coef[e, 1], 0.0
+
+
+@kernel
+def _find(parent, a):
+    root = a
+    while parent[root] != root:
+        root = parent[root]
+    while parent[a] != root:  # path compression
+        a, parent[a] = parent[a], root
+    return root
+
+
+@kernel
+def _clusters(n, kind, ends, piece, parent, cluster, held_node):
+    """Union the nodes the constraints join (the ground is node n; ``held_node`` >= 0, the connector's node
+    whose motion is imposed, is held with it); cluster[j] = the free cluster of node j, numbered in the order
+    of their first node, or -1 for a node held. Returns the number of free clusters."""
+    for a in range(n + 1):
+        parent[a] = a
+    if held_node >= 0:
+        parent[held_node] = n
+    for e in range(kind.shape[0]):
+        if is_constraint(kind, piece, e):
+            j = ends[e, 1]
+            ra = _find(parent, ends[e, 0])
+            rb = _find(parent, n if j == GROUND else j)
+            if ra == rb:
+                continue
+            if ra == n or rb == n:
+                parent[min(ra, rb)] = n
+            else:
+                parent[max(ra, rb)] = min(ra, rb)
+    for a in range(n + 1):
+        cluster[a] = -2
+    count = 0
+    for j in range(n):
+        root = _find(parent, j)
+        if root == n:
+            cluster[j] = -1
+        else:  # the root is the cluster's first node: it is numbered first
+            if cluster[root] == -2:
+                cluster[root] = count
+                count += 1
+            cluster[j] = cluster[root]
+    return count
+
+
+@kernel
+def _start_pieces(model, x, u, piece, d, h):
+    """Put every element on the piece its relative increment at the start point d lies on, keeping the last
+    step's piece where it still holds (the warm start); a branch's kink is a constraint within a step only."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    for e in range(kind.shape[0]):
+        delta = _relative(ends, d, e)
+        if kind[e] == SLIDER:
+            if piece[e] == STUCK and delta != 0.0 or piece[e] * delta < 0.0:
+                piece[e] = 1 if delta > 0.0 else -1
+        elif kind[e] == BRANCH:
+            p = piece[e]
+            if abs(p) == KINK:
+                p = p // KINK
+            y = _ratio(coef, e, h) * (u[e] + delta)
+            eta = coef[e, 1]
+            if y > eta or p > 0 and y == eta:
+                p = 1
+            elif y < -eta or p < 0 and y == -eta:
+                p = -1
+            else:
+                p = ELASTIC
+            piece[e] = p
+
+
+@kernel
+def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
+    """grad_j = dJ/dd_j on the current pieces (constraints without their multipliers); term[e] = the force of
+    element e; scale[j] = the sum of the magnitudes of the forces at node j (for rounding tolerances)."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    for j in range(n):
+        inertia = mass[j] / (h * h) * (d[j] - h * v[j])
+        grad[j] = inertia
+        scale[j] = abs(inertia)
+    grad[load_node] -= force
+    scale[load_node] += abs(force)
+    for e in range(kind.shape[0]):
+        f, _ = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], h)
+        term[e] = f
+        i, j = ends[e, 0], ends[e, 1]
+        grad[i] += f
+        scale[i] += abs(f)
+        if j != GROUND:
+            grad[j] -= f
+            scale[j] += abs(f)
+
+
+@kernel
+def _band(kind, ends, piece, cluster):
+    """The half bandwidth of the cluster matrix."""
+    band = 0
+    for e in range(kind.shape[0]):
+        if is_constraint(kind, piece, e):
+            continue
+        j = ends[e, 1]
+        ci = cluster[ends[e, 0]]
+        cj = -1 if j == GROUND else cluster[j]
+        if ci >= 0 and cj >= 0:
+            band = max(band, abs(ci - cj))
+    return band
+
+
+@kernel
+def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
+    """The clusters' matrix (banded: a[c, t] = H[c, c - t]) and right-hand side -sum of grad over each."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    a = np.zeros((count, band + 1))
+    rhs = np.zeros(count)
+    n = mass.shape[0]
+    for j in range(n):
+        c = cluster[j]
+        if c >= 0:
+            a[c, 0] += mass[j] / (h * h)
+            rhs[c] -= grad[j]
+    for e in range(kind.shape[0]):
+        if is_constraint(kind, piece, e):
+            continue
+        i, j = ends[e, 0], ends[e, 1]
+        ci = cluster[i]
+        cj = -1 if j == GROUND else cluster[j]
+        if ci == cj:
+            continue  # both ends move together (or stay): no curvature along any direction
+        _, kappa = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], h)
+        if kappa == 0.0:
+            continue
+        if ci >= 0:
+            a[ci, 0] += kappa
+        if cj >= 0:
+            a[cj, 0] += kappa
+        if ci >= 0 and cj >= 0:
+            a[max(ci, cj), abs(ci - cj)] -= kappa
+    return a, rhs
+
+
+@kernel
+def _factor(a, band):
+    """In-place banded LDL^T of the symmetric a (a[c, 0] = D_c, a[c, t] = L[c, c - t]). Returns the first
+    cluster whose pivot vanishes (-1: none): the matrix is singular there (a floppy cluster)."""
+    count = a.shape[0]
+    for c in range(count):
+        diagonal = a[c, 0]
+        first = max(0, c - band)
+        for k in range(first, c):
+            s = a[c, c - k]
+            for m in range(first, k):
+                if k - m <= band:
+                    s -= a[c, c - m] * a[m, 0] * a[k, k - m]
+            a[c, c - k] = s / a[k, 0]
+        pivot = diagonal
+        for m in range(first, c):
+            pivot -= a[c, c - m] * a[c, c - m] * a[m, 0]
+        if not pivot > SINGULAR * diagonal:
+            return c
+        a[c, 0] = pivot
+    return -1
+
+
+@kernel
+def _solve(a, band, rhs):
+    """Solve L D L^T q = rhs in place."""
+    count = a.shape[0]
+    for c in range(count):
+        for m in range(max(0, c - band), c):
+            rhs[c] -= a[c, c - m] * rhs[m]
+    for c in range(count):
+        rhs[c] /= a[c, 0]
+    for c in range(count - 1, -1, -1):
+        for r in range(c + 1, min(count, c + band + 1)):
+            rhs[c] -= a[r, r - c] * rhs[r]
+    return rhs
+
+
+@kernel
+def _null_vector(a, band, singular):
+    """A vector z with z_singular = 1 and H z = 0 on the clusters up to ``singular`` (L^T z = 0 above it)."""
+    z = np.zeros(a.shape[0])
+    z[singular] = 1.0
+    for c in range(singular - 1, -1, -1):
+        s = 0.0
+        for r in range(c + 1, min(singular + 1, c + band + 1)):
+            s -= a[r, r - c] * z[r]
+        z[c] = s
+    return z
+
+
+@kernel
+def _room(kind, coef, piece, e, rel_x, delta, u_e, rate, h):
+    """How far (in units of the direction) element e's relative increment may move at ``rate`` before it
+    meets a kink of its piece; inf if never. Constraints and smooth elements never block."""
+    if rate == 0.0:
+        return np.inf
+    kd = kind[e]
+    p = piece[e]
+    if kd == SLIDER:
+        if p == 0:
+            return np.inf
+        if p * rate < 0.0:  # slipping towards delta = 0
+            return max(0.0, -delta / rate)
+        return np.inf
+    if kd != BRANCH or abs(p) == KINK:
+        return np.inf
+    r = _ratio(coef, e, h)
+    eta = coef[e, 1]
+    y = r * (u_e + delta)  # the elongation this increment gives, unclipped
+    slope = r * rate
+    if p == ELASTIC:
+        bound = eta if slope > 0.0 else -eta
+        return max(0.0, (bound - y) / slope)
+    if p * slope < 0.0:  # clipped, going back towards the elastic range
+        bound = eta if p > 0 else -eta
+        return max(0.0, (bound - y) / slope)
+    return np.inf
+
+
+@kernel
+def _multipliers(model, piece, grad, order, parent_edge, adjacency, start, visited, subtree, term, held_node):
+    """The force each constraint carries, from the equilibrium of each cluster's tree of constraints:
+    term[e] (the piece's force) is increased by the multiplier, so that term[e] is then the whole force the
+    constraint carries. grad: the nodes' residual forces at a minimiser of the working set."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    for a in range(n + 2):
+        start[a] = 0
+    for e in range(kind.shape[0]):
+        if is_constraint(kind, piece, e):
+            j = ends[e, 1]
+            start[ends[e, 0] + 1] += 1
+            start[(n if j == GROUND else j) + 1] += 1
+    for a in range(n + 1):
+        start[a + 1] += start[a]
+    for a in range(n + 1):
+        visited[a] = start[a]  # fill pointer
+    for e in range(kind.shape[0]):
+        if is_constraint(kind, piece, e):
+            j = ends[e, 1]
+            i = ends[e, 0]
+            jj = n if j == GROUND else j
+            adjacency[visited[i]] = e
+            visited[i] += 1
+            adjacency[visited[jj]] = e
+            visited[jj] += 1
+    for a in range(n + 1):
+        visited[a] = 0
+        parent_edge[a] = -1
+    size = 0
+    for index in range(n + 2):  # the ground, then the held node, first: a held cluster hangs from them
+        root = n if index == 0 else (held_node if index == 1 else index - 2)
+        if root < 0 or visited[root] or start[root + 1] == start[root]:
+            continue
+        visited[root] = 1
+        order[size] = root
+        size += 1
+        head = size - 1
+        while head < size:
+            a = order[head]
+            head += 1
+            for s in range(start[a], start[a + 1]):
+                e = adjacency[s]
+                j = ends[e, 1]
+                other = ends[e, 0] if (n if j == GROUND else j) == a else (n if j == GROUND else j)
+                if not visited[other]:
+                    visited[other] = 1
+                    parent_edge[other] = e
+                    order[size] = other
+                    size += 1
+    for a in range(n + 1):
+        subtree[a] = grad[a] if a < n else 0.0
+    for s in range(size - 1, -1, -1):
+        a = order[s]
+        e = parent_edge[a]
+        if a == held_node:
+            continue  # held: it takes what its tree does not balance (the connector's force)
+        if e < 0:
+            continue
+        # the constraint's multiplier mu enters grad_i as +mu and grad_j as -mu; node a's balance is
+        # subtree[a] + (+-mu) = 0
+        if ends[e, 0] == a:
+            mu = -subtree[a]
+            other = ends[e, 1]
+        else:
+            mu = subtree[a]
+            other = ends[e, 0]
+        term[e] += mu
+        if other == GROUND:
+            other = n
+        subtree[other] += subtree[a]
+
+
+@kernel
+def _release(kind, coef, piece, term, scale, ends, e):
+    """Whether constraint e, carrying the force term[e], is to be released (and then releases it)."""
+    i, j = ends[e, 0], ends[e, 1]
+    tolerance = ROUNDING * (scale[i] + (0.0 if j == GROUND else scale[j]))
+    f = term[e]
+    if kind[e] == SLIDER:
+        alpha = coef[e, 0]
+        if f > alpha + tolerance:
+            piece[e] = 1
+            return True
+        if f < -alpha - tolerance:
+            piece[e] = -1
+            return True
+        return False
+    limit = coef[e, 0] * coef[e, 1]  # k eta
+    side = 1 if piece[e] > 0 else -1
+    excess = side * f - limit  # > 0: the branch is pulled beyond its kink: it slips; < 0: back to elastic
+    if excess > tolerance:
+        piece[e] = side
+        return True
+    if excess < -tolerance:
+        piece[e] = ELASTIC
+        return True
+    return False
+
+
+@kernel
+def _line_search(model, x, u, piece, d, p, h, force, v, top):
+    """The minimiser of J(d + tau p) over tau in [0, top] (J smooth and convex there: the pieces hold),
+    by safeguarded Newton on its derivative; ``top`` may be inf."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    lo, hi = 0.0, top
+    tau = 1.0 if top >= 1.0 else top
+    for _ in range(LINE_SEARCH_LIMIT):
+        slope, curvature = _directional(model, x, u, piece, d, p, h, force, v, tau)
+        if slope == 0.0:
+            return tau
+        if slope > 0.0:
+            hi = tau
+        else:
+            lo = tau
+            if tau == top:
+                return tau
+        step = tau - slope / curvature if curvature > 0.0 else np.nan
+        if not (step > lo and step < hi):
+            step = 0.5 * (lo + hi) if hi < np.inf else 2.0 * tau + 1.0
+        if step == tau or hi - lo <= 4.0 * np.finfo(np.float64).eps * max(abs(hi), 1.0):
+            return step
+        tau = step
+    return np.nan
+
+
+@kernel
+def _directional(model, x, u, piece, d, p, h, force, v, tau):
+    """(dJ/dtau, d2J/dtau2) at d + tau p."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    slope = 0.0
+    curvature = 0.0
+    for j in range(mass.shape[0]):
+        if p[j] != 0.0:
+            slope += mass[j] / (h * h) * (d[j] + tau * p[j] - h * v[j]) * p[j]
+            curvature += mass[j] / (h * h) * p[j] * p[j]
+    slope -= force * p[load_node]
+    for e in range(kind.shape[0]):
+        rate = _relative(ends, p, e)
+        if rate == 0.0:
+            continue
+        f, kappa = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e) + tau * rate,
+                              u[e], h)
+        slope += f * rate
+        curvature += kappa * rate * rate
+    return slope, curvature
+
+
+@kernel
+def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work):
+    """The increment d (work[0]) of one implicit step and the force each element carries (work[5]); the
+    pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
+    Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
+    (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    elements = kind.shape[0]
+    d, grad, p, parent, cluster, term, subtree, start, adjacency, order, parent_edge, visited, scale = work
+    for j in range(n):
+        d[j] = 0.0
+    if fixed_node >= 0:
+        d[fixed_node] = fixed_increment
+    _start_pieces(model, x, u, piece, d, h)
+    budget = search_budget(n, elements)
+    single = False  # release one constraint at a time (after a release of several met a kink at once)
+    released_many = False
+    for iteration in range(budget):
+        count = _clusters(n, kind, ends, piece, parent, cluster, fixed_node)
+        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
+        for j in range(n):
+            if not abs(grad[j]) < np.inf:
+                return -3
+        band = _band(kind, ends, piece, cluster)
+        a, rhs = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
+        singular = _factor(a, band)
+        top = 1.0
+        if singular >= 0:
+            z = _null_vector(a, band, singular)
+            slope = 0.0
+            for j in range(n):
+                if cluster[j] >= 0:
+                    slope += grad[j] * z[cluster[j]]
+            if slope == 0.0:
+                return -2
+            sign = -1.0 if slope > 0.0 else 1.0
+            for j in range(n):
+                p[j] = sign * z[cluster[j]] if cluster[j] >= 0 else 0.0
+            top = np.inf
+        else:
+            q = _solve(a, band, rhs)
+            for j in range(n):
+                p[j] = q[cluster[j]] if cluster[j] >= 0 else 0.0
+        tau = top
+        blocker = -1
+        for e in range(elements):
+            rate = _relative(ends, p, e)
+            room = _room(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], rate, h)
+            if room < tau:
+                tau = room
+                blocker = e
+        if tau == np.inf and not has_cubic:
+            return -2
+        step_taken = tau
+        if has_cubic:
+            step_taken = _line_search(model, x, u, piece, d, p, h, force, v, tau)
+            if not step_taken < np.inf:
+                return -2 if step_taken == np.inf else -3
+            if step_taken < tau:
+                blocker = -1
+        largest = 0.0
+        for j in range(n):
+            d[j] += step_taken * p[j]
+            largest = max(largest, abs(step_taken * p[j]))
+        if blocker >= 0:
+            if step_taken == 0.0 and released_many:
+                single = True
+            released_many = False
+            if kind[blocker] == SLIDER:
+                piece[blocker] = STUCK
+            else:
+                rel = _relative(ends, d, blocker)
+                y = _ratio(coef, blocker, h) * (u[blocker] + rel)
+                piece[blocker] = KINK if y > 0.0 else -KINK
+            continue
+        released_many = False
+        if has_cubic:  # Newton: converged when the step is rounding
+            size = 0.0
+            for j in range(n):
+                size = max(size, abs(x[j]) + abs(d[j]))
+            if largest > 4.0 * np.finfo(np.float64).eps * size:
+                continue
+        # a minimiser of the working set: the constraints' forces decide
+        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
+        _multipliers(model, piece, grad, order, parent_edge, adjacency, start, visited, subtree, term, fixed_node)
+        released = 0
+        best = -1
+        worst = 0.0
+        for e in range(elements):
+            if not is_constraint(kind, piece, e):
+                continue
+            if single:
+                excess = _excess(kind, coef, piece, term, scale, ends, e)
+                if excess > worst:
+                    worst = excess
+                    best = e
+            elif _release(kind, coef, piece, term, scale, ends, e):
+                released += 1
+        if single and best >= 0:
+            _release(kind, coef, piece, term, scale, ends, best)
+            released = 1
+        if released == 0:
+            return iteration + 1
+        released_many = released > 1
+    return -1
+
+
+@kernel
+def _excess(kind, coef, piece, term, scale, ends, e):
+    """How far constraint e's force is beyond what lets it stay (0 if it may stay)."""
+    i, j = ends[e, 0], ends[e, 1]
+    tolerance = ROUNDING * (scale[i] + (0.0 if j == GROUND else scale[j]))
+    f = term[e]
+    if kind[e] == SLIDER:
+        return max(0.0, abs(f) - coef[e, 0] - tolerance)
+    side = 1 if piece[e] > 0 else -1
+    return max(0.0, abs(side * f - coef[e, 0] * coef[e, 1]) - tolerance)
+
+
+@kernel
+def commit(model, x, v, u, piece, h, force, work, energy, dissipated):
+    """Apply the increment found by :func:`solve_step`: x, v, the branches' elongations; book the energy
+    (``energy`` = [work of the load, dissipated by sliders, by dashpots], or None) and each element's
+    dissipation (``dissipated``, or None). Returns the reaction on the ground."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    d = work[0]
+    term = work[5]
+    reaction = 0.0
+    for e in range(kind.shape[0]):
+        delta = _relative(ends, d, e)
+        kd = kind[e]
+        loss = 0.0
+        slip = 0.0
+        if kd == DASHPOT:
+            loss = coef[e, 0] * delta * delta / h
+        elif kd == SLIDER:
+            if piece[e] != STUCK:
+                slip = coef[e, 0] * abs(delta)
+        elif kd == BRANCH:
+            r = _ratio(coef, e, h)
+            eta = coef[e, 1]
+            if piece[e] == ELASTIC:
+                u1 = r * (u[e] + delta)
+            else:
+                u1 = eta if piece[e] > 0 else -eta
+                slip = coef[e, 0] * eta * abs(u[e] + delta - u1 / r)
+            if coef[e, 2] > 0.0:
+                loss = h * coef[e, 0] * coef[e, 0] * u1 * u1 / coef[e, 2]
+            u[e] = u1
+        if energy is not None:
+            energy[1] += slip
+            energy[2] += loss
+        if dissipated is not None:
+            dissipated[e] += slip + loss
+        if ends[e, 1] == GROUND:
+            reaction += term[e]
+    if energy is not None:
+        energy[0] += force * d[load_node]
+    for j in range(mass.shape[0]):
+        x[j] += d[j]
+        v[j] = d[j] / h
+    return reaction
+
+
+@kernel
+def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
+    """One implicit step from t to t + h (the load at t + h). Returns (status, reaction): status the
+    iterations taken, or < 0 when the step could not be taken (see :func:`solve_step`; the state is then
+    unchanged but for the pieces)."""
+    force = force_at(load, t + h)
+    status = solve_step(model, x, v, u, piece, h, force, -1, 0.0, work)
+    if status < 0:
+        return status, np.nan
+    return status, commit(model, x, v, u, piece, h, force, work, energy, dissipated)
+
+
+@kernel
+def forces_now(model, x, v, u, term):
+    """term[e] = the force of every element that is not a slider in the state (x, v, u), a dashpot at the
+    velocities v (the projected scheme's forces); returns the reaction of those on the ground."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    reaction = 0.0
+    for e in range(kind.shape[0]):
+        kd = kind[e]
+        a = coef[e, 0]
+        if kd == SPRING:
+            f = a * _relative_x(ends, x, e)
+        elif kd == CUBIC:
+            y = _relative_x(ends, x, e)
+            f = a * y * y * y
+        elif kd == DASHPOT:
+            f = a * _relative(ends, v, e)
+        elif kd == BRANCH:
+            f = a * u[e]
+        else:
+            f = 0.0
+        term[e] = f
+        if ends[e, 1] == GROUND:
+            reaction += f
+    return reaction
+
+
+@kernel
+def projected_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
+    """One step of the paper's scheme (every force at t, the load at t): see the module's docstring.
+    Every node has a mass and there is no slider (the driver checks)."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    force = force_at(load, t)
+    grad = work[1]
+    term = work[5]
+    forces_now(model, x, v, u, term)
+    for j in range(n):
+        grad[j] = 0.0
+    grad[load_node] = force
+    for e in range(kind.shape[0]):
+        grad[ends[e, 0]] -= term[e]
+        if ends[e, 1] != GROUND:
+            grad[ends[e, 1]] += term[e]
+    for e in range(kind.shape[0]):
+        kd = kind[e]
+        if kd == BRANCH:
+            a = coef[e, 0]
+            eta = coef[e, 1]
+            rate = _relative(ends, v, e)
+            relax = h * a * u[e] / coef[e, 2] if coef[e, 2] > 0.0 else 0.0
+            y = u[e] + h * rate - relax
+            u1 = min(max(y, -eta), eta)
+            slip = a * eta * abs(y - u1) if u1 != y else 0.0
+            loss = relax * a * u[e]
+            if energy is not None:
+                energy[1] += slip
+                energy[2] += loss
+            if dissipated is not None:
+                dissipated[e] += slip + loss
+            u[e] = u1
+        elif kd == DASHPOT:
+            rate = _relative(ends, v, e)
+            if energy is not None:
+                energy[2] += coef[e, 0] * rate * rate * h
+            if dissipated is not None:
+                dissipated[e] += coef[e, 0] * rate * rate * h
+    if energy is not None:
+        energy[0] += force * h * v[load_node]
+    for j in range(n):
+        x[j] += h * v[j]
+        v[j] += h * grad[j] / mass[j]
+    return 0, forces_now(model, x, v, u, term)
+
+
+@kernel
+def kinetic(mass, v):
+    total = 0.0
+    for j in range(mass.shape[0]):
+        total += 0.5 * mass[j] * v[j] * v[j]
+    return total
+
+
+@kernel
+def stored(model, x, u):
+    """The energy in the springs, cubic springs and branches (J)."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    total = 0.0
+    for e in range(kind.shape[0]):
+        kd = kind[e]
+        if kd == SPRING:
+            y = _relative_x(ends, x, e)
+            total += 0.5 * coef[e, 0] * y * y
+        elif kd == CUBIC:
+            y = _relative_x(ends, x, e)
+            total += 0.25 * coef[e, 0] * y * y * y * y
+        elif kd == BRANCH:
+            total += 0.5 * coef[e, 0] * u[e] * u[e]
+    return total
+
+
+@kernel
+def write_row(model, load, time, x, v, u, reaction, row, energy, energy_row, u_row):
+    """One output row: x and v of every node, F, the reaction; the energy columns (kinetic, stored, work,
+    sliders, dashpots) and the elongations where asked (not None)."""
+    n = x.shape[0]
+    for j in range(n):
+        row[2 * j] = x[j]
+        row[2 * j + 1] = v[j]
+    row[2 * n] = force_at(load, time)
+    row[2 * n + 1] = reaction
+    if energy_row is not None:
+        mass = model[0]
+        energy_row[0] = kinetic(mass, v)
+        energy_row[1] = stored(model, x, u)
+        energy_row[2] = energy[0]
+        energy_row[3] = energy[1]
+        energy_row[4] = energy[2]
+    if u_row is not None:
+        kind = model[1]
+        m = 0
+        for e in range(kind.shape[0]):
+            if kind[e] == BRANCH:
+                u_row[m] = u[e]
+                m += 1
+
+
+def _time_loop(step):
+    def loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy,
+             dissipated, out_dissipated, work):
+        """``out.shape[0] * steps_per_row`` steps of ``step`` from step number first_step (t_p = t_base + p h,
+        from p alone); row j of ``out`` (and of out_u, out_energy, out_dissipated where not None) after every
+        ``steps_per_row`` steps. Returns (steps taken, status of the last step): fewer steps than asked when a
+        step failed (status < 0; the state is the one before that step)."""
+        p = 0
+        status = 0
+        for j in range(out.shape[0]):
+            reaction = 0.0
+            for _ in range(steps_per_row):
+                status, reaction = step(model, load, t_base + (first_step + p) * h, h, x, v, u, piece, work,
+                                        energy, dissipated)
+                if status < 0:
+                    return p, status
+                p += 1
+            write_row(model, load, t_base + (first_step + p) * h, x, v, u, reaction, out[j], energy,
+                      None if out_energy is None else out_energy[j], None if out_u is None else out_u[j])
+            if out_dissipated is not None:
+                out_dissipated[j, :] = dissipated
+        return p, status
+
+    loop.__qualname__ = f"network_loop_{step.__name__}"  # unique: see kernels/loop.py
+    return generic_kernel(loop)
+
+
+_implicit_loop = _time_loop(implicit_step)
+_projected_loop = _time_loop(projected_step)
+
+
+@kernel
+def run_implicit(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy,
+                 dissipated, out_dissipated, work):
+    """The implicit time loop (see _time_loop), cached."""
+    return _implicit_loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy,
+                          out_energy, dissipated, out_dissipated, work)
+
+
+@kernel
+def run_projected(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy,
+                  dissipated, out_dissipated, work):
+    """The projected time loop (see _time_loop), cached."""
+    return _projected_loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy,
+                           out_energy, dissipated, out_dissipated, work)
