@@ -93,9 +93,10 @@ def instant_model(model):
     ends2 = np.concatenate([np.stack([held_nodes, np.full(extra, -1)], axis=1).astype(np.int64).reshape(extra, 2),
                             ends])
     coef2 = np.concatenate([np.tile([np.inf, 0.0, 0.0], (extra, 1)).reshape(extra, 3), coef])
-    rigid = kind2 == kernels.DASHPOT
+    rigid = (kind2 == kernels.DASHPOT) & (coef2[:, 0] > 0)  # a dashpot with c = 0 is no dashpot
     kind2[rigid] = kernels.SLIDER
     coef2[rigid] = (np.inf, 0.0, 0.0)
+    coef2[(kind2 == kernels.DASHPOT), 0] = 0.0
     coef2[kind2 == kernels.BRANCH, 2] = 0.0
     return (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic), extra
 

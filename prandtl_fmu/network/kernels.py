@@ -463,14 +463,19 @@ def _release(kind, coef, piece, term, scale, ends, e):
 @kernel
 def _line_search(model, x, u, piece, d, p, h, force, v, top):
     """The minimiser of J(d + tau p) over tau in [0, top] (J smooth and convex there: the pieces hold),
-    by safeguarded Newton on its derivative; ``top`` may be inf."""
-    mass, kind, ends, coef, load_node, has_cubic = model
+    by safeguarded Newton on its derivative, to rounding (a slope within the rounding of its own terms is
+    zero); ``top`` may be inf. Returns NaN if the derivative is not finite."""
     lo, hi = 0.0, top
     tau = 1.0 if top >= 1.0 else top
+    best, least = 0.0, np.inf
     for _ in range(LINE_SEARCH_LIMIT):
-        slope, curvature = _directional(model, x, u, piece, d, p, h, force, v, tau)
-        if slope == 0.0:
+        slope, curvature, size = _directional(model, x, u, piece, d, p, h, force, v, tau)
+        if not (abs(slope) < np.inf and abs(curvature) < np.inf):
+            return np.nan
+        if abs(slope) <= ROUNDING * size:
             return tau
+        if abs(slope) < least:
+            best, least = tau, abs(slope)
         if slope > 0.0:
             hi = tau
         else:
@@ -483,20 +488,24 @@ def _line_search(model, x, u, piece, d, p, h, force, v, top):
         if step == tau or hi - lo <= 4.0 * np.finfo(np.float64).eps * max(abs(hi), 1.0):
             return step
         tau = step
-    return np.nan
+    return best  # the budget ran out: the point of least slope seen
 
 
 @kernel
 def _directional(model, x, u, piece, d, p, h, force, v, tau):
-    """(dJ/dtau, d2J/dtau2) at d + tau p."""
+    """(dJ/dtau, d2J/dtau2, the sum of the magnitudes of the slope's terms) at d + tau p."""
     mass, kind, ends, coef, load_node, has_cubic = model
     slope = 0.0
     curvature = 0.0
+    size = 0.0
     for j in range(mass.shape[0]):
         if p[j] != 0.0:
-            slope += mass[j] / (h * h) * (d[j] + tau * p[j] - h * v[j]) * p[j]
+            term = mass[j] / (h * h) * (d[j] + tau * p[j] - h * v[j]) * p[j]
+            slope += term
+            size += abs(term)
             curvature += mass[j] / (h * h) * p[j] * p[j]
     slope -= force * p[load_node]
+    size += abs(force * p[load_node])
     for e in range(kind.shape[0]):
         rate = _relative(ends, p, e)
         if rate == 0.0:
@@ -504,8 +513,9 @@ def _directional(model, x, u, piece, d, p, h, force, v, tau):
         f, kappa = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e) + tau * rate,
                               u[e], h)
         slope += f * rate
+        size += abs(f * rate)
         curvature += kappa * rate * rate
-    return slope, curvature
+    return slope, curvature, size
 
 
 @kernel
@@ -534,6 +544,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
                 return -3
         band = _band(kind, ends, piece, cluster)
         a, rhs = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
+        diagonal = a[:, 0].copy()
         singular = _factor(a, band)
         top = 1.0
         if singular >= 0:
@@ -552,9 +563,18 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             q = _solve(a, band, rhs)
             for j in range(n):
                 p[j] = q[cluster[j]] if cluster[j] >= 0 else 0.0
-        tau = top
+        converged = False
+        if has_cubic:  # Newton: converged when its step is rounding
+            # a step within what rounding makes of the forces (or of x + d) is no step
+            converged = top == 1.0
+            for j in range(n):
+                if cluster[j] >= 0:
+                    noise = ROUNDING * (abs(x[j]) + abs(d[j]) + scale[j] / diagonal[cluster[j]])
+                    if abs(p[j]) > noise:
+                        converged = False
+        tau = 0.0 if converged else top
         blocker = -1
-        for e in range(elements):
+        for e in range(elements if not converged else 0):
             rate = _relative(ends, p, e)
             room = _room(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], rate, h)
             if room < tau:
@@ -563,16 +583,14 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         if tau == np.inf and not has_cubic:
             return -2
         step_taken = tau
-        if has_cubic:
+        if has_cubic and not converged:
             step_taken = _line_search(model, x, u, piece, d, p, h, force, v, tau)
             if not step_taken < np.inf:
                 return -2 if step_taken == np.inf else -3
             if step_taken < tau:
                 blocker = -1
-        largest = 0.0
         for j in range(n):
             d[j] += step_taken * p[j]
-            largest = max(largest, abs(step_taken * p[j]))
         if blocker >= 0:
             if step_taken == 0.0 and released_many:
                 single = True
@@ -585,12 +603,8 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
                 piece[blocker] = KINK if y > 0.0 else -KINK
             continue
         released_many = False
-        if has_cubic:  # Newton: converged when the step is rounding
-            size = 0.0
-            for j in range(n):
-                size = max(size, abs(x[j]) + abs(d[j]))
-            if largest > 4.0 * np.finfo(np.float64).eps * size:
-                continue
+        if has_cubic and not converged:
+            continue
         # a minimiser of the working set: the constraints' forces decide
         _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
         _multipliers(model, piece, grad, order, parent_edge, adjacency, start, visited, subtree, term, fixed_node)
