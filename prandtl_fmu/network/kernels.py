@@ -43,7 +43,7 @@ it the step fails (NaN) and the driver says so.
 """
 import numpy as np
 
-from .._jit import generic_kernel, kernel
+from .._jit import generic_kernel, inline_kernel, kernel
 from ..loads import force_at
 
 SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
@@ -69,13 +69,14 @@ def search_budget(n, elements):
 
 @kernel
 def workspace(n, elements):
-    """Arrays an implicit step works in (allocated once per run)."""
+    """Arrays an implicit step works in (allocated once per run): d, grad, p, parent, cluster, term, subtree,
+    queue, degree, links, scale."""
     return (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64),
-            np.zeros(elements), np.zeros(n + 1), np.zeros(n + 2, np.int64), np.zeros(2 * elements + 2, np.int64),
-            np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64), np.zeros(n))
+            np.zeros(elements), np.zeros(n + 1), np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64),
+            np.zeros(n + 1, np.int64), np.zeros(n))
 
 
-@kernel
+@inline_kernel
 def _ratio(coef, e, h):
     """r = 1 / (1 + h k / c) of branch e (1 without a series dashpot)."""
     c = coef[e, 2]
@@ -84,16 +85,17 @@ def _ratio(coef, e, h):
     return 1.0
 
 
-@kernel
-def is_constraint(kind, piece, e):
-    if kind[e] == SLIDER:
-        return piece[e] == STUCK
-    if kind[e] == BRANCH:
-        return abs(piece[e]) == KINK
+@inline_kernel
+def is_constraint(kd, p):
+    """Whether an element of kind kd on piece p is a constraint: a stuck slider, a branch at its kink."""
+    if kd == SLIDER:
+        return p == STUCK
+    if kd == BRANCH:
+        return abs(p) == KINK
     return False
 
 
-@kernel
+@inline_kernel
 def _relative(ends, d, e):
     """d_i - d_j of element e (d of the ground: 0)."""
     j = ends[e, 1]
@@ -102,7 +104,7 @@ def _relative(ends, d, e):
     return d[ends[e, 0]] - d[j]
 
 
-@kernel
+@inline_kernel
 def _relative_x(ends, x, e):
     j = ends[e, 1]
     if j == GROUND:
@@ -110,14 +112,14 @@ def _relative_x(ends, x, e):
     return x[ends[e, 0]] - x[j]
 
 
-@kernel
-def term_force(kind, coef, piece, e, rel_x, delta, u_e, h):
-    """(force, curvature) of element e on its piece at the relative increment delta: force the derivative of
-    its potential in delta (the pull on node i towards j), curvature the second derivative (0 on a flat
-    piece). A constraint's force here is its piece's value (0 for a stuck slider, +-k eta at a kink): the
-    multiplier comes on top (:func:`_multipliers`)."""
-    kd = kind[e]
-    a = coef[e, 0]
+@inline_kernel
+def term_force(kd, a, eta, c, p, rel_x, delta, u_e, h):
+    """(force, curvature) of an element of kind ``kd``, coefficients a, eta, c, on piece p, at the relative
+    increment delta (rel_x: its relative displacement at the step's start, u_e: a branch's elongation there):
+    force the derivative of its potential in delta (the pull on node i towards j), curvature the second
+    derivative (0 on a flat piece). A constraint's force here is its piece's value (0 for a stuck slider,
+    +-k eta at a kink): the multiplier comes on top (:func:`_multipliers`). Scalars only: the hot loops pass
+    what they read once."""
     if kd == SPRING:
         return a * (rel_x + delta), a
     if kd == DASHPOT:
@@ -126,17 +128,15 @@ def term_force(kind, coef, piece, e, rel_x, delta, u_e, h):
         y = rel_x + delta
         return a * y * y * y, 3.0 * a * y * y
     if kd == SLIDER:
-        if piece[e] == STUCK:
+        if p == STUCK:
             return 0.0, 0.0
-        return a * piece[e], 0.0
-    # branch
-    p = piece[e]
+        return a * p, 0.0
     if p == ELASTIC:
-        r = _ratio(coef, e, h)
+        r = 1.0 / (1.0 + h * a / c) if c > 0.0 else 1.0
         return a * r * (u_e + delta), a * r
     if p > 0:
-        return a * coef[e, 1], 0.0
-    return -a * coef[e, 1], 0.0
+        return a * eta, 0.0
+    return -a * eta, 0.0
 
 
 @kernel
@@ -159,7 +159,7 @@ def _clusters(n, kind, ends, piece, parent, cluster, held_node):
     if held_node >= 0:
         parent[held_node] = n
     for e in range(kind.shape[0]):
-        if is_constraint(kind, piece, e):
+        if is_constraint(kind[e], piece[e]):
             j = ends[e, 1]
             ra = _find(parent, ends[e, 0])
             rb = _find(parent, n if j == GROUND else j)
@@ -190,7 +190,8 @@ def _start_pieces(model, x, u, piece, d, h):
     step's piece where it still holds (the warm start); a branch's kink is a constraint within a step only."""
     mass, kind, ends, coef, load_node, has_cubic = model
     for e in range(kind.shape[0]):
-        delta = _relative(ends, d, e)
+        i, j = ends[e, 0], ends[e, 1]
+        delta = d[i] if j == GROUND else d[i] - d[j]
         if kind[e] == SLIDER:
             if piece[e] == STUCK and delta != 0.0 or piece[e] * delta < 0.0:
                 piece[e] = 1 if delta > 0.0 else -1
@@ -198,7 +199,8 @@ def _start_pieces(model, x, u, piece, d, h):
             p = piece[e]
             if abs(p) == KINK:
                 p = p // KINK
-            y = _ratio(coef, e, h) * (u[e] + delta)
+            r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2]) if coef[e, 2] > 0.0 else 1.0
+            y = r * (u[e] + delta)
             eta = coef[e, 1]
             if y > eta or p > 0 and y == eta:
                 p = 1
@@ -222,9 +224,13 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
     grad[load_node] -= force
     scale[load_node] += abs(force)
     for e in range(kind.shape[0]):
-        f, _ = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], h)
-        term[e] = f
         i, j = ends[e, 0], ends[e, 1]
+        if j == GROUND:
+            rel_x, delta = x[i], d[i]
+        else:
+            rel_x, delta = x[i] - x[j], d[i] - d[j]
+        f, _ = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
+        term[e] = f
         grad[i] += f
         scale[i] += abs(f)
         if j != GROUND:
@@ -237,7 +243,7 @@ def _band(kind, ends, piece, cluster):
     """The half bandwidth of the cluster matrix."""
     band = 0
     for e in range(kind.shape[0]):
-        if is_constraint(kind, piece, e):
+        if is_constraint(kind[e], piece[e]):
             continue
         j = ends[e, 1]
         ci = cluster[ends[e, 0]]
@@ -260,14 +266,18 @@ def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
             a[c, 0] += mass[j] / (h * h)
             rhs[c] -= grad[j]
     for e in range(kind.shape[0]):
-        if is_constraint(kind, piece, e):
+        if is_constraint(kind[e], piece[e]):
             continue
         i, j = ends[e, 0], ends[e, 1]
         ci = cluster[i]
         cj = -1 if j == GROUND else cluster[j]
         if ci == cj:
             continue  # both ends move together (or stay): no curvature along any direction
-        _, kappa = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], h)
+        if j == GROUND:
+            rel_x, delta = x[i], d[i]
+        else:
+            rel_x, delta = x[i] - x[j], d[i] - d[j]
+        _, kappa = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
         if kappa == 0.0:
             continue
         if ci >= 0:
@@ -330,14 +340,13 @@ def _null_vector(a, band, singular):
     return z
 
 
-@kernel
-def _room(kind, coef, piece, e, rel_x, delta, u_e, rate, h):
-    """How far (in units of the direction) element e's relative increment may move at ``rate`` before it
-    meets a kink of its piece; inf if never. Constraints and smooth elements never block."""
+@inline_kernel
+def _room(kd, eta, r, p, delta, u_e, rate):
+    """How far (in units of the direction) an element of kind kd on piece p may move its relative increment
+    delta at ``rate`` before it meets a kink of its piece; inf if never. Constraints and smooth elements never
+    block. A branch's eta and r = 1 / (1 + h k / c)."""
     if rate == 0.0:
         return np.inf
-    kd = kind[e]
-    p = piece[e]
     if kd == SLIDER:
         if p == 0:
             return np.inf
@@ -346,8 +355,6 @@ def _room(kind, coef, piece, e, rel_x, delta, u_e, rate, h):
         return np.inf
     if kd != BRANCH or abs(p) == KINK:
         return np.inf
-    r = _ratio(coef, e, h)
-    eta = coef[e, 1]
     y = r * (u_e + delta)  # the elongation this increment gives, unclipped
     slope = r * rate
     if p == ELASTIC:
@@ -360,77 +367,56 @@ def _room(kind, coef, piece, e, rel_x, delta, u_e, rate, h):
 
 
 @kernel
-def _multipliers(model, piece, grad, order, parent_edge, adjacency, start, visited, subtree, term, held_node):
-    """The force each constraint carries, from the equilibrium of each cluster's tree of constraints:
-    term[e] (the piece's force) is increased by the multiplier, so that term[e] is then the whole force the
-    constraint carries. grad: the nodes' residual forces at a minimiser of the working set."""
+def _multipliers(model, piece, grad, queue, degree, links, subtree, term, held_node):
+    """The force each constraint carries, from the equilibrium of each cluster's tree of constraints: term[e]
+    (the piece's force) is increased by the multiplier, so that term[e] is then the whole force the
+    constraint carries. grad: the nodes' residual forces at a minimiser of the working set.
+
+    The trees are peeled from their leaves: a leaf's one constraint balances the leaf's residual and passes it
+    on. A node's remaining constraint is found as the XOR of the ids of its constraints (``links``): O(n + E),
+    no adjacency lists. The ground (node n) and the held node are never peeled: they take what is left."""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
-    for a in range(n + 2):
-        start[a] = 0
-    for e in range(kind.shape[0]):
-        if is_constraint(kind, piece, e):
-            j = ends[e, 1]
-            start[ends[e, 0] + 1] += 1
-            start[(n if j == GROUND else j) + 1] += 1
     for a in range(n + 1):
-        start[a + 1] += start[a]
-    for a in range(n + 1):
-        visited[a] = start[a]  # fill pointer
-    for e in range(kind.shape[0]):
-        if is_constraint(kind, piece, e):
-            j = ends[e, 1]
-            i = ends[e, 0]
-            jj = n if j == GROUND else j
-            adjacency[visited[i]] = e
-            visited[i] += 1
-            adjacency[visited[jj]] = e
-            visited[jj] += 1
-    for a in range(n + 1):
-        visited[a] = 0
-        parent_edge[a] = -1
-    size = 0
-    for index in range(n + 2):  # the ground, then the held node, first: a held cluster hangs from them
-        root = n if index == 0 else (held_node if index == 1 else index - 2)
-        if root < 0 or visited[root] or start[root + 1] == start[root]:
-            continue
-        visited[root] = 1
-        order[size] = root
-        size += 1
-        head = size - 1
-        while head < size:
-            a = order[head]
-            head += 1
-            for s in range(start[a], start[a + 1]):
-                e = adjacency[s]
-                j = ends[e, 1]
-                other = ends[e, 0] if (n if j == GROUND else j) == a else (n if j == GROUND else j)
-                if not visited[other]:
-                    visited[other] = 1
-                    parent_edge[other] = e
-                    order[size] = other
-                    size += 1
-    for a in range(n + 1):
+        degree[a] = 0
+        links[a] = 0
         subtree[a] = grad[a] if a < n else 0.0
-    for s in range(size - 1, -1, -1):
-        a = order[s]
-        e = parent_edge[a]
-        if a == held_node:
-            continue  # held: it takes what its tree does not balance (the connector's force)
-        if e < 0:
+    for e in range(kind.shape[0]):
+        if is_constraint(kind[e], piece[e]):
+            i, j = ends[e, 0], ends[e, 1]
+            jj = n if j == GROUND else j
+            degree[i] += 1
+            links[i] ^= e
+            degree[jj] += 1
+            links[jj] ^= e
+    size = 0
+    for a in range(n):
+        if degree[a] == 1 and a != held_node:
+            queue[size] = a
+            size += 1
+    head = 0
+    while head < size:
+        a = queue[head]
+        head += 1
+        if degree[a] != 1:  # the last node of a free tree (degree 0): its balance holds by the solve
             continue
-        # the constraint's multiplier mu enters grad_i as +mu and grad_j as -mu; node a's balance is
-        # subtree[a] + (+-mu) = 0
-        if ends[e, 0] == a:
-            mu = -subtree[a]
-            other = ends[e, 1]
+        e = links[a]
+        i, j = ends[e, 0], ends[e, 1]
+        jj = n if j == GROUND else j
+        # the multiplier mu enters grad_i as +mu and grad_j as -mu; the leaf's balance is subtree + (+-mu) = 0
+        if i == a:
+            term[e] -= subtree[a]
+            other = jj
         else:
-            mu = subtree[a]
-            other = ends[e, 0]
-        term[e] += mu
-        if other == GROUND:
-            other = n
+            term[e] += subtree[a]
+            other = i
         subtree[other] += subtree[a]
+        degree[a] = 0
+        links[other] ^= e
+        degree[other] -= 1
+        if degree[other] == 1 and other != n and other != held_node:
+            queue[size] = other
+            size += 1
 
 
 @kernel
@@ -510,8 +496,10 @@ def _directional(model, x, u, piece, d, p, h, force, v, tau):
         rate = _relative(ends, p, e)
         if rate == 0.0:
             continue
-        f, kappa = term_force(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e) + tau * rate,
-                              u[e], h)
+        i, j = ends[e, 0], ends[e, 1]
+        rel_x = x[i] if j == GROUND else x[i] - x[j]
+        delta = (d[i] if j == GROUND else d[i] - d[j]) + tau * rate
+        f, kappa = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
         slope += f * rate
         size += abs(f * rate)
         curvature += kappa * rate * rate
@@ -527,7 +515,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     elements = kind.shape[0]
-    d, grad, p, parent, cluster, term, subtree, start, adjacency, order, parent_edge, visited, scale = work
+    d, grad, p, parent, cluster, term, subtree, queue, degree, links, scale = work
     for j in range(n):
         d[j] = 0.0
     if fixed_node >= 0:
@@ -575,8 +563,18 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         tau = 0.0 if converged else top
         blocker = -1
         for e in range(elements if not converged else 0):
-            rate = _relative(ends, p, e)
-            room = _room(kind, coef, piece, e, _relative_x(ends, x, e), _relative(ends, d, e), u[e], rate, h)
+            kd = kind[e]
+            if kd != SLIDER and kd != BRANCH:
+                continue
+            i, j = ends[e, 0], ends[e, 1]
+            if j == GROUND:
+                rate, delta = p[i], d[i]
+            else:
+                rate, delta = p[i] - p[j], d[i] - d[j]
+            r = 1.0
+            if kd == BRANCH and coef[e, 2] > 0.0:
+                r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2])
+            room = _room(kd, coef[e, 1], r, piece[e], delta, u[e], rate)
             if room < tau:
                 tau = room
                 blocker = e
@@ -607,12 +605,12 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             continue
         # a minimiser of the working set: the constraints' forces decide
         _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
-        _multipliers(model, piece, grad, order, parent_edge, adjacency, start, visited, subtree, term, fixed_node)
+        _multipliers(model, piece, grad, queue, degree, links, subtree, term, fixed_node)
         released = 0
         best = -1
         worst = 0.0
         for e in range(elements):
-            if not is_constraint(kind, piece, e):
+            if not is_constraint(kind[e], piece[e]):
                 continue
             if single:
                 excess = _excess(kind, coef, piece, term, scale, ends, e)
