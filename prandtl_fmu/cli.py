@@ -410,12 +410,16 @@ def _run(args) -> int:
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
         _check_image_path(args.plot, "--plot")
         if args.out:
-            columns = 4 + (_branch_count(scene) if args.states else 0) + (len(energy_columns(scene)) if args.energy else 0)
+            columns = _column_count(scene, args)
             rows = scene.solver.stop_time / scene.solver.output_interval + 2
             check_disk(rows * columns * 24.0, _folder(args.out), f"--out {args.out} ({rows:.3g} rows x {columns} "
                        "columns)")
     except (SceneError, ResourceError) as exc:
         return _error(exc)
+    from .network.model import NetworkScene
+
+    if isinstance(scene, NetworkScene):
+        return _run_network(args, scene)
     plot_rows = _PlotRows() if args.plot else None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", StabilityWarning)
@@ -463,6 +467,72 @@ def _run(args) -> int:
         except OSError as exc:
             return _error(f"--plot {args.plot}: cannot write: {exc.strerror or exc}")
     return 0
+
+
+def _column_count(scene, args) -> int:
+    from .driver import energy_columns
+    from .network.model import NetworkScene
+
+    if isinstance(scene, NetworkScene):
+        from .network.driver import columns_of
+
+        return len(columns_of(scene, args.states, args.energy))
+    return 4 + (_branch_count(scene) if args.states else 0) + (len(energy_columns(scene)) if args.energy else 0)
+
+
+def _run_network(args, scene) -> int:
+    """``run`` for a network scene: the columns time, x_<node>, v_<node>, F, reaction (network/driver.py)."""
+    from .driver import ElementError
+    from .network.driver import simulate_chunks
+
+    try:
+        chunks = simulate_chunks(scene, states=args.states, energy=args.energy)
+    except (ElementError, ValueError) as exc:
+        return _error(exc)
+    sink = None
+    kept = []
+    try:
+        sink = AtomicFile(args.out) if args.out and _is_regular(args.out) else (
+            open(args.out, "w", newline="") if args.out else sys.stdout)
+        for index, chunk in enumerate(chunks):
+            chunk.write_csv(sink, header=index == 0)
+            if args.plot:
+                kept.append(chunk.table[:: max(1, chunk.table.shape[0] // 20000)])
+        if isinstance(sink, AtomicFile):
+            sink.commit()
+        elif args.out:
+            sink.close()
+        else:
+            sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+        return 0
+    except KeyboardInterrupt:
+        _discard(sink)
+        print("error: interrupted; no output written" if args.out else "error: interrupted", file=sys.stderr)
+        return 130
+    except (ElementError, ValueError) as exc:
+        _discard(sink)
+        return _error(exc)
+    except OSError as exc:
+        _discard(sink)
+        return _error(f"cannot write {args.out or 'the output'}: {exc.strerror or exc}")
+    if args.plot:
+        from .network.driver import NetworkResult
+        from .plots import plot_network
+
+        try:
+            plot_network(NetworkResult(chunks_names(scene, args), np.concatenate(kept),
+                                       args.stepper or scene.solver.stepper, scene), args.plot)
+        except OSError as exc:
+            return _error(f"--plot {args.plot}: cannot write: {exc.strerror or exc}")
+    return 0
+
+
+def chunks_names(scene, args) -> list:
+    from .network.driver import columns_of
+
+    return columns_of(scene, args.states, args.energy)
 
 
 def _error(exc) -> int:

@@ -29,6 +29,36 @@ def plot_result(result, path: str, note: str = "") -> None:
     save_figure(fig, path)
 
 
+def plot_network(result, path: str) -> None:
+    """Write a figure of a network run: the loop F against the load node's displacement, and every node's
+    x(t) (at most 12 nodes drawn, evenly picked, for a long chain)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    network = result.scene.network
+    load = network.nodes[network.load_node]
+    fig, (loop, history) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    loop.plot(result.column(f"x_{load}"), result.F, lw=0.8)
+    loop.set_xlabel(f"x_{load} (m)")
+    loop.set_ylabel("F (N)")
+    loop.set_title(f"load against the displacement of {load}")
+    loop.grid(alpha=0.3)
+    picked = np.unique(np.linspace(0, network.n - 1, min(network.n, 12)).round().astype(int))
+    for j in picked:
+        history.plot(result.time, result.x[:, j], lw=0.8, label=network.nodes[j])
+    history.set_xlabel("t (s)")
+    history.set_ylabel("x (m)")
+    history.set_title("displacements")
+    history.grid(alpha=0.3)
+    history.legend(fontsize=7, ncol=2)
+    fig.suptitle(f"{result.scene.name}: network of {network.n} nodes, stepper {result.stepper}, "
+                 f"h = {result.scene.solver.step:g} s")
+    save_figure(fig, path)
+
+
 def image_format(path: str) -> str:
     """The image format named by ``path``'s extension (png, pdf, svg, ...; PNG for a device or a pipe);
     ValueError naming the formats matplotlib writes when it names none of them. Checked before any work."""

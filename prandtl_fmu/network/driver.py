@@ -196,9 +196,13 @@ class NetworkResult:
         return self.column("reaction")
 
     def write_csv(self, file, header: bool = True) -> None:
+        """Every float in full precision (repr), as the element's CSV; ``header=False``: the rows only."""
         if header:
             file.write(",".join(self.names) + "\n")
-        np.savetxt(file, self.table, delimiter=",", fmt="%.17g")
+        block = max(1, 100_000 // self.table.shape[1])  # rows turned into text at a time: a few MB
+        for first in range(0, self.table.shape[0], block):
+            rows = self.table[first:first + block].tolist()
+            file.write("".join(",".join(map(repr, row)) + "\n" for row in rows))
 
 
 def simulate(scene: NetworkScene, stepper: Optional[str] = None, *, states: bool = False, energy: bool = False,
