@@ -564,6 +564,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         blocker = -1
         for e in range(elements if not converged else 0):
             kd = kind[e]
+            term[e] = np.inf
             if kd != SLIDER and kd != BRANCH:
                 continue
             i, j = ends[e, 0], ends[e, 1]
@@ -575,6 +576,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             if kd == BRANCH and coef[e, 2] > 0.0:
                 r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2])
             room = _room(kd, coef[e, 1], r, piece[e], delta, u[e], rate)
+            term[e] = room  # (term is free here: the next force balance rewrites it)
             if room < tau:
                 tau = room
                 blocker = e
@@ -593,12 +595,27 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             if step_taken == 0.0 and released_many:
                 single = True
             released_many = False
-            if kind[blocker] == SLIDER:
-                piece[blocker] = STUCK
-            else:
-                rel = _relative(ends, d, blocker)
-                y = _ratio(coef, blocker, h) * (u[blocker] + rel)
-                piece[blocker] = KINK if y > 0.0 else -KINK
+            # every element that meets its kink at this same tau joins the working set (at a load reversal a
+            # whole slip front sticks at once), unless the constraints joined so far already tie its ends (a
+            # loop of constraints would be redundant): parent is the union-find of the working set
+            for e in range(elements):
+                if term[e] != tau or (e != blocker and step_taken != tau):
+                    continue
+                i, j = ends[e, 0], ends[e, 1]
+                ra = _find(parent, i)
+                rb = _find(parent, n if j == GROUND else j)
+                if ra == rb:
+                    continue
+                if ra == n or rb == n:
+                    parent[min(ra, rb)] = n
+                else:
+                    parent[max(ra, rb)] = min(ra, rb)
+                if kind[e] == SLIDER:
+                    piece[e] = STUCK
+                else:
+                    rel = d[i] if j == GROUND else d[i] - d[j]
+                    r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2]) if coef[e, 2] > 0.0 else 1.0
+                    piece[e] = KINK if r * (u[e] + rel) > 0.0 else -KINK
             continue
         released_many = False
         if has_cubic and not converged:
