@@ -348,13 +348,13 @@ class NetworkElement(OutputMemo):
         network = self.scene.network
         self.model = network.compile()
         self._origin, self._steps, self._grid = 0.0, 0, None
-        self.force = float(force)
-        self._load = held(self.force)
+        self.held_force = float(force)
+        self._load = held(self.held_force)
         self.x, self.v, self.u, self.piece = initial_state(self.scene, self.model, self._load)
         self.work = kernels.workspace(network.n, len(network.elements))
         self.account = np.zeros(3)
         self.dissipated = np.zeros(len(network.elements))
-        self._reaction = initial_reaction(self.scene, self.model, self.x, self.v, self.u, self.force)
+        self._reaction = initial_reaction(self.scene, self.model, self.x, self.v, self.u, self.held_force)
         self.initial_energy = self._energies()[0] + self._energies()[1]
         self._touch()
 
@@ -390,12 +390,12 @@ class NetworkElement(OutputMemo):
 
     def checkpoint(self):
         return (self.x.copy(), self.v.copy(), self.u.copy(), self.piece.copy(), self.account.copy(),
-                self.dissipated.copy(), self._reaction, self._origin, self._steps, self._grid, self.force,
+                self.dissipated.copy(), self._reaction, self._origin, self._steps, self._grid, self.held_force,
                 self._load)
 
     def rollback(self, saved) -> None:
-        (x, v, u, piece, account, dissipated, self._reaction, self._origin, self._steps, self._grid, self.force,
-         self._load) = saved
+        (x, v, u, piece, account, dissipated, self._reaction, self._origin, self._steps, self._grid,
+         self.held_force, self._load) = saved
         self.x[:], self.v[:], self.u[:], self.piece[:] = x, v, u, piece
         self.account[:], self.dissipated[:] = account, dissipated
         self._touch()
@@ -421,7 +421,7 @@ class NetworkElement(OutputMemo):
                                "advance: advance by shorter durations or with a larger step")
         saved = self.checkpoint()
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
-        self.force, self._load = float(force), load
+        self.held_force, self._load = float(force), load
         self._touch()
         if self._grid != h:
             self._origin, self._steps, self._grid = self.time, 0, h
@@ -471,7 +471,7 @@ class NetworkElement(OutputMemo):
     def get_state(self) -> dict:
         """Everything that determines the continuation, as plain data."""
         return {"time": self.time, "origin": self._origin, "steps": self._steps, "grid": self._grid,
-                "force": self.force, "x": self.x.tolist(), "v": self.v.tolist(), "u": self.u.tolist(),
+                "force": self.held_force, "x": self.x.tolist(), "v": self.v.tolist(), "u": self.u.tolist(),
                 "piece": self.piece.tolist(), "account": self.account.tolist(),
                 "dissipated": self.dissipated.tolist(), "reaction": self._reaction,
                 "initial_energy": self.initial_energy, "parameters": self.scene.network.parameters()}
@@ -515,9 +515,9 @@ class NetworkElement(OutputMemo):
         self.x[:], self.v[:], self.u[:] = arrays["x"], arrays["v"], arrays["u"]
         self.piece[:] = piece.astype(np.int64)
         self.account[:], self.dissipated[:] = arrays["account"], arrays["dissipated"]
-        self._origin, self.force, self._reaction, self.initial_energy = scalars
+        self._origin, self.held_force, self._reaction, self.initial_energy = scalars
         self._steps, self._grid = steps, grid
-        self._load = held(self.force)
+        self._load = held(self.held_force)
         self._touch()
 
 
@@ -549,15 +549,7 @@ class NetworkConnector(NetworkElement):
         return float(self._force)
 
     def _reaction_force(self) -> float:
-        mass, kind, ends, coef, load_node, has_cubic = self.model
-        term = self.work[5]
-        total = 0.0
-        for e in range(kind.shape[0]):
-            if ends[e, 0] == load_node:
-                total += term[e]
-            elif ends[e, 1] == load_node:
-                total -= term[e]
-        return float(total)
+        return float(kernels.node_force(self.model, self.work[5], self.scene.network.load_node))
 
     def move_to(self, x: float, v: float, time: float) -> None:
         """Commit the motion (x, v) of the load's node at ``time``; ValueError for a bad argument, ElementError
@@ -574,19 +566,18 @@ class NetworkConnector(NetworkElement):
         duration = time - start
         try:
             if duration == 0:
-                self._impose(x - x_start, max(self.h, 1.0))
+                whole, rest, h = 0, max(self.h, 1.0), self.h  # an instant: one step, no dashpot relaxes much
             else:
                 h = self.h
                 whole, rest = split_duration(duration, h)
                 if whole + (rest > 0) > ADVANCE_BUDGET:
                     raise ElementError(f"{self.scene.source}: a move over {duration!r} s takes more than "
                                        f"{ADVANCE_BUDGET:.0e} steps")
-                done = 0.0
-                for p in range(whole + (rest > 0)):
-                    step = h if p < whole else rest
-                    done += step
-                    target = x_start + (x - x_start) * min(1.0, done / duration)
-                    self._impose(target - float(self.x[node]), step)
+            status, _ = kernels.move_node(self.model, self.x, self.v, self.u, self.piece, self.work, self.account,
+                                          self.dissipated, node, float(x), whole, h, rest)
+            if status < 0:
+                raise ElementError(failure_message(self.scene, "implicit", status, start, 0.0))
+            if duration != 0:
                 self._origin, self._steps, self._grid = time, 0, h
         except ElementError:
             self.rollback(saved)
@@ -600,12 +591,3 @@ class NetworkConnector(NetworkElement):
             raise ElementError(f"{self.scene.source}: the motion x = {x!r} at t = {time!r} s refused: an output "
                                "would not be finite (an overflow); the connector is unchanged")
         self._touch()
-
-    def _impose(self, increment: float, h: float) -> None:
-        node = self.scene.network.load_node
-        status = kernels.solve_step(self.model, self.x, self.v, self.u, self.piece, h, 0.0, node, increment,
-                                    self.work)
-        if status < 0:
-            raise ElementError(failure_message(self.scene, "implicit", status, self.time, 0.0))
-        self._reaction = kernels.commit(self.model, self.x, self.v, self.u, self.piece, h, 0.0, self.work,
-                                        self.account, self.dissipated)

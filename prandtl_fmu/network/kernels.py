@@ -885,3 +885,39 @@ def run_projected(model, load, x, v, u, piece, t_base, first_step, h, steps_per_
     """The projected time loop (see _time_loop), cached."""
     return _projected_loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy,
                            out_energy, dissipated, out_dissipated, work)
+
+
+@kernel
+def move_node(model, x, v, u, piece, work, energy, dissipated, node, target, whole, h, rest):
+    """The connector's motion: node ``node`` moves along the line from its x to ``target`` over ``whole``
+    implicit steps of h and a last one of ``rest`` (if > 0), the rest of the network responding. Returns
+    (status, steps taken): status < 0 (see :func:`solve_step`) when a step could not be taken."""
+    start = x[node]
+    total = whole * h + rest
+    done = 0.0
+    count = whole + (1 if rest > 0.0 else 0)
+    for p in range(count):
+        size = h if p < whole else rest
+        done += size
+        there = target if p == count - 1 else start + (target - start) * (done / total)
+        status = solve_step(model, x, v, u, piece, size, 0.0, node, there - x[node], work)
+        if status < 0:
+            return status, p
+        commit(model, x, v, u, piece, size, 0.0, work, energy, dissipated)
+        if energy is not None:  # the work of what imposes the motion: its force (at t + h) times the move
+            energy[0] += node_force(model, work[5], node) * work[0][node]
+    return 0, count
+
+
+@kernel
+def node_force(model, term, node):
+    """The force the elements exert on ``node`` against its motion (what holds it there): the connector's
+    output."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    total = 0.0
+    for e in range(kind.shape[0]):
+        if ends[e, 0] == node:
+            total += term[e]
+        elif ends[e, 1] == node:
+            total -= term[e]
+    return total
