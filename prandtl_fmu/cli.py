@@ -9,7 +9,7 @@
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
     prandtl-fmu sweep SCENE SWEEP.toml [--scheduler ADDRESS] [--workers N] [--out DIR] [--resume]
     prandtl-fmu scenes
-    prandtl-fmu bench [--quick] [--out DIR] [--from-csv]
+    prandtl-fmu bench [--quick] [--out DIR] [--from-csv] [--networks]
     prandtl-fmu --version
 
 SCENE is a scene file, or the name of a scene shipped in the package
@@ -143,6 +143,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
     bench.add_argument("--out", default="out/bench", help="folder for the CSV, plots and report (default out/bench)")
     bench.add_argument("--from-csv", action="store_true", help="redo the plots and report from the CSV files in --out")
+    bench.add_argument("--networks", action="store_true",
+                       help="the cost of a step of the chain on a support (dynamic and massless) for n = 10 .. "
+                            "10,000 nodes (--quick: up to 1,000): network_scaling.csv, .png, network_report.md")
     return parser
 
 
@@ -250,6 +253,11 @@ def _main(argv) -> int:
         from .scene import packaged_scenes
 
         print("\n".join(packaged_scenes()))
+        return 0
+    if args.command == "bench" and args.networks:
+        from .network.bench import run as network_bench
+
+        print(network_bench(args.out, args.quick))
         return 0
     if args.command == "bench":
         missing = _missing("scipy", "matplotlib", "fmpy")
