@@ -72,27 +72,35 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         raise ValueError(f"--loader {loader}: the native runtime has no PythonFMU loader (its binary is the FMU's "
                          "own C layer): drop --loader, or build with --runtime python")
     if runtime == "native":
-        from ..native.build import build_native_fmu
-
-        from .osp import file_name, osp_model_description
+        from .osp import file_name, osp_model_description, port_variables
 
         native_scene = load_scene(scene_path, check_stepper=False)
+        network = _is_network(native_scene)
+        if network:
+            from ..native import build as native_build
+
+            build_native = getattr(native_build, "build_native_network_fmu", None)
+            if build_native is None:
+                raise ValueError("--runtime native: networks are not in the native runtime yet")
+        else:
+            from ..native.build import build_native_fmu as build_native
         target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
         if target.is_dir():
             raise ValueError(f"{target}: is a directory")
         if osp:
             _check_osp_name(native_scene.name)
-        built = build_native_fmu(resolve_scene(scene_path), target, fmi=fmi, causality=causality)
+        built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality)
         if osp:
+            kind = causality or native_scene.causality
             write_atomically(target.parent / file_name(native_scene.name),
-                             osp_model_description(causality or native_scene.causality).encode("utf-8"))
+                             osp_model_description(kind, port_variables(native_scene, kind)).encode("utf-8"))
         return built
     if fmi != 2:
         raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
     from pythonfmu import FmuBuilder
 
     from . import loader as native
-    from .osp import MODEL_IDENTIFIERS, file_name, osp_model_description
+    from .osp import file_name, model_identifier, osp_model_description, port_variables
 
     loader = "prandtl" if loader is None else loader
     if loader not in native.LOADERS:
@@ -113,7 +121,8 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     sidecar = out.parent / file_name(scene.name) if osp else None
     if osp:
         _check_osp_name(scene.name)
-    identifier = MODEL_IDENTIFIERS[scene.causality]
+    identifier = model_identifier(scene)
+    osp_text = osp_model_description(scene.causality, port_variables(scene))
     module = f"prandtl_slave_{_digest(scene_bytes, loader)}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
@@ -122,9 +131,14 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         marker = '\n_CAUSALITY = "force"\n'
         if entry.count(marker) != 1:
             raise RuntimeError("entry.py has lost its _CAUSALITY line")
-        script.write_text(entry.replace(marker, f'\n_CAUSALITY = "{scene.causality}"\n'), encoding="utf-8")
+        entry = entry.replace(marker, f'\n_CAUSALITY = "{scene.causality}"\n')
+        network_marker = "\n_NETWORK = False\n"
+        if entry.count(network_marker) != 1:
+            raise RuntimeError("entry.py has lost its _NETWORK line")
+        entry = entry.replace(network_marker, f"\n_NETWORK = {_is_network(scene)}\n")
+        script.write_text(entry, encoding="utf-8")
         (staging / "scene.toml").write_bytes(scene_bytes)
-        (staging / file_name(identifier)).write_text(osp_model_description(scene.causality), encoding="utf-8")
+        (staging / file_name(identifier)).write_text(osp_text, encoding="utf-8")
         package = staging / "prandtl_fmu"
         for path in _library_files():
             target = package / path.relative_to(LIBRARY)
@@ -148,8 +162,15 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         # into place in one rename, with the usual mode: a failed build never leaves a half-written FMU behind
         write_atomically(out, Path(built).read_bytes())
     if sidecar is not None:
-        write_atomically(sidecar, osp_model_description(scene.causality).encode("utf-8"))
+        write_atomically(sidecar, osp_text.encode("utf-8"))
     return out
+
+
+def _is_network(scene) -> bool:
+    """Whether a scene is a network ([network] or [chain]): its FMUs are ``network_slave.py``'s."""
+    from ..network.model import NetworkScene
+
+    return isinstance(scene, NetworkScene)
 
 
 def _check_osp_name(name: str) -> None:

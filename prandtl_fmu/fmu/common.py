@@ -36,16 +36,19 @@ class SlaveBase(Fmi2Slave):
     """The scene of the FMU, logging refusals, failing a call without freeing the instance, reading a
     serialized state."""
 
+    # whether the scene's own stepper must apply (a connector takes the library's constrained steps instead)
+    check_stepper = True
+
     def __init__(self, **kwargs):
         # absent under PythonFMU's stock loader (and when PythonFMU's builder instantiates the class)
         self.loader = kwargs.pop("pythonfmu_loader", None)
         super().__init__(**kwargs)
-        self.scene = load_scene(os.path.join(self.resources, "scene.toml"))
+        self.scene = load_scene(os.path.join(self.resources, "scene.toml"), check_stepper=self.check_stepper)
         solver = self.scene.solver
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
                                                     step_size=solver.output_interval)
         self.start_time = 0.0
-        branches = self.scene.branches
+        branches = getattr(self.scene, "branches", None)  # a network scene has none: its slaves have no n
         # the variable n: the number of branches, -1 for the continuous element
         self.n = 0 if branches is None else -1 if branches.continuum else branches.n
 

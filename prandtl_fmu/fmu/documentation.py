@@ -162,8 +162,13 @@ def index_html(model_description: bytes, scene, runtime: str = "python") -> str:
     else:
         refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
         requirements = _PYTHON_REQUIREMENTS
-    body = _connector_body(scene, refusal) if scene.causality == "displacement" else _element_body(scene, refusal)
-    return _page(name, rows, body.replace("fmi2Discard", f"{version}Discard"), requirements)
+    if hasattr(scene, "network"):
+        body = network_body(scene, refusal)
+        title = "Network of springs, dashpots, sliders and Prandtl branches"
+    else:
+        body = _connector_body(scene, refusal) if scene.causality == "displacement" else _element_body(scene, refusal)
+        title = "Generalized Prandtl element"
+    return _page(name, rows, body.replace("fmi2Discard", f"{version}Discard"), requirements, title)
 
 
 _PYTHON_REQUIREMENTS = """<p>A PythonFMU FMU runs in the host's Python: the host process needs Python 3 with numpy, numba and pythonfmu
@@ -223,12 +228,12 @@ logged reason ({refusal}); the instance stays usable. The whole state can be sav
 LinearMechanicalQuasiPort (F in, x out).</p>"""
 
 
-def _page(name, rows, body, requirements) -> str:
+def _page(name, rows, body, requirements, title="Generalized Prandtl element") -> str:
     return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{name}: Prandtl element</title>
+<html><head><meta charset="utf-8"><title>{name}: {title}</title>
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{border:1px solid #ccc;padding:2px 6px}}
 table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style></head><body>
-<h1>Generalized Prandtl element: {name}</h1>
+<h1>{title}: {name}</h1>
 {body}
 <h2>Variables</h2>
 <p>An empty min or max means no bound.</p>
@@ -240,3 +245,127 @@ table{{border-collapse:collapse}} pre{{background:#f4f4f4;padding:1em}}</style><
 {requirements}
 </body></html>
 """
+
+
+# ------------------------------------------------------------------ networks
+
+_LAWS = {
+    "spring": "f = k (x_i - x_j)",
+    "dashpot": "f = c (v_i - v_j)",
+    "slider": "f in alpha sign(v_i - v_j)  (any f in [-alpha, alpha] while it sticks)",
+    "branch": "f = k u,  u' + d psi_[-eta, eta](u) ∋ v_i - v_j - (k / c) u  (no last term when c = 0)",
+    "cubic": "f = k3 (x_i - x_j)^3",
+}
+
+
+def network_equations(scene) -> str:
+    """The equations of the network: the balance of every node and the law of every kind of element present."""
+    network = scene.network
+    load = network.nodes[network.load_node]
+    input_force = "F" if scene.causality == "force" else "0"
+    lines = []
+    if any(network.mass > 0):
+        lines.append(f"m_j v_j' = {input_force} [j = {load}] - sum_e s_ej f_e,  x_j' = v_j    (nodes with a mass)")
+    if not all(network.mass > 0):
+        lines.append(f"0 = {input_force} [j = {load}] - sum_e s_ej f_e    (massless nodes: equilibrium at every "
+                     "instant)")
+    if scene.causality == "displacement":
+        lines.append(f"x_{load}, v_{load} given (the inputs x, v);  force = sum_e s_e{load} f_e")
+    lines.append("s_ej = +1 if j is the element's first end i, -1 if its second end j (the ground: x = v = 0)")
+    for kind in scene.effects:
+        lines.append(f"{kind:8s} {_LAWS[kind]}")
+    lines.append("reaction = sum of f_e over the elements with an end at the ground")
+    return "\n".join(lines)
+
+
+def _network_tables(scene) -> str:
+    network = scene.network
+    nodes = []
+    for j, node in enumerate(network.nodes):
+        cells = (node, f"m_{node}", f"{network.mass[j]:.6g}", f"{network.x0[j]:.6g}", f"{network.v0[j]:.6g}",
+                 "yes" if j == network.load_node else "")
+        nodes.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells) + "</tr>")
+    elements = []
+    for e in network.elements:
+        ends = " - ".join("ground" if j < 0 else network.nodes[j] for j in e.between)
+        values = ", ".join(f"{key}_{e.name} = {value:.6g}" for key, value in e.coefficients().items())
+        if e.kind == "branch" and e.u0:
+            values += f" (u0 = {e.u0:.6g})"
+        cells = (e.name, e.kind, ends, values)
+        elements.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells) + "</tr>")
+    return f"""<h2>Nodes</h2>
+<table><tr><th>node</th><th>mass parameter</th><th>mass (kg)</th><th>x0 (m)</th><th>v0 (m/s)</th>
+<th>load node</th></tr>
+{chr(10).join(nodes)}
+</table>
+<h2>Elements</h2>
+<p>Each coefficient is a tunable FMU parameter named &lt;key&gt;_&lt;element&gt;; a change is checked by the
+library's rules (a refused value: fmi2Discard at the next step with the reason logged).</p>
+<table><tr><th>element</th><th>kind</th><th>between (i - j)</th><th>parameters</th></tr>
+{chr(10).join(elements)}
+</table>"""
+
+
+def _network_stepper_rows(scene) -> str:
+    from ..network.model import NETWORK_STEPPERS, stepper_problem
+
+    rows = []
+    texts = {"implicit": "implicit Euler, every term implicit; each step one strictly convex problem solved "
+                         "exactly by an active-set method (any network)",
+             "projected": "the paper's scheme (5.1): explicit in the masses, the branches projected (all "
+                          "plasticity in branches, a mass at every node)"}
+    for name in NETWORK_STEPPERS:
+        problem = stepper_problem(scene, name)
+        applies = f"no: {problem}" if problem else "default" if name == scene.solver.stepper else "yes"
+        rows.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in (name, applies, "1", texts[name]))
+                    + "</tr>")
+    return "\n".join(rows)
+
+
+def network_body(scene, refusal: str) -> str:
+    """The page's body for a network's FMU (the element with the force F, or the connector)."""
+    network = scene.network
+    load = html.escape(network.nodes[network.load_node])
+    counts = ", ".join(f"{len(network.of_kind(kind))} {kind}{'s' if len(network.of_kind(kind)) > 1 else ''}"
+                       for kind in scene.effects) or "no elements"
+    if scene.causality == "displacement":
+        intro = f"""<p>This FMU is a network of {network.n} nodes ({counts}) as a <b>connector</b>: the motion of its
+load node {load} is imposed by the inputs <code>x</code> and <code>v</code>, the rest of the network responds,
+and <code>force</code> is the force of the network's elements on {load} (what holds the motion). The scene is
+<code>resources/scene.toml</code>.</p>"""
+        stepping = f"""<h2>Stepping</h2>
+<p>The inputs set at a communication point belong to that time. <code>doStep(t, H)</code> commits the sample set
+at t: the library moves {load} from the last committed sample to it along a line in implicit steps of the
+parameter <code>step</code> (default {scene.solver.step:g} s). The outputs always show the network at the inputs
+set last and the FMU's current time, without committing (<code>force</code> depends directly on
+<code>x</code> and <code>v</code>): a master may set x several times at one communication point. The first
+sample is taken as an instant move from the scene's x0. A non-finite input at doStep is refused (fmi2Discard,
+a logged message, the state unchanged); a bad parameter is refused with its reason ({refusal} at
+initialization, fmi2Discard at a step). The whole state can be saved, restored and serialized. OSP:
+<code>resources/PrandtlNetworkConnector_OspModelDescription.xml</code> declares a LinearMechanicalPort (force
+out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
+    else:
+        intro = f"""<p>This FMU is a network of {network.n} nodes ({counts}) under the input force <code>F</code> at its
+load node {load}. Its outputs are <code>x_&lt;node&gt;</code> and <code>v_&lt;node&gt;</code> of every node, the
+<code>reaction</code> (the force of the elements on the ground) and the energy account. The scene is
+<code>resources/scene.toml</code>.</p>"""
+        stepping = f"""<h2>Stepping</h2>
+<p>The input F is held constant over each communication step (with the parameter <code>scene_load</code> true,
+the scene's [load] F_scene(t) is added and evaluated at every internal step as in the library: with no input
+connected the FMU reproduces the library's run of its scene). <code>doStep(t, H)</code> advances by whole
+internal steps of the parameter <code>step</code> (default {scene.solver.step:g} s) and, when H is not a multiple
+of it, one last shorter step for the remainder. The outputs are those at the end of the last step (none depends
+directly on F). The parameter <code>stepper</code> chooses the scheme:</p>
+<table><tr><th>stepper</th><th>applies to this FMU</th><th>order</th><th>scheme</th></tr>
+{_network_stepper_rows(scene)}
+</table>
+<p>A step the library cannot take (no equilibrium of a massless part, e.g. a massless chain pulled beyond the
+total friction of its nodes; the step budget; an overflow) and a non-finite F are refused: fmi2Discard, the
+library's reason logged, the state unchanged. A bad parameter value is refused with its reason ({refusal} at
+initialization, fmi2Discard at a step); the instance stays usable. The whole state of the network can be saved,
+restored and serialized. OSP: <code>resources/PrandtlNetwork_OspModelDescription.xml</code> declares a
+LinearMechanicalPort (F in, v_{load} out) and a LinearMechanicalQuasiPort (F in, x_{load} out).</p>"""
+    return f"""{intro}
+<pre>{html.escape(network_equations(scene))}</pre>
+{_network_tables(scene)}
+{stepping}"""

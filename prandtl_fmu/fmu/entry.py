@@ -62,12 +62,16 @@ def _import_library(here):
 # from here at a later instantiation: ``__file__`` keeps the folder of the first one, which a master may have
 # deleted since).
 _CAUSALITY = "force"
+# Whether the scene is a network ([network] or [chain]), also written here by build_fmu.
+_NETWORK = False
 
 _drop_duplicate_path_entries(_HERE)
 try:
     _import_library(_HERE)
-    _slave_module = importlib.import_module(
-        _LIBRARY + (".fmu.connector_slave" if _CAUSALITY == "displacement" else ".fmu.slave"))
+    _slave_module = importlib.import_module(_LIBRARY + {
+        (False, "force"): ".fmu.slave", (False, "displacement"): ".fmu.connector_slave",
+        (True, "force"): ".fmu.network_slave", (True, "displacement"): ".fmu.network_connector_slave",
+    }[_NETWORK, _CAUSALITY])
 except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
     raise ImportError(
         f"prandtl_fmu FMU: {_exc} in the host's Python ({sys.version.split()[0]}, prefix {sys.prefix}): the FMU "
@@ -78,7 +82,11 @@ except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which 
 # class of this module's namespace whose MRO is deepest in Fmi2Slave: exactly
 # one is bound here, by a plain assignment (PythonFMU reads the names the
 # file's execution defines).
-if _CAUSALITY == "displacement":
+if _NETWORK and _CAUSALITY == "displacement":
+    PrandtlNetworkConnector = _slave_module.PrandtlNetworkConnector
+elif _NETWORK:
+    PrandtlNetwork = _slave_module.PrandtlNetwork
+elif _CAUSALITY == "displacement":
     PrandtlConnector = _slave_module.PrandtlConnector
 else:
     PrandtlElement = _slave_module.PrandtlElement

@@ -9,7 +9,9 @@ named after the FMU's ``modelName``, and then connects ports with one
 ``VariableGroupConnection`` (and ECCO's ``powerBond``).
 
 * the element with its force input (``PrandtlElement``): F in; v, x out;
-* the connector (``PrandtlConnector``): v, x in; force out.
+* the connector (``PrandtlConnector``): v, x in; force out;
+* a network with its force input (``PrandtlNetwork``): F in; v_<load node>, x_<load node> out;
+* a network as a connector (``PrandtlNetworkConnector``): v, x (of its load node) in; force out.
 
 Units refer to the FMU's own UnitDefinitions (N, m/s, m).
 """
@@ -20,11 +22,28 @@ NAMESPACE = "https://open-simulation-platform.com/OspModelDescription/1.0.1"
 # (force variable, velocity variable, displacement variable) per causality
 PORT_VARIABLES = {"force": ("F", "v", "x"), "displacement": ("force", "v", "x")}
 MODEL_IDENTIFIERS = {"force": "PrandtlElement", "displacement": "PrandtlConnector"}
+NETWORK_IDENTIFIERS = {"force": "PrandtlNetwork", "displacement": "PrandtlNetworkConnector"}
 
 
-def osp_model_description(causality: str) -> str:
-    """The XML text for an FMU of ``causality`` ("force" or "displacement")."""
-    force, velocity, displacement = PORT_VARIABLES[causality]
+def model_identifier(scene) -> str:
+    """The modelIdentifier of a scene's FMU (the slave class's name)."""
+    return (NETWORK_IDENTIFIERS if hasattr(scene, "network") else MODEL_IDENTIFIERS)[scene.causality]
+
+
+def port_variables(scene, causality: str = None) -> tuple:
+    """(force, velocity, displacement) variable names of the FMU of a scene (with ``causality``, default the
+    scene's): a network's element FMU shows the load node's motion as v_<node>, x_<node>."""
+    causality = causality or scene.causality
+    if hasattr(scene, "network") and causality == "force":
+        node = scene.network.nodes[scene.network.load_node]
+        return ("F", f"v_{node}", f"x_{node}")
+    return PORT_VARIABLES[causality]
+
+
+def osp_model_description(causality: str, variables: tuple = None) -> str:
+    """The XML text for an FMU of ``causality`` ("force" or "displacement"); ``variables``: (force, velocity,
+    displacement) names other than the element's (:func:`port_variables`)."""
+    force, velocity, displacement = variables or PORT_VARIABLES[causality]
     return f"""<?xml version="1.0" encoding="utf-8"?>
 <OspModelDescription xmlns="{NAMESPACE}" version="1.0">
   <VariableGroups>

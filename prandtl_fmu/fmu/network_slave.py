@@ -1,0 +1,323 @@
+"""A network (``[network]`` or ``[chain]`` scene) under a force at its load's node: an FMI 2.0 co-simulation slave
+(PythonFMU).
+
+Glue only: the library's :class:`~prandtl_fmu.network.NetworkElement` computes every number; this class maps
+FMU variables to it and back.
+
+Variables (a contract, the same names as the library's CSV columns):
+
+* input ``F`` (N): the force on the load's node, held over each communication step;
+* outputs ``x_<node>`` (m), ``v_<node>`` (m/s) of every node, ``reaction`` (N: the force of the elements on
+  the ground), the energy account under the element FMU's names (``kinetic_energy``, ``stored_energy``,
+  ``work``, ``dissipated_sliders``, ``dissipated_damper``, ``energy_residual``), the share of every
+  dissipating element ``dissipated_<kind>_<name>`` and the elongation ``u_<branch>`` of every branch;
+* parameters: every coefficient of the network by its scene name (``Network.parameters()``: ``m_<node>``,
+  ``k_<spring>``, ``c_<dashpot>``, ``alpha_<slider>``, ``k_``/``eta_``/``c_<branch>``, ``k3_<cubic>``), and
+  ``step``, ``stepper`` (``implicit``, or ``projected`` where the network allows it), ``scene_load``.
+
+Stepping, refusals and FMU states follow the element's slave (``slave.py``): ``do_step(t, H)`` advances by
+whole internal steps of ``step`` and one shorter last step for a remainder, with F held (plus the scene's
+[load] with ``scene_load``: with no input connected the FMU then reproduces ``network.simulate`` of its
+scene). A step the library cannot take (``ElementError``: no equilibrium of a massless part, the step budget,
+an overflow) and a parameter the library refuses (``SceneError``) are fmi2Discard with the library's reason
+logged, the state unchanged; a bad value at initialization, a forged state and a bad call fail that call
+(fmi2Error under the FMU's own loader) with the reason logged, the instance intact. No output is handed out
+with fmi2OK unless it is a finite number.
+
+The outputs after ``doStep(t, H)`` are those of the network at t + H under the F held over the step: none
+depends directly on F (a master that sets F sees the outputs change at the next step).
+"""
+
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, String
+
+from .. import __version__
+from ..driver import ElementError
+from ..loads import force_at
+from ..network import NetworkElement
+from ..network.model import NETWORK_STEPPERS, stepper_problem
+from ..scene import SceneError
+from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
+from .description import RealVariable, complete
+
+# the unit and meaning of a coefficient, by its scene key (network/model.py KEYS) and the element's kind
+COEFFICIENTS = {
+    ("spring", "k"): ("N/m", 0.0, "stiffness of the spring {name}: force k (x_i - x_j)"),
+    ("dashpot", "c"): ("N.s/m", 0.0, "coefficient of the dashpot {name}: force c (v_i - v_j)"),
+    ("slider", "alpha"): ("N", 0.0, "threshold of the Saint-Venant slider {name}: force in alpha sign(v_i - v_j)"),
+    ("branch", "k"): ("N/m", SMALLEST, "stiffness of the Prandtl branch {name} (force k u); must be > 0"),
+    ("branch", "eta"): ("m", 0.0, "elastic range of the Prandtl branch {name}: |u| <= eta, threshold k eta"),
+    ("branch", "c"): ("N.s/m", 0.0, "series dashpot of the Prandtl branch {name} (relaxation rate k / c); 0: none"),
+    ("cubic", "k3"): ("N/m3", 0.0, "coefficient of the cubic spring {name}: force k3 (x_i - x_j)^3"),
+}
+
+
+def _end(network, j) -> str:
+    return "the ground" if j < 0 else network.nodes[j]
+
+
+def parameter_variables(network, exclude=()) -> list:
+    """(name, unit, min, description) of every network parameter, in ``Network.parameters()`` order."""
+    described = {}
+    for node, mass in zip(network.nodes, network.mass):
+        described[f"m_{node}"] = ("kg", 0.0, f"mass of node {node}; 0: a massless node (in equilibrium at every "
+                                  "instant)")
+    for e in network.elements:
+        where = f"{e.name} (between {_end(network, e.between[0])} and {_end(network, e.between[1])})"
+        for key in e.coefficients():
+            unit, low, text = COEFFICIENTS[(e.kind, key)]
+            described[f"{key}_{e.name}"] = (unit, low, text.format(name=where))
+    names = [name for name in network.parameters() if name not in exclude]
+    return [(name,) + described[name] for name in names]
+
+
+def check_unique(variables) -> None:
+    """A scene whose names would give two FMU variables the same name is refused at build time."""
+    seen = set()
+    for var in variables:
+        if var.name in seen:
+            raise SceneError(f"two FMU variables would be named {var.name!r}: rename a node or an element")
+        seen.add(var.name)
+
+
+class PrandtlNetwork(SlaveBase):
+    author = "prandtl_fmu"
+    description = ("Network of nodes joined by springs, dashpots, sliders, Prandtl branches and cubic springs "
+                   "under a force F at its load's node (documentation/index.html)")
+    version = __version__
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.element = NetworkElement(self.scene)
+        self.initialized = False
+        # what the master set; checked and handed to the library at each step
+        self.F = 0.0
+        self.scene_load = False
+        self.stepper = self.element.stepper
+        self.step = self.element.h
+        self._handed_over = None
+        self.parameters = self.scene.network.parameters()
+        self._register()
+
+    # ------------------------------------------------------------ variables
+
+    def _register(self):
+        real = RealVariable
+        network = self.scene.network
+        load_node = network.nodes[network.load_node]
+        self.register_variable(real(
+            "F", unit="N", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
+            min=-DBL_MAX, max=DBL_MAX, start=0.0,
+            description=f"external force on the load's node {load_node}, held over each step",
+            getter=lambda: self.F, setter=lambda value: setattr(self, "F", value)))
+        outputs = network_outputs(network, lambda: self.element)
+        outputs.insert(2 * network.n, (
+            "reaction", "N", "force of the elements on the ground (the sum over the elements with an end at the "
+            "ground), at the end of the last step", lambda: self.element.reaction))
+        for name, unit, text, getter in outputs:
+            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
+                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
+        for name, unit, low, text in parameter_variables(network):
+            self.register_variable(real(
+                name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+                min=low, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
+                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
+        self.register_variable(real(
+            "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            min=SMALLEST, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
+            getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
+        self.register_variable(Boolean(
+            "scene_load", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            description="true: the force on the load's node is F plus the scene's [load] F_scene(t), evaluated at "
+                        "every internal step as in the library (with no input connected the FMU reproduces the "
+                        "library's run of its scene); false (default): F alone",
+            getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
+        self.register_variable(String(
+            "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            description="time stepper: " + stepper_choices(self.scene),
+            getter=lambda: self.stepper, setter=lambda value: setattr(self, "stepper", value)))
+        check_unique(self.vars.values())
+
+    def to_xml(self, model_options=dict()):
+        root = super().to_xml(model_options)
+        # no direct feedthrough: the outputs are those of the state at the end of the last step
+        return complete(root, list(self.vars.values()), output_dependencies={})
+
+    # ------------------------------------------------------------ stepping
+
+    def exit_initialization_mode(self):
+        problem = None
+        if not finite_number(self.F):
+            problem = f"F = {self.F!r} refused: the force must be finite"
+        elif not self._hand_over_settings():
+            problem = self.log_queue[-1].msg if self.log_queue else "a parameter does not fit the network"
+        else:
+            try:  # a massless part starts in equilibrium with the force at the start
+                self.element.reset(self._force_at_start())
+            except (ElementError, ValueError) as exc:
+                problem = str(exc)
+        if problem is not None:
+            self._fail(f"initialization refused: {problem}")
+        self.element.time = self.start_time
+        self._handed_over = None
+        self.initialized = True
+
+    def _force_at_start(self) -> float:
+        if self.scene_load:
+            return self.F + float(force_at(self.scene.load.compile(), self.start_time))
+        return self.F
+
+    def do_step(self, current_time, step_size):
+        problem = self._communication_problem(current_time, step_size)
+        if problem:
+            self._fail(f"{problem}; the instance is unchanged")
+        if not self._apply_settings():
+            return False
+        force = self.F
+        if not finite_number(force):
+            return self._refuse(f"F = {force!r} refused: the force must be finite; step not taken")
+        element = self.element
+        saved = element.checkpoint()
+        try:
+            element.time = current_time
+            element.advance(step_size, force, scene_load=bool(self.scene_load))
+        except ElementError as exc:  # the library cannot take the step: fmi2Discard, the state as it was
+            element.rollback(saved)
+            return self._refuse(f"step from t = {current_time!r} with F = {force!r} refused: {exc}")
+        except Exception as exc:  # a bad argument the checks above missed: fmi2Error, the state as it was
+            element.rollback(saved)
+            self._fail(f"step from t = {current_time!r} with F = {force!r} refused ({exc.__class__.__name__}: "
+                       f"{exc}); the instance is unchanged")
+        return True  # NetworkElement.advance refuses (ElementError) a step that leaves an output non-finite
+
+    def _apply_settings(self) -> bool:
+        settings = (tuple(self.parameters.values()), self.stepper, self.step)
+        if settings == self._handed_over:
+            return True
+        accepted = self._hand_over_settings()
+        self._handed_over = settings if accepted else None
+        return accepted
+
+    def _hand_over_settings(self) -> bool:
+        """Hand the parameters, stepper and step the master set to the library; False (logged: fmi2Discard) if it
+        refuses one, nothing changed then."""
+        element = self.element
+        current = element.scene.network.parameters()
+        changed = {name: value for name, value in self.parameters.items() if not value == current[name]}
+        if changed:
+            try:
+                element.set_parameters(**changed)
+            except SceneError as exc:
+                return self._refuse(f"parameter {exc}; steps are refused until it is set right")
+        if self.stepper != element.stepper or self.step != element.h:
+            try:
+                self.element = rebuilt(element, self.stepper, self.step)
+            except (SceneError, ValueError, ElementError) as exc:
+                return self._refuse(f"parameter stepper = {self.stepper!r}, step = {self.step!r} refused: {exc}; "
+                                    "steps are refused until it is set right")
+        return True
+
+    # ------------------------------------------------------------ FMU state
+
+    def _get_fmu_state(self):
+        """The whole state as plain data (PythonFMU serializes it as JSON: no code can hide in it)."""
+        return {"network": self.element.get_state(),
+                "settings": {"F": self.F, "step": self.step, "stepper": self.stepper,
+                             "scene_load": bool(self.scene_load), "parameters": dict(self.parameters),
+                             "start_time": self.start_time}}
+
+    def _set_fmu_state(self, state):
+        try:
+            if not isinstance(state, dict) or "invalid" in state:
+                raise ValueError(state.get("invalid") if isinstance(state, dict) else "not a state of this FMU")
+            settings = state["settings"]
+            parameters = dict(settings["parameters"])
+            if set(parameters) != set(self.parameters):
+                raise ValueError("its parameters are not this FMU's")
+            self.scene.network.with_parameters(**parameters)  # SceneError names a bad one
+            values = (settings["F"], settings["step"], settings["stepper"], settings["start_time"])
+            if not (finite_number(settings["F"]) and finite_number(settings["start_time"])):
+                raise ValueError(f"F = {settings['F']!r}, start time {settings['start_time']!r}: must be finite "
+                                 "numbers")
+            if not isinstance(settings["scene_load"], bool):
+                raise ValueError(f"scene_load = {settings['scene_load']!r}: must be true or false")
+            element = restored(self.element, state["network"], settings["stepper"], settings["step"])
+        except Exception as exc:  # any malformed or forged content: a reason, the instance unchanged
+            self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
+        self.element = element
+        self.F, self.step, self.stepper, self.start_time = values
+        self.scene_load = settings["scene_load"]
+        self.parameters = parameters
+        self._handed_over = None
+
+
+def network_outputs(network, stepped, nodes=None) -> list:
+    """(name, unit, description, getter) of the outputs of a network's FMU, read from the library's stepped
+    object ``stepped()``: x_<node>, v_<node> (of ``nodes``, default all), the energy account under the element
+    FMU's names, dissipated_<kind>_<name> of every dissipating element, u_<branch> of every branch."""
+    outputs = []
+    for i, node in enumerate(network.nodes):
+        if nodes is None or node in nodes:
+            outputs.append((f"x_{node}", "m", f"displacement of node {node}", lambda i=i: stepped().x[i]))
+            outputs.append((f"v_{node}", "m/s", f"velocity of node {node}", lambda i=i: stepped().v[i]))
+    kinds = {e.kind for e in network.elements}
+    energy = [
+        ("kinetic_energy", "kinetic energy sum_j m_j v_j^2/2", True),
+        ("stored_energy", "elastic energy of the springs, cubic springs and branches", True),
+        ("work", "work done on the load's node since the start (as the stepper books it)", True),
+        ("dissipated_sliders", "work dissipated by the sliders and the branches' sliders",
+         bool(kinds & {"slider", "branch"})),
+        ("dissipated_damper", "work dissipated by the dashpots and the branches' series dashpots",
+         bool(kinds & {"dashpot", "branch"})),
+        ("energy_residual", "work - dissipated - change of kinetic and stored energy: dissipated (> 0) or "
+         "created (< 0) by the scheme itself", True),
+    ]
+    for name, text, present in energy:
+        if present:
+            outputs.append((name, "J", text, lambda name=name: stepped().energy()[name]))
+    for e, element in enumerate(network.elements):
+        if element.kind in ("slider", "branch", "dashpot"):
+            outputs.append((f"dissipated_{element.kind}_{element.name}", "J",
+                            f"work dissipated by the {element.kind} {element.name} since the start",
+                            lambda e=e: stepped().dissipated[e]))
+    for e, element in enumerate(network.elements):
+        if element.kind == "branch":
+            outputs.append((f"u_{element.name}", "m", f"elongation of the spring of branch {element.name} "
+                            "(|u| <= eta)", lambda e=e: stepped().u[e]))
+    return outputs
+
+
+def stepper_choices(scene) -> str:
+    """The network steppers, each with whether it applies to this network (and why not)."""
+    texts = []
+    for name in NETWORK_STEPPERS:
+        problem = stepper_problem(scene, name)
+        texts.append(f"{name}" + (" (default)" if name == scene.solver.stepper else "")
+                     + (f" (does not apply as built: {problem})" if problem else ""))
+    return "; ".join(texts)
+
+
+def rebuilt(element, stepper, step):
+    """The library's stepped object of ``element``'s network with another stepper or step, in its state (the
+    library checks both: ValueError with the reason)."""
+    if not isinstance(stepper, str) or stepper not in NETWORK_STEPPERS:
+        raise ValueError(f"the stepper must be one of {', '.join(NETWORK_STEPPERS)}")
+    if not (finite_number(step) and step > 0):
+        raise ValueError("the step must be finite and > 0")
+    fresh = type(element)(element.scene, stepper=stepper, step=step)
+    fresh.set_state(element.get_state())
+    return fresh
+
+
+def restored(element, network_state, stepper, step):
+    """A new stepped object like ``element`` with the parameters, stepper, step and state of a saved FMU state;
+    every check is the library's (ValueError, SceneError)."""
+    if not isinstance(network_state, dict) or not isinstance(network_state.get("parameters"), dict):
+        raise ValueError("it holds no network state")
+    if not isinstance(stepper, str) or stepper not in NETWORK_STEPPERS:
+        raise ValueError(f"stepper = {stepper!r}: must be one of {', '.join(NETWORK_STEPPERS)}")
+    if not (finite_number(step) and step > 0):
+        raise ValueError(f"step = {step!r}: must be finite and > 0")
+    network = element.scene.network.with_parameters(**network_state["parameters"])
+    fresh = type(element)(element.scene.with_network(network), stepper=stepper, step=step)
+    fresh.set_state(network_state)
+    return fresh
