@@ -49,6 +49,19 @@ def compiler() -> str:
     return found
 
 
+def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False) -> Path:
+    """Build the native FMU of the network scene (``[network]`` or ``[chain]``) at ``scene_path`` into ``out``: the
+    element (force in at the load's node) or, with causality "displacement", the connector (its motion in, force
+    out); ``arrays`` (FMI 3.0): also the nodes' x and v as arrays (scalars x_<node>, v_<node> in any case: masters
+    such as OMSimulator and ecos read an FMI 3.0 array as a scalar). See ``network_build.py``; NativeBuildError
+    names what stops it."""
+    from . import network_build
+
+    if fmi not in (2, 3):
+        raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
+    return network_build.build(scene_path, out, fmi, causality, arrays, compiler(), NativeBuildError)
+
+
 def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it."""
     from ..fmu.build import add_entry, build_fmu
@@ -58,6 +71,8 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
+    if hasattr(scene, "network"):  # a [network] or [chain] scene
+        return build_native_network_fmu(scene_path, out, fmi, causality)
     if causality is not None and causality != scene.causality:
         from ..fmu.build import _with_causality
 

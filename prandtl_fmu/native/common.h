@@ -22,7 +22,9 @@ extern __thread int prandtl_kernel_failed;
 /* the scratch of state_check (a memory-stack state and n elongations) */
 #define STATE_SCRATCH (NB_ARR + NB)
 
+#if !NETWORK /* the element's parameters (a network's are its scene's: network.h) */
 enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
+#endif
 /* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
 enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8 };
 #define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
@@ -61,8 +63,11 @@ static void say_to(void* instance, void* logger, int logging, int status, const 
     emit(instance, status, categories[status], message);
 }
 
+#if !NETWORK
 static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic",
                                             "stribeck_velocity", "belt_velocity"};
+
+#endif
 
 /* scene.magnitude_problem: a finite nonzero coefficient's |value| lies in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE];
    a value's (is_value: scene.VALUES) is at most LARGEST_MAGNITUDE */
@@ -88,6 +93,7 @@ static const char* magnitude_problem(const char* name, double value, int is_valu
     return NULL;
 }
 
+#if !NETWORK
 /* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
 static const char* parameter_problem(const double* par, const double* cbranch, char* buffer, size_t size)
 {
@@ -143,8 +149,6 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
     return NULL;
 }
 
-/* whether an output's value may be shown: finite (every stepper books its energy account, as driver.Element) */
-static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
 
 static const Var* find(unsigned vr, int type)
 {
@@ -164,6 +168,11 @@ static size_t branch_state_used(const double* u)
     used = STACK_HEADER + STACK_ROW * (size_t)(u[0] > 0 ? u[0] : 0); /* u[0]: the count of pieces */
     return used < NB_ARR ? used : NB_ARR;
 }
+
+#endif
+
+/* whether an output's value may be shown: finite (every stepper books its energy account, as driver.Element) */
+static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
 
 static uint64_t fnv1a(const unsigned char* bytes, size_t size)
 {

@@ -10,7 +10,9 @@
 #define STANDARD "FMI 2.0"
 #define STEPPING_NAME "stepComplete"
 #include "scene.h"
-#if CONNECTOR
+#if NETWORK
+#include "network.h"
+#elif CONNECTOR
 #include "connector.h"
 #else
 #include "element.h"

@@ -13,13 +13,20 @@
 #define STANDARD "FMI 3.0"
 #define STEPPING_NAME "step mode"
 #include "scene.h"
-#if CONNECTOR
+#if NETWORK
+#include "network.h"
+#elif CONNECTOR
 #include "connector.h"
 #else
 #include "element.h"
 #endif
 #include "state.h"
 #include "calls.h"
+#ifndef STRUCTURAL_N /* the structural parameter (VR_N): the element's n branches; a network's nodes (ARRAYS) */
+#define STRUCTURAL_N NB
+#define HAS_STRUCTURAL 1
+#define STRUCTURAL_TEXT "n is the scene's number of branches"
+#endif
 
 static void emit(void* instance, int status, const char* category, const char* message)
 {
@@ -169,10 +176,14 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 H, fmi3B
 /* the elongations u (m), in the scene's order: VR_U, an array of n */
 static void elongations(Instance* c, double* out)
 {
+#if NETWORK
+    (void)c; /* a network has no array u (NB is 0) */
+    (void)out;
+#elif CONNECTOR
     Element* e = &c->el;
-#if CONNECTOR
     (damped(e) ? elongations_c : elongations_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, out);
 #else
+    Element* e = &c->el;
     KERNEL(e, elongations)(BRANCHES(e), out);
 #endif
 }
@@ -187,6 +198,22 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         return fmi3Error;
     for (i = 0; i < nvr; i++) {
         const Var* var;
+#if NETWORK
+        if (ARRAYS && (vr[i] == VR_XA || vr[i] == VR_VA)) { /* x or v of every node, in the nodes' order */
+            if (at + NN > nvalues) {
+                say(c, ST_ERROR, "fmi3GetFloat64 refused: %zu values asked, %s alone has %d", nvalues,
+                    vr[i] == VR_XA ? "x" : "v", NN);
+                return fmi3Error;
+            }
+            if (node_values(c, vr[i] == VR_VA, values + at) != 0) {
+                say(c, ST_ERROR, "fmi3GetFloat64 refused: %s of a node is not a finite number (a non-finite input "
+                    "or a motion refused)", vr[i] == VR_XA ? "x" : "v");
+                return fmi3Error;
+            }
+            at += NN;
+            continue;
+        }
+#endif
         if (vr[i] == VR_U && NB > 0) {
             if (at + NB > nvalues) {
                 say(c, ST_ERROR, "fmi3GetFloat64 refused: %zu values asked, u alone has %d", nvalues, NB);
@@ -248,11 +275,11 @@ fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
     if (!arrays_given(c, nvr, vr, values, "fmi3GetUInt64"))
         return fmi3Error;
     for (i = 0; i < nvr; i++) {
-        if (vr[i] != VR_N || i >= nvalues) {
-            say(c, ST_ERROR, "fmi3GetUInt64 refused: value reference %u is not n", vr[i]);
+        if (!HAS_STRUCTURAL || vr[i] != VR_N || i >= nvalues) {
+            say(c, ST_ERROR, "fmi3GetUInt64 refused: value reference %u is not the structural parameter", vr[i]);
             return fmi3Error;
         }
-        values[i] = (fmi3UInt64)NB;
+        values[i] = (fmi3UInt64)STRUCTURAL_N;
     }
     return fmi3OK;
 }
@@ -265,8 +292,8 @@ fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
     if (!arrays_given(c, nvr, vr, values, "fmi3SetUInt64"))
         return fmi3Error;
     for (i = 0; i < nvr; i++) {
-        if (vr[i] != VR_N || i >= nvalues || values[i] != (fmi3UInt64)NB) {
-            say(c, ST_ERROR, "fmi3SetUInt64 refused: n is the scene's number of branches, %d", NB);
+        if (!HAS_STRUCTURAL || vr[i] != VR_N || i >= nvalues || values[i] != (fmi3UInt64)STRUCTURAL_N) {
+            say(c, ST_ERROR, "fmi3SetUInt64 refused: " STRUCTURAL_TEXT ", %d", (int)STRUCTURAL_N);
             return fmi3Error;
         }
     }

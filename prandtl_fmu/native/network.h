@@ -1,0 +1,761 @@
+/* The native FMU of a network (issue 32: nodes joined by springs, dashpots, sliders, Prandtl branches and cubic
+ * springs), the element (force in at the load's node) or, with CONNECTOR, the connector (the load node's motion
+ * in, force out), shared by the FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
+ *
+ * Every number comes from the library's network kernels, compiled by numba for this scene
+ * (native/network_kernels.py) and declared in the generated "scene.h" with the scene's arrays (the kinds and
+ * ends of the elements, the scene's coefficients, x0, v0, u0), the parameters' rules (prandtl_fmu.network.model:
+ * Network.with_parameters, check_topology and stepper_problem, as tables) and the FMU's variables (value reference
+ * = index in VARS). This file does what network.driver.NetworkElement and NetworkConnector do around the kernels,
+ * in the same order of floating-point operations: the clock (origin + steps * grid), a duration split into whole
+ * steps and a last shorter one, the parameters handed over at a step, the refusals (fmi2Discard for a bad input,
+ * a step that fails or whose outputs would not be finite, the state unchanged; fmi2Error for a bad start value,
+ * a non-finite time or a bad FMU state, checked field by field; logged even with logging off, never a NULL
+ * category).
+ */
+#ifndef PRANDTL_NETWORK_H
+#define PRANDTL_NETWORK_H
+#include "common.h"
+
+/* the network in use and its state (driver.NetworkElement's model, x, v, u, piece, account, dissipated, ...) */
+typedef struct {
+    double mass[NN], coef[3 * NE_ARR]; /* the coefficients in use: (a, eta, c) per element */
+    int stepper;                        /* index into STEPPER_NAMES */
+    double h;
+    double x[NN], v[NN], u[NE_ARR];
+    int64_t piece[NE_ARR];
+    double account[3];                  /* the work of the load, dissipated by sliders, by dashpots */
+    double dissipated[NE_ARR], reaction, initial_energy;
+    double origin, grid;                /* the clock: time = origin + steps * grid (grid 0: none yet) */
+    int64_t steps;
+    double force;        /* the load of the last advance (plus the scene's [load] with scene_load); CONNECTOR: the
+                            force of the elements on the load's node (NetworkConnector.force) */
+    int scene_load;
+    double sample_x, sample_v; /* CONNECTOR: the input sample committed last */
+} Element;
+
+/* the workspace of a step (kernels.workspace's arrays): scratch, not state */
+typedef struct {
+    double d[NN], grad[NN], p[NN], term[NE_ARR], subtree[NN + 1], scale[NN];
+    int64_t parent[NN + 1], cluster[NN + 1], queue[NN + 1], degree[NN + 1], links[NN + 1];
+    double out[2 * NN + 2];
+} Work;
+#define WORK(w) (w)->d, (w)->grad, (w)->p, (w)->parent, (w)->cluster, (w)->term, (w)->subtree, (w)->queue, \
+                (w)->degree, (w)->links, (w)->scale
+#define NET(e) (e)->mass, (e)->coef, (int64_t*)KIND, (int64_t*)ENDS, (int64_t)LOAD_NODE, (int64_t)HAS_CUBIC
+
+typedef struct {
+    char header[24];
+    uint32_t version, size;
+    char digest[65];
+    Element element;
+    double F, x_in, v_in, step, start_time, par[N_PARAMS];
+    int scene_load, stepper_valid, initialized;
+    char stepper[32];
+    uint64_t checksum;
+} State;
+
+typedef struct {
+    char* name;
+    void* env; /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
+    void* logger;
+    int logging, phase, last_step_failed;
+    Element el;
+    /* what the master set */
+    double F, x_in, v_in, step, start_time, par[N_PARAMS];
+    int scene_load, initialized;
+    char stepper[32];
+    int stepper_valid; /* the string fitted in the buffer */
+    int handed;        /* the settings were handed over and nothing changed since */
+    Element saved;     /* core_do_step's checkpoint */
+    Element preview;   /* CONNECTOR: the outputs' state, the committed one moved to the inputs set last */
+    int preview_state; /* 0: to compute, 1: computed, -1: the move failed (no outputs) */
+    Work work;
+} Instance;
+
+/* a value reference is the index of its variable (one table for every type) */
+static const Var* find(unsigned vr, int type)
+{
+    if (vr < (unsigned)N_VARS && VARS[vr].vr == vr && VARS[vr].type == type)
+        return &VARS[vr];
+    return NULL;
+}
+
+static double element_time(const Element* e) { return e->steps ? e->origin + (double)e->steps * e->grid : e->origin; }
+
+/* NetworkElement.time = value */
+static void set_time(Element* e, double value)
+{
+    if (e->grid != 0.0 && fabs(value - element_time(e)) <= 1e-9 * e->grid)
+        return;
+    e->origin = value;
+    e->steps = 0;
+}
+
+/* ------------------------------------------------------------------ the library's rules (network/model.py) */
+
+static int stepper_index(const char* name)
+{
+    int i;
+    for (i = 0; i < N_STEPPERS; i++)
+        if (strcmp(name, STEPPER_NAMES[i]) == 0)
+            return i;
+    return -1;
+}
+
+/* Network.with_parameters (the magnitudes, the rule of each key, a branch's eta and its u0), check_topology (the
+ * rules a mass can break: a massless node held by sliders alone, a load on a part with neither a support nor a
+ * mass), stepper_problem, and for the connector a load node without mass: the message, or NULL */
+static const char* network_problem(const double* par, int stepper, char* buffer, size_t size)
+{
+    int i, j, massive = 0;
+    for (i = 0; i < N_PARAMS; i++) {
+        double value = par[i];
+        const Param* p = &PARAMS[i];
+        if (!isfinite(value)) {
+            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", p->name, value);
+            return buffer;
+        }
+        if (magnitude_problem(p->name, value, 0, buffer, size))
+            return buffer;
+        if (p->rule == R_POSITIVE && !(value > 0)) {
+            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", p->name, value);
+            return buffer;
+        }
+        if (p->rule != R_POSITIVE && value < 0) {
+            snprintf(buffer, size, "parameter %s: must be >= 0, got %.17g", p->name, value);
+            return buffer;
+        }
+        if (p->rule == R_ETA && fabs(p->u0) > value) {
+            snprintf(buffer, size, "parameter %s: %.17g would leave u0 = %.17g outside [-eta, eta]", p->name, value,
+                     p->u0);
+            return buffer;
+        }
+    }
+    for (j = 0; j < NN; j++) { /* m_<node> are the first parameters, in the nodes' order */
+        if (par[j] > 0) {
+            massive = 1;
+            continue;
+        }
+        if (SLIDER_ONLY[j]) {
+            snprintf(buffer, size, "parameter %s: node %s: massless and held by sliders alone: once a slider slips, "
+                     "nothing sets where it stops (give it a mass, a spring or a dashpot)", PARAMS[j].name,
+                     NODE_NAMES[j]);
+            return buffer;
+        }
+    }
+    if (LOAD_FLOATING) {
+        int carried = 0;
+        for (j = 0; j < NN; j++)
+            carried |= LOAD_PART[j] && par[j] > 0;
+        if (!carried) {
+            snprintf(buffer, size, "the part of the network that carries the load (%s) is joined to the ground by no "
+                     "element and has no mass: the load has no equilibrium", NODE_NAMES[LOAD_NODE]);
+            return buffer;
+        }
+    }
+    if (CONNECTOR && par[LOAD_NODE] > 0) {
+        snprintf(buffer, size, "parameter %s = %.17g: the connector imposes the motion of the load's node %s, which "
+                 "must be massless", PARAMS[LOAD_NODE].name, par[LOAD_NODE], NODE_NAMES[LOAD_NODE]);
+        return buffer;
+    }
+    (void)massive;
+    if (stepper >= 0 && strcmp(STEPPER_NAMES[stepper], "projected") == 0) {
+        for (j = 0; j < NN; j++) {
+            if (!(par[j] > 0)) {
+                snprintf(buffer, size, "'projected' is explicit and needs a mass at every node; %s is massless: use "
+                         "'implicit'", NODE_NAMES[j]);
+                return buffer;
+            }
+        }
+    }
+    return NULL;
+}
+
+static const char* settings_problem(Instance* c, char* buffer, size_t size)
+{
+    int stepper = c->stepper_valid ? stepper_index(c->stepper) : -1;
+    if (stepper < 0) {
+        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers that apply to this "
+                 "network)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
+        return buffer;
+    }
+    if (!(isfinite(c->step) && c->step > 0)) {
+        snprintf(buffer, size, "parameter step = %.17g: must be finite and > 0", c->step);
+        return buffer;
+    }
+    return network_problem(c->par, stepper, buffer, size);
+}
+
+/* the coefficients in use from the parameters: mass[j], and column ``column`` of element ``element`` */
+static void coefficients_of(const double* par, double* mass, double* coef)
+{
+    int i;
+    memcpy(mass, MASS_SCENE, sizeof(double) * NN);
+    memcpy(coef, COEF_SCENE, sizeof(double) * 3 * NE_ARR);
+    for (i = 0; i < N_PARAMS; i++) {
+        if (PARAMS[i].node >= 0)
+            mass[PARAMS[i].node] = par[i];
+        else
+            coef[3 * PARAMS[i].element + PARAMS[i].column] = par[i];
+    }
+}
+
+/* slave: the coefficients, stepper and step the master set go to the network (NetworkElement.set_parameters) */
+static void hand_over(Instance* c)
+{
+    coefficients_of(c->par, c->el.mass, c->el.coef);
+    c->el.stepper = stepper_index(c->stepper);
+    c->el.h = c->step;
+    c->handed = 1;
+    c->preview_state = 0;
+}
+
+/* ------------------------------------------------------------------ the network */
+
+static double energy(Element* e, int which)
+{
+    double kinetic_stored[2];
+    if (which >= 2 && which <= 4)
+        return e->account[which - 2];
+    energies(NET(e), e->x, e->v, e->u, kinetic_stored);
+    if (which < 2)
+        return kinetic_stored[which];
+    /* NetworkElement.energy: work - sliders - damper - (kinetic + stored - initial) */
+    return e->account[0] - e->account[1] - e->account[2] - (kinetic_stored[0] + kinetic_stored[1] -
+                                                             e->initial_energy);
+}
+
+/* the load of an advance: the force held, or the scene's [load] plus it (loads.held, loads.plus) */
+typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
+static const double NO_TABLE[1] = {0.0};
+
+static Load load_of(double force, int scene_load)
+{
+    Load l;
+    if (scene_load) {
+        l.kind = LOAD_KIND;
+        l.lk[0] = LOAD_LK[0] + force;
+        l.lk[1] = LOAD_LK[1];
+        l.lk[2] = LOAD_LK[2];
+        l.t = LOAD_T;
+        l.f = LOAD_F;
+        l.n = LOAD_N;
+    } else {
+        l.kind = 0;
+        l.lk[0] = force;
+        l.lk[1] = 0.0;
+        l.lk[2] = 0.0;
+        l.t = NO_TABLE;
+        l.f = NO_TABLE;
+        l.n = 1;
+    }
+    return l;
+}
+
+/* driver.failure_message: why a step (or the equilibrium at t = 0) could not be taken */
+static const char* failure(int64_t status, char* buffer, size_t size)
+{
+    if (status == -2)
+        snprintf(buffer, size, "no equilibrium: a part of the network with no mass is pushed beyond what holds it "
+                 "(e.g. a massless chain pulled beyond the total friction of its nodes, or a massless node beyond its "
+                 "branches' strength)");
+    else if (status == -1)
+        snprintf(buffer, size, "the active-set search did not end within its budget of %lld iterations (%d per node "
+                 "and element + %d); a smaller step needs fewer", (long long)SEARCH_BUDGET, SEARCH_PER_TERM,
+                 SEARCH_CONSTANT);
+    else if (status == -10)
+        snprintf(buffer, size, "the move takes more than %.0e steps", ADVANCE_BUDGET);
+    else
+        snprintf(buffer, size, "a number overflowed (not finite)");
+    return buffer;
+}
+
+/* NetworkElement.reset(force) (the connector's: force 0): the scene's x0, v0, u0 and every massless node in
+ * equilibrium with the force; NULL, or why not */
+static const char* reset(Instance* c, double force, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double reaction[1] = {0.0}, kinetic_stored[2];
+    int64_t status;
+    e->origin = 0.0;
+    e->steps = 0;
+    e->grid = 0.0;
+    e->force = force;
+    e->scene_load = 0;
+    memcpy(e->x, X0, sizeof e->x);
+    memcpy(e->v, V0, sizeof e->v);
+    memcpy(e->u, U0, sizeof e->u);
+    memset(e->piece, 0, sizeof e->piece);
+    memset(e->account, 0, sizeof e->account);
+    memset(e->dissipated, 0, sizeof e->dissipated);
+    e->sample_x = X0[LOAD_NODE];
+    e->sample_v = V0[LOAD_NODE];
+    prandtl_kernel_failed = 0;
+    status = initial(NET(e), e->x, e->v, e->u, e->piece, force, reaction);
+    if (prandtl_kernel_failed)
+        return "a kernel failed (out of memory)";
+    if (status < 0)
+        return failure(status, buffer, size);
+    e->reaction = reaction[0];
+    energies(NET(e), e->x, e->v, e->u, kinetic_stored);
+    e->initial_energy = kinetic_stored[0] + kinetic_stored[1];
+    c->preview_state = 0;
+    return NULL;
+}
+
+/* driver.split_duration */
+static void split_duration(double duration, double h, double* whole, double* rest)
+{
+    double ratio = duration / h, nearest = nearbyint(ratio);
+    if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
+        *whole = nearest;
+        *rest = 0.0;
+        return;
+    }
+    *whole = floor(ratio);
+    *rest = duration - *whole * h;
+}
+
+/* NetworkElement._steps_from: ``count`` steps of h from step number ``first`` (t_p = t_base + p h); NULL, or why
+ * not (the element is then partly advanced: the caller rolls back) */
+static const char* steps_from(Instance* c, const Load* l, double t_base, int64_t first, int64_t count, double h,
+                              char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    int64_t status = 0, taken;
+    if (count == 0)
+        return NULL;
+    prandtl_kernel_failed = 0;
+    taken = ADVANCE[e->stepper](NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, c->work.out,
+                                WORK(&c->work), l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n, t_base,
+                                first, h, count, &status);
+    if (prandtl_kernel_failed)
+        return "a kernel failed (out of memory)";
+    if (taken < count) {
+        char reason[256];
+        snprintf(buffer, size, "the %s step from t = %.17g s %s", STEPPER_NAMES[e->stepper],
+                 t_base + (double)(first + taken) * h, failure(status, reason, sizeof reason));
+        return buffer;
+    }
+    e->reaction = c->work.out[2 * NN + 1];
+    return NULL;
+}
+
+/* NetworkElement.advance: NULL, or why the step was not taken (the caller rolls back) */
+static const char* advance(Instance* c, double duration, double force, int scene_load, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double h = e->h, whole, rest;
+    const char* problem;
+    Load l;
+    if (duration == 0.0)
+        return NULL;
+    if (duration < SHORTEST_STEP) {
+        snprintf(buffer, size, "the duration is shorter than %g s", SHORTEST_STEP);
+        return buffer;
+    }
+    if (!(duration / h < MAX_STEPS)) {
+        snprintf(buffer, size, "the duration is more than 2^53 steps of h = %.17g s", h);
+        return buffer;
+    }
+    split_duration(duration, h, &whole, &rest);
+    if (whole + (rest > 0) > ADVANCE_BUDGET) {
+        snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
+                 "steps of one advance: advance by shorter durations or with a larger step", duration,
+                 whole + (rest > 0), h, ADVANCE_BUDGET);
+        return buffer;
+    }
+    l = load_of(force, scene_load);
+    e->force = force;
+    e->scene_load = scene_load;
+    if (e->grid != h) {
+        e->origin = element_time(e);
+        e->steps = 0;
+        e->grid = h;
+    }
+    problem = steps_from(c, &l, e->origin, e->steps, (int64_t)whole, h, buffer, size);
+    if (problem == NULL && rest > 0)
+        problem = steps_from(c, &l, e->origin + (double)(e->steps + (int64_t)whole) * h, 0, 1, rest, buffer, size);
+    if (problem != NULL)
+        return problem;
+    if (rest > 0) {
+        e->origin = e->origin + (double)(e->steps + (int64_t)whole) * h + rest;
+        e->steps = 0;
+    } else {
+        e->steps += (int64_t)whole;
+    }
+    return NULL;
+}
+
+/* NetworkConnector.move_to(x, v, time) on ``e``; NULL, or why not (``e`` is then partly moved) */
+static const char* move(Instance* c, Element* e, double x, double v, double time, char* buffer, size_t size)
+{
+    double result[2];
+    int64_t status;
+    double start = element_time(e);
+    prandtl_kernel_failed = 0;
+    status = move_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, WORK(&c->work), x, v, start,
+                    time, e->h, result);
+    if (prandtl_kernel_failed)
+        return "a kernel failed (out of memory)";
+    if (status < 0) {
+        char reason[256];
+        snprintf(buffer, size, "the motion x = %.17g at t = %.17g s: %s", x, time,
+                 failure(status, reason, sizeof reason));
+        return buffer;
+    }
+    if (time != start) {
+        e->origin = time;
+        e->steps = 0;
+        e->grid = e->h;
+    }
+    e->reaction = result[1];
+    e->force = result[0];
+    e->sample_x = x;
+    e->sample_v = v;
+    return NULL;
+}
+
+/* CONNECTOR: the outputs' state: the committed network when the inputs are its last sample, else the committed
+ * network moved to the inputs set last in an instant (NetworkConnector.move_to at its own time, not committed);
+ * NULL when that motion is refused */
+static Element* previewed(Instance* c)
+{
+    char buffer[512];
+    if (c->x_in == c->el.sample_x && c->v_in == c->el.sample_v)
+        return &c->el;
+    if (c->preview_state == 0) {
+        c->preview = c->el;
+        c->preview_state = isfinite(c->x_in) && isfinite(c->v_in) &&
+            move(c, &c->preview, c->x_in, c->v_in, element_time(&c->el), buffer, sizeof buffer) == NULL ? 1 : -1;
+    }
+    return c->preview_state == 1 ? &c->preview : NULL;
+}
+
+/* ------------------------------------------------------------------ outputs */
+
+static double real_value(Instance* c, const Var* var)
+{
+    Element* e = &c->el;
+    switch (var->what) {
+    case W_F: return c->F;
+    case W_XIN: return c->x_in;
+    case W_VIN: return c->v_in;
+    case W_PARAM: return c->par[var->index];
+    case W_STEP: return c->step;
+    }
+    if (CONNECTOR && (e = previewed(c)) == NULL)
+        return NAN; /* refused by the getter (calls.h: shown) */
+    switch (var->what) {
+    case W_X: return e->x[var->index];
+    case W_V: return e->v[var->index];
+    case W_REACTION: return e->reaction;
+    case W_FORCE: return e->force;
+    case W_ENERGY: return energy(e, var->index);
+    }
+    return NAN;
+}
+
+/* FMI 3.0's arrays x and v (ARRAYS): every node's value in ``out``; 0, or -1 when one is not a number */
+static int node_values(Instance* c, int velocities, double* out)
+{
+    Element* e = CONNECTOR ? previewed(c) : &c->el;
+    int j;
+    if (e == NULL)
+        return -1;
+    for (j = 0; j < NN; j++) {
+        out[j] = velocities ? e->v[j] : e->x[j];
+        if (!isfinite(out[j]))
+            return -1;
+    }
+    return 0;
+}
+
+static void defaults(Instance* c)
+{
+    char buffer[512];
+    memcpy(c->par, P_SCENE, sizeof c->par);
+    snprintf(c->stepper, sizeof c->stepper, "%s", DEFAULT_STEPPER);
+    c->stepper_valid = 1;
+    c->step = DEFAULT_STEP;
+    c->F = c->x_in = c->v_in = 0.0;
+    c->scene_load = 0;
+    c->start_time = 0.0;
+    c->initialized = 0;
+    c->handed = 0;
+    c->phase = INSTANTIATED;
+    c->last_step_failed = 0;
+    memset(&c->el, 0, sizeof c->el);
+    hand_over(c);
+    if (reset(c, 0.0, buffer, sizeof buffer) != NULL)
+        c->preview_state = -1; /* no equilibrium under F = 0 (a scene's u0): initialization will say why */
+    c->handed = 0;
+}
+
+/* ------------------------------------------------------------------ FMU state: a checked blob */
+
+static void capture(const Instance* c, State* s)
+{
+    memset(s, 0, sizeof *s);
+    FILL_HEAD(s);
+    s->element = c->el;
+    s->F = c->F;
+    s->x_in = c->x_in;
+    s->v_in = c->v_in;
+    s->step = c->step;
+    s->start_time = c->start_time;
+    memcpy(s->par, c->par, sizeof s->par);
+    s->scene_load = c->scene_load;
+    s->stepper_valid = c->stepper_valid;
+    s->initialized = c->initialized;
+    memcpy(s->stepper, c->stepper, sizeof s->stepper);
+    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+}
+
+/* why a state cannot be restored here, or NULL: every field checked (a checksum detects accidents, not edits: a
+ * blob with a recomputed one is checked field by field): the coefficients in use by the parameters' rules, the
+ * network's state as NetworkElement.set_state checks it (x, v, u, the accounts finite; |u| <= eta of a branch,
+ * u = 0 elsewhere), and more: a piece each element's kind can be on, no negative dissipation, the clock */
+static const char* state_problem(const State* s, char* buffer, size_t size)
+{
+    const Element* e = &s->element;
+    double par[N_PARAMS], mass[NN], coef[3 * NE_ARR];
+    const char* problem;
+    int i, j;
+    const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
+                                    fnv1a((const unsigned char*)s, offsetof(State, checksum)));
+    if (head != NULL)
+        return head;
+    if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->force) &&
+          isfinite(e->reaction) && isfinite(e->initial_energy) && isfinite(e->sample_x) && isfinite(e->sample_v) &&
+          (e->scene_load == 0 || e->scene_load == 1) &&
+          (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
+          (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
+        return "it holds a non-finite or out-of-range value";
+    if (!(isfinite(e->origin) && isfinite(e->grid) && e->grid >= 0 && e->steps >= 0 &&
+          (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
+        return "its clock is not a finite time (origin, steps and grid)";
+    /* the coefficients in use: the parameters' values, the rest the scene's */
+    for (i = 0; i < N_PARAMS; i++)
+        par[i] = PARAMS[i].node >= 0 ? e->mass[PARAMS[i].node] : e->coef[3 * PARAMS[i].element + PARAMS[i].column];
+    coefficients_of(par, mass, coef);
+    if (memcmp(mass, e->mass, sizeof mass) != 0 || memcmp(coef, e->coef, sizeof coef) != 0)
+        return "its coefficients are not this network's";
+    problem = network_problem(par, e->stepper, buffer, size);
+    if (problem != NULL)
+        return problem;
+    for (j = 0; j < NN; j++)
+        if (!(isfinite(e->x[j]) && isfinite(e->v[j])))
+            return "its x and v must be finite numbers";
+    if (!(isfinite(e->account[0]) && e->account[1] >= 0 && isfinite(e->account[1]) && e->account[2] >= 0 &&
+          isfinite(e->account[2])))
+        return "its energy account is not finite (or a dissipation is negative)";
+    for (i = 0; i < NE; i++) {
+        int64_t p = e->piece[i];
+        int plastic = KIND[i] == K_SLIDER || KIND[i] == K_BRANCH;
+        if (!(p >= -2 && p <= 2) || (KIND[i] == K_SLIDER && (p == 2 || p == -2)) || (!plastic && p != 0)) {
+            snprintf(buffer, size, "element %s is on piece %lld, which its kind has not", ELEMENT_NAMES[i],
+                     (long long)p);
+            return buffer;
+        }
+        if (KIND[i] == K_BRANCH ? !(fabs(e->u[i]) <= e->coef[3 * i + 1]) : e->u[i] != 0) {
+            snprintf(buffer, size, "the u of %s (%.17g) is outside its elastic range", ELEMENT_NAMES[i], e->u[i]);
+            return buffer;
+        }
+        if (!(isfinite(e->dissipated[i]) && e->dissipated[i] >= 0) ||
+            (!plastic && KIND[i] != K_DASHPOT && e->dissipated[i] != 0)) {
+            snprintf(buffer, size, "the dissipation of %s (%.17g) is not one", ELEMENT_NAMES[i], e->dissipated[i]);
+            return buffer;
+        }
+    }
+    return NULL;
+}
+
+static int restore(Instance* c, const State* s)
+{
+    char buffer[512];
+    const char* problem = state_problem(s, buffer, sizeof buffer);
+    if (problem != NULL) {
+        say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
+        return ST_ERROR;
+    }
+    c->el = s->element;
+    c->F = s->F;
+    c->x_in = s->x_in;
+    c->v_in = s->v_in;
+    c->step = s->step;
+    c->start_time = s->start_time;
+    memcpy(c->par, s->par, sizeof c->par);
+    c->scene_load = s->scene_load;
+    c->stepper_valid = s->stepper_valid;
+    c->initialized = s->initialized;
+    memcpy(c->stepper, s->stepper, sizeof c->stepper);
+    c->stepper[sizeof c->stepper - 1] = 0;
+    c->handed = 0;
+    c->preview_state = 0;
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------------ stepping */
+
+/* fmi2/3ExitInitializationMode: the settings checked and handed over, the network reset (the connector: moved to
+ * the first input) */
+static int core_exit_initialization(Instance* c)
+{
+    char buffer[512], reason[512];
+    const char* problem;
+    if (c->phase != INITIALIZING) {
+        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
+        return ST_ERROR;
+    }
+    problem = settings_problem(c, buffer, sizeof buffer);
+    if (problem == NULL && !(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
+        snprintf(buffer, sizeof buffer, "the inputs must be finite (%s = %.17g, %.17g)", CONNECTOR ? "x, v" : "F",
+                 CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
+        problem = buffer;
+    }
+    if (problem == NULL) {
+        double force = CONNECTOR ? 0.0 : c->F;
+        hand_over(c);
+        if (!CONNECTOR && c->scene_load) { /* F plus the scene's load at the start time */
+            Load l = load_of(0.0, 1);
+            force = c->F + load_force(l.kind, (double*)l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time);
+        }
+        if (reset(c, force, reason, sizeof reason) != NULL) {
+            snprintf(buffer, sizeof buffer, "no equilibrium at t = 0 under F = %.17g N: %s", force, reason);
+            problem = buffer;
+        }
+    }
+    if (problem == NULL) {
+        set_time(&c->el, c->start_time);
+        if (CONNECTOR) { /* from x0 to the first input, in an instant */
+            if (move(c, &c->el, c->x_in, c->v_in, element_time(&c->el), reason, sizeof reason) != NULL) {
+                snprintf(buffer, sizeof buffer, "%s", reason);
+                problem = buffer;
+            }
+        }
+    }
+    if (problem != NULL) {
+        say(c, ST_ERROR, "initialization refused: %s", problem);
+        return ST_ERROR;
+    }
+    c->handed = 0;
+    c->initialized = 1;
+    c->preview_state = 0;
+    c->phase = STEPPING;
+    return ST_OK;
+}
+
+/* the first output that is not a number to show after a step, or NULL */
+static const Var* unshowable_output(Instance* c, double* value)
+{
+    int i;
+    for (i = 0; i < N_VARS; i++) {
+        const Var* var = &VARS[i];
+        if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_ENERGY &&
+            var->what != W_FORCE)
+            continue;
+        *value = real_value(c, var);
+        if (!isfinite(*value))
+            return var;
+    }
+    return NULL;
+}
+
+/* fmi2/3DoStep: one communication step; the FMI layer checked the call sequence */
+static int core_do_step(Instance* c, double t, double H)
+{
+    char buffer[768];
+    const char* problem;
+    const Var* overflowed;
+    double value;
+    if (c->phase != STEPPING) {
+        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
+            "Terminate");
+        return ST_ERROR;
+    }
+    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
+        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
+            ">= 0 (and their sum finite)", t, H);
+        return ST_ERROR;
+    }
+    c->last_step_failed = 1;
+    if (!c->handed) {
+        problem = settings_problem(c, buffer, sizeof buffer);
+        if (problem != NULL) {
+            say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
+            return ST_DISCARD;
+        }
+        hand_over(c);
+    }
+    if (!(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
+        say(c, ST_DISCARD, "the inputs must be finite (%s = %.17g, %.17g); step not taken", CONNECTOR ? "x, v" : "F",
+            CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
+        return ST_DISCARD;
+    }
+    c->saved = c->el;
+    c->preview_state = 0;
+    if (CONNECTOR) { /* the input sample belongs to the communication point: commit it (the clock only goes on) */
+        double now = element_time(&c->el);
+        problem = move(c, &c->el, c->x_in, c->v_in, t > now ? t : now, buffer, sizeof buffer);
+    } else {
+        set_time(&c->el, t);
+        problem = advance(c, H, c->F, c->scene_load, buffer, sizeof buffer);
+    }
+    if (problem != NULL) {
+        c->el = c->saved;
+        say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
+        return ST_DISCARD;
+    }
+    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    if (overflowed != NULL) {
+        double time = element_time(&c->el);
+        c->el = c->saved;
+        c->preview_state = 0;
+        say(c, ST_DISCARD, "the step to t = %.17g refused: %s would be %.17g, not finite (an overflow); the state is "
+            "unchanged", time, overflowed->name, value);
+        return ST_DISCARD;
+    }
+    c->last_step_failed = 0;
+    return ST_OK;
+}
+
+/* a Float64/Real the master sets: the inputs, the parameters, the step */
+static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
+{
+    (void)value;
+    if (var == NULL || !(var->what == W_F || var->what == W_XIN || var->what == W_VIN || var->what == W_PARAM ||
+                         var->what == W_STEP)) {
+        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static void core_set_float(Instance* c, const Var* var, double value)
+{
+    if (var->what == W_F)
+        c->F = value;
+    else if (var->what == W_XIN)
+        c->x_in = value;
+    else if (var->what == W_VIN)
+        c->v_in = value;
+    else if (var->what == W_PARAM) {
+        c->par[var->index] = value;
+        c->handed = 0;
+    } else {
+        c->step = value;
+        c->handed = 0;
+    }
+    c->preview_state = 0;
+}
+
+static void core_set_stepper(Instance* c, const char* value)
+{
+    c->stepper_valid = strlen(value) < sizeof c->stepper;
+    snprintf(c->stepper, sizeof c->stepper, "%s", c->stepper_valid ? value : "");
+    c->handed = 0;
+}
+
+#endif
