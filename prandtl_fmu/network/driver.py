@@ -506,7 +506,10 @@ class NetworkElement(OutputMemo):
             restored = network.with_parameters(**parameters)
         except SceneError as exc:
             raise ValueError(f"state's parameters: {exc}") from None
+        allowed = {"slider": (-1, 0, 1), "branch": (-2, -1, 0, 1, 2)}
         for e, element in enumerate(restored.elements):
+            if piece[e] not in allowed.get(element.kind, (0,)):
+                raise ValueError(f"state's piece of {element.name} ({piece[e]!r}) is not one of its law's pieces")
             u = arrays["u"][e]
             if element.kind == "branch" and not abs(u) <= element.eta or element.kind != "branch" and u != 0:
                 raise ValueError(f"state's u of {element.name} ({u!r}) is outside its elastic range")

@@ -290,11 +290,12 @@ def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
 
 
 @kernel
-def _factor(a, band):
-    """In-place banded LDL^T of the symmetric a (a[c, 0] = D_c, a[c, t] = L[c, c - t]). Returns the first
-    cluster whose pivot vanishes (-1: none): the matrix is singular there (a floppy cluster)."""
+def _factor(a, band, first_row):
+    """In-place banded LDL^T of the symmetric a (a[c, 0] = D_c, a[c, t] = L[c, c - t]), from row
+    ``first_row`` on (the rows above are factored). Returns the first cluster whose pivot vanishes (-1:
+    none): the matrix is singular there (a floppy cluster); its pivot is left unset."""
     count = a.shape[0]
-    for c in range(count):
+    for c in range(first_row, count):
         diagonal = a[c, 0]
         first = max(0, c - band)
         for k in range(first, c):
@@ -533,21 +534,29 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         band = _band(kind, ends, piece, cluster)
         a, rhs = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
         diagonal = a[:, 0].copy()
-        singular = _factor(a, band)
         top = 1.0
-        if singular >= 0:
+        row = 0
+        while True:
+            singular = _factor(a, band, row)
+            if singular < 0:
+                break
+            # a floppy cluster (no mass, no stiffness along z): J is linear along the null vector z
             z = _null_vector(a, band, singular)
             slope = 0.0
+            size = 0.0
             for j in range(n):
                 if cluster[j] >= 0:
                     slope += grad[j] * z[cluster[j]]
-            if slope == 0.0:
-                return -2
-            sign = -1.0 if slope > 0.0 else 1.0
-            for j in range(n):
-                p[j] = sign * z[cluster[j]] if cluster[j] >= 0 else 0.0
-            top = np.inf
-        else:
+                    size += scale[j] * abs(z[cluster[j]])
+            if abs(slope) > ROUNDING * size:  # descend along z until a kink stops it (or nothing does)
+                sign = -1.0 if slope > 0.0 else 1.0
+                for j in range(n):
+                    p[j] = sign * z[cluster[j]] if cluster[j] >= 0 else 0.0
+                top = np.inf
+                break
+            a[singular, 0] = 1.0  # balanced along z: no move along it (the forward solve gives 0 there)
+            row = singular + 1
+        if top == 1.0:
             q = _solve(a, band, rhs)
             for j in range(n):
                 p[j] = q[cluster[j]] if cluster[j] >= 0 else 0.0
@@ -556,7 +565,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             # a step within what rounding makes of the forces (or of x + d) is no step
             converged = top == 1.0
             for j in range(n):
-                if cluster[j] >= 0:
+                if cluster[j] >= 0 and diagonal[cluster[j]] > 0.0:  # (a floppy, balanced cluster has p = 0)
                     noise = ROUNDING * (abs(x[j]) + abs(d[j]) + scale[j] / diagonal[cluster[j]])
                     if abs(p[j]) > noise:
                         converged = False
