@@ -336,6 +336,10 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
     """
     from .resources import check_memory
 
+    if _is_network(scene):  # a [network] or [chain] scene: its own driver (network/driver.py)
+        from .network.driver import simulate as simulate_network
+
+        return simulate_network(scene, stepper, states=states, energy=energy, progress=progress)
     columns = 4 + (_state_count(scene) if states else 0) + (len(energy_columns(scene)) if energy else 0)
     rows = _row_count(scene)
     check_memory(2 * rows * columns * 8, f"{scene.source}: the output ({rows:.0f} rows x {columns} columns)",
@@ -355,6 +359,10 @@ def simulate(scene: Scene, stepper: Optional[str] = None, *, states: bool = Fals
                   first.stepper, scene)
 
 
+def _is_network(scene) -> bool:
+    return type(scene).__name__ == "NetworkScene"
+
+
 def _row_count(scene: Scene) -> float:
     return scene.solver.stop_time / scene.solver.output_interval + 2
 
@@ -372,6 +380,10 @@ def simulate_chunks(scene: Scene, stepper: Optional[str] = None, *, states: bool
     """:func:`simulate` as a generator of consecutive :class:`Result` pieces of the output grid, in bounded
     memory (the first piece is the initial row). The same numbers as :func:`simulate`: step p is taken at
     t_p = p h however the run is cut. Checks everything (stepper, options) before the first piece."""
+    if _is_network(scene):
+        from .network.driver import simulate_chunks as network_chunks
+
+        return network_chunks(scene, stepper, states=states, energy=energy, progress=progress)
     solver = scene.solver
     name = stepper or solver.stepper
     loop = compile_loop(scene, name)
@@ -545,6 +557,8 @@ class Element(OutputMemo):
 
     def __init__(self, scene: Scene, stepper: Optional[str] = None, step: Optional[float] = None,
                  branch_kernel: Optional[str] = None):
+        if _is_network(scene):
+            raise ValueError(f"{scene.source}: a network scene: step it with prandtl_fmu.network.NetworkElement")
         if branch_kernel not in (None, "play", "stack"):
             raise ValueError(f"branch_kernel must be 'play', 'stack' or None, got {branch_kernel!r}")
         if branch_kernel == "play" and scene.branches is not None and scene.branches.continuum:
