@@ -1,0 +1,760 @@
+"""Networks of nodes (issue 32): the checks the issue asks for, each against mechanics written here.
+
+References are independent of the library's kernels: closed forms (the massless chain, Masing's rule), a
+backward Euler written in this file that solves each step by enumerating the sliders' states (stick, slip
+forwards, slip backwards) and keeping the one whose forces and velocities are consistent, and the one-mass
+element of the library (a different code path: prandtl_fmu.driver).
+"""
+import itertools
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.driver import ElementError
+from prandtl_fmu.driver import simulate as simulate_element
+from prandtl_fmu.network import NetworkElement, NetworkScene, simulate, simulate_chunks
+from prandtl_fmu.scene import SceneError, parse_scene
+
+
+# ------------------------------------------------------------------ scenes as TOML text
+
+def toml_value(value):
+    if isinstance(value, str):
+        return '"' + value + '"'
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        return str(int(value))
+    return repr(float(value))
+
+
+def table(header, values):
+    return "\n".join([f"[{header}]"] + [f"{k} = {toml_value(v)}" for k, v in values.items()]) + "\n"
+
+
+def network_text(nodes, mass, elements, load, solver, x0=None, v0=None, load_node=None):
+    """A [network] scene: ``elements`` is a list of (kind, {between, k, ...})."""
+    head = {"nodes": list(nodes), "mass": list(mass)}
+    if x0 is not None:
+        head["x0"] = list(x0)
+    if v0 is not None:
+        head["v0"] = list(v0)
+    if load_node is not None:
+        head["load_node"] = load_node
+    text = table("network", head)
+    for kind, values in elements:
+        text += table(f"[network.{kind}]", values)
+    return text + table("load", load) + table("solver", solver)
+
+
+def solver(step, stop_time, output_interval=None, stepper="implicit"):
+    return {"stepper": stepper, "step": step, "stop_time": stop_time,
+            "output_interval": step if output_interval is None else output_interval}
+
+
+def chain_text(n, m, k, alpha, load, solver_values, k_wall=None, c=None):
+    chain = {"n": n, "m": m, "k": k, "alpha": alpha}
+    if k_wall is not None:
+        chain["k_wall"] = k_wall
+    if c is not None:
+        chain["c"] = c
+    return table("chain", chain) + table("load", load) + table("solver", solver_values)
+
+
+def ramp(points, duration_per_unit=1.0):
+    """A table load through the forces ``points`` at times spaced by |dF| * duration_per_unit (so the force
+    changes at the same rate everywhere)."""
+    times = [0.0]
+    for a, b in zip(points[:-1], points[1:]):
+        times.append(times[-1] + abs(b - a) * duration_per_unit)
+    return {"kind": "table", "time": times, "force": list(points)}
+
+
+# ------------------------------------------------------------------ 1. the massless chain, closed forms
+
+def virgin_end(force, k, alpha):
+    """x_end(F) of a massless chain of uniform k and alpha pulled from rest: the last p = floor(F / alpha)
+    nodes slide, the spring behind the q-th of them from the end carries F - q alpha."""
+    p = np.floor(np.asarray(force) / alpha)
+    return (p * force - alpha * p * (p + 1) / 2) / k
+
+
+def massless_chain(n, k, alpha, force_max, k_wall, steps_per_second=512):
+    """Load from 0 to force_max over 1 s, down to -force_max over 2 s; output at every step (h = 1/512 s: the
+    table's corners fall on the step grid exactly)."""
+    load = {"kind": "table", "time": [0.0, 1.0, 3.0], "force": [0.0, force_max, -force_max]}
+    text = chain_text(n, 0.0, k, alpha, load, solver(1.0 / steps_per_second, 3.0), k_wall=k_wall)
+    return parse_scene(text)
+
+
+@pytest.mark.parametrize("case", ["n6", "random"])
+@pytest.mark.parametrize("wall", [True, False])
+def test_massless_chain_virgin_curve_and_masing(case, wall):
+    if case == "n6":
+        n, k, alpha = 6, 2.0, 0.5
+    else:
+        rng = np.random.default_rng(20261124 + wall)
+        n, k, alpha = int(rng.integers(3, 12)), float(rng.uniform(0.5, 5.0)), float(rng.uniform(0.1, 2.0))
+    # with the wall spring (k_wall = k) the formula holds for p <= n: F < (n + 1) alpha; free: p < n
+    force_max = (n + 0.7) * alpha if wall else (n - 0.3) * alpha
+    result = simulate(massless_chain(n, k, alpha, force_max, k if wall else None))
+    F, x_end = result.F, result.x[:, -1]
+    peak = int(np.argmax(F))
+    assert F[peak] == pytest.approx(force_max, rel=1e-12)
+    loading = slice(0, peak + 1)
+    scale = virgin_end(force_max, k, alpha)
+    np.testing.assert_allclose(x_end[loading], virgin_end(F[loading], k, alpha), rtol=0, atol=1e-12 * scale)
+    # the curve is not trivially zero: the end moved by the closed form's amount at the peak
+    assert x_end[peak] == pytest.approx(scale, rel=1e-12) and scale > 0
+    unloading = slice(peak, None)
+    masing = x_end[peak] - 2 * virgin_end((force_max - F[unloading]) / 2, k, alpha)
+    assert F[-1] == pytest.approx(-force_max, rel=1e-12)
+    np.testing.assert_allclose(x_end[unloading], masing, rtol=0, atol=1e-12 * scale)
+    # the node next to the fixed end (n1) stays put while F < n alpha (only p < n nodes slide)
+    if not wall:
+        assert np.all(result.x[:, 0] == 0.0)
+
+
+def test_massless_chain_beyond_total_friction_has_no_equilibrium():
+    n, k, alpha = 6, 2.0, 0.5
+    scene = massless_chain(n, k, alpha, (n + 0.5) * alpha, None)
+    with pytest.raises(ElementError, match="no equilibrium") as info:
+        simulate(scene)
+    assert "\n" not in str(info.value)
+    # the refusal comes where F first exceeds n alpha, not earlier: just below it the run goes through
+    below = massless_chain(n, k, alpha, (n - 0.01) * alpha, None)
+    assert np.isfinite(simulate(below).x).all()
+
+
+# ------------------------------------------------------------------ 2. an independent backward Euler
+
+class BruteForceEuler:
+    """Backward Euler for nodes with masses m (all > 0), springs (linear) and sliders, the load F on one node:
+
+        m (w - v) / h = F(t + h) e_L - K (x + h w) - sum_s g_s f_s,   f_s in alpha_s Sign(g_s . w),
+
+    with w the new velocities, g_s the incidence row of slider s (e_i - e_j, or e_i to the ground). Each step
+    tries the sliders' states (stuck: g_s . w = 0 and f_s unknown; slipping: f_s = +-alpha_s) and keeps the
+    one that is consistent (|f_s| <= alpha_s, sign(g_s . w) = the slip's sign): the KKT point of a strictly
+    convex problem, hence the step. The previous step's states are tried first (the answer is unique)."""
+
+    def __init__(self, mass, springs, sliders, load_node, force):
+        self.m = np.asarray(mass, float)
+        n = self.n = len(mass)
+        self.K = np.zeros((n, n))
+        for i, j, k in springs:
+            g = self.row(i, j)
+            self.K += k * np.outer(g, g)
+        self.G = np.array([self.row(i, j) for i, j, _ in sliders]).reshape(len(sliders), n)
+        self.alpha = np.array([a for _, _, a in sliders], float)
+        self.load_node = load_node
+        self.force = force
+        self.states = (0,) * len(sliders)
+
+    def row(self, i, j):
+        g = np.zeros(self.n)
+        g[i] += 1.0
+        if j is not None:
+            g[j] -= 1.0
+        return g
+
+    def solve(self, states, A, b):
+        stuck = [s for s, state in enumerate(states) if state == 0]
+        rhs = b - sum((state * self.alpha[s] * self.G[s] for s, state in enumerate(states) if state), np.zeros(self.n))
+        size = self.n + len(stuck)
+        system = np.zeros((size, size))
+        system[:self.n, :self.n] = A
+        for c, s in enumerate(stuck):
+            system[:self.n, self.n + c] = self.G[s]
+            system[self.n + c, :self.n] = self.G[s]
+        solution = np.linalg.solve(system, np.concatenate([rhs, np.zeros(len(stuck))]))
+        w = solution[:self.n]
+        scale = np.abs(b).max() + self.alpha.max() + 1e-300
+        for c, s in enumerate(stuck):
+            if abs(solution[self.n + c]) > self.alpha[s] + 1e-10 * scale:
+                return None
+        rate_scale = 1e-10 * (np.abs(w).max() + 1e-300)
+        for s, state in enumerate(states):
+            if state and state * (self.G[s] @ w) < -rate_scale:
+                return None
+        return w
+
+    def step(self, t, h, x, v):
+        A = np.diag(self.m / h) + h * self.K
+        b = self.m * v / h - self.K @ x
+        b[self.load_node] += self.force(t + h)
+        candidates = itertools.chain([self.states], itertools.product((0, 1, -1), repeat=len(self.alpha)))
+        for states in candidates:
+            w = self.solve(states, A, b)
+            if w is not None:
+                self.states = states
+                return x + h * w, w
+        raise AssertionError(f"no consistent slider state at t = {t + h}")
+
+    def run(self, x0, v0, h, steps):
+        x, v = np.array(x0, float), np.array(v0, float)
+        xs, vs = [x], [v]
+        for p in range(steps):
+            x, v = self.step(p * h, h, x, v)
+            xs.append(x)
+            vs.append(v)
+        return np.array(xs), np.array(vs)
+
+
+HARMONIC = {"kind": "harmonic", "amplitude": 1.0, "omega": 1.3, "offset": 0.2}
+
+
+def harmonic(t):
+    return HARMONIC["offset"] + HARMONIC["amplitude"] * math.cos(HARMONIC["omega"] * t)
+
+
+def two_masses(h, stop=5.0, output=None):
+    """Masses a, b joined by a slider, each on a spring to the ground, the load on b."""
+    text = network_text(
+        ["a", "b"], [1.0, 0.5],
+        [("spring", {"between": ["a", "ground"], "k": 4.0}), ("spring", {"between": ["b", "ground"], "k": 2.0}),
+         ("slider", {"between": ["a", "b"], "alpha": 0.6})],
+        HARMONIC, solver(h, stop, output), x0=[0.1, -0.2], v0=[0.5, -0.2])
+    reference = BruteForceEuler([1.0, 0.5], [(0, None, 4.0), (1, None, 2.0)], [(0, 1, 0.6)], 1, harmonic)
+    return parse_scene(text), reference
+
+
+def test_two_masses_and_a_slider_against_brute_force_backward_euler():
+    h, stop = 0.005, 5.0
+    scene, reference = two_masses(h, stop)
+    result = simulate(scene)
+    x, v = reference.run([0.1, -0.2], [0.5, -0.2], h, round(stop / h))
+    # the slider both sticks and slips in this run (else the test would not test the slider)
+    rate = v[:, 0] - v[:, 1]
+    assert np.sum(rate == 0) > 10 and np.sum(rate != 0) > 10
+    scale = np.abs(x).max()
+    np.testing.assert_allclose(result.x, x, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(result.v, v, rtol=0, atol=1e-11 * np.abs(v).max())
+
+
+def test_two_masses_order_one_in_h():
+    stop, output = 4.0, 0.05
+    fine = simulate(two_masses(0.05 / 2 ** 12, stop, output)[0]).x
+    steps = [0.05 / 2 ** j for j in range(2, 7)]
+    errors = [np.abs(simulate(two_masses(h, stop, output)[0]).x - fine).max() for h in steps]
+    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert 0.85 < slope < 1.15, (errors, slope)
+    assert np.all((ratios > 1.5) & (ratios < 2.6)), ratios
+
+
+def test_chain_with_masses_against_brute_force_backward_euler():
+    n, h, stop = 4, 0.005, 6.0
+    m, k, alpha, k_wall = [1.0, 0.7, 1.2, 0.9], [3.0, 2.0, 4.0], [0.2, 0.3, 0.25, 0.4], 2.0
+    load = {"kind": "harmonic", "amplitude": 1.0, "omega": 1.1, "offset": 0.0}
+    result = simulate(parse_scene(chain_text(n, m, k, alpha, load, solver(h, stop), k_wall=k_wall)))
+    springs = [(0, None, k_wall)] + [(i, i + 1, k[i]) for i in range(n - 1)]
+    sliders = [(i, None, alpha[i]) for i in range(n)]
+    reference = BruteForceEuler(m, springs, sliders, n - 1, lambda t: math.cos(1.1 * t))
+    x, v = reference.run(np.zeros(n), np.zeros(n), h, round(stop / h))
+    # every node both sticks and slips (the solve of the reference leaves 1e-30 where a node is held)
+    for i in range(n):
+        held = np.abs(v[:, i]) < 1e-12 * np.abs(v).max()
+        assert np.sum(held) > 10 and np.sum(~held) > 10
+    np.testing.assert_allclose(result.x, x, rtol=0, atol=1e-12 * np.abs(x).max())
+    np.testing.assert_allclose(result.v, v, rtol=0, atol=1e-11 * np.abs(v).max())
+
+
+# ------------------------------------------------------------------ 3. one node is the element
+
+BRANCHES = {"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "u0": [0.05, -0.1, 0.0]}
+ELEMENT_LOAD = {"kind": "harmonic", "amplitude": 0.8, "omega": 0.7, "offset": 0.1}
+ONE_NODE_CASES = {
+    # name: (element tables, whether a mass, extra network elements)
+    "branches": {"mass": True, "spring": 0.2},
+    "series_dashpots": {"mass": True, "spring": 0.2, "c": [0.4, 1.5, 3.0]},
+    "slider": {"mass": True, "spring": 0.2, "friction": 0.5},
+    "cubic": {"mass": True, "spring": 0.2, "cubic": 0.3},
+    "damper": {"mass": True, "spring": 0.2, "damper": 0.05},
+    "massless": {"mass": False, "spring": 0.2},
+    "massless_dashpot": {"mass": False, "spring": 0.2, "damper": 0.5},
+    "massless_series": {"mass": False, "spring": 0.0, "c": [0.4, 1.5, 3.0], "cubic": 0.3},
+}
+
+
+def one_node_scenes(case, stepper, h=2e-3, stop=12.0, output=0.02):
+    spec = ONE_NODE_CASES[case]
+    element = ""
+    elements = [("spring", {"between": ["a", "ground"], "k": spec["spring"]})]
+    if spec["mass"]:
+        element += table("mass", {"m": 1.3, "x0": 0.05, "v0": 0.2})
+    element += table("spring", {"k0": spec["spring"]})
+    branches = dict(BRANCHES)
+    if "c" in spec:
+        branches["c"] = spec["c"]
+    element += table("branches", branches)
+    for i in range(3):
+        values = {"between": ["a", "ground"], "k": BRANCHES["k"][i], "eta": BRANCHES["eta"][i],
+                  "u0": BRANCHES["u0"][i]}
+        if "c" in spec:
+            values["c"] = spec["c"][i]
+        elements.append(("branch", values))
+    if "cubic" in spec:
+        element += table("cubic", {"k3": spec["cubic"]})
+        elements.append(("cubic", {"between": ["a", "ground"], "k3": spec["cubic"]}))
+    if "damper" in spec:
+        element += table("damper", {"c": spec["damper"]})
+        elements.append(("dashpot", {"between": ["a", "ground"], "c": spec["damper"]}))
+    if "friction" in spec:
+        # alpha_kinetic = alpha (its default): Coulomb's law, the network's slider
+        element += table("friction", {"alpha": spec["friction"], "alpha_kinetic": spec["friction"]})
+        elements.append(("slider", {"between": ["a", "ground"], "alpha": spec["friction"]}))
+    settings = solver(h, stop, output, stepper)
+    element += table("load", ELEMENT_LOAD) + table("solver", settings)
+    network = network_text(["a"], [1.3 if spec["mass"] else 0.0], elements, ELEMENT_LOAD, settings,
+                           x0=[0.05] if spec["mass"] else None, v0=[0.2] if spec["mass"] else None)
+    return parse_scene(element), parse_scene(network)
+
+
+ONE_NODE_RUNS = [(case, "implicit") for case in ONE_NODE_CASES] + [
+    (case, "projected") for case, spec in ONE_NODE_CASES.items() if spec["mass"] and "friction" not in spec]
+
+
+@pytest.mark.parametrize("case,stepper", ONE_NODE_RUNS)
+def test_one_node_network_is_the_element(case, stepper):
+    element_scene, network_scene = one_node_scenes(case, stepper)
+    assert isinstance(network_scene, NetworkScene) and not isinstance(element_scene, NetworkScene)
+    element = simulate_element(element_scene, stepper)
+    network = simulate(network_scene, stepper)
+    np.testing.assert_array_equal(network.time, element.time)
+    x_scale = np.abs(element.x).max()
+    assert x_scale > 0.1  # a run that moves
+    np.testing.assert_allclose(network.x[:, 0], element.x, rtol=0, atol=1e-12 * x_scale)
+    # v and the reaction from the first step on (the initial row of a massless node with a dashpot is
+    # test_massless_dashpot_node_at_time_zero's)
+    np.testing.assert_allclose(network.v[1:, 0], element.v[1:], rtol=0,
+                               atol=1e-12 * (np.abs(element.v).max() + x_scale))
+    if case != "slider":
+        # With a slider the reaction differs where the mass sticks: the element reports the static friction
+        # (F minus the other forces), the network the implicit step's friction force. x and v only there.
+        np.testing.assert_allclose(network.reaction[1:], element.reaction[1:], rtol=0,
+                                   atol=1e-12 * np.abs(element.reaction).max())
+    else:
+        assert np.any(element.v == 0) and np.any(element.v != 0)  # the mass both sticks and slides
+
+
+@pytest.mark.parametrize("dashpot", [False, True])
+def test_massless_dashpot_node_at_time_zero(dashpot):
+    """A massless network holds the whole load at every instant: the reaction on the ground is F, and with a
+    dashpot c to the ground the node moves at once with c v = F - (its springs' and branches' forces)."""
+    case = "massless_dashpot" if dashpot else "massless"
+    element_scene, network_scene = one_node_scenes(case, "implicit")
+    network = simulate(network_scene)
+    np.testing.assert_allclose(network.reaction, network.F, rtol=0, atol=1e-12 * np.abs(network.F).max())
+    if dashpot:
+        c = ONE_NODE_CASES[case]["damper"]
+        F0 = ELEMENT_LOAD["offset"] + ELEMENT_LOAD["amplitude"]
+        held_by_branches = sum(k * u for k, u in zip(BRANCHES["k"], BRANCHES["u0"]))  # x(0) = 0: no spring force
+        assert network.x[0, 0] == 0.0
+        assert network.v[0, 0] == pytest.approx((F0 - held_by_branches) / c, rel=1e-12)
+        assert simulate_element(element_scene, "implicit").v[0] == pytest.approx((F0 - held_by_branches) / c,
+                                                                                 rel=1e-12)
+
+
+def test_cubic_spring_step_solves_backward_euler():
+    """Mass, spring and cubic spring to the ground: each implicit step is backward Euler,
+    m (v1 - v0) / h = F(t1) - k x1 - k3 x1^3 with x1 = x0 + h v1, to the rounding of its terms."""
+    m, k, k3, h = 1.3, 0.2, 0.3, 2e-3
+    elements = [("spring", {"between": ["a", "ground"], "k": k}), ("cubic", {"between": ["a", "ground"], "k3": k3})]
+    result = simulate(parse_scene(network_text(["a"], [m], elements, ELEMENT_LOAD, solver(h, 12.0), x0=[0.05],
+                                               v0=[0.2])))
+    x, v, t = result.x[:, 0], result.v[:, 0], result.time
+    F = ELEMENT_LOAD["offset"] + ELEMENT_LOAD["amplitude"] * np.cos(ELEMENT_LOAD["omega"] * t[1:])
+    inertia = m * (v[1:] - v[:-1]) / h
+    spring = k * x[1:] + k3 * x[1:] ** 3
+    residual = inertia - (F - spring)
+    # the rounding of the terms: m v / h (about 1e3 N here) times a few eps
+    terms = m * (np.abs(v[1:]) + np.abs(v[:-1])) / h + np.abs(F) + np.abs(spring)
+    assert np.abs(x).max() > 1.0  # the cubic spring matters
+    worst = int(np.argmax(np.abs(residual) / terms))
+    assert np.all(np.abs(residual) <= 1e-13 * terms), (worst, t[worst + 1], residual[worst], terms[worst])
+    np.testing.assert_allclose(x[1:] - x[:-1], h * v[1:], rtol=0, atol=1e-15 * np.abs(x).max())
+
+
+# ------------------------------------------------------------------ 4. energy
+
+def energy_scene(h, stop=6.0, output=None, slider=True, stepper="implicit"):
+    """Three masses: springs, a cubic spring, a dashpot, a branch with a series dashpot, sliders."""
+    elements = [
+        ("spring", {"between": ["a", "ground"], "k": 3.0}),
+        ("spring", {"between": ["a", "b"], "k": 2.0}),
+        ("cubic", {"between": ["b", "c"], "k3": 1.5}),
+        ("spring", {"between": ["b", "c"], "k": 1.0}),
+        ("dashpot", {"between": ["c", "ground"], "c": 0.2, "name": "damp_c"}),
+        ("branch", {"between": ["b", "ground"], "k": 1.5, "eta": 0.05, "c": 2.0, "name": "br_b"}),
+        ("branch", {"between": ["c", "a"], "k": 0.8, "eta": 0.1, "name": "br_ca"}),
+    ]
+    if slider:
+        elements += [("slider", {"between": ["a", "b"], "alpha": 0.2, "name": "slip_ab"}),
+                     ("slider", {"between": ["c", "ground"], "alpha": 0.15, "name": "slip_c"})]
+    load = {"kind": "harmonic", "amplitude": 1.5, "omega": 1.7, "offset": 0.0}
+    return parse_scene(network_text(["a", "b", "c"], [1.0, 0.6, 0.8], elements, load,
+                                    solver(h, stop, output, stepper), v0=[0.0, 0.3, -0.2]))
+
+
+def test_energy_account_dissipation_and_the_sign_of_the_residual():
+    h = 2e-3
+    scene = energy_scene(h)
+    result = simulate(scene, states=True, energy=True)
+    cols = result.columns()
+    dissipations = [name for name in result.names if name.startswith("dissipated_") and name.count("_") >= 2
+                    and name not in ("dissipated_sliders", "dissipated_damper")]
+    assert set(dissipations) == {"dissipated_dashpot_damp_c", "dissipated_branch_br_b", "dissipated_branch_br_ca",
+                                 "dissipated_slider_slip_ab", "dissipated_slider_slip_c"}
+    for name in dissipations + ["dissipated_sliders", "dissipated_damper"]:
+        assert np.all(np.diff(cols[name]) >= 0), name
+        assert cols[name][-1] > 0, name  # every element dissipated something in this run
+    total = sum(cols[name] for name in dissipations)
+    np.testing.assert_allclose(total, cols["dissipated_sliders"] + cols["dissipated_damper"], rtol=1e-12,
+                               atol=1e-14)
+    work = cols["work"]
+    scale = np.abs(work).max()
+    assert scale > 0.1
+    # implicit Euler only dissipates: the residual (numerical dissipation) is never negative
+    assert np.all(cols["energy_residual"] >= -1e-12 * scale)
+    assert cols["energy_residual"][-1] > 0
+
+
+def test_energy_dissipation_is_the_physics_of_each_element():
+    """With a row every step: a slider dissipates alpha |slip| per step, a dashpot c (delta)^2 / h, and the load
+    does F(t + h) times the step of its node (the implicit step's work)."""
+    h = 2e-3
+    result = simulate(energy_scene(h, stop=3.0), energy=True)
+    x, cols = result.x, result.columns()
+    a, b, c = x[:, 0], x[:, 1], x[:, 2]
+    slip_ab = 0.2 * np.cumsum(np.abs(np.diff(a - b)))
+    slip_c = 0.15 * np.cumsum(np.abs(np.diff(c)))
+    dashpot = 0.2 * np.cumsum(np.diff(c) ** 2 / h)
+    work = np.cumsum(result.F[1:] * np.diff(c))
+    for name, expected in [("dissipated_slider_slip_ab", slip_ab), ("dissipated_slider_slip_c", slip_c),
+                           ("dissipated_dashpot_damp_c", dashpot), ("work", work)]:
+        got = cols[name][1:]
+        np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max(), err_msg=name)
+
+
+def test_energy_residual_goes_to_zero_like_h():
+    """A smooth dynamic scene (no slider, branches elastic: eta large) so that the scheme's own dissipation
+    is O(h) over a fixed time."""
+    residuals = []
+    steps = [4e-3, 2e-3, 1e-3, 5e-4]
+    for h in steps:
+        text = network_text(
+            ["a", "b"], [1.0, 0.5],
+            [("spring", {"between": ["a", "ground"], "k": 3.0}), ("spring", {"between": ["a", "b"], "k": 2.0}),
+             ("dashpot", {"between": ["b", "ground"], "c": 0.1}),
+             ("branch", {"between": ["b", "ground"], "k": 1.0, "eta": 100.0, "c": 3.0})],
+            {"kind": "harmonic", "amplitude": 1.0, "omega": 1.3, "offset": 0.0}, solver(h, 4.0, 0.1),
+            v0=[0.5, 0.0])
+        cols = simulate(parse_scene(text), energy=True).columns()
+        residuals.append(cols["energy_residual"][-1])
+        assert np.all(cols["energy_residual"] >= -1e-12 * np.abs(cols["work"]).max())
+    ratios = np.array(residuals[:-1]) / np.array(residuals[1:])
+    assert residuals[-1] > 0
+    np.testing.assert_allclose(ratios, 2.0, rtol=0.1)
+
+
+# ------------------------------------------------------------------ 5. rate independence
+
+def test_massless_network_is_rate_independent():
+    """Same load path twice as fast with the same number of steps per unit of force: x(F) the same."""
+    elements = [
+        ("spring", {"between": ["a", "ground"], "k": 2.0}),
+        ("branch", {"between": ["a", "b"], "k": 1.0, "eta": 0.3}),
+        ("cubic", {"between": ["a", "b"], "k3": 0.5}),
+        ("slider", {"between": ["b", "ground"], "alpha": 0.4}),
+        ("branch", {"between": ["b", "ground"], "k": 0.7, "eta": 0.5}),
+        ("spring", {"between": ["c", "b"], "k": 1.5}),
+        ("slider", {"between": ["c", "ground"], "alpha": 0.2}),
+    ]
+    points = [0.0, 1.5, -1.0, 2.0, 0.3]
+    runs = []
+    for rate in (1.0, 2.0):
+        load = ramp(points, 1.0 / rate)
+        h = 0.005 / rate
+        text = network_text(["a", "b", "c"], [0.0, 0.0, 0.0], elements, load, solver(h, load["time"][-1]))
+        runs.append(simulate(parse_scene(text)))
+    slow, fast = runs
+    assert slow.x.shape == fast.x.shape
+    np.testing.assert_allclose(fast.F, slow.F, rtol=0, atol=1e-13)
+    scale = np.abs(slow.x).max()
+    assert scale > 0.5
+    np.testing.assert_allclose(fast.x, slow.x, rtol=0, atol=1e-13 * scale)
+    np.testing.assert_allclose(fast.reaction, slow.reaction, rtol=0, atol=1e-13 * np.abs(slow.reaction).max())
+
+
+# ------------------------------------------------------------------ 6. refusals
+
+SIMPLE_LOAD = {"kind": "constant", "value": 1.0}
+SIMPLE_SOLVER = solver(0.01, 1.0, 0.1)
+
+
+def refused(text, *culprits):
+    with pytest.raises(SceneError) as info:
+        parse_scene(text)
+    message = str(info.value)
+    assert "\n" not in message and message.strip()
+    for culprit in culprits:
+        assert culprit in message, (culprit, message)
+    return message
+
+
+def test_refuses_a_node_with_no_path_to_the_load_or_ground():
+    text = network_text(["a", "lost", "other"], [1.0, 1.0, 1.0],
+                        [("spring", {"between": ["a", "ground"], "k": 1.0}),
+                         ("spring", {"between": ["lost", "other"], "k": 1.0})],
+                        SIMPLE_LOAD, SIMPLE_SOLVER, load_node="a")
+    refused(text, "lost")
+
+
+def test_refuses_a_massless_node_held_by_sliders_alone():
+    text = network_text(["a", "floater"], [1.0, 0.0],
+                        [("spring", {"between": ["a", "ground"], "k": 1.0}),
+                         ("slider", {"between": ["floater", "ground"], "alpha": 1.0}),
+                         ("slider", {"between": ["floater", "a"], "alpha": 1.0})],
+                        SIMPLE_LOAD, SIMPLE_SOLVER, load_node="a")
+    refused(text, "floater", "slider")
+
+
+def test_refuses_an_element_between_a_node_and_itself():
+    text = network_text(["a", "b"], [1.0, 1.0],
+                        [("spring", {"between": ["a", "ground"], "k": 1.0}),
+                         ("spring", {"between": ["b", "a"], "k": 1.0}),
+                         ("dashpot", {"between": ["b", "b"], "c": 1.0})],
+                        SIMPLE_LOAD, SIMPLE_SOLVER)
+    refused(text, "'b'", "itself")
+
+
+def test_refuses_ground_as_a_node_name():
+    text = network_text(["a", "ground"], [1.0, 1.0], [("spring", {"between": ["a", "ground"], "k": 1.0})],
+                        SIMPLE_LOAD, SIMPLE_SOLVER)
+    refused(text, "ground", "reserved")
+
+
+@pytest.mark.parametrize("where", ["top", "network", "element", "chain"])
+def test_refuses_an_unknown_key(where):
+    if where == "chain":
+        text = table("chain", {"n": 3, "m": 1.0, "k": 1.0, "alpha": 0.1, "stiffness": 2.0}) + table(
+            "solver", SIMPLE_SOLVER)
+        refused(text, "stiffness")
+        return
+    text = network_text(["a"], [1.0], [("spring", {"between": ["a", "ground"], "k": 1.0, **(
+        {"stiffnes": 2.0} if where == "element" else {})})], SIMPLE_LOAD, SIMPLE_SOLVER)
+    if where == "network":
+        text = text.replace("[network]\n", "[network]\nmasses = [1.0]\n")
+        refused(text, "masses")
+    elif where == "top":
+        refused("colour = 3\n" + text, "colour")
+    else:
+        refused(text, "stiffnes")
+
+
+def test_refuses_network_with_an_element_table():
+    text = network_text(["a"], [1.0], [("spring", {"between": ["a", "ground"], "k": 1.0})], SIMPLE_LOAD,
+                        SIMPLE_SOLVER) + table("mass", {"m": 1.0})
+    refused(text, "[mass]")
+    text = table("chain", {"n": 3, "m": 1.0, "k": 1.0, "alpha": 0.1}) + table("solver", SIMPLE_SOLVER)
+    text += table("network", {"nodes": ["a"], "mass": [1.0]})
+    refused(text, "[chain]", "[network]")
+
+
+@pytest.mark.parametrize("stepper,case,culprit", [
+    ("exact", "plain", "exact"),
+    ("symplectic", "plain", "symplectic"),
+    ("projected", "slider", "(slider_1)"),
+    ("projected", "massless", "b is massless"),
+])
+def test_refuses_a_stepper_that_does_not_apply(stepper, case, culprit):
+    elements = [("spring", {"between": ["a", "ground"], "k": 1.0}), ("spring", {"between": ["a", "b"], "k": 1.0})]
+    if case == "slider":
+        elements.append(("slider", {"between": ["b", "ground"], "alpha": 0.5}))
+    mass = [1.0, 0.0 if case == "massless" else 1.0]
+    text = network_text(["a", "b"], mass, elements, SIMPLE_LOAD, solver(0.01, 1.0, 0.1, stepper))
+    message = refused(text, culprit, "stepper")
+    assert "'implicit'" in message
+    # the same network with the implicit stepper is accepted and runs
+    good = parse_scene(text.replace(f'stepper = "{stepper}"', 'stepper = "implicit"'))
+    assert np.isfinite(simulate(good).x).all()
+
+
+# ------------------------------------------------------------------ 7. the CSV contract, parameter names
+
+def test_columns_and_parameter_names_of_a_chain():
+    scene = parse_scene(chain_text(4, [1.0, 0.0, 2.0, 0.5], [1.0, 2.0, 3.0], [0.1, 0.2, 0.3, 0.4],
+                                   SIMPLE_LOAD, SIMPLE_SOLVER, k_wall=5.0, c=[0.5, 0.6, 0.7, 0.8]))
+    nodes = [f"n{i}" for i in range(1, 5)]
+    assert list(scene.network.nodes) == nodes
+    result = simulate(scene)
+    expected = ["time"] + [f"{axis}_{node}" for node in nodes for axis in ("x", "v")] + ["F", "reaction"]
+    assert result.names == expected
+    assert result.table.shape == (11, len(expected))
+    assert list(result.columns()) == expected
+    np.testing.assert_array_equal(result.x, result.table[:, [1, 3, 5, 7]])
+    np.testing.assert_array_equal(result.v, result.table[:, [2, 4, 6, 8]])
+    np.testing.assert_array_equal(result.F, 1.0)
+    parameters = scene.network.parameters()
+    expected_parameters = {"m_n1": 1.0, "m_n2": 0.0, "m_n3": 2.0, "m_n4": 0.5, "k_wall": 5.0,
+                           "k_spring_1": 1.0, "k_spring_2": 2.0, "k_spring_3": 3.0,
+                           "alpha_n1": 0.1, "alpha_n2": 0.2, "alpha_n3": 0.3, "alpha_n4": 0.4,
+                           "c_n1": 0.5, "c_n2": 0.6, "c_n3": 0.7, "c_n4": 0.8}
+    assert parameters == expected_parameters
+
+
+def test_columns_with_states_and_energy_and_the_reaction():
+    scene = energy_scene(0.01, stop=0.5, output=0.1)
+    result = simulate(scene, states=True, energy=True)
+    base = ["time", "x_a", "v_a", "x_b", "v_b", "x_c", "v_c", "F", "reaction"]
+    energy = ["kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+              "energy_residual"]
+    # the elements' own columns come by kind (spring, dashpot, slider, branch, cubic), in the scene's order
+    per_element = ["dissipated_dashpot_damp_c", "dissipated_slider_slip_ab", "dissipated_slider_slip_c",
+                   "dissipated_branch_br_b", "dissipated_branch_br_ca"]
+    assert result.names == base + ["u_br_b", "u_br_ca"] + energy + per_element
+    assert np.all(np.abs(result.column("u_br_b")) <= 0.05) and np.all(np.abs(result.column("u_br_ca")) <= 0.1)
+    # the reaction of a network without sliders to the ground, from the state: spring a and the branch on b,
+    # the dashpot on c at the step's velocity
+    text = network_text(["a", "b"], [1.0, 0.5],
+                        [("spring", {"between": ["a", "ground"], "k": 3.0}), ("spring", {"between": ["a", "b"], "k": 2.0}),
+                         ("dashpot", {"between": ["b", "ground"], "c": 0.4}),
+                         ("branch", {"between": ["ground", "b"], "k": 1.0, "eta": 0.2, "u0": 0.1})],
+                        HARMONIC, solver(0.01, 3.0, 0.01), v0=[0.5, 0.0])
+    run = simulate(parse_scene(text), states=True)
+    u = run.column("u_branch_1")
+    # between = [ground, b]: u counts from b to the ground, u0 = 0.1 was given ground-first (x_ground - x_b)
+    assert u[0] == pytest.approx(-0.1)
+    expected = 3.0 * run.x[:, 0] + 0.4 * run.v[:, 1] + 1.0 * u
+    np.testing.assert_allclose(run.reaction, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
+# ------------------------------------------------------------------ 8. output grid, chunks
+
+def test_output_interval_and_chunks_do_not_change_the_numbers():
+    h = 0.002
+    every = simulate(energy_scene(h, stop=4.0, output=h))
+    tenth = simulate(energy_scene(h, stop=4.0, output=10 * h))
+    np.testing.assert_array_equal(every.table[::10], tenth.table)
+    scene = energy_scene(h, stop=4.0, output=h)
+    whole = simulate(scene, states=True, energy=True)
+    chunks = list(simulate_chunks(scene, states=True, energy=True))
+    assert len(chunks) >= 2
+    np.testing.assert_array_equal(np.concatenate([c.table for c in chunks]), whole.table)
+    # a stop time off the grid: the last row is the state at stop_time, the others unchanged
+    odd = simulate(energy_scene(h, stop=4.0 - h, output=10 * h))
+    np.testing.assert_array_equal(odd.table[:-1], tenth.table[:-1])
+    assert odd.time[-1] == pytest.approx(4.0 - h)
+    np.testing.assert_array_equal(odd.x[-1], every.x[-2])
+
+
+# ------------------------------------------------------------------ 9. the stepped object
+
+def stepped_scene(h=0.002, stop=2.0, value=0.7):
+    elements = [
+        ("spring", {"between": ["a", "ground"], "k": 3.0}),
+        ("spring", {"between": ["a", "b"], "k": 2.0}),
+        ("slider", {"between": ["b", "ground"], "alpha": 0.3}),
+        ("branch", {"between": ["a", "b"], "k": 1.0, "eta": 0.1, "c": 2.0}),
+        ("dashpot", {"between": ["b", "ground"], "c": 0.1}),
+    ]
+    return parse_scene(network_text(["a", "b"], [1.0, 0.5], elements, {"kind": "constant", "value": value},
+                                    solver(h, stop, 10 * h), v0=[0.3, 0.0]))
+
+
+@pytest.mark.parametrize("scene_load", [True, False])
+def test_network_element_advances_as_simulate(scene_load):
+    h = 0.002
+    scene = stepped_scene(h)
+    rows = simulate(scene)
+    element = NetworkElement(scene)
+    xs, vs = [element.x.copy()], [element.v.copy()]
+    for _ in range(rows.table.shape[0] - 1):
+        if scene_load:
+            element.advance(10 * h, 0.0, scene_load=True)
+        else:
+            element.advance(10 * h, 0.7)
+        xs.append(element.x.copy())
+        vs.append(element.v.copy())
+    assert element.time == pytest.approx(rows.time[-1])
+    np.testing.assert_allclose(np.array(xs), rows.x, rtol=0, atol=1e-14 * np.abs(rows.x).max())
+    np.testing.assert_allclose(np.array(vs), rows.v, rtol=0, atol=1e-14 * np.abs(rows.v).max())
+    assert element.reaction == pytest.approx(rows.reaction[-1], rel=1e-12)
+
+
+def test_network_element_state_round_trip_and_forged_states():
+    h = 0.002
+    scene = stepped_scene(h)
+    first = NetworkElement(scene)
+    for _ in range(30):
+        first.advance(10 * h, 0.7)
+    state = first.get_state()
+    later = []
+    for _ in range(30):
+        first.advance(10 * h, 0.7)
+        later.append(np.concatenate([first.x, first.v, first.u]))
+    second = NetworkElement(scene)
+    second.set_state(state)
+    assert second.time == pytest.approx(state["time"])
+    for expected in later:
+        second.advance(10 * h, 0.7)
+        np.testing.assert_array_equal(np.concatenate([second.x, second.v, second.u]), expected)
+    assert second.energy() == first.energy()
+
+    # forged states are refused whole, and the element is left as it was
+    before = second.get_state()
+    branch = [e.kind for e in scene.network.elements].index("branch")
+    eta = scene.network.elements[branch].eta
+    forgeries = {
+        "x too short": dict(state, x=state["x"][:1]),
+        "v NaN": dict(state, v=[float("nan"), 0.0]),
+        "u beyond eta": dict(state, u=[1.5 * eta if e == branch else 0.0 for e in range(len(state["u"]))]),
+        "u of a spring": dict(state, u=[0.01] + state["u"][1:]),
+        "no x": {key: value for key, value in state.items() if key != "x"},
+    }
+    for what, forged in forgeries.items():
+        with pytest.raises(ValueError) as info:
+            second.set_state(forged)
+        assert "\n" not in str(info.value), what
+        after = second.get_state()
+        assert after == before, what
+    # and it continues as before
+    second.advance(10 * h, 0.7)
+    first_again = NetworkElement(scene)
+    first_again.set_state(before)
+    first_again.advance(10 * h, 0.7)
+    np.testing.assert_array_equal(second.x, first_again.x)
+
+
+# ------------------------------------------------------------------ 6 bis. the CLI
+
+def test_cli_runs_a_network_and_refuses_with_one_line(tmp_path):
+    path = tmp_path / "chain.toml"
+    path.write_text(chain_text(3, 1.0, 2.0, 0.1, SIMPLE_LOAD, solver(0.01, 0.5, 0.1), k_wall=1.0))
+    out = tmp_path / "out.csv"
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "run", str(path), "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time,x_n1,v_n1,x_n2,v_n2,x_n3,v_n3,F,reaction"
+    table_read = np.loadtxt(out, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table_read, simulate(parse_scene(path.read_text())).table)
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text(network_text(["a", "a_b"], [1.0, 0.0],
+                                [("spring", {"between": ["a", "ground"], "k": 1.0}),
+                                 ("slider", {"between": ["a_b", "ground"], "alpha": 1.0}),
+                                 ("slider", {"between": ["a_b", "a"], "alpha": 1.0})],
+                                SIMPLE_LOAD, SIMPLE_SOLVER, load_node="a"))
+    beyond = tmp_path / "beyond.toml"
+    beyond.write_text(chain_text(3, 0.0, 2.0, 0.1, ramp([0.0, 0.5]), solver(0.01, 0.5, 0.1)))
+    for path, culprit in [(bad, "a_b"), (beyond, "no equilibrium")]:
+        done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "run", str(path), "--out",
+                               str(tmp_path / "x.csv")], capture_output=True, text=True, timeout=300)
+        assert done.returncode == 2, done.stderr
+        assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+        assert "Traceback" not in done.stderr and culprit in done.stderr
