@@ -226,7 +226,8 @@ def simulate_chunks(scene: NetworkScene, stepper: Optional[str] = None, *, state
 
     network = scene.network
     width = len(columns_of(scene, states, energy))
-    check_memory(8.0 * width * 64 + 200.0 * (network.n + len(network.elements)),
+    # the model and the workspace (about 20 numbers per node and element) and a few output rows
+    check_memory(8.0 * (4 * width + 20 * (network.n + len(network.elements))),
                  f"{scene.source}: a network of {network.n} nodes and {len(network.elements)} elements")
     return _chunks(scene, name, states, energy, progress)
 
