@@ -31,7 +31,6 @@ typedef struct {
     double force;        /* the load of the last advance (plus the scene's [load] with scene_load); CONNECTOR: the
                             force of the elements on the load's node (NetworkConnector.force) */
     int scene_load;
-    double sample_x, sample_v; /* CONNECTOR: the input sample committed last */
 } Element;
 
 /* the workspace of a step (kernels.workspace's arrays): scratch, not state */
@@ -49,7 +48,7 @@ typedef struct {
     uint32_t version, size;
     char digest[65];
     Element element;
-    double F, x_in, v_in, step, start_time, par[N_PARAMS];
+    double F, x_in, v_in, step, start_time, time, par[N_PARAMS];
     int scene_load, stepper_valid, initialized;
     char stepper[32];
     uint64_t checksum;
@@ -63,13 +62,15 @@ typedef struct {
     Element el;
     /* what the master set */
     double F, x_in, v_in, step, start_time, par[N_PARAMS];
+    double time;       /* CONNECTOR: the communication point, the time of the inputs set now */
     int scene_load, initialized;
     char stepper[32];
     int stepper_valid; /* the string fitted in the buffer */
     int handed;        /* the settings were handed over and nothing changed since */
     Element saved;     /* core_do_step's checkpoint */
-    Element preview;   /* CONNECTOR: the outputs' state, the committed one moved to the inputs set last */
+    Element preview;   /* CONNECTOR: the outputs' state: the committed one moved to the inputs set now */
     int preview_state; /* 0: to compute, 1: computed, -1: the move failed (no outputs) */
+    char why[512];     /* why the preview's move failed */
     Work work;
 } Instance;
 
@@ -103,13 +104,16 @@ static int stepper_index(const char* name)
     return -1;
 }
 
+/* the mass of node j under the parameters par: its parameter's, or the scene's (the connector's load node) */
+#define MASS_OF(par, j) (MASS_PARAM[j] >= 0 ? (par)[MASS_PARAM[j]] : MASS_SCENE[j])
+
 /* Network.with_parameters (the magnitudes, the rule of each key, a branch's eta and its u0), check_topology (the
  * rules a mass can break: a massless node held by sliders alone, a load on a part with neither a support nor a
  * mass), stepper_problem, and for the connector a load node without mass: the message, or NULL */
 static const char* network_problem(const double* par, int stepper, char* buffer, size_t size)
 {
-    int i, j, massive = 0;
-    for (i = 0; i < N_PARAMS; i++) {
+    int i, j;
+    for (i = 0; i < N_PARAMS_USED; i++) {
         double value = par[i];
         const Param* p = &PARAMS[i];
         if (!isfinite(value)) {
@@ -132,14 +136,10 @@ static const char* network_problem(const double* par, int stepper, char* buffer,
             return buffer;
         }
     }
-    for (j = 0; j < NN; j++) { /* m_<node> are the first parameters, in the nodes' order */
-        if (par[j] > 0) {
-            massive = 1;
-            continue;
-        }
-        if (SLIDER_ONLY[j]) {
-            snprintf(buffer, size, "parameter %s: node %s: massless and held by sliders alone: once a slider slips, "
-                     "nothing sets where it stops (give it a mass, a spring or a dashpot)", PARAMS[j].name,
+    for (j = 0; j < NN; j++) {
+        if (!(MASS_OF(par, j) > 0) && SLIDER_ONLY[j]) {
+            snprintf(buffer, size, "parameter m_%s: node %s: massless and held by sliders alone: once a slider "
+                     "slips, nothing sets where it stops (give it a mass, a spring or a dashpot)", NODE_NAMES[j],
                      NODE_NAMES[j]);
             return buffer;
         }
@@ -147,22 +147,16 @@ static const char* network_problem(const double* par, int stepper, char* buffer,
     if (LOAD_FLOATING) {
         int carried = 0;
         for (j = 0; j < NN; j++)
-            carried |= LOAD_PART[j] && par[j] > 0;
+            carried |= LOAD_PART[j] && MASS_OF(par, j) > 0;
         if (!carried) {
             snprintf(buffer, size, "the part of the network that carries the load (%s) is joined to the ground by no "
                      "element and has no mass: the load has no equilibrium", NODE_NAMES[LOAD_NODE]);
             return buffer;
         }
     }
-    if (CONNECTOR && par[LOAD_NODE] > 0) {
-        snprintf(buffer, size, "parameter %s = %.17g: the connector imposes the motion of the load's node %s, which "
-                 "must be massless", PARAMS[LOAD_NODE].name, par[LOAD_NODE], NODE_NAMES[LOAD_NODE]);
-        return buffer;
-    }
-    (void)massive;
     if (stepper >= 0 && strcmp(STEPPER_NAMES[stepper], "projected") == 0) {
         for (j = 0; j < NN; j++) {
-            if (!(par[j] > 0)) {
+            if (!(MASS_OF(par, j) > 0)) {
                 snprintf(buffer, size, "'projected' is explicit and needs a mass at every node; %s is massless: use "
                          "'implicit'", NODE_NAMES[j]);
                 return buffer;
@@ -193,7 +187,7 @@ static void coefficients_of(const double* par, double* mass, double* coef)
     int i;
     memcpy(mass, MASS_SCENE, sizeof(double) * NN);
     memcpy(coef, COEF_SCENE, sizeof(double) * 3 * NE_ARR);
-    for (i = 0; i < N_PARAMS; i++) {
+    for (i = 0; i < N_PARAMS_USED; i++) {
         if (PARAMS[i].node >= 0)
             mass[PARAMS[i].node] = par[i];
         else
@@ -264,8 +258,6 @@ static const char* failure(int64_t status, char* buffer, size_t size)
         snprintf(buffer, size, "the active-set search did not end within its budget of %lld iterations (%d per node "
                  "and element + %d); a smaller step needs fewer", (long long)SEARCH_BUDGET, SEARCH_PER_TERM,
                  SEARCH_CONSTANT);
-    else if (status == -10)
-        snprintf(buffer, size, "the move takes more than %.0e steps", ADVANCE_BUDGET);
     else
         snprintf(buffer, size, "a number overflowed (not finite)");
     return buffer;
@@ -289,8 +281,6 @@ static const char* reset(Instance* c, double force, char* buffer, size_t size)
     memset(e->piece, 0, sizeof e->piece);
     memset(e->account, 0, sizeof e->account);
     memset(e->dissipated, 0, sizeof e->dissipated);
-    e->sample_x = X0[LOAD_NODE];
-    e->sample_v = V0[LOAD_NODE];
     prandtl_kernel_failed = 0;
     status = initial(NET(e), e->x, e->v, e->u, e->piece, force, reaction);
     if (prandtl_kernel_failed)
@@ -300,6 +290,9 @@ static const char* reset(Instance* c, double force, char* buffer, size_t size)
     e->reaction = reaction[0];
     energies(NET(e), e->x, e->v, e->u, kinetic_stored);
     e->initial_energy = kinetic_stored[0] + kinetic_stored[1];
+    e->force = 0.0; /* the connector's: the force of a fresh workspace's elements (NetworkConnector.reset) */
+    if (!CONNECTOR)
+        e->force = force;
     c->preview_state = 0;
     return NULL;
 }
@@ -388,47 +381,65 @@ static const char* advance(Instance* c, double duration, double force, int scene
     return NULL;
 }
 
-/* NetworkConnector.move_to(x, v, time) on ``e``; NULL, or why not (``e`` is then partly moved) */
+/* NetworkConnector.move_to(x, v, time) on ``e``: the load's node along the line from its x to ``x`` in implicit
+ * steps of h (an instant when no time passes: one step of max(h, 1)), kernels.move_node; NULL, or why not (``e`` is
+ * then partly moved: the caller keeps a copy) */
 static const char* move(Instance* c, Element* e, double x, double v, double time, char* buffer, size_t size)
 {
-    double result[2];
+    double start = element_time(e), duration = time - start, whole = 0.0, rest, h = e->h, force[1] = {0.0};
     int64_t status;
-    double start = element_time(e);
+    int j;
+    if (!(isfinite(x) && isfinite(v) && isfinite(time)) || duration < 0) {
+        snprintf(buffer, size, "the motion must be finite and go forward, got x = %.17g, v = %.17g at t = %.17g",
+                 x, v, time);
+        return buffer;
+    }
+    if (duration == 0) {
+        rest = h > 1.0 ? h : 1.0; /* max(self.h, 1.0) */
+    } else {
+        split_duration(duration, h, &whole, &rest);
+        if (whole + (rest > 0) > ADVANCE_BUDGET) {
+            snprintf(buffer, size, "a move over %.17g s takes more than %.0e steps", duration, ADVANCE_BUDGET);
+            return buffer;
+        }
+    }
     prandtl_kernel_failed = 0;
-    status = move_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, WORK(&c->work), x, v, start,
-                    time, e->h, result);
+    status = move_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, WORK(&c->work), x, (int64_t)whole,
+                    h, rest, force);
     if (prandtl_kernel_failed)
         return "a kernel failed (out of memory)";
     if (status < 0) {
         char reason[256];
-        snprintf(buffer, size, "the motion x = %.17g at t = %.17g s: %s", x, time,
-                 failure(status, reason, sizeof reason));
+        snprintf(buffer, size, "the implicit step from t = %.17g s %s", start, failure(status, reason, sizeof reason));
         return buffer;
     }
-    if (time != start) {
+    if (duration != 0) {
         e->origin = time;
         e->steps = 0;
-        e->grid = e->h;
+        e->grid = h;
     }
-    e->reaction = result[1];
-    e->force = result[0];
-    e->sample_x = x;
-    e->sample_v = v;
+    e->v[LOAD_NODE] = v;
+    e->force = force[0];
+    for (j = 0; j < NN && isfinite(e->force); j++)
+        if (!isfinite(e->x[j]))
+            break;
+    if (!isfinite(e->force) || j < NN) {
+        snprintf(buffer, size, "the motion x = %.17g at t = %.17g s refused: an output would not be finite (an "
+                 "overflow)", x, time);
+        return buffer;
+    }
     return NULL;
 }
 
-/* CONNECTOR: the outputs' state: the committed network when the inputs are its last sample, else the committed
- * network moved to the inputs set last in an instant (NetworkConnector.move_to at its own time, not committed);
- * NULL when that motion is refused */
+/* CONNECTOR: the outputs' state, the committed network moved to the inputs set now at the FMU's time, not
+ * committed (network_connector_slave._current); NULL when that motion is refused (the reason in ``why``) */
 static Element* previewed(Instance* c)
 {
-    char buffer[512];
-    if (c->x_in == c->el.sample_x && c->v_in == c->el.sample_v)
-        return &c->el;
     if (c->preview_state == 0) {
+        double now = element_time(&c->el);
         c->preview = c->el;
-        c->preview_state = isfinite(c->x_in) && isfinite(c->v_in) &&
-            move(c, &c->preview, c->x_in, c->v_in, element_time(&c->el), buffer, sizeof buffer) == NULL ? 1 : -1;
+        c->preview_state = move(c, &c->preview, c->x_in, c->v_in, c->time > now ? c->time : now, c->why,
+                                sizeof c->why) == NULL ? 1 : -1;
     }
     return c->preview_state == 1 ? &c->preview : NULL;
 }
@@ -453,6 +464,8 @@ static double real_value(Instance* c, const Var* var)
     case W_REACTION: return e->reaction;
     case W_FORCE: return e->force;
     case W_ENERGY: return energy(e, var->index);
+    case W_DISSIPATED: return e->dissipated[var->index];
+    case W_U: return e->u[var->index];
     }
     return NAN;
 }
@@ -479,7 +492,10 @@ static void defaults(Instance* c)
     snprintf(c->stepper, sizeof c->stepper, "%s", DEFAULT_STEPPER);
     c->stepper_valid = 1;
     c->step = DEFAULT_STEP;
-    c->F = c->x_in = c->v_in = 0.0;
+    c->F = 0.0;
+    c->x_in = X0[LOAD_NODE]; /* the inputs' start values */
+    c->v_in = V0[LOAD_NODE];
+    c->time = 0.0;
     c->scene_load = 0;
     c->start_time = 0.0;
     c->initialized = 0;
@@ -505,6 +521,7 @@ static void capture(const Instance* c, State* s)
     s->v_in = c->v_in;
     s->step = c->step;
     s->start_time = c->start_time;
+    s->time = c->time;
     memcpy(s->par, c->par, sizeof s->par);
     s->scene_load = c->scene_load;
     s->stepper_valid = c->stepper_valid;
@@ -528,7 +545,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (head != NULL)
         return head;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->force) &&
-          isfinite(e->reaction) && isfinite(e->initial_energy) && isfinite(e->sample_x) && isfinite(e->sample_v) &&
+          isfinite(e->reaction) && isfinite(e->initial_energy) && isfinite(s->time) &&
           (e->scene_load == 0 || e->scene_load == 1) &&
           (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
           (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
@@ -537,7 +554,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
         return "its clock is not a finite time (origin, steps and grid)";
     /* the coefficients in use: the parameters' values, the rest the scene's */
-    for (i = 0; i < N_PARAMS; i++)
+    memset(par, 0, sizeof par);
+    for (i = 0; i < N_PARAMS_USED; i++)
         par[i] = PARAMS[i].node >= 0 ? e->mass[PARAMS[i].node] : e->coef[3 * PARAMS[i].element + PARAMS[i].column];
     coefficients_of(par, mass, coef);
     if (memcmp(mass, e->mass, sizeof mass) != 0 || memcmp(coef, e->coef, sizeof coef) != 0)
@@ -586,6 +604,7 @@ static int restore(Instance* c, const State* s)
     c->v_in = s->v_in;
     c->step = s->step;
     c->start_time = s->start_time;
+    c->time = s->time;
     memcpy(c->par, s->par, sizeof c->par);
     c->scene_load = s->scene_load;
     c->stepper_valid = s->stepper_valid;
@@ -629,11 +648,11 @@ static int core_exit_initialization(Instance* c)
     }
     if (problem == NULL) {
         set_time(&c->el, c->start_time);
-        if (CONNECTOR) { /* from x0 to the first input, in an instant */
-            if (move(c, &c->el, c->x_in, c->v_in, element_time(&c->el), reason, sizeof reason) != NULL) {
-                snprintf(buffer, sizeof buffer, "%s", reason);
-                problem = buffer;
-            }
+        c->time = c->start_time;
+        c->preview_state = 0;
+        if (CONNECTOR && previewed(c) == NULL) { /* the first sample, checked now (committed by the first doStep) */
+            snprintf(buffer, sizeof buffer, "%s", c->why);
+            problem = buffer;
         }
     }
     if (problem != NULL) {
@@ -654,7 +673,7 @@ static const Var* unshowable_output(Instance* c, double* value)
     for (i = 0; i < N_VARS; i++) {
         const Var* var = &VARS[i];
         if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_ENERGY &&
-            var->what != W_FORCE)
+            var->what != W_DISSIPATED && var->what != W_U)
             continue;
         *value = real_value(c, var);
         if (!isfinite(*value))
@@ -694,15 +713,26 @@ static int core_do_step(Instance* c, double t, double H)
             CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
         return ST_DISCARD;
     }
-    c->saved = c->el;
-    c->preview_state = 0;
     if (CONNECTOR) { /* the input sample belongs to the communication point: commit it (the clock only goes on) */
-        double now = element_time(&c->el);
-        problem = move(c, &c->el, c->x_in, c->v_in, t > now ? t : now, buffer, sizeof buffer);
-    } else {
-        set_time(&c->el, t);
-        problem = advance(c, H, c->F, c->scene_load, buffer, sizeof buffer);
+        double now = c->time;
+        c->time = t;
+        c->preview_state = 0;
+        if (previewed(c) == NULL) {
+            c->time = now;
+            c->preview_state = 0;
+            say(c, ST_DISCARD, "step from t = %.17g with x = %.17g refused: %s; the state is unchanged", t, c->x_in,
+                c->why);
+            return ST_DISCARD;
+        }
+        c->el = c->preview;
+        c->time = t + H;
+        c->preview_state = 0;
+        c->last_step_failed = 0;
+        return ST_OK;
     }
+    c->saved = c->el; /* NetworkElement.checkpoint, then the time */
+    set_time(&c->el, t);
+    problem = advance(c, H, c->F, c->scene_load, buffer, sizeof buffer);
     if (problem != NULL) {
         c->el = c->saved;
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);

@@ -2,17 +2,12 @@
 (FMI 2.0 or 3.0), the generated ``scene.h`` and the link. :func:`prandtl_fmu.native.build.build_native_network_fmu`
 is the entry.
 
-Variables (the value reference of a variable is its index in this list; FMI 3.0 adds ``time`` and, with
-``arrays``, the structural parameter ``n_nodes`` and the arrays ``x`` and ``v``):
-
-* the element (causality "force"): input ``F`` (N, at the load's node); outputs ``x_<node>``, ``v_<node>`` of
-  every node, ``reaction`` (the force of the elements on the ground) and the energy account (kinetic_energy,
-  stored_energy, work, dissipated_sliders, dissipated_damper, energy_residual); parameters: every coefficient of
-  the network by its scene name (``scene.network.parameters()``: m_<node>, k_spring_1, alpha_n3, ...), ``step``,
-  ``stepper`` (implicit, and projected where the network allows it) and ``scene_load``;
-* the connector (causality "displacement"): inputs ``x``, ``v`` (the motion of the load's node); outputs
-  ``force`` (what the network's elements exert on that node), ``reaction``, ``x_<node>``, ``v_<node>``,
-  kinetic_energy, stored_energy, dissipated_sliders, dissipated_damper; the coefficients and ``step``.
+The variables are the PythonFMU FMU's of the scene (``fmu/network_slave.py``, ``fmu/network_connector_slave.py``:
+the same names, value references, units, causalities and semantics; that FMU is built first, in a scratch folder,
+and its ``modelDescription.xml`` is taken with ``needsExecutionTool="false"``). FMI 3.0's is derived from it, with
+``time`` and, with ``arrays``, the structural parameter ``n_nodes`` and the nodes' x and v as arrays (``x`` and
+``v``; the connector's ``x_nodes`` and ``v_nodes``) besides the scalars x_<node>, v_<node> (OMSimulator and ecos
+read an FMI 3.0 array as a scalar: the arrays are an option).
 
 The parameters' rules are the library's (``network.model``: ``Network.with_parameters``, ``check_topology``,
 ``stepper_problem``), written into ``scene.h`` as tables: each parameter's rule, and what a mass can break (a node
@@ -22,114 +17,58 @@ held by sliders alone, the load's part with neither support nor mass). Everythin
 from __future__ import annotations
 
 import hashlib
-import html
 import os
-import re
 import subprocess
 import tempfile
-import uuid
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
-CONNECTOR_ENERGIES = ("kinetic_energy", "stored_energy", "dissipated_sliders", "dissipated_damper")
-UNITS = {"s": {"s": 1}, "m": {"m": 1}, "kg": {"kg": 1}, "m/s": {"m": 1, "s": -1}, "N": {"kg": 1, "m": 1, "s": -2},
-         "N/m": {"kg": 1, "s": -2}, "N/m3": {"kg": 1, "m": -2, "s": -2}, "N.s/m": {"kg": 1, "s": -1},
-         "J": {"kg": 1, "m": 2, "s": -2}}
-KEY_UNITS = {("spring", "k"): "N/m", ("branch", "k"): "N/m", ("branch", "eta"): "m", ("branch", "c"): "N.s/m",
-             ("dashpot", "c"): "N.s/m", ("slider", "alpha"): "N", ("cubic", "k3"): "N/m3"}
-KEY_TEXT = {("spring", "k"): "stiffness of spring {name}: force k (x_i - x_j)",
-            ("cubic", "k3"): "coefficient of cubic spring {name}: force k3 (x_i - x_j)^3",
-            ("dashpot", "c"): "coefficient of dashpot {name}: force c (v_i - v_j)",
-            ("slider", "alpha"): "threshold of slider {name} (Saint-Venant): |force| <= alpha",
-            ("branch", "k"): "stiffness of Prandtl branch {name} (> 0)",
-            ("branch", "eta"): "elastic range of Prandtl branch {name}: |u| <= eta (and >= |u0|)",
-            ("branch", "c"): "dashpot in series with Prandtl branch {name} (0: none)"}
-DBL_MAX = "1.7976931348623157e+308"
 
 
-class Variable:
-    """One FMU variable: what the C layer reads (``what``, ``index``) and what the description says."""
-
-    def __init__(self, name, type_name, causality, variability, what, index=0, start=None, unit=None,
-                 description="", initial=None):
-        self.name, self.type, self.causality, self.variability = name, type_name, causality, variability
-        self.what, self.index, self.start, self.unit = what, index, start, unit
-        self.description, self.initial = description, initial
-
-
-def parameter_table(network) -> list:
-    """(name, node, element, column, rule, u0, unit, text) for every parameter, in Network.parameters() order."""
+def parameter_table(network, exclude=()) -> list:
+    """(name, node, element, column, rule, u0) of every FMU parameter of the network, in Network.parameters()
+    order without ``exclude`` (the connector's load node mass: fixed at 0)."""
     rows = []
     for j, node in enumerate(network.nodes):
-        rows.append((f"m_{node}", j, -1, 0, "R_MASS", 0.0, "kg", f"mass of node {node} (0: massless)"))
+        rows.append((f"m_{node}", j, -1, 0, "R_MASS", 0.0))
     for e, element in enumerate(network.elements):
         for key in element.coefficients():
-            column = {"k": 0, "c": 0, "alpha": 0, "k3": 0}[key] if element.kind != "branch" else \
-                {"k": 0, "eta": 1, "c": 2}[key]
+            column = {"k": 0, "eta": 1, "c": 2}[key] if element.kind == "branch" else 0
             rule = "R_POSITIVE" if (element.kind, key) == ("branch", "k") else "R_ETA" if key == "eta" else "R_NONNEG"
-            rows.append((f"{key}_{element.name}", -1, e, column, rule, abs(float(element.u0)),
-                         KEY_UNITS[(element.kind, key)], KEY_TEXT[(element.kind, key)].format(name=element.name)))
-    names = [row[0] for row in rows]
-    if names != list(network.parameters()):
+            rows.append((f"{key}_{element.name}", -1, e, column, rule, abs(float(element.u0))))
+    if [row[0] for row in rows] != list(network.parameters()):
         raise ValueError("the native network's parameters do not follow Network.parameters()")
-    return rows
+    return [row for row in rows if row[0] not in exclude]
 
 
-def variables(scene, connector: bool) -> list:
+def meanings(scene, connector: bool) -> dict:
+    """What the C layer reads for each variable name of the FMU (network_slave.py's and
+    network_connector_slave.py's contract): name -> (W_ code, index)."""
     network = scene.network
-    out = []
-    load = network.nodes[network.load_node]
+    names = {"F": ("W_F", 0), "reaction": ("W_REACTION", 0), "step": ("W_STEP", 0),
+             "scene_load": ("W_SCENE_LOAD", 0), "stepper": ("W_STEPPER", 0)}
     if connector:
-        out.append(Variable("x", "Real", "input", "continuous", "W_XIN", start=float(network.x0[network.load_node]),
-                            unit="m", description=f"displacement of the load's node {load} (linear between "
-                            "communication points)"))
-        out.append(Variable("v", "Real", "input", "continuous", "W_VIN", start=float(network.v0[network.load_node]),
-                            unit="m/s", description=f"velocity of the load's node {load}"))
-        out.append(Variable("force", "Real", "output", "continuous", "W_FORCE", unit="N",
-                            description=f"force of the network's elements on node {load} (what holds its motion)"))
-    else:
-        out.append(Variable("F", "Real", "input", "continuous", "W_F", start=0.0, unit="N",
-                            description=f"force on the load's node {load}, held over a communication step"))
+        names.update({"x": ("W_XIN", 0), "v": ("W_VIN", 0), "force": ("W_FORCE", 0)})
     for j, node in enumerate(network.nodes):
-        out.append(Variable(f"x_{node}", "Real", "output", "continuous", "W_X", j, unit="m",
-                            description=f"displacement of node {node}"))
-        out.append(Variable(f"v_{node}", "Real", "output", "continuous", "W_V", j, unit="m/s",
-                            description=f"velocity of node {node}"))
-    out.append(Variable("reaction", "Real", "output", "continuous", "W_REACTION", unit="N",
-                        description="force of the elements on the ground"))
-    for name in (CONNECTOR_ENERGIES if connector else ENERGIES):
-        out.append(Variable(name, "Real", "output", "continuous", "W_ENERGY", ENERGIES.index(name), unit="J",
-                            description={"kinetic_energy": "sum m_j v_j^2 / 2",
-                                         "stored_energy": "energy in the springs, cubic springs and branches",
-                                         "work": "work of the load since the start",
-                                         "dissipated_sliders": "dissipated by the sliders and branches' sliders",
-                                         "dissipated_damper": "dissipated by the dashpots and series dashpots",
-                                         "energy_residual": "work - dissipated - (kinetic + stored - initial)"}[name]))
-    for index, (name, node, element, column, rule, u0, unit, text) in enumerate(parameter_table(network)):
-        value = network.parameters()[name]
-        out.append(Variable(name, "Real", "parameter", "tunable", "W_PARAM", index, start=value, unit=unit,
-                            description=text))
-    out.append(Variable("step", "Real", "parameter", "tunable", "W_STEP", start=float(scene.solver.step), unit="s",
-                        description="the internal step h of the stepper (s)"))
-    if not connector:
-        out.append(Variable("stepper", "String", "parameter", "tunable", "W_STEPPER", start=scene.solver.stepper,
-                            description="the stepper: implicit (every network) or projected (every node massive, "
-                            "no slider)"))
-        out.append(Variable("scene_load", "Boolean", "parameter", "tunable", "W_SCENE_LOAD", start=False,
-                            description="add the scene's [load] to F"))
-    return out
+        names[f"x_{node}"] = ("W_X", j)
+        names[f"v_{node}"] = ("W_V", j)
+    for k, name in enumerate(ENERGIES):
+        names[name] = ("W_ENERGY", k)
+    for e, element in enumerate(network.elements):
+        names[f"dissipated_{element.kind}_{element.name}"] = ("W_DISSIPATED", e)
+        if element.kind == "branch":
+            names[f"u_{element.name}"] = ("W_U", e)
+    for i, row in enumerate(parameter_table(network, excluded(scene, connector))):
+        names[row[0]] = ("W_PARAM", i)
+    return names
 
 
-def dependencies(scene, variables_, connector: bool) -> dict:
-    """The outputs' direct dependencies on the inputs (names): none for the element (every output follows the
-    state); the connector's on x (its instant move), and v_<load node> on v."""
-    if not connector:
-        return {v.name: () for v in variables_ if v.causality == "output"}
-    load = scene.network.nodes[scene.network.load_node]
-    return {v.name: (("x", "v") if v.name == f"v_{load}" else ("x",)) for v in variables_ if v.causality == "output"}
+def excluded(scene, connector: bool) -> tuple:
+    network = scene.network
+    return (f"m_{network.nodes[network.load_node]}",) if connector else ()
 
 
 def steppers_of(scene, connector: bool) -> list:
@@ -140,143 +79,97 @@ def steppers_of(scene, connector: bool) -> list:
     return [name for name in ("implicit", "projected") if stepper_problem(scene, name) is None]
 
 
-def identifier_of(scene) -> str:
-    return re.sub(r"\W", "_", f"prandtl_network_{scene.name}")[:100]
-
-
-def guid_of(scene_bytes: bytes, connector: bool, fmi: int, arrays: bool) -> str:
-    from .._jit import source_digest
-
-    key = scene_bytes + f"{connector}{fmi}{arrays}".encode() + source_digest().encode()
-    return "{" + str(uuid.UUID(hashlib.sha256(key).hexdigest()[:32])) + "}"
-
-
-# ------------------------------------------------------------------ model descriptions
-
-def _units(parent, used):
-    units = ET.SubElement(parent, "UnitDefinitions")
-    for name in sorted(used):
-        unit = ET.SubElement(units, "Unit", {"name": name})
-        ET.SubElement(unit, "BaseUnit", {k: str(v) for k, v in UNITS[name].items()})
-
-
-def _log_categories(parent, fmi):
-    categories = ET.SubElement(parent, "LogCategories")
-    for name, text in (("logStatusWarning", "warnings"), ("logStatusDiscard", f"fmi{fmi}Discard: a refused step"),
-                       ("logStatusError", f"fmi{fmi}Error: a refused call"), ("logStatusFatal", "fatal errors"),
-                       ("logAll", "every message")):
-        ET.SubElement(categories, "Category", {"name": name, "description": text})
-
-
-def _start(v) -> str:
-    if v.type == "Boolean":
-        return "true" if v.start else "false"
-    if v.type == "String":
-        return str(v.start)
-    return repr(float(v.start))
-
-
-def description_fmi2(scene, variables_, guid, identifier, connector) -> str:
-    root = ET.Element("fmiModelDescription", {
-        "fmiVersion": "2.0", "modelName": scene.name, "guid": guid,
-        "description": f"network {scene.name} ({'connector' if connector else 'element'}, native runtime)",
-        "generationTool": "prandtl_fmu (native runtime)", "variableNamingConvention": "flat",
-        "numberOfEventIndicators": "0"})
-    ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": identifier, "needsExecutionTool": "false", "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false", "maxOutputDerivativeOrder": "0", "canRunAsynchronuously": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false", "canNotUseMemoryManagementFunctions": "true",
-        "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false"})
-    _units(root, {v.unit for v in variables_ if v.unit})
-    _log_categories(root, 2)
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0", "stopTime": repr(float(scene.solver.stop_time)),
-                                              "stepSize": repr(float(scene.solver.output_interval))})
-    model = ET.SubElement(root, "ModelVariables")
-    for vr, v in enumerate(variables_):
-        attributes = {"name": v.name, "valueReference": str(vr), "description": v.description,
-                      "causality": v.causality, "variability": v.variability}
-        if v.causality == "parameter":
-            attributes["initial"] = "exact"
-        node = ET.SubElement(model, "ScalarVariable", attributes)
-        kind = {}
-        if v.unit:
-            kind["unit"] = v.unit
-        if v.start is not None:
-            kind["start"] = _start(v)
-        ET.SubElement(node, v.type, kind)
-    structure = ET.SubElement(root, "ModelStructure")
-    index = {v.name: i + 1 for i, v in enumerate(variables_)}
-    depends = dependencies(scene, variables_, connector)
-    outputs = ET.SubElement(structure, "Outputs")
-    for v in variables_:
-        if v.causality == "output":
-            ET.SubElement(outputs, "Unknown", {"index": str(index[v.name]),
-                                               "dependencies": " ".join(str(index[d]) for d in depends[v.name])})
-    initial = ET.SubElement(structure, "InitialUnknowns")
-    for v in variables_:
-        if v.causality == "output":
-            ET.SubElement(initial, "Unknown", {"index": str(index[v.name])})
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
-def description_fmi3(scene, variables_, guid, identifier, connector, arrays, extra_vr) -> str:
-    root = ET.Element("fmiModelDescription", {
-        "fmiVersion": "3.0", "modelName": scene.name, "instantiationToken": guid,
-        "description": f"network {scene.name} ({'connector' if connector else 'element'}, native runtime)",
-        "generationTool": "prandtl_fmu (native runtime)", "variableNamingConvention": "structured"})
-    ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": identifier, "needsExecutionTool": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
-        "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
-        "canHandleVariableCommunicationStepSize": "true", "providesIntermediateUpdate": "false",
-        "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false"})
-    _units(root, {v.unit for v in variables_ if v.unit} | {"s"})
-    _log_categories(root, 3)
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0", "stopTime": repr(float(scene.solver.stop_time)),
-                                              "stepSize": repr(float(scene.solver.output_interval))})
-    model = ET.SubElement(root, "ModelVariables")
-    ET.SubElement(model, "Float64", {"name": "time", "valueReference": str(extra_vr["time"]),
-                                     "causality": "independent", "variability": "continuous", "unit": "s",
-                                     "description": "the network's time"})
-    depends = dependencies(scene, variables_, connector)
-    vr_of = {v.name: str(vr) for vr, v in enumerate(variables_)}
-    for vr, v in enumerate(variables_):
-        attributes = {"name": v.name, "valueReference": str(vr), "description": v.description,
-                      "causality": v.causality, "variability": v.variability}
-        tag = {"Real": "Float64", "Boolean": "Boolean", "String": "String"}[v.type]
-        if v.unit:
-            attributes["unit"] = v.unit
-        if v.type == "String":
-            node = ET.SubElement(model, tag, attributes)
-            ET.SubElement(node, "Start", {"value": v.start})
+def fmi3_network_description(root, scene, extra_vr, arrays: bool, connector: bool) -> str:
+    """The FMI 3.0 description from the FMI 2.0 one: the same scalars (Real -> Float64, with their value references,
+    units, causalities, variabilities, start values, dependencies), ``time``; with ``arrays`` the structural
+    parameter ``n_nodes`` (UInt64, fixed) and the nodes' x and v as arrays of n_nodes Float64 (``x`` and ``v``;
+    the connector's ``x_nodes`` and ``v_nodes``: its inputs are x and v)."""
+    top = ET.Element("fmiModelDescription", {
+        "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
+        "description": root.get("description", ""), "author": root.get("author", ""),
+        "version": root.get("version", ""), "generationTool": "prandtl_fmu (native runtime)",
+        "variableNamingConvention": "structured"})
+    cosim = root.find("CoSimulation")
+    ET.SubElement(top, "CoSimulation", {
+        "modelIdentifier": cosim.get("modelIdentifier"), "needsExecutionTool": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
+        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
+        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
+        "hasEventMode": "false"})
+    for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
+        if root.find(name) is not None:
+            top.append(root.find(name))
+        if name == "LogCategories" and top.find(name) is not None:
+            for category in top.find(name):
+                if category.get("description"):
+                    category.set("description", category.get("description").replace("fmi2", "fmi3"))
+        if name == "UnitDefinitions":
+            units = top.find("UnitDefinitions")
+            if units is None:
+                units = ET.SubElement(top, "UnitDefinitions")
+            if not any(unit.get("name") == "s" for unit in units):
+                ET.SubElement(ET.SubElement(units, "Unit", {"name": "s"}), "BaseUnit", {"s": "1"})
+    variables = ET.SubElement(top, "ModelVariables")
+    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(extra_vr["time"]),
+                                         "causality": "independent", "variability": "continuous", "unit": "s",
+                                         "description": "the network's time"})
+    scalars = list(root.find("ModelVariables"))
+    index_to_vr, name_to_vr, outputs = {}, {}, []
+    for position, variable in enumerate(scalars, start=1):
+        name, vr = variable.get("name"), variable.get("valueReference")
+        index_to_vr[position] = vr
+        name_to_vr[name] = vr
+        kind = next(child for child in variable if child.tag in ("Real", "Integer", "Boolean", "String"))
+        attributes = {"name": name, "valueReference": vr}
+        if variable.get("description"):
+            attributes["description"] = variable.get("description")
+        for key in ("causality", "variability", "initial"):
+            if variable.get(key):
+                attributes[key] = variable.get(key)
+        if kind.tag == "String":
+            element = ET.SubElement(variables, "String", attributes)
+            if kind.get("start") is not None:
+                ET.SubElement(element, "Start", {"value": kind.get("start")})
             continue
-        if v.start is not None:
-            attributes["start"] = _start(v)
-        ET.SubElement(model, tag, attributes)
-    outputs = [vr_of[v.name] for v in variables_ if v.causality == "output"]
-    dependency_text = {vr_of[name]: " ".join(vr_of[d] for d in deps) for name, deps in depends.items()}
+        tag = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}[kind.tag]
+        for key in ("start", "unit", "min", "max"):
+            if kind.get(key) is not None:
+                attributes[key] = kind.get(key)
+        ET.SubElement(variables, tag, attributes)
+        if variable.get("causality") == "output":
+            outputs.append(vr)
+    dependencies = {}
+    old = root.find("ModelStructure/Outputs")
+    for unknown in (old if old is not None else []):
+        if unknown.get("dependencies") is not None:
+            dependencies[index_to_vr[int(unknown.get("index"))]] = " ".join(
+                index_to_vr[int(i)] for i in unknown.get("dependencies").split())
     if arrays:
-        n = scene.network.n
-        ET.SubElement(model, "UInt64", {"name": "n_nodes", "valueReference": str(extra_vr["n_nodes"]),
-                                        "causality": "structuralParameter", "variability": "fixed", "start": str(n),
-                                        "description": "number of nodes (the length of the arrays x and v)"})
-        for name, unit in (("x", "m"), ("v", "m/s")):
+        network = scene.network
+        n = network.n
+        ET.SubElement(variables, "UInt64", {"name": "n_nodes", "valueReference": str(extra_vr["n_nodes"]),
+                                            "causality": "structuralParameter", "variability": "fixed",
+                                            "start": str(n), "description": "number of nodes: the length of the "
+                                            "arrays of the nodes' x and v"})
+        shown = ", ".join(network.nodes[:5]) + (", ..." if n > 5 else "")
+        for name, unit, what in (("x", "m", "displacement"), ("v", "m/s", "velocity")):
             vr = str(extra_vr[f"{name}_nodes"])
-            node = ET.SubElement(model, "Float64", {
+            array = ET.SubElement(variables, "Float64", {
                 "name": f"{name}_nodes" if connector else name, "valueReference": vr, "causality": "output",
                 "variability": "continuous", "unit": unit,
-                "description": f"{'displacement' if name == 'x' else 'velocity'} of every node, in the nodes' order "
-                               f"({', '.join(scene.network.nodes[:5])}{', ...' if n > 5 else ''})"})
-            ET.SubElement(node, "Dimension", {"valueReference": str(extra_vr["n_nodes"])})
+                "description": f"{what} of every node, in the nodes' order ({shown})"})
+            ET.SubElement(array, "Dimension", {"valueReference": str(extra_vr["n_nodes"])})
             outputs.append(vr)
-            dependency_text[vr] = dependency_text[vr_of[f"{name}_{scene.network.nodes[0]}"]] if not connector else \
-                vr_of["x"] + (" " + vr_of["v"] if name == "v" else "")
-    structure = ET.SubElement(root, "ModelStructure")
+            dependencies[vr] = " ".join(name_to_vr[i] for i in ("x", "v")) if connector else ""
+    structure = ET.SubElement(top, "ModelStructure")
     for tag in ("Output", "InitialUnknown"):
         for vr in outputs:
-            ET.SubElement(structure, tag, {"valueReference": vr, "dependencies": dependency_text[vr]})
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+            attributes = {"valueReference": vr}
+            if vr in dependencies:
+                attributes["dependencies"] = dependencies[vr]
+            ET.SubElement(structure, tag, attributes)
+    ET.indent(top)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(top, encoding="unicode") + "\n"
 
 
 # ------------------------------------------------------------------ scene.h
@@ -320,14 +213,21 @@ def topology_tables(network):
     return [int(k == {"slider"}) for k in kinds], int(floating), part
 
 
-def scene_header(scene, variables_, steppers, symbols, guid, digest, connector, arrays, extra_vr) -> str:
+def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extra_vr) -> str:
+    """scene.h of the network: its arrays, the parameters' rules, the kernels' symbols, the variables of the FMI
+    2.0 description ``root`` (indexed by value reference)."""
     from .. import scene as library_rules
     from ..network import kernels as nk
 
     network = scene.network
     n, count = network.n, len(network.elements)
     mass, kind, ends, coef, load_node, has_cubic = network.compile()
-    table = parameter_table(network)
+    table = parameter_table(network, excluded(scene, connector))
+    mass_param = [-1] * n
+    for i, row in enumerate(table):
+        if row[1] >= 0:
+            mass_param[row[1]] = i
+    guid = root.get("guid")
     slider_only, floating, part = topology_tables(network)
     load = scene.load.compile()
     load_kind, offset, amplitude, omega, times, forces = load
@@ -341,8 +241,8 @@ def scene_header(scene, variables_, steppers, symbols, guid, digest, connector, 
     declarations = {
         "energies": f"int64_t energies({net}, {ptr}, {ptr}, {ptr}, {ptr})",
         "initial": f"int64_t initial({net}, {ptr}, {ptr}, {ptr}, {iptr}, double, {ptr})",
-        "move": f"int64_t move_c({net}, {ptr}, {ptr}, {ptr}, {iptr}, {ptr}, {ptr}, {work}, double, double, double, "
-                f"double, double, {ptr})",
+        "move": f"int64_t move_c({net}, {ptr}, {ptr}, {ptr}, {iptr}, {ptr}, {ptr}, {work}, double, int64_t, double, "
+                f"double, {ptr})",
         "load_force": f"double load_force({load_args}, double)",
     }
     lines = [
@@ -396,12 +296,14 @@ def scene_header(scene, variables_, steppers, symbols, guid, digest, connector, 
         f"static const int LOAD_PART[NN] = {_ints(part)};",
         "enum { R_MASS, R_POSITIVE, R_NONNEG, R_ETA };",
         "typedef struct { const char* name; int node; int element; int column; int rule; double u0; } Param;",
-        f"#define N_PARAMS {len(table)}",
+        f"#define N_PARAMS {max(len(table), 1)}",
         "static const Param PARAMS[N_PARAMS] = {",
         *[f'    {{"{name}", {node}, {element}, {column}, {rule}, {u0!r}}},'
-          for name, node, element, column, rule, u0, _, _ in table],
+          for name, node, element, column, rule, u0 in table or [("none", 0, -1, 0, "R_MASS", 0.0)]],
         "};",
-        f"static const double P_SCENE[N_PARAMS] = {_doubles(network.parameters().values())};",
+        f"#define N_PARAMS_USED {len(table)}",
+        f"static const double P_SCENE[N_PARAMS] = {_doubles([network.parameters()[row[0]] for row in table])};",
+        f"static const int MASS_PARAM[NN] = {_ints(mass_param)}; /* the parameter of node j's mass, or -1 */",
         f'static const char GUID[] = "{guid}";',
         f'static const char DIGEST[] = "{digest}";',
         f"static const int64_t LOAD_KIND = {int(load_kind)};",
@@ -425,76 +327,76 @@ def scene_header(scene, variables_, steppers, symbols, guid, digest, connector, 
                  + "};")
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
-        "enum { W_F, W_X, W_V, W_REACTION, W_FORCE, W_ENERGY, W_PARAM, W_STEP, W_SCENE_LOAD, W_STEPPER, W_XIN, "
-        "W_VIN };",
+        "enum { W_NONE, W_F, W_X, W_V, W_REACTION, W_FORCE, W_ENERGY, W_DISSIPATED, W_U, W_PARAM, W_STEP, "
+        "W_SCENE_LOAD, W_STEPPER, W_XIN, W_VIN };",
         "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
-        "static const Var VARS[] = {",
+        "static const Var VARS[] = { /* VARS[vr]: the variable of value reference vr (a hole: vr = UINT32_MAX) */",
     ]
-    types = {"Real": "T_REAL", "Boolean": "T_BOOLEAN", "String": "T_STRING"}
-    for vr, v in enumerate(variables_):
-        lines.append(f'    {{{vr}, {types[v.type]}, {v.what}, {v.index}, "{v.name}"}},')
-    lines += ["};", f"#define N_VARS {len(variables_)}", "#endif", ""]
+    types = {"Real": "T_REAL", "Boolean": "T_BOOLEAN", "String": "T_STRING", "Integer": "T_INTEGER"}
+    known = meanings(scene, connector)
+    table_of = {}
+    for variable in root.find("ModelVariables"):
+        name = variable.get("name")
+        if name not in known:
+            raise ValueError(f"the native runtime does not know the FMU variable {name!r}")
+        type_name = next(child.tag for child in variable if child.tag in types)
+        table_of[int(variable.get("valueReference"))] = (types[type_name], *known[name], name)
+    for vr in range(max(table_of) + 1):
+        if vr in table_of:
+            type_code, what, index, name = table_of[vr]
+            lines.append(f'    {{{vr}, {type_code}, {what}, {index}, "{name}"}},')
+        else:
+            lines.append('    {4294967295u, T_REAL, W_NONE, 0, ""},')
+    lines += ["};", f"#define N_VARS {max(table_of) + 1}", "#endif", ""]
     return "\n".join(lines)
-
-
-def documentation(scene, variables_, fmi, connector) -> str:
-    rows = "\n".join(f"<tr><td>{html.escape(v.name)}</td><td>{v.causality}</td><td>{v.unit or ''}</td>"
-                     f"<td>{html.escape(v.description)}</td></tr>" for v in variables_)
-    kind = "connector (the motion of the load's node in, the force out)" if connector else \
-        "element (the force in at the load's node)"
-    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{html.escape(scene.name)}</title></head>"
-            f"<body><h1>{html.escape(scene.name)}</h1><p>A network of {scene.network.n} nodes and "
-            f"{len(scene.network.elements)} elements as an FMI {fmi}.0 co-simulation {kind}, native runtime: the "
-            "library's compiled network kernels and a C FMI layer, no Python. The scene is resources/scene.toml. "
-            "Refusals (a bad parameter, a step with no equilibrium, a non-finite output) are logged with their "
-            f"reason, logging on or off.</p><table><tr><th>name</th><th>causality</th><th>unit</th>"
-            f"<th>description</th></tr>\n{rows}\n</table></body></html>\n")
 
 
 def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, build_error) -> Path:
     """Build the native FMU of the network scene at ``scene_path`` into ``out`` (see the module docstring)."""
-    from ..fmu.build import add_entry
+    from ..fmu.build import _with_causality, add_entry, build_fmu
     from ..network.model import stepper_problem
-    from ..scene import load_scene, parse_scene
+    from ..scene import load_scene
     from . import kernels as element_kernels
     from . import network_kernels
+    from .build import FMI_HEADERS, _native_description, _stubs
 
-    scene_bytes = Path(scene_path).read_bytes()
     scene = load_scene(scene_path, check_stepper=False)
     if causality is not None and causality != scene.causality:
-        if causality not in ("force", "displacement"):
-            raise build_error(f"--causality {causality}: must be force or displacement")
-        text = scene_bytes.decode("utf-8")
-        text = re.sub(r"(?ms)^\[fmu\].*?(?=^\[|\Z)", "", text) + f'\n[fmu]\ncausality = "{causality}"\n'
-        scene_bytes = text.encode("utf-8")
-        scene = parse_scene(text, str(scene_path), check_stepper=False)
+        scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
     if arrays and fmi != 3:
-        raise build_error("arrays: the nodes' x and v as arrays are an FMI 3.0 option (--fmi 3)")
+        raise build_error("arrays: the nodes' x and v as arrays are an FMI 3.0 option (fmi=3)")
     steppers = steppers_of(scene, connector)
-    if scene.solver.stepper not in steppers:
-        problem = stepper_problem(scene, scene.solver.stepper) or "the connector takes 'implicit' steps"
-        raise build_error(f"{scene.source}: [solver] stepper: {problem}")
-    network = scene.network
-    variables_ = variables(scene, connector)
-    count = len(variables_)
-    extra_vr = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
-    identifier = identifier_of(scene)
-    guid = guid_of(scene_bytes, connector, fmi, arrays)
-    digest = hashlib.sha256(scene_bytes + guid.encode()).hexdigest()
+    if not connector and scene.solver.stepper not in steppers:
+        raise build_error(f"{scene.source}: [solver] stepper: {stepper_problem(scene, scene.solver.stepper)}")
+    if connector:
+        scene = scene.with_solver(stepper="implicit")
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_network_") as scratch:
         scratch = Path(scratch)
+        # the model description (variables, value references, units, documentation) is the PythonFMU FMU's
+        python_fmu = build_fmu(scene_path, scratch / "python.fmu", causality=causality)
+        with zipfile.ZipFile(python_fmu) as archive:
+            description = archive.read("modelDescription.xml").decode("utf-8")
+            kept = {name: archive.read(name) for name in archive.namelist()
+                    if name.startswith("documentation/") or name == "resources/scene.toml"
+                    or name.endswith("_OspModelDescription.xml")}
+        root = ET.fromstring(description)
+        identifier = root.find("CoSimulation").get("modelIdentifier")
+        count = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
+        extra_vr = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
+        digest = hashlib.sha256(Path(scene_path).read_bytes() + root.get("guid").encode()).hexdigest()
         compiled = network_kernels.compile_network(scene, steppers, connector)
         objects, external = element_kernels.emit_objects(compiled, scratch)
         symbols = {name: function.native_name for name, function in compiled}
-        (scratch / "scene.h").write_text(scene_header(scene, variables_, steppers, symbols, guid, digest, connector,
-                                                      arrays, extra_vr))
-        from .build import FMI_HEADERS, _stubs
-
+        try:
+            header = scene_header(scene, root, steppers, symbols, digest, connector, arrays, extra_vr)
+        except ValueError as exc:
+            raise build_error(str(exc)) from None
+        (scratch / "scene.h").write_text(header)
         (scratch / "stubs.c").write_text(_stubs(external))
         library = scratch / f"{identifier}.so"
-        exports = scratch / "exports.map"
+        exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
         exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
         headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
         command = [compiler, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
@@ -505,16 +407,22 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
         if done.returncode != 0:
             errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
             raise build_error(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
-        description = (description_fmi2(scene, variables_, guid, identifier, connector) if fmi == 2 else
-                       description_fmi3(scene, variables_, guid, identifier, connector, arrays, extra_vr))
+        native_description = (_native_description(description) if fmi == 2
+                               else fmi3_network_description(root, scene, extra_vr, arrays, connector))
+        try:  # the page of the native FMU from its own description, where the documentation knows networks
+            from ..fmu.documentation import index_html
+
+            kept["documentation/index.html"] = index_html(native_description.encode("utf-8"), scene,
+                                                          runtime="native")
+        except Exception:  # noqa: BLE001 (the PythonFMU FMU's page stays)
+            pass
         platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            add_entry(archive, "modelDescription.xml", description)
+            add_entry(archive, "modelDescription.xml", native_description)
             add_entry(archive, f"binaries/{platform}/{identifier}.so", library.read_bytes(), mode=0o755)
-            add_entry(archive, "resources/scene.toml", scene_bytes)
-            add_entry(archive, "documentation/index.html", documentation(scene, variables_, fmi, connector))
+            for name, data in kept.items():
+                add_entry(archive, name, data)
         os.replace(partial, out)
-    del network
     return out

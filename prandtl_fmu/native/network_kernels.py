@@ -9,15 +9,11 @@ compiled kernels (:mod:`prandtl_fmu.network.kernels`): the time loops ``run_impl
 ``forces_now``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
 library's, bit for bit (tests/test_native_network.py).
 
-Three pieces of the library are plain Python (numpy) and cannot be called from a cfunc; they are written below
-as compiled functions that do the same operations in the same order on the same arrays, and the tests hold them
-to the library's numbers bit for bit:
-
-* :func:`instant_state`: ``network.driver.initial_state`` (the instant model of ``driver.instant_model``, built
-  in place: the massive nodes held by sliders of infinite threshold listed first, rigid dashpots, no series
-  dashpot relaxing) and ``driver.initial_reaction``;
-* :func:`move_node`: ``NetworkConnector.move_to`` (the load node on the line from its committed x to the input
-  x, in steps of h; an instant when no time passes) with ``driver.split_duration``.
+Two pieces of the library are plain Python (numpy) and cannot be called from a cfunc; they are written below as
+compiled functions that do the same operations in the same order on the same arrays (tests hold them to the
+library's numbers bit for bit): ``network.driver.initial_state`` (the instant model of ``driver.instant_model``,
+built in place: the massive nodes held by sliders of infinite threshold listed first, rigid dashpots, no series
+dashpot relaxing) and ``driver.initial_reaction``, both in :func:`instant_state`.
 
 The C signatures (``P`` a pointer to doubles, ``I`` a pointer to int64; ``net`` = mass, coef, kind, ends,
 load_node, has_cubic; ``work`` = the workspace's 11 arrays, kernels.workspace's order; ``load`` = kind, lk, lt,
@@ -28,8 +24,9 @@ lf, nl as the element's):
 * ``load_force(load, t)`` -> F(t) of the load (``loads.force_at``);
 * ``energies(net, x, v, u, out)``: out[0] the kinetic, out[1] the stored energy;
 * ``initial(net, x, v, u, piece, force, reaction)`` -> 0, or the status of the equilibrium that failed;
-* ``move(net, x, v, u, piece, account, dissipated, work, x_in, v_in, start, time, h, result)`` -> 0, or the
-  status of the step that failed (-10: more steps than ADVANCE_BUDGET); result = force on the node, reaction.
+* ``move(net, x, v, u, piece, account, dissipated, work, target, whole, h, rest, force)``: ``kernels.move_node``
+  (the load's node to ``target`` in ``whole`` steps of h and one of ``rest``) -> its status; force[0] the force
+  of the elements on the load's node (``kernels.node_force``).
 """
 from __future__ import annotations
 
@@ -43,8 +40,8 @@ SIGNATURES = {
                f"types.int64, types.float64, types.int64, {_I})",
     "energies": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_P})",
     "initial": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, types.float64, {_P})",
-    "move": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_WORK}, types.float64, types.float64, "
-            f"types.float64, types.float64, types.float64, {_P})",
+    "move": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_WORK}, types.float64, types.int64, "
+            f"types.float64, types.float64, {_P})",
     "load_force": f"types.float64({_LOAD}, types.float64)",
 }
 
@@ -93,15 +90,15 @@ def initial(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep
 
 
 def move(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp,
-         dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp, x_in, v_in, start, time, h, resultp):
-    return move_node(_net(massp, coefp, kindp, endsp, load_node, has_cubic), carray(xp, ({n},)),
-                     carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)), carray(accountp, (3,)),
-                     carray(dissipatedp, ({e},)), _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp), x_in,
-                     v_in, start, time, h, carray(resultp, (2,)))
+         dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp, target, whole, h, rest, forcep):
+    model = _net(massp, coefp, kindp, endsp, load_node, has_cubic)
+    work = _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp)
+    status, taken = move_node(model, carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)),
+                              carray(piecep, ({e},)), work, carray(accountp, (3,)), carray(dissipatedp, ({e},)),
+                              load_node, target, whole, h, rest)
+    forcep[0] = node_force(model, work[5], load_node)
+    return status
 '''
-
-BUDGET_EXCEEDED = -10
-
 
 def _library_pieces():
     """The compiled stand-ins of driver.initial_state, driver.initial_reaction, NetworkConnector.move_to (see the
@@ -110,10 +107,8 @@ def _library_pieces():
     from numba import njit
 
     from ..network import kernels as nk
-    from ..scene import ADVANCE_BUDGET
 
     SLIDER, DASHPOT, BRANCH, GROUND, KINK = nk.SLIDER, nk.DASHPOT, nk.BRANCH, nk.GROUND, nk.KINK
-    budget = float(ADVANCE_BUDGET)
 
     @njit
     def initial_reaction(model, x, v, u, force):
@@ -206,61 +201,7 @@ def _library_pieces():
         reaction[0] = initial_reaction(model, x, v, u, force)
         return 0
 
-    @njit
-    def reaction_force(model, term):
-        """NetworkConnector._reaction_force: the force of the elements on the load's node."""
-        mass, kind, ends, coef, load_node, has_cubic = model
-        total = 0.0
-        for e in range(kind.shape[0]):
-            if ends[e, 0] == load_node:
-                total += term[e]
-            elif ends[e, 1] == load_node:
-                total -= term[e]
-        return total
-
-    @njit
-    def move_node(model, x, v, u, piece, account, dissipated, work, x_in, v_in, start, time, h, result):
-        """NetworkConnector.move_to(x_in, v_in, time) from ``start`` (its committed time): result = (the force on
-        the load's node, the reaction). Returns 0, or the status of a step that failed (the state is then
-        partly moved: the caller rolls back), BUDGET_EXCEEDED before any step."""
-        node = model[4]
-        x_start = x[node]
-        duration = time - start
-        reaction = 0.0
-        if duration == 0:
-            status = nk.solve_step(model, x, v, u, piece, max(h, 1.0), 0.0, node, x_in - x_start, work)
-            if status < 0:
-                return status
-            reaction = nk.commit(model, x, v, u, piece, max(h, 1.0), 0.0, work, account, dissipated)
-        else:
-            ratio = duration / h  # driver.split_duration
-            nearest = np.rint(ratio)
-            if nearest >= 1 and abs(ratio - nearest) <= 1e-9:
-                whole, rest = nearest, 0.0
-            else:
-                whole = np.floor(ratio)
-                rest = duration - whole * h
-            total = whole + (1.0 if rest > 0 else 0.0)
-            if total > budget:
-                return -10
-            done = 0.0
-            for p in range(int(total)):
-                step = h if p < whole else rest
-                done += step
-                fraction = done / duration  # min(1.0, done / duration) as Python's builtin picks
-                if fraction >= 1.0:
-                    fraction = 1.0
-                target = x_start + (x_in - x_start) * fraction
-                status = nk.solve_step(model, x, v, u, piece, step, 0.0, node, target - x[node], work)
-                if status < 0:
-                    return status
-                reaction = nk.commit(model, x, v, u, piece, step, 0.0, work, account, dissipated)
-        v[node] = v_in
-        result[0] = reaction_force(model, work[5])
-        result[1] = reaction
-        return 0
-
-    return dict(instant_state=instant_state, move_node=move_node, initial_reaction=initial_reaction)
+    return dict(instant_state=instant_state, initial_reaction=initial_reaction)
 
 
 _PIECES = {}
@@ -291,6 +232,7 @@ def compile_network(scene, steppers, connector: bool) -> list:
     compiled = []
     for stepper in [None] + list(steppers):
         namespace = dict(carray=carray, np=np, kinetic=nk.kinetic, stored=nk.stored, force_at=force_at,
+                         move_node=nk.move_node, node_force=nk.node_force,
                          run=loop_for(stepper) if stepper else None, **library_pieces())
         exec(compile(source, f"<prandtl_fmu native network kernels of {scene.source}>", "exec"), namespace)
         for helper in ("_net", "_work", "_load"):  # inlined into each C function
