@@ -336,8 +336,8 @@ and <code>force</code> is the force of the network's elements on {load} (what ho
         stepping = f"""<h2>Stepping</h2>
 <p>The inputs set at a communication point belong to that time. <code>doStep(t, H)</code> commits the sample set
 at t: the library moves {load} from the last committed sample to it along a line in implicit steps of the
-parameter <code>step</code> (default {scene.solver.step:g} s). The outputs always show the network at the inputs
-set last and the FMU's current time, without committing (<code>force</code> depends directly on
+parameter <code>step</code> (default {scene.solver.step:g} s). The outputs always show the network with the
+inputs and parameters set last at the FMU's current time, without committing (<code>force</code> depends directly on
 <code>x</code> and <code>v</code>): a master may set x several times at one communication point. The first
 sample is taken as an instant move from the scene's x0. A non-finite input at doStep is refused (fmi2Discard,
 a logged message, the state unchanged); a bad parameter is refused with its reason ({refusal} at

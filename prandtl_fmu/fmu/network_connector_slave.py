@@ -14,8 +14,8 @@ element FMU (``network_slave.py``); parameters: every coefficient by its scene n
 Semantics: the inputs set at a communication point belong to that time. ``doStep(t, H)`` commits the sample
 set at t (the library moves the load's node along a line from the last committed sample, in implicit steps of
 ``step``; the first sample is an instant move from the scene's x0). The outputs always show the network at the
-inputs set last and the FMU's current time, without committing: ``force`` depends directly on ``x`` and ``v``,
-and a master may set x several times at one communication point.
+inputs and parameters set last and the FMU's current time, without committing: ``force`` depends directly on
+``x`` and ``v``, and a master may set x several times at one communication point.
 
 Refusals: a non-finite input at ``doStep``, a motion the library cannot follow (``ElementError``) or a
 parameter it refuses (``SceneError``) is logged and the step returns fmi2Discard with the state unchanged; an
@@ -30,7 +30,7 @@ from .. import __version__
 from ..driver import ElementError
 from ..network import NetworkConnector
 from ..scene import SceneError
-from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
+from .common import DBL_MAX, SMALLEST, Refused, SlaveBase, finite_number
 from .description import RealVariable, complete
 from .network_slave import check_unique, network_outputs, parameter_variables, rebuilt, restored
 
@@ -104,7 +104,11 @@ class PrandtlNetworkConnector(SlaveBase):
     # ------------------------------------------------------------ the network at the inputs
 
     def _current(self):
-        """The connector moved to the inputs set last at the FMU's current time, not committed (cached)."""
+        """The connector with the parameters set last, moved to the inputs set last at the FMU's current time,
+        not committed (cached)."""
+        problem = self._hand_over_settings()
+        if problem is not None:  # no output is handed out for a network the library refuses
+            self._fail(f"{problem}: the outputs of a network with it are not numbers (a doStep would be refused)")
         connector = self.connector
         key = (self.x, self.v, self.time, connector._memo("revision", object))  # a new object per state
         if key != self._preview_key:
@@ -169,6 +173,9 @@ class PrandtlNetworkConnector(SlaveBase):
         except ElementError as exc:  # the library cannot follow the motion: fmi2Discard, the connector as it was
             self.time = now
             return self._refuse(f"step from t = {current_time!r} with x = {self.x!r} refused: {exc}")
+        except Refused:
+            self.time = now
+            raise
         except Exception as exc:
             self.time = now
             self._fail(f"step from t = {current_time!r} with x = {self.x!r} refused ({exc.__class__.__name__}: "
