@@ -56,7 +56,7 @@ import math
 
 import numpy as np
 
-from ._jit import kernel
+from ._jit import inline_kernel, kernel
 
 # --- Philox4x32-10 (Random123) -------------------------------------------------------------------------------
 
@@ -196,7 +196,7 @@ def _root(seed):
     return np.int64(math.floor(_ROOT_SD * normal(seed, _ROOT_STREAM, 0) + 0.5))
 
 
-@kernel
+@inline_kernel
 def _reset_if_foreign(seed, cache):
     if cache[_TAG] != _CACHE_TAG or cache[_SEED] != seed:
         cache[_TAG] = _CACHE_TAG
@@ -205,7 +205,7 @@ def _reset_if_foreign(seed, cache):
         cache[_FINE_K] = -1
 
 
-@kernel
+@inline_kernel
 def _coarse(seed, k, cache):
     """(W(k), W(k + 1)) in coarse quanta, 0 <= k < 2^52, through the cache's coarse path."""
     held = cache[_COARSE_K]
@@ -230,7 +230,7 @@ def _coarse(seed, k, cache):
     return cache[_CL + LEVELS], cache[_CR + LEVELS]
 
 
-@kernel
+@inline_kernel
 def _fine(seed, k, bits, unit_increment, cache):
     """W(k + bits 2^-52) - W(k) in fine quanta, 0 < bits < 2^52, given W(k + 1) - W(k) (fine quanta), through
     the cache's fine path."""
@@ -263,7 +263,7 @@ def _fine(seed, k, bits, unit_increment, cache):
     return cache[_FL + depth]
 
 
-@kernel
+@inline_kernel
 def point(seed, t, cache):
     """W(t) as the exact pair (W(k) in 2^-32 units, W(t) - W(k) in 2^-48 units), k = floor(t)."""
     if not t > 0.0:  # t <= 0 and NaN
