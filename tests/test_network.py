@@ -169,22 +169,27 @@ def test_massless_chain_driven_by_its_end_motion(wall):
 # ------------------------------------------------------------------ 2. an independent backward Euler
 
 class BruteForceEuler:
-    """Backward Euler for nodes with masses m (all > 0), springs (linear) and sliders, the load F on one node:
+    """Backward Euler for nodes with masses m (0: a massless node, in equilibrium), springs (linear), dashpots
+    and sliders, the load F on one node:
 
-        m (w - v) / h = F(t + h) e_L - K (x + h w) - sum_s g_s f_s,   f_s in alpha_s Sign(g_s . w),
+        m (w - v) / h = F(t + h) e_L - K (x + h w) - C w - sum_s g_s f_s,   f_s in alpha_s Sign(g_s . w),
 
     with w the new velocities, g_s the incidence row of slider s (e_i - e_j, or e_i to the ground). Each step
     tries the sliders' states (stuck: g_s . w = 0 and f_s unknown; slipping: f_s = +-alpha_s) and keeps the
     one that is consistent (|f_s| <= alpha_s, sign(g_s . w) = the slip's sign): the KKT point of a strictly
     convex problem, hence the step. The previous step's states are tried first (the answer is unique)."""
 
-    def __init__(self, mass, springs, sliders, load_node, force):
+    def __init__(self, mass, springs, sliders, load_node, force, dashpots=()):
         self.m = np.asarray(mass, float)
         n = self.n = len(mass)
         self.K = np.zeros((n, n))
         for i, j, k in springs:
             g = self.row(i, j)
             self.K += k * np.outer(g, g)
+        self.C = np.zeros((n, n))  # dashpots: force c (w_i - w_j) at the new velocities
+        for i, j, c in dashpots:
+            g = self.row(i, j)
+            self.C += c * np.outer(g, g)
         self.G = np.array([self.row(i, j) for i, j, _ in sliders]).reshape(len(sliders), n)
         self.alpha = np.array([a for _, _, a in sliders], float)
         self.load_node = load_node
@@ -220,7 +225,7 @@ class BruteForceEuler:
         return w
 
     def step(self, t, h, x, v):
-        A = np.diag(self.m / h) + h * self.K
+        A = np.diag(self.m / h) + h * self.K + self.C
         b = self.m * v / h - self.K @ x
         b[self.load_node] += self.force(t + h)
         candidates = itertools.chain([self.states], itertools.product((0, 1, -1), repeat=len(self.alpha)))
@@ -283,14 +288,17 @@ def test_two_masses_order_one_in_h():
     assert np.all((ratios > 1.5) & (ratios < 2.6)), ratios
 
 
-def test_chain_with_masses_against_brute_force_backward_euler():
+@pytest.mark.parametrize("damped", [False, True])
+def test_chain_with_masses_against_brute_force_backward_euler(damped):
     n, h, stop = 4, 0.005, 6.0
     m, k, alpha, k_wall = [1.0, 0.7, 1.2, 0.9], [3.0, 2.0, 4.0], [0.2, 0.3, 0.25, 0.4], 2.0
+    c = [0.3, 0.1, 0.2, 0.05] if damped else None
     load = {"kind": "harmonic", "amplitude": 1.0, "omega": 1.1, "offset": 0.0}
-    result = simulate(parse_scene(chain_text(n, m, k, alpha, load, solver(h, stop), k_wall=k_wall)))
+    result = simulate(parse_scene(chain_text(n, m, k, alpha, load, solver(h, stop), k_wall=k_wall, c=c)))
     springs = [(0, None, k_wall)] + [(i, i + 1, k[i]) for i in range(n - 1)]
     sliders = [(i, None, alpha[i]) for i in range(n)]
-    reference = BruteForceEuler(m, springs, sliders, n - 1, lambda t: math.cos(1.1 * t))
+    dashpots = [(i, None, c[i]) for i in range(n)] if damped else ()
+    reference = BruteForceEuler(m, springs, sliders, n - 1, lambda t: math.cos(1.1 * t), dashpots)
     x, v = reference.run(np.zeros(n), np.zeros(n), h, round(stop / h))
     # every node both sticks and slips (the solve of the reference leaves 1e-30 where a node is held)
     for i in range(n):
@@ -298,6 +306,59 @@ def test_chain_with_masses_against_brute_force_backward_euler():
         assert np.sum(held) > 10 and np.sum(~held) > 10
     np.testing.assert_allclose(result.x, x, rtol=0, atol=1e-12 * np.abs(x).max())
     np.testing.assert_allclose(result.v, v, rtol=0, atol=1e-11 * np.abs(v).max())
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4, 5])
+def test_random_network_against_brute_force_backward_euler(seed):
+    """Four nodes, one massless (held by its own spring), sliders forming a tree through the ground (no loop
+    of sliders: the rule of check_topology), springs and a dashpot at random, the load on a random node."""
+    rng = np.random.default_rng(seed)
+    nodes = ["p", "q", "r", "s"]
+    n = len(nodes)
+    mass = rng.uniform(0.5, 2.0, n)
+    mass[rng.integers(n)] = 0.0
+
+    def name(j):
+        return "ground" if j is None else nodes[j]
+
+    springs = [(j, None, float(rng.uniform(1.0, 4.0))) for j in range(n)]
+    for _ in range(2):
+        i, j = rng.choice(n, 2, replace=False)
+        springs.append((int(i), int(j), float(rng.uniform(0.5, 3.0))))
+    order = rng.permutation(n)
+    sliders = []
+    for position, j in enumerate(order):  # each node on a slider to the ground or to a node before it
+        other = None if position == 0 or rng.random() < 0.4 else int(order[rng.integers(position)])
+        sliders.append((int(j), other, float(rng.uniform(0.1, 0.6))))
+    i, j = rng.choice(n, 2, replace=False)
+    dashpots = [(int(i), int(j), float(rng.uniform(0.05, 0.5)))]
+    load_node = int(rng.integers(n))
+    amplitude, omega = float(rng.uniform(1.0, 3.0)), float(rng.uniform(0.5, 2.0))
+    elements = ([("spring", {"between": [name(i), name(j)], "k": k}) for i, j, k in springs]
+                + [("slider", {"between": [name(i), name(j)], "alpha": a}) for i, j, a in sliders]
+                + [("dashpot", {"between": [name(i), name(j)], "c": c}) for i, j, c in dashpots])
+    v0 = rng.uniform(-0.5, 0.5, n) * (mass > 0)
+    h, stop = 0.004, 6.0
+    text = network_text(nodes, mass, elements, {"kind": "harmonic", "amplitude": amplitude, "omega": omega,
+                                               "offset": 0.0}, solver(h, stop), v0=v0, load_node=nodes[load_node])
+    result = simulate(parse_scene(text))
+    reference = BruteForceEuler(mass, springs, sliders, load_node, lambda t: amplitude * math.cos(omega * t),
+                                dashpots)
+    # from the library's first row (the massless node's initial equilibrium is checked below)
+    x, v = reference.run(result.x[0], result.v[0], h, round(stop / h))
+    massless = int(np.flatnonzero(mass == 0)[0])
+    np.testing.assert_allclose(result.x, x, rtol=0, atol=1e-11 * np.abs(x).max())
+    np.testing.assert_allclose(result.v[1:], v[1:], rtol=0, atol=1e-10 * np.abs(v).max())
+    assert np.abs(x[:, massless]).max() > 0.01  # the massless node moves
+    # its initial position balances the forces on it at F(0), its sliders holding at most their alpha (a
+    # dashpot on it holds it at its x0 at the instant t = 0: not this check's case)
+    if any(massless in (i, j) for i, j, _ in dashpots):
+        assert np.all(result.x[0] == 0.0)
+        return
+    stuck = [s for s in sliders if massless in (s[0], s[1])]
+    force = sum(-k * (result.x[0, i] - (0.0 if j is None else result.x[0, j])) * (1 if i == massless else -1)
+                for i, j, k in springs if massless in (i, j)) + (amplitude if load_node == massless else 0.0)
+    assert abs(force) <= sum(a for _, _, a in stuck) * (1 + 1e-12) + 1e-12
 
 
 # ------------------------------------------------------------------ 3. one node is the element
