@@ -485,7 +485,8 @@ def test_cubic_spring_step_solves_backward_euler():
     bad = np.abs(residual) > 1e-13 * terms
     worst = int(np.argmax(np.abs(residual) / terms))
     assert not bad.any(), (f"{bad.sum()} of {bad.size} steps off backward Euler; worst: the step to t = "
-                           f"{float(t[worst + 1])!r}, x = {float(x[worst + 1])!r}, v = {float(v[worst + 1])!r}: residual "
+                           f"{float(t[worst + 1])!r}, x = {float(x[worst + 1])!r}, v = {float(v[worst + 1])!r}: "
+                           "residual "
                            f"{float(residual[worst])!r} N against terms of {float(terms[worst])!r} N")
     np.testing.assert_allclose(x[1:] - x[:-1], h * v[1:], rtol=0, atol=1e-15 * np.abs(x).max())
 
