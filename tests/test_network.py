@@ -724,6 +724,24 @@ def test_columns_and_parameter_names_of_a_chain():
     assert parameters == expected_parameters
 
 
+def test_chain_is_its_network():
+    """[chain] is the shorthand of a [network]: springs k_i between n<i> and n<i+1>, each node on a slider
+    alpha_i and a dashpot c_i to the support, k_wall from n1 to the ground, the load on the last node."""
+    m, k, alpha, c = [1.0, 0.0, 2.0, 0.5], [1.0, 2.0, 3.0], [0.1, 0.2, 0.3, 0.4], [0.5, 0.6, 0.7, 0.8]
+    load = {"kind": "harmonic", "amplitude": 1.5, "omega": 2.0, "offset": 0.0}
+    settings = solver(0.005, 5.0, 0.05)
+    chain = simulate(parse_scene(chain_text(4, m, k, alpha, load, settings, k_wall=5.0, c=c)))
+    nodes = ["n1", "n2", "n3", "n4"]
+    elements = [("spring", {"between": ["n1", "ground"], "k": 5.0})]
+    elements += [("spring", {"between": [nodes[i], nodes[i + 1]], "k": k[i]}) for i in range(3)]
+    elements += [("slider", {"between": [nodes[i], "ground"], "alpha": alpha[i]}) for i in range(4)]
+    elements += [("dashpot", {"between": [nodes[i], "ground"], "c": c[i]}) for i in range(4)]
+    network = simulate(parse_scene(network_text(nodes, m, elements, load, settings)))
+    assert network.names == chain.names
+    assert np.abs(chain.x[:, -1]).max() > 0.1
+    np.testing.assert_allclose(chain.table, network.table, rtol=0, atol=1e-13 * np.abs(chain.table).max())
+
+
 def test_columns_with_states_and_energy_and_the_reaction():
     scene = energy_scene(0.01, stop=0.5, output=0.1)
     result = simulate(scene, states=True, energy=True)
