@@ -8,8 +8,8 @@ Nothing here depends on a step, an output interval, a communication step or the 
 Construction (every normal is keyed by its place in the tree, never drawn from a stream):
 
 * the generator is Philox4x32-10 (Salmon et al., SC'11; Random123's known answers in the tests), keyed by the
-  64-bit seed, with a 128-bit counter (stream, index); a normal is Box-Muller's cosine of two 53-bit
-  uniforms, u1 in (0, 1] and u2 in [0, 1): z = sqrt(-2 ln u1) cos(2 pi u2);
+  64-bit seed, with a 128-bit counter (stream, index); a normal is Marsaglia and Tsang's ziggurat (128 layers,
+  Doornik's ZIGNOR) on one Philox block per attempt (98.8 % end at the first: a product and a comparison);
 * the coarse tree: W(0) = 0, W(2^52) = 2^26 z_root, and the midpoint of every dyadic interval [l, r] of
   [0, 2^52] down to width 1 is the Brownian bridge (W(l) + W(r)) / 2 + sqrt(r - l) / 2 * z(level, index).
   This gives W(k) at every integer k (a random walk with N(0, 1) steps) in 52 bridge draws, not k;
@@ -33,13 +33,17 @@ What is exact and what is not:
   [m, b] (two half steps equal one step, in floating point, not only in law). Larger increments are rounded
   once (to 1 ulp);
 * the domain is 0 <= t < 2^52 units (4.5e15); t <= 0 or NaN gives W(0) = 0, t >= 2^52 gives W(2^52).
-* the normals are exact transforms of 53-bit uniforms: |z| <= 8.6 (a tail of probability 1e-17 cut off).
+* the normals are exact in law (rejection) up to the tables' rounding (1e-13) and a total variation below
+  1e-15 (eight rejections in a row keep the last candidate);
+* the same bits on every machine: only IEEE +, -, *, /, sqrt, floor and integer operations, no libm (exp and
+  log are written here, for the ziggurat's wedges and tail and for its tables; the tables and the bridge's
+  constants come from the same operations at import), so the native runtime's compiled path equals this one.
 
 Cost, work per call bounded (only bounded loops, no allocation, no exception: compilable as a numba cfunc;
 the state is plain int64):
 
-* a call descends at most 52 coarse and 52 fine levels: at most 104 draws of the generator (one Philox block,
-  one log, one sqrt, one cosine each), whatever t, h or the cache;
+* a call descends at most 52 coarse and 52 fine levels: at most 105 normals (the root's, then one per level;
+  a normal is one Philox block 98.8 % of the time, at most 16), whatever t, h or the cache;
 * the cache (:func:`new_cache`, a small int64 array the caller keeps; all zeros is a new cache) holds the two
   root-to-leaf paths last walked. A query reuses the levels it shares with them, so stepping forward by h costs
   the levels below the first bit where t and t + h differ: amortized O(1) draws per step (about one) when the
@@ -68,7 +72,6 @@ _PHILOX_M1 = np.uint64(0xCD9E8D57)
 _PHILOX_W0 = np.uint64(0x9E3779B9)
 _PHILOX_W1 = np.uint64(0xBB67AE85)
 _TWO_POW_M53 = 2.0 ** -53
-_TWO_PI = 2.0 * math.pi
 
 
 @kernel
@@ -104,13 +107,137 @@ def uniform(seed, stream, index):
 
 
 @kernel
+def _bit_length(x):
+    """The number of bits of 0 <= x < 2^63 (0 for 0)."""
+    n = 0
+    if x >= (1 << 32):
+        x >>= 32
+        n += 32
+    if x >= (1 << 16):
+        x >>= 16
+        n += 16
+    if x >= (1 << 8):
+        x >>= 8
+        n += 8
+    if x >= (1 << 4):
+        x >>= 4
+        n += 4
+    if x >= (1 << 2):
+        x >>= 2
+        n += 2
+    if x >= (1 << 1):
+        x >>= 1
+        n += 1
+    if x >= 1:
+        n += 1
+    return n
+
+
+# --- exp and log in plain arithmetic: the same bits on every machine (no libm) ------------------------------------
+
+_LN2_HI = 6.93147180369123816490e-01  # fdlibm's split of ln 2: n * _LN2_HI is exact for |n| < 2^20
+_LN2_LO = 1.90821492927058770002e-10
+_INV_LN2 = 1.44269504088896338700e+00
+_SQRT2 = math.sqrt(2.0)  # IEEE square roots are correctly rounded: the same everywhere
+_POW2 = np.array([math.ldexp(1.0, n) for n in range(-64, 65)])  # 2^n, |n| <= 64
+_EXP_TAYLOR = np.array([1.0 / math.factorial(n) for n in range(14)])
+
+
+@kernel
+def _exp(x):
+    """e^x for |x| <= 40, to about 1 ulp: x = n ln 2 + r, |r| <= ln 2 / 2, and Taylor to r^13 (below 1e-17)."""
+    n = math.floor(x * _INV_LN2 + 0.5)
+    r = (x - n * _LN2_HI) - n * _LN2_LO
+    p = _EXP_TAYLOR[13]
+    for k in range(12, -1, -1):
+        p = p * r + _EXP_TAYLOR[k]
+    return p * _POW2[np.int64(n) + 64]
+
+
+@kernel
+def _log_mantissa(m):
+    """ln m for m in [sqrt(1/2), sqrt(2)]: 2 atanh((m - 1) / (m + 1)) to s^19 (below 1e-17)."""
+    s = (m - 1.0) / (m + 1.0)
+    s2 = s * s
+    p = 1.0 / 19.0
+    for k in range(17, 0, -2):
+        p = p * s2 + 1.0 / k
+    return 2.0 * s * p
+
+
+@kernel
+def _log_uniform(bits):
+    """ln U for U = (bits + 1) 2^-53 in (0, 1], bits a 53-bit integer (uint64)."""
+    m = np.int64(bits) + 1
+    e = _bit_length(m) - 1  # m = 2^e * mantissa, mantissa in [1, 2)
+    mantissa = np.float64(m) * _POW2[64 - e]
+    if mantissa > _SQRT2:
+        mantissa *= 0.5
+        e += 1
+    power = np.float64(e - 53)
+    return _log_mantissa(mantissa) + power * _LN2_LO + power * _LN2_HI
+
+
+def _log_table(x):
+    """ln x for a positive double (for the tables, at import)."""
+    mantissa, e = math.frexp(x)  # exact: x = mantissa 2^e, mantissa in [1/2, 1)
+    mantissa, e = mantissa * 2.0, e - 1
+    if mantissa > _SQRT2:
+        mantissa, e = mantissa * 0.5, e + 1
+    return _log_mantissa.py_func(mantissa) + e * _LN2_LO + e * _LN2_HI
+
+
+# --- the standard normal: Marsaglia and Tsang's ziggurat (Doornik's ZIGNOR, 128 layers) -----------------------------
+
+# R and V solve the ziggurat's two closing conditions to 40 digits (mpmath): the base layer R f(R) + the tail
+# integral = V, and the 127th layer ends at the mode (Doornik's 13-digit R leaves it open by 1e-9)
+_ZIG_R = 3.442619855896652
+_ZIG_V = 0.009912563035336461
+
+
+def _ziggurat_tables():
+    f = _exp.py_func(-0.5 * _ZIG_R * _ZIG_R)
+    x = [_ZIG_V / f, _ZIG_R]
+    for _ in range(2, 128):
+        x.append(math.sqrt(-2.0 * _log_table(_ZIG_V / x[-1] + f)))
+        f = _exp.py_func(-0.5 * x[-1] * x[-1])
+    x.append(0.0)
+    x = np.array(x)
+    return x, x[1:] / x[:-1]
+
+
+_ZIG_X, _ZIG_RATIO = _ziggurat_tables()
+_ZIG_ATTEMPTS = 8  # all eight rejected: probability below 1e-15
+_LAYER = np.uint64(127)
+_TWO_POW_M52 = 2.0 ** -52
+
+
+@kernel
 def normal(seed, stream, index):
-    """A standard normal, a function of (seed, stream, index) only: Box-Muller's cosine of two 53-bit uniforms
-    of one Philox block."""
-    a, b = _block(seed, stream, index)
-    u1 = (np.float64(a >> _SHIFT11) + 1.0) * _TWO_POW_M53  # (0, 1]: the log is finite
-    u2 = np.float64(b >> _SHIFT11) * _TWO_POW_M53
-    return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
+    """A standard normal, a function of (seed, stream, index) only (bits 58-62 of the stream must be clear: the
+    attempts use them). The ziggurat: one Philox block per attempt, a layer from 7 bits and a point from 53;
+    98.8 % of attempts end in the layer's core (a product and a comparison), the rest take the wedge test (two
+    exponentials) or the tail beyond R (Marsaglia's, two logarithms). Exact in law up to the tables' rounding
+    and a total variation below 1e-15 (eight rejections in a row return the last candidate)."""
+    x = 0.0
+    for attempt in range(_ZIG_ATTEMPTS):
+        a, b = _block(seed, stream ^ (attempt << 58), index)
+        layer = np.int64(a & _LAYER)
+        u = np.float64(a >> _SHIFT11) * _TWO_POW_M52 - 1.0  # [-1, 1)
+        x = u * _ZIG_X[layer]
+        if abs(u) < _ZIG_RATIO[layer]:
+            return x
+        if layer == 0:  # beyond R: the tail, from a block of its own
+            c, d = _block(seed, stream ^ ((attempt + 16) << 58), index)
+            beyond = -_log_uniform(c >> _SHIFT11) / _ZIG_R
+            if -2.0 * _log_uniform(d >> _SHIFT11) > beyond * beyond:
+                return _ZIG_R + beyond if u > 0.0 else -_ZIG_R - beyond
+            continue
+        f0 = _exp(-0.5 * (_ZIG_X[layer] * _ZIG_X[layer] - x * x))
+        f1 = _exp(-0.5 * (_ZIG_X[layer + 1] * _ZIG_X[layer + 1] - x * x))
+        if f1 + np.float64(b >> _SHIFT11) * _TWO_POW_M53 * (f0 - f1) < 1.0:
+            return x
+    return x
 
 
 # --- the virtual Brownian tree ---------------------------------------------------------------------------------
@@ -126,9 +253,16 @@ _EXACT_DIFFERENCE = 1 << 46  # |W(b) - W(k)| in coarse quanta below which the di
 _FINE_SCALE = 2.0 ** LEVELS
 
 # the bridge's standard deviation sqrt(r - l) / 2 in quanta, at the midpoint of an interval of level L
-_COARSE_SD = np.array([2.0 ** (_COARSE_Q + (LEVELS - level) / 2.0 - 1.0) for level in range(LEVELS)])
-_FINE_SD = np.array([2.0 ** (_FINE_Q - level / 2.0 - 1.0) for level in range(LEVELS)])
-_ROOT_SD = 2.0 ** (_COARSE_Q + LEVELS / 2.0)
+
+
+def _half_sqrt_width(log2_width, quantum_bits):
+    """sqrt(2^log2_width) / 2 in quanta of 2^-quantum_bits, from IEEE operations only (the same everywhere)."""
+    return math.ldexp(_SQRT2 if log2_width % 2 else 1.0, quantum_bits + log2_width // 2 - 1)
+
+
+_COARSE_SD = np.array([_half_sqrt_width(LEVELS - level, _COARSE_Q) for level in range(LEVELS)])
+_FINE_SD = np.array([_half_sqrt_width(-level, _FINE_Q) for level in range(LEVELS)])
+_ROOT_SD = _half_sqrt_width(LEVELS, _COARSE_Q) * 2.0
 
 # streams of the generator: bit 63 tells the coarse tree (level in bits 52-57) from the fine (level in bits
 # 52-57, the unit k in bits 0-51); the index is the interval's rank on its level
@@ -158,33 +292,6 @@ def new_cache():
 
 
 @kernel
-def _bit_length(x):
-    """The number of bits of 0 <= x < 2^63 (0 for 0)."""
-    n = 0
-    if x >= (1 << 32):
-        x >>= 32
-        n += 32
-    if x >= (1 << 16):
-        x >>= 16
-        n += 16
-    if x >= (1 << 8):
-        x >>= 8
-        n += 8
-    if x >= (1 << 4):
-        x >>= 4
-        n += 4
-    if x >= (1 << 2):
-        x >>= 2
-        n += 2
-    if x >= (1 << 1):
-        x >>= 1
-        n += 1
-    if x >= 1:
-        n += 1
-    return n
-
-
-@kernel
 def _bridge(left, right, z, sd):
     """The midpoint of a Brownian bridge from ``left`` to ``right`` (int64 quanta), sd in quanta."""
     return left + ((right - left) >> 1) + np.int64(math.floor(sd * z + 0.5))
@@ -206,6 +313,17 @@ def _reset_if_foreign(seed, cache):
 
 
 @inline_kernel
+def _take_other_half(cache, left, right, level, held_went_right):
+    """Step from the interval at ``level`` into the half the held path did not take, whose midpoint it holds."""
+    if held_went_right:
+        cache[right + level + 1] = cache[left + level + 1]
+        cache[left + level + 1] = cache[left + level]
+    else:
+        cache[left + level + 1] = cache[right + level + 1]
+        cache[right + level + 1] = cache[right + level]
+
+
+@inline_kernel
 def _coarse(seed, k, cache):
     """(W(k), W(k + 1)) in coarse quanta, 0 <= k < 2^52, through the cache's coarse path."""
     held = cache[_COARSE_K]
@@ -216,6 +334,9 @@ def _coarse(seed, k, cache):
         shared = 0
     else:
         shared = LEVELS - _bit_length(k ^ held)
+        if shared < LEVELS:  # k leaves the held path here: the other half of this interval is already known
+            _take_other_half(cache, _CL, _CR, shared, (held >> (LEVELS - 1 - shared)) & 1)
+            shared += 1
     for level in range(shared, LEVELS):
         mid = _bridge(cache[_CL + level], cache[_CR + level],
                       normal(seed, _COARSE_STREAM | (level << 52), k >> (LEVELS - level)), _COARSE_SD[level])
@@ -245,8 +366,11 @@ def _fine(seed, k, bits, unit_increment, cache):
         shared = 0
     else:
         shared = min(held_depth, LEVELS - _bit_length(bits ^ held_bits))
-    if shared >= depth:
-        return cache[_FL + depth]
+        if shared >= depth:
+            return cache[_FL + depth]
+        if shared < held_depth:  # the held path went on through this interval's midpoint
+            _take_other_half(cache, _FL, _FR, shared, (held_bits >> (LEVELS - 1 - shared)) & 1)
+            shared += 1
     stream = k  # the unit in bits 0-51, the level in bits 52-57
     for level in range(shared, depth):
         mid = _bridge(cache[_FL + level], cache[_FR + level],
@@ -280,14 +404,14 @@ def point(seed, t, cache):
     return left, _fine(seed, k, bits, (right - left) << _COARSE_TO_FINE, cache)
 
 
-@kernel
+@inline_kernel
 def brownian(seed, t, cache):
     """W(t) in the caller's time unit (a double: rounded once from the exact pair of :func:`point`)."""
     coarse, fine = point(seed, t, cache)
     return np.float64(coarse) * _COARSE_QUANTUM + np.float64(fine) * _FINE_QUANTUM
 
 
-@kernel
+@inline_kernel
 def increment(seed, a, b, cache):
     """W(b) - W(a): the exact difference of the two values, converted once to a double (exact, and additive
     over adjacent intervals bit for bit, when |W(b) - W(a)| < 32 units). Cheapest with a = the previous b."""
