@@ -54,7 +54,15 @@ the state is plain int64):
   a cache whose header does not match the seed is reset. A cache is a new one or one these functions wrote.
   ``cache[DRAWS]`` counts the normals drawn (for the tests and benchmarks; it never enters a value).
 
-``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times.
+Use in a stepper: keep one cache per path (seed) beside the loop's scratch, never in the saved state; at step p
+take dW = increment(seed, tau_p, tau_p+1, cache) with tau_p = p * (h / T0), and choose the unit T0 so that
+h / T0 is a power of two for every step size of a refinement study (T0 = the coarsest step: tau_p = p for it,
+p / 2^i for h / 2^i). Every query is then a point of the tree: about one normal per step, and the steps h and
+h / 2 see the same path bit for bit. A restored or rolled-back state needs only its time.
+
+``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times (2026-11, a loaded
+2-core x86_64: 160 ns per step with dyadic step times, one normal; 2.1 us with h = 1e-3 units, 34 normals; 5 us
+at random times; a normal 55 ns; the deterministic 7-branch implicit step 590 ns, projected 190 ns).
 """
 import math
 
