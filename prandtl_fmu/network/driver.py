@@ -132,23 +132,39 @@ def initial_state(scene: NetworkScene, model, load):
 
 
 def initial_reaction(scene: NetworkScene, model, x, v, u, force: float) -> float:
-    """The reaction at t = 0: the elements' forces on the ground in the initial state; a slider to the ground
-    slips against its node's velocity, or holds the other forces on its node up to alpha."""
+    """The reaction at t = 0: the elements' forces on the ground in the initial state. What holds a massless
+    node (a dashpot's force c v at t = 0+ included: a massless network passes the whole of F(0) to the ground)
+    is the instant's equilibrium; a slider of a massive node slips against its velocity, or holds the other
+    forces on its node up to alpha."""
     mass, kind, ends, coef, load_node, has_cubic = model
     term = np.zeros(kind.shape[0])
     kernels.forces_now(model, x, v, u, term)
+    massless = ~(mass > 0)
+    if np.any(massless):  # the instant's forces (its solve from the equilibrium found by initial_state)
+        instant, extra = instant_model(model)
+        work = kernels.workspace(mass.shape[0], instant[1].shape[0])
+        piece = np.zeros(instant[1].shape[0], dtype=np.int64)
+        status = kernels.solve_step(instant, x.copy(), np.zeros(mass.shape[0]), np.concatenate([np.zeros(extra), u]),
+                                    piece, 1.0, force, -1, 0.0, work)
+        if status >= 0:
+            held = work[5][extra:]
+            for e in range(kind.shape[0]):
+                if massless[ends[e, 0]] or (ends[e, 1] >= 0 and massless[ends[e, 1]]):
+                    term[e] = held[e]
     net = np.zeros(mass.shape[0])
     net[load_node] += force
     for e in range(kind.shape[0]):
-        net[ends[e, 0]] -= term[e]
-        if ends[e, 1] >= 0:
-            net[ends[e, 1]] += term[e]
+        if kind[e] != kernels.SLIDER:
+            net[ends[e, 0]] -= term[e]
+            if ends[e, 1] >= 0:
+                net[ends[e, 1]] += term[e]
     total = 0.0
     for e in range(kind.shape[0]):
         if ends[e, 1] != kernels.GROUND:
             continue
-        if kind[e] == kernels.SLIDER:
-            i, alpha = ends[e, 0], coef[e, 0]
+        i = ends[e, 0]
+        if kind[e] == kernels.SLIDER and not massless[i]:
+            alpha = coef[e, 0]
             total += alpha * math.copysign(1.0, v[i]) if v[i] != 0 else min(max(net[i], -alpha), alpha)
         else:
             total += term[e]

@@ -220,7 +220,7 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
     for j in range(n):
         inertia = mass[j] / (h * h) * (d[j] - h * v[j])
         grad[j] = inertia
-        scale[j] = abs(inertia)
+        scale[j] = mass[j] / (h * h) * (abs(d[j]) + abs(h * v[j]))  # the rounding's size, not the value's
     grad[load_node] -= force
     scale[load_node] += abs(force)
     for e in range(kind.shape[0]):
@@ -229,13 +229,14 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
             rel_x, delta = x[i], d[i]
         else:
             rel_x, delta = x[i] - x[j], d[i] - d[j]
-        f, _ = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
+        f, kappa = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
         term[e] = f
+        size = abs(f) + kappa * (abs(rel_x) + abs(delta) + abs(u[e]))  # f and what it cancelled
         grad[i] += f
-        scale[i] += abs(f)
+        scale[i] += size
         if j != GROUND:
             grad[j] -= f
-            scale[j] += abs(f)
+            scale[j] += size
 
 
 @kernel
@@ -533,7 +534,15 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
                 return -3
         band = _band(kind, ends, piece, cluster)
         a, rhs = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
-        diagonal = a[:, 0].copy()
+        balanced = True  # every free cluster's forces balance to their rounding (Newton's test, cubic springs)
+        if has_cubic:
+            size = np.zeros(count)
+            for j in range(n):
+                if cluster[j] >= 0:
+                    size[cluster[j]] += scale[j]
+            for c in range(count):
+                if abs(rhs[c]) > ROUNDING * size[c]:
+                    balanced = False
         top = 1.0
         row = 0
         while True:
@@ -561,14 +570,16 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             for j in range(n):
                 p[j] = q[cluster[j]] if cluster[j] >= 0 else 0.0
         converged = False
-        if has_cubic:  # Newton: converged when its step is rounding
-            # a step within what rounding makes of the forces (or of x + d) is no step
-            converged = top == 1.0
-            for j in range(n):
-                if cluster[j] >= 0 and diagonal[cluster[j]] > 0.0:  # (a floppy, balanced cluster has p = 0)
-                    noise = ROUNDING * (abs(x[j]) + abs(d[j]) + scale[j] / diagonal[cluster[j]])
-                    if abs(p[j]) > noise:
+        if has_cubic and top == 1.0:
+            # Newton has converged when the forces balance to their rounding, or when its step no longer
+            # changes the increment (it is below d's last bit)
+            converged = balanced
+            if not converged:
+                converged = True
+                for j in range(n):
+                    if abs(p[j]) > 4.0 * np.finfo(np.float64).eps * abs(d[j]):
                         converged = False
+                        break
         tau = 0.0 if converged else top
         blocker = -1
         for e in range(elements if not converged else 0):
