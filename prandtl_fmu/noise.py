@@ -9,7 +9,8 @@ Construction (every normal is keyed by its place in the tree, never drawn from a
 
 * the generator is Philox4x32-10 (Salmon et al., SC'11; Random123's known answers in the tests), keyed by the
   64-bit seed, with a 128-bit counter (stream, index); a normal is Marsaglia and Tsang's ziggurat (128 layers,
-  Doornik's ZIGNOR) on one Philox block per attempt (98.8 % end at the first: a product and a comparison);
+  Doornik's ZIGNOR) on one Philox block per attempt (an attempt accepts with probability 98.8 %; 97.2 % end
+  in a layer's core: a product and a comparison);
 * the coarse tree: W(0) = 0, W(2^52) = 2^26 z_root, and the midpoint of every dyadic interval [l, r] of
   [0, 2^52] down to width 1 is the Brownian bridge (W(l) + W(r)) / 2 + sqrt(r - l) / 2 * z(level, index).
   This gives W(k) at every integer k (a random walk with N(0, 1) steps) in 52 bridge draws, not k;
@@ -224,9 +225,10 @@ _TWO_POW_M52 = 2.0 ** -52
 def normal(seed, stream, index):
     """A standard normal, a function of (seed, stream, index) only (bits 58-62 of the stream must be clear: the
     attempts use them). The ziggurat: one Philox block per attempt, a layer from 7 bits and a point from 53;
-    98.8 % of attempts end in the layer's core (a product and a comparison), the rest take the wedge test (two
-    exponentials) or the tail beyond R (Marsaglia's, two logarithms). Exact in law up to the tables' rounding
-    and a total variation below 1e-15 (eight rejections in a row return the last candidate)."""
+    97.2 % of attempts end in the layer's core (a product and a comparison), the rest take the wedge test (two
+    exponentials) or the tail beyond R (Marsaglia's, two logarithms, a second block); 1.2 % are rejected.
+    Exact in law up to the tables' rounding and a total variation below 1e-15 (eight rejections in a row return
+    the last candidate)."""
     x = 0.0
     for attempt in range(_ZIG_ATTEMPTS):
         a, b = _block(seed, stream ^ (attempt << 58), index)
@@ -257,10 +259,8 @@ _FINE_Q = 48  # W(t) - W(k) in quanta of 2^-48 units
 _COARSE_TO_FINE = _FINE_Q - _COARSE_Q
 _COARSE_QUANTUM = 2.0 ** -_COARSE_Q
 _FINE_QUANTUM = 2.0 ** -_FINE_Q
-_EXACT_DIFFERENCE = 1 << 46  # |W(b) - W(k)| in coarse quanta below which the difference fits in fine quanta
+_EXACT_DIFFERENCE = 1 << 46  # |W(kb) - W(ka)| in coarse quanta below which it fits in fine quanta in an int64
 _FINE_SCALE = 2.0 ** LEVELS
-
-# the bridge's standard deviation sqrt(r - l) / 2 in quanta, at the midpoint of an interval of level L
 
 
 def _half_sqrt_width(log2_width, quantum_bits):
@@ -268,6 +268,7 @@ def _half_sqrt_width(log2_width, quantum_bits):
     return math.ldexp(_SQRT2 if log2_width % 2 else 1.0, quantum_bits + log2_width // 2 - 1)
 
 
+# the bridge's standard deviation sqrt(r - l) / 2 in quanta, at the midpoint of an interval of each level
 _COARSE_SD = np.array([_half_sqrt_width(LEVELS - level, _COARSE_Q) for level in range(LEVELS)])
 _FINE_SD = np.array([_half_sqrt_width(-level, _FINE_Q) for level in range(LEVELS)])
 _ROOT_SD = _half_sqrt_width(LEVELS, _COARSE_Q) * 2.0
@@ -285,7 +286,11 @@ _FINE_K = 3  # the unit whose fine path is held (-1: none)
 _FINE_BITS = 4  # the fraction (in 2^-52 units) whose fine path is held, to depth _FINE_DEPTH
 _FINE_DEPTH = 5
 DRAWS = 6  # normals drawn through this cache (statistics only)
-_CL = 8
+_LAST_K = 7  # the last point asked (unit, fraction bits) and its value (-1: none)
+_LAST_BITS = 8
+_LAST_COARSE = 9
+_LAST_FINE = 10
+_CL = 12
 _CR = _CL + LEVELS + 1
 _FL = _CR + LEVELS + 1
 _FR = _FL + LEVELS + 1
@@ -318,6 +323,7 @@ def _reset_if_foreign(seed, cache):
         cache[_SEED] = seed
         cache[_COARSE_K] = -1
         cache[_FINE_K] = -1
+        cache[_LAST_K] = -1
 
 
 @inline_kernel
@@ -395,7 +401,7 @@ def _fine(seed, k, bits, unit_increment, cache):
     return cache[_FL + depth]
 
 
-@inline_kernel
+@kernel
 def point(seed, t, cache):
     """W(t) as the exact pair (W(k) in 2^-32 units, W(t) - W(k) in 2^-48 units), k = floor(t)."""
     if not t > 0.0:  # t <= 0 and NaN
@@ -406,10 +412,17 @@ def point(seed, t, cache):
     whole = math.floor(t)
     k = np.int64(whole)
     bits = np.int64(math.floor((t - whole) * _FINE_SCALE))
+    if k == cache[_LAST_K] and bits == cache[_LAST_BITS]:  # a step's start is the previous step's end
+        return cache[_LAST_COARSE], cache[_LAST_FINE]
     left, right = _coarse(seed, k, cache)
-    if bits == 0:
-        return left, np.int64(0)
-    return left, _fine(seed, k, bits, (right - left) << _COARSE_TO_FINE, cache)
+    fine = np.int64(0)
+    if bits != 0:
+        fine = _fine(seed, k, bits, (right - left) << _COARSE_TO_FINE, cache)
+    cache[_LAST_K] = k
+    cache[_LAST_BITS] = bits
+    cache[_LAST_COARSE] = left
+    cache[_LAST_FINE] = fine
+    return left, fine
 
 
 @inline_kernel

@@ -156,6 +156,9 @@ def test_the_path_is_continuous_in_time_and_defined_everywhere():
         assert abs(increment(3, k - 2.0 ** -30, k, cache)) < 1e-3
         assert abs(increment(3, k, k + 2.0 ** -30, cache)) < 1e-3
         assert brownian(3, k, cache) == brownian(3, k, new_cache())
+    # an increment beyond 2^15 units is the difference rounded once (not in fine quanta)
+    assert increment(3, 0.0, 2.0 ** 50, cache) == pytest.approx(brownian(3, 2.0 ** 50, cache), rel=1e-15, abs=0)
+    assert abs(brownian(3, 2.0 ** 50, cache)) > 2.0 ** 15
     # below the grid of 2^-52 units the path is constant; at the grid it moves
     assert brownian(3, 2.0 ** -53, cache) == brownian(3, 0.0, cache)
     assert brownian(3, 2.0 ** -52, cache) != 0.0
