@@ -61,9 +61,11 @@ h / T0 is a power of two for every step size of a refinement study (T0 = the coa
 p / 2^i for h / 2^i). Every query is then a point of the tree: about one normal per step, and the steps h and
 h / 2 see the same path bit for bit. A restored or rolled-back state needs only its time.
 
-``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times (2026-11, a loaded
-2-core x86_64: 160 ns per step with dyadic step times, one normal; 2.1 us with h = 1e-3 units, 34 normals; 5 us
-at random times; a normal 55 ns; the deterministic 7-branch implicit step 590 ns, projected 190 ns).
+``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times, beside the
+deterministic step (2026-11, a 2-core x86_64 under a load of 4.4, so absolute times are about twice an idle
+machine's: 116 ns per step with dyadic step times, one normal; 1.7 us with h = 1e-3 units from t = 0, 34
+normals; 2.8 us at random times, 75 normals; a normal alone 19-40 ns; the deterministic 7-branch step 388 ns
+implicit, 129 ns projected).
 """
 import math
 
