@@ -19,6 +19,9 @@
 #endif
 #include "state.h"
 #include "calls.h"
+#ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
+#define FMU_TIME(c) element_time(&(c)->el)
+#endif
 
 static void emit(void* instance, int status, const char* category, const char* message)
 {
@@ -327,7 +330,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Rea
         return no_status(c, "fmi2GetRealStatus", value);
     if (!given(c, value, "fmi2GetRealStatus", "value"))
         return fmi2Error;
-    *value = element_time(&c->el);
+    *value = FMU_TIME(c);
     return fmi2OK;
 }
 

@@ -22,6 +22,9 @@
 #endif
 #include "state.h"
 #include "calls.h"
+#ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
+#define FMU_TIME(c) element_time(&(c)->el)
+#endif
 #ifndef STRUCTURAL_N /* the structural parameter (VR_N): the element's n branches; a network's nodes (ARRAYS) */
 #define STRUCTURAL_N NB
 #define HAS_STRUCTURAL 1
@@ -231,7 +234,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
             continue;
         }
         if (vr[i] == VR_TIME && at < nvalues) { /* the independent variable */
-            values[at++] = element_time(&c->el);
+            values[at++] = FMU_TIME(c);
             continue;
         }
         var = find(vr[i], T_REAL);

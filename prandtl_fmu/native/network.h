@@ -84,6 +84,9 @@ static const Var* find(unsigned vr, int type)
 
 static double element_time(const Element* e) { return e->steps ? e->origin + (double)e->steps * e->grid : e->origin; }
 
+/* the FMU's time: the network's; the connector's communication point (its outputs are the network there) */
+#define FMU_TIME(c) (CONNECTOR ? (c)->time : element_time(&(c)->el))
+
 /* NetworkElement.time = value */
 static void set_time(Element* e, double value)
 {
@@ -530,6 +533,29 @@ static void capture(const Instance* c, State* s)
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
+/* the coefficients in use: the parameters' values (checked by their rules), the rest the scene's (on the heap: a
+ * network may be large, the host's stack small) */
+static const char* coefficients_problem(const Element* e, char* buffer, size_t size)
+{
+    double* par = (double*)calloc(N_PARAMS + NN + 3 * NE_ARR, sizeof(double));
+    double *mass, *coef;
+    const char* problem = NULL;
+    int i;
+    if (par == NULL)
+        return "out of memory";
+    mass = par + N_PARAMS;
+    coef = mass + NN;
+    for (i = 0; i < N_PARAMS_USED; i++)
+        par[i] = PARAMS[i].node >= 0 ? e->mass[PARAMS[i].node] : e->coef[3 * PARAMS[i].element + PARAMS[i].column];
+    coefficients_of(par, mass, coef);
+    if (memcmp(mass, e->mass, sizeof(double) * NN) != 0 || memcmp(coef, e->coef, sizeof(double) * 3 * NE_ARR) != 0)
+        problem = "its coefficients are not this network's";
+    else
+        problem = network_problem(par, e->stepper, buffer, size);
+    free(par);
+    return problem;
+}
+
 /* why a state cannot be restored here, or NULL: every field checked (a checksum detects accidents, not edits: a
  * blob with a recomputed one is checked field by field): the coefficients in use by the parameters' rules, the
  * network's state as NetworkElement.set_state checks it (x, v, u, the accounts finite; |u| <= eta of a branch,
@@ -537,7 +563,6 @@ static void capture(const Instance* c, State* s)
 static const char* state_problem(const State* s, char* buffer, size_t size)
 {
     const Element* e = &s->element;
-    double par[N_PARAMS], mass[NN], coef[3 * NE_ARR];
     const char* problem;
     int i, j;
     const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
@@ -553,14 +578,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (!(isfinite(e->origin) && isfinite(e->grid) && e->grid >= 0 && e->steps >= 0 &&
           (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
         return "its clock is not a finite time (origin, steps and grid)";
-    /* the coefficients in use: the parameters' values, the rest the scene's */
-    memset(par, 0, sizeof par);
-    for (i = 0; i < N_PARAMS_USED; i++)
-        par[i] = PARAMS[i].node >= 0 ? e->mass[PARAMS[i].node] : e->coef[3 * PARAMS[i].element + PARAMS[i].column];
-    coefficients_of(par, mass, coef);
-    if (memcmp(mass, e->mass, sizeof mass) != 0 || memcmp(coef, e->coef, sizeof coef) != 0)
-        return "its coefficients are not this network's";
-    problem = network_problem(par, e->stepper, buffer, size);
+    problem = coefficients_problem(e, buffer, size);
     if (problem != NULL)
         return problem;
     for (j = 0; j < NN; j++)

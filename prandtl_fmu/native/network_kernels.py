@@ -103,6 +103,8 @@ def move(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, a
 def _library_pieces():
     """The compiled stand-ins of driver.initial_state, driver.initial_reaction, NetworkConnector.move_to (see the
     module docstring), defined on first use (numba is imported then)."""
+    import math
+
     import numpy as np
     from numba import njit
 
@@ -111,93 +113,133 @@ def _library_pieces():
     SLIDER, DASHPOT, BRANCH, GROUND, KINK = nk.SLIDER, nk.DASHPOT, nk.BRANCH, nk.GROUND, nk.KINK
 
     @njit
+    def instant_model(model):
+        """driver.instant_model: (the instant's model, the number of held nodes listed first)."""
+        mass, kind, ends, coef, load_node, has_cubic = model
+        n = mass.shape[0]
+        elements = kind.shape[0]
+        extra = 0
+        for j in range(n):
+            if mass[j] > 0:
+                extra += 1
+        count = extra + elements
+        kind2 = np.empty(count, np.int64)
+        ends2 = np.empty((count, 2), np.int64)
+        coef2 = np.empty((count, 3))
+        m = 0
+        for j in range(n):  # every massive node held: a stuck slider of infinite threshold, listed first
+            if mass[j] > 0:
+                kind2[m] = SLIDER
+                ends2[m, 0] = j
+                ends2[m, 1] = -1
+                coef2[m, 0], coef2[m, 1], coef2[m, 2] = np.inf, 0.0, 0.0
+                m += 1
+        for e in range(elements):
+            kind2[extra + e] = kind[e]
+            ends2[extra + e, 0], ends2[extra + e, 1] = ends[e, 0], ends[e, 1]
+            coef2[extra + e, 0], coef2[extra + e, 1], coef2[extra + e, 2] = coef[e, 0], coef[e, 1], coef[e, 2]
+        for e in range(count):
+            if kind2[e] == DASHPOT and coef2[e, 0] > 0:  # rigid (a dashpot with c = 0 is no dashpot)
+                kind2[e] = SLIDER
+                coef2[e, 0], coef2[e, 1], coef2[e, 2] = np.inf, 0.0, 0.0
+        for e in range(count):
+            if kind2[e] == DASHPOT:
+                coef2[e, 0] = 0.0
+            if kind2[e] == BRANCH:
+                coef2[e, 2] = 0.0
+        return (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic), extra
+
+    @njit
+    def initial_state(model, x, v, u, piece, force):
+        """driver.initial_state on (x, v, u, piece) holding the scene's x0, v0, u0 and zeros: every massless node
+        in equilibrium with ``force``. Returns 0, or the failed equilibrium's status."""
+        mass, kind, ends, coef, load_node, has_cubic = model
+        n = mass.shape[0]
+        elements = kind.shape[0]
+        massless = False
+        for j in range(n):
+            if not mass[j] > 0:
+                v[j] = 0.0
+                massless = True
+        if not massless:
+            return 0
+        instant, extra = instant_model(model)
+        count = instant[1].shape[0]
+        work = nk.workspace(n, count)
+        piece2 = np.zeros(count, np.int64)
+        u2 = np.zeros(count)
+        for e in range(elements):
+            u2[extra + e] = u[e]
+        status = nk.solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
+        if status < 0:
+            return status
+        nk.commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
+        for e in range(elements):  # the pieces reached; a rigid dashpot is a dashpot again
+            if kind[e] == SLIDER or kind[e] == BRANCH:
+                p = piece2[extra + e]
+                piece[e] = p if abs(p) != KINK else p // KINK
+            u[e] = u2[extra + e]
+        return 0
+
+    @njit
     def initial_reaction(model, x, v, u, force):
         """driver.initial_reaction, in the same order of operations (Python's min and max included)."""
         mass, kind, ends, coef, load_node, has_cubic = model
-        term = np.zeros(kind.shape[0])
+        n = mass.shape[0]
+        elements = kind.shape[0]
+        term = np.zeros(elements)
         nk.forces_now(model, x, v, u, term)
-        net = np.zeros(mass.shape[0])
+        massless = False
+        for j in range(n):
+            if not mass[j] > 0:
+                massless = True
+        if massless:  # the instant's forces (its solve from the equilibrium found by initial_state)
+            instant, extra = instant_model(model)
+            count = instant[1].shape[0]
+            work = nk.workspace(n, count)
+            piece = np.zeros(count, np.int64)
+            u2 = np.zeros(count)
+            for e in range(elements):
+                u2[extra + e] = u[e]
+            status = nk.solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, -1, 0.0, work)
+            if status >= 0:
+                held = work[5]
+                for e in range(elements):
+                    if not mass[ends[e, 0]] > 0 or (ends[e, 1] >= 0 and not mass[ends[e, 1]] > 0):
+                        term[e] = held[extra + e]
+        net = np.zeros(n)
         net[load_node] += force
-        for e in range(kind.shape[0]):
-            net[ends[e, 0]] -= term[e]
-            if ends[e, 1] >= 0:
-                net[ends[e, 1]] += term[e]
+        for e in range(elements):
+            if kind[e] != SLIDER:
+                net[ends[e, 0]] -= term[e]
+                if ends[e, 1] >= 0:
+                    net[ends[e, 1]] += term[e]
         total = 0.0
-        for e in range(kind.shape[0]):
+        for e in range(elements):
             if ends[e, 1] != GROUND:
                 continue
-            if kind[e] == SLIDER:
-                i, alpha = ends[e, 0], coef[e, 0]
+            i = ends[e, 0]
+            if kind[e] == SLIDER and mass[i] > 0:
+                alpha = coef[e, 0]
                 if v[i] != 0:
-                    total += alpha * (-1.0 if v[i] < 0 else 1.0)
+                    total += alpha * math.copysign(1.0, v[i])
                 else:
-                    held = net[i]  # min(max(net, -alpha), alpha) as Python's builtins pick
-                    if -alpha > held:
-                        held = -alpha
-                    if alpha < held:
-                        held = alpha
-                    total += held
+                    held_force = net[i]  # min(max(net, -alpha), alpha) as Python's builtins pick
+                    if -alpha > held_force:
+                        held_force = -alpha
+                    if alpha < held_force:
+                        held_force = alpha
+                    total += held_force
             else:
                 total += term[e]
         return total
 
     @njit
     def instant_state(model, x, v, u, piece, force, reaction):
-        """driver.initial_state on (x, v, u, piece) holding the scene's x0, v0, u0 and zeros: every massless
-        node in equilibrium with ``force`` (the instant model, solve_step and commit); reaction[0] the reaction
-        (driver.initial_reaction). Returns 0, or the failed equilibrium's status."""
-        mass, kind, ends, coef, load_node, has_cubic = model
-        n = mass.shape[0]
-        elements = kind.shape[0]
-        massless = False
-        extra = 0
-        for j in range(n):
-            if not mass[j] > 0:
-                v[j] = 0.0
-                massless = True
-            else:
-                extra += 1
-        if massless:
-            count = extra + elements
-            kind2 = np.empty(count, np.int64)
-            ends2 = np.empty((count, 2), np.int64)
-            coef2 = np.empty((count, 3))
-            m = 0
-            for j in range(n):  # every massive node held: a stuck slider of infinite threshold, listed first
-                if mass[j] > 0:
-                    kind2[m] = SLIDER
-                    ends2[m, 0] = j
-                    ends2[m, 1] = -1
-                    coef2[m, 0], coef2[m, 1], coef2[m, 2] = np.inf, 0.0, 0.0
-                    m += 1
-            for e in range(elements):
-                kind2[extra + e] = kind[e]
-                ends2[extra + e, 0], ends2[extra + e, 1] = ends[e, 0], ends[e, 1]
-                coef2[extra + e, 0], coef2[extra + e, 1], coef2[extra + e, 2] = coef[e, 0], coef[e, 1], coef[e, 2]
-            for e in range(count):
-                if kind2[e] == DASHPOT and coef2[e, 0] > 0:  # rigid (a dashpot with c = 0 is no dashpot)
-                    kind2[e] = SLIDER
-                    coef2[e, 0], coef2[e, 1], coef2[e, 2] = np.inf, 0.0, 0.0
-            for e in range(count):
-                if kind2[e] == DASHPOT:
-                    coef2[e, 0] = 0.0
-                if kind2[e] == BRANCH:
-                    coef2[e, 2] = 0.0
-            instant = (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic)
-            work = nk.workspace(n, count)
-            piece2 = np.zeros(count, np.int64)
-            u2 = np.zeros(count)
-            for e in range(elements):
-                u2[extra + e] = u[e]
-            status = nk.solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
-            if status < 0:
-                return status
-            nk.commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
-            for e in range(elements):  # the pieces reached; a rigid dashpot is a dashpot again
-                if kind[e] == SLIDER or kind[e] == BRANCH:
-                    p = piece2[extra + e]
-                    piece[e] = p if abs(p) != KINK else p // KINK
-                u[e] = u2[extra + e]
+        """initial_state, then reaction[0] = initial_reaction. Returns 0, or the failed equilibrium's status."""
+        status = initial_state(model, x, v, u, piece, force)
+        if status < 0:
+            return status
         reaction[0] = initial_reaction(model, x, v, u, force)
         return 0
 
