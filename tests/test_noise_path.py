@@ -276,9 +276,12 @@ def test_stepping_forward_costs_amortized_o1_draws(h, most):
 
 # --- a C function ----------------------------------------------------------------------------------------------------
 
-def test_the_increment_compiles_as_a_cfunc_without_python():
-    """The native runtime emits kernels as C functions: no Python object, no exception on the way."""
+def test_the_increment_compiles_as_a_cfunc_without_python_nor_libm():
+    """The native runtime emits kernels as C functions: no Python object, no exception on the way. And no
+    transcendental function of the platform's libm (whose last bits differ between machines): the FMU's path
+    is the library's bit for bit."""
     import ctypes
+    import re
 
     from numba import carray, cfunc, types
 
@@ -290,3 +293,6 @@ def test_the_increment_compiles_as_a_cfunc_without_python():
     pointer = cache.ctypes.data_as(ctypes.POINTER(ctypes.c_int64))
     for a, b in [(0.3, 0.7), (1e6 + 0.1, 1e6 + 0.1 + 1e-9), (2.5, 2.75), (0.0, 2.0 ** 45)]:
         assert c_increment.ctypes(5, a, b, pointer) == increment(5, a, b, new_cache())
+    declared = set(re.findall(r"declare [^@]*@([\w.]+)", str(c_increment._library._final_module)))
+    assert not {name for name in declared if re.match(r"(llvm\.)?(log|exp|pow|sin|cos|tan|atan|erf)", name)}
+    assert "llvm.floor.f64" in declared  # the pattern sees the module's declarations
