@@ -62,10 +62,9 @@ p / 2^i for h / 2^i). Every query is then a point of the tree: about one normal 
 h / 2 see the same path bit for bit. A restored or rolled-back state needs only its time.
 
 ``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times, beside the
-deterministic step (2026-11, a 2-core x86_64 under a load of 4.4, so absolute times are about twice an idle
-machine's: 116 ns per step with dyadic step times, one normal; 1.7 us with h = 1e-3 units from t = 0, 34
-normals; 2.8 us at random times, 75 normals; a normal alone 19-40 ns; the deterministic 7-branch step 388 ns
-implicit, 129 ns projected).
+deterministic step (2026-11, a shared 2-core x86_64, load 3.5, 10^6 steps): 57 ns per step with dyadic step
+times (one normal); 830 ns with h = 1e-3 units from t = 0 (34 normals), 580 ns from t = 1e6 (23); 2.0 us at
+random times (75); a normal 19 ns; the deterministic 7-branch step 191 ns implicit, 63 ns projected.
 """
 import math
 
