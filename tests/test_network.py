@@ -181,7 +181,7 @@ class BruteForceEuler:
     one that is consistent (|f_s| <= alpha_s, sign(g_s . w) = the slip's sign): the KKT point of a strictly
     convex problem, hence the step. The previous step's states are tried first (the answer is unique)."""
 
-    def __init__(self, mass, springs, sliders, load_node, force, dashpots=()):
+    def __init__(self, mass, springs, sliders, load_node, force, dashpots=(), cubics=()):
         self.m = np.asarray(mass, float)
         n = self.n = len(mass)
         self.K = np.zeros((n, n))
@@ -192,6 +192,8 @@ class BruteForceEuler:
         for i, j, c in dashpots:
             g = self.row(i, j)
             self.C += c * np.outer(g, g)
+        # cubic springs: force k3 (g . x1)^3, solved by Newton's iteration to its last bit
+        self.cubics = [(self.row(i, j), k3) for i, j, k3 in cubics]
         self.G = np.array([self.row(i, j) for i, j, _ in sliders]).reshape(len(sliders), n)
         self.alpha = np.array([a for _, _, a in sliders], float)
         self.load_node = load_node
@@ -205,7 +207,7 @@ class BruteForceEuler:
             g[j] -= 1.0
         return g
 
-    def solve(self, states, A, b):
+    def solve(self, states, A, b, x, h):
         stuck = [s for s, state in enumerate(states) if state == 0]
         rhs = b - sum((state * self.alpha[s] * self.G[s] for s, state in enumerate(states) if state), np.zeros(self.n))
         size = self.n + len(stuck)
@@ -215,6 +217,18 @@ class BruteForceEuler:
             system[:self.n, self.n + c] = self.G[s]
             system[self.n + c, :self.n] = self.G[s]
         solution = np.linalg.solve(system, np.concatenate([rhs, np.zeros(len(stuck))]))
+        for _ in range(100 if self.cubics else 0):  # Newton on the same KKT system with the cubic forces
+            w = solution[:self.n]
+            residual = system @ solution - np.concatenate([rhs, np.zeros(len(stuck))])
+            jacobian = system.copy()
+            for g, k3 in self.cubics:
+                y = g @ (x + h * w)
+                residual[:self.n] += k3 * y ** 3 * g
+                jacobian[:self.n, :self.n] += 3.0 * k3 * y * y * h * np.outer(g, g)
+            change = np.linalg.solve(jacobian, -residual)
+            solution = solution + change
+            if np.all(np.abs(change[:self.n]) <= 1e-16 * (np.abs(solution[:self.n]) + 1e-300)):
+                break
         w = solution[:self.n]
         scale = np.abs(b).max() + self.alpha.max() + 1e-300
         for c, s in enumerate(stuck):
@@ -232,7 +246,7 @@ class BruteForceEuler:
         b[self.load_node] += self.force(t + h)
         candidates = itertools.chain([self.states], itertools.product((0, 1, -1), repeat=len(self.alpha)))
         for states in candidates:
-            w = self.solve(states, A, b)
+            w = self.solve(states, A, b, x, h)
             if w is not None:
                 self.states = states
                 return x + h * w, w
@@ -361,6 +375,33 @@ def test_random_network_against_brute_force_backward_euler(seed):
     force = sum(-k * (result.x[0, i] - (0.0 if j is None else result.x[0, j])) * (1 if i == massless else -1)
                 for i, j, k in springs if massless in (i, j)) + (amplitude if load_node == massless else 0.0)
     assert abs(force) <= sum(a for _, _, a in stuck) * (1 + 1e-12) + 1e-12
+
+
+def test_cubic_springs_and_sliders_against_brute_force_backward_euler():
+    """Three masses, cubic springs between them and to the ground, sliders: Newton inside the active set."""
+    nodes, mass = ["a", "b", "c"], [1.0, 0.6, 0.8]
+    springs = [(0, None, 1.0), (0, 1, 2.0), (2, None, 0.5)]
+    cubics = [(0, 1, 3.0), (1, None, 2.0), (1, 2, 1.5)]
+    sliders = [(0, None, 0.5), (1, 2, 1.0), (2, None, 0.8)]
+    elements = ([("spring", {"between": [nodes[i], "ground" if j is None else nodes[j]], "k": k})
+                 for i, j, k in springs]
+                + [("cubic", {"between": [nodes[i], "ground" if j is None else nodes[j]], "k3": k3})
+                   for i, j, k3 in cubics]
+                + [("slider", {"between": [nodes[i], "ground" if j is None else nodes[j]], "alpha": a})
+                   for i, j, a in sliders])
+    h, stop = 0.004, 6.0
+    load = {"kind": "harmonic", "amplitude": 2.5, "omega": 1.4, "offset": 0.0}
+    result = simulate(parse_scene(network_text(nodes, mass, elements, load, solver(h, stop), v0=[0.0, 0.8, -0.5],
+                                               load_node="b")))
+    reference = BruteForceEuler(mass, springs, sliders, 1, lambda t: 2.5 * math.cos(1.4 * t), cubics=cubics)
+    x, v = reference.run(np.zeros(3), [0.0, 0.8, -0.5], h, round(stop / h))
+    assert np.abs(x[:, 0] - x[:, 1]).max() > 0.3  # the cubic terms matter (3 y^3 against 2 y)
+    for i, j, _ in sliders:  # each slider both sticks and slips
+        rate = v[:, i] - (0.0 if j is None else v[:, j])
+        stuck = np.abs(rate) <= 1e-12 * np.abs(v).max()
+        assert np.sum(stuck) > 20 and np.sum(~stuck) > 20
+    np.testing.assert_allclose(result.x, x, rtol=0, atol=1e-12 * np.abs(x).max())
+    np.testing.assert_allclose(result.v, v, rtol=0, atol=1e-10 * np.abs(v).max())
 
 
 # ------------------------------------------------------------------ 3. one node is the element
