@@ -491,6 +491,27 @@ def test_the_connector_state_round_trip_and_a_refused_motion(fmus):
         other.close()
 
 
+def test_a_native_host_runs_the_network_fmu_with_the_recipe(fmus, tmp_path):
+    """The C host of tests/c_host (no Python of its own) with docs/masters.md's variables, PYTHONHOME included:
+    the network FMU steps there as the library does, and a refusal reaches the host's logger as a Discard."""
+    from .native_host import Extracted, compile_host, python_recipe, run_host
+
+    fmu, scene_path = fmus["chain"]
+    extracted = Extracted(fmu, tmp_path / "chain")
+    env = dict(python_recipe(), PYTHONHOME=sys.base_prefix)
+    code, calls, logs, values, out = run_host(
+        compile_host(tmp_path), extracted, ["setup", "enter", "exit", "setr:F:1.0", "steps:0:0.1:10", "getr:x_n3",
+                                            "getr:reaction", "setr:alpha_n2:-1", "step:1:0.1", "getr:x_n3", "term",
+                                            "free"], logging=True, env=env)
+    assert code == 0, out
+    element = NetworkElement(load_scene(scene_path))
+    for _ in range(10):
+        element.advance(0.1, 1.0)
+    assert [value for _, value in values] == [element.x[2], element.reaction, element.x[2]]
+    assert calls["step:1:0.1"] == ["2"]  # fmi2Discard
+    assert any(status == 2 and "alpha_n2: must be >= 0.0" in message for status, _, message in logs), out
+
+
 def test_the_native_runtime_takes_the_native_builder_or_says_networks_are_not_there(fmus, tmp_path, monkeypatch):
     """Without prandtl_fmu.native.build.build_native_network_fmu the native runtime refuses a network with one
     line; with it, build_fmu hands it the scene, the target and the options."""
