@@ -82,93 +82,25 @@ def failure_message(scene: NetworkScene, stepper: str, status: int, time: float,
 
 # ------------------------------------------------------------------ the initial state
 
-def instant_model(model):
-    """The model of an instant (h -> 0): every massive node held (a stuck slider of infinite threshold to the
-    ground, listed first), every dashpot rigid (the same), no series dashpot relaxes, no mass."""
-    mass, kind, ends, coef, load_node, has_cubic = model
-    n = mass.shape[0]
-    held_nodes = np.flatnonzero(mass > 0)
-    extra = len(held_nodes)
-    kind2 = np.concatenate([np.full(extra, kernels.SLIDER, np.int64), kind])
-    ends2 = np.concatenate([np.stack([held_nodes, np.full(extra, -1)], axis=1).astype(np.int64).reshape(extra, 2),
-                            ends])
-    coef2 = np.concatenate([np.tile([np.inf, 0.0, 0.0], (extra, 1)).reshape(extra, 3), coef])
-    rigid = (kind2 == kernels.DASHPOT) & (coef2[:, 0] > 0)  # a dashpot with c = 0 is no dashpot
-    kind2[rigid] = kernels.SLIDER
-    coef2[rigid] = (np.inf, 0.0, 0.0)
-    coef2[(kind2 == kernels.DASHPOT), 0] = 0.0
-    coef2[kind2 == kernels.BRANCH, 2] = 0.0
-    return (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic), extra
-
-
 def initial_state(scene: NetworkScene, model, load):
-    """(x, v, u, piece) at t = 0: the scene's x0, v0, u0, and every massless node in equilibrium with F(0) (an
-    instant: the masses and dashpots do not move, as the element's massless start). ElementError if none."""
+    """(x, v, u, piece) at t = 0: the scene's x0, v0, u0, and every massless node in equilibrium with F(0)
+    (:func:`kernels.initial_state`, compiled: the native FMU calls the same). ElementError if none exists."""
     network = scene.network
     x = np.array(network.x0, dtype=float)
     v = np.array(network.v0, dtype=float)
     u = np.array([e.u0 for e in network.elements], dtype=float)
     piece = np.zeros(len(network.elements), dtype=np.int64)
-    massless = ~(network.mass > 0)
-    v[massless] = 0.0
-    if not np.any(massless):
-        return x, v, u, piece
-    instant, extra = instant_model(model)
-    work = kernels.workspace(network.n, instant[1].shape[0])
-    piece2 = np.zeros(instant[1].shape[0], dtype=np.int64)
-    u2 = np.concatenate([np.zeros(extra), u])
     force = float(force_at(load, 0.0))
-    status = kernels.solve_step(instant, x, np.zeros(network.n), u2, piece2, 1.0, force, -1, 0.0, work)
+    status = kernels.initial_state(model, x, v, u, piece, force)
     if status < 0:
         raise ElementError(failure_message(scene, "instant (equilibrium at t = 0)", status, 0.0, force).replace(
             "step from t = 0.0 s", "equilibrium at t = 0"))
-    kernels.commit(instant, x, np.zeros(network.n), u2, piece2, 1.0, force, work, None, None)
-    # the elements keep the pieces they reached; a rigid dashpot is a dashpot again
-    original = piece2[extra:]
-    for e, element in enumerate(network.elements):
-        if element.kind in ("slider", "branch"):
-            piece[e] = original[e] if abs(original[e]) != kernels.KINK else original[e] // kernels.KINK
-    return x, v, u2[extra:].copy(), piece
+    return x, v, u, piece
 
 
 def initial_reaction(scene: NetworkScene, model, x, v, u, force: float) -> float:
-    """The reaction at t = 0: the elements' forces on the ground in the initial state. What holds a massless
-    node (a dashpot's force c v at t = 0+ included: a massless network passes the whole of F(0) to the ground)
-    is the instant's equilibrium; a slider of a massive node slips against its velocity, or holds the other
-    forces on its node up to alpha."""
-    mass, kind, ends, coef, load_node, has_cubic = model
-    term = np.zeros(kind.shape[0])
-    kernels.forces_now(model, x, v, u, term)
-    massless = ~(mass > 0)
-    if np.any(massless):  # the instant's forces (its solve from the equilibrium found by initial_state)
-        instant, extra = instant_model(model)
-        work = kernels.workspace(mass.shape[0], instant[1].shape[0])
-        piece = np.zeros(instant[1].shape[0], dtype=np.int64)
-        status = kernels.solve_step(instant, x.copy(), np.zeros(mass.shape[0]), np.concatenate([np.zeros(extra), u]),
-                                    piece, 1.0, force, -1, 0.0, work)
-        if status >= 0:
-            held = work[5][extra:]
-            for e in range(kind.shape[0]):
-                if massless[ends[e, 0]] or (ends[e, 1] >= 0 and massless[ends[e, 1]]):
-                    term[e] = held[e]
-    net = np.zeros(mass.shape[0])
-    net[load_node] += force
-    for e in range(kind.shape[0]):
-        if kind[e] != kernels.SLIDER:
-            net[ends[e, 0]] -= term[e]
-            if ends[e, 1] >= 0:
-                net[ends[e, 1]] += term[e]
-    total = 0.0
-    for e in range(kind.shape[0]):
-        if ends[e, 1] != kernels.GROUND:
-            continue
-        i = ends[e, 0]
-        if kind[e] == kernels.SLIDER and not massless[i]:
-            alpha = coef[e, 0]
-            total += alpha * math.copysign(1.0, v[i]) if v[i] != 0 else min(max(net[i], -alpha), alpha)
-        else:
-            total += term[e]
-    return float(total)
+    """The reaction at t = 0 (:func:`kernels.initial_reaction`)."""
+    return float(kernels.initial_reaction(model, x, v, u, float(force)))
 
 
 # ------------------------------------------------------------------ whole runs

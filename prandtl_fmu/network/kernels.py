@@ -941,3 +941,129 @@ def node_force(model, term, node):
         elif ends[e, 1] == node:
             total -= term[e]
     return total
+
+
+# ------------------------------------------------------------------ t = 0
+
+@kernel
+def instant_model(model):
+    """The model of an instant (h -> 0), and the number of elements put first: every massive node held (a
+    stuck slider of infinite threshold to the ground, listed first), every dashpot with c > 0 rigid (the same;
+    c = 0 is no dashpot), no series dashpot relaxing, no mass."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    extra = 0
+    for j in range(n):
+        if mass[j] > 0.0:
+            extra += 1
+    count = kind.shape[0]
+    kind2 = np.empty(extra + count, np.int64)
+    ends2 = np.empty((extra + count, 2), np.int64)
+    coef2 = np.empty((extra + count, 3))
+    e = 0
+    for j in range(n):
+        if mass[j] > 0.0:
+            kind2[e] = SLIDER
+            ends2[e, 0], ends2[e, 1] = j, GROUND
+            coef2[e, 0], coef2[e, 1], coef2[e, 2] = np.inf, 0.0, 0.0
+            e += 1
+    for f in range(count):
+        kind2[extra + f] = kind[f]
+        ends2[extra + f, 0], ends2[extra + f, 1] = ends[f, 0], ends[f, 1]
+        coef2[extra + f, 0], coef2[extra + f, 1], coef2[extra + f, 2] = coef[f, 0], coef[f, 1], coef[f, 2]
+        if kind[f] == DASHPOT:
+            if coef[f, 0] > 0.0:
+                kind2[extra + f] = SLIDER
+                coef2[extra + f, 0] = np.inf
+            else:
+                coef2[extra + f, 0] = 0.0
+        elif kind[f] == BRANCH:
+            coef2[extra + f, 2] = 0.0
+    return (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic), extra
+
+
+@kernel
+def initial_state(model, x, v, u, piece, force):
+    """The state at t = 0 in place: x, v, u hold the scene's x0, v0, u0, piece zeros; every massless node
+    is brought to equilibrium with the force F(0) (an instant: the masses and dashpots do not move, as the
+    element's massless start) and gets v = 0. Returns 0, or the status of the equilibrium that failed
+    (:func:`solve_step`)."""
+    mass = model[0]
+    kind = model[1]
+    n = mass.shape[0]
+    massless = False
+    for j in range(n):
+        if not mass[j] > 0.0:
+            v[j] = 0.0
+            massless = True
+    for e in range(kind.shape[0]):
+        piece[e] = 0
+    if not massless:
+        return 0
+    instant, extra = instant_model(model)
+    count = instant[1].shape[0]
+    work = workspace(n, count)
+    piece2 = np.zeros(count, np.int64)
+    u2 = np.zeros(count)
+    u2[extra:] = u
+    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
+    if status < 0:
+        return status
+    commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
+    for e in range(kind.shape[0]):  # the elements keep the pieces they reached; a rigid dashpot is a dashpot
+        u[e] = u2[extra + e]
+        if kind[e] == SLIDER or kind[e] == BRANCH:
+            p = piece2[extra + e]
+            piece[e] = p // KINK if abs(p) == KINK else p
+    return 0
+
+
+@kernel
+def initial_reaction(model, x, v, u, force):
+    """The reaction at t = 0: the elements' forces on the ground in the initial state. What holds a massless
+    node (a dashpot's force c v at t = 0+ included: a massless network passes the whole of F(0) to the ground)
+    is the instant's equilibrium; a slider of a massive node slips against its velocity, or holds the other
+    forces on its node up to alpha."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    count = kind.shape[0]
+    term = np.zeros(count)
+    forces_now(model, x, v, u, term)
+    massless = False
+    for j in range(n):
+        if not mass[j] > 0.0:
+            massless = True
+    if massless:  # the instant's forces (its solve from the equilibrium initial_state found)
+        instant, extra = instant_model(model)
+        work = workspace(n, instant[1].shape[0])
+        piece = np.zeros(instant[1].shape[0], np.int64)
+        u2 = np.zeros(instant[1].shape[0])
+        u2[extra:] = u
+        status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, -1, 0.0, work)
+        if status >= 0:
+            held = work[5]
+            for e in range(count):
+                j = ends[e, 1]
+                if not mass[ends[e, 0]] > 0.0 or (j != GROUND and not mass[j] > 0.0):
+                    term[e] = held[extra + e]
+    net = np.zeros(n)
+    net[load_node] += force
+    for e in range(count):
+        if kind[e] != SLIDER:
+            net[ends[e, 0]] -= term[e]
+            if ends[e, 1] != GROUND:
+                net[ends[e, 1]] += term[e]
+    total = 0.0
+    for e in range(count):
+        if ends[e, 1] != GROUND:
+            continue
+        i = ends[e, 0]
+        if kind[e] == SLIDER and mass[i] > 0.0:
+            alpha = coef[e, 0]
+            if v[i] != 0.0:
+                total += alpha if v[i] > 0.0 else -alpha
+            else:
+                total += min(max(net[i], -alpha), alpha)
+        else:
+            total += term[e]
+    return total
