@@ -1,6 +1,9 @@
 """The FMI glue: an FMI 2.0 co-simulation FMU of a scene, built with PythonFMU.
 
-* ``slave.py``: the slave class (variables <-> :class:`prandtl_fmu.Element`);
+* ``slave.py``: the slave class (variables <-> :class:`prandtl_fmu.Element`); ``connector_slave.py``: the
+  element as a connector (motion in, force out);
+* ``network_slave.py``, ``network_connector_slave.py``: the same two for a network scene ([network],
+  [chain]: :class:`prandtl_fmu.network.NetworkElement`, :class:`~prandtl_fmu.network.NetworkConnector`);
 * ``entry.py``: the FMU's script: imports the bundled library, hands over the slave class;
 * ``description.py``: what PythonFMU leaves out of modelDescription.xml;
 * ``build.py``: :func:`build_fmu` (also ``python build_fmu.py``);

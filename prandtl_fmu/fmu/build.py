@@ -1,6 +1,8 @@
 """Build the FMU of a scene: ``build_fmu(scene_path, out)``.
 
-The FMU holds, in ``resources/``: the slave script under a unique module name
+A network scene ([network] or [chain]) gets the network's slaves (``network_slave.py``,
+``network_connector_slave.py``; model identifiers ``PrandtlNetwork``, ``PrandtlNetworkConnector``), the
+others the element's. The FMU holds, in ``resources/``: the slave script under a unique module name
 (``prandtl_slave_<digest>``, the digest of the scene and the library's
 sources), a copy of the library (``prandtl_fmu/``, the code the tests run),
 the scene (``scene.toml``) and the OSP interface description
@@ -64,7 +66,9 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
 
     ``runtime="native"``: an FMU whose binary holds the scene's compiled kernels and a C FMI layer, no Python
-    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); a ``loader`` is refused with it.
+    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); a ``loader`` is refused with it. A
+    network scene goes to ``prandtl_fmu.native.build.build_native_network_fmu`` (ValueError where the native
+    runtime has none).
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")

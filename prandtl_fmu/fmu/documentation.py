@@ -340,8 +340,8 @@ parameter <code>step</code> (default {scene.solver.step:g} s). The outputs alway
 inputs and parameters set last at the FMU's current time, without committing (<code>force</code> depends directly on
 <code>x</code> and <code>v</code>): a master may set x several times at one communication point. The first
 sample is taken as an instant move from the scene's x0. A non-finite input at doStep is refused (fmi2Discard,
-a logged message, the state unchanged); a bad parameter is refused with its reason ({refusal} at
-initialization, fmi2Discard at a step). The whole state can be saved, restored and serialized. OSP:
+a logged message, the state unchanged); a bad parameter is refused with its reason: at initialization
+{refusal}, at a step fmi2Discard. The whole state can be saved, restored and serialized. OSP:
 <code>resources/PrandtlNetworkConnector_OspModelDescription.xml</code> declares a LinearMechanicalPort (force
 out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
     else:
@@ -361,8 +361,8 @@ directly on F). The parameter <code>stepper</code> chooses the scheme:</p>
 </table>
 <p>A step the library cannot take (no equilibrium of a massless part, e.g. a massless chain pulled beyond the
 total friction of its nodes; the step budget; an overflow) and a non-finite F are refused: fmi2Discard, the
-library's reason logged, the state unchanged. A bad parameter value is refused with its reason ({refusal} at
-initialization, fmi2Discard at a step); the instance stays usable. The whole state of the network can be saved,
+library's reason logged, the state unchanged. A bad parameter value is refused with its reason: at
+initialization {refusal}, at a step fmi2Discard. The instance stays usable. The whole state of the network can be saved,
 restored and serialized. OSP: <code>resources/PrandtlNetwork_OspModelDescription.xml</code> declares a
 LinearMechanicalPort (F in, v_{load} out) and a LinearMechanicalQuasiPort (F in, x_{load} out).</p>"""
     return f"""{intro}
