@@ -466,6 +466,44 @@ def test_a_parameter_is_refused_in_the_library_s_words_and_steps_go_on_when_set_
         slave.close()
 
 
+def test_a_step_with_no_equilibrium_is_discarded_with_the_library_s_reason(built):
+    """The massless chain with its dashpots and its wall spring set to 0 (springs between the nodes and sliders on
+    the support hold it) pulled beyond the total friction of its nodes: no quasi-static solution. NetworkElement refuses the advance
+    (ElementError); the FMU discards the step with the reason logged (logging off), its outputs unchanged, and
+    steps on under a force the chain can hold."""
+    from fmpy.fmi1 import FMICallException
+
+    from prandtl_fmu.driver import ElementError
+
+    fmu, _ = built["massless", 2, None, False, False]
+    scene = scene_of("massless")
+    no_dashpots = {f"c_{node}": 0.0 for node in scene.network.nodes} | {"k_wall": 0.0}
+    element = NetworkElement(scene.with_network(scene.network.with_parameters(**no_dashpots)))
+    element.advance(0.1, 1.0)
+    with pytest.raises(ElementError, match="no equilibrium"):
+        element.advance(0.1, 2.0)
+    slave = Slave2(fmu)
+    try:
+        slave.set(list(no_dashpots), list(no_dashpots.values()))
+        slave.set(["F"], [1.0])
+        slave.step(0.0, 0.1)
+        before = slave.get(slave.outputs)
+        assert before == library_outputs(element, element.scene, slave.outputs)
+        slave.set(["F"], [2.0])
+        count = len(slave.messages)
+        with pytest.raises(FMICallException):
+            slave.step(0.1, 0.1)
+        said = [text for status, text in slave.messages[count:] if status == DISCARD]
+        assert said and "no equilibrium" in said[0], slave.messages[count:]
+        assert slave.get(slave.outputs) == before
+        slave.set(["F"], [-1.0])
+        slave.step(0.1, 0.1)
+        element.advance(0.1, -1.0)
+        assert slave.get(slave.outputs) == library_outputs(element, element.scene, slave.outputs)
+    finally:
+        slave.close()
+
+
 # ------------------------------------------------------------------ the connector
 
 def connector_against_library(slave, scene, samples, h_fmu=0.05):
