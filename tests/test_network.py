@@ -470,7 +470,7 @@ def test_one_node_network_is_the_element(case, stepper):
     assert x_scale > 0.1  # a run that moves
     np.testing.assert_allclose(network.x[:, 0], element.x, rtol=0, atol=1e-12 * x_scale)
     # v and the reaction from the first step on (the initial row of a massless node with a dashpot is
-    # test_massless_dashpot_node_at_time_zero's)
+    # test_massless_dashpot_node_velocity_at_time_zero's)
     np.testing.assert_allclose(network.v[1:, 0], element.v[1:], rtol=0,
                                atol=1e-12 * (np.abs(element.v).max() + x_scale))
     if case != "slider":
@@ -482,30 +482,26 @@ def test_one_node_network_is_the_element(case, stepper):
         assert np.any(element.v == 0) and np.any(element.v != 0)  # the mass both sticks and slides
 
 
-@pytest.mark.parametrize("dashpot", [False, True])
-def test_massless_dashpot_node_at_time_zero(dashpot):
-    """A massless network holds the whole load at every instant: the reaction on the ground is F, and with a
-    dashpot c to the ground the node moves at once with c v = F - (its springs' and branches' forces)."""
-    case = "massless_dashpot" if dashpot else "massless"
-    element_scene, network_scene = one_node_scenes(case, "implicit")
+@pytest.mark.parametrize("case", ["massless", "massless_dashpot"])
+def test_massless_network_passes_its_load_to_the_ground(case):
+    """A massless network holds the whole load at every instant, t = 0 included: the reaction is F."""
+    network = simulate(one_node_scenes(case, "implicit")[1])
+    np.testing.assert_allclose(network.reaction, network.F, rtol=0, atol=1e-12 * np.abs(network.F).max())
+
+
+def test_massless_dashpot_node_velocity_at_time_zero():
+    """With a dashpot c to the ground a massless node moves at once: c v(0) = F(0) - (its springs' and
+    branches' forces), as the one-mass element reports. (docs/networks.md, commit 12df5f3, documents the
+    network's initial v of a massless node as 0 instead: this test states the element's physics.)"""
+    element_scene, network_scene = one_node_scenes("massless_dashpot", "implicit")
+    c = ONE_NODE_CASES["massless_dashpot"]["damper"]
+    F0 = ELEMENT_LOAD["offset"] + ELEMENT_LOAD["amplitude"]
+    held_by_branches = sum(k * u for k, u in zip(BRANCHES["k"], BRANCHES["u0"]))  # x(0) = 0: no spring force
+    expected = (F0 - held_by_branches) / c
+    assert simulate_element(element_scene, "implicit").v[0] == pytest.approx(expected, rel=1e-12)
     network = simulate(network_scene)
-    problems = []
-    unbalanced = np.flatnonzero(np.abs(network.reaction - network.F) > 1e-12 * np.abs(network.F).max())
-    if unbalanced.size:
-        row = unbalanced[0]
-        problems.append(f"reaction {float(network.reaction[row])!r} != F {float(network.F[row])!r} at "
-                        f"t = {float(network.time[row])!r} "
-                        f"({unbalanced.size} rows)")
-    if dashpot:
-        c = ONE_NODE_CASES[case]["damper"]
-        F0 = ELEMENT_LOAD["offset"] + ELEMENT_LOAD["amplitude"]
-        held_by_branches = sum(k * u for k, u in zip(BRANCHES["k"], BRANCHES["u0"]))  # x(0) = 0: no spring force
-        expected = (F0 - held_by_branches) / c
-        assert network.x[0, 0] == 0.0
-        assert simulate_element(element_scene, "implicit").v[0] == pytest.approx(expected, rel=1e-12)
-        if network.v[0, 0] != pytest.approx(expected, rel=1e-12):
-            problems.append(f"v(0) = {float(network.v[0, 0])!r}, expected (F - sum k u0) / c = {expected!r}")
-    assert not problems, problems
+    assert network.x[0, 0] == 0.0
+    assert float(network.v[0, 0]) == pytest.approx(expected, rel=1e-12)
 
 
 def test_cubic_spring_step_solves_backward_euler():
