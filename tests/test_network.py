@@ -490,18 +490,24 @@ def test_massless_network_passes_its_load_to_the_ground(case):
 
 
 def test_massless_dashpot_node_velocity_at_time_zero():
-    """With a dashpot c to the ground a massless node moves at once: c v(0) = F(0) - (its springs' and
-    branches' forces), as the one-mass element reports. (docs/networks.md, commit 12df5f3, documents the
-    network's initial v of a massless node as 0 instead: this test states the element's physics.)"""
+    """A massless node has no velocity of its own (docs/networks.md, Limits): its v is the rate of the step that
+    ended at the row's time, d/h, and 0 in the initial row. The one-mass element reports the rate
+    c v(0) = F(0) - (springs' and branches' forces) there instead; from the first step on the two agree (the
+    one-node tests), and the network's reaction at t = 0 already holds the dashpot's force c v(0+)."""
     element_scene, network_scene = one_node_scenes("massless_dashpot", "implicit")
     c = ONE_NODE_CASES["massless_dashpot"]["damper"]
     F0 = ELEMENT_LOAD["offset"] + ELEMENT_LOAD["amplitude"]
     held_by_branches = sum(k * u for k, u in zip(BRANCHES["k"], BRANCHES["u0"]))  # x(0) = 0: no spring force
-    expected = (F0 - held_by_branches) / c
-    assert simulate_element(element_scene, "implicit").v[0] == pytest.approx(expected, rel=1e-12)
+    rate = (F0 - held_by_branches) / c
+    element = simulate_element(element_scene, "implicit")
+    assert element.v[0] == pytest.approx(rate, rel=1e-12)
     network = simulate(network_scene)
     assert network.x[0, 0] == 0.0
-    assert float(network.v[0, 0]) == pytest.approx(expected, rel=1e-12)
+    assert float(network.v[0, 0]) == 0.0  # the documented rule, not the element's rate
+    # the reaction at t = 0 is F(0): the springs' and branches' forces plus the dashpot's c v(0+)
+    assert float(network.reaction[0]) == pytest.approx(held_by_branches + c * rate, rel=1e-12)
+    # and the first step's rate is the element's
+    assert float(network.v[1, 0]) == pytest.approx(float(element.v[1]), rel=1e-12)
 
 
 def test_cubic_spring_step_solves_backward_euler():
