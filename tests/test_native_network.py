@@ -661,11 +661,11 @@ def host2(tmp_path_factory):
     return compile_trust_host(tmp_path_factory.mktemp("network_host"), 2)
 
 
-def native(built, name, fmi, folder):
+def native(built, name, fmi, folder, causality=None):
     from .native_host import Native
 
-    fmu, _ = built[name, fmi, None, fmi == 3, True]
-    return Native(fmu, folder / f"{name}-{fmi}-unpacked", fmi)
+    fmu, _ = built[name, fmi, causality, fmi == 3, True]
+    return Native(fmu, folder / f"{name}-{fmi}-{causality}-unpacked", fmi)
 
 
 def ran(run):
@@ -763,3 +763,27 @@ def test_the_fmi3_binary_in_the_c_host(built, tmp_path_factory):
     assert run.status("step:0:0.1") == OK and run.status("getr:99999") == ERROR
     values = [value for _, value in run.values]
     assert values[0] == element.x[2] and values[1:] == element.x.tolist()
+
+
+@pytest.mark.slow
+def test_the_connector_binary_in_the_c_host(built, host2, tmp_path_factory):
+    """The massless chain's connector (FMI 2.0) in the sanitized host: samples of the motion committed at each
+    doStep give NetworkConnector's force; a non-finite input is discarded with its reason, NULL pointers refused;
+    no leak, no invalid access."""
+    from .native_host import run_trust
+
+    fmu = native(built, "massless", 2, tmp_path_factory.mktemp("massless_connector"), "displacement")
+    scene = scene_of("massless", "displacement")
+    committed, commands, expected, t = NetworkConnector(scene), list(START), [], 0.0
+    for x, v in motion(12):
+        commands += [f"setr:x:{x!r}", f"setr:v:{v!r}", f"step:{t!r}:0.05"]
+        committed.move_to(x, v, t)
+        preview = copy.deepcopy(committed)
+        preview.move_to(x, v, t + 0.05)
+        commands.append("getr:force")
+        expected.append(preview.force)
+        t += 0.05
+    run = ran(run_trust(host2, fmu, commands + ["setr:x:nan", f"step:{t!r}:0.05", "nulla:x", "term", "free"]))
+    assert [value for _, value in run.values] == expected
+    assert run.status(f"step:{t!r}:0.05") == DISCARD and run.said("the inputs must be finite"), run.logs
+    assert run.said("is NULL")

@@ -201,8 +201,8 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         return fmi3Error;
     for (i = 0; i < nvr; i++) {
         const Var* var;
-#if NETWORK
-        if (ARRAYS && (vr[i] == VR_XA || vr[i] == VR_VA)) { /* x or v of every node, in the nodes' order */
+#if NETWORK && ARRAYS
+        if (vr[i] == VR_XA || vr[i] == VR_VA) { /* x or v of every node, in the nodes' order */
             if (at + NN > nvalues) {
                 say(c, ST_ERROR, "fmi3GetFloat64 refused: %zu values asked, %s alone has %d", nvalues,
                     vr[i] == VR_XA ? "x" : "v", NN);

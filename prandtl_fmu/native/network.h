@@ -384,6 +384,7 @@ static const char* advance(Instance* c, double duration, double force, int scene
     return NULL;
 }
 
+#if CONNECTOR
 /* NetworkConnector.move_to(x, v, time) on ``e``: the load's node along the line from its x to ``x`` in implicit
  * steps of h (an instant when no time passes: one step of max(h, 1)), kernels.move_node; NULL, or why not (``e`` is
  * then partly moved: the caller keeps a copy) */
@@ -446,6 +447,9 @@ static Element* previewed(Instance* c)
     }
     return c->preview_state == 1 ? &c->preview : NULL;
 }
+#else
+static Element* previewed(Instance* c) { return &c->el; } /* the element shows its state */
+#endif
 
 /* ------------------------------------------------------------------ outputs */
 
@@ -459,8 +463,8 @@ static double real_value(Instance* c, const Var* var)
     case W_PARAM: return c->par[var->index];
     case W_STEP: return c->step;
     }
-    if (CONNECTOR && (e = previewed(c)) == NULL)
-        return NAN; /* refused by the getter (calls.h: shown) */
+    if ((e = previewed(c)) == NULL)
+        return NAN; /* the connector's motion refused: so is the getter (calls.h: shown) */
     switch (var->what) {
     case W_X: return e->x[var->index];
     case W_V: return e->v[var->index];
@@ -473,10 +477,11 @@ static double real_value(Instance* c, const Var* var)
     return NAN;
 }
 
+#if ARRAYS
 /* FMI 3.0's arrays x and v (ARRAYS): every node's value in ``out``; 0, or -1 when one is not a number */
 static int node_values(Instance* c, int velocities, double* out)
 {
-    Element* e = CONNECTOR ? previewed(c) : &c->el;
+    Element* e = previewed(c);
     int j;
     if (e == NULL)
         return -1;
@@ -487,6 +492,7 @@ static int node_values(Instance* c, int velocities, double* out)
     }
     return 0;
 }
+#endif
 
 static void defaults(Instance* c)
 {
@@ -640,7 +646,7 @@ static int restore(Instance* c, const State* s)
  * the first input) */
 static int core_exit_initialization(Instance* c)
 {
-    char buffer[512], reason[512];
+    char buffer[1024], reason[512];
     const char* problem;
     if (c->phase != INITIALIZING) {
         say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
