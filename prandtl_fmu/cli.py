@@ -91,8 +91,8 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("-o", "--out", help="FMU file to write (default: ./<scene name>.fmu)")
     build.add_argument("--causality", choices=("force", "displacement"),
                        help="force: force in; x, v, reaction out (default). displacement: the connector between "
-                            "two bodies, massless scenes only: x, v in; force out. Same as the scene's "
-                            "[fmu] causality, which it must not contradict")
+                            "two bodies, massless scenes only (a network: its load node massless): x, v in; "
+                            "force out. Same as the scene's [fmu] causality, which it must not contradict")
     build.add_argument("--osp", action="store_true",
                        help="also write <modelName>_OspModelDescription.xml beside the FMU (libcosim reads it "
                             "from there: mechanical ports for powerBond and ECCO); its path is printed second")

@@ -462,6 +462,9 @@ class NetworkElement(OutputMemo):
             u = arrays["u"][e]
             if element.kind == "branch" and not abs(u) <= element.eta or element.kind != "branch" and u != 0:
                 raise ValueError(f"state's u of {element.name} ({u!r}) is outside its elastic range")
+        problem = stepper_problem(self.scene.with_network(restored), self.stepper)
+        if problem:
+            raise ValueError(f"state's parameters: {problem}")
         self.scene = self.scene.with_network(restored)
         self.model = restored.compile()
         self.x[:], self.v[:], self.u[:] = arrays["x"], arrays["v"], arrays["u"]
@@ -476,10 +479,11 @@ class NetworkElement(OutputMemo):
 class NetworkConnector(NetworkElement):
     """The network with the motion of its load's node imposed (a connector FMU: x, v in; force out).
 
-    ``move_to(x, v, time)`` advances from the committed time to ``time`` in steps of the scene's h (on a grid
-    from time 0), the load's node following the line from the committed x to ``x``; the rest of the network
-    responds (masses, dashpots, sliders). :attr:`force` is the force of the network's elements on that node
-    (what holds the motion)."""
+    ``move_to(x, v, time)`` advances from the committed time to ``time`` in steps of the scene's h from the
+    committed time (and a last shorter one), the load's node following the line from the committed x to ``x``;
+    the rest of the network responds (masses, dashpots, sliders). A move at the committed time is an instant
+    (:func:`kernels.jump_node`: the masses and dashpots do not move). :attr:`force` is the force of the
+    network's elements on that node (what holds the motion). The load's node must stay massless."""
 
     def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None):
         if scene.network.mass[scene.network.load_node] > 0:
@@ -500,6 +504,31 @@ class NetworkConnector(NetworkElement):
     def force(self) -> float:
         return float(self._force)
 
+    def get_state(self) -> dict:
+        state = super().get_state()
+        state["connector_force"] = self._force
+        return state
+
+    def set_state(self, state: dict) -> None:
+        """:meth:`NetworkElement.set_state`, and the force that held the node (part of the state: it comes from
+        the last step's equilibrium)."""
+        force = state.get("connector_force") if isinstance(state, dict) else None
+        if isinstance(force, bool) or not isinstance(force, (int, float)) or not math.isfinite(force):
+            raise ValueError("state has no finite connector_force")
+        parameters = state.get("parameters")
+        load = f"m_{self.scene.network.nodes[self.scene.network.load_node]}"
+        if isinstance(parameters, dict) and parameters.get(load, 0.0) != 0.0:
+            raise ValueError(f"state's {load} must be 0: the connector's load node is massless")
+        super().set_state(state)
+        self._force = float(force)
+
+    def set_parameters(self, **values) -> None:
+        """:meth:`NetworkElement.set_parameters`; the load node's mass stays 0."""
+        load = f"m_{self.scene.network.nodes[self.scene.network.load_node]}"
+        if load in values and values[load] != 0:
+            raise SceneError(f"{load}: the connector imposes the motion of its load node, which must stay massless")
+        super().set_parameters(**values)
+
     def _reaction_force(self) -> float:
         return float(kernels.node_force(self.model, self.work[5], self.scene.network.load_node))
 
@@ -518,25 +547,27 @@ class NetworkConnector(NetworkElement):
         duration = time - start
         try:
             if duration == 0:
-                whole, rest, h = 0, max(self.h, 1.0), self.h  # an instant: one step, no dashpot relaxes much
+                status, held = kernels.jump_node(self.model, self.x, self.v, self.u, self.piece, self.account,
+                                                 self.dissipated, node, float(x))
+                if status < 0:
+                    raise ElementError(failure_message(self.scene, "instant", status, start, 0.0))
             else:
                 h = self.h
                 whole, rest = split_duration(duration, h)
                 if whole + (rest > 0) > ADVANCE_BUDGET:
                     raise ElementError(f"{self.scene.source}: a move over {duration!r} s takes more than "
                                        f"{ADVANCE_BUDGET:.0e} steps")
-            status, _ = kernels.move_node(self.model, self.x, self.v, self.u, self.piece, self.work, self.account,
-                                          self.dissipated, node, float(x), whole, h, rest)
-            if status < 0:
-                raise ElementError(failure_message(self.scene, "implicit", status, start, 0.0))
-            if duration != 0:
+                status, _ = kernels.move_node(self.model, self.x, self.v, self.u, self.piece, self.work,
+                                              self.account, self.dissipated, node, float(x), whole, h, rest)
+                if status < 0:
+                    raise ElementError(failure_message(self.scene, "implicit", status, start, 0.0))
                 self._origin, self._steps, self._grid = time, 0, h
         except ElementError:
             self.rollback(saved)
             self._force = saved_force
             raise
         self.v[node] = v
-        self._force = self._reaction_force()
+        self._force = held if duration == 0 else self._reaction_force()
         if not math.isfinite(self._force) or not np.all(np.isfinite(self.x)):
             self.rollback(saved)
             self._force = saved_force

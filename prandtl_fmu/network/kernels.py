@@ -1067,3 +1067,52 @@ def initial_reaction(model, x, v, u, force):
         else:
             total += term[e]
     return total
+
+
+@kernel
+def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
+    """An instant's move of ``node`` to ``target`` (a connector's sample at the time it already is at): the
+    masses do not move and keep their velocities, the dashpots are rigid, no series dashpot relaxes (the
+    instant's model, as at t = 0); the massless part follows in equilibrium, sliders and branches slip as
+    they must. Returns (status, force): 0 and the force that holds the node, or the status of the equilibrium
+    that failed (< 0; nothing changed then) and NaN."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    instant, extra = instant_model(model)
+    count = instant[1].shape[0]
+    work = workspace(n, count)
+    piece2 = np.zeros(count, np.int64)
+    u2 = np.zeros(count)
+    u2[extra:] = u
+    for e in range(kind.shape[0]):
+        piece2[extra + e] = piece[e]
+    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, node, target - x[node], work)
+    if status < 0:
+        return status, np.nan
+    d = work[0]
+    rates = v.copy()
+    commit(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, work, None, None)
+    for j in range(n):
+        v[j] = rates[j]
+    term = work[5]
+    for e in range(kind.shape[0]):
+        i, j = ends[e, 0], ends[e, 1]
+        delta = d[i] if j == GROUND else d[i] - d[j]
+        slip = 0.0
+        if kind[e] == SLIDER and piece2[extra + e] != STUCK:
+            slip = coef[e, 0] * abs(delta)
+        elif kind[e] == BRANCH:
+            if piece2[extra + e] != ELASTIC:
+                slip = coef[e, 0] * coef[e, 1] * abs(u[e] + delta - u2[extra + e])
+            u[e] = u2[extra + e]
+        if kind[e] == SLIDER or kind[e] == BRANCH:
+            p = piece2[extra + e]
+            piece[e] = p // KINK if abs(p) == KINK else p
+        if energy is not None:
+            energy[1] += slip
+        if dissipated is not None:
+            dissipated[e] += slip
+    force = node_force(instant, term, node)
+    if energy is not None:
+        energy[0] += force * d[node]
+    return 0, force
