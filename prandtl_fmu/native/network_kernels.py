@@ -5,8 +5,8 @@ As :mod:`prandtl_fmu.native.kernels` does for the element: small Python function
 scene's sizes written into them, unpack C pointers (``numba.carray``) into the library's model tuple
 ``(mass, kind, ends, coef, load_node, has_cubic)``, its load tuple and its workspace, and call the library's own
 compiled kernels (:mod:`prandtl_fmu.network.kernels`): the time loops ``run_implicit`` and ``run_projected``,
-``solve_step`` and ``commit`` (the connector and the equilibrium at t = 0), ``kinetic``, ``stored``,
-``forces_now``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
+``move_node`` and ``node_force`` (the connector), ``solve_step`` and ``commit`` (the equilibrium at t = 0),
+``kinetic``, ``stored``, ``forces_now``, and ``loads.force_at``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
 library's, bit for bit (tests/test_native_network.py).
 
 Two pieces of the library are plain Python (numpy) and cannot be called from a cfunc; they are written below as
@@ -23,7 +23,8 @@ lf, nl as the element's):
   status)`` -> steps taken (``out``: the row of write_row, 2 n + 2; ``status[0]``: the last step's status);
 * ``load_force(load, t)`` -> F(t) of the load (``loads.force_at``);
 * ``energies(net, x, v, u, out)``: out[0] the kinetic, out[1] the stored energy;
-* ``initial(net, x, v, u, piece, force, reaction)`` -> 0, or the status of the equilibrium that failed;
+* ``initial(net, x, v, u, piece, force, reaction)``: the equilibrium at t = 0 in place (x, v, u, piece hold the
+  scene's x0, v0, u0 and zeros), reaction[0] the reaction -> 0, or the status of the equilibrium that failed;
 * ``move(net, x, v, u, piece, account, dissipated, work, target, whole, h, rest, force)``: ``kernels.move_node``
   (the load's node to ``target`` in ``whole`` steps of h and one of ``rest``) -> its status; force[0] the force
   of the elements on the load's node (``kernels.node_force``).
