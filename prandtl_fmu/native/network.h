@@ -386,11 +386,11 @@ static const char* advance(Instance* c, double duration, double force, int scene
 
 #if CONNECTOR
 /* NetworkConnector.move_to(x, v, time) on ``e``: the load's node along the line from its x to ``x`` in implicit
- * steps of h (an instant when no time passes: one step of max(h, 1)), kernels.move_node; NULL, or why not (``e`` is
- * then partly moved: the caller keeps a copy) */
+ * steps of h (kernels.move_node), or in an instant when no time passes (kernels.jump_node); NULL, or why not (``e``
+ * is then partly moved: the caller keeps a copy) */
 static const char* move(Instance* c, Element* e, double x, double v, double time, char* buffer, size_t size)
 {
-    double start = element_time(e), duration = time - start, whole = 0.0, rest, h = e->h, force[1] = {0.0};
+    double start = element_time(e), duration = time - start, whole = 0.0, rest = 0.0, h = e->h, force[1] = {0.0};
     int64_t status;
     int j;
     if (!(isfinite(x) && isfinite(v) && isfinite(time)) || duration < 0) {
@@ -398,23 +398,24 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
                  x, v, time);
         return buffer;
     }
-    if (duration == 0) {
-        rest = h > 1.0 ? h : 1.0; /* max(self.h, 1.0) */
+    prandtl_kernel_failed = 0;
+    if (duration == 0) { /* an instant: the masses and dashpots hold, the massless part follows */
+        status = jump_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, x, force);
     } else {
         split_duration(duration, h, &whole, &rest);
         if (whole + (rest > 0) > ADVANCE_BUDGET) {
             snprintf(buffer, size, "a move over %.17g s takes more than %.0e steps", duration, ADVANCE_BUDGET);
             return buffer;
         }
+        status = move_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, WORK(&c->work), x,
+                        (int64_t)whole, h, rest, force);
     }
-    prandtl_kernel_failed = 0;
-    status = move_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, WORK(&c->work), x, (int64_t)whole,
-                    h, rest, force);
     if (prandtl_kernel_failed)
         return "a kernel failed (out of memory)";
     if (status < 0) {
         char reason[256];
-        snprintf(buffer, size, "the implicit step from t = %.17g s %s", start, failure(status, reason, sizeof reason));
+        snprintf(buffer, size, "the %s from t = %.17g s %s", duration == 0 ? "instant" : "implicit step", start,
+                 failure(status, reason, sizeof reason));
         return buffer;
     }
     if (duration != 0) {

@@ -5,15 +5,9 @@ As :mod:`prandtl_fmu.native.kernels` does for the element: small Python function
 scene's sizes written into them, unpack C pointers (``numba.carray``) into the library's model tuple
 ``(mass, kind, ends, coef, load_node, has_cubic)``, its load tuple and its workspace, and call the library's own
 compiled kernels (:mod:`prandtl_fmu.network.kernels`): the time loops ``run_implicit`` and ``run_projected``,
-``move_node`` and ``node_force`` (the connector), ``solve_step`` and ``commit`` (the equilibrium at t = 0),
-``kinetic``, ``stored``, ``forces_now``, and ``loads.force_at``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
+``move_node``, ``jump_node`` and ``node_force`` (the connector), ``initial_state`` and ``initial_reaction`` (the
+equilibrium at t = 0), ``kinetic``, ``stored``, and ``loads.force_at``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
 library's, bit for bit (tests/test_native_network.py).
-
-Two pieces of the library are plain Python (numpy) and cannot be called from a cfunc; they are written below as
-compiled functions that do the same operations in the same order on the same arrays (tests hold them to the
-library's numbers bit for bit): ``network.driver.initial_state`` (the instant model of ``driver.instant_model``,
-built in place: the massive nodes held by sliders of infinite threshold listed first, rigid dashpots, no series
-dashpot relaxing) and ``driver.initial_reaction``, both in :func:`instant_state`.
 
 The C signatures (``P`` a pointer to doubles, ``I`` a pointer to int64; ``net`` = mass, coef, kind, ends,
 load_node, has_cubic; ``work`` = the workspace's 11 arrays, kernels.workspace's order; ``load`` = kind, lk, lt,
@@ -27,7 +21,9 @@ lf, nl as the element's):
   scene's x0, v0, u0 and zeros), reaction[0] the reaction -> 0, or the status of the equilibrium that failed;
 * ``move(net, x, v, u, piece, account, dissipated, work, target, whole, h, rest, force)``: ``kernels.move_node``
   (the load's node to ``target`` in ``whole`` steps of h and one of ``rest``) -> its status; force[0] the force
-  of the elements on the load's node (``kernels.node_force``).
+  of the elements on the load's node (``kernels.node_force``);
+* ``jump(net, x, v, u, piece, account, dissipated, target, force)``: ``kernels.jump_node`` (the load's node to
+  ``target`` in an instant) -> its status; force[0] the force that holds the node.
 """
 from __future__ import annotations
 
@@ -44,6 +40,7 @@ SIGNATURES = {
     "move": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_WORK}, types.float64, types.int64, "
             f"types.float64, types.float64, {_P})",
     "load_force": f"types.float64({_LOAD}, types.float64)",
+    "jump": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, types.float64, {_P})",
 }
 
 _TEMPLATE = '''
@@ -85,9 +82,22 @@ def energies(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, outp)
 
 
 def initial(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, force, reactionp):
-    return instant_state(_net(massp, coefp, kindp, endsp, load_node, has_cubic), carray(xp, ({n},)),
-                         carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)), force,
-                         carray(reactionp, (1,)))
+    model = _net(massp, coefp, kindp, endsp, load_node, has_cubic)
+    x, v, u = carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},))
+    status = initial_state(model, x, v, u, carray(piecep, ({e},)), force)
+    if status < 0:
+        return status
+    reactionp[0] = initial_reaction(model, x, v, u, force)
+    return 0
+
+
+def jump(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp, target,
+         forcep):
+    status, held = jump_node(_net(massp, coefp, kindp, endsp, load_node, has_cubic), carray(xp, ({n},)),
+                             carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)), carray(accountp, (3,)),
+                             carray(dissipatedp, ({e},)), load_node, target)
+    forcep[0] = held
+    return status
 
 
 def move(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp,
@@ -100,161 +110,6 @@ def move(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, a
     forcep[0] = node_force(model, work[5], load_node)
     return status
 '''
-
-def _library_pieces():
-    """The compiled stand-ins of driver.initial_state, driver.initial_reaction, NetworkConnector.move_to (see the
-    module docstring), defined on first use (numba is imported then)."""
-    import math
-
-    import numpy as np
-    from numba import njit
-
-    from ..network import kernels as nk
-
-    SLIDER, DASHPOT, BRANCH, GROUND, KINK = nk.SLIDER, nk.DASHPOT, nk.BRANCH, nk.GROUND, nk.KINK
-
-    @njit
-    def instant_model(model):
-        """driver.instant_model: (the instant's model, the number of held nodes listed first)."""
-        mass, kind, ends, coef, load_node, has_cubic = model
-        n = mass.shape[0]
-        elements = kind.shape[0]
-        extra = 0
-        for j in range(n):
-            if mass[j] > 0:
-                extra += 1
-        count = extra + elements
-        kind2 = np.empty(count, np.int64)
-        ends2 = np.empty((count, 2), np.int64)
-        coef2 = np.empty((count, 3))
-        m = 0
-        for j in range(n):  # every massive node held: a stuck slider of infinite threshold, listed first
-            if mass[j] > 0:
-                kind2[m] = SLIDER
-                ends2[m, 0] = j
-                ends2[m, 1] = -1
-                coef2[m, 0], coef2[m, 1], coef2[m, 2] = np.inf, 0.0, 0.0
-                m += 1
-        for e in range(elements):
-            kind2[extra + e] = kind[e]
-            ends2[extra + e, 0], ends2[extra + e, 1] = ends[e, 0], ends[e, 1]
-            coef2[extra + e, 0], coef2[extra + e, 1], coef2[extra + e, 2] = coef[e, 0], coef[e, 1], coef[e, 2]
-        for e in range(count):
-            if kind2[e] == DASHPOT and coef2[e, 0] > 0:  # rigid (a dashpot with c = 0 is no dashpot)
-                kind2[e] = SLIDER
-                coef2[e, 0], coef2[e, 1], coef2[e, 2] = np.inf, 0.0, 0.0
-        for e in range(count):
-            if kind2[e] == DASHPOT:
-                coef2[e, 0] = 0.0
-            if kind2[e] == BRANCH:
-                coef2[e, 2] = 0.0
-        return (np.zeros(n), kind2, ends2, coef2, load_node, has_cubic), extra
-
-    @njit
-    def initial_state(model, x, v, u, piece, force):
-        """driver.initial_state on (x, v, u, piece) holding the scene's x0, v0, u0 and zeros: every massless node
-        in equilibrium with ``force``. Returns 0, or the failed equilibrium's status."""
-        mass, kind, ends, coef, load_node, has_cubic = model
-        n = mass.shape[0]
-        elements = kind.shape[0]
-        massless = False
-        for j in range(n):
-            if not mass[j] > 0:
-                v[j] = 0.0
-                massless = True
-        if not massless:
-            return 0
-        instant, extra = instant_model(model)
-        count = instant[1].shape[0]
-        work = nk.workspace(n, count)
-        piece2 = np.zeros(count, np.int64)
-        u2 = np.zeros(count)
-        for e in range(elements):
-            u2[extra + e] = u[e]
-        status = nk.solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
-        if status < 0:
-            return status
-        nk.commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
-        for e in range(elements):  # the pieces reached; a rigid dashpot is a dashpot again
-            if kind[e] == SLIDER or kind[e] == BRANCH:
-                p = piece2[extra + e]
-                piece[e] = p if abs(p) != KINK else p // KINK
-            u[e] = u2[extra + e]
-        return 0
-
-    @njit
-    def initial_reaction(model, x, v, u, force):
-        """driver.initial_reaction, in the same order of operations (Python's min and max included)."""
-        mass, kind, ends, coef, load_node, has_cubic = model
-        n = mass.shape[0]
-        elements = kind.shape[0]
-        term = np.zeros(elements)
-        nk.forces_now(model, x, v, u, term)
-        massless = False
-        for j in range(n):
-            if not mass[j] > 0:
-                massless = True
-        if massless:  # the instant's forces (its solve from the equilibrium found by initial_state)
-            instant, extra = instant_model(model)
-            count = instant[1].shape[0]
-            work = nk.workspace(n, count)
-            piece = np.zeros(count, np.int64)
-            u2 = np.zeros(count)
-            for e in range(elements):
-                u2[extra + e] = u[e]
-            status = nk.solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, -1, 0.0, work)
-            if status >= 0:
-                held = work[5]
-                for e in range(elements):
-                    if not mass[ends[e, 0]] > 0 or (ends[e, 1] >= 0 and not mass[ends[e, 1]] > 0):
-                        term[e] = held[extra + e]
-        net = np.zeros(n)
-        net[load_node] += force
-        for e in range(elements):
-            if kind[e] != SLIDER:
-                net[ends[e, 0]] -= term[e]
-                if ends[e, 1] >= 0:
-                    net[ends[e, 1]] += term[e]
-        total = 0.0
-        for e in range(elements):
-            if ends[e, 1] != GROUND:
-                continue
-            i = ends[e, 0]
-            if kind[e] == SLIDER and mass[i] > 0:
-                alpha = coef[e, 0]
-                if v[i] != 0:
-                    total += alpha * math.copysign(1.0, v[i])
-                else:
-                    held_force = net[i]  # min(max(net, -alpha), alpha) as Python's builtins pick
-                    if -alpha > held_force:
-                        held_force = -alpha
-                    if alpha < held_force:
-                        held_force = alpha
-                    total += held_force
-            else:
-                total += term[e]
-        return total
-
-    @njit
-    def instant_state(model, x, v, u, piece, force, reaction):
-        """initial_state, then reaction[0] = initial_reaction. Returns 0, or the failed equilibrium's status."""
-        status = initial_state(model, x, v, u, piece, force)
-        if status < 0:
-            return status
-        reaction[0] = initial_reaction(model, x, v, u, force)
-        return 0
-
-    return dict(instant_state=instant_state, initial_reaction=initial_reaction)
-
-
-_PIECES = {}
-
-
-def library_pieces() -> dict:
-    if not _PIECES:
-        _PIECES.update(_library_pieces())
-    return _PIECES
-
 
 def compile_network(scene, steppers, connector: bool) -> list:
     """The scene's C functions: ``[(c_name, cfunc), ...]`` (``advance_<stepper>`` for ``steppers``, ``energies``,
@@ -271,12 +126,13 @@ def compile_network(scene, steppers, connector: bool) -> list:
     source = _TEMPLATE.format(**shape)
     from ..loads import force_at
 
-    names = ["energies", "initial", "load_force"] + (["move"] if connector else [])
+    names = ["energies", "initial", "load_force"] + (["move", "jump"] if connector else [])
     compiled = []
     for stepper in [None] + list(steppers):
         namespace = dict(carray=carray, np=np, kinetic=nk.kinetic, stored=nk.stored, force_at=force_at,
-                         move_node=nk.move_node, node_force=nk.node_force,
-                         run=loop_for(stepper) if stepper else None, **library_pieces())
+                         move_node=nk.move_node, node_force=nk.node_force, jump_node=nk.jump_node,
+                         initial_state=nk.initial_state, initial_reaction=nk.initial_reaction,
+                         run=loop_for(stepper) if stepper else None)
         exec(compile(source, f"<prandtl_fmu native network kernels of {scene.source}>", "exec"), namespace)
         for helper in ("_net", "_work", "_load"):  # inlined into each C function
             namespace[helper] = njit(inline="always")(namespace[helper])
