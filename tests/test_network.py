@@ -471,8 +471,11 @@ def test_one_node_network_is_the_element(case, stepper):
     np.testing.assert_allclose(network.x[:, 0], element.x, rtol=0, atol=1e-12 * x_scale)
     # v from the first step on (the initial row of a massless node with a dashpot is
     # test_massless_dashpot_node_velocity_at_time_zero's)
+    # A massless node's v is d/h: with a cubic spring both solve a cubic equation by Newton to the rounding of
+    # the position x + d (the network's test: 64 eps |x|), which d/h amplifies by |x| / |d|: 1e-11 there.
+    massless_cubic = not ONE_NODE_CASES[case]["mass"] and "cubic" in ONE_NODE_CASES[case]
     np.testing.assert_allclose(network.v[1:, 0], element.v[1:], rtol=0,
-                               atol=1e-12 * (np.abs(element.v).max() + x_scale))
+                               atol=(1e-11 if massless_cubic else 1e-12) * (np.abs(element.v).max() + x_scale))
     if case != "slider":
         # With a slider the reaction differs where the mass sticks: the element reports the static friction
         # (F minus the other forces), the network the implicit step's friction force. x and v only there.

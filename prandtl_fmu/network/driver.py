@@ -68,6 +68,8 @@ def columns_of(scene: NetworkScene, states: bool = False, energy: bool = False) 
 def failure_message(scene: NetworkScene, stepper: str, status: int, time: float, force: float) -> str:
     """Why the step from ``time`` could not be taken, in words."""
     where = f"{scene.source}: the {stepper} step from t = {float(time)!r} s (F = {float(force)!r} N)"
+    if stepper == "instant":
+        where = f"{scene.source}: at t = {float(time)!r} s (F = {float(force)!r} N), the network (an instant's move)"
     if status == -2:
         return (f"{where} has no equilibrium: a part of the network with no mass is pushed beyond what holds it "
                 "(e.g. a massless chain pulled beyond the total friction of its nodes, or a massless node beyond "
@@ -77,6 +79,10 @@ def failure_message(scene: NetworkScene, stepper: str, status: int, time: float,
         return (f"{where} refused: the active-set search did not end within its budget of "
                 f"{kernels.search_budget(n, count)} iterations ({kernels.SEARCH_PER_TERM} per node and element "
                 f"+ {kernels.SEARCH_CONSTANT}); a smaller step needs fewer")
+    if status == -4:
+        return (f"{where} refused: its linear system is too ill-conditioned for double precision (a stiffness "
+                "beyond 1e10 times a node's inertia m/h^2: a stiff spring between light masses); take a smaller "
+                "step, or join such nodes into one")
     return f"{where} refused: a number overflowed (not finite)"
 
 
@@ -93,8 +99,7 @@ def initial_state(scene: NetworkScene, model, load):
     force = float(force_at(load, 0.0))
     status = kernels.initial_state(model, x, v, u, piece, force)
     if status < 0:
-        raise ElementError(failure_message(scene, "instant (equilibrium at t = 0)", status, 0.0, force).replace(
-            "step from t = 0.0 s", "equilibrium at t = 0"))
+        raise ElementError(failure_message(scene, "instant", status, 0.0, force))
     return x, v, u, piece
 
 
@@ -409,6 +414,10 @@ class NetworkElement(OutputMemo):
         """Change coefficients by parameter name (m_<node>, k_spring_1, alpha_n3, ...): SceneError names the
         culprit and changes nothing. A change of a mass to or from 0 or of a topology rule is checked."""
         network = self.scene.network.with_parameters(**values)
+        for e, element in enumerate(network.elements):
+            if element.kind == "branch" and abs(self.u[e]) > element.eta:
+                raise SceneError(f"eta_{element.name}: {element.eta!r} is below the branch's elongation now, "
+                                 f"|u| = {abs(float(self.u[e]))!r}: it would drop stored energy unbooked")
         scene = self.scene.with_network(network)
         problem = stepper_problem(scene, self.stepper)
         if problem:

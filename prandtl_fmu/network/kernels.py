@@ -57,8 +57,8 @@ KINK = 2
 SEARCH_PER_TERM = 8
 SEARCH_CONSTANT = 200
 LINE_SEARCH_LIMIT = 200  # bisection/Newton iterations of one line search along a cubic spring's Newton step
-SINGULAR = 1e-12  # a pivot below this fraction of its diagonal: the cluster is floppy (no stiffness, no mass)
 ROUNDING = 64.0 * np.finfo(np.float64).eps  # relative size of a rounding error in a force balance
+ILL_CONDITIONED = 1e-10  # a pivot this far below its diagonal leaves fewer than 6 right digits: refused
 
 
 @kernel
@@ -256,15 +256,20 @@ def _band(kind, ends, piece, cluster):
 
 @kernel
 def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
-    """The clusters' matrix (banded: a[c, t] = H[c, c - t]) and right-hand side -sum of grad over each."""
+    """The clusters' matrix (banded: a[c, t] = H[c, c - t]), right-hand side (-sum of grad over each) and
+    anchor: the part of each cluster's diagonal that no other cluster shares (its inertia, its elements to
+    held nodes). A pivot of the LDL^T factorization is at least its cluster's anchor (a Schur complement of
+    a sum of positive semidefinite matrices is at least the sum of theirs)."""
     mass, kind, ends, coef, load_node, has_cubic = model
     a = np.zeros((count, band + 1))
     rhs = np.zeros(count)
+    anchor = np.zeros(count)
     n = mass.shape[0]
     for j in range(n):
         c = cluster[j]
         if c >= 0:
             a[c, 0] += mass[j] / (h * h)
+            anchor[c] += mass[j] / (h * h)
             rhs[c] -= grad[j]
     for e in range(kind.shape[0]):
         if is_constraint(kind[e], piece[e]):
@@ -287,14 +292,21 @@ def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
             a[cj, 0] += kappa
         if ci >= 0 and cj >= 0:
             a[max(ci, cj), abs(ci - cj)] -= kappa
-    return a, rhs
+        elif ci >= 0:
+            anchor[ci] += kappa
+        else:
+            anchor[cj] += kappa
+    return a, rhs, anchor
 
 
 @kernel
-def _factor(a, band, first_row):
+def _factor(a, band, first_row, anchor):
     """In-place banded LDL^T of the symmetric a (a[c, 0] = D_c, a[c, t] = L[c, c - t]), from row
     ``first_row`` on (the rows above are factored). Returns the first cluster whose pivot vanishes (-1:
-    none): the matrix is singular there (a floppy cluster); its pivot is left unset."""
+    none): the matrix is singular there (a floppy cluster); its pivot is left unset. A cluster with an anchor
+    (inertia, or an element to a held node) is never singular: its pivot is at least its anchor; if rounding
+    cancelled its pivot below ILL_CONDITIONED of its diagonal (a stiff spring between light masses: k h^2 / m
+    beyond 1e10), the solve would be wrong in its leading digits: returns -2 - c."""
     count = a.shape[0]
     for c in range(first_row, count):
         diagonal = a[c, 0]
@@ -308,7 +320,11 @@ def _factor(a, band, first_row):
         pivot = diagonal
         for m in range(first, c):
             pivot -= a[c, c - m] * a[c, c - m] * a[m, 0]
-        if not pivot > SINGULAR * diagonal:
+        if anchor[c] > 0.0:
+            if not pivot > ILL_CONDITIONED * diagonal:
+                return -2 - c  # rounding ate the pivot: the stiffness dwarfs the inertia
+            pivot = max(pivot, anchor[c])
+        elif not pivot > ROUNDING * diagonal:
             return c
         a[c, 0] = pivot
     return -1
@@ -456,6 +472,8 @@ def _line_search(model, x, u, piece, d, p, h, force, v, top):
     lo, hi = 0.0, top
     tau = 1.0 if top >= 1.0 else top
     best, least = 0.0, np.inf
+    width = np.inf  # the bracket's width two iterations ago
+    last_width = np.inf
     for _ in range(LINE_SEARCH_LIMIT):
         slope, curvature, size = _directional(model, x, u, piece, d, p, h, force, v, tau)
         if not (abs(slope) < np.inf and abs(curvature) < np.inf):
@@ -470,10 +488,20 @@ def _line_search(model, x, u, piece, d, p, h, force, v, top):
             lo = tau
             if tau == top:
                 return tau
-        step = tau - slope / curvature if curvature > 0.0 else np.nan
-        if not (step > lo and step < hi):
-            step = 0.5 * (lo + hi) if hi < np.inf else 2.0 * tau + 1.0
-        if step == tau or hi - lo <= 4.0 * np.finfo(np.float64).eps * max(abs(hi), 1.0):
+        newton = tau - slope / curvature if curvature > 0.0 else np.nan
+        if hi == np.inf:
+            # no upper bound yet: three Newton steps at once (a root of a cubic spring at rest is triple, where
+            # Newton goes a third of the way; past a simple root this gives the bound)
+            step = tau + 3.0 * (newton - tau) if newton > tau else 2.0 * tau + 1.0
+        else:
+            # Newton inside the bracket while the bracket halves every two iterations; bisection otherwise
+            step = newton
+            if not (step > lo and step < hi) or hi - lo > 0.5 * width:
+                step = 0.5 * (lo + hi)
+            if hi - lo <= 4.0 * np.finfo(np.float64).eps * max(abs(hi), 1.0):
+                return step
+            width, last_width = last_width, hi - lo
+        if step == tau:
             return step
         tau = step
     return best  # the budget ran out: the point of least slope seen
@@ -513,7 +541,8 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     """The increment d (work[0]) of one implicit step and the force each element carries (work[5]); the
     pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
     Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
-    (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number."""
+    (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number, -4 when the
+    linear system is too ill-conditioned to be solved in double precision."""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     elements = kind.shape[0]
@@ -533,7 +562,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             if not abs(grad[j]) < np.inf:
                 return -3
         band = _band(kind, ends, piece, cluster)
-        a, rhs = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
+        a, rhs, anchor = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
         balanced = True  # every free cluster's forces balance to their rounding (Newton's test, cubic springs)
         if has_cubic:
             size = np.zeros(count)
@@ -546,7 +575,9 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         top = 1.0
         row = 0
         while True:
-            singular = _factor(a, band, row)
+            singular = _factor(a, band, row, anchor)
+            if singular <= -2:
+                return -4
             if singular < 0:
                 break
             # a floppy cluster (no mass, no stiffness along z): J is linear along the null vector z
@@ -572,15 +603,23 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         converged = False
         if has_cubic and top == 1.0:
             # Newton has converged when the forces balance to their rounding, or when its step no longer
-            # changes the increment (it is below d's last bit)
+            # changes anything: below a few ulps of the increment, or, at a massless node, below the rounding
+            # of its position (a massless node held by a cubic spring at rest: a triple root, where the force
+            # vanishes faster than the position can be resolved)
             converged = balanced
             if not converged:
                 converged = True
                 for j in range(n):
-                    if abs(p[j]) > 4.0 * np.finfo(np.float64).eps * abs(d[j]):
-                        converged = False
-                        break
-        tau = 0.0 if converged else top
+                    if abs(p[j]) <= 4.0 * np.finfo(np.float64).eps * abs(d[j]):
+                        continue
+                    if not mass[j] > 0.0 and abs(p[j]) <= ROUNDING * (abs(x[j]) + abs(d[j])):
+                        continue
+                    converged = False
+                    break
+        # the farthest the move may go: to the working set's minimiser (tau = 1), or, along a floppy direction
+        # or a cubic spring's Newton direction (searched exactly: it may go past 1, where Newton falls short
+        # of a triple root), as far as no kink stops it
+        tau = 0.0 if converged else (np.inf if has_cubic else top)
         blocker = -1
         for e in range(elements if not converged else 0):
             kd = kind[e]
@@ -600,8 +639,17 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             if room < tau:
                 tau = room
                 blocker = e
-        if tau == np.inf and not has_cubic:
-            return -2
+        if tau == np.inf and top == np.inf:  # a floppy direction no kink stops: only a cubic spring it stretches
+            bounded = False
+            for e in range(elements if has_cubic else 0):
+                if kind[e] == CUBIC and coef[e, 0] > 0.0:
+                    i, j = ends[e, 0], ends[e, 1]
+                    rate = p[i] if j == GROUND else p[i] - p[j]
+                    size = abs(p[i]) + (0.0 if j == GROUND else abs(p[j]))
+                    if abs(rate) > ROUNDING * size:  # (a rigid motion's rate is 0 but for rounding)
+                        bounded = True
+            if not bounded:
+                return -2
         step_taken = tau
         if has_cubic and not converged:
             step_taken = _line_search(model, x, u, piece, d, p, h, force, v, tau)
@@ -632,10 +680,12 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
                     parent[max(ra, rb)] = min(ra, rb)
                 if kind[e] == SLIDER:
                     piece[e] = STUCK
-                else:
-                    rel = d[i] if j == GROUND else d[i] - d[j]
-                    r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2]) if coef[e, 2] > 0.0 else 1.0
-                    piece[e] = KINK if r * (u[e] + rel) > 0.0 else -KINK
+                else:  # the kink it moved onto: the side its motion goes (eta = 0: both kinks are at 0)
+                    rate = p[i] if j == GROUND else p[i] - p[j]
+                    if piece[e] == ELASTIC:
+                        piece[e] = KINK if rate > 0.0 else -KINK
+                    else:  # clipped, coming back: the kink of its side
+                        piece[e] = KINK if piece[e] > 0 else -KINK
             continue
         released_many = False
         if has_cubic and not converged:
