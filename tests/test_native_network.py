@@ -431,6 +431,36 @@ def test_a_parameter_is_refused_in_the_library_s_words_and_steps_go_on_when_set_
         slave.close()
 
 
+def test_an_eta_below_the_branch_s_elongation_now_is_refused(built):
+    """The branch pulled to its kink (|u| = eta = 0.02), then eta set to 0.006 (above |u0|, below |u| now): the
+    library refuses it (the stored energy k u^2 / 2 would drop unbooked), and so does the FMU, with the reason; the
+    state as it was."""
+    from fmpy.fmi1 import FMICallException
+
+    fmu, _ = built["joint", 2, None, False, False]
+    element = NetworkElement(scene_of("joint"))
+    slave = Slave2(fmu)
+    try:
+        t = 0.0
+        for _ in range(10):
+            slave.set(["F"], [40.0])
+            slave.step(t, 0.05)
+            element.advance(0.05, 40.0)
+            t += 0.05
+        assert slave.get(["u_branch_1"]) == [element.u[5]] and abs(element.u[5]) > 0.006
+        with pytest.raises(SceneError, match="below the branch's elongation now"):
+            element.set_parameters(eta_branch_1=0.006)
+        before = slave.get(slave.outputs)
+        slave.set(["eta_branch_1"], [0.006])
+        count = len(slave.messages)
+        with pytest.raises(FMICallException):
+            slave.step(t, 0.05)
+        assert any("below the branch's elongation now" in text for _, text in slave.messages[count:])
+        assert slave.get(slave.outputs) == before
+    finally:
+        slave.close()
+
+
 def test_a_step_with_no_equilibrium_is_discarded_with_the_library_s_reason(built):
     """The massless chain with its dashpots and its wall spring set to 0 (springs between the nodes and sliders on
     the support hold it) pulled beyond the total friction of its nodes: no quasi-static solution. NetworkElement refuses the advance
