@@ -172,6 +172,7 @@ static const char* network_problem(const double* par, int stepper, char* buffer,
 static const char* settings_problem(Instance* c, char* buffer, size_t size)
 {
     int i, stepper = c->stepper_valid ? stepper_index(c->stepper) : -1;
+    const char* problem;
     if (stepper < 0) {
         snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers that apply to this "
                  "network)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
@@ -181,15 +182,17 @@ static const char* settings_problem(Instance* c, char* buffer, size_t size)
         snprintf(buffer, size, "parameter step = %.17g: must be finite and > 0", c->step);
         return buffer;
     }
+    problem = network_problem(c->par, stepper, buffer, size);
+    if (problem != NULL)
+        return problem;
     for (i = 0; i < N_PARAMS_USED; i++) { /* NetworkElement.set_parameters: an eta below the branch's |u| now */
-        double u = c->el.u[PARAMS[i].element];
-        if (PARAMS[i].rule == R_ETA && fabs(u) > c->par[i]) {
+        if (PARAMS[i].rule == R_ETA && fabs(c->el.u[PARAMS[i].element]) > c->par[i]) {
             snprintf(buffer, size, "parameter %s: %.17g is below the branch's elongation now, |u| = %.17g: it would "
-                     "drop stored energy unbooked", PARAMS[i].name, c->par[i], fabs(u));
+                     "drop stored energy unbooked", PARAMS[i].name, c->par[i], fabs(c->el.u[PARAMS[i].element]));
             return buffer;
         }
     }
-    return network_problem(c->par, stepper, buffer, size);
+    return NULL;
 }
 
 /* the coefficients in use from the parameters: mass[j], and column ``column`` of element ``element`` */
