@@ -451,6 +451,8 @@ class NetworkElement(OutputMemo):
         for key, size in shapes.items():
             if arrays[key].shape != (size,) or not np.all(np.isfinite(arrays[key])):
                 raise ValueError(f"state's {key} must be {size} finite numbers")
+        if np.any(arrays["account"][1:] < 0) or np.any(arrays["dissipated"] < 0):
+            raise ValueError("state's dissipated energies must be >= 0 (a dissipation never gives energy back)")
         if piece.shape != (count,) or not np.all(np.isin(piece, (-2, -1, 0, 1, 2))):
             raise ValueError("state's piece must hold one of -2..2 per element")
         if not all(math.isfinite(s) for s in scalars):
@@ -577,6 +579,9 @@ class NetworkConnector(NetworkElement):
             raise
         self.v[node] = v
         self._force = held if duration == 0 else self._reaction_force()
+        if duration != 0:  # the reaction on the ground after the last step (an instant keeps the last one)
+            ends = self.model[2]
+            self._reaction = float(np.sum(self.work[5][ends[:, 1] == kernels.GROUND]))
         if not math.isfinite(self._force) or not np.all(np.isfinite(self.x)):
             self.rollback(saved)
             self._force = saved_force
