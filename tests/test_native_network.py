@@ -23,8 +23,13 @@ import struct
 import numpy as np
 import pytest
 
+
 from prandtl_fmu.network import NetworkConnector, NetworkElement, simulate
 from prandtl_fmu.scene import SceneError, parse_scene
+
+# every test builds native FMUs (20-40 s each from a cold cache): the quick suite has the element's native
+# route (test_native.py, test_native_host.py); the networks' run under -m slow, as CI does
+pytestmark = pytest.mark.slow
 
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
