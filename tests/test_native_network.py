@@ -23,7 +23,6 @@ import struct
 import numpy as np
 import pytest
 
-
 from prandtl_fmu.network import NetworkConnector, NetworkElement, simulate
 from prandtl_fmu.scene import SceneError, parse_scene
 
