@@ -22,6 +22,10 @@ from prandtl_fmu.scene import SceneError
 from .conftest import SCENES
 from .fmu_tools import Slave, held_input
 
+# every FMU of a network compiles the network kernels in its own process (40 s cold): under -m slow, which CI
+# runs; the quick suite keeps the library's networks (test_network.py) and the element's FMUs
+pytestmark = pytest.mark.slow
+
 # three masses sliding on the support, held to the wall by a spring (the dynamic chain of Bastien & Lamarque)
 CHAIN = """name = "chain3"
 
