@@ -91,33 +91,6 @@ static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
 #define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e)
 #define KERNEL(e, name) ((e)->play ? (damped(e) ? name##_cp : name##_np) : (damped(e) ? name##_c : name##_n))
 
-/* the load of an advance: the force held, or the scene's [load] plus it */
-typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
-static const double NO_TABLE[1] = {0.0};
-
-static Load load_of(double force, int scene_load)
-{
-    Load l;
-    if (scene_load) {
-        l.kind = LOAD_KIND;
-        l.lk[0] = LOAD_LK[0] + force;
-        l.lk[1] = LOAD_LK[1];
-        l.lk[2] = LOAD_LK[2];
-        l.t = LOAD_T;
-        l.f = LOAD_F;
-        l.n = LOAD_N;
-    } else {
-        l.kind = 0;
-        l.lk[0] = force;
-        l.lk[1] = 0.0;
-        l.lk[2] = 0.0;
-        l.t = NO_TABLE;
-        l.f = NO_TABLE;
-        l.n = 1;
-    }
-    return l;
-}
-
 static void record(Element* e, double t)
 {
     Load l = load_of(e->force, e->scene_load);

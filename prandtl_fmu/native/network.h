@@ -234,33 +234,6 @@ static double energy(Element* e, int which)
                                                              e->initial_energy);
 }
 
-/* the load of an advance: the force held, or the scene's [load] plus it (loads.held, loads.plus) */
-typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
-static const double NO_TABLE[1] = {0.0};
-
-static Load load_of(double force, int scene_load)
-{
-    Load l;
-    if (scene_load) {
-        l.kind = LOAD_KIND;
-        l.lk[0] = LOAD_LK[0] + force;
-        l.lk[1] = LOAD_LK[1];
-        l.lk[2] = LOAD_LK[2];
-        l.t = LOAD_T;
-        l.f = LOAD_F;
-        l.n = LOAD_N;
-    } else {
-        l.kind = 0;
-        l.lk[0] = force;
-        l.lk[1] = 0.0;
-        l.lk[2] = 0.0;
-        l.t = NO_TABLE;
-        l.f = NO_TABLE;
-        l.n = 1;
-    }
-    return l;
-}
-
 /* driver.failure_message: why a step (or the equilibrium at t = 0) could not be taken */
 static const char* failure(int64_t status, char* buffer, size_t size)
 {
