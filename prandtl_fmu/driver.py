@@ -30,6 +30,7 @@ from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force
 from .loads import force_at, held, plus
+from .noise import new_cache
 from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
@@ -574,6 +575,10 @@ class Element(OutputMemo):
         self._energy_row = np.empty((1, 6))
         self.account = np.zeros(4)
         self._load = held(0.0)  # the load of the last advance: the reaction's F(t)
+        # the Brownian tree's cache of a white noise in [load] (loads.WhiteNoise): scratch beside the loop's, never
+        # in the state (the path is a function of (seed, time) alone: a restored or rolled-back element redraws
+        # the same increments whatever the cache holds)
+        self._noise_cache = new_cache()
         self.reset()
 
     def reset(self, force: float = 0.0) -> None:
@@ -630,7 +635,7 @@ class Element(OutputMemo):
         if self.scene.friction is None:
             return self.reaction
         key = ("reaction_under", force, scene_load)
-        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
         return self._memo(key, lambda: float(reaction(self.model, load, self.time, self.x, self.v,
                                                        branch_force(self.model[4], self.u))))
 
@@ -692,7 +697,7 @@ class Element(OutputMemo):
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations (communication steps) or with a larger step")
         saved = self.checkpoint()
-        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
         self.force, self._load = float(force), load
         self._touch()  # the compiled loop writes the state and the outputs in place
         if self._grid != h:  # a new step: the grid starts again at the current time

@@ -1,21 +1,63 @@
-"""Force histories F(t) (N) for standalone runs.
+"""Force histories F(t) (N) for standalone runs, and a white noise added to them.
 
 Each load compiles to the tuple ``(kind, offset, amplitude, omega, time, force)``
 (``offset`` is added to every kind: see :func:`plus`) that the kernels evaluate with :func:`force_at`; an FMU instead holds its
 input F constant over a communication step (:func:`held`). A random load
 puts its frequencies in ``time`` and its phases in ``force``.
+
+A load with a white noise (``noise``: :class:`WhiteNoise`, the scene's ``kind = "white_noise"`` or
+``noise_intensity``) compiles to that tuple and a seventh entry, ``(sigma, seed, unit, cache)``: the force is
+F(t) + sigma xi(t), xi = dB/dt a standard white noise. A white noise has no value at an instant: a step
+takes its impulse over [t, t + h], :func:`impulse` = sigma (B(t + h) - B(t)) (N s), and :func:`force_at`
+stays the deterministic part. Without noise the tuple has six entries and every noise function compiles to
+nothing (:func:`noise_of` is chosen from the tuple's type): an absent noise costs nothing.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
+from numba.core import types
+from numba.extending import overload
+
+from . import noise as brownian_tree
 from ._jit import kernel
 
 CONSTANT, HARMONIC, TABLE, RANDOM = 0, 1, 2, 3
 _NO_TABLE = np.zeros(1)
+# the Brownian tree sees time in noise units to this many significant bits (see tree_time)
+TREE_TIME_BITS = 48
+
+
+@dataclass(frozen=True)
+class WhiteNoise:
+    """sigma xi(t), xi = dB/dt a standard white noise: ``intensity`` sigma (N sqrt(s)), the path's ``seed``
+    (0 <= seed < 2^63) and the Brownian tree's time ``unit`` T0 (s).
+
+    B(t) = sqrt(T0) W(t / T0), W the virtual Brownian tree of :mod:`prandtl_fmu.noise`: a function of (seed, t)
+    only, never of a step, an output interval or how a run is cut. Its cost per step is about one normal when
+    the step times are dyadic points of the unit (h = T0 / 2^j: set T0 to the coarsest step of a study), up to
+    about 40 otherwise (``docs/white-noise.md``).
+    """
+
+    intensity: float
+    seed: int
+    unit: float = 1.0
+
+    def compile(self, cache=None):
+        """``(sigma, seed, unit, cache)``; ``cache``: the Brownian tree's cache of the run (a new one if None)."""
+        return (float(self.intensity), int(self.seed), float(self.unit),
+                brownian_tree.new_cache() if cache is None else cache)
+
+
+def _noisy(compiled, noise, cache):
+    """A compiled load tuple, with the seventh entry of its noise if it has one."""
+    if noise is None:
+        return compiled
+    return compiled + (noise.compile(cache),)
 
 
 @dataclass(frozen=True)
@@ -23,9 +65,10 @@ class ConstantLoad:
     """F(t) = value."""
 
     value: float
+    noise: Optional[WhiteNoise] = None
 
-    def compile(self):
-        return (CONSTANT, float(self.value), 0.0, 0.0, _NO_TABLE, _NO_TABLE)
+    def compile(self, cache=None):
+        return _noisy((CONSTANT, float(self.value), 0.0, 0.0, _NO_TABLE, _NO_TABLE), self.noise, cache)
 
 
 @dataclass(frozen=True)
@@ -35,9 +78,11 @@ class HarmonicLoad:
     amplitude: float
     omega: float
     offset: float = 0.0
+    noise: Optional[WhiteNoise] = None
 
-    def compile(self):
-        return (HARMONIC, float(self.offset), float(self.amplitude), float(self.omega), _NO_TABLE, _NO_TABLE)
+    def compile(self, cache=None):
+        return _noisy((HARMONIC, float(self.offset), float(self.amplitude), float(self.omega), _NO_TABLE, _NO_TABLE),
+                      self.noise, cache)
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,9 +95,11 @@ class TableLoad:
 
     time: np.ndarray
     force: np.ndarray
+    noise: Optional[WhiteNoise] = None
 
-    def compile(self):
-        return (TABLE, 0.0, 0.0, 0.0, np.ascontiguousarray(self.time, float), np.ascontiguousarray(self.force, float))
+    def compile(self, cache=None):
+        return _noisy((TABLE, 0.0, 0.0, 0.0, np.ascontiguousarray(self.time, float),
+                       np.ascontiguousarray(self.force, float)), self.noise, cache)
 
 
 @dataclass(frozen=True)
@@ -75,6 +122,7 @@ class RandomLoad:
     omega_max: float
     components: int = 100
     offset: float = 0.0
+    noise: Optional[WhiteNoise] = None
 
     def frequencies_and_phases(self):
         """(omega_j, phi_j), arrays of shape (N,)."""
@@ -85,10 +133,10 @@ class RandomLoad:
         phase = 2.0 * math.pi * draws[n:]
         return omega, phase
 
-    def compile(self):
+    def compile(self, cache=None):
         omega, phase = self.frequencies_and_phases()
         amplitude = float(self.rms) * math.sqrt(2.0 / int(self.components))
-        return (RANDOM, float(self.offset), amplitude, 0.0, omega, phase)
+        return _noisy((RANDOM, float(self.offset), amplitude, 0.0, omega, phase), self.noise, cache)
 
 
 def uniform_stream(seed: int, count: int) -> np.ndarray:
@@ -105,15 +153,14 @@ def held(value: float):
 
 
 def plus(load, value: float):
-    """A compiled ``load`` plus a constant ``value`` (N): the scene's load and an FMU's input F."""
-    kind, offset, amplitude, omega, time, force = load
-    return (kind, offset + float(value), amplitude, omega, time, force)
+    """A compiled ``load`` plus a constant ``value`` (N): the scene's load and an FMU's input F (its noise kept)."""
+    return (load[0], load[1] + float(value)) + tuple(load[2:])
 
 
 @kernel
 def force_at(load, t):
-    """F(t) for a compiled load tuple."""
-    kind, offset, amplitude, omega, time, force = load
+    """F(t) for a compiled load tuple: the deterministic part (a white noise has no value at an instant)."""
+    kind, offset, amplitude, omega, time, force = load[0], load[1], load[2], load[3], load[4], load[5]
     if kind == CONSTANT:
         return offset
     if kind == HARMONIC:
@@ -130,3 +177,74 @@ def force_at(load, t):
         return offset + force[-1]
     t0, t1 = time[j - 1], time[j]
     return offset + (force[j - 1] + (force[j] - force[j - 1]) * ((t - t0) / (t1 - t0)))
+
+
+# --- the white noise -------------------------------------------------------------------------------------------
+
+
+def noise_of(load):
+    """The compiled noise ``(sigma, seed, unit, cache)`` of a load tuple, None for a tuple of six (compiled
+    only: the choice is made from the tuple's type, so that a load without noise compiles no noise code)."""
+    raise NotImplementedError
+
+
+@overload(noise_of, inline="always")
+def _noise_of_overload(load):
+    if isinstance(load, types.BaseTuple) and len(load) == 7:
+        return lambda load: load[6]
+    return lambda load: None
+
+
+@kernel
+def tree_time(t, unit):
+    """t / unit (s / s) rounded to TREE_TIME_BITS significant bits: the point of the Brownian tree at time t.
+
+    A step time t_p = p h computed in doubles is within a few ulps of p (h / unit); when h / unit = 2^-j that
+    is a point of the tree of level j, and the rounding (16 ulps either way) puts it there exactly: about one
+    normal per step, and the steps h and h / 2 share their points, for any unit (1e-3 s is not a double). A
+    function of t alone (monotone: adjacent steps' increments add up); it resolves time to 3.6e-15 relative.
+    """
+    tau = t / unit
+    if not tau > 0.0:  # t <= 0 and NaN: the path's start
+        return 0.0
+    if tau >= brownian_tree.HORIZON:
+        return brownian_tree.HORIZON
+    mantissa, exponent = math.frexp(tau)  # tau = mantissa 2^exponent, mantissa in [1/2, 1)
+    return math.ldexp(math.floor(math.ldexp(mantissa, TREE_TIME_BITS) + 0.5), exponent - TREE_TIME_BITS)
+
+
+@kernel
+def _impulse(noise, t, h):
+    if noise is None:
+        return 0.0
+    sigma, seed, unit, cache = noise
+    if sigma == 0.0:
+        return 0.0
+    dw = brownian_tree.increment(seed, tree_time(t, unit), tree_time(t + h, unit), cache)
+    return sigma * math.sqrt(unit) * dw
+
+
+@kernel
+def impulse(load, t, h):
+    """sigma (B(t + h) - B(t)) (N s): the impulse of the load's white noise over the step [t, t + h]; 0 without
+    noise (compiled away) or with sigma = 0 (one comparison)."""
+    return _impulse(noise_of(load), t, h)
+
+
+@kernel
+def _choose(noise, deterministic, noisy):
+    if noise is None:
+        return deterministic
+    return noisy
+
+
+@kernel
+def with_noise(load, deterministic, noisy):
+    """``noisy`` for a load with a white noise, ``deterministic`` for one without: a stepper writes both forms of
+    an update, and a run without noise compiles only the first (the same bits as before noise existed)."""
+    return _choose(noise_of(load), deterministic, noisy)
+
+
+def has_noise(load) -> bool:
+    """Whether a compiled load tuple carries a white noise with sigma != 0 (Python side)."""
+    return len(load) == 7 and load[6][0] != 0.0

@@ -28,7 +28,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .effects import (SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
                       sample_spectrum)
-from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad
+from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad, WhiteNoise
 from .resources import ResourceError, check_memory
 
 # Memory per branch at the peak of a run: the scene's arrays, the kernel's sorted copies, the memory stack's ten
@@ -641,18 +641,34 @@ def _continuum(r) -> ContinuousBranches:
     return ContinuousBranches.linear(k_total, float(a), float(b))
 
 
+# the keys of [load] that add a white noise to a deterministic kind (see _noise)
+NOISE_KEYS = ("noise_intensity", "noise_seed", "noise_unit")
+
+
 def _load(source, data) -> Load:
     r = _Reader(source, "load", data)
-    kind = r.string("kind", choices=("harmonic", "constant", "table", "random"))
+    kind = r.string("kind", choices=("harmonic", "constant", "table", "random", "white_noise"))
+    if kind == "white_noise":
+        for key in ("noise_intensity", "noise_seed"):
+            if key in r.data:
+                r.fail(key, "a white_noise load is the noise itself: give its intensity and seed")
+        r.only({"kind", "intensity", "seed", "offset", "noise_unit"})
+        noise = _white_noise(r, "intensity", "seed")
+        return ConstantLoad(r.number("offset", 0.0), noise)
+    noise = _white_noise(r, "noise_intensity", "noise_seed") if "noise_intensity" in r.data else None
+    if noise is None:
+        for key in NOISE_KEYS:
+            if key in r.data:
+                r.fail(key, "needs noise_intensity (the white noise's sigma, N sqrt(s))")
     if kind == "harmonic":
-        r.only({"kind", "amplitude", "omega", "offset"})
-        return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset", 0.0))
+        r.only({"kind", "amplitude", "omega", "offset", *NOISE_KEYS})
+        return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset", 0.0), noise)
     if kind == "constant":
-        r.only({"kind", "value"})
-        return ConstantLoad(r.number("value"))
+        r.only({"kind", "value", *NOISE_KEYS})
+        return ConstantLoad(r.number("value"), noise)
     if kind == "random":
-        return _random_load(r)
-    r.only({"kind", "time", "force"})
+        return _random_load(r, noise)
+    r.only({"kind", "time", "force", *NOISE_KEYS})
     time = r.numbers("time", minimum=0.0)
     force = r.numbers("force", length=len(time))
     steps = np.diff(time)
@@ -661,14 +677,31 @@ def _load(source, data) -> Load:
         r.fail(f"time[{i}]", "times must be non-decreasing (a repeated time is a jump)")
     if np.any((steps[1:] == 0) & (steps[:-1] == 0)):
         r.fail("time", "a time may appear at most twice (one jump at a time)")
-    return TableLoad(time, force)
+    return TableLoad(time, force, noise)
 
 
-def _random_load(r) -> RandomLoad:
-    r.only({"kind", "seed", "rms", "band", "components", "offset"})
-    seed = r.integer("seed", minimum=0)
+def _white_noise(r, intensity_key, seed_key) -> Optional[WhiteNoise]:
+    """The white noise sigma xi(t) of [load] (``docs/white-noise.md``), or None when sigma = 0 (no noise at all).
+    ``noise_unit`` (s, default 1): the Brownian tree's time unit, a property of the path, never of the step."""
+    intensity = r.number(intensity_key, minimum=0.0)
+    seed = _seed(r, seed_key)
+    unit = r.number("noise_unit", 1.0, positive=True)
+    if intensity == 0.0:
+        return None
+    return WhiteNoise(intensity, seed, unit)
+
+
+def _seed(r, key) -> int:
+    """A seed: an integer, 0 <= seed < 2^63 (a Philox key and a TOML integer)."""
+    seed = r.integer(key, minimum=0)
     if seed >= 2**63:
-        r.fail("seed", f"must be < 2^63, got {seed}")
+        r.fail(key, f"must be < 2^63, got {seed}")
+    return seed
+
+
+def _random_load(r, noise=None) -> RandomLoad:
+    r.only({"kind", "seed", "rms", "band", "components", "offset", *NOISE_KEYS})
+    seed = _seed(r, "seed")
     band = r.numbers("band", minimum=0.0)
     if len(band) != 2 or not band[0] < band[1]:
         r.fail("band", f"must be [omega_min, omega_max] (rad/s) with omega_min < omega_max, got {list(band)}")
@@ -678,7 +711,7 @@ def _random_load(r) -> RandomLoad:
     except ResourceError as exc:
         raise SceneError(str(exc)) from None
     return RandomLoad(seed, r.number("rms", minimum=0.0), float(band[0]), float(band[1]), components,
-                      r.number("offset", 0.0))
+                      r.number("offset", 0.0), noise)
 
 
 def _solver(source, data) -> Solver:

@@ -73,6 +73,9 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     scene = load_scene(scene_path, check_stepper=False)
     if hasattr(scene, "network"):  # a [network] or [chain] scene
         return build_native_network_fmu(scene_path, out, fmi, causality)
+    if scene.load.noise is not None:
+        raise NativeBuildError(f"{scene.source}: [load]: the native runtime has no white noise yet: build it with "
+                               "--runtime python, or without the noise")
     if causality is not None and causality != scene.causality:
         from ..fmu.build import _with_causality
 

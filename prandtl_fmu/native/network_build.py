@@ -365,6 +365,9 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
     if causality is not None and causality != scene.causality:
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
+    if getattr(scene.load, "noise", None) is not None:
+        raise build_error(f"{scene.source}: [load]: the native runtime has no white noise yet: build it with "
+                          "--runtime python, or without the noise")
     if arrays and fmi != 3:
         raise build_error("arrays: the nodes' x and v as arrays are an FMI 3.0 option (fmi=3)")
     steppers = steppers_of(scene, connector)

@@ -121,6 +121,9 @@ def loop_for(scene):
     """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is None:
         raise ValueError("'exact' needs [mass] (the massless element is solved exactly by 'implicit')")
+    if scene.load.noise is not None:
+        raise ValueError("'exact' has no exact solution under a white noise: use 'implicit' (backward "
+                         "Euler-Maruyama) or 'projected' (Euler-Maruyama)")
     if scene.cubic is not None:
         raise ValueError("'exact' needs a linear smooth part: no [cubic]")
     if scene.branches is not None and scene.branches.continuum:

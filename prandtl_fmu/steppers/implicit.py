@@ -34,6 +34,17 @@ stability check warns. Series dashpots in the branches (``[branches] c``):
 u1_i = clip((u_i + w) / (1 + h k_i / c_i)), backward Euler on the
 relaxation (``kernels/series.py``); G keeps its shape.
 
+White noise (``[load] kind = "white_noise"`` or ``noise_intensity``: F + sigma xi(t)): backward
+Euler-Maruyama, the noise's impulse over the step in the momentum and everything else as above,
+
+    m (v1 - v) = h (F(t_{p+1}) - k0 x1 - k3 x1^3 - c v1 - sum_i k_i u1_i) + sigma (B(t_{p+1}) - B(t_p)),
+
+i.e. F(t_{p+1}) replaced by the step's mean force F(t_{p+1}) + sigma dB / h in G: the branches' boxes and
+the friction's sign stay implicit. Strong order 1/2 with branches or friction, 1 on a smooth element
+(additive noise), measured in ``docs/white-noise.md``. Massless with a dashpot: c (x1 - x) = h (...) +
+sigma dB, backward Euler-Maruyama on the first-order SDE (v is then the step's mean rate, of size
+sigma / (c sqrt(h)): it has no limit as h -> 0); massless without one: refused (no solution).
+
 Massless element (no [mass]): the same equation without the m terms. With a
 dashpot it is backward Euler on c x' = F - ...; without, the quasi-static
 element F(t_{p+1}) = k0 x + k3 x^3 + sum_i k_i u_i, i.e. the inverse of the
@@ -50,7 +61,7 @@ from ..kernels.increment import solve_held_increment, solve_increment
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.series import BACKWARD, move_branches
-from ..loads import force_at
+from ..loads import force_at, impulse, with_noise
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
@@ -63,6 +74,9 @@ def loop_for(scene):
         # yield one after the other: the exact scalar solve does not apply
         raise ValueError("'implicit' solves a piecewise linear equation and the continuum yields smoothly: use "
                          "'verlet' (order 2), 'symplectic' or 'projected'")
+    if scene.load.noise is not None and scene.mass is None and not scene.has_dashpot:
+        raise ValueError("a white noise on a massless element without a dashpot has no solution (the equilibrium "
+                         "would follow a force of infinite variance): add [mass] or a [damper]")
     return run
 
 
@@ -70,6 +84,7 @@ def loop_for(scene):
 def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t + h)
+    force = with_noise(load, force, force + impulse(load, t, h) / h)  # the mean force over the step
     linear = _plus_damping(_inertia(m, h), c, h)
     w, v1, f = _increment(friction, x, linear, _momentum(m, v, h) - force, k0, k3, k, eta, cs, u, h)
     if not abs(w) < np.inf:  # no equilibrium: plastic collapse

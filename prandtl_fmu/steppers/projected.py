@@ -33,6 +33,11 @@ the scheme creates energy, O(h) over a fixed time. The amplitude doubles
 within one period once omega h > ln(2)/pi ~ 0.22; :mod:`prandtl_fmu.stability`
 warns before such a run.
 
+White noise (F + sigma xi(t)): Euler-Maruyama, the impulse sigma (B(t_{p+1}) - B(t_p)) added to the
+momentum, v <- v + h a + sigma dB / m (before the friction's projection), and to the massless element's
+motion, x <- x + h v + sigma dB / c; the work booked is that of the step's mean force F + sigma dB / h.
+Strong order 1/2 (measured in ``docs/white-noise.md``).
+
 Massless element with a dashpot (no [mass]): the same scheme on
 c x' = F - k0 x - k3 x^3 - sum_i k_i u_i, i.e. x <- x + h v with the rate
 v = (F(t_p) - k0 x - k3 x^3 - sum_i k_i u_i) / c of the old state; stable
@@ -46,7 +51,7 @@ from ..kernels.loop import time_loop
 from ..kernels.friction import book_friction, held_velocity
 from ..kernels.series import EXPLICIT, move_branches
 from ..kernels.smooth import elastic_force, smooth_force
-from ..loads import force_at
+from ..loads import force_at, impulse, with_noise
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
@@ -66,6 +71,7 @@ def loop_for(scene):
 def step(model, load, t, h, x, v, s, u, energy):
     m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t)
+    force = with_noise(load, force, force + impulse(load, t, h) / h)  # the mean force over the step
     a = (force - smooth_force(x, v, k0, k3, c) - s) / m
     dx = h * v
     book(energy, force, dx, c, v)
@@ -80,8 +86,9 @@ def step_massless(model, load, t, h, x, v, s, u, energy):
     """Massless element with a dashpot: ``v`` is the rate of the current state."""
     m, k0, k3, c, k, eta, cs, friction = model
     force = force_at(load, t)
-    dx = h * v
-    book(energy, force, dx, c, v)
+    kick = impulse(load, t, h)
+    dx = with_noise(load, h * v, h * v + kick / c)  # c (x1 - x) = h c v + sigma dB
+    book(energy, with_noise(load, force, force + kick / h), dx, c, with_noise(load, v, dx / h))
     s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
     x = x + dx
     return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s) / c, s

@@ -35,6 +35,8 @@ def loop_for(scene):
     """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
     if scene.mass is None:
         raise ValueError("'symplectic' needs [mass]; a massless element is solved by 'implicit'")
+    if scene.load.noise is not None:
+        raise ValueError("'symplectic' takes no white noise (no strong order measured for it): use 'implicit' (backward Euler-Maruyama) or 'projected' (Euler-Maruyama)")
     return run
 
 
