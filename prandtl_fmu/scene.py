@@ -656,7 +656,7 @@ def _load(source, data) -> Load:
         noise = _white_noise(r, "intensity", "seed")
         return ConstantLoad(r.number("offset", 0.0), noise)
     noise = _white_noise(r, "noise_intensity", "noise_seed") if "noise_intensity" in r.data else None
-    if noise is None:
+    if "noise_intensity" not in r.data:
         for key in NOISE_KEYS:
             if key in r.data:
                 r.fail(key, "needs noise_intensity (the white noise's sigma, N sqrt(s))")
