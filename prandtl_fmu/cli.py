@@ -395,6 +395,8 @@ def _sweep(args) -> int:
         _restore_signals(previous)
     failed = frame[frame["error"] != ""]
     print(out)
+    if the_plan.spec.statistics is not None:
+        print(os.path.join(out, "_report", "report.md"))
     print(f"{len(frame)} runs in {out}", file=sys.stderr)
     if len(failed):
         first = failed.iloc[0]

@@ -22,7 +22,17 @@ The quantities (``SUMMARIES``):
   the run;
 * ``loop_area`` (J): the energy dissipated over the last period 2 pi / omega
   of a harmonic load (the last whole number of steps closest to it): once the
-  loop closes (the steady state), the area of the (x, reaction) loop.
+  loop closes (the steady state), the area of the (x, reaction) loop;
+* ``late_mean_x``, ``late_mean_v``, ``late_mean_square_x``,
+  ``late_mean_square_v``: the time averages (2/T) int_{T/2}^{T} y(t) dt of
+  y = x, v, x^2, v^2 over the run's second half (T = stop_time), by the
+  trapezoidal rule on the output rows (the piecewise-linear y between rows,
+  cut at T/2): for Monte Carlo of stationary laws (a linear oscillator under
+  white noise sigma xi: <x^2> -> sigma^2/(2ck), <v^2> -> sigma^2/(2cm)). They
+  are the output grid's, not every internal step's: an output interval much
+  shorter than the correlation time 2m/c makes them the time averages. Asked
+  for only by name (:func:`default_summaries` leaves them out: a run keeps its
+  output rows in memory for them).
 """
 from __future__ import annotations
 
@@ -55,7 +65,14 @@ SUMMARIES = {
     "dissipated_damper": "energy dissipated by the dashpot and the branches' series dashpots over the run (J)",
     "dissipated_friction": "energy dissipated by the friction of the mass on the ground over the run (J)",
     "loop_area": "energy dissipated over the last period of the harmonic load (J): the steady loop's area",
+    "late_mean_x": "time average of x over the run's second half, on the output rows (m)",
+    "late_mean_v": "time average of v over the run's second half, on the output rows (m/s)",
+    "late_mean_square_x": "time average of x^2 over the run's second half, on the output rows (m^2)",
+    "late_mean_square_v": "time average of v^2 over the run's second half, on the output rows (m^2/s^2)",
 }
+# Quantities from the output rows (the run keeps them in memory); never in the default set, so that a sweep
+# file without [keep] summary keeps its columns and its cost.
+LATE_SUMMARIES = ("late_mean_x", "late_mean_v", "late_mean_square_x", "late_mean_square_v")
 ENERGY_SUMMARIES = ("work", "dissipated", "dissipated_sliders", "dissipated_damper", "dissipated_friction",
                     "loop_area")
 HISTORY_COLUMNS = ("time", "x", "v", "reaction")
@@ -82,8 +99,9 @@ def summary_problem(scene: Scene, stepper: str, quantities: Iterable[str]) -> Op
 
 
 def default_summaries(scene: Scene, stepper: str) -> list:
-    """Every quantity of SUMMARIES that ``scene`` with ``stepper`` gives."""
-    return [q for q in SUMMARIES if summary_problem(scene, stepper, [q]) is None]
+    """Every quantity of SUMMARIES that ``scene`` with ``stepper`` gives, but the LATE_SUMMARIES (asked for by
+    name only)."""
+    return [q for q in SUMMARIES if q not in LATE_SUMMARIES and summary_problem(scene, stepper, [q]) is None]
 
 
 def summarize(scene: Scene, stepper: Optional[str] = None, quantities: Optional[Iterable[str]] = None, *,
@@ -179,8 +197,9 @@ class _Job:
         if "loop_area" in quantities:
             period = 2 * math.pi / abs(scene.load.omega)
             self.mark = min(self.full_steps, max(0, round((solver.stop_time - period) / h)))
-        self.history_rows = grid.rows if history else 0
-        if history:
+        self.history = history  # the rows returned; kept in memory also for the late averages
+        self.history_rows = grid.rows if history or any(q in LATE_SUMMARIES for q in quantities) else 0
+        if self.history_rows:
             check_memory(24.0 * grid.rows, f"{scene.source}: the history ({grid.rows} rows)",
                          hint="keep summaries only")
 
@@ -284,13 +303,34 @@ class _Batch:
                 "dissipated_friction": account[3], "dissipated": account[1] + account[2] + account[3],
                 "loop_area": (account[1] + account[2] + account[3]) - (mark[1] + mark[2] + mark[3]),
             }
-            result = {q: float(values[q]) for q in quantities}
             if job.history_rows:
                 written = int(row[packed.ROWS_WRITTEN])
                 if written != job.history_rows:  # a broken invariant, never a short history
                     raise RuntimeError(f"summary: {written} of {job.history_rows} output rows written")
                 a, b = index[j, packed.HISTORY_A], index[j, packed.HISTORY_B]
                 rows = history[a:b].reshape(-1, 3)
-                result.update(time=job.grid.times(0, job.grid.rows), x=rows[:, 0].copy(), v=rows[:, 1].copy(),
-                              reaction=rows[:, 2].copy())
+                times = job.grid.times(0, job.grid.rows)
+                if any(q in LATE_SUMMARIES for q in quantities):
+                    values.update(late_averages(times, rows[:, 0], rows[:, 1]))
+            result = {q: float(values[q]) for q in quantities}
+            if job.history:
+                result.update(time=times, x=rows[:, 0].copy(), v=rows[:, 1].copy(), reaction=rows[:, 2].copy())
             outcomes[position].values = result
+
+
+def late_average(time: np.ndarray, y: np.ndarray) -> float:
+    """(2/T) int_{T/2}^{T} y dt, T = time[-1], for the piecewise-linear y through the rows ``(time, y)`` (time
+    increasing from 0): the trapezoidal rule on the rows after T/2 and on the piece cut at T/2."""
+    stop = time[-1]
+    half = 0.5 * stop
+    after = np.searchsorted(time, half, side="right")  # the first row after T/2 (row 0 is at 0 <= T/2)
+    y_half = np.interp(half, time[after - 1:after + 1], y[after - 1:after + 1])
+    t = np.concatenate(([half], time[after:]))
+    values = np.concatenate(([y_half], y[after:]))
+    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(t)) / (stop - half))
+
+
+def late_averages(time: np.ndarray, x: np.ndarray, v: np.ndarray) -> dict:
+    """The LATE_SUMMARIES of a run's output rows."""
+    return {"late_mean_x": late_average(time, x), "late_mean_v": late_average(time, v),
+            "late_mean_square_x": late_average(time, x * x), "late_mean_square_v": late_average(time, v * v)}

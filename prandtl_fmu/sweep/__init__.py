@@ -16,12 +16,14 @@ Needs the ``sweep`` extra: ``pip install "prandtl_fmu[sweep]"`` (dask[distribute
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 import uuid
 from typing import Optional, Union
 
 from ..scene import Scene, SceneError, read_document, scene_from_document
 from ..summary import default_summaries, summary_problem
+from . import report
 from .runs import columns, run_batch
 from .spec import MAX_RUNS_PER_TASK, SweepError, SweepSpec, apply, load_spec
 from .store import Store, read_sweep
@@ -33,7 +35,8 @@ class Plan:
     """What a sweep will do, checked before any run: the scene document, the spec, the columns, the tasks."""
 
     def __init__(self, document: dict, source: str, spec: SweepSpec):
-        self.document, self.source, self.spec = document, source, spec
+        self.document, self.source = document, source
+        self.spec = spec = _with_seed_key(spec, document, source)
         run0 = spec.values(0, 1)[0][1]
         try:
             scene = scene_from_document(apply(document, run0), f"{source} with the first run's values")
@@ -42,13 +45,29 @@ class Plan:
         stepper = scene.solver.stepper
         if spec.summary is None:
             self.summary = default_summaries(scene, stepper)
+            if spec.statistics is not None:  # what the report asks for by name is kept too
+                asked = list(spec.statistics.outputs or ()) + [law.output for law in spec.laws]
+                self.summary += [q for q in dict.fromkeys(asked) if q not in self.summary]
+            problem = summary_problem(scene, stepper, self.summary)
+            if problem:
+                raise SweepError(f"{spec.source}: [statistics]: {problem}")
         else:
             problem = summary_problem(scene, stepper, spec.summary)
             if problem:
                 raise SweepError(f"{spec.source}: [keep] summary: {problem}")
             self.summary = list(spec.summary)
+        if spec.statistics is not None:
+            report.require_scipy()
+            first_group = apply(document, {key: run0[key] for key in spec.group_keys})
+            for position, law in enumerate(spec.laws):  # each group's law is made again from its own scene
+                report.law_density(law, first_group, report.law_where(spec, position))
         self.columns = columns(spec.keys, self.summary, spec.history)
         self.schema = _schema(spec, run0, self.summary)
+
+    def report(self, frame, out) -> str:
+        """Write the Monte Carlo report of ``frame`` (this sweep's rows) into ``out``/_report; its report.md."""
+        return report.write_report(frame, self.spec, self.document, self.summary, out,
+                                   title=f"{self.source} x {self.spec.source}")
 
     def manifest(self) -> dict:
         import hashlib
@@ -62,6 +81,19 @@ class Plan:
         """``[(first, stop)]``: consecutive runs, ``runs_per_task`` each (the last may be shorter)."""
         runs = self.spec.runs
         return [(first, min(runs, first + runs_per_task)) for first in range(0, runs, runs_per_task)]
+
+
+def _with_seed_key(spec: SweepSpec, document: dict, source: str) -> SweepSpec:
+    """The spec with its [seeds] key named: the scene's seeded load's seed when the file gives none."""
+    if spec.seeds is None or spec.seeds.key is not None:
+        return spec
+    key = report.seed_key(document)
+    if key is None:
+        raise SweepError(f"{spec.source}: [seeds] key: {source} has no seeded load ([load] kind = \"random\" or "
+                         "\"white_noise\", or noise_intensity on another load): name the key")
+    if key in spec.keys:
+        raise SweepError(f"{spec.source}: [seeds]: the scene's seed {key} already varies in [grid] or [random]")
+    return dataclasses.replace(spec, seeds=dataclasses.replace(spec.seeds, key=key))
 
 
 def plan(scene, spec) -> Plan:
@@ -93,7 +125,9 @@ def sweep(scene, spec, client=None, *, out: Optional[Union[str, os.PathLike]] = 
     ``client``: a ``dask.distributed.Client`` to run on; else one connected to ``scheduler``
     (``tcp://host:port``); else a ``LocalCluster`` of ``workers`` processes (default: one per core), closed at
     the end. ``out``: a folder that receives the rows as tasks finish (:mod:`.store`); ``resume`` continues a
-    sweep there, running only its unfinished tasks. SweepError (one line) for a bad sweep, scene or folder,
+    sweep there, running only its unfinished tasks. With [seeds], [statistics] or [law] in the sweep file the
+    Monte Carlo report (:mod:`.report`) is written into ``out``/_report at the end (a new [law] with
+    ``resume`` on a finished sweep redoes only the report). SweepError (one line) for a bad sweep, scene or folder,
     before any run; RuntimeError if a task fails (its message names the runs).
     """
     the_plan = plan(scene, spec)
@@ -112,7 +146,10 @@ def sweep(scene, spec, client=None, *, out: Optional[Union[str, os.PathLike]] = 
         for thing in reversed(owned):
             thing.close()
     if store is not None:
-        return read_sweep(store.out)
+        frame = read_sweep(store.out)
+        if the_plan.spec.statistics is not None:
+            the_plan.report(frame, store.out)
+        return frame
     import pyarrow as pa
 
     return pa.concat_tables(tables).to_pandas().sort_values("run", kind="stable").reset_index(drop=True)

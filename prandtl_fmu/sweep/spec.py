@@ -22,13 +22,32 @@
     [tasks]
     runs_per_task = 2000                # default: the runs split into about 8 tasks per worker, at most 2000 each
 
+    [seeds]                             # Monte Carlo: every grid point (and random sample) run with many seeds
+    count = 1000                        # required in [seeds]: the seeds first .. first + count - 1
+    first = 0                           # default 0
+    key = "load.seed"                   # default: the scene's seeded load (load.seed, or load.noise_seed)
+
+    [statistics]                        # the report (:mod:`.report`): mean, std, histogram, with intervals
+    outputs = ["final_x"]               # default: every kept summary quantity
+    bins = 20                           # default: ceil(2 n^(1/3)) (Rice's rule), n the runs of a group
+    confidence = 0.95                   # default 0.95
+
+    [law]                               # (or [[law]], one per output): the histogram against a density
+    output = "final_x"
+    density = "oscillator_x"            # LAWS (:mod:`.statistics`): normal, uniform, oscillator_x, ...
+    sigma = 0.2                         # a parameter: a number, or a scene key ("damper.c"); default the scene's
+
 A key is a scene key, ``table.key`` (``spring.k0``, ``load.amplitude``,
 ``branches.k_total``, ``friction.alpha``, ``solver.step``, ...) or one value of a list,
 ``table.key[i]`` (1-based: ``branches.k[2]``, ``branches.c[2]``, ``branches.eta_range[2]``).
 Setting a key of a table the scene lacks adds the table (``spring.k0`` on a
 scene without [spring] adds the spring); every run's scene is checked by the
-rules of the scene format. Run r combines grid point r // samples with random
-sample r % samples (runs = grid points x samples).
+rules of the scene format. Run r combines grid point r // (samples x seeds)
+with random sample (r // seeds) % samples and seed first + r % seeds (runs =
+grid points x samples x seeds; seeds = 1 without [seeds]): the runs of one
+seed range are consecutive, a *group* (:meth:`SweepSpec.group`), and the
+statistics are taken over each group. Without [seeds] a group is the random
+samples of one grid point.
 
 Random draws come from the raw PCG64 stream of ``seed`` (``loads.uniform_stream``),
 sample by sample and key by key in the file's order, and are turned into each
@@ -56,7 +75,7 @@ from ..scene import read_toml
 from ..summary import SUMMARIES
 
 # Scene keys that hold integers: a grid or a distribution gives them whole numbers.
-INTEGER_KEYS = {"branches.count", "load.seed", "load.components"}
+INTEGER_KEYS = {"branches.count", "load.seed", "load.noise_seed", "load.components"}
 DISTRIBUTIONS = {
     "uniform": ("low", "high"),
     "loguniform": ("low", "high"),
@@ -100,6 +119,35 @@ class Distribution:
 
 
 @dataclass(frozen=True)
+class Seeds:
+    """[seeds]: the scene key ``key`` (None: the scene's seeded load, chosen by the plan) takes the values
+    first .. first + count - 1, innermost (the runs of one seed range are consecutive)."""
+
+    key: Optional[str]
+    first: int
+    count: int
+
+
+@dataclass(frozen=True)
+class Statistics:
+    """[statistics]: what the report gives (``outputs`` None: every kept summary quantity)."""
+
+    outputs: Optional[tuple] = None
+    bins: Optional[int] = None
+    confidence: float = 0.95
+
+
+@dataclass(frozen=True)
+class LawSpec:
+    """One [law]: the density ``density`` (a name of ``statistics.LAWS``) of the summary ``output``, with its
+    ``parameters`` (name -> a number, or a scene key whose value each group's scene gives)."""
+
+    output: str
+    density: str
+    parameters: dict
+
+
+@dataclass(frozen=True)
 class SweepSpec:
     """A parsed sweep file (see the module docstring)."""
 
@@ -111,11 +159,32 @@ class SweepSpec:
     history: bool = False
     runs_per_task: Optional[int] = None
     source: str = "<sweep>"
+    seeds: Optional[Seeds] = None
+    statistics: Optional[Statistics] = None   # None: no report
+    laws: tuple = ()                          # LawSpec, at most one per output
 
     @property
     def keys(self) -> list:
-        """The varied keys: the grid's, then the random ones, in the file's order."""
-        return list(self.grid) + list(self.distributions)
+        """The varied keys: the grid's, then the random ones, in the file's order, then the seeds' key."""
+        return list(self.grid) + list(self.distributions) + ([self.seeds.key] if self.seeds else [])
+
+    @property
+    def seed_count(self) -> int:
+        return self.seeds.count if self.seeds else 1
+
+    @property
+    def group_size(self) -> int:
+        """Runs per group: the seeds of one grid point and sample, or (without [seeds]) the samples of one grid
+        point."""
+        return self.seeds.count if self.seeds else self.samples
+
+    @property
+    def group_keys(self) -> list:
+        """The keys that are constant over a group (and tell the groups apart)."""
+        return list(self.grid) + (list(self.distributions) if self.seeds else [])
+
+    def group(self, run: int) -> int:
+        return run // self.group_size
 
     @property
     def grid_size(self) -> int:
@@ -123,15 +192,17 @@ class SweepSpec:
 
     @property
     def runs(self) -> int:
-        return self.grid_size * self.samples
+        return self.grid_size * self.samples * self.seed_count
 
     def values(self, first: int, stop: int) -> list:
         """``[(run, {key: value})]`` for runs first .. stop - 1."""
         shape = [len(values) for values in self.grid.values()]
         random = self._draws if self.distributions else None
         rows = []
+        per_point, count = self.samples * self.seed_count, self.seed_count
         for run in range(first, stop):
-            point, sample = divmod(run, self.samples)
+            point, rest = divmod(run, per_point)
+            sample, seed = divmod(rest, count)
             values = {}
             if shape:
                 for key, index in zip(self.grid, np.unravel_index(point, shape)):
@@ -139,6 +210,8 @@ class SweepSpec:
             if random is not None:
                 for key in self.distributions:
                     values[key] = random[key][sample]
+            if self.seeds is not None:
+                values[self.seeds.key] = self.seeds.first + seed
             rows.append((run, values))
         return rows
 
@@ -156,6 +229,8 @@ class SweepSpec:
                 "distributions": {k: [d.kind, list(d.args) if d.kind != "choice" else d.args[0]]
                                   for k, d in self.distributions.items()},
                 "summary": self.summary, "history": self.history}
+        if self.seeds is not None:  # the report's tables change no run: a new [law] and --resume redo the report
+            what["seeds"] = [self.seeds.key, self.seeds.first, self.seeds.count]
         return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -175,10 +250,10 @@ def parse_spec(doc: dict, source: str) -> SweepSpec:
         raise SweepError(f"{source}: {where}: {rule}")
 
     for key in doc:
-        if key not in ("grid", "random", "keep", "tasks"):
-            fail(key, "unknown table (allowed: grid, random, keep, tasks)")
+        if key not in TABLES:
+            fail(key, f"unknown table (allowed: {', '.join(TABLES)})")
     for table in doc:
-        if not isinstance(doc[table], dict):
+        if not isinstance(doc[table], dict) and not (table == "law" and isinstance(doc[table], list)):
             fail(f"[{table}]", "must be a table")
     grid = {}
     for key, value in doc.get("grid", {}).items():
@@ -201,8 +276,9 @@ def parse_spec(doc: dict, source: str) -> SweepSpec:
             distributions[key] = _distribution(key, value, lambda rule: fail(f"[random] {key}", rule))
         if not distributions:
             fail("[random]", "names no key to draw (add e.g. \"load.seed\" = { distribution = \"integers\", ... })")
-    if not grid and not distributions:
-        fail("[grid]", "the sweep varies nothing: give [grid] values or [random] distributions")
+    seeds = _seeds(doc["seeds"], grid, distributions, fail) if "seeds" in doc else None
+    if not grid and not distributions and seeds is None:
+        fail("[grid]", "the sweep varies nothing: give [grid] values, [random] distributions or [seeds]")
     keep = doc.get("keep", {})
     for key in keep:
         if key not in ("summary", "history"):
@@ -230,10 +306,111 @@ def parse_spec(doc: dict, source: str) -> SweepSpec:
     runs_per_task = None
     if "runs_per_task" in tasks:
         runs_per_task = _integer(tasks["runs_per_task"], 1, lambda rule: fail("[tasks] runs_per_task", rule))
-    spec = SweepSpec(grid, samples, seed, distributions, summary, history, runs_per_task, source)
+    laws = _laws(doc.get("law", []), summary, fail)
+    statistics = None
+    if "statistics" in doc or laws or seeds is not None:
+        statistics = _statistics(doc.get("statistics", {}), summary, fail)
+        if seeds is None and not distributions:
+            fail("[statistics]" if "statistics" in doc else "[law]", "needs [seeds] or [random]: statistics are "
+                 "taken over the seeds (or the random samples) of each grid point")
+    spec = SweepSpec(grid, samples, seed, distributions, summary, history, runs_per_task, source,
+                     seeds=seeds, statistics=statistics, laws=laws)
     if spec.runs > 10**9:
         fail("[grid]", f"{spec.runs} runs: more than 10^9 (split the sweep)")
     return spec
+
+
+TABLES = ("grid", "random", "keep", "tasks", "seeds", "statistics", "law")
+
+
+def _seeds(table, grid, distributions, fail) -> Seeds:
+    for name in table:
+        if name not in ("count", "first", "key"):
+            fail(f"[seeds] {name}", "unknown key (allowed: count, first, key)")
+    if "count" not in table:
+        fail("[seeds] count", "missing (required: the number of seeds run for every grid point)")
+    count = _integer(table["count"], 1, lambda rule: fail("[seeds] count", rule))
+    first = _integer(table.get("first", 0), 0, lambda rule: fail("[seeds] first", rule))
+    if first + count - 1 >= 2**63:
+        fail("[seeds]", f"the last seed, first + count - 1 = {first + count - 1}, must be < 2^63")
+    key = table.get("key")
+    if key is not None:
+        if not isinstance(key, str):
+            fail("[seeds] key", f"must be a scene key (a string such as \"load.seed\"), got {key!r}")
+        _check_key(key, "[seeds] key", fail)
+        if _base(key) not in INTEGER_KEYS or not _base(key).endswith("seed"):
+            fail("[seeds] key", f"{key!r} is not a seed (seed keys: load.seed, load.noise_seed)")
+        if key in grid or key in distributions:
+            fail("[seeds] key", f"{key} already varies in [{'grid' if key in grid else 'random'}]")
+    return Seeds(key, first, count)
+
+
+def _statistics(table, summary, fail) -> Statistics:
+    for name in table:
+        if name not in ("outputs", "bins", "confidence"):
+            fail(f"[statistics] {name}", "unknown key (allowed: bins, confidence, outputs)")
+    outputs = table.get("outputs")
+    if outputs is not None:
+        if not isinstance(outputs, list) or not outputs or not all(isinstance(q, str) for q in outputs):
+            fail("[statistics] outputs", "must be a non-empty list of summary quantities")
+        for q in outputs:
+            _check_output(q, summary, lambda rule: fail("[statistics] outputs", rule))
+        if len(set(outputs)) != len(outputs):
+            fail("[statistics] outputs", "names a quantity twice")
+        outputs = tuple(outputs)
+    bins = table.get("bins")
+    if bins is not None:
+        bins = _integer(bins, 1, lambda rule: fail("[statistics] bins", rule))
+        if bins > 10000:
+            fail("[statistics] bins", f"must be <= 10000, got {bins}")
+    confidence = table.get("confidence", 0.95)
+    _number(confidence, lambda rule: fail("[statistics] confidence", rule))
+    if not 0 < confidence < 1:
+        fail("[statistics] confidence", f"must be in (0, 1), got {confidence!r}")
+    return Statistics(outputs, bins, float(confidence))
+
+
+def _check_output(q, summary, rule):
+    if q not in SUMMARIES:
+        rule(f"unknown quantity {q!r} (known: {', '.join(SUMMARIES)})")
+    if summary is not None and q not in summary:
+        rule(f"{q!r} is not kept: add it to [keep] summary")
+
+
+def _laws(tables, summary, fail) -> tuple:
+    from .statistics import LAWS
+
+    laws = []
+    for position, table in enumerate(tables if isinstance(tables, list) else [tables]):
+        where = "[law]" if isinstance(tables, dict) else f"[[law]] {position + 1}"
+        if not isinstance(table, dict):
+            fail(where, "must be a table")
+        for name in ("output", "density"):
+            if name not in table:
+                fail(f"{where} {name}", "missing (required: the summary quantity and its density)")
+        output, density = table["output"], table["density"]
+        if not isinstance(output, str):
+            fail(f"{where} output", f"must be a summary quantity, got {output!r}")
+        _check_output(output, summary, lambda rule: fail(f"{where} output", rule))
+        if any(law.output == output for law in laws):
+            fail(f"{where} output", f"{output} has a law already (one law per output)")
+        if density not in LAWS:
+            fail(f"{where} density", f"must be one of {', '.join(LAWS)}, got {density!r}")
+        names = LAWS[density].parameters
+        parameters = {}
+        for name, value in table.items():
+            if name in ("output", "density"):
+                continue
+            if name not in names:
+                fail(f"{where} {name}", f"unknown parameter of {density} (allowed: {', '.join(names)})")
+            if isinstance(value, str):
+                _check_key(value, f"{where} {name}", fail)
+            else:
+                _number(value, lambda rule: fail(f"{where} {name}", rule + " or a scene key such as \"damper.c\""))
+                value = float(value)
+            parameters[name] = value
+        laws.append(LawSpec(output, density, parameters))
+    return tuple(laws)
 
 
 def _check_key(key, where, fail):
