@@ -212,15 +212,38 @@ def _start_pieces(model, x, u, piece, d, h):
 
 
 @kernel
-def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
+def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree, links):
     """grad_j = dJ/dd_j on the current pieces (constraints without their multipliers); term[e] = the force of
-    element e; scale[j] = the sum of the magnitudes of the forces at node j (for rounding tolerances)."""
+    element e; scale[j] = the sum of the magnitudes of the forces at node j (for rounding tolerances).
+
+    In the same pass over the elements (each pass costs as much as the arithmetic: the arrays of a large
+    network do not fit in the cache), where not None:
+
+    * ``a``, ``anchor`` (zeros; ``cluster`` from :func:`_clusters`): the clusters' matrix, banded (a[c, t] =
+      H[c, c - t]), and anchors: the part of each cluster's diagonal that no other cluster shares (its inertia,
+      its elements to held nodes). A pivot of the LDL^T factorization is at least its cluster's anchor (a Schur
+      complement of a sum of positive semidefinite matrices is at least the sum of theirs). Returns the half
+      bandwidth the matrix needs: beyond ``a``'s width, ``a`` is incomplete and the caller assembles it again,
+      wider;
+    * ``degree``, ``links``: each node's count of constraints and the XOR of their ids (:func:`_multipliers`).
+    """
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
+    width = 0 if a is None else a.shape[1] - 1
+    band = 0
     for j in range(n):
         inertia = mass[j] / (h * h) * (d[j] - h * v[j])
         grad[j] = inertia
         scale[j] = mass[j] / (h * h) * (abs(d[j]) + abs(h * v[j]))  # the rounding's size, not the value's
+        if a is not None:
+            c = cluster[j]
+            if c >= 0:
+                a[c, 0] += mass[j] / (h * h)
+                anchor[c] += mass[j] / (h * h)
+    if degree is not None:
+        for q in range(n + 1):
+            degree[q] = 0
+            links[q] = 0
     grad[load_node] -= force
     scale[load_node] += abs(force)
     for e in range(kind.shape[0]):
@@ -237,66 +260,32 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale):
         if j != GROUND:
             grad[j] -= f
             scale[j] += size
-
-
-@kernel
-def _band(kind, ends, piece, cluster):
-    """The half bandwidth of the cluster matrix."""
-    band = 0
-    for e in range(kind.shape[0]):
-        if is_constraint(kind[e], piece[e]):
-            continue
-        j = ends[e, 1]
-        ci = cluster[ends[e, 0]]
-        cj = -1 if j == GROUND else cluster[j]
-        if ci >= 0 and cj >= 0:
-            band = max(band, abs(ci - cj))
+        constraint = is_constraint(kind[e], piece[e])
+        if degree is not None and constraint:
+            jj = n if j == GROUND else j
+            degree[i] += 1
+            links[i] ^= e
+            degree[jj] += 1
+            links[jj] ^= e
+        if a is not None and not constraint and kappa != 0.0:
+            ci = cluster[i]
+            cj = -1 if j == GROUND else cluster[j]
+            if ci == cj:
+                continue  # both ends move together (or stay): no curvature along any direction
+            if ci >= 0 and cj >= 0:
+                w = abs(ci - cj)
+                band = max(band, w)
+                if w <= width:
+                    a[ci, 0] += kappa
+                    a[cj, 0] += kappa
+                    a[max(ci, cj), w] -= kappa
+            elif ci >= 0:
+                a[ci, 0] += kappa
+                anchor[ci] += kappa
+            else:
+                a[cj, 0] += kappa
+                anchor[cj] += kappa
     return band
-
-
-@kernel
-def _assemble(model, x, u, piece, d, h, cluster, count, band, grad):
-    """The clusters' matrix (banded: a[c, t] = H[c, c - t]), right-hand side (-sum of grad over each) and
-    anchor: the part of each cluster's diagonal that no other cluster shares (its inertia, its elements to
-    held nodes). A pivot of the LDL^T factorization is at least its cluster's anchor (a Schur complement of
-    a sum of positive semidefinite matrices is at least the sum of theirs)."""
-    mass, kind, ends, coef, load_node, has_cubic = model
-    a = np.zeros((count, band + 1))
-    rhs = np.zeros(count)
-    anchor = np.zeros(count)
-    n = mass.shape[0]
-    for j in range(n):
-        c = cluster[j]
-        if c >= 0:
-            a[c, 0] += mass[j] / (h * h)
-            anchor[c] += mass[j] / (h * h)
-            rhs[c] -= grad[j]
-    for e in range(kind.shape[0]):
-        if is_constraint(kind[e], piece[e]):
-            continue
-        i, j = ends[e, 0], ends[e, 1]
-        ci = cluster[i]
-        cj = -1 if j == GROUND else cluster[j]
-        if ci == cj:
-            continue  # both ends move together (or stay): no curvature along any direction
-        if j == GROUND:
-            rel_x, delta = x[i], d[i]
-        else:
-            rel_x, delta = x[i] - x[j], d[i] - d[j]
-        _, kappa = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
-        if kappa == 0.0:
-            continue
-        if ci >= 0:
-            a[ci, 0] += kappa
-        if cj >= 0:
-            a[cj, 0] += kappa
-        if ci >= 0 and cj >= 0:
-            a[max(ci, cj), abs(ci - cj)] -= kappa
-        elif ci >= 0:
-            anchor[ci] += kappa
-        else:
-            anchor[cj] += kappa
-    return a, rhs, anchor
 
 
 @kernel
@@ -392,21 +381,12 @@ def _multipliers(model, piece, grad, queue, degree, links, subtree, term, held_n
 
     The trees are peeled from their leaves: a leaf's one constraint balances the leaf's residual and passes it
     on. A node's remaining constraint is found as the XOR of the ids of its constraints (``links``): O(n + E),
-    no adjacency lists. The ground (node n) and the held node are never peeled: they take what is left."""
+    no adjacency lists (``degree`` and ``links`` come from :func:`_gradient`'s pass). The ground (node n) and the
+    held node are never peeled: they take what is left."""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     for a in range(n + 1):
-        degree[a] = 0
-        links[a] = 0
         subtree[a] = grad[a] if a < n else 0.0
-    for e in range(kind.shape[0]):
-        if is_constraint(kind[e], piece[e]):
-            i, j = ends[e, 0], ends[e, 1]
-            jj = n if j == GROUND else j
-            degree[i] += 1
-            links[i] ^= e
-            degree[jj] += 1
-            links[jj] ^= e
     size = 0
     for a in range(n):
         if degree[a] == 1 and a != held_node:
@@ -553,16 +533,25 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         d[fixed_node] = fixed_increment
     _start_pieces(model, x, u, piece, d, h)
     budget = search_budget(n, elements)
+    width = 1  # the half bandwidth of the clusters' matrix allocated (grown when a working set needs more)
     single = False  # release one constraint at a time (after a release of several met a kink at once)
     released_many = False
     for iteration in range(budget):
         count = _clusters(n, kind, ends, piece, parent, cluster, fixed_node)
-        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
+        while True:  # the gradient and the clusters' matrix in one pass (again, wider, if the band grew)
+            a = np.zeros((count, width + 1))
+            anchor = np.zeros(count)
+            band = _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, None, None)
+            if band <= width:
+                break
+            width = band
+        band = width
+        rhs = np.zeros(count)
         for j in range(n):
             if not abs(grad[j]) < np.inf:
                 return -3
-        band = _band(kind, ends, piece, cluster)
-        a, rhs, anchor = _assemble(model, x, u, piece, d, h, cluster, count, band, grad)
+            if cluster[j] >= 0:
+                rhs[cluster[j]] -= grad[j]
         balanced = True  # every free cluster's forces balance to their rounding (Newton's test, cubic springs)
         if has_cubic:
             size = np.zeros(count)
@@ -691,7 +680,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         if has_cubic and not converged:
             continue
         # a minimiser of the working set: the constraints' forces decide
-        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale)
+        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, degree, links)
         _multipliers(model, piece, grad, queue, degree, links, subtree, term, fixed_node)
         released = 0
         best = -1
