@@ -139,12 +139,17 @@ def summarize_many(runs, quantities: Iterable[str], *, history: bool = False,
 
     The runs of one structure (stepper loop, effects present, branch kernel)
     are packed into a batch and run by one compiled call (``kernels/batch.py``).
+    A run whose load has a white noise goes alone through :func:`driver.simulate`, every step an output row
+    (:func:`_noisy_run`: the batch's packed load has no noise).
     """
     quantities = list(quantities)
     energy = any(q in ENERGY_SUMMARIES for q in quantities)
     outcomes = [Outcome() for _ in runs]
     batches, branch_models = {}, {}
     for position, (scene, name) in enumerate(runs):
+        if getattr(scene.load, "noise", None) is not None:
+            _noisy_run(outcomes[position], scene, name, quantities, history, branch_kernel)
+            continue
         try:
             job = _Job(scene, name, quantities, history, branch_kernel, branch_models)
         except (ValueError, ElementError) as exc:
@@ -334,3 +339,52 @@ def late_averages(time: np.ndarray, x: np.ndarray, v: np.ndarray) -> dict:
     """The LATE_SUMMARIES of a run's output rows."""
     return {"late_mean_x": late_average(time, x), "late_mean_v": late_average(time, v),
             "late_mean_square_x": late_average(time, x * x), "late_mean_square_v": late_average(time, v * v)}
+
+
+def _noisy_run(outcome: Outcome, scene: Scene, name: str, quantities: list, history: bool,
+               branch_kernel: Optional[str]) -> None:
+    """One run with a white noise (``kernels/batch.py`` packs loads without one): :func:`driver.simulate` with
+    an output row after every step (the same steps t_p = p h as the scene's own grid, so the same numbers), the
+    peaks, the final state and the energies from those rows, the late averages and the history from the rows of
+    the scene's output grid among them."""
+    from .driver import energy_columns, simulate
+
+    try:
+        problem = summary_problem(scene, name, quantities)
+        if problem:
+            raise ValueError(f"{scene.source}: {problem}")
+        solver = scene.solver
+        h = solver.step
+        problem = stability_problem(scene, name, h)
+        outcome.warning = f"{scene.source}: {problem}" if problem else ""
+        energy = any(q in ENERGY_SUMMARIES for q in quantities)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StabilityWarning)  # kept in outcome.warning
+            result = simulate(scene.with_solver(stepper=name, output_interval=h), name, energy=energy,
+                              progress=False, branch_kernel=branch_kernel)
+    except (ValueError, ElementError) as exc:
+        outcome.error = exc
+        return
+    grid = OutputGrid(solver.stop_time, solver.output_interval, h)
+    rows = np.concatenate((np.arange(grid.full + 1) * grid.per_row, [result.x.size - 1] if grid.last_is_short else []))
+    rows = rows.astype(np.int64)
+    values = {"max_abs_x": np.abs(result.x).max(), "max_abs_v": np.abs(result.v).max(),
+              "max_abs_reaction": np.abs(result.reaction).max(), "final_x": result.x[-1], "final_v": result.v[-1],
+              "final_reaction": result.reaction[-1]}
+    if energy:
+        e = result.energy
+        friction = e["dissipated_friction"] if "dissipated_friction" in energy_columns(scene) else np.zeros(1)
+        total = e["dissipated_sliders"] + e["dissipated_damper"] + (friction if friction.size > 1 else 0.0)
+        values.update(work=e["work"][-1], dissipated_sliders=e["dissipated_sliders"][-1],
+                      dissipated_damper=e["dissipated_damper"][-1], dissipated_friction=friction[-1],
+                      dissipated=total[-1])
+        if "loop_area" in quantities:
+            period = 2 * math.pi / abs(scene.load.omega)
+            mark = min(grid.full * grid.per_row, max(0, round((solver.stop_time - period) / h)))
+            values["loop_area"] = total[-1] - total[mark]
+    times = grid.times(0, grid.rows)
+    if any(q in LATE_SUMMARIES for q in quantities):
+        values.update(late_averages(times, result.x[rows], result.v[rows]))
+    outcome.values = {q: float(values[q]) for q in quantities}
+    if history:
+        outcome.values.update(time=times, x=result.x[rows], v=result.v[rows], reaction=result.reaction[rows])
