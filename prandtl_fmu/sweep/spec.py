@@ -404,6 +404,8 @@ def _laws(tables, summary, fail) -> tuple:
             if name not in names:
                 fail(f"{where} {name}", f"unknown parameter of {density} (allowed: {', '.join(names)})")
             if isinstance(value, str):
+                if not _KEY.match(value):
+                    fail(f"{where} {name}", f"{value!r} is neither a number nor a scene key (e.g. \"damper.c\")")
                 _check_key(value, f"{where} {name}", fail)
             else:
                 _number(value, lambda rule: fail(f"{where} {name}", rule + " or a scene key such as \"damper.c\""))
