@@ -421,8 +421,9 @@ ONE_NODE_CASES = {
 }
 
 
-def one_node_scenes(case, stepper, h=2e-3, stop=12.0, output=0.02):
+def one_node_scenes(case, stepper, h=2e-3, stop=12.0, output=0.02, load=None, parse=parse_scene):
     spec = ONE_NODE_CASES[case]
+    load = ELEMENT_LOAD if load is None else load
     element = ""
     elements = [("spring", {"between": ["a", "ground"], "k": spec["spring"]})]
     if spec["mass"]:
@@ -449,10 +450,10 @@ def one_node_scenes(case, stepper, h=2e-3, stop=12.0, output=0.02):
         element += table("friction", {"alpha": spec["friction"], "alpha_kinetic": spec["friction"]})
         elements.append(("slider", {"between": ["a", "ground"], "alpha": spec["friction"]}))
     settings = solver(h, stop, output, stepper)
-    element += table("load", ELEMENT_LOAD) + table("solver", settings)
-    network = network_text(["a"], [1.3 if spec["mass"] else 0.0], elements, ELEMENT_LOAD, settings,
+    element += table("load", load) + table("solver", settings)
+    network = network_text(["a"], [1.3 if spec["mass"] else 0.0], elements, load, settings,
                            x0=[0.05] if spec["mass"] else None, v0=[0.2] if spec["mass"] else None)
-    return parse_scene(element), parse_scene(network)
+    return parse(element), parse(network)
 
 
 ONE_NODE_RUNS = [(case, "implicit") for case in ONE_NODE_CASES] + [
@@ -483,6 +484,93 @@ def test_one_node_network_is_the_element(case, stepper):
                                    atol=1e-12 * np.abs(element.reaction).max())
     else:
         assert np.any(element.v == 0) and np.any(element.v != 0)  # the mass both sticks and slides
+
+
+NOISY_LOAD = dict(ELEMENT_LOAD, noise_intensity=0.6, noise_seed=11, noise_unit=2e-3)
+# (a massless node needs a dashpot of its own under a white noise: the refusal's test below)
+NOISY_RUNS = [(case, stepper) for case, stepper in ONE_NODE_RUNS if case not in ("massless", "massless_series")]
+
+
+@pytest.mark.slow  # compiles the noisy forms of the element's and the network's kernels
+@pytest.mark.parametrize("case,stepper", NOISY_RUNS)
+def test_one_node_network_under_white_noise_is_the_element(case, stepper):
+    """The same Brownian path (a function of the seed and the time alone) drives the element and the
+    one-node network: the same x(t), each with its own scheme's rounding."""
+    element_scene, network_scene = one_node_scenes(case, stepper, load=NOISY_LOAD)
+    element = simulate_element(element_scene, stepper)
+    network = simulate(network_scene, stepper)
+    quiet = simulate(one_node_scenes(case, stepper)[1], stepper)
+    x_scale = np.abs(element.x).max()
+    assert np.abs(network.x[:, 0] - quiet.x[:, 0]).max() > 0.05 * x_scale  # the noise moves it
+    np.testing.assert_allclose(network.x[:, 0], element.x, rtol=0, atol=1e-12 * x_scale)
+    np.testing.assert_allclose(network.v[1:, 0], element.v[1:], rtol=0,
+                               atol=1e-12 * (np.abs(element.v).max() + x_scale))
+
+
+@pytest.mark.parametrize("case", ["massless", "massless_series"])
+def test_white_noise_on_a_massless_node_without_dashpot_is_refused(case):
+    """As the element refuses it (its series dashpots do not hold the node: a branch's force is at most k eta)."""
+    element, network = one_node_scenes(case, "implicit", load=NOISY_LOAD, parse=lambda text: text)
+    with pytest.raises(SceneError, match="white noise on a massless element without a dashpot"):
+        parse_scene(element)
+    with pytest.raises(SceneError, match="white noise on the massless node a with no dashpot"):
+        parse_scene(network)
+
+
+@pytest.mark.slow  # compiles the noisy forms of the network's kernels
+def test_white_noise_network_does_not_depend_on_chunks_or_fmu_steps():
+    """The path is a function of (seed, t): a run cut into chunks, a coarser output grid, and a NetworkElement
+    advanced by uneven communication steps (whole numbers of steps) give the batch run's numbers bit for bit."""
+    h = 2e-3
+    _, scene = one_node_scenes("slider", "implicit", h=h, stop=3.0, output=10 * h, load=NOISY_LOAD)
+    whole = simulate(scene)
+    np.testing.assert_array_equal(np.concatenate([chunk.table for chunk in simulate_chunks(scene)]), whole.table)
+    _, coarse = one_node_scenes("slider", "implicit", h=h, stop=3.0, output=50 * h, load=NOISY_LOAD)
+    np.testing.assert_array_equal(simulate(coarse).table, whole.table[::5])
+    element = NetworkElement(scene)
+    rng = np.random.default_rng(3)
+    for row in range(1, len(whole.time)):
+        steps = 0
+        while steps < 10:  # 10 steps per row, advanced in random pieces
+            piece = int(min(10 - steps, rng.integers(1, 8)))
+            element.advance(piece * h, 0.0, scene_load=True)
+            steps += piece
+        np.testing.assert_array_equal(element.x, whole.x[row])
+        np.testing.assert_array_equal(element.v, whole.v[row])
+
+
+@pytest.mark.slow  # about 10 s: long runs for the statistics
+@pytest.mark.parametrize("stepper,stop", [("projected", 20000.0), ("implicit", 8000.0)])
+def test_white_noise_network_reaches_the_gibbs_law(stepper, stop):
+    """Two masses, a spring to the ground, a spring between them, a cubic spring and a dashpot from the loaded
+    node to the ground, white noise sigma on that node: the noise and the damping act on the same node, so
+    the stationary law is Gibbs's, exp(-E / T) with T = sigma^2 / (2 c) (fluctuation-dissipation; unique: the
+    chain is controllable from the loaded node): <m v^2> = T at each node, and the positions' moments are
+    integrals of exp(-V / T) (quadrature here). The schemes' bias is O(h): the estimate is extrapolated from
+    h and h / 2 on the same Brownian path (2 m(h/2) - m(h), Richardson), and must agree with the law within 4
+    standard errors (batch means over 40 batches of the extrapolated series)."""
+    ma, mb, k1, k2, k3, c, sigma = 1.0, 0.5, 1.0, 2.0, 0.5, 0.8, 1.0
+    temperature = sigma ** 2 / (2 * c)
+    elements = [("spring", {"between": ["a", "ground"], "k": k1}), ("spring", {"between": ["a", "b"], "k": k2}),
+                ("cubic", {"between": ["b", "ground"], "k3": k3}), ("dashpot", {"between": ["b", "ground"], "c": c})]
+    load = {"kind": "white_noise", "intensity": sigma, "seed": 5, "noise_unit": 0.01}
+
+    def moments(h):
+        run = simulate(parse_scene(network_text(["a", "b"], [ma, mb], elements, load, solver(h, stop, 0.1, stepper))))
+        late = slice(len(run.time) // 20, None)  # 5 % burn-in
+        x, v = run.x[late], run.v[late]
+        return np.stack([ma * v[:, 0] ** 2, mb * v[:, 1] ** 2, x[:, 0] ** 2, (x[:, 1] - x[:, 0]) ** 2])
+
+    extrapolated = 2 * moments(0.005) - moments(0.01)
+    batches = extrapolated[:, :extrapolated.shape[1] // 40 * 40].reshape(4, 40, -1).mean(axis=2)
+    mean, error = batches.mean(axis=1), batches.std(axis=1, ddof=1) / np.sqrt(40)
+    grid = np.linspace(-6.0, 6.0, 1201)
+    xa, xb = np.meshgrid(grid, grid, indexing="ij")
+    weight = np.exp(-(0.5 * k1 * xa ** 2 + 0.5 * k2 * (xb - xa) ** 2 + 0.25 * k3 * xb ** 4) / temperature)
+    weight /= weight.sum()
+    law = np.array([temperature, temperature, np.sum(weight * xa ** 2), np.sum(weight * (xb - xa) ** 2)])
+    assert np.all(error < 0.03 * law)  # the statistics resolve a bias of a few per cent
+    assert np.all(np.abs(mean - law) < 4 * error), (mean, law, error)
 
 
 @pytest.mark.parametrize("case", ["massless", "massless_dashpot"])

@@ -20,6 +20,7 @@ from . import kernels
 from .model import NetworkScene, stepper_problem
 from ..driver import ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration
 from ..loads import force_at, held, plus
+from ..noise import new_cache
 from ..scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, SceneError
 
 ENERGY_COLUMNS = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
@@ -306,6 +307,9 @@ class NetworkElement(OutputMemo):
         self._load = held(self.held_force)
         self.x, self.v, self.u, self.piece = initial_state(self.scene, self.model, self._load)
         self.work = kernels.workspace(network.n, len(network.elements))
+        # the Brownian tree's cache of a white noise in [load]: scratch (never saved; any cache gives the same
+        # increments), kept across advances so that stepping forward costs about one normal per step
+        self._noise_cache = new_cache()
         self.account = np.zeros(3)
         self.dissipated = np.zeros(len(network.elements))
         self._reaction = initial_reaction(self.scene, self.model, self.x, self.v, self.u, self.held_force)
@@ -374,7 +378,7 @@ class NetworkElement(OutputMemo):
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations or with a larger step")
         saved = self.checkpoint()
-        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
         self.held_force, self._load = float(force), load
         self._touch()
         if self._grid != h:

@@ -36,6 +36,11 @@ springs the piece's quadratic is their Newton model, and the step is taken with 
 it: Newton's iteration, converged to rounding. Every search has a stated budget (:func:`search_budget`); past
 it the step fails (NaN) and the driver says so.
 
+A white noise on the load (``[load] kind = "white_noise"`` or ``noise_intensity``: F + sigma xi(t) on the load's
+node) enters both steps as the step's mean force, F + sigma (B(t + h) - B(t)) / h (:func:`loads.impulse`):
+backward Euler-Maruyama for ``implicit`` (every multivalued part stays implicit), Euler-Maruyama for
+``projected``. Without a noise the load tuple has no noise entry and nothing of it is compiled.
+
 ``projected`` (where every node has a mass and all plasticity is in branches): the paper's scheme
 (M2AN 2002, eq. 5.1) on the network, every force at the old state:
 
@@ -44,7 +49,7 @@ it the step fails (NaN) and the driver says so.
 import numpy as np
 
 from .._jit import generic_kernel, inline_kernel, kernel
-from ..loads import force_at
+from ..loads import force_at, impulse, with_noise
 
 SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
 GROUND = -1
@@ -767,6 +772,7 @@ def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
     iterations taken, or < 0 when the step could not be taken (see :func:`solve_step`; the state is then
     unchanged but for the pieces)."""
     force = force_at(load, t + h)
+    force = with_noise(load, force, force + impulse(load, t, h) / h)  # a white noise: the step's mean force
     status = solve_step(model, x, v, u, piece, h, force, -1, 0.0, work)
     if status < 0:
         return status, np.nan
@@ -806,6 +812,7 @@ def projected_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     force = force_at(load, t)
+    force = with_noise(load, force, force + impulse(load, t, h) / h)  # a white noise: the step's mean force
     grad = work[1]
     term = work[5]
     forces_now(model, x, v, u, term)

@@ -187,6 +187,12 @@ class NetworkScene:
 def stepper_problem(scene: NetworkScene, stepper: str) -> Optional[str]:
     """Why ``stepper`` does not apply to the network (None if it does)."""
     network = scene.network
+    if stepper in NETWORK_STEPPERS and getattr(scene.load, "noise", None) is not None:
+        node = network.load_node
+        damped = any(e.kind == "dashpot" and node in e.between for e in network.elements)
+        if not network.mass[node] > 0 and not damped:
+            return (f"a white noise on the massless node {network.nodes[node]} with no dashpot on it has no solution "
+                    "(its equilibrium would follow a force of infinite variance): give it a mass or a dashpot")
     if stepper == "implicit":
         return None
     if stepper == "projected":
