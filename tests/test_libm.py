@@ -1,0 +1,379 @@
+"""prandtl_fmu.libm: accuracy against mpmath in ulps, C99 Annex F special values, symmetries, and the same bits
+from the compiled code and from CPython running the same source (the proxy for "the same bits on every
+platform": CPython's floats are IEEE doubles with nothing fused and nothing from libm in these functions).
+
+An error in ulps is |computed - exact| / 2^(max(E, -1022) - 52) with E the binade of the exact value
+(2^E <= |exact| < 2^(E + 1)): below 1/2 is correct rounding, below 1 a faithful result. The quick tests sample
+a few hundred arguments per function; the slow ones (``-m slow``) 20,000 and every exponent's hardest
+arguments for the reduction of sin and cos; ``docs/libm.md`` quotes the slow figures.
+"""
+import importlib.util
+import math
+import pathlib
+import re
+
+import mpmath
+import numpy as np
+import pytest
+
+from prandtl_fmu import _jit, libm
+
+# overflow to inf is a result here (exp(710), hypot(MAX, MAX)): numpy's scalars warn about it in the Python run
+pytestmark = pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+
+mpmath.mp.prec = 256  # mpmath raises its own precision for the reduction of large trigonometric arguments
+
+MAX = 1.7976931348623157e308
+TINY = 5e-324  # the smallest subnormal
+OVERFLOW_EDGE = mpmath.ldexp(2 ** 54 - 1, 1024 - 54)  # the exact values from here on round to inf
+
+
+# --- measuring -------------------------------------------------------------------------------------------------
+
+def ulps(computed, exact):
+    """|computed - exact| in units of the last place of the exact value (see the module docstring)."""
+    exact = mpmath.mpf(exact)
+    if math.isinf(computed):
+        return 0.0 if abs(exact) >= OVERFLOW_EDGE and (computed > 0) == (exact > 0) else math.inf
+    if math.isnan(computed):
+        return math.inf
+    if exact == 0:
+        return 0.0 if computed == 0 else math.inf
+    _, binade = mpmath.frexp(exact)  # |exact| = mantissa 2^binade, mantissa in [1/2, 1)
+    return float(abs(mpmath.mpf(computed) - exact) / mpmath.ldexp(1, max(binade - 1, -1022) - 52))
+
+
+def bits(value):
+    return int(np.float64(value).view(np.int64))
+
+
+def exact_cbrt(x):
+    return mpmath.sign(x) * mpmath.cbrt(abs(x))
+
+
+def exact_hypot(x, y):
+    return mpmath.sqrt(mpmath.mpf(x) ** 2 + mpmath.mpf(y) ** 2)
+
+
+EXACT = {
+    "sin": mpmath.sin, "cos": mpmath.cos, "exp": mpmath.exp, "expm1": mpmath.expm1, "log": mpmath.log,
+    "log1p": mpmath.log1p, "acos": mpmath.acos, "cbrt": exact_cbrt, "hypot": exact_hypot,
+}
+
+# the largest error measured by test_accuracy_many (20,000 random arguments each, docs/libm.md), rounded up:
+# fdlibm's own bounds are below 1 ulp for every one of them
+BOUND = {"sin": 0.80, "cos": 0.80, "exp": 0.80, "expm1": 0.80, "log": 0.80, "log1p": 0.80, "acos": 0.80,
+         "cbrt": 0.70, "hypot": 0.80}
+
+
+# --- arguments -------------------------------------------------------------------------------------------------
+
+def log_uniform(rng, count, low_exponent=-1074, high_exponent=1023, signed=True):
+    """Doubles whose binade is uniform in [low_exponent, high_exponent] and mantissa uniform: every range
+    alike, subnormals included."""
+    values = np.ldexp(rng.uniform(1.0, 2.0, count), rng.integers(low_exponent, high_exponent + 1, count))
+    if signed:
+        values *= rng.choice([-1.0, 1.0], count)
+    return values
+
+
+def near(value, count=3):
+    """value and its ``count`` neighbours on each side."""
+    out = [value]
+    up = down = value
+    with np.errstate(over="ignore"):
+        for _ in range(count):
+            up, down = np.nextafter(up, math.inf), np.nextafter(down, -math.inf)
+            out += [up, down]
+    return [v for v in out if np.isfinite(v)]
+
+
+def hardest_for_reduction(exponent, count=2):
+    """Doubles m 2^exponent (m a 53-bit integer) closest to a multiple of pi/2: multiples of the largest
+    denominators of the continued fraction of 2^exponent 2/pi mod 1 below 2^53."""
+    with mpmath.workprec(1200 + max(exponent, 0)):
+        alpha = mpmath.frac(mpmath.ldexp(2 / mpmath.pi, exponent))
+        denominators = []
+        previous, current = 0, 1
+        rest = alpha
+        for _ in range(100):
+            whole = int(mpmath.floor(rest))
+            previous, current = current, whole * current + previous
+            if current >= 2 ** 53:
+                break
+            denominators.append(current)
+            if rest == whole:
+                break
+            rest = 1 / (rest - whole)
+    out = []
+    for q in denominators[-count:]:
+        m = q * -(-2 ** 52 // q)
+        if m < 2 ** 53:
+            out.append(math.ldexp(m, exponent))
+    return out
+
+
+FAMOUS = 6381956970095103 * 2.0 ** 797  # the double closest to a multiple of pi/2 (2^-60.9 away)
+
+
+def hard_arguments(name):
+    """The arguments where each function is most likely to go wrong: thresholds of its algorithm, overflow and
+    underflow, subnormals, and for sin and cos the neighbourhoods of multiples of pi/2."""
+    if name in ("sin", "cos"):
+        values = [FAMOUS, 5261692873635770 * 2.0 ** 499, 2.0 ** 20 * math.pi / 2, math.pi / 4, 2.0 ** -26,
+                  2.0 ** -27, 1e6, 2.0 ** 30, 2.0 ** 60, MAX, TINY, 2.2250738585072014e-308]
+        values += [float(mpmath.mpf(k) * mpmath.pi / 2) for k in (1, 2, 3, 4, 5, 10, 100, 1000, 2 ** 19 + 1,
+                                                                  2 ** 20 - 1, 2 ** 20 + 1, 10 ** 9)]
+        values += hardest_for_reduction(-52) + hardest_for_reduction(-35) + hardest_for_reduction(100)
+        return [w for v in values for w in near(v, 1)]
+    if name in ("exp", "expm1"):
+        values = [709.782712893384, -708.3964185322641, -745.1332191019411, -745.1332191019412, 0.5 * math.log(2),
+                  1.5 * math.log(2), 2.0 ** -28, 2.0 ** -54, 56 * math.log(2), 1e-300, TINY, -1e-300, 1.0, -1.0,
+                  20 * math.log(2), 57 * math.log(2), -37.5]
+        return [w for v in values for w in near(v, 2)]
+    if name in ("log", "log1p"):
+        values = [1.0, 2.0, 0.5, math.sqrt(2.0), math.sqrt(0.5), MAX, TINY, 2.2250738585072014e-308, 1 + 2.0 ** -20,
+                  1 - 2.0 ** -20, 2.0 ** 53, 2.0 ** -29, 2.0 ** -54, math.e]
+        if name == "log1p":
+            values += [-0.2928932188134524, -0.5, -1.0 + 2.0 ** -53, math.sqrt(2.0) - 1.0, 1e-300]
+        return [w for v in values for w in near(v, 2) if w > (-1.0 if name == "log1p" else 0.0)]
+    if name == "acos":
+        values = [1.0, -1.0, 0.5, -0.5, 2.0 ** -57, -(2.0 ** -57), 1e-300, 0.0, 0.9999999999999999]
+        return [w for v in values for w in near(v, 2) if abs(w) <= 1.0]
+    if name == "cbrt":
+        values = [1.0, 8.0, -27.0, 2.0 ** 1023, MAX, TINY, 2.2250738585072014e-308, 1e-310, 0.125]
+        return [w for v in values for w in near(v, 2)]
+    raise KeyError(name)
+
+
+def arguments(name, rng, count):
+    """``count`` random arguments over the function's whole domain and its hard arguments."""
+    if name in ("sin", "cos", "cbrt"):
+        values = log_uniform(rng, count)
+    elif name == "exp":
+        values = np.concatenate([rng.uniform(-745.2, 709.8, count // 2), log_uniform(rng, count // 2, -60, 0)])
+    elif name == "expm1":
+        values = np.concatenate([rng.uniform(-40.0, 709.8, count // 2), log_uniform(rng, count // 2, -1074, 0)])
+    elif name == "log":
+        values = np.concatenate([log_uniform(rng, count // 2, signed=False),
+                                 1.0 + log_uniform(rng, count // 2, -60, -1)])
+    elif name == "log1p":
+        values = np.concatenate([log_uniform(rng, count // 2, signed=False),
+                                 -log_uniform(rng, count // 2, -1074, -1, signed=False)])
+    elif name == "acos":
+        values = np.concatenate([rng.uniform(-1.0, 1.0, count // 2),
+                                 rng.choice([-1.0, 1.0], count // 4) * (1.0 - log_uniform(rng, count // 4, -53, -2, False)),
+                                 log_uniform(rng, count - count // 2 - count // 4, -1074, -1)])
+    else:
+        raise KeyError(name)
+    return [float(v) for v in values] + hard_arguments(name)
+
+
+def hypot_arguments(rng, count):
+    """Pairs over every range (the result below the overflow threshold), the ratio from 1 to 2^-70 and beyond."""
+    a = log_uniform(rng, count, -1074, 1022)
+    b = a * log_uniform(rng, count, -70, 0)
+    pairs = list(zip(a.tolist(), b.tolist()))
+    pairs += [(3.0, 4.0), (5.0, 12.0), (MAX / 2, MAX / 2), (MAX, 1.0), (TINY, TINY), (TINY, 3 * TINY),
+              (2.0 ** 500, 2.0 ** 500), (2.0 ** -500, 2.0 ** -500), (1e-310, 1e-300), (2.0 ** 60, 1.0),
+              (2.0 ** 61, 1.0), (1.0, 1.0), (1.0, 2.0 ** -27), (2.2250738585072014e-308, 1e-320)]
+    return pairs
+
+
+FUNCTIONS = ("sin", "cos", "exp", "expm1", "log", "log1p", "acos", "cbrt")
+
+
+def worst(name, rng, count):
+    """(largest error in ulps, its argument, number of arguments) of libm's ``name``."""
+    if name == "hypot":
+        cases = hypot_arguments(rng, count)
+        errors = [(ulps(libm.hypot(x, y), exact_hypot(x, y)), (x, y)) for x, y in cases]
+    else:
+        function, exact = getattr(libm, name), EXACT[name]
+        cases = arguments(name, rng, count)
+        errors = [(ulps(function(x), exact(mpmath.mpf(x))), x) for x in cases]
+    error, argument = max(errors)
+    return error, argument, len(cases)
+
+
+# --- the same source run by CPython ----------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def in_python():
+    """A second copy of prandtl_fmu/libm.py whose kernels are left plain Python functions, calls between them
+    included (``.py_func`` alone would call the compiled callees)."""
+    spec = importlib.util.spec_from_file_location("prandtl_fmu._libm_in_python", libm.__file__)
+    module = importlib.util.module_from_spec(spec)
+    kernel, inline_kernel = _jit.kernel, _jit.inline_kernel
+    _jit.kernel = _jit.inline_kernel = lambda fn: fn
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        _jit.kernel, _jit.inline_kernel = kernel, inline_kernel
+    assert not hasattr(module.cos, "py_func")
+    return module
+
+
+# --- tests -----------------------------------------------------------------------------------------------------
+
+def test_two_over_pi_table_is_two_over_pi():
+    table = libm._TWO_OVER_PI
+    assert table.dtype == np.int64 and np.all((0 <= table) & (table < 2 ** 24))
+    assert np.all(table[:3] == 0)  # the 72 padding bits
+    with mpmath.workprec(1500):
+        digits = int(mpmath.floor(mpmath.ldexp(2 / mpmath.pi, 24 * (len(table) - 3))))
+    assert int("".join(f"{int(limb):06x}" for limb in table[3:]), 16) == digits
+    # the largest double's window, and one more limb for the shift, lie inside the table
+    start = 1023 - 52 - 2 + libm._PAD_BITS
+    assert start // 24 + 9 <= len(table)
+
+
+@pytest.mark.parametrize("name", FUNCTIONS + ("hypot",))
+def test_accuracy(name):
+    error, argument, count = worst(name, np.random.default_rng(33), 600)
+    assert error <= BOUND[name], (name, argument, error, count)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", FUNCTIONS + ("hypot",))
+def test_accuracy_many(name):
+    """The figures of docs/libm.md (printed with -s)."""
+    error, argument, count = worst(name, np.random.default_rng(2026), 20000)
+    print(f"\n{name}: max {error:.3f} ulp over {count} arguments (at {argument!r})")
+    assert error <= BOUND[name], (name, argument, error, count)
+
+
+@pytest.mark.slow
+def test_reduction_at_every_exponents_hardest_arguments():
+    """sin and cos at the doubles closest to multiples of pi/2, for every exponent: the reduced argument loses
+    up to 61 leading bits there and must still carry the 53 after them."""
+    largest = 0.0
+    for exponent in range(-52, 972):
+        for x in hardest_for_reduction(exponent, count=1):
+            for name in ("sin", "cos"):
+                largest = max(largest, ulps(getattr(libm, name)(x), EXACT[name](mpmath.mpf(x))))
+    print(f"\nsin, cos at the hardest argument of each exponent: max {largest:.3f} ulp")
+    assert largest <= BOUND["sin"]
+
+
+def test_the_famous_hardest_case():
+    """6381956970095103 2^797 is 4.69e-19 from a multiple of pi/2 (Kahan, McDonald): cos x is that distance."""
+    assert ulps(libm.cos(FAMOUS), mpmath.cos(mpmath.mpf(FAMOUS))) < 0.5
+    assert ulps(libm.sin(FAMOUS), mpmath.sin(mpmath.mpf(FAMOUS))) < 0.5
+    assert libm.cos(FAMOUS) == pytest.approx(-4.687165924254628e-19, rel=1e-15)
+
+
+def test_exact_cases():
+    assert libm.exp(0.0) == 1.0 and libm.exp(-0.0) == 1.0
+    assert libm.log(1.0) == 0.0 and bits(libm.log(1.0)) == 0
+    assert libm.log1p(0.0) == 0.0
+    for x, root in ((-8.0, -2.0), (27.0, 3.0), (0.125, 0.5), (-64.0, -4.0), (1000.0, 10.0), (2.0 ** 300, 2.0 ** 100),
+                    (2.0 ** -999, 2.0 ** -333), (-(2.0 ** -1071), -(2.0 ** -357)), (3.0 ** 33, 3.0 ** 11)):
+        assert libm.cbrt(x) == root, x
+    assert libm.hypot(3.0, 4.0) == 5.0 and libm.hypot(-5.0, 12.0) == 13.0 and libm.hypot(0.0, -7.5) == 7.5
+    assert libm.hypot(2.0 ** 1000 * 3, 2.0 ** 1000 * 4) == 2.0 ** 1000 * 5
+    assert libm.hypot(TINY * 3, TINY * 4) == TINY * 5
+    assert libm.acos(1.0) == 0.0 and libm.acos(0.0) == math.pi / 2 and libm.acos(-1.0) == math.pi
+    assert libm.sin(0.0) == 0.0 and libm.cos(0.0) == 1.0
+    for n in range(-1074, 1024, 7):  # n ln 2, rounded once (k ln2_hi is exact, a sum of two roundings)
+        assert ulps(libm.log(2.0 ** n), n * mpmath.log(2)) < 0.5, n
+
+
+NAN = math.nan
+INF = math.inf
+SPECIALS = [  # (function, arguments, C99 Annex F's value)
+    ("sin", (0.0,), 0.0), ("sin", (-0.0,), -0.0), ("sin", (INF,), NAN), ("sin", (-INF,), NAN), ("sin", (NAN,), NAN),
+    ("sin", (TINY,), TINY), ("sin", (-TINY,), -TINY),
+    ("cos", (0.0,), 1.0), ("cos", (-0.0,), 1.0), ("cos", (INF,), NAN), ("cos", (-INF,), NAN), ("cos", (NAN,), NAN),
+    ("exp", (0.0,), 1.0), ("exp", (-0.0,), 1.0), ("exp", (INF,), INF), ("exp", (-INF,), 0.0), ("exp", (NAN,), NAN),
+    ("exp", (710.0,), INF), ("exp", (MAX,), INF), ("exp", (-746.0,), 0.0), ("exp", (-MAX,), 0.0),
+    ("exp", (-745.0,), TINY), ("exp", (TINY,), 1.0), ("exp", (-TINY,), 1.0),
+    ("expm1", (0.0,), 0.0), ("expm1", (-0.0,), -0.0), ("expm1", (INF,), INF), ("expm1", (-INF,), -1.0),
+    ("expm1", (NAN,), NAN), ("expm1", (710.0,), INF), ("expm1", (-40.0,), -1.0), ("expm1", (-MAX,), -1.0),
+    ("expm1", (TINY,), TINY), ("expm1", (-TINY,), -TINY),
+    ("log", (0.0,), -INF), ("log", (-0.0,), -INF), ("log", (1.0,), 0.0), ("log", (INF,), INF), ("log", (-1.0,), NAN),
+    ("log", (-INF,), NAN), ("log", (NAN,), NAN), ("log", (-TINY,), NAN), ("log", (TINY,), -744.4400719213812),
+    ("log1p", (0.0,), 0.0), ("log1p", (-0.0,), -0.0), ("log1p", (-1.0,), -INF), ("log1p", (-2.0,), NAN),
+    ("log1p", (INF,), INF), ("log1p", (-INF,), NAN), ("log1p", (NAN,), NAN), ("log1p", (TINY,), TINY),
+    ("log1p", (-TINY,), -TINY),
+    ("acos", (1.0,), 0.0), ("acos", (-1.0,), math.pi), ("acos", (1.0000000000000002,), NAN), ("acos", (INF,), NAN),
+    ("acos", (-INF,), NAN), ("acos", (NAN,), NAN), ("acos", (0.0,), math.pi / 2), ("acos", (-0.0,), math.pi / 2),
+    ("cbrt", (0.0,), 0.0), ("cbrt", (-0.0,), -0.0), ("cbrt", (INF,), INF), ("cbrt", (-INF,), -INF),
+    ("cbrt", (NAN,), NAN),
+    ("hypot", (INF, NAN), INF), ("hypot", (NAN, -INF), INF), ("hypot", (NAN, 1.0), NAN), ("hypot", (1.0, NAN), NAN),
+    ("hypot", (0.0, 0.0), 0.0), ("hypot", (-0.0, -0.0), 0.0), ("hypot", (-3.0, 0.0), 3.0), ("hypot", (MAX, MAX), INF),
+    ("hypot", (MAX, 1.0), MAX), ("hypot", (-INF, 0.0), INF), ("hypot", (TINY, 0.0), TINY),
+]
+
+
+@pytest.mark.parametrize("name, args, expected", SPECIALS)
+def test_special_values(name, args, expected, in_python):
+    for module in (libm, in_python):
+        value = getattr(module, name)(*args)
+        if math.isnan(expected):
+            assert math.isnan(value), (name, args, value)
+        else:
+            assert bits(value) == bits(expected), (name, args, value, expected)
+    if name in ("sin", "cos"):
+        value = libm.sincos(*args)[0 if name == "sin" else 1]
+        assert (math.isnan(value) and math.isnan(expected)) or bits(value) == bits(expected)
+
+
+def test_symmetries_bit_for_bit():
+    rng = np.random.default_rng(7)
+    xs = [float(x) for x in log_uniform(rng, 1500, signed=False)] + hard_arguments("sin")[:60]
+    for x in xs:
+        assert bits(libm.cos(-x)) == bits(libm.cos(x)), x
+        assert bits(libm.sin(-x)) == bits(-libm.sin(x)), x
+        s, c = libm.sincos(-x)
+        assert (bits(s), bits(c)) == (bits(-libm.sin(x)), bits(libm.cos(x))), x
+        assert bits(libm.cbrt(-x)) == bits(-libm.cbrt(x)), x
+        y = x * 0.37
+        assert bits(libm.hypot(x, y)) == bits(libm.hypot(-y, -x)), x
+    for x in rng.uniform(0.0, 1.0, 500):  # acos(-x) = pi - acos(x), to the roundings of both
+        assert abs(libm.acos(-x) + libm.acos(x) - math.pi) <= 4.5e-16
+
+
+def test_compiled_equals_python_bit_for_bit(in_python):
+    rng = np.random.default_rng(11)
+    for name in FUNCTIONS:
+        compiled, python = getattr(libm, name), getattr(in_python, name)
+        for x in arguments(name, rng, 120):
+            assert bits(compiled(x)) == bits(python(x)), (name, x)
+    for x in arguments("sin", rng, 120):
+        assert [bits(v) for v in libm.sincos(x)] == [bits(v) for v in in_python.sincos(x)], x
+    for x, y in hypot_arguments(rng, 120):
+        assert bits(libm.hypot(x, y)) == bits(in_python.hypot(x, y)), (x, y)
+
+
+def test_sincos_is_sin_and_cos():
+    rng = np.random.default_rng(5)
+    for x in [float(v) for v in log_uniform(rng, 500)] + hard_arguments("cos"):
+        assert [bits(v) for v in libm.sincos(x)] == [bits(libm.sin(x)), bits(libm.cos(x))], x
+
+
+@pytest.mark.slow
+def test_machine_code_has_no_libm_call_and_no_fused_operation():
+    """Compiled afresh (the cached code cannot be inspected): the IR declares nothing outside numba's runtime
+    but llvm.sqrt (IEEE's correctly rounded square root), and no floating-point operation carries a fast-math
+    or contract flag, so LLVM may fuse nothing on any target."""
+    spec = importlib.util.spec_from_file_location("prandtl_fmu._libm_uncached", libm.__file__)
+    module = importlib.util.module_from_spec(spec)
+    from numba import njit
+    kernel, inline_kernel = _jit.kernel, _jit.inline_kernel
+    _jit.kernel = lambda fn: njit(cache=False)(fn)
+    _jit.inline_kernel = lambda fn: njit(cache=False, inline="always")(fn)
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        _jit.kernel, _jit.inline_kernel = kernel, inline_kernel
+    for name in FUNCTIONS + ("sincos", "hypot"):
+        function = getattr(module, name)
+        function(*((0.5, 0.25) if name == "hypot" else (0.5,)))
+        for ir in function.inspect_llvm().values():
+            declared = set(re.findall(r"^declare .*?@\"?([\w.$]+)", ir, re.M))
+            foreign = {d for d in declared if not (d.startswith(("_Z", "NRT_", "numba_", "llvm.sqrt.", "llvm.lifetime",
+                                                                   "llvm.assume", "llvm.ctpop")))}
+            assert not foreign, (name, foreign)
+            assert not re.search(r"\bf(add|sub|mul|div) (fast|contract|reassoc|afn)", ir), name
+            assert "llvm.fma" not in ir and "llvm.fmuladd" not in ir, name
