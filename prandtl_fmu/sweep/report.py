@@ -202,7 +202,7 @@ def markdown(statistics, spec: SweepSpec, title: str, images: list, note: str) -
         cells = [str(row["group"]), *(_text(row[key]) for key in keys), row["output"], str(row["n"]),
                  str(row["failed"]), _text(row["mean"]), f"[{_text(row['mean_low'])}, {_text(row['mean_high'])}]",
                  _text(row["std"]), f"[{_text(row['std_low'])}, {_text(row['std_high'])}]", row["law"], fit, p]
-        lines.append("| " + " | ".join(cells) + " |")
+        lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
     lines.append("")
     for name in images:
         lines += [f"![{name}]({name})", ""]
@@ -265,6 +265,7 @@ def plot_histogram(hist, density, fit, output: str, values: dict):
                       for key, value in values.items())
     axes.set_title(f"{output}{': ' + where if where else ''}\nchi2 = {fit.chi2:.3g}, dof = {fit.dof}, "
                    f"p = {fit.p_value:.3g}", fontsize=10)
-    axes.legend(fontsize=8)
+    axes.set_ylim(0, 1.3 * max(float(hist.density_high.max()), float(density.pdf(grid).max())))  # room for the legend
+    axes.legend(fontsize=8, loc="upper left")
     figure.tight_layout()
     return figure
