@@ -780,3 +780,167 @@ def hypot(x, y):
     if k != 0:
         return w * _from_high((1023 + k) << 20)
     return w
+
+
+# --- a double-double logarithm, and log2 and pow on it ------------------------------------------------------
+
+_LN2_DD_HI = 0.6931471805599453  # ln 2 = _LN2_DD_HI + _LN2_DD_LO to 2^-106
+_LN2_DD_LO = 2.3190468138462996e-17
+_INV_LN2_HI = 1.4426950408889634  # 1 / ln 2, likewise
+_INV_LN2_LO = 2.0355273740931033e-17
+_TWO_THIRDS_HI = 0.6666666666666666
+_TWO_THIRDS_LO = 3.700743415417188e-17
+_TWO_FIFTHS_HI = 0.4
+_TWO_FIFTHS_LO = -2.2204460492503132e-17
+_SQRT2 = 1.4142135623730951
+
+
+@inline_kernel
+def _fast_two_sum(a, b):
+    """(s, e) with s = fl(a + b), s + e = a + b exactly, for |a| >= |b| (Dekker)."""
+    s = a + b
+    return s, b - (s - a)
+
+
+@kernel
+def _log_dd(x):
+    """(k, hi, lo) with ln x = k ln 2 + hi + lo to a relative 2^-68, for a positive finite x (subnormals too).
+
+    x = 2^k m, m in [sqrt(1/2), sqrt(2)]; ln m = 2 atanh s = 2 s + 2 s^3 / 3 + 2 s^5 / 5 + s^7 R(s^2),
+    s = (m - 1) / (m + 1), |s| <= 0.172: s, and the terms down to s^5 (2^-12.5 of the sum), in double-double,
+    R (2^-18 of it) in double, to s^27 (the next term is below 2^-72)."""
+    k = 0
+    if x < 2.2250738585072014e-308:  # a subnormal: scaled into the normal range
+        x *= _TWO54
+        k = -54
+    bits = _bits(x)
+    k += (bits >> 52) - 1023
+    m = _double((bits & 0xFFFFFFFFFFFFF) | 0x3FF0000000000000)
+    if m > _SQRT2:
+        m *= 0.5
+        k += 1
+    f = m - 1.0  # exact
+    u_hi, u_lo = _two_sum(m, 1.0)
+    s_hi = f / u_hi
+    p, e = _two_product(s_hi, u_hi)
+    s_lo = (((f - p) - e) - s_hi * u_lo) / u_hi
+    z_hi, z_lo = _two_product(s_hi, s_hi)
+    z_lo += 2.0 * s_hi * s_lo
+    cube_hi, cube_lo = _two_product(z_hi, s_hi)
+    cube_lo += z_hi * s_lo + z_lo * s_hi
+    cube_hi, cube_lo = _fast_two_sum(cube_hi, cube_lo)
+    third_hi, third_lo = _two_product(cube_hi, _TWO_THIRDS_HI)
+    third_lo += cube_hi * _TWO_THIRDS_LO + cube_lo * _TWO_THIRDS_HI
+    fifth_hi, fifth_lo = _two_product(cube_hi, z_hi)
+    fifth_lo += cube_hi * z_lo + cube_lo * z_hi
+    fifth_hi, fifth_lo = _fast_two_sum(fifth_hi, fifth_lo)
+    z = z_hi
+    rest = fifth_hi * z * (2.0 / 7.0 + z * (2.0 / 9.0 + z * (2.0 / 11.0 + z * (2.0 / 13.0 + z * (
+        2.0 / 15.0 + z * (2.0 / 17.0 + z * (2.0 / 19.0 + z * (2.0 / 21.0 + z * (2.0 / 23.0 + z * (
+            2.0 / 25.0 + z * (2.0 / 27.0)))))))))))
+    fifth_lo = fifth_hi * _TWO_FIFTHS_LO + fifth_lo * _TWO_FIFTHS_HI
+    fifth_hi, err = _two_product(fifth_hi, _TWO_FIFTHS_HI)
+    fifth_lo += err
+    hi, lo1 = _two_sum(2.0 * s_hi, third_hi)
+    hi, lo2 = _two_sum(hi, fifth_hi)
+    lo = lo1 + lo2 + (2.0 * s_lo + third_lo + fifth_lo + rest)
+    hi, lo = _fast_two_sum(hi, lo)
+    return k, hi, lo
+
+
+@kernel
+def log2(x):
+    """log2 x (k exactly for x = 2^k). log2(+-0) = -inf, log2(1) = +0, log2(inf) = inf, log2(x < 0) = NaN."""
+    x = np.float64(x)
+    if not x > 0.0:
+        if x == 0.0:
+            return -_INF
+        return _NAN  # x < 0 or NaN
+    if x == _INF:
+        return x
+    k, hi, lo = _log_dd(x)
+    t_hi, t_lo = _two_product(hi, _INV_LN2_HI)
+    t_lo += hi * _INV_LN2_LO + lo * _INV_LN2_HI
+    s, e = _two_sum(np.float64(k), t_hi)
+    return s + (e + t_lo)
+
+
+@kernel
+def _exp_dd(x, tail):
+    """e^(x + tail) for -745.2 <= x <= 709.8, |tail| <= ulp(x): e_exp.c's reduction with the tail in its
+    low part (overflow to inf and gradual underflow as exp's)."""
+    k = np.int64(_INV_LN2 * x + (-0.5 if x < 0.0 else 0.5))
+    t = np.float64(k)
+    hi = x - t * _LN2_HI
+    lo = t * _LN2_LO - tail
+    r = hi - lo
+    t = r * r
+    c = r - t * (_P1 + t * (_P2 + t * (_P3 + t * (_P4 + t * _P5))))
+    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
+    if k >= -1021:
+        if k == 1024:
+            return y * 2.0 * _TWO_1023
+        return y * _from_high((0x3FF + k) << 20)
+    return y * _from_high((0x3FF + k + 1000) << 20) * _TWO_M1000
+
+
+@inline_kernel
+def _integer_kind(y):
+    """0 if the finite nonzero y is not an integer, 1 if an odd one, 2 if an even one."""
+    bits = _bits(y)
+    e = ((bits >> 52) & 0x7FF) - 1023
+    if e < 0:
+        return 0
+    if e > 52:
+        return 2
+    fraction_bits = 52 - e
+    mantissa = (bits & 0xFFFFFFFFFFFFF) | (1 << 52)
+    if mantissa & ((np.int64(1) << fraction_bits) - 1) != 0:
+        return 0
+    return 1 if (mantissa >> fraction_bits) & 1 else 2
+
+
+@kernel
+def pow(x, y):
+    """x^y, with C99 Annex F's special values: pow(x, +-0) = 1 and pow(1, y) = 1 even for a NaN; pow(-1, +-inf)
+    = 1; pow(+-0, y) = +-0 or +0 for y > 0, +-inf or +inf for y < 0 (the sign kept for an odd integer y);
+    pow(x < 0, y) = NaN for a finite non-integer y, else (-1)^y |x|^y; the infinities by |x| <> 1.
+
+    |x|^y = e^(y ln|x|), ln|x| in double-double (relative 2^-68) and y ln|x| as a double-double, whose tail
+    enters exp's reduction."""
+    x = np.float64(x)
+    y = np.float64(y)
+    if y == 0.0 or x == 1.0:
+        return 1.0
+    if x != x or y != y:
+        return x + y
+    ax = abs(x)
+    ay = abs(y)
+    kind = 2 if ay == _INF else _integer_kind(y)
+    if ay == _INF:
+        if ax == 1.0:
+            return 1.0
+        return _INF if (ax > 1.0) == (y > 0.0) else 0.0
+    negative_odd = x < 0.0 and kind == 1  # (also -0.0: its sign kept)
+    if x == 0.0 or ax == _INF:
+        if (x == 0.0) == (y < 0.0):
+            return -_INF if negative_odd else _INF
+        return -0.0 if negative_odd else 0.0
+    if x < 0.0 and kind == 0:
+        return _NAN
+    sign = -1.0 if negative_odd else 1.0
+    k, m_hi, m_lo = _log_dd(ax)
+    dk = np.float64(k)
+    a, b = _two_product(dk, _LN2_DD_HI)
+    l_hi, l_lo = _two_sum(a, m_hi)
+    l_lo += b + dk * _LN2_DD_LO + m_lo
+    l_hi, l_lo = _fast_two_sum(l_hi, l_lo)
+    z = y * l_hi
+    if z > 709.8:
+        return sign * _INF
+    if z < -745.2:
+        return sign * 0.0
+    z, err = _two_product(y, l_hi)
+    err += y * l_lo
+    z, err = _fast_two_sum(z, err)
+    return sign * _exp_dd(z, err)
