@@ -921,7 +921,7 @@ def pow(x, y):
         if ax == 1.0:
             return 1.0
         return _INF if (ax > 1.0) == (y > 0.0) else 0.0
-    negative_odd = x < 0.0 and kind == 1  # (also -0.0: its sign kept)
+    negative_odd = _bits(x) < 0 and kind == 1  # -0.0 too: its sign is kept
     if x == 0.0 or ax == _INF:
         if (x == 0.0) == (y < 0.0):
             return -_INF if negative_odd else _INF
