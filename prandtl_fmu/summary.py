@@ -341,12 +341,15 @@ def late_averages(time: np.ndarray, x: np.ndarray, v: np.ndarray) -> dict:
             "late_mean_square_x": late_average(time, x * x), "late_mean_square_v": late_average(time, v * v)}
 
 
+_EVERY_STEP = ("max_abs_x", "max_abs_v", "max_abs_reaction", "loop_area")
+
+
 def _noisy_run(outcome: Outcome, scene: Scene, name: str, quantities: list, history: bool,
                branch_kernel: Optional[str]) -> None:
     """One run with a white noise (``kernels/batch.py`` packs loads without one): :func:`driver.simulate` with
-    an output row after every step (the same steps t_p = p h as the scene's own grid, so the same numbers), the
-    peaks, the final state and the energies from those rows, the late averages and the history from the rows of
-    the scene's output grid among them."""
+    an output row after every step when a peak or loop_area is asked for (the same steps t_p = p h as the
+    scene's own grid, so the same numbers), else on the scene's grid; the peaks, the final state and the
+    energies from those rows, the late averages and the history from the rows of the scene's output grid."""
     from .driver import energy_columns, simulate
 
     try:
@@ -358,16 +361,22 @@ def _noisy_run(outcome: Outcome, scene: Scene, name: str, quantities: list, hist
         problem = stability_problem(scene, name, h)
         outcome.warning = f"{scene.source}: {problem}" if problem else ""
         energy = any(q in ENERGY_SUMMARIES for q in quantities)
+        # the peaks and the loop's mark need every step; the rest (the final state, the account at the end,
+        # the late averages) the scene's own rows
+        every_step = any(q in _EVERY_STEP for q in quantities)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", StabilityWarning)  # kept in outcome.warning
-            result = simulate(scene.with_solver(stepper=name, output_interval=h), name, energy=energy,
-                              progress=False, branch_kernel=branch_kernel)
+            result = simulate(scene.with_solver(stepper=name, output_interval=h) if every_step else scene, name,
+                              energy=energy, progress=False, branch_kernel=branch_kernel)
     except (ValueError, ElementError) as exc:
         outcome.error = exc
         return
     grid = OutputGrid(solver.stop_time, solver.output_interval, h)
-    rows = np.concatenate((np.arange(grid.full + 1) * grid.per_row, [result.x.size - 1] if grid.last_is_short else []))
-    rows = rows.astype(np.int64)
+    if every_step:
+        rows = np.concatenate((np.arange(grid.full + 1) * grid.per_row,
+                               [result.x.size - 1] if grid.last_is_short else [])).astype(np.int64)
+    else:
+        rows = np.arange(result.x.size)
     values = {"max_abs_x": np.abs(result.x).max(), "max_abs_v": np.abs(result.v).max(),
               "max_abs_reaction": np.abs(result.reaction).max(), "final_x": result.x[-1], "final_v": result.v[-1],
               "final_reaction": result.reaction[-1]}

@@ -352,3 +352,32 @@ def test_the_linear_oscillators_x_at_T_over_400_seeds_has_its_stationary_law(tmp
                               "law": {"output": "final_x", "density": "oscillator_x", "sigma": 0.75}})
     too_wide, _, _ = tables(frame, wider.spec, wider.document, ["final_x"])
     assert too_wide["p_value"][0] < 1e-4
+
+
+@pytest.mark.slow
+def test_a_white_noise_run_is_summarized_from_simulates_own_rows_bit_for_bit():
+    """The batch kernel packs loads without noise: a noisy run goes through simulate, every step a row when a
+    peak is asked for; its numbers are simulate's (the scene's grid, and every step for the peaks)."""
+    from prandtl_fmu import parse_scene
+    from prandtl_fmu.driver import simulate
+    from prandtl_fmu.summary import late_average, summarize
+
+    scene = parse_scene(scene_text(base_tables(branches=None, load=dict(WHITE, noise_unit=0.64),
+                                               solver={"stepper": "implicit", "step": 0.01, "stop_time": 5.0,
+                                                       "output_interval": 0.05})))
+    result = simulate(scene, energy=True)
+    fine = simulate(scene.with_solver(output_interval=0.01))
+    quantities = ["final_x", "final_v", "work", "dissipated", "late_mean_square_v"]
+    for peaks in ([], ["max_abs_x", "max_abs_v"]):
+        values = summarize(scene, quantities=quantities + peaks, history=True)
+        assert values["final_x"] == result.x[-1] and values["final_v"] == result.v[-1]
+        assert values["work"] == result.energy["work"][-1]
+        assert values["dissipated"] == result.energy["dissipated_sliders"][-1] + result.energy["dissipated_damper"][-1]
+        assert values["late_mean_square_v"] == late_average(result.time, result.v**2)
+        assert np.array_equal(values["x"], result.x) and np.array_equal(values["time"], result.time)
+    assert values["max_abs_x"] == np.abs(fine.x).max() and values["max_abs_v"] == np.abs(fine.v).max()
+    assert values["max_abs_v"] > np.abs(result.v).max()  # every step, not the rows
+    # the late average is the trapezoidal rule from T/2 (a row here) to T
+    half = result.time >= 2.5
+    assert values["late_mean_square_v"] == pytest.approx(np.trapezoid(result.v[half] ** 2, result.time[half]) / 2.5,
+                                                         rel=1e-13)
