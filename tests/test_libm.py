@@ -409,9 +409,10 @@ def test_sincos_is_sin_and_cos():
 
 
 # what the compiled code may name: our own functions (_Z...), numba's runtime and the CPython wrapper around the
-# entry point (NRT_, numba_, Py...), LLVM's intrinsics that are exact (fabs, lifetime, assume, ...) and sqrt,
+# entry point (NRT_, numba_, Py...), LLVM's intrinsics that are exact (fabs, copysign, fpclass, ...) and sqrt,
 # correctly rounded by IEEE 754 in every libm (and one instruction on x86_64 and aarch64: checked below)
-_ALLOWED = ("_Z", "NRT_", "numba_", "Py", "_Py", "llvm.fabs.", "llvm.lifetime.", "llvm.assume", "llvm.ctpop.",
+_ALLOWED = ("_Z", "NRT_", "numba_", "Py", "_Py", "llvm.fabs.", "llvm.copysign.", "llvm.is.fpclass.",
+            "llvm.lifetime.", "llvm.assume", "llvm.ctpop.",
             "llvm.ctlz.", "llvm.cttz.", "llvm.sqrt.", "llvm.memset.", "llvm.memcpy.", "llvm.umul.with.overflow.",
             "llvm.smul.with.overflow.", "llvm.sadd.with.overflow.", "llvm.ssub.with.overflow.")
 
