@@ -127,8 +127,9 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--out", help="scene file to write (default: print it)")
     fit.add_argument("--fmu", help="also build the connector FMU of the fitted scene")
     fit.add_argument("--plot", help="PNG: measured against fitted loop, and the residual")
-    sweep = commands.add_parser("sweep", help="many runs of a scene (grid and random samples of its keys) on "
-                                              "dask.distributed; one Parquet row per run")
+    sweep = commands.add_parser("sweep", help="many runs of a scene (grid and random samples of its keys, seeds "
+                                              "of its noise) on dask.distributed; one Parquet row per run, and "
+                                              "with [seeds] a Monte Carlo report in DIR/_report")
     sweep.add_argument("scene", help=_SCENE_HELP)
     sweep.add_argument("spec", metavar="SWEEP.toml", help="the sweep file: the keys that vary and what to keep "
                                                           "(docs/sweeps.md)")
