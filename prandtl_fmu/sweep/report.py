@@ -171,6 +171,9 @@ def write_report(frame, spec: SweepSpec, document: dict, summary: list, out, tit
     folder = os.path.join(os.fspath(out), REPORT_FOLDER)
     try:
         os.makedirs(folder, exist_ok=True)
+        for name in os.listdir(folder):  # a report written again (a new [law]) keeps no figure of the old one
+            if name.startswith("law-") and name.endswith(".png"):
+                os.remove(os.path.join(folder, name))
         statistics.to_csv(os.path.join(folder, "statistics.csv"), index=False)
         histograms.to_csv(os.path.join(folder, "histograms.csv"), index=False)
         images, note = _figures(figures, folder)
