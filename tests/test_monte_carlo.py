@@ -381,3 +381,13 @@ def test_a_white_noise_run_is_summarized_from_simulates_own_rows_bit_for_bit():
     half = result.time >= 2.5
     assert values["late_mean_square_v"] == pytest.approx(np.trapezoid(result.v[half] ** 2, result.time[half]) / 2.5,
                                                          rel=1e-13)
+
+
+def test_a_law_that_fails_at_one_grid_point_is_refused_before_any_run(write_scene):
+    scene = write_scene(base_tables(branches=None, cubic=None, load=WHITE,
+                                    solver={"stepper": "implicit", "step": 0.01, "stop_time": 1.0,
+                                            "output_interval": 0.1}))
+    with pytest.raises(SweepError) as info:
+        plan(scene, {"grid": {"damper.c": [0.5, 0.0]}, "seeds": {"count": 3},
+                     "law": {"output": "final_x", "density": "oscillator_x"}})
+    assert str(info.value).endswith("[law] (damper.c = 0.0): oscillator_x: c must be > 0, got 0.0")

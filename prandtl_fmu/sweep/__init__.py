@@ -10,7 +10,9 @@ run, so that the scheduler's cost stays small against the work), the rows go to
 a folder of Parquet files as tasks finish (:mod:`.store`), and the result is a
 pandas DataFrame with one row per run: its number, its values, the summary
 quantities (``summary.SUMMARIES``), optionally its output grid, and the
-``error`` and ``warning`` of the run ("" if none).
+``error`` and ``warning`` of the run ("" if none). A Monte Carlo sweep ([seeds]: many seeds of the scene's
+noise for every grid point) also writes a report, OUT/_report (:mod:`.report`, :mod:`.statistics`): the
+mean, standard deviation and histogram of chosen outputs with their confidence intervals, against a law.
 
 Needs the ``sweep`` extra: ``pip install "prandtl_fmu[sweep]"`` (dask[distributed], pandas, pyarrow).
 """
@@ -58,9 +60,7 @@ class Plan:
             self.summary = list(spec.summary)
         if spec.statistics is not None:
             report.require_scipy()
-            first_group = apply(document, {key: run0[key] for key in spec.group_keys})
-            for position, law in enumerate(spec.laws):  # each group's law is made again from its own scene
-                report.law_density(law, first_group, report.law_where(spec, position))
+            _check_laws(spec, document)
         self.columns = columns(spec.keys, self.summary, spec.history)
         self.schema = _schema(spec, run0, self.summary)
 
@@ -81,6 +81,25 @@ class Plan:
         """``[(first, stop)]``: consecutive runs, ``runs_per_task`` each (the last may be shorter)."""
         runs = self.spec.runs
         return [(first, min(runs, first + runs_per_task)) for first in range(0, runs, runs_per_task)]
+
+
+# groups whose laws are checked before any run (each law's parameters come from its group's scene)
+LAW_CHECKS = 10000
+
+
+def _check_laws(spec: SweepSpec, document: dict) -> None:
+    """Make each law of the first LAW_CHECKS groups from the group's scene: a bad parameter (c = 0 at one grid
+    point) is one line before any run, not an error after them all."""
+    if not spec.laws:
+        return
+    groups = spec.runs // spec.group_size
+    for group in range(min(groups, LAW_CHECKS)):
+        values, group_document = report.group_documents(spec, document, [group])[group]
+        for position, law in enumerate(spec.laws):
+            where = report.law_where(spec, position)
+            if values:
+                where += " (" + ", ".join(f"{key} = {value!r}" for key, value in values.items()) + ")"
+            report.law_density(law, group_document, where)
 
 
 def _with_seed_key(spec: SweepSpec, document: dict, source: str) -> SweepSpec:
