@@ -788,10 +788,6 @@ _LN2_DD_HI = 0.6931471805599453  # ln 2 = _LN2_DD_HI + _LN2_DD_LO to 2^-106
 _LN2_DD_LO = 2.3190468138462996e-17
 _INV_LN2_HI = 1.4426950408889634  # 1 / ln 2, likewise
 _INV_LN2_LO = 2.0355273740931033e-17
-_TWO_THIRDS_HI = 0.6666666666666666
-_TWO_THIRDS_LO = 3.700743415417188e-17
-_TWO_FIFTHS_HI = 0.4
-_TWO_FIFTHS_LO = -2.2204460492503132e-17
 _SQRT2 = 1.4142135623730951
 
 
@@ -802,13 +798,45 @@ def _fast_two_sum(a, b):
     return s, b - (s - a)
 
 
+# ln(j / 64) = _LOG_B_HI[j - 45] + _LOG_B_LO[j - 45] to 2^-106, j = 45 ... 91 (j / 64 spans [sqrt(1/2), sqrt(2)]);
+# mpmath's values, checked by the tests
+_LOG_B_FIRST = 45
+_LOG_B_HI = np.array([
+    -0.3522205935893521, -0.33024168687057687, -0.3087354816496133, -0.2876820724517809, -0.26706278524904525,
+    -0.24686007793152578, -0.22705745063534608, -0.2076393647782445, -0.18859116980755003, -0.16989903679539747,
+    -0.15154989812720093, -0.13353139262452263, -0.1158318155251217, -0.09844007281325252, -0.0813456394539524,
+    -0.06453852113757118, -0.048009219186360606, -0.0317486983145803, -0.015748356968139168, 0.0,
+    0.015504186535965254, 0.030771658666753687, 0.0458095360312942, 0.06062462181643484, 0.07522342123758753,
+    0.08961215868968714, 0.10379679368164356, 0.11778303565638346, 0.13157635778871926, 0.1451820098444979,
+    0.15860503017663857, 0.17185025692665923, 0.184922338494012, 0.19782574332991987, 0.21056476910734964,
+    0.22314355131420976, 0.2355660713127669, 0.24783616390458127, 0.25995752443692605, 0.27193371548364176,
+    0.2837681731306446, 0.2954642128938359, 0.3070250352949119, 0.3184537311185346, 0.329753286372468,
+    0.3409265869705932, 0.3519764231571782,
+])
+_LOG_B_LO = np.array([
+    -5.7233316949182485e-18, 1.0828321637483858e-17, 1.6199186085148102e-17, -2.607160616442564e-17,
+    7.32891532732017e-18, -1.361743371748368e-17, -9.551415762738488e-18, -1.2053243216686129e-17,
+    7.432164219196925e-18, 4.868008764439071e-19, -5.1669593684615594e-18, 3.664457663660085e-18,
+    -4.338484369808096e-18, 4.439009633675136e-18, -5.07707635593117e-18, 6.470486661692933e-18,
+    -1.4390903347292205e-18, -3.0382263084680858e-18, -1.0021578630528974e-18, 0.0, -3.278321022892429e-19,
+    1.0431732029005968e-18, 1.902959866474257e-18, 2.6424025938726934e-18, -5.930604196293241e-18,
+    -5.4268129336647135e-18, 5.47772415726659e-18, -1.1971685747593677e-18, 1.1123000879729588e-17,
+    8.242418783022475e-18, 1.1257003872182592e-17, -6.0224538210113705e-18, 3.0236614153574064e-18,
+    1.2821194372980142e-17, -4.249405314729895e-18, -9.091270597324799e-18, -2.3943371495187355e-18,
+    -1.2432209578702523e-17, 2.069806938978935e-17, 7.83319637697442e-19, -2.032665581126656e-17,
+    -2.16461086040599e-17, -1.2319916200101964e-17, 2.7114779367326236e-17, 2.122020616196946e-18,
+    1.7467136443544747e-17, -1.2953893030191963e-17,
+])
+
+
 @kernel
 def _log_dd(x):
     """(k, hi, lo) with ln x = k ln 2 + hi + lo to a relative 2^-68, for a positive finite x (subnormals too).
 
-    x = 2^k m, m in [sqrt(1/2), sqrt(2)]; ln m = 2 atanh s = 2 s + 2 s^3 / 3 + 2 s^5 / 5 + s^7 R(s^2),
-    s = (m - 1) / (m + 1), |s| <= 0.172: s, and the terms down to s^5 (2^-12.5 of the sum), in double-double,
-    R (2^-18 of it) in double, to s^27 (the next term is below 2^-72)."""
+    x = 2^k m, m in [sqrt(1/2), sqrt(2)]; b = j / 64 the nearest such fraction (m - b exact, |m - b| <= 1/128);
+    ln m = ln b + 2 atanh s = ln b + 2 s + 2 s^3 / 3 + ... + 2 s^9 / 9, s = (m - b) / (m + b), |s| <= 0.0056:
+    ln b and s in double-double, the odd powers from s^3 (below 2^-16 of the sum) in double (the next term
+    is below 2^-78)."""
     k = 0
     if x < 2.2250738585072014e-308:  # a subnormal: scaled into the normal range
         x *= _TWO54
@@ -819,31 +847,18 @@ def _log_dd(x):
     if m > _SQRT2:
         m *= 0.5
         k += 1
-    f = m - 1.0  # exact
-    u_hi, u_lo = _two_sum(m, 1.0)
+    j64 = (m * 64.0 + _ROUND_TO_INTEGER) - _ROUND_TO_INTEGER
+    b = j64 * 0.015625
+    index = np.int64(j64) - _LOG_B_FIRST
+    f = m - b  # exact (Sterbenz)
+    u_hi, u_lo = _two_sum(m, b)
     s_hi = f / u_hi
     p, e = _two_product(s_hi, u_hi)
     s_lo = (((f - p) - e) - s_hi * u_lo) / u_hi
-    z_hi, z_lo = _two_product(s_hi, s_hi)
-    z_lo += 2.0 * s_hi * s_lo
-    cube_hi, cube_lo = _two_product(z_hi, s_hi)
-    cube_lo += z_hi * s_lo + z_lo * s_hi
-    cube_hi, cube_lo = _fast_two_sum(cube_hi, cube_lo)
-    third_hi, third_lo = _two_product(cube_hi, _TWO_THIRDS_HI)
-    third_lo += cube_hi * _TWO_THIRDS_LO + cube_lo * _TWO_THIRDS_HI
-    fifth_hi, fifth_lo = _two_product(cube_hi, z_hi)
-    fifth_lo += cube_hi * z_lo + cube_lo * z_hi
-    fifth_hi, fifth_lo = _fast_two_sum(fifth_hi, fifth_lo)
-    z = z_hi
-    rest = fifth_hi * z * (2.0 / 7.0 + z * (2.0 / 9.0 + z * (2.0 / 11.0 + z * (2.0 / 13.0 + z * (
-        2.0 / 15.0 + z * (2.0 / 17.0 + z * (2.0 / 19.0 + z * (2.0 / 21.0 + z * (2.0 / 23.0 + z * (
-            2.0 / 25.0 + z * (2.0 / 27.0)))))))))))
-    fifth_lo = fifth_hi * _TWO_FIFTHS_LO + fifth_lo * _TWO_FIFTHS_HI
-    fifth_hi, err = _two_product(fifth_hi, _TWO_FIFTHS_HI)
-    fifth_lo += err
-    hi, lo1 = _two_sum(2.0 * s_hi, third_hi)
-    hi, lo2 = _two_sum(hi, fifth_hi)
-    lo = lo1 + lo2 + (2.0 * s_lo + third_lo + fifth_lo + rest)
+    z = s_hi * s_hi
+    odd = s_hi * z * (2.0 / 3.0 + z * (2.0 / 5.0 + z * (2.0 / 7.0 + z * (2.0 / 9.0))))
+    hi, lo = _two_sum(_LOG_B_HI[index], 2.0 * s_hi)
+    lo += _LOG_B_LO[index] + (2.0 * s_lo + odd)
     hi, lo = _fast_two_sum(hi, lo)
     return k, hi, lo
 

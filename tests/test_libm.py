@@ -259,6 +259,13 @@ def test_two_over_pi_table_is_two_over_pi():
     assert start // 24 + 9 <= len(table)
 
 
+def test_log_table_is_ln_j_over_64():
+    for i, (hi, lo) in enumerate(zip(libm._LOG_B_HI, libm._LOG_B_LO)):
+        exact = mpmath.log(mpmath.mpf(i + libm._LOG_B_FIRST) / 64)
+        assert hi == float(exact) and lo == float(exact - hi), i
+    assert libm._LOG_B_FIRST / 64 <= math.sqrt(0.5) and (libm._LOG_B_FIRST + len(libm._LOG_B_HI) - 1) / 64 >= math.sqrt(2)
+
+
 @pytest.mark.parametrize("name", FUNCTIONS + tuple(PAIRS))
 def test_accuracy(name):
     error, argument, count = worst(name, np.random.default_rng(33), 600)
