@@ -273,7 +273,7 @@ def _reduce(ax):
     """(n mod 4, y0, y1) with ax = n pi/2 + y0 + y1, |y0 + y1| <= pi/4 (a few ulps more by rounding), for a
     finite ax > pi/4: fdlibm's Cody-Waite below 2^20 pi/2 (e_rem_pio2.c), Payne-Hanek above."""
     hx = _high(ax)
-    if hx > _MEDIUM:
+    if hx >= _MEDIUM:  # fdlibm: ix < 0x413921fb is medium
         return _reduce_large(ax)
     fn = (ax * _INV_PIO2 + _ROUND_TO_INTEGER) - _ROUND_TO_INTEGER
     n = np.int64(fn)
