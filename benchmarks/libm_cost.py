@@ -4,11 +4,12 @@
 Problem: a compiled loop sums f(x_i) over ``--count`` arguments drawn once (fixed seed) from the range a kernel
 meets: cos and sin of omega t over [0, 1e3] (Cody-Waite) and [1e6, 1e9] (Payne-Hanek above 2^20 pi/2 = 1.6e6),
 exp and the other ones over the ranges in ``CASES``. Each loop is compiled before it is timed; the figure is
-the median of ``--repeat`` runs divided by the count, loop and load included (an empty loop over the same
-array is timed too, for scale). No reference solution: ``tests/test_libm.py`` checks the values; the two sums
+the median of ``--repeat`` runs divided by the count, loop and load included, ours and numba's run in turn
+in every repeat so that both see the same load of a shared machine (an empty loop over the same array is
+timed too, for scale). No reference solution: ``tests/test_libm.py`` checks the values; the two sums
 are printed side by side as a sanity check (they agree to the functions' last bits).
 
-    python benchmarks/libm_cost.py [--count 200000] [--repeat 7] [--out out/libm_cost.csv]
+    python benchmarks/libm_cost.py [--count 200000] [--repeat 21] [--out out/libm_cost.csv]
 
 prints a markdown table (the one in docs/libm.md) and writes the CSV.
 """
@@ -100,20 +101,24 @@ CASES = [
 ]
 
 
-def _median_ns(loop, xs, ys, repeat):
-    value = loop(xs, ys)  # compiles
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        loop(xs, ys)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times)) / xs.shape[0] * 1e9, value
+def _seconds(loop, xs, ys):
+    start = time.perf_counter()
+    loop(xs, ys)
+    return time.perf_counter() - start
+
+
+def _median_ns(loops, xs, ys, repeat):
+    """Median ns per element of each loop, the loops run in turn in every repeat (on a shared machine they see
+    the same load), and each loop's sum."""
+    values = [loop(xs, ys) for loop in loops]  # compiles
+    times = np.array([[_seconds(loop, xs, ys) for loop in loops] for _ in range(repeat)])
+    return np.median(times, axis=0) / xs.shape[0] * 1e9, values
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=200_000)
-    parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--repeat", type=int, default=21)
     parser.add_argument("--out", default=os.path.join(ROOT, "out", "libm_cost.csv"))
     args = parser.parse_args()
 
@@ -124,9 +129,9 @@ def main():
         xs = draw_x(rng, args.count)
         ys = draw_y(rng, args.count) if draw_y is not None else xs
         if empty_ns is None:
-            empty_ns, _ = _median_ns(_empty, xs, ys, args.repeat)
-        ours_ns, ours_sum = _median_ns(make_loop(ours), xs, ys, args.repeat)
-        libm_ns, libm_sum = _median_ns(make_loop(theirs), xs, ys, args.repeat)
+            (empty_ns,), _ = _median_ns([_empty], xs, ys, args.repeat)
+        (ours_ns, libm_ns), (ours_sum, libm_sum) = _median_ns([make_loop(ours), make_loop(theirs)], xs, ys,
+                                                              args.repeat)
         rows.append(dict(function=name, arguments=domain, libm_ns=round(ours_ns, 2), platform_ns=round(libm_ns, 2),
                          ratio=round(ours_ns / libm_ns, 2), sum_libm=repr(ours_sum), sum_platform=repr(libm_sum)))
 
