@@ -20,8 +20,8 @@ Measured in one run of this script, warm (every kernel compiled, in this process
   kernel (``kernels/batch.py``) runs many paths per compiled call: what the noise and its path-by-path route
   cost;
 * ``LocalCluster, W workers``: ``prandtl_fmu.sweep.sweep`` of the same seeds on a warm cluster of W = 1, 2
-  single-threaded workers (the cluster started before the clock; the Parquet store and the report written),
-  paths per second and per core (divided by W);
+  single-threaded workers (the cluster started before the clock; the Parquet store and the report written;
+  the better of two sweeps), paths per second and per core (divided by W);
 * the load average before and after (the machine is shared: a load above the core count slows every line).
 
     python benchmarks/monte_carlo.py [--paths 2000] [--out docs/bench/monte_carlo.md]
@@ -85,10 +85,12 @@ def on_cluster(doc, paths, workers):
             Client(cluster) as client, tempfile.TemporaryDirectory() as folder:
         # warm: every worker compiles, this process imports what the store and the report need
         sweep(doc, spec(4 * workers), client=client, out=os.path.join(folder, "warm"), progress=False)
-        start = time.perf_counter()
-        frame = sweep(doc, spec(paths), client=client, out=os.path.join(folder, "out"), progress=False)
-        wall = time.perf_counter() - start
-        assert len(frame) == paths and (frame["error"] == "").all()
+        wall = float("inf")
+        for repeat in range(2):  # the better of two: the machine is shared
+            start = time.perf_counter()
+            frame = sweep(doc, spec(paths), client=client, out=os.path.join(folder, f"out{repeat}"), progress=False)
+            wall = min(wall, time.perf_counter() - start)
+            assert len(frame) == paths and (frame["error"] == "").all()
     return wall
 
 
