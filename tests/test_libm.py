@@ -395,18 +395,26 @@ def test_symmetries_bit_for_bit():
         assert abs(libm.acos(-x) + libm.acos(x) - math.pi) <= 4.5e-16
 
 
-def test_compiled_equals_python_bit_for_bit(in_python):
-    rng = np.random.default_rng(11)
+def _compare_compiled_with_python(in_python, rng, count):
     for name in FUNCTIONS:
         compiled, python = getattr(libm, name), getattr(in_python, name)
-        for x in arguments(name, rng, 120):
+        for x in arguments(name, rng, count):
             assert bits(compiled(x)) == bits(python(x)), (name, x)
-    for x in arguments("sin", rng, 120):
+    for x in arguments("sin", rng, count):
         assert [bits(v) for v in libm.sincos(x)] == [bits(v) for v in in_python.sincos(x)], x
     for name, pairs in PAIRS.items():
         compiled, python = getattr(libm, name), getattr(in_python, name)
-        for x, y in pairs(rng, 120):
+        for x, y in pairs(rng, count):
             assert bits(compiled(x, y)) == bits(python(x, y)), (name, x, y)
+
+
+def test_compiled_equals_python_bit_for_bit(in_python):
+    _compare_compiled_with_python(in_python, np.random.default_rng(11), 120)
+
+
+@pytest.mark.slow
+def test_compiled_equals_python_bit_for_bit_many(in_python):
+    _compare_compiled_with_python(in_python, np.random.default_rng(12), 20000)
 
 
 def test_sincos_is_sin_and_cos():
