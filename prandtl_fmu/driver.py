@@ -16,6 +16,7 @@ import math
 import os
 import sys
 from time import perf_counter
+import dataclasses
 import warnings
 from dataclasses import dataclass
 from typing import Optional
@@ -29,7 +30,7 @@ from .kernels.drive import tangent
 from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force
-from .loads import force_at, held, plus
+from .loads import force_at, held, plus, with_white_noise
 from .noise import new_cache
 from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
@@ -579,7 +580,28 @@ class Element(OutputMemo):
         # in the state (the path is a function of (seed, time) alone: a restored or rolled-back element redraws
         # the same increments whatever the cache holds)
         self._noise_cache = new_cache()
+        self.noise = scene.load.noise  # the white noise on the force (set_noise; default the scene's)
         self.reset()
+
+    def set_noise(self, noise) -> None:
+        """The white noise (``loads.WhiteNoise``, or None: none) on the element's force from the next advance
+        on, whether or not the scene's [load] is added (an FMU's noise_intensity, noise_seed, noise_unit);
+        ValueError (nothing changed) if the stepper takes no noise or the element cannot carry one."""
+        compile_loop(self._with_noise(noise), self.stepper)  # the stepper's own refusal
+        self.noise = noise
+        self._touch()
+
+    def _with_noise(self, noise) -> Scene:
+        """The scene with the white noise ``noise`` on its load (what a stepper checks)."""
+        if noise is self.scene.load.noise:
+            return self.scene
+        return dataclasses.replace(self.scene, load=dataclasses.replace(self.scene.load, noise=noise))
+
+    def _load_of(self, force: float, scene_load: bool):
+        """The compiled load of an advance: ``force`` held (plus the scene's [load] with ``scene_load``), and
+        the element's white noise."""
+        base = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        return with_white_noise(base, self.noise, self._noise_cache)
 
     def reset(self, force: float = 0.0) -> None:
         """Back to the scene's initial state at time 0 under the held ``force`` (massless: see
@@ -635,7 +657,7 @@ class Element(OutputMemo):
         if self.scene.friction is None:
             return self.reaction
         key = ("reaction_under", force, scene_load)
-        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
+        load = self._load_of(force, scene_load)
         return self._memo(key, lambda: float(reaction(self.model, load, self.time, self.x, self.v,
                                                        branch_force(self.model[4], self.u))))
 
@@ -697,7 +719,7 @@ class Element(OutputMemo):
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations (communication steps) or with a larger step")
         saved = self.checkpoint()
-        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
+        load = self._load_of(force, scene_load)
         self.force, self._load = float(force), load
         self._touch()  # the compiled loop writes the state and the outputs in place
         if self._grid != h:  # a new step: the grid starts again at the current time
@@ -748,7 +770,7 @@ class Element(OutputMemo):
         elongations are expanded to one per branch (O(n), once); when it does
         and the branches are many, they are folded back into a stack.
         """
-        loop = compile_loop(self.scene, name)
+        loop = compile_loop(self._with_noise(self.noise), name)  # (a stepper may refuse the noise)
         kind = choose_branch_kernel(self.scene, name) if self._can_fold() else "play"
         if self._forced_kernel and getattr(get_stepper(name), "BRANCH_STACK", False):
             kind = self._forced_kernel

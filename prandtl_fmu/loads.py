@@ -53,6 +53,27 @@ class WhiteNoise:
                 brownian_tree.new_cache() if cache is None else cache)
 
 
+def white_noise(intensity, seed, unit=1.0) -> Optional[WhiteNoise]:
+    """The noise an FMU's parameters ``noise_intensity``, ``noise_seed``, ``noise_unit`` give, by the rules of
+    the scene's keys (None for intensity 0: no noise); ValueError naming the parameter otherwise."""
+    if isinstance(intensity, bool) or not isinstance(intensity, (int, float)) or not (
+            math.isfinite(intensity) and intensity >= 0):
+        raise ValueError(f"noise_intensity = {intensity!r}: must be a finite number >= 0 (N sqrt(s))")
+    if isinstance(seed, float) and seed.is_integer():
+        seed = int(seed)  # (a master may pass an integer parameter as a double)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2 ** 63:
+        raise ValueError(f"noise_seed = {seed!r}: must be an integer, 0 <= seed < 2^63")
+    if isinstance(unit, bool) or not isinstance(unit, (int, float)) or not (math.isfinite(unit) and unit > 0):
+        raise ValueError(f"noise_unit = {unit!r}: must be a finite number > 0 (s)")
+    return WhiteNoise(float(intensity), seed, float(unit)) if intensity > 0 else None
+
+
+def with_white_noise(load, noise: Optional[WhiteNoise], cache):
+    """A compiled load tuple with its white noise (if any) replaced by ``noise`` (None: without noise): an
+    FMU's force in, plus the noise its parameters set."""
+    return _noisy(tuple(load[:6]), noise, cache)
+
+
 def _noisy(compiled, noise, cache):
     """A compiled load tuple, with the seventh entry of its noise if it has one."""
     if noise is None:

@@ -50,6 +50,8 @@ class Slave:
             self.fmu.setString([self.vr[name]], [value])
         elif self.types[name] == "Integer":
             self.fmu.setInteger([self.vr[name]], [value])
+        elif self.types[name] == "Boolean":
+            self.fmu.setBoolean([self.vr[name]], [value])
         else:
             self.fmu.setReal([self.vr[name]], [value])
 

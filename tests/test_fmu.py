@@ -70,7 +70,7 @@ def test_model_description_is_valid_and_complete(fmus, name):
         if v.type == "Real":
             assert v.unit, v.name
     # parameters only for the effects present
-    expected = {"m", "x0", "v0", "step", "stepper", "scene_load"}
+    expected = {"m", "x0", "v0", "step", "stepper", "scene_load", "noise_intensity", "noise_seed", "noise_unit"}
     expected |= {"k0"} if scene.spring else set()
     expected |= {"k3"} if scene.cubic else set()
     expected |= {"c"} if scene.damper else set()

@@ -147,7 +147,8 @@ def test_model_description_names_every_node_and_parameter(fmus, name):
     if scene.causality == "force":
         assert md.coSimulation.modelIdentifier == "PrandtlNetwork"
         assert inputs == {"F"} and variables["F"].unit == "N"
-        assert parameters == set(network.parameters()) | {"step", "stepper", "scene_load"}
+        assert parameters == set(network.parameters()) | {"step", "stepper", "scene_load", "noise_intensity",
+                                                          "noise_seed", "noise_unit"}
         nodes = network.nodes
         assert outputs[:2 * network.n + 1] == [f"{q}_{node}" for node in nodes for q in "xv"] + ["reaction"]
     else:
@@ -159,7 +160,7 @@ def test_model_description_names_every_node_and_parameter(fmus, name):
         assert outputs[0] == "force" and outputs[1:1 + 2 * len(nodes)] == [f"{q}_{node}" for node in nodes
                                                                              for q in "xv"]
     units = {"m": "kg", "k": "N/m", "c": "N.s/m", "alpha": "N", "eta": "m", "k3": "N/m3"}
-    for parameter in parameters - {"step", "stepper", "scene_load"}:
+    for parameter in parameters - {"step", "stepper", "scene_load", "noise_intensity", "noise_seed", "noise_unit"}:
         assert variables[parameter].unit == units[parameter.split("_")[0]], parameter
         assert variables[parameter].variability == "tunable"
         assert float(variables[parameter].start) == network.parameters()[parameter]

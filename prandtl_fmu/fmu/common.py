@@ -175,3 +175,87 @@ class SlaveBase(Fmi2Slave):
             return json.loads(bytes(state).decode("utf-8"))
         except Exception as exc:  # any garbage: refused later, with its reason
             return {"invalid": f"not a serialized state of this FMU ({exc.__class__.__name__})"}
+
+
+# ------------------------------------------------------------ the white noise an FMU generates (issue 34)
+
+NOISE_SEED_LIMIT = 2 ** 31  # an FMI 2.0 Integer is 32 bits: an FMU's seed is below this
+
+
+class NoiseParameters:
+    """The parameters ``noise_intensity`` (sigma, N sqrt(s)), ``noise_seed`` and ``noise_unit`` (s) of a slave
+    whose force may carry a white noise: the FMU generates it (a master cannot pass a white noise through an
+    input), on the force whether or not the scene's [load] is added; start values the scene's noise (none:
+    intensity 0). The path is a function of (seed, time) alone (``loads.WhiteNoise``): a rolled-back or restored
+    state redraws the same increments, and the state holds nothing drawn."""
+
+    def _init_noise(self):
+        noise = self.scene.load.noise
+        self.noise_intensity = noise.intensity if noise else 0.0
+        self.noise_seed = noise.seed if noise else 0
+        self.noise_unit = noise.unit if noise else 1.0
+        if self.noise_seed >= NOISE_SEED_LIMIT:
+            from ..scene import SceneError
+
+            raise SceneError(f"{self.scene.source}: [load] seed {self.noise_seed}: an FMU's noise_seed is an FMI "
+                             f"Integer (32 bits): it must be < 2^31")
+
+    def _register_noise(self):
+        from pythonfmu import Fmi2Causality, Fmi2Variability
+
+        from .description import RealVariable
+
+        self.register_variable(RealVariable(
+            "noise_intensity", unit="N.s0.5", min=0.0, max=DBL_MAX, causality=Fmi2Causality.parameter,
+            variability=Fmi2Variability.tunable,
+            description="intensity sigma (N sqrt(s)) of the white noise the FMU adds to the force: F + sigma xi(t), "
+                        "xi = dB/dt; 0: none; must be >= 0 (docs/white-noise.md)",
+            getter=lambda: self.noise_intensity, setter=lambda value: setattr(self, "noise_intensity", value)))
+        self.register_variable(Integer(
+            "noise_seed", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            description="seed of the white noise's Brownian path (0 <= seed < 2^31): the path is a function of the "
+                        "seed and the time alone",
+            getter=lambda: self.noise_seed, setter=lambda value: setattr(self, "noise_seed", value)))
+        self.register_variable(RealVariable(
+            "noise_unit", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
+            min=SMALLEST, max=DBL_MAX,
+            description="time unit of the Brownian tree (a property of the path, not of the step): about one "
+                        "normal per internal step when the step is the unit over a power of two; must be > 0",
+            getter=lambda: self.noise_unit, setter=lambda value: setattr(self, "noise_unit", value)))
+
+    def _noise_settings(self) -> tuple:
+        return (self.noise_intensity, self.noise_seed, self.noise_unit)
+
+    def _hand_over_noise(self, element) -> bool:
+        """Hand the noise the master set to the library's ``element``; False (logged: fmi2Discard) if refused."""
+        from ..loads import white_noise
+
+        try:
+            if not (isinstance(self.noise_seed, int) and 0 <= self.noise_seed < NOISE_SEED_LIMIT):
+                raise ValueError(f"noise_seed = {self.noise_seed!r}: must be an integer, 0 <= seed < 2^31")
+            noise = white_noise(*self._noise_settings())
+            if noise != element.noise:
+                element.set_noise(noise)
+        except ValueError as exc:
+            return self._refuse(f"parameter {exc}; steps are refused until it is set right")
+        return True
+
+    def _noise_state(self) -> dict:
+        return {"noise_intensity": self.noise_intensity, "noise_seed": self.noise_seed,
+                "noise_unit": self.noise_unit}
+
+    @staticmethod
+    def _check_noise_state(settings: dict) -> None:
+        """ValueError if a saved state's noise settings break a rule (the next step hands them over, with the
+        library's checks, as it does the other parameters)."""
+        from ..loads import white_noise
+
+        seed = settings["noise_seed"]
+        if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < NOISE_SEED_LIMIT):
+            raise ValueError(f"noise_seed = {seed!r}: must be an integer, 0 <= seed < 2^31")
+        white_noise(settings["noise_intensity"], seed, settings["noise_unit"])
+
+    def _set_noise_values(self, settings: dict) -> None:
+        self.noise_intensity = settings["noise_intensity"]
+        self.noise_seed = settings["noise_seed"]
+        self.noise_unit = settings["noise_unit"]

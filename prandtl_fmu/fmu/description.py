@@ -22,6 +22,8 @@ UNITS = {
     "N/m3": {"kg": 1, "m": -2, "s": -2},
     "N.s/m": {"kg": 1, "s": -1},
     "J": {"kg": 1, "m": 2, "s": -2},
+    # a white noise's intensity, N sqrt(s): FMI's base-unit exponents are integers, so the name alone says it
+    "N.s0.5": None,
 }
 
 
@@ -57,7 +59,8 @@ def complete(root: Element, variables: list, output_dependencies: dict) -> Eleme
     units = Element("UnitDefinitions")
     for name in used:
         unit = SubElement(units, "Unit", name=name)
-        SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[name].items()})
+        if UNITS[name] is not None:
+            SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[name].items()})
     # UnitDefinitions comes right after CoSimulation (FMI 2.0 schema order).
     position = list(root).index(root.find("CoSimulation")) + 1
     root.insert(position, units)

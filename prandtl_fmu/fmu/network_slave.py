@@ -13,7 +13,9 @@ Variables (a contract, the same names as the library's CSV columns):
   dissipating element ``dissipated_<kind>_<name>`` and the elongation ``u_<branch>`` of every branch;
 * parameters: every coefficient of the network by its scene name (``Network.parameters()``: ``m_<node>``,
   ``k_<spring>``, ``c_<dashpot>``, ``alpha_<slider>``, ``k_``/``eta_``/``c_<branch>``, ``k3_<cubic>``), and
-  ``step``, ``stepper`` (``implicit``, or ``projected`` where the network allows it), ``scene_load``.
+  ``step``, ``stepper`` (``implicit``, or ``projected`` where the network allows it), ``scene_load``, and the
+  white noise the FMU adds to F, ``noise_intensity``, ``noise_seed``, ``noise_unit`` (start values: the scene's
+  [load] noise, or none).
 
 Stepping, refusals and FMU states follow the element's slave (``slave.py``): ``do_step(t, H)`` advances by
 whole internal steps of ``step`` and one shorter last step for a remainder, with F held (plus the scene's
@@ -36,7 +38,7 @@ from ..loads import force_at
 from ..network import NetworkElement
 from ..network.model import NETWORK_STEPPERS, stepper_problem
 from ..scene import SceneError
-from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
+from .common import DBL_MAX, SMALLEST, NoiseParameters, SlaveBase, finite_number
 from .description import RealVariable, complete
 
 # the unit and meaning of a coefficient, by its scene key (network/model.py KEYS) and the element's kind
@@ -79,7 +81,7 @@ def check_unique(variables) -> None:
         seen.add(var.name)
 
 
-class PrandtlNetwork(SlaveBase):
+class PrandtlNetwork(NoiseParameters, SlaveBase):
     author = "prandtl_fmu"
     description = ("Network of nodes joined by springs, dashpots, sliders, Prandtl branches and cubic springs "
                    "under a force F at its load's node (documentation/index.html)")
@@ -96,6 +98,7 @@ class PrandtlNetwork(SlaveBase):
         self.step = self.element.h
         self._handed_over = None
         self.parameters = self.scene.network.parameters()
+        self._init_noise()
         self._register()
 
     # ------------------------------------------------------------ variables
@@ -131,6 +134,7 @@ class PrandtlNetwork(SlaveBase):
                         "every internal step as in the library (with no input connected the FMU reproduces the "
                         "library's run of its scene); false (default): F alone",
             getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
+        self._register_noise()
         self.register_variable(String(
             "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
             description="time stepper: " + stepper_choices(self.scene),
@@ -190,7 +194,7 @@ class PrandtlNetwork(SlaveBase):
         return True  # NetworkElement.advance refuses (ElementError) a step that leaves an output non-finite
 
     def _apply_settings(self) -> bool:
-        settings = (tuple(self.parameters.values()), self.stepper, self.step)
+        settings = (tuple(self.parameters.values()), self.stepper, self.step, self._noise_settings())
         if settings == self._handed_over:
             return True
         accepted = self._hand_over_settings()
@@ -201,6 +205,11 @@ class PrandtlNetwork(SlaveBase):
         """Hand the parameters, stepper and step the master set to the library; False (logged: fmi2Discard) if it
         refuses one, nothing changed then."""
         element = self.element
+        # a noise turned off goes first and one turned on last: a mass's check sees the noise that will be
+        # there (a massless load node needs a dashpot under a noise)
+        noise_first = not self.noise_intensity
+        if noise_first and not self._hand_over_noise(element):
+            return False
         current = element.scene.network.parameters()
         changed = {name: value for name, value in self.parameters.items() if not value == current[name]}
         if changed:
@@ -214,7 +223,7 @@ class PrandtlNetwork(SlaveBase):
             except (SceneError, ValueError, ElementError) as exc:
                 return self._refuse(f"parameter stepper = {self.stepper!r}, step = {self.step!r} refused: {exc}; "
                                     "steps are refused until it is set right")
-        return True
+        return noise_first or self._hand_over_noise(self.element)
 
     # ------------------------------------------------------------ FMU state
 
@@ -223,7 +232,7 @@ class PrandtlNetwork(SlaveBase):
         return {"network": self.element.get_state(),
                 "settings": {"F": self.F, "step": self.step, "stepper": self.stepper,
                              "scene_load": bool(self.scene_load), "parameters": dict(self.parameters),
-                             "start_time": self.start_time}}
+                             "start_time": self.start_time, **self._noise_state()}}
 
     def _set_fmu_state(self, state):
         try:
@@ -240,6 +249,7 @@ class PrandtlNetwork(SlaveBase):
                                  "numbers")
             if not isinstance(settings["scene_load"], bool):
                 raise ValueError(f"scene_load = {settings['scene_load']!r}: must be true or false")
+            self._check_noise_state(settings)
             element = restored(self.element, state["network"], settings["stepper"], settings["step"])
         except Exception as exc:  # any malformed or forged content: a reason, the instance unchanged
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
@@ -247,6 +257,7 @@ class PrandtlNetwork(SlaveBase):
         self.F, self.step, self.stepper, self.start_time = values
         self.scene_load = settings["scene_load"]
         self.parameters = parameters
+        self._set_noise_values(settings)
         self._handed_over = None
 
 
@@ -302,6 +313,7 @@ def rebuilt(element, stepper, step):
     if not isinstance(stepper, str) or not finite_number(step):
         raise ValueError("the stepper must be a name and the step a finite number")
     fresh = type(element)(element.scene, stepper=stepper, step=step)
+    fresh.set_noise(element.noise)
     fresh.set_state(element.get_state())
     return fresh
 

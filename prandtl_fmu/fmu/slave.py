@@ -11,6 +11,10 @@ the input F held at the value set before the call. With the parameter
 ``scene_load`` true the force is F plus the scene's ``[load]`` F_scene(t),
 evaluated by the stepper at every internal step exactly as the library does:
 with no input connected, the FMU then reproduces ``simulate`` of its scene.
+The parameters ``noise_intensity``, ``noise_seed`` and ``noise_unit`` add a
+white noise sigma xi(t) that the FMU generates (start values: the scene's
+[load] noise, or none), with or without ``scene_load``: its path is a function
+of (seed, time) alone, so a rolled-back step redraws the same increments.
 
 Refusals: a non-finite F, a parameter outside its range or a step that would
 leave a non-finite state during stepping is refused: a message naming the
@@ -39,7 +43,7 @@ from .. import __version__
 from ..driver import Element, ElementError
 from ..loads import force_at
 from ..steppers import STEPPERS
-from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
+from .common import DBL_MAX, SMALLEST, NoiseParameters, SlaveBase, finite_number
 from .description import RealVariable, complete
 from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
@@ -83,7 +87,7 @@ def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None
     return None
 
 
-class PrandtlElement(SlaveBase):
+class PrandtlElement(NoiseParameters, SlaveBase):
     author = "prandtl_fmu"
     description = ("Generalized Prandtl element (dry-friction hysteresis) under a force F: the springs, dashpot "
                    "and Prandtl branches (spring in series with a Coulomb slider) of its scene, with or without a "
@@ -101,6 +105,7 @@ class PrandtlElement(SlaveBase):
         self.step = self.element.h
         self._handed_over = None  # (parameters, stepper, step) as last handed to the element
         self.parameters = dict(self.element.coefficients())
+        self._init_noise()
         self._register()
 
     # ------------------------------------------------------------ variables
@@ -167,6 +172,7 @@ class PrandtlElement(SlaveBase):
                         "every internal step as in the library (with no input connected the FMU reproduces the "
                         "library's run of its scene); false (default): F alone",
             getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
+        self._register_noise()
         self.register_variable(String(
             "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
             description="time stepper: " + ", ".join(STEPPERS),
@@ -248,7 +254,7 @@ class PrandtlElement(SlaveBase):
     def _apply_settings(self) -> bool:
         """Hand the parameters the master set to the element; False (logged) if one is refused. Nothing to do
         (the usual step) when they are those handed over last."""
-        settings = (tuple(self.parameters.values()), self.stepper, self.step)
+        settings = (tuple(self.parameters.values()), self.stepper, self.step, self._noise_settings())
         if settings == self._handed_over:
             return True
         element = self.element
@@ -266,6 +272,11 @@ class PrandtlElement(SlaveBase):
 
     def _hand_over_settings(self) -> bool:
         element = self.element
+        # a noise turned off goes first and one turned on last: the stepper's check sees the noise that will
+        # be there (some steppers take none)
+        noise_first = not self.noise_intensity
+        if noise_first and not self._hand_over_noise(element):
+            return False
         current = element.coefficients()
         changed = {name: value for name, value in self.parameters.items() if value != current[name]}
         if changed:
@@ -287,7 +298,7 @@ class PrandtlElement(SlaveBase):
                 return self._refuse(f"parameter step = {step!r} refused: must be finite and > 0; "
                                     "steps are refused until it is set right")
             element.set_step(step)
-        return True
+        return noise_first or self._hand_over_noise(element)
 
     # ------------------------------------------------------------ FMU state
 
@@ -296,7 +307,7 @@ class PrandtlElement(SlaveBase):
         return {
             "element": self.element.get_state(),
             "settings": {"F": self.F, "step": self.step, "stepper": self.stepper, "scene_load": bool(self.scene_load),
-                         "parameters": dict(self.parameters), "start_time": self.start_time},
+                         "parameters": dict(self.parameters), "start_time": self.start_time, **self._noise_state()},
         }
 
     def _set_fmu_state(self, state):
@@ -313,10 +324,12 @@ class PrandtlElement(SlaveBase):
                 problem = f"F = {settings['F']!r}, start time {settings['start_time']!r}: must be finite numbers"
             if problem:
                 raise ValueError(problem)
+            self._check_noise_state(settings)
             self.element.set_state(state["element"])  # checks everything before changing anything
         except Exception as exc:  # any malformed or forged content (IndexError, OverflowError, ...): a reason
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.F, self.step, self.stepper, self.start_time = values
         self.scene_load = settings["scene_load"]
         self.parameters = parameters
+        self._set_noise_values(settings)
         self._handed_over = None

@@ -91,7 +91,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
             kept = {name: archive.read(name) for name in archive.namelist()
                     if name.startswith("documentation/") or name == "resources/scene.toml"
                     or name.endswith("_OspModelDescription.xml")}
-        root = ET.fromstring(description)
+        root = drop_noise_variables(ET.fromstring(description))
         identifier = root.find("CoSimulation").get("modelIdentifier")
         steppers = [] if connector else kernels.applicable(scene)
         if not steppers and not connector:
@@ -307,6 +307,24 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         count += 1
     lines += ["};", f"#define N_VARS {count}", "#endif", ""]
     return "\n".join(lines)
+
+
+NOISE_VARIABLES = ("noise_intensity", "noise_seed", "noise_unit")
+
+
+def drop_noise_variables(root):
+    """The PythonFMU description without the white noise's parameters, which the native runtime does not
+    generate yet (it refuses a noisy scene): they come last among the parameters, after every output, so that
+    no index in ModelStructure moves."""
+    variables = root.find("ModelVariables")
+    for variable in list(variables):
+        if variable.get("name") in NOISE_VARIABLES:
+            variables.remove(variable)
+    units = root.find("UnitDefinitions")
+    for unit in list(units) if units is not None else ():
+        if unit.get("name") == "N.s0.5":
+            units.remove(unit)
+    return root
 
 
 def _what(name: str) -> tuple:

@@ -359,7 +359,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
     from ..scene import load_scene
     from . import kernels as element_kernels
     from . import network_kernels
-    from .build import FMI_HEADERS, _native_description, _stubs
+    from .build import FMI_HEADERS, _native_description, _stubs, drop_noise_variables
 
     scene = load_scene(scene_path, check_stepper=False)
     if causality is not None and causality != scene.causality:
@@ -385,7 +385,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
             kept = {name: archive.read(name) for name in archive.namelist()
                     if name.startswith("documentation/") or name == "resources/scene.toml"
                     or name.endswith("_OspModelDescription.xml")}
-        root = ET.fromstring(description)
+        root = drop_noise_variables(ET.fromstring(description))
         identifier = root.find("CoSimulation").get("modelIdentifier")
         count = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
         extra_vr = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}

@@ -9,6 +9,7 @@ dissipated_damper, energy_residual) and the dissipation of every slider, branch 
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from time import perf_counter
@@ -19,7 +20,7 @@ import numpy as np
 from . import kernels
 from .model import NetworkScene, stepper_problem
 from ..driver import ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration
-from ..loads import force_at, held, plus
+from ..loads import force_at, held, plus, with_white_noise
 from ..noise import new_cache
 from ..scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, SceneError
 
@@ -36,6 +37,13 @@ def loop_for(stepper: str):
 
 def step_for(stepper: str):
     return {"implicit": kernels.implicit_step, "projected": kernels.projected_step}[stepper]
+
+
+def _with_noise(scene: NetworkScene, noise) -> NetworkScene:
+    """The scene with the white noise ``noise`` on its load (what the stepper rules check)."""
+    if noise is scene.load.noise:
+        return scene
+    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=noise))
 
 
 def check_applies(scene: NetworkScene, stepper: str) -> None:
@@ -297,7 +305,17 @@ class NetworkElement(OutputMemo):
         self.h = float(step if step is not None else scene.solver.step)
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
+        self.noise = scene.load.noise  # the white noise on the load's node (set_noise; default the scene's)
         self.reset()
+
+    def set_noise(self, noise) -> None:
+        """The white noise (``loads.WhiteNoise``, or None: none) on the load's node from the next advance on,
+        whether or not the scene's [load] is added (an FMU's noise_intensity, noise_seed, noise_unit);
+        ValueError (nothing changed) where the network cannot carry one (a massless load node without a
+        dashpot)."""
+        check_applies(_with_noise(self.scene, noise), self.stepper)
+        self.noise = noise
+        self._touch()
 
     def reset(self, force: float = 0.0) -> None:
         network = self.scene.network
@@ -378,7 +396,8 @@ class NetworkElement(OutputMemo):
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations or with a larger step")
         saved = self.checkpoint()
-        load = plus(self.scene.load.compile(self._noise_cache), force) if scene_load else held(force)
+        load = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        load = with_white_noise(load, self.noise, self._noise_cache)
         self.held_force, self._load = float(force), load
         self._touch()
         if self._grid != h:
@@ -423,7 +442,7 @@ class NetworkElement(OutputMemo):
                 raise SceneError(f"eta_{element.name}: {element.eta!r} is below the branch's elongation now, "
                                  f"|u| = {abs(float(self.u[e]))!r}: it would drop stored energy unbooked")
         scene = self.scene.with_network(network)
-        problem = stepper_problem(scene, self.stepper)
+        problem = stepper_problem(_with_noise(scene, self.noise), self.stepper)
         if problem:
             raise SceneError(f"{', '.join(values)}: {problem}")
         self.scene = scene
