@@ -9,7 +9,6 @@ arguments for the reduction of sin and cos; ``docs/libm.md`` quotes the slow fig
 """
 import importlib.util
 import math
-import pathlib
 import re
 
 import mpmath
@@ -21,18 +20,30 @@ from prandtl_fmu import _jit, libm
 # overflow to inf is a result here (exp(710), hypot(MAX, MAX)): numpy's scalars warn about it in the Python run
 pytestmark = pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
 
-mpmath.mp.prec = 256  # mpmath raises its own precision for the reduction of large trigonometric arguments
+PRECISION = 256  # bits of mpmath's exact values (it raises its own for the reduction of large trigonometric ones)
 
 MAX = 1.7976931348623157e308
 TINY = 5e-324  # the smallest subnormal
-OVERFLOW_EDGE = mpmath.ldexp(2 ** 54 - 1, 1024 - 54)  # the exact values from here on round to inf
+with mpmath.workprec(PRECISION):
+    OVERFLOW_EDGE = mpmath.ldexp(2 ** 54 - 1, 1024 - 54)  # the exact values from here on round to inf
+
+
+@pytest.fixture(autouse=True)
+def _exact_precision():
+    """mpmath's working precision for this module's tests only (other modules keep theirs)."""
+    with mpmath.workprec(PRECISION):
+        yield
 
 
 # --- measuring -------------------------------------------------------------------------------------------------
 
 def ulps(computed, exact):
     """|computed - exact| in units of the last place of the exact value (see the module docstring)."""
-    exact = mpmath.mpf(exact)
+    with mpmath.workprec(PRECISION):
+        return _ulps(computed, mpmath.mpf(exact))
+
+
+def _ulps(computed, exact):
     if math.isinf(computed):
         return 0.0 if abs(exact) >= OVERFLOW_EDGE and (computed > 0) == (exact > 0) else math.inf
     if math.isnan(computed):
@@ -215,6 +226,11 @@ PAIRS = {"hypot": hypot_arguments, "pow": pow_arguments}
 
 def worst(name, rng, count):
     """(largest error in ulps, its argument, number of arguments) of libm's ``name``."""
+    with mpmath.workprec(PRECISION):
+        return _worst(name, rng, count)
+
+
+def _worst(name, rng, count):
     if name in PAIRS:
         function, exact = getattr(libm, name), EXACT[name]
         cases = PAIRS[name](rng, count)
