@@ -786,6 +786,37 @@ def hypot(x, y):
     return w
 
 
+# --- scalbn (musl's scalbn.c) --------------------------------------------------------------------------------
+
+_TWO_M969 = 2.0 ** -969  # 2^-1022 2^53
+
+
+@kernel
+def scalbn(x, n):
+    """x 2^n for an integer n, rounded once (exact unless the result is subnormal; C99's scalbn and ldexp).
+    For the kernels' powers of two: numba compiles ``2.0 ** n`` with an integer variable n into a call of
+    libm's exp2."""
+    y = np.float64(x)
+    n = np.int64(n)
+    if n > 1023:
+        y *= _TWO_1023
+        n -= 1023
+        if n > 1023:
+            y *= _TWO_1023
+            n -= 1023
+            if n > 1023:
+                n = 1023
+    elif n < -1022:  # the last factor leaves n < -53: one rounding into the subnormals, not two
+        y *= _TWO_M969
+        n += 1022 - 53
+        if n < -1022:
+            y *= _TWO_M969
+            n += 1022 - 53
+            if n < -1022:
+                n = -1022
+    return y * _double((0x3FF + n) << 52)
+
+
 # --- a double-double logarithm, and log2 and pow on it ------------------------------------------------------
 
 _LN2_DD_HI = 0.6931471805599453  # ln 2 = _LN2_DD_HI + _LN2_DD_LO to 2^-106

@@ -433,6 +433,21 @@ def test_compiled_equals_python_bit_for_bit_many(in_python):
     _compare_compiled_with_python(in_python, np.random.default_rng(12), 20000)
 
 
+def test_scalbn_is_ldexp(in_python):
+    """x 2^n rounded once: C's ldexp (CPython's math.ldexp) to the bit, overflow to +-inf, the subnormals
+    rounded to nearest even; n beyond any exponent range too."""
+    rng = np.random.default_rng(13)
+    xs = log_uniform(rng, 3000).tolist() + [0.0, -0.0, TINY, -TINY, MAX, 1.5, 3.0, INF, -INF]
+    for x in xs:
+        for n in [int(rng.integers(-2200, 2200)), -1074, -1075, -1076, 1023, 1024, -2098, 2098, -(10 ** 6), 10 ** 6, 0]:
+            try:
+                expected = math.ldexp(x, n)
+            except OverflowError:
+                expected = math.copysign(INF, x)
+            assert bits(libm.scalbn(x, n)) == bits(expected) == bits(in_python.scalbn(x, n)), (x, n)
+    assert math.isnan(libm.scalbn(NAN, 3)) and libm.scalbn(3.0, -1075) == 2 * TINY
+
+
 def test_sincos_is_sin_and_cos():
     rng = np.random.default_rng(5)
     for x in [float(v) for v in log_uniform(rng, 500)] + hard_arguments("cos"):
@@ -442,9 +457,9 @@ def test_sincos_is_sin_and_cos():
 # what the compiled code may name: our own functions (_Z...), numba's runtime and the CPython wrapper around the
 # entry point (NRT_, numba_, Py...), LLVM's intrinsics that are exact (fabs, copysign, fpclass, ...) and sqrt,
 # correctly rounded by IEEE 754 in every libm (and one instruction on x86_64 and aarch64: checked below)
-_ALLOWED = ("_Z", "NRT_", "numba_", "Py", "_Py", "llvm.fabs.", "llvm.copysign.", "llvm.is.fpclass.",
-            "llvm.lifetime.", "llvm.assume", "llvm.ctpop.",
-            "llvm.ctlz.", "llvm.cttz.", "llvm.sqrt.", "llvm.memset.", "llvm.memcpy.", "llvm.umul.with.overflow.",
+_ALLOWED = ("_Z", "NRT_", "numba_", "Py", "_Py", "llvm.fabs.", "llvm.copysign.", "llvm.is.fpclass.", "llvm.sqrt.",
+            "llvm.lifetime.", "llvm.assume", "llvm.memset.", "llvm.memcpy.", "llvm.ctpop.", "llvm.ctlz.", "llvm.cttz.",
+            "llvm.umax.", "llvm.umin.", "llvm.smax.", "llvm.smin.", "llvm.abs.", "llvm.umul.with.overflow.",
             "llvm.smul.with.overflow.", "llvm.sadd.with.overflow.", "llvm.ssub.with.overflow.")
 
 
@@ -467,9 +482,10 @@ def _compiled_afresh():
         getattr(module, name)(3e9)  # the Payne-Hanek path
     for name in PAIRS:
         getattr(module, name)(0.5, 0.25)
+    module.scalbn(0.5, -3)
     compiled = {name: value for name, value in vars(module).items()
                 if isinstance(value, CPUDispatcher) and value.signatures and not value.targetoptions.get("inline")}
-    assert {"_reduce_large", "_log_dd", "_exp_dd", "cos", "pow"} <= set(compiled)
+    assert {"_reduce_large", "_log_dd", "_exp_dd", "cos", "pow", "scalbn"} <= set(compiled)
     return compiled
 
 
