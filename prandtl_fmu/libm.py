@@ -30,6 +30,7 @@ figures: at most 0.89 ulp):
 * cbrt: ``s_cbrt.c`` (an exponent estimate, a polynomial to 23 bits, one Newton step in double);
 * hypot: ``e_hypot.c`` (scaled by 2^+-600 or 2^1022 so that nothing overflows or underflows, the squares
   summed with their low parts so that the sum is good to about 1/2 ulp before the square root);
+* scalbn: musl's ``scalbn.c`` (x 2^n by at most three exact scalings, one rounding into the subnormals);
 * log2 and pow (written here): ln x in double-double to a relative 2^-68 (a table of ln(j/64) in
   double-double, then 2 atanh s with |s| <= 0.0056), log2 x = k + ln m / ln 2 rounded once (k exactly at
   2^k); pow x^y = e^(y ln|x|) with y ln|x| a double-double whose tail enters exp's reduction.
