@@ -275,6 +275,37 @@ def test_two_over_pi_table_is_two_over_pi():
     assert start // 24 + 9 <= len(table)
 
 
+# fdlibm's coefficients by the bit patterns its sources give beside them (a decimal typo would still pass the
+# accuracy tests when it only costs a fraction of an ulp)
+FDLIBM_BITS = {
+    "_S1": "BFC5555555555549", "_S2": "3F8111111110F8A6", "_S3": "BF2A01A019C161D5", "_S4": "3EC71DE357B1FE7D",
+    "_S5": "BE5AE5E68A2B9CEB", "_S6": "3DE5D93A5ACFD57C", "_C1": "3FA555555555554C", "_C2": "BF56C16C16C15177",
+    "_C3": "3EFA01A019CB1590", "_C4": "BE927E4F809C52AD", "_C5": "3E21EE9EBDB4B1C4", "_C6": "BDA8FAE9BE8838D4",
+    "_INV_PIO2": "3FE45F306DC9C883", "_PIO2_1": "3FF921FB54400000", "_PIO2_1T": "3DD0B4611A626331",
+    "_PIO2_2": "3DD0B4611A600000", "_PIO2_2T": "3BA3198A2E037073", "_PIO2_3": "3BA3198A2E000000",
+    "_PIO2_3T": "397B839A252049C1", "_P1": "3FC555555555553E", "_P2": "BF66C16C16BEBD93", "_P3": "3F11566AAF25DE2C",
+    "_P4": "BEBBBD41C5D26BF1", "_P5": "3E66376972BEA4D0", "_LN2_HI": "3FE62E42FEE00000", "_LN2_LO": "3DEA39EF35793C76",
+    "_INV_LN2": "3FF71547652B82FE", "_EXP_OVERFLOW": "40862E42FEFA39EF", "_EXP_UNDERFLOW": "C0874910D52D3051",
+    "_Q1": "BFA11111111110F4", "_Q2": "3F5A01A019FE5585", "_Q3": "BF14CE199EAADBB7", "_Q4": "3ED0CFCA86E65239",
+    "_Q5": "BE8AFDB76E09C32D", "_LG1": "3FE5555555555593", "_LG2": "3FD999999997FA04", "_LG3": "3FD2492494229359",
+    "_LG4": "3FCC71C51D8E78AF", "_LG5": "3FC7466496CB03DE", "_LG6": "3FC39A09D078C69F", "_LG7": "3FC2F112DF3E5244",
+    "_PI": "400921FB54442D18", "_PIO2_HI": "3FF921FB54442D18", "_PIO2_LO": "3C91A62633145C07",
+    "_PS0": "3FC5555555555555", "_PS1": "BFD4D61203EB6F7D", "_PS2": "3FC9C1550E884455", "_PS3": "BFA48228B5688F3B",
+    "_PS4": "3F49EFE07501B288", "_PS5": "3F023DE10DFDF709", "_QS1": "C0033A271C8A2D4B", "_QS2": "40002AE59C598AC8",
+    "_QS3": "BFE6066C1B8D0159", "_QS4": "3FB3B8C5B12E9282", "_CB0": "3FFE03E60F61E692", "_CB1": "BFFE28E092F02420",
+    "_CB2": "3FF9F1604A49D6C2", "_CB3": "BFE844CBBEE751D9", "_CB4": "3FC2B000D4E4EDD7",
+}
+
+
+def test_constants_are_fdlibms():
+    for name, pattern in FDLIBM_BITS.items():
+        assert f"{bits(getattr(libm, name)) & (2 ** 64 - 1):016X}" == pattern, name
+    with mpmath.workprec(PRECISION):  # and the double-double constants written here
+        for hi, lo, exact in ((libm._LN2_DD_HI, libm._LN2_DD_LO, mpmath.log(2)),
+                              (libm._INV_LN2_HI, libm._INV_LN2_LO, 1 / mpmath.log(2))):
+            assert hi == float(exact) and lo == float(exact - hi)
+
+
 def test_log_table_is_ln_j_over_64():
     for i, (hi, lo) in enumerate(zip(libm._LOG_B_HI, libm._LOG_B_LO)):
         exact = mpmath.log(mpmath.mpf(i + libm._LOG_B_FIRST) / 64)
