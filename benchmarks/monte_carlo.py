@@ -107,7 +107,7 @@ def main(argv=None):
     rows = []
     for stop_time in (10.0, 100.0):
         steps = round(stop_time / 0.01)
-        paths = args.paths if stop_time <= 10 else max(50, args.paths // 10)
+        paths = args.paths if stop_time <= 10 else max(50, args.paths // 4)
         noisy = document(stop_time)
         wall = in_process(noisy, paths)
         rows.append(("one process (1 core)", "white noise", steps, paths, wall, 1))
