@@ -323,22 +323,36 @@ class _Batch:
             outcomes[position].values = result
 
 
-def late_average(time: np.ndarray, y: np.ndarray) -> float:
-    """(2/T) int_{T/2}^{T} y dt, T = time[-1], for the piecewise-linear y through the rows ``(time, y)`` (time
-    increasing from 0): the trapezoidal rule on the rows after T/2 and on the piece cut at T/2."""
+def late_weights(time: np.ndarray) -> np.ndarray:
+    """w such that w @ y = (2/T) int_{T/2}^{T} y dt, T = time[-1], for the piecewise-linear y through the rows
+    ``(time, y)`` (time increasing from 0): the trapezoidal rule on the rows after T/2 and on the piece cut at
+    T/2, whose value there is interpolated between its two rows. The same weights for x, v, x^2, v^2."""
     stop = time[-1]
     half = 0.5 * stop
-    after = np.searchsorted(time, half, side="right")  # the first row after T/2 (row 0 is at 0 <= T/2)
-    y_half = np.interp(half, time[after - 1:after + 1], y[after - 1:after + 1])
-    t = np.concatenate(([half], time[after:]))
-    values = np.concatenate(([y_half], y[after:]))
-    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(t)) / (stop - half))
+    after = int(np.searchsorted(time, half, side="right"))  # the first row after T/2 (row 0 is at 0 <= T/2)
+    weights = np.zeros(time.size)
+    widths = np.diff(time[after - 1:])
+    widths[0] = time[after] - half  # the cut piece: [T/2, time[after]]
+    weights[after - 1:-1] += 0.5 * widths
+    weights[after:] += 0.5 * widths
+    # the cut piece's left end is the interpolated y(T/2) = (1 - theta) y[after - 1] + theta y[after]
+    theta = (half - time[after - 1]) / (time[after] - time[after - 1])
+    left = weights[after - 1]
+    weights[after - 1] = left * (1 - theta)
+    weights[after] += left * theta
+    return weights / (stop - half)
+
+
+def late_average(time: np.ndarray, y: np.ndarray) -> float:
+    """(2/T) int_{T/2}^{T} y dt on the rows ``(time, y)`` (:func:`late_weights`)."""
+    return float(late_weights(time) @ y)
 
 
 def late_averages(time: np.ndarray, x: np.ndarray, v: np.ndarray) -> dict:
     """The LATE_SUMMARIES of a run's output rows."""
-    return {"late_mean_x": late_average(time, x), "late_mean_v": late_average(time, v),
-            "late_mean_square_x": late_average(time, x * x), "late_mean_square_v": late_average(time, v * v)}
+    weights = late_weights(time)
+    return {"late_mean_x": float(weights @ x), "late_mean_v": float(weights @ v),
+            "late_mean_square_x": float(weights @ (x * x)), "late_mean_square_v": float(weights @ (v * v))}
 
 
 _EVERY_STEP = ("max_abs_x", "max_abs_v", "max_abs_reaction", "loop_area")
