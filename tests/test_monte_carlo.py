@@ -391,3 +391,17 @@ def test_a_law_that_fails_at_one_grid_point_is_refused_before_any_run(write_scen
         plan(scene, {"grid": {"damper.c": [0.5, 0.0]}, "seeds": {"count": 3},
                      "law": {"output": "final_x", "density": "oscillator_x"}})
     assert str(info.value).endswith("[law] (damper.c = 0.0): oscillator_x: c must be > 0, got 0.0")
+
+
+@pytest.mark.parametrize("time", [np.linspace(0, 10, 101), np.array([0, 0.3, 1.0, 4.9, 5.2, 7.0, 10.0]),
+                                  np.array([0, 3.0, 7.5]), np.array([0.0, 10.0])])
+def test_the_late_average_is_the_trapezoid_from_half_the_run_with_its_cut_interpolated(time):
+    from prandtl_fmu.summary import late_average
+
+    y = np.random.default_rng(time.size).normal(size=time.size)
+    half = time[-1] / 2
+    after = time > half
+    expected = np.trapezoid(np.concatenate(([np.interp(half, time, y)], y[after])),
+                            np.concatenate(([half], time[after]))) / half
+    assert late_average(time, y) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    assert late_average(time, np.full(time.size, 3.0)) == pytest.approx(3.0, rel=1e-14)
