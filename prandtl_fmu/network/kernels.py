@@ -539,6 +539,8 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     _start_pieces(model, x, u, piece, d, h)
     budget = search_budget(n, elements)
     width = 1  # the half bandwidth of the clusters' matrix allocated (grown when a working set needs more)
+    room = np.empty(elements)  # how far each element may move along the direction (np.inf: unbounded)
+    moving = np.empty(elements, np.int64)  # the elements the direction moves (their force changes)
     single = False  # release one constraint at a time (after a release of several met a kink at once)
     released_many = False
     for iteration in range(budget):
@@ -546,7 +548,8 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         while True:  # the gradient and the clusters' matrix in one pass (again, wider, if the band grew)
             a = np.zeros((count, width + 1))
             anchor = np.zeros(count)
-            band = _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, None, None)
+            band = _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree,
+                             links)
             if band <= width:
                 break
             width = band
@@ -615,23 +618,27 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         # of a triple root), as far as no kink stops it
         tau = 0.0 if converged else (np.inf if has_cubic else top)
         blocker = -1
+        count_moving = 0
         for e in range(elements if not converged else 0):
             kd = kind[e]
-            term[e] = np.inf
-            if kd != SLIDER and kd != BRANCH:
-                continue
+            room[e] = np.inf
             i, j = ends[e, 0], ends[e, 1]
             if j == GROUND:
                 rate, delta = p[i], d[i]
             else:
                 rate, delta = p[i] - p[j], d[i] - d[j]
+            if rate == 0.0:
+                continue
+            moving[count_moving] = e
+            count_moving += 1
+            if kd != SLIDER and kd != BRANCH:
+                continue
             r = 1.0
             if kd == BRANCH and coef[e, 2] > 0.0:
                 r = 1.0 / (1.0 + h * coef[e, 0] / coef[e, 2])
-            room = _room(kd, coef[e, 1], r, piece[e], delta, u[e], rate)
-            term[e] = room  # (term is free here: the next force balance rewrites it)
-            if room < tau:
-                tau = room
+            room[e] = _room(kd, coef[e, 1], r, piece[e], delta, u[e], rate)
+            if room[e] < tau:
+                tau = room[e]
                 blocker = e
         if tau == np.inf and top == np.inf:  # a floppy direction no kink stops: only a cubic spring it stretches
             bounded = False
@@ -651,8 +658,17 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
                 return -2 if step_taken == np.inf else -3
             if step_taken < tau:
                 blocker = -1
+        # the move ends at the working set's minimiser, where the constraints' forces are read: the forces change
+        # only at the elements and nodes that move, so where those are few (a large network that mostly sticks)
+        # they are updated there, else recomputed in one pass over every element
+        update = blocker < 0 and not (has_cubic and not converged) and step_taken != 0.0
+        if update and 4 * count_moving <= elements:
+            _moved(model, x, v, u, piece, d, p, step_taken, h, grad, term, scale, moving, count_moving)
+            update = False
         for j in range(n):
             d[j] += step_taken * p[j]
+        if update:
+            _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, None, None)
         if blocker >= 0:
             if step_taken == 0.0 and released_many:
                 single = True
@@ -661,7 +677,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             # whole slip front sticks at once), unless the constraints joined so far already tie its ends (a
             # loop of constraints would be redundant): parent is the union-find of the working set
             for e in range(elements):
-                if term[e] != tau or (e != blocker and step_taken != tau):
+                if room[e] != tau or (e != blocker and step_taken != tau):
                     continue
                 i, j = ends[e, 0], ends[e, 1]
                 ra = _find(parent, i)
@@ -684,8 +700,8 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
         released_many = False
         if has_cubic and not converged:
             continue
-        # a minimiser of the working set: the constraints' forces decide
-        _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, degree, links)
+        # a minimiser of the working set: the constraints' forces decide (grad, term and scale are those of d
+        # now, degree and links those of the working set: from this iteration's pass and the move's update)
         _multipliers(model, piece, grad, queue, degree, links, subtree, term, fixed_node)
         released = 0
         best = -1
@@ -707,6 +723,40 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             return iteration + 1
         released_many = released > 1
     return -1
+
+
+@kernel
+def _moved(model, x, v, u, piece, d, p, step, h, grad, term, scale, moving, count):
+    """grad, term and scale (as :func:`_gradient` computes them at d) brought to d + step p: the inertia of every
+    node that moves and the force of each of the ``count`` elements in ``moving`` (those the direction p moves;
+    the others' forces do not change), each recomputed at the new point and its change added at its ends."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    for q in range(count):
+        e = moving[q]
+        i, j = ends[e, 0], ends[e, 1]
+        if j == GROUND:
+            rel_x, delta = x[i], d[i]
+            rate = p[i]
+        else:
+            rel_x, delta = x[i] - x[j], d[i] - d[j]
+            rate = p[i] - p[j]
+        f0, kappa0 = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
+        new = delta + step * rate
+        f1, kappa1 = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, new, u[e], h)
+        term[e] = f1
+        change = (abs(f1) + kappa1 * (abs(rel_x) + abs(new) + abs(u[e]))) - (
+            abs(f0) + kappa0 * (abs(rel_x) + abs(delta) + abs(u[e])))
+        grad[i] += f1 - f0
+        scale[i] += change
+        if j != GROUND:
+            grad[j] -= f1 - f0
+            scale[j] += change
+    for j in range(mass.shape[0]):
+        if p[j] != 0.0 and mass[j] > 0.0:
+            inertia = mass[j] / (h * h)
+            new = d[j] + step * p[j]
+            grad[j] += inertia * (new - h * v[j]) - inertia * (d[j] - h * v[j])
+            scale[j] += inertia * ((abs(new) + abs(h * v[j])) - (abs(d[j]) + abs(h * v[j])))
 
 
 @kernel
