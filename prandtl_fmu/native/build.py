@@ -73,9 +73,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
     scene = load_scene(scene_path, check_stepper=False)
     if hasattr(scene, "network"):  # a [network] or [chain] scene
         return build_native_network_fmu(scene_path, out, fmi, causality)
-    if scene.load.noise is not None:
-        raise NativeBuildError(f"{scene.source}: [load]: the native runtime has no white noise yet: build it with "
-                               "--runtime python, or without the noise")
     if causality is not None and causality != scene.causality:
         from ..fmu.build import _with_causality
 
@@ -91,7 +88,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
             kept = {name: archive.read(name) for name in archive.namelist()
                     if name.startswith("documentation/") or name == "resources/scene.toml"
                     or name.endswith("_OspModelDescription.xml")}
-        root = drop_noise_variables(ET.fromstring(description))
+        root = ET.fromstring(description)
         identifier = root.find("CoSimulation").get("modelIdentifier")
         steppers = [] if connector else kernels.applicable(scene)
         if not steppers and not connector:
@@ -136,6 +133,20 @@ def _native_description(description: str) -> str:
     return re.sub(r'generationTool="[^"]*"', 'generationTool="prandtl_fmu (native runtime)"', text, count=1)
 
 
+def c_string(text: str) -> str:
+    """A C string literal of ``text``."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def noise_lines(scene, connector: bool) -> list:
+    """scene.h's lines of the white noise: the Brownian tree's cache size, the scene's noise (the start values of
+    noise_intensity, noise_seed, noise_unit: none for a connector, whose motion comes in)."""
+    noise = None if connector else scene.load.noise
+    sigma, seed, unit = (noise.intensity, noise.seed, noise.unit) if noise is not None else (0.0, 0, 1.0)
+    return [f"#define NOISE_CACHE_SIZE {kernels.NOISE_CACHE_SIZE} /* noise.CACHE_SIZE: int64s */",
+            f"#define NOISE_SCENE {{{float(sigma)!r}, {int(seed)}, {float(unit)!r}}} /* the scene's [load] noise */"]
+
+
 def _c_array(values) -> str:
     values = list(values) or [0.0]
     return "{" + ", ".join(repr(float(value)) for value in values) + "}"
@@ -176,7 +187,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     if friction is not None and friction.stribeck_velocity is None:
         values["alpha_kinetic"] = float(friction.alpha)
     load = scene.load.compile()
-    kind, offset, amplitude, omega, times, forces = load
+    kind, offset, amplitude, omega, times, forces = load[:6]  # (a noise: its settings are parameters)
     symbols = {name: function.native_name for name, function in compiled}
     guid = root.get("guid")
     digest = hashlib.sha256(Path(scene_path).read_bytes() + guid.encode()).hexdigest()
@@ -244,11 +255,20 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         "typedef double* P;",
         "typedef int64_t (*advance_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t);",
+        "typedef int64_t (*noisy_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        "double, int64_t, double, int64_t, double, int64_t*);",
+        *noise_lines(scene, scene.causality == "displacement"),
+        # the library's refusal of a white noise by each stepper (steppers' loop_for), NULL: it takes one
+        "static const char* NOISE_REFUSAL[] = {" + ", ".join(
+            [c_string(reason) if reason else "NULL" for reason in (kernels.noise_refusal(scene, name)
+                                                                   for name in steppers)] + ["NULL"]) + "};",
     ]
     variants = [suffix for suffix, _ in kernels.variants(scene)]
     declarations = {
         "advance": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
                    "int64_t)",
+        "noisy": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+                 "int64_t, double, int64_t, double, int64_t*)",
         "record": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double)",
         "stiffness": "double {name}(P, P, P, P, P, P)",
         "initial": "int64_t {name}(P, P, P, P, P, P, int64_t, P, P, P, int64_t)",
@@ -286,6 +306,13 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
                 for name in steppers) + "};")
             lines.append(f"static const advance_fn ADVANCE_{suffix.upper()}P[N_STEPPERS] = {{"
                          + ", ".join(f"advance_{name}_{unfolded}" for name in steppers) + "};")
+            noisy = {name: f"noisy_{name}_{chosen if kernels.takes_stack(name) or not folds else unfolded}"
+                     for name in steppers}  # NULL: the stepper takes no noise
+            lines.append(f"static const noisy_fn NOISY_{suffix.upper()}[N_STEPPERS] = {{" + ", ".join(
+                noisy[name] if noisy[name] in symbols else "NULL" for name in steppers) + "};")
+            lines.append(f"static const noisy_fn NOISY_{suffix.upper()}P[N_STEPPERS] = {{" + ", ".join(
+                f"noisy_{name}_{unfolded}" if f"noisy_{name}_{unfolded}" in symbols else "NULL"
+                for name in steppers) + "};")
         for function in functions:
             lines.append(f"#define {function}_{suffix} {function}_{chosen}")
             if not connector:
@@ -293,7 +320,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
         "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "
-        "W_STEPPER, W_N, W_FORCE };",
+        "W_STEPPER, W_N, W_FORCE, W_NOISE_INTENSITY, W_NOISE_SEED, W_NOISE_UNIT };",
         "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
         "static const Var VARS[] = {",
     ]
@@ -309,27 +336,10 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
     return "\n".join(lines)
 
 
-NOISE_VARIABLES = ("noise_intensity", "noise_seed", "noise_unit")
-
-
-def drop_noise_variables(root):
-    """The PythonFMU description without the white noise's parameters, which the native runtime does not
-    generate yet (it refuses a noisy scene): they come last among the parameters, after every output, so that
-    no index in ModelStructure moves."""
-    variables = root.find("ModelVariables")
-    for variable in list(variables):
-        if variable.get("name") in NOISE_VARIABLES:
-            variables.remove(variable)
-    units = root.find("UnitDefinitions")
-    for unit in list(units) if units is not None else ():
-        if unit.get("name") == "N.s0.5":
-            units.remove(unit)
-    return root
-
-
 def _what(name: str) -> tuple:
     fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS", "force": "W_FORCE",
-             "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N"}
+             "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N",
+             "noise_intensity": "W_NOISE_INTENSITY", "noise_seed": "W_NOISE_SEED", "noise_unit": "W_NOISE_UNIT"}
     if name in fixed:
         return fixed[name], 0
     if name in ENERGIES:
@@ -389,6 +399,11 @@ def _stubs(undefined) -> str:
             continue
         if symbol == "numba_nextafter":
             lines.append("double numba_nextafter(double a, double b) { return nextafter(a, b); }")
+        elif symbol == "numba_frexp":  # numba's helpers (_helperlib.c), the same special cases
+            lines.append("double numba_frexp(double x, int* e) { if (!isfinite(x) || x == 0) { *e = 0; return x; } "
+                         "return frexp(x, e); }")
+        elif symbol == "numba_ldexp":
+            lines.append("double numba_ldexp(double x, int e) { return isfinite(x) && x != 0 && e ? ldexp(x, e) : x; }")
         elif symbol.startswith("PyExc_"):
             lines.append(f"void* {symbol} = dummy;")
         elif symbol.startswith(("Py", "_Py", "NRT_", "numba_")):

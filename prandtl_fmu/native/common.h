@@ -18,7 +18,7 @@ extern __thread int prandtl_kernel_failed;
 
 /* MAX_STEPS, SHORTEST_STEP, ADVANCE_BUDGET and the magnitudes of a coefficient: scene.h, from prandtl_fmu.scene */
 #define STATE_MAGIC "PRANDTL-FMU-STATE"
-#define STATE_VERSION 1
+#define STATE_VERSION 2 /* 2: the white noise's settings (issue 34) */
 /* the scratch of state_check (a memory-stack state and n elongations) */
 #define STATE_SCRATCH (NB_ARR + NB)
 
@@ -210,11 +210,74 @@ static const char* head_problem(const char* header, uint32_t version, uint32_t s
 }
 
 #if NETWORK || !CONNECTOR /* the element and the network take a load; the element connector a motion */
-/* the load of an advance: the force held, or the scene's [load] plus it (loads.held, loads.plus) */
-typedef struct { int64_t kind; double lk[3]; const double *t, *f; int64_t n; } Load;
+/* ------------------------------------------------------------------ the white noise (loads.WhiteNoise) */
+
+/* a white noise sigma xi(t) on the force: its intensity sigma (N sqrt(s); 0: none), the seed of its Brownian path
+ * (an FMI Integer, 32 bits: 0 <= seed < 2^31) and the Brownian tree's time unit (s). What the master set, and what
+ * was handed over to the kernels; the path is a function of (seed, time) alone, drawn by the kernels (noise.py) */
+typedef struct { double sigma; int64_t seed; double unit; } Noise;
+#define NOISE_SEED_LIMIT 2147483648.0 /* fmu.common.NOISE_SEED_LIMIT: 2^31 */
+static const Noise SCENE_NOISE = NOISE_SCENE; /* the start values: the scene's [load] noise, or none */
+
+/* Python's repr of a double (the shortest digits that read back, a ".0" on an integral value, an exponent below
+ * 1e-4 and from 1e16 on): what the PythonFMU FMU's messages show */
+static const char* python_repr(double value, char* buffer, size_t size)
+{
+    char digits[40];
+    int precision = 1, exponent;
+    if (!isfinite(value) || value == 0.0) {
+        snprintf(buffer, size, "%s", isnan(value) ? "nan" : isinf(value) ? (value > 0 ? "inf" : "-inf")
+                                     : signbit(value) ? "-0.0" : "0.0");
+        return buffer;
+    }
+    do
+        snprintf(digits, sizeof digits, "%.*e", precision - 1, value);
+    while (strtod(digits, NULL) != value && ++precision <= 17);
+    exponent = atoi(strchr(digits, 'e') + 1);
+    if (exponent < -4 || exponent >= 16)
+        snprintf(buffer, size, "%s", digits); /* d.ddde+XX, as Python's (two exponent digits at least) */
+    else if (exponent >= precision - 1)
+        snprintf(buffer, size, "%.1f", value); /* an integral value: exact in fixed notation */
+    else
+        snprintf(buffer, size, "%.*f", precision - 1 - exponent, value);
+    return buffer;
+}
+
+/* why the noise's settings break a rule, or NULL: NoiseParameters._hand_over_noise's checks and messages, in its
+ * order (the seed an FMU takes, then loads.white_noise: the intensity, the seed, the unit) */
+static const char* noise_problem(const Noise* n, char* buffer, size_t size)
+{
+    char shown[40];
+    if (!(n->seed >= 0 && (double)n->seed < NOISE_SEED_LIMIT)) {
+        snprintf(buffer, size, "parameter noise_seed = %lld: must be an integer, 0 <= seed < 2^31", (long long)n->seed);
+        return buffer;
+    }
+    if (!(isfinite(n->sigma) && n->sigma >= 0)) {
+        snprintf(buffer, size, "parameter noise_intensity = %s: must be a finite number >= 0 (N sqrt(s))",
+                 python_repr(n->sigma, shown, sizeof shown));
+        return buffer;
+    }
+    if (!(isfinite(n->unit) && n->unit > 0)) {
+        snprintf(buffer, size, "parameter noise_unit = %s: must be a finite number > 0 (s)",
+                 python_repr(n->unit, shown, sizeof shown));
+        return buffer;
+    }
+    return NULL;
+}
+
+/* the load of an advance: the force held, or the scene's [load] plus it (loads.held, loads.plus), and the white
+ * noise (loads.with_white_noise: sigma 0, none; ``cache``: the Brownian tree's, any content valid) */
+typedef struct {
+    int64_t kind;
+    double lk[3];
+    const double *t, *f;
+    int64_t n;
+    Noise noise;
+    int64_t* cache;
+} Load;
 static const double NO_TABLE[1] = {0.0};
 
-static Load load_of(double force, int scene_load)
+static Load load_of(double force, int scene_load, const Noise* noise, int64_t* cache)
 {
     Load l;
     if (scene_load) {
@@ -234,6 +297,10 @@ static Load load_of(double force, int scene_load)
         l.f = NO_TABLE;
         l.n = 1;
     }
+    l.noise.sigma = noise != NULL ? noise->sigma : 0.0;
+    l.noise.seed = noise != NULL ? noise->seed : 0;
+    l.noise.unit = noise != NULL ? noise->unit : 1.0;
+    l.cache = cache;
     return l;
 }
 #endif

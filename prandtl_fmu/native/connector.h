@@ -340,4 +340,17 @@ static void core_set_float(Instance* c, const Var* var, double value)
 
 static void core_set_stepper(Instance* c, const char* value) { (void)c; (void)value; }
 
+/* the connector's one Integer is n, a constant: the motion comes in, no white noise */
+static int32_t integer_value(Instance* c, const Var* var) { (void)c; (void)var; return (int32_t)N_VALUE; }
+
+static int core_check_integer(Instance* c, const Var* var, unsigned vr, const char* function)
+{
+    (void)var;
+    say(c, ST_ERROR, "%s refused: the FMU has no Integer input or tunable parameter (value reference %u)", function,
+        vr);
+    return ST_ERROR;
+}
+
+static void core_set_integer(Instance* c, const Var* var, int32_t value) { (void)c; (void)var; (void)value; }
+
 #endif

@@ -40,6 +40,7 @@ typedef struct {
     double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
     int scene_load, stepper_valid, initialized;
     char stepper[32];
+    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;
 } State;
 
@@ -64,7 +65,10 @@ typedef struct {
     int scene_load, initialized;
     char stepper[32];
     int stepper_valid; /* the string fitted in the buffer */
+    Noise noise_set;   /* noise_intensity, noise_seed, noise_unit */
     int handed;        /* the settings were handed over and nothing changed since */
+    Noise noise;       /* the white noise handed over (sigma 0: none), on the force of every advance */
+    int64_t noise_cache[NOISE_CACHE_SIZE]; /* the Brownian tree's cache: scratch, never in the state */
     Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
     double saved_u[SAVED_U];
 } Instance;
@@ -93,7 +97,7 @@ static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
 
 static void record(Element* e, double t)
 {
-    Load l = load_of(e->force, e->scene_load);
+    Load l = load_of(e->force, e->scene_load, NULL, NULL); /* the outputs read F(t) alone (loads.force_at) */
     double xv[2] = {e->x, e->v};
     KERNEL(e, record)(BRANCHES(e), xv, e->account, e->out, e->erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
                       t);
@@ -102,7 +106,7 @@ static void record(Element* e, double t)
 /* Element.reset(force): the initial state under the force held; 0 when a massless element has no equilibrium */
 static int reset(Element* e, double force)
 {
-    Load l = load_of(force, 0);
+    Load l = load_of(force, 0, NULL, NULL);
     double xv[2];
     int ok;
     e->origin = 0.0;
@@ -142,9 +146,19 @@ static void split_duration(double duration, double h, double* whole, double* res
 static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first, double h, int64_t steps)
 {
     double xv[2] = {e->x, e->v};
-    int64_t taken = (e->play ? (damped(e) ? ADVANCE_CP : ADVANCE_NP) : (damped(e) ? ADVANCE_C : ADVANCE_N))[e->stepper](
-        BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n,
-        t_base, first, h, steps);
+    int64_t taken;
+    if (l->noise.sigma != 0.0) { /* the load tuple with its noise (loads.with_white_noise): the noisy kernel */
+        noisy_fn noisy = (e->play ? (damped(e) ? NOISY_CP : NOISY_NP) : (damped(e) ? NOISY_C : NOISY_N))[e->stepper];
+        if (noisy == NULL) /* a stepper that takes no noise: refused when the settings are handed over */
+            return -1;
+        taken = noisy(BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t,
+                      (double*)l->f, l->n, t_base, first, h, steps, l->noise.sigma, l->noise.seed, l->noise.unit,
+                      l->cache);
+    } else {
+        taken = (e->play ? (damped(e) ? ADVANCE_CP : ADVANCE_NP) : (damped(e) ? ADVANCE_C : ADVANCE_N))[e->stepper](
+            BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t, (double*)l->f,
+            l->n, t_base, first, h, steps);
+    }
     if (prandtl_kernel_failed)
         return -1;
     e->x = xv[0];
@@ -152,10 +166,11 @@ static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first
     return taken;
 }
 
-/* Element.advance: NULL, or why the step was not taken (the element then is as it was: the caller rolls back);
- * ``failed_at`` NaN: refused before any step (a duration of too many steps) */
-static const char* advance(Element* e, double duration, double force, int scene_load, double* failed_at,
-                           char* buffer, size_t size)
+/* Element.advance under ``force`` (plus the scene's [load] with ``scene_load``) and the white ``noise`` (its
+ * Brownian tree's ``cache``): NULL, or why the step was not taken (the element then is as it was: the caller rolls
+ * back); ``failed_at`` NaN: refused before any step (a duration of too many steps) */
+static const char* advance(Element* e, double duration, double force, int scene_load, const Noise* noise,
+                           int64_t* cache, double* failed_at, char* buffer, size_t size)
 {
     double h = e->h, whole, rest, t_base;
     int64_t first, taken;
@@ -184,7 +199,7 @@ static const char* advance(Element* e, double duration, double force, int scene_
                  duration, whole + (rest > 0), h, ADVANCE_BUDGET);
         return buffer;
     }
-    l = load_of(force, scene_load);
+    l = load_of(force, scene_load, noise, cache);
     e->force = force;
     e->scene_load = scene_load;
     if (e->grid != h) {
@@ -279,13 +294,40 @@ static void hand_over(Instance* c)
     }
     e->stepper = stepper;
     e->h = c->step;
+    c->noise = c->noise_set; /* Element.set_noise (sigma 0: none) */
     c->handed = 1;
 }
 
+/* the coefficients, the stepper's name and the step: what a saved state's settings are checked for too */
 static const char* settings_problem(Instance* c, char* buffer, size_t size)
 {
     const char* problem = parameter_problem(c->par, c->cbranch, buffer, size);
     return problem ? problem : stepper_problem(c, buffer, size);
+}
+
+/* slave._hand_over_settings: why the settings the master set cannot be handed over, or NULL, in its order: a noise
+ * turned off goes first (its values checked), then the coefficients, the stepper (Element.set_stepper under the
+ * noise in use: the stepper's own refusal, NOISE_REFUSAL) and the step; a noise turned on goes last (its values,
+ * then Element.set_noise: the stepper's refusal) */
+static const char* hand_over_problem(Instance* c, char* buffer, size_t size)
+{
+    int turned_on = c->noise_set.sigma != 0.0, stepper; /* (a NaN intensity too: refused by its rule) */
+    const char* problem = turned_on ? NULL : noise_problem(&c->noise_set, buffer, size);
+    if (problem == NULL)
+        problem = settings_problem(c, buffer, size);
+    if (problem != NULL || !turned_on)
+        return problem;
+    stepper = stepper_index(c->stepper);
+    if (c->noise.sigma != 0.0 && stepper != c->el.stepper && NOISE_REFUSAL[stepper] != NULL) {
+        snprintf(buffer, size, "parameter stepper = '%s' refused: %s", c->stepper, NOISE_REFUSAL[stepper]);
+        return buffer;
+    }
+    problem = noise_problem(&c->noise_set, buffer, size);
+    if (problem == NULL && NOISE_REFUSAL[stepper] != NULL) {
+        snprintf(buffer, size, "parameter %s", NOISE_REFUSAL[stepper]);
+        problem = buffer;
+    }
+    return problem;
 }
 
 /* ------------------------------------------------------------------ outputs */
@@ -297,7 +339,8 @@ static double reaction_now(Instance* c)
     Load l;
     if (!HAS_FRICTION)
         return e->out[2];
-    l = load_of(c->F, c->scene_load); /* the reaction under the F set now: a stuck mass is held against it */
+    l = load_of(c->F, c->scene_load, NULL, NULL); /* the reaction under the F set now: a stuck mass is held against
+                                                     it (F(t) alone: loads.force_at) */
     xv[0] = e->x;
     xv[1] = e->v;
     KERNEL(e, record)(BRANCHES(e), xv, e->account, out, erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
@@ -328,8 +371,16 @@ static double real_value(Instance* c, const Var* var)
     case W_PARAM: return c->par[var->index];
     case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
     case W_STEP: return c->step;
+    case W_NOISE_INTENSITY: return c->noise_set.sigma;
+    case W_NOISE_UNIT: return c->noise_set.unit;
     }
     return NAN;
+}
+
+/* an Integer: n (the scene's), or noise_seed */
+static int32_t integer_value(Instance* c, const Var* var)
+{
+    return var->what == W_NOISE_SEED ? (int32_t)c->noise_set.seed : (int32_t)N_VALUE;
 }
 
 static void defaults(Instance* c)
@@ -346,6 +397,8 @@ static void defaults(Instance* c)
     c->handed = 0;
     c->phase = INSTANTIATED;
     c->last_step_failed = 0;
+    c->noise_set = SCENE_NOISE;
+    memset(c->noise_cache, 0, sizeof c->noise_cache); /* a new cache (noise.new_cache) */
     memset(&c->el, 0, sizeof c->el);
     hand_over(c);
     prandtl_kernel_failed = 0;
@@ -368,6 +421,7 @@ static void capture(const Instance* c, State* s)
     s->stepper_valid = c->stepper_valid;
     s->initialized = c->initialized;
     memcpy(s->stepper, c->stepper, sizeof s->stepper);
+    s->noise_set = c->noise_set;
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
@@ -393,6 +447,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
         return "its clock is not a finite time (origin, steps and grid)";
     problem = parameter_problem(e->p, e->cs, buffer, size); /* the coefficients in use, as the setters' */
+    if (problem == NULL) /* the noise's settings (NoiseParameters._check_noise_state) */
+        problem = noise_problem(&s->noise_set, buffer, size);
     if (problem != NULL)
         return problem;
     if (!HAS_STRIBECK && e->p[P_ALPHA_KINETIC] != e->p[P_ALPHA])
@@ -466,6 +522,7 @@ static int restore(Instance* c, const State* s)
     c->stepper_valid = s->stepper_valid;
     memcpy(c->stepper, s->stepper, sizeof c->stepper);
     c->stepper[sizeof c->stepper - 1] = 0;
+    c->noise_set = s->noise_set; /* handed over at the next step, which redraws the same path */
     c->handed = 0;
     return ST_OK;
 }
@@ -636,13 +693,13 @@ static int core_exit_initialization(Instance* c)
         say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
         return ST_ERROR;
     }
-    problem = settings_problem(c, buffer, sizeof buffer);
+    problem = hand_over_problem(c, buffer, sizeof buffer);
     if (problem == NULL && !isfinite(c->F)) {
         snprintf(buffer, sizeof buffer, "F = %.17g refused: the force must be finite", c->F);
         problem = buffer;
     }
     if (problem == NULL) {
-        Load l = load_of(0.0, 1);
+        Load l = load_of(0.0, 1, NULL, NULL);
         hand_over(c);
         force = c->F;
         if (c->scene_load) { /* F plus the scene's load at the start time */
@@ -738,7 +795,7 @@ static int core_do_step(Instance* c, double t, double H)
     }
     c->last_step_failed = 1;
     if (!c->handed) {
-        problem = settings_problem(c, buffer, sizeof buffer);
+        problem = hand_over_problem(c, buffer, sizeof buffer);
         if (problem != NULL) {
             say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
             return ST_DISCARD;
@@ -761,7 +818,7 @@ static int core_do_step(Instance* c, double t, double H)
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     set_time(&c->el, t);
     prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->scene_load, &failed_at, buffer, sizeof buffer);
+    problem = advance(&c->el, H, c->F, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer, sizeof buffer);
     if (problem != NULL && isnan(failed_at)) { /* refused before any step */
         rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
@@ -791,7 +848,8 @@ static int core_do_step(Instance* c, double t, double H)
 /* a Float64/Real the master sets: which variables take one, and the rule of the fixed parameters */
 static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
 {
-    if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP)) {
+    if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP ||
+                         var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT)) {
         say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
         return ST_ERROR;
     }
@@ -817,10 +875,30 @@ static void core_set_float(Instance* c, const Var* var, double value)
             if (var->index < 0 || var->index == j)
                 c->cbranch[j] = value;
         c->handed = 0;
+    } else if (var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT) {
+        *(var->what == W_NOISE_INTENSITY ? &c->noise_set.sigma : &c->noise_set.unit) = value;
+        c->handed = 0; /* checked when handed over (a bad value: a Discard at the next step) */
     } else {
         c->step = value;
         c->handed = 0;
     }
+}
+
+/* an Integer the master sets: noise_seed alone (its rule is checked when it is handed over) */
+static int core_check_integer(Instance* c, const Var* var, unsigned vr, const char* function)
+{
+    if (var == NULL || var->what != W_NOISE_SEED) {
+        say(c, ST_ERROR, "%s refused: value reference %u is not the Integer parameter noise_seed", function, vr);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static void core_set_integer(Instance* c, const Var* var, int32_t value)
+{
+    (void)var;
+    c->noise_set.seed = value;
+    c->handed = 0;
 }
 
 static void core_set_stepper(Instance* c, const char* value)

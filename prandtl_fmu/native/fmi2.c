@@ -180,11 +180,12 @@ fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], siz
     if (!arrays_given(c, n, vr, value, "fmi2GetInteger"))
         return fmi2Error;
     for (i = 0; i < n; i++) {
-        if (find(vr[i], T_INTEGER) == NULL) {
+        const Var* var = find(vr[i], T_INTEGER);
+        if (var == NULL) {
             say(c, fmi2Error, "fmi2GetInteger refused: no Integer variable has value reference %u", vr[i]);
             return fmi2Error;
         }
-        value[i] = N_VALUE;
+        value[i] = integer_value(c, var);
     }
     return fmi2OK;
 }
@@ -237,11 +238,16 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2Integer value[])
 {
+    size_t i;
     BEGIN(fmi2SetInteger, MASK_SET);
-    if (n == 0)
-        return fmi2OK;
-    say(c, fmi2Error, "fmi2SetInteger refused: the FMU has no Integer input or tunable parameter");
-    return fmi2Error;
+    if (!arrays_given(c, n, vr, value, "fmi2SetInteger"))
+        return fmi2Error;
+    for (i = 0; i < n; i++) /* all or nothing */
+        if (core_check_integer(c, find(vr[i], T_INTEGER), vr[i], "fmi2SetInteger") != ST_OK)
+            return fmi2Error;
+    for (i = 0; i < n; i++)
+        core_set_integer(c, find(vr[i], T_INTEGER), value[i]);
+    return fmi2OK;
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2Boolean value[])

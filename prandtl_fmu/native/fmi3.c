@@ -471,16 +471,18 @@ fmi3Status fmi3GetUInt16(fmi3Instance instance, const fmi3ValueReference valueRe
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int32 values[], size_t nValues)
 {
-    size_t i; /* n of the continuum: -1, a local constant (there is no array u then) */
+    size_t i; /* noise_seed, and n of the continuum: -1, a local constant (there is no array u then) */
     BEGIN(fmi3GetInt32, MASK_GET);
     if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3GetInt32"))
         return fmi3Error;
     for (i = 0; i < nValueReferences; i++) {
-        if (find(valueReferences[i], T_INTEGER) == NULL || i >= nValues) {
-            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not n", valueReferences[i]);
+        const Var* var = find(valueReferences[i], T_INTEGER);
+        if (var == NULL || i >= nValues) {
+            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not an Int32 variable (noise_seed, or n of "
+                "the continuum)", valueReferences[i]);
             return fmi3Error;
         }
-        values[i] = N_VALUE;
+        values[i] = integer_value(c, var);
     }
     return fmi3OK;
 }
@@ -532,7 +534,20 @@ fmi3Status fmi3SetUInt16(fmi3Instance instance, const fmi3ValueReference valueRe
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 values[], size_t nValues)
 {
-    return not_provided(instance, "fmi3SetInt32: not provided by this co-simulation FMU");
+    size_t i; /* noise_seed: an FMI 2.0 Integer, 32 bits as there (0 <= seed < 2^31) */
+    BEGIN(fmi3SetInt32, MASK_SET);
+    if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3SetInt32"))
+        return fmi3Error;
+    if (nValues < nValueReferences) {
+        say(c, ST_ERROR, "fmi3SetInt32 refused: %zu values for %zu value references", nValues, nValueReferences);
+        return fmi3Error;
+    }
+    for (i = 0; i < nValueReferences; i++) /* all or nothing */
+        if (core_check_integer(c, find(valueReferences[i], T_INTEGER), valueReferences[i], "fmi3SetInt32") != ST_OK)
+            return fmi3Error;
+    for (i = 0; i < nValueReferences; i++)
+        core_set_integer(c, find(valueReferences[i], T_INTEGER), values[i]);
+    return fmi3OK;
 }
 
 fmi3Status fmi3SetUInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt32 values[], size_t nValues)

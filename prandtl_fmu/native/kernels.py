@@ -18,6 +18,10 @@ the load, ``lt``/``lf``/``nl`` its table):
 
 * ``advance(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t_base, first, h, steps)`` -> steps
   taken (``kernels/loop.py``: out = x, v, reaction; erow = the energy row);
+* ``advance_noisy(..., steps, sigma, seed, unit, cache)``: the same under the load plus a white noise, the load
+  tuple's seventh entry ``(sigma, seed, unit, cache)`` (``loads.WhiteNoise``; ``cache``: the Brownian tree's
+  int64 cache of :data:`NOISE_CACHE_SIZE`, any content valid), for the steppers that take a noise
+  (:func:`noise_refusal`);
 * ``record(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t)``: the outputs of the state;
 * ``stiffness(p, k, eta, cs, u, xv)`` -> the tangent stiffness;
 * ``initial(p, k, eta, cs, u, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
@@ -34,13 +38,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..noise import CACHE_SIZE
+
 PARAMETERS = ("m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity")
 NATIVE_STEPPERS = ("projected", "implicit", "symplectic", "verlet", "exact")
+NOISE_CACHE_SIZE = CACHE_SIZE  # the int64s of the Brownian tree's cache (noise.new_cache): one per FMU instance
 
 _PTR = "types.CPointer(types.float64)"
+# a white noise's entry of the load tuple, (sigma, seed, unit, cache) (loads.WhiteNoise.compile)
+_NOISE = "types.float64, types.int64, types.float64, types.CPointer(types.int64)"
 _SIGNATURES = {
     "advance": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
                "types.float64, types.int64, types.float64, types.int64)",
+    "advance_noisy": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
+                     f"types.float64, types.int64, types.float64, types.int64, {_NOISE})",
     "record": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64)",
     "stiffness": f"types.float64({', '.join([_PTR] * 6)})",
     "initial": f"types.int64({', '.join([_PTR] * 6)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
@@ -57,9 +68,24 @@ def _load(kind, lk, lt, lf, nl):
     return (kind, lk[0], lk[1], lk[2], carray(lt, (nl,)), carray(lf, (nl,)))
 
 
+def _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep):
+    return (kind, lk[0], lk[1], lk[2], carray(lt, (nl,)), carray(lf, (nl,)),
+            (sigma, seed, unit, carray(cachep, ({noise_cache},))))
+
+
 def advance(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps):
     x, v, taken = run(_model(p, kp, etap, csp), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base, first,
                       h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
+    xv[0] = x
+    xv[1] = v
+    return taken
+
+
+def advance_noisy(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps,
+                  sigma, seed, unit, cachep):
+    x, v, taken = run_noisy(_model(p, kp, etap, csp), _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep),
+                      xv[0], xv[1], {u}, t_base, first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)),
+                      carray(erowp, (1, 6)))
     xv[0] = x
     xv[1] = v
     return taken
@@ -257,9 +283,33 @@ def applicable(scene) -> list:
     return names
 
 
+def with_a_noise(scene):
+    """The scene with a white noise on its load (the steppers' rules read only that there is one)."""
+    import dataclasses
+
+    from ..loads import WhiteNoise
+
+    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=WhiteNoise(1.0, 0)))
+
+
+def noise_refusal(scene, stepper) -> "str | None":
+    """Why ``stepper`` takes no white noise on ``scene``: the library's own refusal (``loop_for`` of the scene
+    with a noise, what ``Element.set_noise`` and ``set_stepper`` call), or None when it takes one. A rule of the
+    scene's structure (which effects), never of a coefficient the FMU may change: a massless element keeps its
+    dashpot in the native runtime (c > 0, common.h)."""
+    from ..steppers import get_stepper
+
+    try:
+        get_stepper(stepper).loop_for(with_a_noise(scene))
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
 def compile_kernels(scene, steppers) -> list:
     """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``:
-    ``advance_<stepper>_<variant>``, ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``,
+    ``advance_<stepper>_<variant>``, ``noisy_<stepper>_<variant>`` (``advance_noisy``, for the steppers that take
+    a white noise), ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``,
     ``elongations_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
     (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
@@ -279,22 +329,27 @@ def compile_kernels(scene, steppers) -> list:
         return _compile_connector(scene, structure(scene)) + checks
     compiled = []
     compiled_force = False
+    noisy = with_a_noise(scene)
     kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
     for suffix, damped in variants(scene):
         for unfolded, shape in kernels:
-            source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False", **shape)
+            source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False",
+                                      noise_cache=NOISE_CACHE_SIZE, **shape)
             for stepper in list(steppers) + [None]:
                 if stepper and shape["stack"] == "True" and not takes_stack(stepper):
                     continue  # on the O(n) kernel only (the element unfolds the stack for it)
+                takes_noise = stepper is not None and noise_refusal(scene, stepper) is None
                 namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
                                  tangent=tangent, branch_force=branch_force, move=move,
                                  solve_increment=solve_increment, write_elongations=write_elongations,
                                  elastic_force=elastic_force, force_at=force_at, start=start,
-                                 run=get_stepper(stepper).loop_for(scene) if stepper else None)
+                                 run=get_stepper(stepper).loop_for(scene) if stepper else None,
+                                 run_noisy=get_stepper(stepper).loop_for(noisy) if takes_noise else None)
                 exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
-                for helper in ("_model", "_load"):  # inlined into each C function
+                for helper in ("_model", "_load", "_noisy_load"):  # inlined into each C function
                     namespace[helper] = njit(inline="always")(namespace[helper])
-                names = ["advance"] if stepper else ["record", "stiffness", "initial", "elongations"]
+                names = (["advance"] + (["advance_noisy"] if takes_noise else []) if stepper
+                         else ["record", "stiffness", "initial", "elongations"])
                 if stepper is None and not compiled_force:
                     names.append("force_at")  # the scene's load alone: once
                     compiled_force = True
@@ -302,7 +357,8 @@ def compile_kernels(scene, steppers) -> list:
                     signature = eval(_SIGNATURES[name], {"types": types})
                     function = cfunc(signature, error_model="numpy")(
                         namespace["force_at_c" if name == "force_at" else name])
-                    c_name = (f"advance_{stepper}_{suffix}{unfolded}" if stepper else
+                    c_name = (f"advance_{stepper}_{suffix}{unfolded}" if name == "advance" else
+                              f"noisy_{stepper}_{suffix}{unfolded}" if name == "advance_noisy" else
                               "force_at" if name == "force_at" else f"{name}_{suffix}{unfolded}")
                     compiled.append((c_name, function))
     if folds(scene):

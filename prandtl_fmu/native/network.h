@@ -51,6 +51,7 @@ typedef struct {
     double F, x_in, v_in, step, start_time, time, par[N_PARAMS];
     int scene_load, stepper_valid, initialized;
     char stepper[32];
+    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;
 } State;
 
@@ -66,7 +67,10 @@ typedef struct {
     int scene_load, initialized;
     char stepper[32];
     int stepper_valid; /* the string fitted in the buffer */
+    Noise noise_set;   /* noise_intensity, noise_seed, noise_unit (the element; the connector has none) */
     int handed;        /* the settings were handed over and nothing changed since */
+    Noise noise;       /* the white noise handed over (sigma 0: none), on the load's node at every advance */
+    int64_t noise_cache[NOISE_CACHE_SIZE]; /* the Brownian tree's cache: scratch, never in the state */
     Element saved;     /* core_do_step's checkpoint */
     Element preview;   /* CONNECTOR: the outputs' state: the committed one moved to the inputs set now */
     int preview_state; /* 0: to compute, 1: computed, -1: the move failed (no outputs) */
@@ -195,6 +199,49 @@ static const char* settings_problem(Instance* c, char* buffer, size_t size)
     return NULL;
 }
 
+/* stepper_problem's rule of a white noise (NOISE_MASSLESS_LOAD, the library's words): a massless load node needs a
+ * dashpot on it (LOAD_DAMPED: the scene's structure); the message, or NULL */
+static const char* noise_refusal(const double* par)
+{
+    return MASS_OF(par, LOAD_NODE) > 0 || LOAD_DAMPED ? NULL : NOISE_MASSLESS_LOAD;
+}
+
+/* slave._hand_over_settings: why the settings the master set cannot be handed over, or NULL, in its order: a noise
+ * turned off goes first (its values checked), then the parameters (NetworkElement.set_parameters: under the noise in
+ * use, a mass set to 0 on the load's node may be refused), the stepper and step; a noise turned on goes last (its
+ * values, then NetworkElement.set_noise: the rule of the load's node) */
+static const char* hand_over_problem(Instance* c, char* buffer, size_t size)
+{
+    int turned_on = c->noise_set.sigma != 0.0; /* (a NaN intensity too: refused by its rule) */
+    const char* problem = turned_on ? NULL : noise_problem(&c->noise_set, buffer, size);
+    if (problem == NULL)
+        problem = settings_problem(c, buffer, size);
+    if (problem != NULL || !turned_on)
+        return problem;
+    if (c->noise.sigma != 0.0 && noise_refusal(c->par) != NULL) { /* set_parameters: the names that changed */
+        size_t at = (size_t)snprintf(buffer, size, "parameter");
+        const char* separator = " ";
+        int i;
+        for (i = 0; i < N_PARAMS_USED && at < size; i++) {
+            const Param* p = &PARAMS[i];
+            double now = p->node >= 0 ? c->el.mass[p->node] : c->el.coef[3 * p->element + p->column];
+            if (!(c->par[i] == now)) {
+                at += (size_t)snprintf(buffer + at, size - at, "%s%s", separator, p->name);
+                separator = ", ";
+            }
+        }
+        if (at < size)
+            snprintf(buffer + at, size - at, ": %s", noise_refusal(c->par));
+        return buffer;
+    }
+    problem = noise_problem(&c->noise_set, buffer, size);
+    if (problem == NULL && noise_refusal(c->par) != NULL) {
+        snprintf(buffer, size, "parameter %s", noise_refusal(c->par));
+        problem = buffer;
+    }
+    return problem;
+}
+
 /* the coefficients in use from the parameters: mass[j], and column ``column`` of element ``element`` */
 static void coefficients_of(const double* par, double* mass, double* coef)
 {
@@ -215,6 +262,7 @@ static void hand_over(Instance* c)
     coefficients_of(c->par, c->el.mass, c->el.coef);
     c->el.stepper = stepper_index(c->stepper);
     c->el.h = c->step;
+    c->noise = c->noise_set; /* NetworkElement.set_noise (sigma 0: none; the connector's: none) */
     c->handed = 1;
     c->preview_state = 0;
 }
@@ -307,9 +355,14 @@ static const char* steps_from(Instance* c, const Load* l, double t_base, int64_t
     if (count == 0)
         return NULL;
     prandtl_kernel_failed = 0;
-    taken = ADVANCE[e->stepper](NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, c->work.out,
-                                WORK(&c->work), l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n, t_base,
-                                first, h, count, &status);
+    if (l->noise.sigma != 0.0) /* the load tuple with its noise (loads.with_white_noise): the noisy kernel */
+        taken = NOISY[e->stepper](NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, c->work.out,
+                                  WORK(&c->work), l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n, t_base,
+                                  first, h, count, &status, l->noise.sigma, l->noise.seed, l->noise.unit, l->cache);
+    else
+        taken = ADVANCE[e->stepper](NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, c->work.out,
+                                    WORK(&c->work), l->kind, (double*)l->lk, (double*)l->t, (double*)l->f, l->n,
+                                    t_base, first, h, count, &status);
     if (prandtl_kernel_failed)
         return "a kernel failed (out of memory)";
     if (taken < count) {
@@ -346,7 +399,7 @@ static const char* advance(Instance* c, double duration, double force, int scene
                  whole + (rest > 0), h, ADVANCE_BUDGET);
         return buffer;
     }
-    l = load_of(force, scene_load);
+    l = load_of(force, scene_load, &c->noise, c->noise_cache);
     e->force = force;
     e->scene_load = scene_load;
     if (e->grid != h) {
@@ -447,6 +500,8 @@ static double real_value(Instance* c, const Var* var)
     case W_VIN: return c->v_in;
     case W_PARAM: return c->par[var->index];
     case W_STEP: return c->step;
+    case W_NOISE_INTENSITY: return c->noise_set.sigma;
+    case W_NOISE_UNIT: return c->noise_set.unit;
     }
     if ((e = previewed(c)) == NULL)
         return NAN; /* the connector's motion refused: so is the getter (calls.h: shown) */
@@ -496,6 +551,8 @@ static void defaults(Instance* c)
     c->handed = 0;
     c->phase = INSTANTIATED;
     c->last_step_failed = 0;
+    c->noise_set = SCENE_NOISE;
+    memset(c->noise_cache, 0, sizeof c->noise_cache); /* a new cache (noise.new_cache) */
     memset(&c->el, 0, sizeof c->el);
     hand_over(c);
     if (reset(c, 0.0, buffer, sizeof buffer) != NULL)
@@ -521,6 +578,7 @@ static void capture(const Instance* c, State* s)
     s->stepper_valid = c->stepper_valid;
     s->initialized = c->initialized;
     memcpy(s->stepper, c->stepper, sizeof s->stepper);
+    s->noise_set = c->noise_set;
     s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
 }
 
@@ -570,6 +628,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
         return "its clock is not a finite time (origin, steps and grid)";
     problem = coefficients_problem(e, buffer, size);
+    if (problem == NULL) /* the noise's settings (NoiseParameters._check_noise_state) */
+        problem = noise_problem(&s->noise_set, buffer, size);
     if (problem != NULL)
         return problem;
     for (j = 0; j < NN; j++)
@@ -620,6 +680,7 @@ static int restore(Instance* c, const State* s)
     c->initialized = s->initialized;
     memcpy(c->stepper, s->stepper, sizeof c->stepper);
     c->stepper[sizeof c->stepper - 1] = 0;
+    c->noise_set = s->noise_set; /* handed over at the next step, which redraws the same path */
     c->handed = 0;
     c->preview_state = 0;
     return ST_OK;
@@ -637,7 +698,7 @@ static int core_exit_initialization(Instance* c)
         say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
         return ST_ERROR;
     }
-    problem = settings_problem(c, buffer, sizeof buffer);
+    problem = hand_over_problem(c, buffer, sizeof buffer);
     if (problem == NULL && !(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
         snprintf(buffer, sizeof buffer, "the inputs must be finite (%s = %.17g, %.17g)", CONNECTOR ? "x, v" : "F",
                  CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
@@ -647,7 +708,7 @@ static int core_exit_initialization(Instance* c)
         double force = CONNECTOR ? 0.0 : c->F;
         hand_over(c);
         if (!CONNECTOR && c->scene_load) { /* F plus the scene's load at the start time */
-            Load l = load_of(0.0, 1);
+            Load l = load_of(0.0, 1, NULL, NULL);
             force = c->F + load_force(l.kind, (double*)l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time);
         }
         if (reset(c, force, reason, sizeof reason) != NULL) {
@@ -710,7 +771,7 @@ static int core_do_step(Instance* c, double t, double H)
     }
     c->last_step_failed = 1;
     if (!c->handed) {
-        problem = settings_problem(c, buffer, sizeof buffer);
+        problem = hand_over_problem(c, buffer, sizeof buffer);
         if (problem != NULL) {
             say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
             return ST_DISCARD;
@@ -765,7 +826,7 @@ static int core_check_float(Instance* c, const Var* var, unsigned vr, double val
 {
     (void)value;
     if (var == NULL || !(var->what == W_F || var->what == W_XIN || var->what == W_VIN || var->what == W_PARAM ||
-                         var->what == W_STEP)) {
+                         var->what == W_STEP || var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT)) {
         say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
         return ST_ERROR;
     }
@@ -783,11 +844,38 @@ static void core_set_float(Instance* c, const Var* var, double value)
     else if (var->what == W_PARAM) {
         c->par[var->index] = value;
         c->handed = 0;
+    } else if (var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT) {
+        *(var->what == W_NOISE_INTENSITY ? &c->noise_set.sigma : &c->noise_set.unit) = value;
+        c->handed = 0; /* checked when handed over (a bad value: a Discard at the next step) */
     } else {
         c->step = value;
         c->handed = 0;
     }
     c->preview_state = 0;
+}
+
+/* an Integer: noise_seed (the network has no other) */
+static int32_t integer_value(Instance* c, const Var* var)
+{
+    (void)var;
+    return (int32_t)c->noise_set.seed;
+}
+
+/* an Integer the master sets: noise_seed alone (its rule is checked when it is handed over) */
+static int core_check_integer(Instance* c, const Var* var, unsigned vr, const char* function)
+{
+    if (var == NULL || var->what != W_NOISE_SEED) {
+        say(c, ST_ERROR, "%s refused: value reference %u is not the Integer parameter noise_seed", function, vr);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static void core_set_integer(Instance* c, const Var* var, int32_t value)
+{
+    (void)var;
+    c->noise_set.seed = value;
+    c->handed = 0;
 }
 
 static void core_set_stepper(Instance* c, const char* value)

@@ -15,6 +15,9 @@ lf, nl as the element's):
 
 * ``advance_<stepper>(net, x, v, u, piece, account, dissipated, out, work, load, t_base, first, h, steps,
   status)`` -> steps taken (``out``: the row of write_row, 2 n + 2; ``status[0]``: the last step's status);
+* ``noisy_<stepper>(..., status, sigma, seed, unit, cache)``: the same under the load plus a white noise on the
+  load's node, the load tuple's seventh entry ``(sigma, seed, unit, cache)`` (``loads.WhiteNoise``; ``cache``: the
+  Brownian tree's int64 cache, ``kernels.NOISE_CACHE_SIZE``);
 * ``load_force(load, t)`` -> F(t) of the load (``loads.force_at``);
 * ``energies(net, x, v, u, out)``: out[0] the kinetic, out[1] the stored energy;
 * ``initial(net, x, v, u, piece, force, reaction)``: the equilibrium at t = 0 in place (x, v, u, piece hold the
@@ -27,14 +30,19 @@ lf, nl as the element's):
 """
 from __future__ import annotations
 
+from .kernels import NOISE_CACHE_SIZE
+
 _P = "types.CPointer(types.float64)"
 _I = "types.CPointer(types.int64)"
 _NET = f"{_P}, {_P}, {_I}, {_I}, types.int64, types.int64"
 _WORK = ", ".join([_P, _P, _P, _I, _I, _P, _P, _I, _I, _I, _P])
 _LOAD = f"types.int64, {_P}, {_P}, {_P}, types.int64"
+_NOISE = f"types.float64, types.int64, types.float64, {_I}"
 SIGNATURES = {
     "advance": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_P}, {_WORK}, {_LOAD}, types.float64, "
                f"types.int64, types.float64, types.int64, {_I})",
+    "advance_noisy": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_P}, {_WORK}, {_LOAD}, types.float64, "
+                     f"types.int64, types.float64, types.int64, {_I}, {_NOISE})",
     "energies": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_P})",
     "initial": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, types.float64, {_P})",
     "move": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, {_WORK}, types.float64, types.int64, "
@@ -59,10 +67,27 @@ def _load(kind, lk, lt, lf, nl):
     return (kind, lk[0], lk[1], lk[2], carray(lt, (nl,)), carray(lf, (nl,)))
 
 
+def _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep):
+    return (kind, lk[0], lk[1], lk[2], carray(lt, (nl,)), carray(lf, (nl,)),
+            (sigma, seed, unit, carray(cachep, ({noise_cache},))))
+
+
 def advance(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp, outp,
             dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp, kind, lk, lt, lf, nl, t_base, first, h, steps,
             statusp):
     taken, status = run(_net(massp, coefp, kindp, endsp, load_node, has_cubic), _load(kind, lk, lt, lf, nl),
+                        carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)),
+                        t_base, first, h, steps, carray(outp, (1, {row})), None, carray(accountp, (3,)), None,
+                        carray(dissipatedp, ({e},)), None, _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
+    statusp[0] = status
+    return taken
+
+
+def advance_noisy(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp,
+                  outp, dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp, kind, lk, lt, lf, nl, t_base, first, h,
+                  steps, statusp, sigma, seed, unit, cachep):
+    taken, status = run(_net(massp, coefp, kindp, endsp, load_node, has_cubic),
+                        _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep),
                         carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)),
                         t_base, first, h, steps, carray(outp, (1, {row})), None, carray(accountp, (3,)), None,
                         carray(dissipatedp, ({e},)), None, _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
@@ -112,8 +137,10 @@ def move(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, a
 '''
 
 def compile_network(scene, steppers, connector: bool) -> list:
-    """The scene's C functions: ``[(c_name, cfunc), ...]`` (``advance_<stepper>`` for ``steppers``, ``energies``,
-    ``initial``, and ``move`` for a connector)."""
+    """The scene's C functions: ``[(c_name, cfunc), ...]`` (``advance_<stepper>`` and, but for a connector (motion
+    in: no noise), ``noisy_<stepper>`` for ``steppers``, ``energies``, ``initial``, and ``move`` for a connector).
+    Whether a noise applies (``stepper_problem``: a massless load node needs a dashpot) depends on a mass the FMU
+    may change: the C layer checks it (network.h)."""
     import numpy as np
     from numba import carray, cfunc, njit, types
 
@@ -122,7 +149,7 @@ def compile_network(scene, steppers, connector: bool) -> list:
 
     network = scene.network
     n, e = network.n, len(network.elements)
-    shape = dict(n=n, e=e, n1=n + 1, row=2 * n + 2)
+    shape = dict(n=n, e=e, n1=n + 1, row=2 * n + 2, noise_cache=NOISE_CACHE_SIZE)
     source = _TEMPLATE.format(**shape)
     from ..loads import force_at
 
@@ -134,10 +161,11 @@ def compile_network(scene, steppers, connector: bool) -> list:
                          initial_state=nk.initial_state, initial_reaction=nk.initial_reaction,
                          run=loop_for(stepper) if stepper else None)
         exec(compile(source, f"<prandtl_fmu native network kernels of {scene.source}>", "exec"), namespace)
-        for helper in ("_net", "_work", "_load"):  # inlined into each C function
+        for helper in ("_net", "_work", "_load", "_noisy_load"):  # inlined into each C function
             namespace[helper] = njit(inline="always")(namespace[helper])
-        for name in (["advance"] if stepper else names):
+        for name in ((["advance"] + ([] if connector else ["advance_noisy"])) if stepper else names):
             signature = eval(SIGNATURES[name], {"types": types})
             function = cfunc(signature, error_model="numpy")(namespace[name])
-            compiled.append((f"advance_{stepper}" if stepper else name, function))
+            compiled.append((f"noisy_{stepper}" if name == "advance_noisy" else f"advance_{stepper}" if stepper
+                             else name, function))
     return compiled
