@@ -141,3 +141,216 @@ def test_impulse_is_additive_and_scaled():
         assert impulse(load, p * h, h) == 2.0 * math.sqrt(unit) * whole
         halves = impulse(load, p * h, h / 2) + impulse(load, (2 * p + 1) * (h / 2), h / 2)
         assert halves == pytest.approx(2.0 * math.sqrt(unit) * whole, rel=1e-15, abs=1e-300)
+
+
+# --- the schemes against a plain implementation driven by the same increments ----------------------------------
+
+
+def clip(value, bound):
+    return np.minimum(np.maximum(value, -bound), bound)
+
+
+class Reference:
+    """The element's schemes written out in numpy from their definitions (docs/white-noise.md), one step at a
+    time, with dB over [t, t + h] = sqrt(T0) (W((t + h) / T0) - W(t / T0)) from ``noise.increment`` (step times
+    dyadic in T0: the tree's points are t / T0 themselves).
+
+    implicit (backward Euler-Maruyama): with w = x1 - x, v1 = w / h, u1_i(w) = clip((u_i + w) / (1 + h k_i / c_i))
+        m (v1 - v) = h (F(t + h) - k0 x1 - k3 x1^3 - c v1 - sum k_i u1_i - alpha s) + sigma dB,  s ∈ Sign(v1):
+    G(w) (the momentum balance divided by h, s apart) is increasing: the mass sticks (w = 0) when |G(0)| <= alpha,
+    else G(w) = -/+ alpha is solved by bisection (w to 1e-14 h).
+    projected (Euler-Maruyama, the paper's scheme): v_free = v + h (F(t) - k0 x - k3 x^3 - c v - sum k_i u_i) / m
+    + sigma dB / m, v1 = sign(v_free) max(|v_free| - alpha h / m, 0), u_i <- clip(u_i + h (v - k_i u_i / c_i)),
+    x <- x + h v.
+    """
+
+    def __init__(self, m, k0, k3, c, k, eta, cs, alpha, force, sigma, seed, unit):
+        self.m, self.k0, self.k3, self.c, self.alpha, self.force = m, k0, k3, c, alpha, force
+        self.k, self.eta = np.asarray(k, float), np.asarray(eta, float)
+        self.lam = np.zeros_like(self.k) if cs is None else self.k / np.asarray(cs, float)
+        self.sigma, self.seed, self.unit, self.cache = sigma, seed, unit, new_cache()
+
+    def kick(self, t, h):
+        return self.sigma * math.sqrt(self.unit) * increment(self.seed, t / self.unit, (t + h) / self.unit,
+                                                             self.cache)
+
+    def implicit(self, t, h, x, v, u):
+        kick = self.kick(t, h)
+        decay = 1.0 / (1.0 + h * self.lam)
+
+        def g(w):
+            x1 = x + w
+            return (self.m * (w / h - v) / h + self.k0 * x1 + self.k3 * x1 ** 3 + self.c * w / h
+                    + np.dot(self.k, clip((u + w) * decay, self.eta)) - self.force(t + h) - kick / h)
+
+        if abs(g(0.0)) <= self.alpha:
+            w = 0.0
+        else:
+            forward = g(0.0) < -self.alpha  # the root is at w > 0
+            target = self.alpha if forward else -self.alpha  # s = sign(w)
+            lo, hi = (0.0, h) if forward else (-h, 0.0)
+            while g(hi) + target < 0:
+                lo, hi = hi, 2 * hi
+            while g(lo) + target > 0:
+                lo, hi = 2 * lo, lo
+            while hi - lo > 1e-14 * h:  # w to 1e-14 h: v1 = w / h to 1e-14 m/s
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if g(mid) + target < 0 else (lo, mid)
+            w = lo if abs(g(lo) + target) <= abs(g(hi) + target) else hi
+        return x + w, w / h, clip((u + w) * decay, self.eta)
+
+    def projected(self, t, h, x, v, u):
+        force = self.force(t) - self.k0 * x - self.k3 * x ** 3 - self.c * v - np.dot(self.k, u)
+        free = v + h * force / self.m + self.kick(t, h) / self.m
+        v1 = math.copysign(max(abs(free) - self.alpha * h / self.m, 0.0), free)
+        return x + h * v, v1, clip(u + h * (v - self.lam * u), self.eta)
+
+    def run(self, scheme, h, steps, x, v, u):
+        step = getattr(self, scheme)
+        u = np.array(u, float)
+        path = [(x, v)]
+        for p in range(steps):
+            x, v, u = step(p * h, h, x, v, u)
+            path.append((x, v))
+        return np.array(path), u
+
+
+def paper_scene(**changes):
+    """The paper's section-8 element (100 branches, stack kernel) with a white noise on its harmonic load."""
+    import pathlib
+
+    from prandtl_fmu.scene import scene_path
+
+    text = pathlib.Path(scene_path("paper-section-8")).read_text()
+    return text
+
+
+def tables_with_branches(stepper, effects):
+    n = 7
+    k = [0.3 + 0.1 * i for i in range(n)]
+    eta = [0.02 * (i + 1) for i in range(n)]
+    tables = {"": {"name": "branches"}, "mass": {"m": 0.8, "x0": 0.01, "v0": -0.2},
+              "branches": {"k": k, "eta": eta},
+              "load": {"kind": "harmonic", "amplitude": 0.6, "omega": 1.3, "offset": 0.05,
+                       "noise_intensity": 0.7, "noise_seed": 2026},
+              "solver": {"stepper": stepper, "step": 2.0 ** -7, "stop_time": 4.0, "output_interval": 2.0 ** -7}}
+    if "spring" in effects:
+        tables["spring"] = {"k0": 0.5}
+    if "cubic" in effects:
+        tables["cubic"] = {"k3": 3.0}
+    if "damper" in effects:
+        tables["damper"] = {"c": 0.2}
+    if "series" in effects:
+        tables["branches"]["c"] = [2.0 + i for i in range(n)]
+    if "friction" in effects:
+        tables["friction"] = {"alpha": 0.3}
+    return tables
+
+
+def reference_of(scene):
+    m = scene.mass.m
+    k0 = scene.spring.k0 if scene.spring else 0.0
+    k3 = scene.cubic.k3 if scene.cubic else 0.0
+    c = scene.damper.c if scene.damper else 0.0
+    alpha = scene.friction.alpha if scene.friction else 0.0
+    load = scene.load
+    noise = load.noise
+    return Reference(m, k0, k3, c, scene.branches.stiffness, scene.branches.yield_displacement,
+                     scene.branches.damping, alpha, lambda t: load.offset + load.amplitude * math.cos(load.omega * t),
+                     noise.intensity, noise.seed, noise.unit)
+
+
+EFFECTS = [("spring", "damper"), ("cubic",), ("series", "damper"), ("friction", "spring"),
+           ("friction", "cubic", "series", "damper")]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stepper", ["implicit", "projected"])
+@pytest.mark.parametrize("effects", EFFECTS, ids="+".join)
+def test_scheme_equals_a_plain_implementation(stepper, effects):
+    """7 branches and each combination of the effects: the library's step equals the scheme written out, driven by
+    the same increments, to rounding (the implicit solve is exact to rounding: bisection on one side)."""
+    scene = scene_of(tables_with_branches(stepper, effects))
+    result = simulate(scene, states=True)
+    h = scene.solver.step
+    steps = round(scene.solver.stop_time / h)
+    path, u = reference_of(scene).run(stepper, h, steps, scene.mass.x0, scene.mass.v0, scene.branches.u0)
+    scale = np.max(np.abs(path), axis=0)
+    assert np.max(np.abs(result.x - path[:, 0])) <= 1e-9 * scale[0]
+    assert np.max(np.abs(result.v - path[:, 1])) <= 1e-9 * scale[1]
+    assert np.max(np.abs(result.u[-1] - u)) <= 1e-9 * np.max(scene.branches.yield_displacement)
+    deterministic = simulate(scene_of({**tables_with_branches(stepper, effects),
+                                       "load": {"kind": "harmonic", "amplitude": 0.6, "omega": 1.3, "offset": 0.05}}))
+    assert np.max(np.abs(result.x - deterministic.x)) > 100 * 1e-9 * scale[0]  # the noise moved it
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stepper", ["implicit", "projected"])
+def test_paper_scene_with_noise_equals_a_plain_implementation(stepper):
+    """The paper's 100 branches (on the memory stack) under its harmonic load plus a white noise."""
+    text = paper_scene()
+    text = text.replace('offset = 0.0\n', 'offset = 0.0\nnoise_intensity = 0.3\nnoise_seed = 8\nnoise_unit = 0.5\n')
+    text = text.replace('stepper = "projected"', f'stepper = "{stepper}"').replace("stop_time = 500.0",
+                                                                                    "stop_time = 8.0")
+    text = text.replace("step = 1e-3", "step = 0.015625").replace("output_interval = 0.1",
+                                                                   "output_interval = 0.015625")
+    scene = parse_scene(text, "<paper>")
+    from prandtl_fmu.driver import choose_branch_kernel
+
+    assert choose_branch_kernel(scene, stepper) == "stack"
+    result = simulate(scene)
+    h = scene.solver.step
+    path, _ = reference_of(scene).run(stepper, h, round(8.0 / h), 0.0, 0.0, scene.branches.u0)
+    assert np.max(np.abs(result.x - path[:, 0])) <= 1e-9 * np.max(np.abs(path[:, 0]))
+    assert np.max(np.abs(result.v - path[:, 1])) <= 1e-9 * np.max(np.abs(path[:, 1]))
+
+
+# --- the same bits however a run is cut -------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stepper", ["implicit", "projected"])
+def test_chunks_output_grid_and_element_give_the_same_bits(stepper):
+    """simulate, simulate_chunks, another output grid, and an Element advanced by arbitrary durations (whole steps)
+    see the same increments: the same bits. A unit of 0.1 s (not a double) with h = 0.1 / 16."""
+    tables = tables_with_branches(stepper, ("friction", "spring", "damper"))
+    tables["load"]["noise_unit"] = 0.1
+    tables["solver"].update(step=0.1 / 16, stop_time=6.0, output_interval=0.1 / 16)
+    scene = scene_of(tables)
+    whole = simulate(scene)
+    pieces = list(simulate_chunks(scene))
+    assert np.array_equal(np.concatenate([p.x for p in pieces]), whole.x)
+    coarse = simulate(scene.with_solver(output_interval=0.1 / 2))
+    assert np.array_equal(coarse.x, whole.x[::8]) and np.array_equal(coarse.v, whole.v[::8])
+    element = Element(scene)
+    rng = np.random.default_rng(5)
+    steps, h = 0, scene.solver.step
+    while steps < 800:
+        count = int(rng.integers(1, 40))
+        element.advance(count * h, 0.0, scene_load=True)
+        steps += count
+        assert element.x == whole.x[steps] and element.v == whole.v[steps], steps
+    # a rollback and a restored state redraw the same increments: the cache is no part of the state
+    saved = element.get_state()
+    element.advance(7 * h, 0.0, scene_load=True)
+    after = (element.x, element.v)
+    other = Element(scene)
+    other.set_state(saved)
+    other.advance(7 * h, 0.0, scene_load=True)
+    assert (other.x, other.v) == after == (whole.x[steps + 7], whole.v[steps + 7])
+
+
+@pytest.mark.slow
+def test_steps_h_and_h_over_2_see_one_path():
+    """With h and h/2 (noise_unit = h) the free Brownian motion (a free mass, m v' = sigma xi, implicit: v1 = v +
+    sigma dB / m exactly) ends on the same path: v(T) agrees to rounding, not merely in law."""
+    tables = {"": {"name": "free"}, "mass": {"m": 2.0},
+              "load": {"kind": "white_noise", "intensity": 3.0, "seed": 77, "noise_unit": 0.01},
+              "solver": {"stepper": "implicit", "step": 0.01, "stop_time": 10.0, "output_interval": 1.0}}
+    a = simulate(scene_of(tables))
+    tables["solver"]["step"] = 0.005
+    b = simulate(scene_of(tables))
+    assert np.max(np.abs(a.v - b.v)) <= 1e-12 * np.max(np.abs(a.v))
+    assert np.std(np.diff(a.v)) > 0.5  # sigma / m sqrt(1 s) = 1.5: the noise is there
+    w = np.array([increment(77, 0.0, t / 0.01, new_cache()) for t in a.time])
+    assert np.allclose(a.v, 3.0 * math.sqrt(0.01) * w / 2.0, rtol=0, atol=1e-12)
