@@ -379,10 +379,15 @@ def _room(kd, eta, r, p, delta, u_e, rate):
 
 
 @kernel
-def _multipliers(model, piece, grad, queue, degree, links, subtree, term, held_node):
+def _multipliers(model, piece, grad, queue, degree, links, subtree, term, scale, held_node, single):
     """The force each constraint carries, from the equilibrium of each cluster's tree of constraints: term[e]
     (the piece's force) is increased by the multiplier, so that term[e] is then the whole force the
     constraint carries. grad: the nodes' residual forces at a minimiser of the working set.
+
+    Each constraint's force is final once its leaf is peeled: it is then released where it is beyond what
+    lets it stay (:func:`_release`), or, with ``single``, only the one furthest beyond (the first in the
+    elements' order among equals). Returns the number released. (A constraint between two roots, the ground
+    and the held node, is never peeled: its force is not determined, and it stays.)
 
     The trees are peeled from their leaves: a leaf's one constraint balances the leaf's residual and passes it
     on. A node's remaining constraint is found as the XOR of the ids of its constraints (``links``): O(n + E),
@@ -392,6 +397,9 @@ def _multipliers(model, piece, grad, queue, degree, links, subtree, term, held_n
     n = mass.shape[0]
     for a in range(n + 1):
         subtree[a] = grad[a] if a < n else 0.0
+    released = 0
+    best = -1
+    worst = 0.0
     size = 0
     for a in range(n):
         if degree[a] == 1 and a != held_node:
@@ -420,6 +428,17 @@ def _multipliers(model, piece, grad, queue, degree, links, subtree, term, held_n
         if degree[other] == 1 and other != n and other != held_node:
             queue[size] = other
             size += 1
+        if single:
+            excess = _excess(kind, coef, piece, term, scale, ends, e)
+            if excess > worst or (excess == worst and excess > 0.0 and e < best):
+                worst = excess
+                best = e
+        elif _release(kind, coef, piece, term, scale, ends, e):
+            released += 1
+    if single and best >= 0:
+        _release(kind, coef, piece, term, scale, ends, best)
+        released = 1
+    return released
 
 
 @kernel
@@ -702,23 +721,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
             continue
         # a minimiser of the working set: the constraints' forces decide (grad, term and scale are those of d
         # now, degree and links those of the working set: from this iteration's pass and the move's update)
-        _multipliers(model, piece, grad, queue, degree, links, subtree, term, fixed_node)
-        released = 0
-        best = -1
-        worst = 0.0
-        for e in range(elements):
-            if not is_constraint(kind[e], piece[e]):
-                continue
-            if single:
-                excess = _excess(kind, coef, piece, term, scale, ends, e)
-                if excess > worst:
-                    worst = excess
-                    best = e
-            elif _release(kind, coef, piece, term, scale, ends, e):
-                released += 1
-        if single and best >= 0:
-            _release(kind, coef, piece, term, scale, ends, best)
-            released = 1
+        released = _multipliers(model, piece, grad, queue, degree, links, subtree, term, scale, fixed_node, single)
         if released == 0:
             return iteration + 1
         released_many = released > 1
