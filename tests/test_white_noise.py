@@ -525,3 +525,15 @@ def test_strong_order(stepper, effects, order):
         errors += [np.max(np.abs(runs[level] - runs[reference])) for level in levels]
     slope = np.polyfit(np.log(2.0 ** -np.array(levels)), np.log(errors), 1)[0]
     assert slope >= order, (slope, errors)
+
+
+@pytest.mark.slow
+def test_energy_account_with_noise():
+    """The work booked is the step's mean force (F + sigma dB / h) times its displacement, so the balance keeps
+    its deterministic sign: implicit dissipates (residual >= 0 at every row), projected creates (<= 0); and the
+    noise did work (the account differs from the deterministic run's)."""
+    scene = load_scene("white-noise").with_solver(stop_time=20.0)
+    residual = simulate(scene, energy=True).energy["energy_residual"]
+    assert np.all(residual >= -1e-12) and residual[-1] > 0
+    residual = simulate(scene, "projected", energy=True).energy["energy_residual"]
+    assert np.all(residual <= 1e-12) and residual[-1] < 0
