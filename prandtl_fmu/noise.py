@@ -55,11 +55,14 @@ the state is plain int64):
   a cache whose header does not match the seed is reset. A cache is a new one or one these functions wrote.
   ``cache[DRAWS]`` counts the normals drawn (for the tests and benchmarks; it never enters a value).
 
-Use in a stepper: keep one cache per path (seed) beside the loop's scratch, never in the saved state; at step p
-take dW = increment(seed, tau_p, tau_p+1, cache) with tau_p = p * (h / T0), and choose the unit T0 so that
-h / T0 is a power of two for every step size of a refinement study (T0 = the coarsest step: tau_p = p for it,
-p / 2^i for h / 2^i). Every query is then a point of the tree: about one normal per step, and the steps h and
-h / 2 see the same path bit for bit. A restored or rolled-back state needs only its time.
+Use in a stepper: keep one cache per path (seed) beside the loop's scratch, never in the saved state, and ask
+for the increment over each step [t_p, t_p+1] at the tree's points of those times. The element's steppers do
+it through :func:`prandtl_fmu.loads.impulse`: the point of time t is t / T0 rounded to 48 significant bits
+(:func:`prandtl_fmu.loads.tree_time`), a function of t alone, so that step times p h within a few ulps of
+p (h / T0) land on the tree's dyadic points when h / T0 is a power of two, for any unit T0 (the scene's
+``noise_unit``; docs/white-noise.md). Choose T0 = the coarsest step of a refinement study: every query is then
+a point of the tree, about one normal per step, and the steps h and h / 2 see the same path bit for bit. A
+restored or rolled-back state needs only its time.
 
 ``benchmarks/noise_cost.py`` measures ns per increment stepping forward and at random times, beside the
 deterministic step (2026-11, a shared 2-core x86_64, load 3.5, 10^6 steps): 57 ns per step with dyadic step
