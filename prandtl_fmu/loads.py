@@ -6,7 +6,7 @@ input F constant over a communication step (:func:`held`). A random load
 puts its frequencies in ``time`` and its phases in ``force``.
 
 A load with a white noise (``noise``: :class:`WhiteNoise`, the scene's ``kind = "white_noise"`` or
-``noise_intensity``) compiles to that tuple and a seventh entry, ``(sigma sqrt(T0), seed, 1 / T0, cache)``
+``noise_intensity``) compiles to that tuple and a seventh entry, ``(sigma, seed, unit, cache)``
 (:meth:`WhiteNoise.compile`): the force is
 F(t) + sigma xi(t), xi = dB/dt a standard white noise. A white noise has no value at an instant: a step
 takes its impulse over [t, t + h], :func:`impulse` = sigma (B(t + h) - B(t)) (N s), and :func:`force_at`
@@ -49,9 +49,8 @@ class WhiteNoise:
     unit: float = 1.0
 
     def compile(self, cache=None):
-        """``(scale, seed, per_unit, cache)``: scale = sigma sqrt(T0) (N s per unit of the tree's W), the seed,
-        1 / T0 (1/s) and the Brownian tree's cache of the run (a new one if None)."""
-        return (float(self.intensity) * math.sqrt(float(self.unit)), int(self.seed), 1.0 / float(self.unit),
+        """``(sigma, seed, unit, cache)``; ``cache``: the Brownian tree's cache of the run (a new one if None)."""
+        return (float(self.intensity), int(self.seed), float(self.unit),
                 brownian_tree.new_cache() if cache is None else cache)
 
 
@@ -206,7 +205,7 @@ def force_at(load, t):
 
 
 def noise_of(load):
-    """The compiled noise ``(scale, seed, per_unit, cache)`` of a load tuple, None for a tuple of six (compiled
+    """The compiled noise ``(sigma, seed, unit, cache)`` of a load tuple, None for a tuple of six (compiled
     only: the choice is made from the tuple's type, so that a load without noise compiles no noise code)."""
     raise NotImplementedError
 
@@ -222,8 +221,8 @@ _SPLITTER = 2.0 ** (53 - TREE_TIME_BITS) + 1.0  # Veltkamp's splitter: keeps the
 
 
 @kernel
-def tree_time(t, per_unit):
-    """t / T0 = t * per_unit (s times 1/s) rounded to TREE_TIME_BITS significant bits (to nearest, Veltkamp's split: three IEEE
+def tree_time(t, unit):
+    """t / unit (s / s) rounded to TREE_TIME_BITS significant bits (to nearest, Veltkamp's split: three IEEE
     operations): the point of the Brownian tree at time t.
 
     A step time t_p = p h computed in doubles is within a few ulps of p (h / unit); when h / unit = 2^-j that
@@ -231,7 +230,7 @@ def tree_time(t, per_unit):
     normal per step, and the steps h and h / 2 share their points, for any unit (1e-3 s is not a double). A
     function of t alone, monotone (adjacent steps' increments add up); it resolves time to 3.6e-15 relative.
     """
-    tau = t * per_unit  # within 1.5 ulps of t / T0
+    tau = t / unit
     if not tau > 0.0:  # t <= 0 and NaN: the path's start
         return 0.0
     if tau >= brownian_tree.HORIZON:
@@ -244,10 +243,12 @@ def tree_time(t, per_unit):
 def _impulse(noise, t, h):
     if noise is None:
         return 0.0
-    scale, seed, per_unit, cache = noise
-    if scale == 0.0:
+    sigma, seed, unit, cache = noise
+    if sigma == 0.0:
         return 0.0
-    return scale * brownian_tree.increment(seed, tree_time(t, per_unit), tree_time(t + h, per_unit), cache)
+    # sigma sqrt(T0) is the same at every step: the compiler hoists it out of the time loop
+    return (sigma * math.sqrt(unit)) * brownian_tree.increment(seed, tree_time(t, unit), tree_time(t + h, unit),
+                                                                cache)
 
 
 @kernel
