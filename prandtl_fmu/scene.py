@@ -253,7 +253,8 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 
 # ---------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "load", "solver", "fmu"}
+_TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "masing", "load", "solver",
+             "fmu"}
 # (a scene with [network] or [chain] is a network: network/model.py reads it)
 # How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
 # with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
@@ -454,6 +455,8 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
         damper = Damper(r.number("c", minimum=0.0))
     if "branches" in doc:
         branches = _branches(source, doc["branches"])
+    if "masing" in doc:  # a backbone curve: its parallel spring and its Iwan spectrum of branches
+        spring, branches = _masing(source, doc)
     friction = _friction(source, doc["friction"], mass) if "friction" in doc else None
     load = _load(source, doc["load"]) if "load" in doc else ConstantLoad(0.0)
     if "solver" not in doc:
@@ -639,6 +642,55 @@ def _continuum(r) -> ContinuousBranches:
     if not a < b:
         r.fail("eta_range", f"the continuum needs a < b (eta(s) = a + (b - a) s increasing), got [{a!r}, {b!r}]")
     return ContinuousBranches.linear(k_total, float(a), float(b))
+
+
+def _masing(source, doc) -> tuple:
+    """``(spring, branches)`` of ``[masing]``: a Masing model given by its backbone curve, turned into the
+    parallel spring k0 = F_b'(inf) and the branches of its Iwan spectrum (masing.py, docs/masing.md)."""
+    from . import masing
+
+    r = _Reader(source, "masing", doc["masing"])
+    for other in ("branches", "spring"):
+        if other in doc:
+            r.fail(None, f"gives the branches and their parallel spring by a backbone curve: remove [{other}] "
+                   "(a scene gives its branches one way)")
+    kind = r.string("kind", choices=("bilinear", "hyperbolic", "ramberg_osgood"))
+    smooth = {"count", "x_max", "spacing"}
+    keys = {"bilinear": {"k", "f_y", "alpha"}, "hyperbolic": {"k", "f_u"} | smooth,
+            "ramberg_osgood": {"k", "f_y", "a", "r"} | smooth}[kind]
+    if kind == "bilinear":
+        for key in sorted(smooth & set(r.data)):
+            r.fail(key, "the bilinear backbone is one branch and a spring exactly: no count, x_max or spacing")
+    r.only(keys | {"kind"})
+    k = r.number("k", positive=True)
+    if kind == "bilinear":
+        alpha = r.number("alpha", 0.0, minimum=0.0)
+        if not alpha < 1.0:
+            r.fail("alpha", f"must be < 1 (the post-yield stiffness alpha k below the initial k), got {alpha!r}")
+        k0, branches = masing.iwan_branches(masing.Bilinear(k, r.number("f_y", positive=True), alpha))
+    else:
+        if kind == "hyperbolic":
+            backbone = masing.Hyperbolic(k, r.number("f_u", positive=True))
+        else:
+            f_y, a, exponent = r.number("f_y", positive=True), r.number("a", positive=True), r.number("r")
+            if not exponent > 1.0:
+                r.fail("r", f"must be > 1 (the exponent of x = F/k (1 + a |F/f_y|^(r-1))), got {exponent!r}")
+            backbone = masing.RambergOsgood(k, f_y, a, exponent)
+        if "x_max" not in r.data:
+            r.fail("x_max", "missing (required: the largest |x| the element will see, in m; the smooth backbone "
+                   "is interpolated at nodes up to it)")
+        x_max = r.number("x_max", positive=True)
+        count = r.integer("count", minimum=1) if "count" in r.data else 100
+        try:
+            check_memory(count * BYTES_PER_BRANCH, f"{source}: [masing] count = {count}")
+        except ResourceError as exc:
+            raise SceneError(str(exc)) from None
+        spacing = r.string("spacing", "force", choices=masing.SPACINGS)
+        try:
+            k0, branches = masing.iwan_branches(backbone, count, x_max, spacing)
+        except ValueError as exc:
+            r.fail("count" if "count" in str(exc) else "x_max", str(exc))
+    return (Spring(k0) if k0 > 0 else None), branches
 
 
 # the keys of [load] that add a white noise to a deterministic kind (see _noise)
