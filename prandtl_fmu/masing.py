@@ -1,8 +1,8 @@
 """Masing models given by their backbone curve, turned into the element's Prandtl branches (Iwan 1966).
 
-A Masing model (Masing 1926; the extended rules of Jayakumar & Beck) is
-fixed by its backbone F_b(x), the force under a monotone loading from the
-virgin state, odd and concave for x >= 0. Iwan (J. Appl. Mech. 33, 1966)
+A Masing model (Masing 1926, with the "extended" rules for irregular
+histories: return-point memory) is fixed by its backbone F_b(x), the force
+under a monotone loading from the virgin state, odd and concave for x >= 0. Iwan (J. Appl. Mech. 33, 1966)
 showed that a parallel set of Jenkins elements (our Prandtl branches: a
 spring k_i in series with a slider of elastic range eta_i) beside a spring k0
 follows the extended Masing rules exactly, with the backbone

@@ -184,6 +184,19 @@ def test_the_error_falls_like_one_over_count_squared(table):
     assert -np.polyfit(np.log(counts), np.log(bounds), 1)[0] == pytest.approx(2.0, abs=0.1)
 
 
+def test_a_ramberg_osgood_exponent_below_two_converges_like_count_to_the_minus_r():
+    """F_b = k x - O(x^r) at 0: the first cell's gap is O(h^r), the others' O(h^2) (docs/masing.md)."""
+    table = {**RAMBERG_OSGOOD, "r": 1.5}
+    counts = [50, 100, 200, 400]
+    bounds = []
+    for n in counts:
+        points = np.concatenate([[0.0], connector({**table, "count": n}).branches.yield_displacement])
+        bounds.append(interpolation_error(library_backbone(table), points))
+        if n == 50:
+            assert bounds[-1] == pytest.approx(dense_interpolation_error(backbone_of(table), points), rel=1e-3)
+    assert -np.polyfit(np.log(counts), np.log(bounds), 1)[0] == pytest.approx(1.5, abs=0.1)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("table", [BILINEAR, HYPERBOLIC, RAMBERG_OSGOOD], ids=["bilinear", "hyperbolic",
                                                                                "ramberg_osgood"])
@@ -251,6 +264,22 @@ def test_the_packaged_scene_runs_and_its_loops_stay_within_the_bilinear_bounds()
     hysteretic = run.reaction - 10.0 * run.x - 0.2 * run.v  # 90 u_1, |u_1| <= 0.01
     assert np.all(np.abs(hysteretic) <= 0.9 * (1 + 1e-12)) and np.abs(hysteretic).max() > 0.89
     assert np.abs(run.x).max() > 10 * 0.01  # it yields
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("runtime", ["python", "native"])
+def test_both_fmu_runtimes_run_the_packaged_scene_as_the_library(runtime, tmp_path):
+    """[masing] is branches and a spring: each FMU runtime is the library bit for bit, unchanged."""
+    fmpy = pytest.importorskip("fmpy")
+    from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.scene import scene_path
+
+    path = build_fmu(scene_path("masing-bilinear"), tmp_path / "masing.fmu", runtime=runtime)
+    result = fmpy.simulate_fmu(str(path), stop_time=5.0, output_interval=0.01, start_values={"scene_load": True})
+    expected = simulate(load_scene("masing-bilinear").with_solver(stop_time=5.0))
+    assert len(result) == len(expected.time)
+    np.testing.assert_array_equal(result["x"], expected.x)
+    np.testing.assert_array_equal(result["reaction"], expected.reaction)
 
 
 # ---------------------------------------------------------------- refusals, one line each
