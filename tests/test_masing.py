@@ -258,9 +258,15 @@ def test_the_packaged_scene_is_the_bilinear_branch_and_spring():
 
 
 @pytest.mark.slow
-def test_the_packaged_scene_runs_and_its_loops_stay_within_the_bilinear_bounds():
+def test_the_packaged_scene_runs_and_its_loops_stay_within_the_bilinear_bounds(tmp_path):
+    from prandtl_fmu.cli import main
+
     scene = load_scene("masing-bilinear").with_solver(stop_time=10.0)
     run = simulate(scene)
+    out = tmp_path / "masing.csv"
+    assert main(["run", "masing-bilinear", "--stop-time", "10", "--out", str(out)]) == 0
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table[:, 1], run.x)  # prandtl-fmu run: the same numbers
     hysteretic = run.reaction - 10.0 * run.x - 0.2 * run.v  # 90 u_1, |u_1| <= 0.01
     assert np.all(np.abs(hysteretic) <= 0.9 * (1 + 1e-12)) and np.abs(hysteretic).max() > 0.89
     assert np.abs(run.x).max() > 10 * 0.01  # it yields
