@@ -28,7 +28,7 @@ Everything here runs once when a scene is read; the kernels see only branches.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
@@ -144,9 +144,10 @@ def nodes(backbone, count: int, x_max: float, spacing: str = "force") -> np.ndar
     return points
 
 
-def iwan_branches(backbone, count: int = 1, x_max: float = None, spacing: str = "force") -> tuple:
+def iwan_branches(backbone, count: int = 100, x_max: Optional[float] = None, spacing: str = "force") -> tuple:
     """``(k0, branches)``: the parallel spring (N/m) and virgin branches whose backbone interpolates
-    ``backbone`` at :func:`nodes` (one exact branch for :class:`Bilinear`, which takes no count or x_max).
+    ``backbone`` at :func:`nodes` (one exact branch for :class:`Bilinear`, which takes no count or x_max;
+    a smooth backbone needs x_max).
 
     ValueError when the chord slopes do not fall strictly (no positive k_j in double precision: too many
     nodes for the curve's bend)."""
@@ -154,6 +155,8 @@ def iwan_branches(backbone, count: int = 1, x_max: float = None, spacing: str = 
         k = np.array([(1.0 - backbone.alpha) * backbone.k])
         eta = np.array([backbone.f_y / backbone.k])
         return backbone.post_yield_stiffness, Branches(k, eta, np.zeros(1))
+    if x_max is None:
+        raise ValueError(f"a smooth backbone ({type(backbone).__name__}) needs x_max, the last node")
     points = nodes(backbone, count, x_max, spacing)
     values = backbone.force(points)
     if not np.all(np.isfinite(values)):

@@ -107,7 +107,8 @@ def history(seed, x_max, reversals=60, samples=8):
     walk = np.clip(np.cumsum(rng.normal(0.0, 0.15, reversals // 3)), -1.0, 1.0)
     decay = np.cos(np.pi * np.arange(reversals // 3)) * np.linspace(1.0, 0.05, reversals // 3)
     ends = np.concatenate([big, walk, decay])
-    ends[5:12:3] = ends[2:9:3]  # back exactly to an earlier turning point
+    for i in (2, 9, 16):  # back exactly to the turning point before last: a loop closes on the dot
+        ends[i + 2] = ends[i]
     legs = [np.linspace(a, b, samples + 1)[1:] for a, b in zip(np.concatenate([[0.0], ends[:-1]]), ends)]
     return x_max * np.concatenate(legs)
 
