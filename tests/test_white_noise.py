@@ -538,3 +538,28 @@ def test_energy_account_with_noise():
     residual = simulate(scene, "projected", energy=True).energy["energy_residual"]
     assert np.all(residual <= 1e-12) and residual[-1] < 0
 
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stepper", ["implicit", "projected"])
+def test_massless_element_with_dashpot_stationary_law(stepper):
+    """c x' + k x = sigma xi (no mass: a first-order SDE, Ornstein-Uhlenbeck): <x^2> = sigma^2 / (2 c k). The
+    schemes: implicit c (x1 - x) = -h k x1 + sigma dB, x1 = (c x + sigma dB) / (c + h k); projected
+    x1 = x (1 - h k / c) + sigma dB / c. Their stationary variance b^2 / (1 - a^2) is within O(h) of the law and
+    the time average within 4.5 of its exact standard deviations of it."""
+    c, k, sigma, h, interval, stop = 2.0, 1.0, 1.0, 2.0 ** -6, 2.0 ** -3, 20000.0
+    tables = {"": {"name": "massless"}, "spring": {"k0": k}, "damper": {"c": c},
+              "load": {"kind": "white_noise", "intensity": sigma, "seed": 99},
+              "solver": {"stepper": stepper, "step": h, "stop_time": stop, "output_interval": interval}}
+    result = simulate(scene_of(tables))
+    kept = result.time >= 40.0
+    if stepper == "implicit":
+        a, b = c / (c + h * k), sigma * math.sqrt(h) / (c + h * k)
+    else:
+        a, b = 1 - h * k / c, sigma * math.sqrt(h) / c
+    p = stationary_covariance(np.array([[a]]), np.array([b]))
+    law = sigma ** 2 / (2 * c * k)
+    spread = mean_square_spread(np.array([[a]]), p, round(interval / h), int(kept.sum()), 0)
+    assert abs(p[0, 0] - law) <= h * law
+    assert abs(np.mean(result.x[kept] ** 2) - p[0, 0]) <= 4.5 * spread
+    assert spread < 0.03 * law
