@@ -214,13 +214,14 @@ class Run:
 
 def run_trust(host: Path, fmu: Native, commands, logging: bool = False, timeout: float = 120) -> Run:
     """Run the trust host on ``fmu``; commands may name variables (``setr:m:-1``, ``getr:x``, ``sets:stepper:NULL``,
-    ``nulla:stepper``). The process must end by itself: a crash or a sanitizer's report is a failure the caller
-    asserts (``run.code == 0 and run.ended``)."""
+    ``seti:noise_seed:7``, ``nulla:stepper``). The process must end by itself: a crash or a sanitizer's report is a
+    failure the caller asserts (``run.code == 0 and run.ended``)."""
     argv = [str(host), str(fmu.library), fmu.guid, "1" if logging else "0"]
     written = {}  # the command as the host prints it -> as the caller wrote it
     for command in commands:
         parts = command.split(":")
-        if parts[0] in ("setr", "getr", "geta", "sets", "nulla") and len(parts) > 1 and parts[1] in fmu.vr:
+        named = parts[0] in ("setr", "getr", "geta", "sets", "seti", "geti", "nulla")
+        if named and len(parts) > 1 and parts[1] in fmu.vr:
             parts[1] = str(fmu.vr[parts[1]])
         argv.append(":".join(parts))
         written[argv[-1]] = command

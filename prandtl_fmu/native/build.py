@@ -337,8 +337,8 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
 
 
 def _what(name: str) -> tuple:
-    fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS", "force": "W_FORCE",
-             "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N",
+    fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS",
+             "force": "W_FORCE", "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N",
              "noise_intensity": "W_NOISE_INTENSITY", "noise_seed": "W_NOISE_SEED", "noise_unit": "W_NOISE_UNIT"}
     if name in fixed:
         return fixed[name], 0

@@ -270,26 +270,34 @@ def variants(scene) -> list:
 
 
 def applicable(scene) -> list:
-    """The native steppers that apply to ``scene`` (``loop_for`` accepts it)."""
+    """The native steppers that apply to ``scene`` without its white noise (``loop_for`` accepts it): the FMU's
+    parameters turn a noise on and off, and a stepper that takes none refuses it then (:func:`noise_refusal`)."""
     from ..steppers import get_stepper
 
     names = []
     for name in NATIVE_STEPPERS:
         try:
-            get_stepper(name).loop_for(scene)
+            get_stepper(name).loop_for(with_noise(scene, None))
         except ValueError:
             continue
         names.append(name)
     return names
 
 
-def with_a_noise(scene):
-    """The scene with a white noise on its load (the steppers' rules read only that there is one)."""
+def with_noise(scene, noise):
+    """The scene (an element's or a network's) with the white noise ``noise`` (None: none) on its load."""
     import dataclasses
 
+    if getattr(scene.load, "noise", None) is noise:
+        return scene
+    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=noise))
+
+
+def with_a_noise(scene):
+    """The scene with a white noise on its load (the steppers' rules read only that there is one)."""
     from ..loads import WhiteNoise
 
-    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=WhiteNoise(1.0, 0)))
+    return with_noise(scene, WhiteNoise(1.0, 0))
 
 
 def noise_refusal(scene, stepper) -> "str | None":
@@ -329,7 +337,7 @@ def compile_kernels(scene, steppers) -> list:
         return _compile_connector(scene, structure(scene)) + checks
     compiled = []
     compiled_force = False
-    noisy = with_a_noise(scene)
+    quiet, noisy = with_noise(scene, None), with_a_noise(scene)  # the two loads a stepper's loop is compiled for
     kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
     for suffix, damped in variants(scene):
         for unfolded, shape in kernels:
@@ -343,7 +351,7 @@ def compile_kernels(scene, steppers) -> list:
                                  tangent=tangent, branch_force=branch_force, move=move,
                                  solve_increment=solve_increment, write_elongations=write_elongations,
                                  elastic_force=elastic_force, force_at=force_at, start=start,
-                                 run=get_stepper(stepper).loop_for(scene) if stepper else None,
+                                 run=get_stepper(stepper).loop_for(quiet) if stepper else None,
                                  run_noisy=get_stepper(stepper).loop_for(noisy) if takes_noise else None)
                 exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
                 for helper in ("_model", "_load", "_noisy_load"):  # inlined into each C function

@@ -79,11 +79,14 @@ def excluded(scene, connector: bool) -> tuple:
 
 
 def steppers_of(scene, connector: bool) -> list:
+    """The steppers of the network without its white noise (the parameters turn it on and off: network.h checks
+    its rule, :func:`noise_rule`)."""
     from ..network.model import stepper_problem
+    from .kernels import with_noise
 
     if connector:
         return ["implicit"]
-    return [name for name in ("implicit", "projected") if stepper_problem(scene, name) is None]
+    return [name for name in ("implicit", "projected") if stepper_problem(with_noise(scene, None), name) is None]
 
 
 def fmi3_network_description(root, scene, extra_vr, arrays: bool, connector: bool) -> str:

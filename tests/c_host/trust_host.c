@@ -11,6 +11,7 @@
    Commands: setup:START[:STOP] (FMI 2.0: fmi2SetupExperiment; FMI 3.0: the start and stop of enter)
              enter | exit | term | reset | free | cancel (fmi2CancelStep) | status (the last successful time)
              setr:VR:VALUE | getr:VR | geta:VR:N (FMI 3.0: N values of one variable, u) | sets:VR:TEXT|NULL
+             seti:VR:VALUE | geti:VR (an Integer; FMI 3.0: an Int32)
              step:T:H | save | restore | freestate | dump:PATH (the saved state serialized into PATH)
              load:PATH (PATH deserialized into the saved state) | poke:PATH (PATH's bytes over the saved state's
              memory) | debug:0|1
@@ -416,6 +417,29 @@ int main(int argc, char** argv)
 #endif
             if (status == 0)
                 printf("VALUE %u %.17g\n", vr, value);
+        } else if (strncmp(command, "seti:", 5) == 0) {
+            ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
+            int value = (int)strtol(strchr(rest, ':') + 1, NULL, 10);
+#if FMI_VERSION == 3
+            fmi3Int32 values[1];
+            values[0] = (fmi3Int32)value;
+            status = F(SetInt32)(c, &vr, 1, values, 1);
+#else
+            fmi2Integer values[1];
+            values[0] = (fmi2Integer)value;
+            status = F(SetInteger)(c, &vr, 1, values);
+#endif
+        } else if (strncmp(command, "geti:", 5) == 0) {
+            ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
+#if FMI_VERSION == 3
+            fmi3Int32 values[1] = {0};
+            status = F(GetInt32)(c, &vr, 1, values, 1);
+#else
+            fmi2Integer values[1] = {0};
+            status = F(GetInteger)(c, &vr, 1, values);
+#endif
+            if (status == 0)
+                printf("VALUE %u %d\n", vr, (int)values[0]);
         } else if (strncmp(command, "geta:", 5) == 0) {
             ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
             size_t n = (size_t)strtoul(strchr(rest, ':') + 1, NULL, 10), j;
