@@ -12,6 +12,10 @@ taken with ``needsExecutionTool="false"``; FMI 3.0's is derived from it) and a b
 * ``fmi2.c`` or ``fmi3.c``, the FMI layer, over ``element.h`` or ``connector.h`` (with ``common.h``,
   ``state.h``) and the generated ``scene.h``.
 
+The element's white noise (``noise_intensity``, ``noise_seed``, ``noise_unit``): the kernels' noisy ``advance``
+beside the deterministic one, the steppers' refusals of a noise as a table (``kernels.noise_refusal``), the
+scene's noise as the start values (``docs/native-route.md``).
+
 It needs a C compiler and linker (``cc`` or ``gcc``, or ``$CC``); without one the build stops with one line
 saying what to install. ``$PRANDTL_NATIVE_CFLAGS`` adds flags to the compile (the tests build with
 ``-fsanitize=address,undefined``: such a binary runs only in a host that loads the sanitizers' runtime).

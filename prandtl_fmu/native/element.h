@@ -5,8 +5,9 @@
  * names and value references as the PythonFMU FMU of the scene) and the kernels' symbols. This file does
  * what fmu/slave.py and driver.Element do around them, in the same order of floating-point operations:
  * the element's clock (origin + steps * grid), a duration split into whole steps and a last shorter one,
- * the parameters handed over at a step, the refusals (fmi2Discard for a bad input, a step of more internal
- * steps than ADVANCE_BUDGET, a step that fails or whose outputs would not be finite, the state unchanged;
+ * the parameters handed over at a step (a white noise turned off first, one turned on last), the refusals
+ * (fmi2Discard for a bad input, a step of more internal steps than ADVANCE_BUDGET, a step that fails or whose
+ * outputs would not be finite, the state unchanged;
  * fmi2Error for a bad start value, a non-finite time or a bad FMU state, checked field by field; logged even
  * with logging off, never a NULL category).
  */

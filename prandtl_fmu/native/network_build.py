@@ -12,7 +12,8 @@ read an FMI 3.0 array as a scalar: the arrays are an option).
 The parameters' rules are the library's (``network.model``: ``Network.with_parameters``, ``check_topology``,
 ``stepper_problem``), written into ``scene.h`` as tables: each parameter's rule, and what a mass can break (a node
 held by sliders alone, the load's part with neither support nor mass). Everything a parameter change cannot break
-(which nodes are joined, loops of sliders) is the scene's topology, fixed.
+(which nodes are joined, loops of sliders) is the scene's topology, fixed. The white noise's rule (a massless load
+node needs a dashpot on it) is :func:`noise_rule`'s, its parameters' rules ``common.h``'s (the PythonFMU's).
 """
 from __future__ import annotations
 
