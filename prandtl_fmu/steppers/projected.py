@@ -36,7 +36,7 @@ warns before such a run.
 White noise (F + sigma xi(t)): Euler-Maruyama, the impulse sigma (B(t_{p+1}) - B(t_p)) added to the
 momentum, v <- v + h a + sigma dB / m (before the friction's projection), and to the massless element's
 motion, x <- x + h v + sigma dB / c; the work booked is that of the step's mean force F + sigma dB / h.
-Strong order 1/2 (measured in ``docs/white-noise.md``).
+Strong order: about 1 measured with 7 branches, friction and series dashpots (``docs/white-noise.md``).
 
 Massless element with a dashpot (no [mass]): the same scheme on
 c x' = F - k0 x - k3 x^3 - sum_i k_i u_i, i.e. x <- x + h v with the rate
