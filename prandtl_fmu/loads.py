@@ -246,7 +246,7 @@ def _impulse(noise, t, h):
     sigma, seed, unit, cache = noise
     if sigma == 0.0:
         return 0.0
-    # sigma sqrt(T0) is the same at every step: the compiler hoists it out of the time loop
+    # B = sqrt(T0) W(t / T0): one square root per step (a few ns beside the tree's normal)
     return (sigma * math.sqrt(unit)) * brownian_tree.increment(seed, tree_time(t, unit), tree_time(t + h, unit),
                                                                 cache)
 
@@ -270,8 +270,3 @@ def with_noise(load, deterministic, noisy):
     """``noisy`` for a load with a white noise, ``deterministic`` for one without: a stepper writes both forms of
     an update, and a run without noise compiles only the first (the same bits as before noise existed)."""
     return _choose(noise_of(load), deterministic, noisy)
-
-
-def has_noise(load) -> bool:
-    """Whether a compiled load tuple carries a white noise with sigma != 0 (Python side)."""
-    return len(load) == 7 and load[6][0] != 0.0
