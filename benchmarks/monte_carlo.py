@@ -94,6 +94,24 @@ def on_cluster(doc, paths, workers):
     return wall
 
 
+def derived(rows):
+    """From the in-process lines at both lengths: the cost of a step and of a path's fixed part (scene check,
+    simulate's setup, the reduction), per load; the cluster's efficiency against one process."""
+    per_path = {(where, load, steps): wall / paths for where, load, steps, paths, wall, _ in rows}
+    lines = ["One process, from the two path lengths (cost of a path = fixed + steps x step):", "",
+             "| load | us per step | fixed cost per path (ms) |", "|---|---|---|"]
+    for load in dict.fromkeys(load for where, load, *_ in rows if where.startswith("one process")):
+        short, long = per_path[("one process (1 core)", load, 1000)], per_path[("one process (1 core)", load, 10000)]
+        step = (long - short) / 9000
+        lines.append(f"| {load} | {1e6 * step:.3f} | {1e3 * (short - 1000 * step):.3f} |")
+    lines += ["", "The cluster against one process (paths/s per core over one process's paths/s):", ""]
+    for where, load, steps, paths, wall, cores in rows:
+        if where.startswith("LocalCluster"):
+            alone = per_path[("one process (1 core)", load, steps)]
+            lines.append(f"* {where}, {steps} steps a path: {alone * paths / (wall * cores):.2f}")
+    return lines
+
+
 def load_average():
     return "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
 
@@ -133,6 +151,7 @@ def main(argv=None):
     for where, load, steps, paths, wall, cores in rows:
         lines.append(f"| {where} | {load} | {steps} | {paths} | {wall:.2f} | {paths / wall:.0f} | "
                      f"{paths / wall / cores:.0f} | {1e6 * wall * cores / (paths * steps):.2f} |")
+    lines += ["", *derived(rows)]
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     with open(args.out, "w") as fh:
         fh.write("\n".join(lines) + "\n")
