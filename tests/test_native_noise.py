@@ -104,9 +104,39 @@ step = 0.005
 stop_time = 3.0
 output_interval = 0.1
 """
-TEXTS = {"element": ELEMENT, "quiet": QUIET, "network": NETWORK}
-COLUMNS = {"element": ["x", "v", "reaction"], "quiet": ["x", "v", "reaction"],
-           "network": ["x_a", "v_a", "x_b", "v_b", "reaction"]}
+# massless with a dashpot: backward Euler-Maruyama on c x' = F + sigma xi - ... ('implicit'), Euler-Maruyama
+# ('projected', which books the dashpot's rate as dx / h under a noise, v without: with sigma = 0 the noisy kernel
+# would not be the deterministic one to the bit, so the native FMU runs the deterministic one then)
+MASSLESS = """name = "noisy-massless"
+
+[spring]
+k0 = 1.0
+
+[damper]
+c = 0.5
+
+[branches]
+k = [0.5, 0.3]
+eta = [0.1, 0.4]
+
+[load]
+kind = "harmonic"
+amplitude = 0.5
+omega = 1.1
+noise_intensity = 0.4
+noise_seed = 7
+noise_unit = 0.01
+
+[solver]
+stepper = "implicit"
+step = 0.005
+stop_time = 3.0
+output_interval = 0.1
+"""
+TEXTS = {"element": ELEMENT, "quiet": QUIET, "network": NETWORK, "massless": MASSLESS}
+ENERGY = ["work", "dissipated_sliders", "dissipated_damper", "energy_residual"]
+COLUMNS = {"element": ["x", "v", "reaction"] + ENERGY, "quiet": ["x", "v", "reaction"] + ENERGY,
+           "massless": ["x", "v", "reaction"] + ENERGY, "network": ["x_a", "v_a", "x_b", "v_b", "reaction"]}
 
 
 class Built(dict):
@@ -143,8 +173,8 @@ def library_columns(name, scene):
     if name == "network":
         run = simulate_network(scene)
         return run.time, [run.x[:, 0], run.v[:, 0], run.x[:, 1], run.v[:, 1], run.reaction]
-    run = simulate(scene)
-    return run.time, [run.x, run.v, run.reaction]
+    run = simulate(scene, energy=True)
+    return run.time, [run.x, run.v, run.reaction] + [run.energy[name] for name in ENERGY]
 
 
 def fmu_columns(fmu, name, **start):
@@ -251,11 +281,12 @@ class Instance:
 # ------------------------------------------------------------------ the library's path, bit for bit
 
 
-@pytest.mark.parametrize("fmi", [2, 3])
-@pytest.mark.parametrize("name", ["element", "network"])
+@pytest.mark.parametrize("name, fmi", [("element", 2), ("element", 3), ("network", 2), ("network", 3),
+                                       ("massless", 2)])
 def test_the_native_fmu_with_its_scene_load_is_the_library_bit_for_bit(built, name, fmi):
-    """simulate_fmu with scene_load: the noisy run of the library (x, v, reaction; the network's nodes); with
-    noise_intensity = 0 the deterministic kernels: the library's run of the scene without its noise, bit for bit."""
+    """simulate_fmu with scene_load: the noisy run of the library (x, v, reaction and the energy account; the
+    network's nodes); with noise_intensity = 0 the deterministic kernels: the library's run of the scene without
+    its noise, bit for bit."""
     fmu, path = built[name, fmi]
     scene = load_scene(path)
     time, expected = library_columns(name, scene)
@@ -271,15 +302,18 @@ def test_the_native_fmu_with_its_scene_load_is_the_library_bit_for_bit(built, na
         np.testing.assert_array_equal(fmu_values, values, err_msg=column)
 
 
-@pytest.mark.parametrize("name", ["element", "network"])
+@pytest.mark.parametrize("name", ["element", "network", "massless"])
 def test_the_projected_stepper_draws_the_library_path(built, name):
-    """'projected' (Euler-Maruyama) set on the FMU: the library's run of the scene with that stepper."""
+    """'projected' (Euler-Maruyama) set on the FMU: the library's run of the scene with that stepper, with its
+    noise and, noise_intensity = 0, without."""
     fmu, path = built[name, 2]
     scene = with_text(path, 'stepper = "implicit"', 'stepper = "projected"')
-    _, expected = library_columns(name, scene)
-    _, got = fmu_columns(fmu, name, stepper="projected")
-    for column, fmu_values, values in zip(COLUMNS[name], got, expected):
-        np.testing.assert_array_equal(fmu_values, values, err_msg=column)
+    for noise, start in ((scene.load.noise, {}), (None, {"noise_intensity": 0.0})):
+        _, expected = library_columns(name, dataclasses.replace(scene, load=dataclasses.replace(scene.load,
+                                                                                                noise=noise)))
+        _, got = fmu_columns(fmu, name, stepper="projected", **start)
+        for column, fmu_values, values in zip(COLUMNS[name], got, expected):
+            np.testing.assert_array_equal(fmu_values, values, err_msg=f"{column} {noise}")
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
