@@ -142,13 +142,34 @@ def c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
 
 
+def noise_words() -> dict:
+    """The PythonFMU's words for each rule of the noise's parameters (``NoiseParameters._check_noise_state``:
+    the seed an FMU takes, then ``loads.white_noise``), what follows "name = value: " in its message."""
+    from ..fmu.common import NoiseParameters
+
+    words = {}
+    for name, bad in (("noise_intensity", -1.0), ("noise_seed", -1), ("noise_unit", 0.0)):
+        try:
+            NoiseParameters._check_noise_state({"noise_intensity": 0.0, "noise_seed": 0, "noise_unit": 1.0,
+                                                name: bad})
+        except ValueError as exc:
+            words[name] = str(exc).split(": ", 1)[1]
+    return words
+
+
 def noise_lines(scene, connector: bool) -> list:
     """scene.h's lines of the white noise: the Brownian tree's cache size, the scene's noise (the start values of
-    noise_intensity, noise_seed, noise_unit: none for a connector, whose motion comes in)."""
+    noise_intensity, noise_seed, noise_unit: none for a connector, whose motion comes in), the seed's bound and
+    the words of the parameters' rules (the PythonFMU's, :func:`noise_words`)."""
+    from ..fmu.common import NOISE_SEED_LIMIT
+
     noise = None if connector else scene.load.noise
     sigma, seed, unit = (noise.intensity, noise.seed, noise.unit) if noise is not None else (0.0, 0, 1.0)
+    words = noise_words()
     return [f"#define NOISE_CACHE_SIZE {kernels.NOISE_CACHE_SIZE} /* noise.CACHE_SIZE: int64s */",
-            f"#define NOISE_SCENE {{{float(sigma)!r}, {int(seed)}, {float(unit)!r}}} /* the scene's [load] noise */"]
+            f"#define NOISE_SCENE {{{float(sigma)!r}, {int(seed)}, {float(unit)!r}}} /* the scene's [load] noise */",
+            f"#define NOISE_SEED_LIMIT {float(NOISE_SEED_LIMIT)!r} /* fmu.common: an FMI Integer's seed is below */",
+            *[f"static const char {name.upper()}_WORDS[] = {c_string(text)};" for name, text in words.items()]]
 
 
 def _c_array(values) -> str:

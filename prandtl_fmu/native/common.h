@@ -216,7 +216,6 @@ static const char* head_problem(const char* header, uint32_t version, uint32_t s
  * (an FMI Integer, 32 bits: 0 <= seed < 2^31) and the Brownian tree's time unit (s). What the master set, and what
  * was handed over to the kernels; the path is a function of (seed, time) alone, drawn by the kernels (noise.py) */
 typedef struct { double sigma; int64_t seed; double unit; } Noise;
-#define NOISE_SEED_LIMIT 2147483648.0 /* fmu.common.NOISE_SEED_LIMIT: 2^31 */
 static const Noise SCENE_NOISE = NOISE_SCENE; /* the start values: the scene's [load] noise, or none */
 
 /* Python's repr of a double (the shortest digits that read back, a ".0" on an integral value, an exponent below
@@ -243,23 +242,24 @@ static const char* python_repr(double value, char* buffer, size_t size)
     return buffer;
 }
 
-/* why the noise's settings break a rule, or NULL: NoiseParameters._hand_over_noise's checks and messages, in its
- * order (the seed an FMU takes, then loads.white_noise: the intensity, the seed, the unit) */
+/* why the noise's settings break a rule, or NULL: NoiseParameters._hand_over_noise's checks, in its order (the
+ * seed an FMU takes, NOISE_SEED_LIMIT, then loads.white_noise: the intensity, the seed, the unit), and its words
+ * (scene.h: *_WORDS, taken from the PythonFMU's messages at build time) */
 static const char* noise_problem(const Noise* n, char* buffer, size_t size)
 {
     char shown[40];
     if (!(n->seed >= 0 && (double)n->seed < NOISE_SEED_LIMIT)) {
-        snprintf(buffer, size, "parameter noise_seed = %lld: must be an integer, 0 <= seed < 2^31", (long long)n->seed);
+        snprintf(buffer, size, "parameter noise_seed = %lld: %s", (long long)n->seed, NOISE_SEED_WORDS);
         return buffer;
     }
     if (!(isfinite(n->sigma) && n->sigma >= 0)) {
-        snprintf(buffer, size, "parameter noise_intensity = %s: must be a finite number >= 0 (N sqrt(s))",
-                 python_repr(n->sigma, shown, sizeof shown));
+        snprintf(buffer, size, "parameter noise_intensity = %s: %s", python_repr(n->sigma, shown, sizeof shown),
+                 NOISE_INTENSITY_WORDS);
         return buffer;
     }
     if (!(isfinite(n->unit) && n->unit > 0)) {
-        snprintf(buffer, size, "parameter noise_unit = %s: must be a finite number > 0 (s)",
-                 python_repr(n->unit, shown, sizeof shown));
+        snprintf(buffer, size, "parameter noise_unit = %s: %s", python_repr(n->unit, shown, sizeof shown),
+                 NOISE_UNIT_WORDS);
         return buffer;
     }
     return NULL;
