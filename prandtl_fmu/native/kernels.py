@@ -83,9 +83,9 @@ def advance(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, n
 
 def advance_noisy(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps,
                   sigma, seed, unit, cachep):
-    x, v, taken = run_noisy(_model(p, kp, etap, csp), _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep),
-                      xv[0], xv[1], {u}, t_base, first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)),
-                      carray(erowp, (1, 6)))
+    load = _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep)
+    x, v, taken = run_noisy(_model(p, kp, etap, csp), load, xv[0], xv[1], {u}, t_base, first, h, steps,
+                            carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
     xv[0] = x
     xv[1] = v
     return taken
