@@ -30,7 +30,7 @@ from .kernels.drive import tangent
 from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force
-from .loads import force_at, held, plus, with_white_noise
+from .loads import force_at, held, noise_problem, plus, with_white_noise
 from .noise import new_cache
 from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
@@ -143,6 +143,17 @@ def choose_branch_kernel(scene: Scene, stepper: str) -> str:
 
 def _initial_x(scene: Scene) -> float:
     return scene.mass.x0 if scene.mass is not None else 0.0
+
+
+UNCHANGED = object()  # an argument's default: keep what the object has
+
+
+def with_noise(scene, noise):
+    """The scene (an element's or a network's) with the white noise ``noise`` (``loads.WhiteNoise`` or None) on
+    its load: what a stepper's rules are checked against when an FMU sets a noise of its own."""
+    if noise is scene.load.noise:
+        return scene
+    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=noise))
 
 
 def compile_loop(scene: Scene, stepper: str):
@@ -587,15 +598,12 @@ class Element(OutputMemo):
         """The white noise (``loads.WhiteNoise``, or None: none) on the element's force from the next advance
         on, whether or not the scene's [load] is added (an FMU's noise_intensity, noise_seed, noise_unit);
         ValueError (nothing changed) if the stepper takes no noise or the element cannot carry one."""
-        compile_loop(self._with_noise(noise), self.stepper)  # the stepper's own refusal
+        compile_loop(with_noise(self.scene, noise), self.stepper)  # the stepper's own refusal
+        problem = noise_problem(noise, self.h)
+        if problem:
+            raise ValueError(problem)
         self.noise = noise
         self._touch()
-
-    def _with_noise(self, noise) -> Scene:
-        """The scene with the white noise ``noise`` on its load (what a stepper checks)."""
-        if noise is self.scene.load.noise:
-            return self.scene
-        return dataclasses.replace(self.scene, load=dataclasses.replace(self.scene.load, noise=noise))
 
     def _load_of(self, force: float, scene_load: bool):
         """The compiled load of an advance: ``force`` held (plus the scene's [load] with ``scene_load``), and
@@ -718,6 +726,10 @@ class Element(OutputMemo):
             raise ElementError(f"{self.scene.source}: an advance of {duration!r} s takes {whole + (rest > 0):.4g} "
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations (communication steps) or with a larger step")
+        problem = noise_problem(self.noise, self.h, self.time + duration)  # the Brownian tree's end
+        if problem:
+            raise ElementError(f"{self.scene.source}: the advance to t = {self.time + duration!r} s refused: "
+                               f"{problem}")
         saved = self.checkpoint()
         load = self._load_of(force, scene_load)
         self.force, self._load = float(force), load
@@ -759,7 +771,8 @@ class Element(OutputMemo):
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
-        loop = compile_loop(scene, self.stepper)  # c -> 0 on a massless element: 'projected' no longer applies
+        # c -> 0 on a massless element: 'projected' no longer applies, nor a noise (checked with the noise in use)
+        loop = compile_loop(with_noise(scene, self.noise), self.stepper)
         self.scene, self.model, self._loop = scene, with_scene_coefficients(scene, self.model), loop
         self._record()
 
@@ -770,7 +783,7 @@ class Element(OutputMemo):
         elongations are expanded to one per branch (O(n), once); when it does
         and the branches are many, they are folded back into a stack.
         """
-        loop = compile_loop(self._with_noise(self.noise), name)  # (a stepper may refuse the noise)
+        loop = compile_loop(with_noise(self.scene, self.noise), name)  # (a stepper may refuse the noise)
         kind = choose_branch_kernel(self.scene, name) if self._can_fold() else "play"
         if self._forced_kernel and getattr(get_stepper(name), "BRANCH_STACK", False):
             kind = self._forced_kernel
@@ -808,6 +821,9 @@ class Element(OutputMemo):
         """Use another internal step h (s) from the next step on."""
         if not (math.isfinite(step) and step > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
+        problem = noise_problem(self.noise, step)
+        if problem:
+            raise ValueError(problem)
         self.h = float(step)
 
     def stability_problem(self) -> Optional[str]:
@@ -836,9 +852,12 @@ class Element(OutputMemo):
         state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
         return state
 
-    def set_state(self, state: dict) -> None:
+    def set_state(self, state: dict, noise=UNCHANGED) -> None:
         """Restore a state from :meth:`get_state`; checks every field (types, finiteness, the admissibility of
-        the branch state, finite outputs) before changing anything: ValueError naming what does not fit."""
+        the branch state, finite outputs) before changing anything: ValueError naming what does not fit.
+        ``noise``: the white noise in use from then on (an FMU state's own settings; default the element's),
+        against which the state's stepper and coefficients are checked."""
+        noise = self.noise if noise is UNCHANGED else noise
         values = [plain_number(state[key], key) for key in ("time", "x", "v", "force", "initial_energy")]
         clock = _clock(state.get("clock"), values[0])
         booked = state["energy_account"]
@@ -857,7 +876,7 @@ class Element(OutputMemo):
         stepper, step = state["stepper"], plain_number(state["step"], "step")
         if not isinstance(stepper, str):
             raise ValueError(f"state has stepper {stepper!r}, not a name")
-        loop = compile_loop(scene, stepper)
+        loop = compile_loop(with_noise(scene, noise), stepper)
         if not step > 0:
             raise ValueError(f"state has step = {step!r}, must be > 0")
         model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
@@ -871,6 +890,7 @@ class Element(OutputMemo):
         self.scene, self.branch_kernel = scene, kind
         self.model = model
         self._loop, self.stepper = loop, stepper
+        self.noise = noise
         self.x, self.v, self.force, self.initial_energy = values[1:]
         self._load = held(self.force)
         self._origin, self._steps, self._grid = clock

@@ -69,6 +69,27 @@ def white_noise(intensity, seed, unit=1.0) -> Optional[WhiteNoise]:
     return WhiteNoise(float(intensity), seed, float(unit)) if intensity > 0 else None
 
 
+# The Brownian tree resolves time to 2^-52 of its unit (below one unit; 2^-48 relative through tree_time) and
+# ends at 2^52 units: a step shorter than this many units would see a path rounded to nothing.
+FINEST_STEP_IN_UNITS = 2.0 ** -40
+
+
+def noise_problem(noise: Optional[WhiteNoise], step: float, stop_time: Optional[float] = None) -> Optional[str]:
+    """Why the noise's unit does not fit a run with internal step ``step`` up to ``stop_time`` (None if it does):
+    beyond the tree's horizon (2^52 units) or a step below 2^-40 units the path would be frozen or rounded
+    away, silently: refused instead."""
+    if noise is None:
+        return None
+    if not step / noise.unit >= FINEST_STEP_IN_UNITS:
+        return (f"noise_unit = {noise.unit!r} s is too coarse for the step {step!r} s: the Brownian tree resolves "
+                f"2^-40 of its unit; take noise_unit <= {step / FINEST_STEP_IN_UNITS:.3g} s (the coarsest step of a "
+                "study is the advice)")
+    if stop_time is not None and not stop_time / noise.unit < brownian_tree.HORIZON:
+        return (f"noise_unit = {noise.unit!r} s is too fine for the stop time {stop_time!r} s: the Brownian tree ends "
+                f"at 2^52 units; take noise_unit >= {stop_time / brownian_tree.HORIZON:.3g} s")
+    return None
+
+
 def with_white_noise(load, noise: Optional[WhiteNoise], cache):
     """A compiled load tuple with its white noise (if any) replaced by ``noise`` (None: without noise): an
     FMU's force in, plus the noise its parameters set."""
@@ -246,6 +267,8 @@ def _impulse(noise, t, h):
     sigma, seed, unit, cache = noise
     if sigma == 0.0:
         return 0.0
+    if not (t + h) / unit < brownian_tree.HORIZON:
+        return np.nan  # the tree ends at 2^52 units: the step fails (a frozen path would be a silent zero)
     # B = sqrt(T0) W(t / T0): one square root per step (a few ns beside the tree's normal)
     return (sigma * math.sqrt(unit)) * brownian_tree.increment(seed, tree_time(t, unit), tree_time(t + h, unit),
                                                                 cache)

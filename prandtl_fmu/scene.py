@@ -28,7 +28,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .effects import (SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
                       sample_spectrum)
-from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad, WhiteNoise
+from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad, WhiteNoise, noise_problem
 from .resources import ResourceError, check_memory
 
 # Memory per branch at the peak of a run: the scene's arrays, the kernel's sorted copies, the memory stack's ten
@@ -471,6 +471,7 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
             r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
                    "remove [mass] (the bodies hold the inertia) or use \"force\"")
     scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality, friction)
+    _check_noise_unit(scene)
     if check_stepper and causality == "force":  # the connector takes no time steps: no stepper to check
         _check_stepper_applies(scene, where="[solver] ")
     return scene
@@ -730,6 +731,13 @@ def _load(source, data) -> Load:
     if np.any((steps[1:] == 0) & (steps[:-1] == 0)):
         r.fail("time", "a time may appear at most twice (one jump at a time)")
     return TableLoad(time, force, noise)
+
+
+def _check_noise_unit(scene) -> None:
+    """The white noise's unit against the run's step and stop time (loads.noise_problem), one line."""
+    problem = noise_problem(scene.load.noise, scene.solver.step, scene.solver.stop_time)
+    if problem:
+        raise SceneError(f"{scene.source}: [load] {problem}")
 
 
 def _white_noise(r, intensity_key, seed_key) -> Optional[WhiteNoise]:

@@ -24,7 +24,7 @@ from typing import Optional, Union
 from xml.sax.saxutils import escape as xml_escape
 
 from ..outputs import write_atomically
-from ..scene import load_scene, scene_path as resolve_scene
+from ..scene import SceneError, load_scene, scene_path as resolve_scene
 
 LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
 MODEL_IDENTIFIER = "PrandtlElement"
@@ -49,6 +49,17 @@ def file_stem(name: str) -> str:
     else becomes '_'; no leading dot; an empty result is 'prandtl_element'."""
     stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".")[:100]
     return stem or "prandtl_element"
+
+
+def _check_noise_seed(scene) -> None:
+    """An FMU's noise_seed is an FMI Integer (32 bits): a scene's seed beyond it is refused here, naming the
+    user's scene (the slave checks it again where PythonFMU copies the scene)."""
+    from .common import NOISE_SEED_LIMIT
+
+    noise = getattr(scene.load, "noise", None)
+    if noise is not None and noise.seed >= NOISE_SEED_LIMIT:
+        raise SceneError(f"{scene.source}: [load] the noise's seed {noise.seed}: an FMU's noise_seed is an FMI "
+                         "Integer (32 bits): it must be < 2^31")
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
@@ -112,6 +123,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if loader == "prandtl" and native.stale():
         raise RuntimeError(native.stale())
     scene = load_scene(scene_path, check_stepper=causality != "displacement")
+    _check_noise_seed(scene)
     scene_bytes = Path(resolve_scene(scene_path)).read_bytes()
     if causality is not None:
         scene, scene_bytes = _with_causality(scene, scene_bytes, causality)

@@ -245,15 +245,15 @@ class NoiseParameters:
                 "noise_unit": self.noise_unit}
 
     @staticmethod
-    def _check_noise_state(settings: dict) -> None:
-        """ValueError if a saved state's noise settings break a rule (the next step hands them over, with the
-        library's checks, as it does the other parameters)."""
+    def _check_noise_state(settings: dict):
+        """The white noise of a saved state's settings (None: none), against which the library checks the
+        state's stepper and coefficients; ValueError if a setting breaks a rule."""
         from ..loads import white_noise
 
         seed = settings["noise_seed"]
         if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < NOISE_SEED_LIMIT):
             raise ValueError(f"noise_seed = {seed!r}: must be an integer, 0 <= seed < 2^31")
-        white_noise(settings["noise_intensity"], seed, settings["noise_unit"])
+        return white_noise(settings["noise_intensity"], seed, settings["noise_unit"])
 
     def _set_noise_values(self, settings: dict) -> None:
         self.noise_intensity = settings["noise_intensity"]

@@ -249,8 +249,8 @@ class PrandtlNetwork(NoiseParameters, SlaveBase):
                                  "numbers")
             if not isinstance(settings["scene_load"], bool):
                 raise ValueError(f"scene_load = {settings['scene_load']!r}: must be true or false")
-            self._check_noise_state(settings)
-            element = restored(self.element, state["network"], settings["stepper"], settings["step"])
+            noise = self._check_noise_state(settings)
+            element = restored(self.element, state["network"], settings["stepper"], settings["step"], noise)
         except Exception as exc:  # any malformed or forged content: a reason, the instance unchanged
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.element = element
@@ -312,20 +312,19 @@ def rebuilt(element, stepper, step):
     library checks both: ValueError with the reason)."""
     if not isinstance(stepper, str) or not finite_number(step):
         raise ValueError("the stepper must be a name and the step a finite number")
-    fresh = type(element)(element.scene, stepper=stepper, step=step)
-    fresh.set_noise(element.noise)
+    fresh = type(element)(element.scene, stepper=stepper, step=step, noise=element.noise)
     fresh.set_state(element.get_state())
     return fresh
 
 
-def restored(element, network_state, stepper, step):
-    """A new stepped object like ``element`` with the parameters, stepper, step and state of a saved FMU state;
-    every check is the library's (ValueError, SceneError)."""
+def restored(element, network_state, stepper, step, noise):
+    """A new stepped object like ``element`` with the parameters, stepper, step, white noise and state of a saved
+    FMU state; every check is the library's (ValueError, SceneError)."""
     if not isinstance(network_state, dict) or not isinstance(network_state.get("parameters"), dict):
         raise ValueError("it holds no network state")
     if not isinstance(stepper, str) or not finite_number(step):
         raise ValueError(f"stepper = {stepper!r}, step = {step!r}: must be a name and a finite number")
     network = element.scene.network.with_parameters(**network_state["parameters"])
-    fresh = type(element)(element.scene.with_network(network), stepper=stepper, step=step)
+    fresh = type(element)(element.scene.with_network(network), stepper=stepper, step=step, noise=noise)
     fresh.set_state(network_state)
     return fresh

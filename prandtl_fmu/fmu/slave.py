@@ -324,8 +324,9 @@ class PrandtlElement(NoiseParameters, SlaveBase):
                 problem = f"F = {settings['F']!r}, start time {settings['start_time']!r}: must be finite numbers"
             if problem:
                 raise ValueError(problem)
-            self._check_noise_state(settings)
-            self.element.set_state(state["element"])  # checks everything before changing anything
+            noise = self._check_noise_state(settings)
+            # checks everything (the stepper with the state's noise) before changing anything
+            self.element.set_state(state["element"], noise=noise)
         except Exception as exc:  # any malformed or forged content (IndexError, OverflowError, ...): a reason
             self._fail(f"FMU state refused ({exc.__class__.__name__}: {exc}); the instance is unchanged")
         self.F, self.step, self.stepper, self.start_time = values

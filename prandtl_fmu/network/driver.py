@@ -19,8 +19,8 @@ import numpy as np
 
 from . import kernels
 from .model import NetworkScene, stepper_problem
-from ..driver import ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration
-from ..loads import force_at, held, plus, with_white_noise
+from ..driver import UNCHANGED, ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration, with_noise
+from ..loads import force_at, held, noise_problem, plus, with_white_noise
 from ..noise import new_cache
 from ..scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, SceneError
 
@@ -37,13 +37,6 @@ def loop_for(stepper: str):
 
 def step_for(stepper: str):
     return {"implicit": kernels.implicit_step, "projected": kernels.projected_step}[stepper]
-
-
-def _with_noise(scene: NetworkScene, noise) -> NetworkScene:
-    """The scene with the white noise ``noise`` on its load (what the stepper rules check)."""
-    if noise is scene.load.noise:
-        return scene
-    return dataclasses.replace(scene, load=dataclasses.replace(scene.load, noise=noise))
 
 
 def check_applies(scene: NetworkScene, stepper: str) -> None:
@@ -298,14 +291,19 @@ class NetworkElement(OutputMemo):
     element's rules: :class:`prandtl_fmu.driver.Element`). Outputs: :attr:`x`, :attr:`v` (per node),
     :attr:`reaction`, :meth:`energy`."""
 
-    def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None):
+    def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
+                 noise=UNCHANGED):
         self.scene = scene
         self.stepper = stepper or scene.solver.stepper
-        check_applies(scene, self.stepper)
+        # the white noise on the load's node (set_noise; default the scene's), the stepper checked with it
+        self.noise = scene.load.noise if noise is UNCHANGED else noise
+        check_applies(with_noise(scene, self.noise), self.stepper)
         self.h = float(step if step is not None else scene.solver.step)
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"step must be a finite number > 0, got {step!r}")
-        self.noise = scene.load.noise  # the white noise on the load's node (set_noise; default the scene's)
+        problem = noise_problem(self.noise, self.h)
+        if problem:
+            raise ValueError(problem)
         self.reset()
 
     def set_noise(self, noise) -> None:
@@ -313,7 +311,10 @@ class NetworkElement(OutputMemo):
         whether or not the scene's [load] is added (an FMU's noise_intensity, noise_seed, noise_unit);
         ValueError (nothing changed) where the network cannot carry one (a massless load node without a
         dashpot)."""
-        check_applies(_with_noise(self.scene, noise), self.stepper)
+        check_applies(with_noise(self.scene, noise), self.stepper)
+        problem = noise_problem(noise, self.h)
+        if problem:
+            raise ValueError(problem)
         self.noise = noise
         self._touch()
 
@@ -395,6 +396,10 @@ class NetworkElement(OutputMemo):
             raise ElementError(f"{self.scene.source}: an advance of {duration!r} s takes {whole + (rest > 0):.4g} "
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations or with a larger step")
+        problem = noise_problem(self.noise, self.h, self.time + duration)  # the Brownian tree's end
+        if problem:
+            raise ElementError(f"{self.scene.source}: the advance to t = {self.time + duration!r} s refused: "
+                               f"{problem}")
         saved = self.checkpoint()
         load = plus(self.scene.load.compile(), force) if scene_load else held(force)
         load = with_white_noise(load, self.noise, self._noise_cache)
@@ -442,7 +447,7 @@ class NetworkElement(OutputMemo):
                 raise SceneError(f"eta_{element.name}: {element.eta!r} is below the branch's elongation now, "
                                  f"|u| = {abs(float(self.u[e]))!r}: it would drop stored energy unbooked")
         scene = self.scene.with_network(network)
-        problem = stepper_problem(_with_noise(scene, self.noise), self.stepper)
+        problem = stepper_problem(with_noise(scene, self.noise), self.stepper)
         if problem:
             raise SceneError(f"{', '.join(values)}: {problem}")
         self.scene = scene
@@ -496,7 +501,7 @@ class NetworkElement(OutputMemo):
             u = arrays["u"][e]
             if element.kind == "branch" and not abs(u) <= element.eta or element.kind != "branch" and u != 0:
                 raise ValueError(f"state's u of {element.name} ({u!r}) is outside its elastic range")
-        problem = stepper_problem(self.scene.with_network(restored), self.stepper)
+        problem = stepper_problem(with_noise(self.scene.with_network(restored), self.noise), self.stepper)
         if problem:
             raise ValueError(f"state's parameters: {problem}")
         self.scene = self.scene.with_network(restored)

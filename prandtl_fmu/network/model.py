@@ -24,7 +24,7 @@ from typing import Optional
 import numpy as np
 
 from . import kernels
-from ..scene import SceneError, Solver, _Reader, _check_solver, _kind, _load, _solver, CAUSALITIES
+from ..scene import SceneError, Solver, _Reader, _check_noise_unit, _check_solver, _kind, _load, _solver, CAUSALITIES
 from ..loads import ConstantLoad
 
 KINDS = {"spring": kernels.SPRING, "dashpot": kernels.DASHPOT, "slider": kernels.SLIDER, "branch": kernels.BRANCH,
@@ -249,6 +249,7 @@ def network_scene(doc: dict, source: str, check: bool = True) -> NetworkScene:
             r.fail("causality", f'"displacement" imposes the motion of load node {network.nodes[network.load_node]}'
                    ", which must then be massless (the bodies hold its inertia): give it mass 0 or use \"force\"")
     scene = NetworkScene(name, network, load, solver, source, causality)
+    _check_noise_unit(scene)
     if check:
         check_stepper(scene, "[solver] ")
     return scene
