@@ -425,6 +425,26 @@ def test_a_bad_noise_parameter_is_a_logged_discard_with_the_pythonfmu_words(buil
     slave.close()
 
 
+@pytest.mark.parametrize("name", ["element", "network"])
+def test_a_noise_unit_too_coarse_for_the_step_is_refused_with_the_library_words(built, name):
+    """loads.noise_problem: below 2^-40 units a step's increment would be rounded away (the adversarial review's
+    silent zero); the native FMU refuses it as Element/NetworkElement.set_noise do, in their words."""
+    from prandtl_fmu.loads import WhiteNoise, noise_problem
+
+    fmu, _ = built[name, 2]
+    out = "x" if name == "element" else "x_b"
+    slave = Instance(fmu, {"scene_load": True})
+    assert slave.step(0.1) == OK
+    before = slave.get(out)
+    step = slave.get("step")
+    slave.set("noise_unit", 1e20)
+    assert slave.step(0.1) == DISCARD
+    words = noise_problem(WhiteNoise(slave.get("noise_intensity"), 0, 1e20), step)
+    assert slave.said(f"parameter {words}{REFUSED_UNTIL}"), (words, slave.messages[-1])
+    assert slave.get(out) == before
+    slave.close()
+
+
 def test_a_value_in_a_message_is_written_as_python_writes_it(built):
     """The refused value as Python's repr shows it (the PythonFMU's message): the shortest digits, '.0' on an
     integral value, an exponent below 1e-4 and from 1e16 on."""

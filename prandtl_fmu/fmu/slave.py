@@ -297,7 +297,10 @@ class PrandtlElement(NoiseParameters, SlaveBase):
             if not (finite_number(step) and step > 0):
                 return self._refuse(f"parameter step = {step!r} refused: must be finite and > 0; "
                                     "steps are refused until it is set right")
-            element.set_step(step)
+            try:
+                element.set_step(step)
+            except ValueError as exc:  # a white noise's unit too coarse for it
+                return self._refuse(f"parameter {exc}; steps are refused until it is set right")
         return noise_first or self._hand_over_noise(element)
 
     # ------------------------------------------------------------ FMU state

@@ -265,6 +265,20 @@ static const char* noise_problem(const Noise* n, char* buffer, size_t size)
     return NULL;
 }
 
+/* why the noise's unit is too coarse for the internal step, or NULL: loads.noise_problem's first rule and words
+ * (the Brownian tree resolves 2^-40 of its unit; below, the path would be rounded away), as Element.set_noise and
+ * set_step refuse it. (Its second rule, the tree's end at 2^52 units, fails the step in the kernel.) */
+static const char* noise_step_problem(const Noise* n, double step, char* buffer, size_t size)
+{
+    char unit[40], shown[40];
+    if (n->sigma == 0.0 || step / n->unit >= 0x1p-40)
+        return NULL;
+    snprintf(buffer, size, "parameter noise_unit = %s s is too coarse for the step %s s: the Brownian tree resolves "
+             "2^-40 of its unit; take noise_unit <= %.3g s (the coarsest step of a study is the advice)",
+             python_repr(n->unit, unit, sizeof unit), python_repr(step, shown, sizeof shown), step / 0x1p-40);
+    return buffer;
+}
+
 /* the load of an advance: the force held, or the scene's [load] plus it (loads.held, loads.plus), and the white
  * noise (loads.with_white_noise: sigma 0, none; ``cache``: the Brownian tree's, any content valid) */
 typedef struct {

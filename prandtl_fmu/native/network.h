@@ -235,6 +235,8 @@ static const char* hand_over_problem(Instance* c, char* buffer, size_t size)
         return buffer;
     }
     problem = noise_problem(&c->noise_set, buffer, size);
+    if (problem == NULL)
+        problem = noise_step_problem(&c->noise_set, c->step, buffer, size);
     if (problem == NULL && noise_refusal(c->par) != NULL) {
         snprintf(buffer, size, "parameter %s", noise_refusal(c->par));
         problem = buffer;
