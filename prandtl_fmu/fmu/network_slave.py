@@ -33,7 +33,7 @@ depends directly on F (a master that sets F sees the outputs change at the next 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, String
 
 from .. import __version__
-from ..driver import ElementError
+from ..driver import UNCHANGED, ElementError
 from ..loads import force_at
 from ..network import NetworkElement
 from ..network.model import NETWORK_STEPPERS, stepper_problem
@@ -317,9 +317,11 @@ def rebuilt(element, stepper, step):
     return fresh
 
 
-def restored(element, network_state, stepper, step, noise):
-    """A new stepped object like ``element`` with the parameters, stepper, step, white noise and state of a saved
-    FMU state; every check is the library's (ValueError, SceneError)."""
+def restored(element, network_state, stepper, step, noise=UNCHANGED):
+    """A new stepped object like ``element`` with the parameters, stepper, step, white noise (default:
+    ``element``'s; a connector has none of its own) and state of a saved FMU state; every check is the
+    library's (ValueError, SceneError)."""
+    noise = element.noise if noise is UNCHANGED else noise
     if not isinstance(network_state, dict) or not isinstance(network_state.get("parameters"), dict):
         raise ValueError("it holds no network state")
     if not isinstance(stepper, str) or not finite_number(step):

@@ -524,11 +524,12 @@ class NetworkConnector(NetworkElement):
     (:func:`kernels.jump_node`: the masses and dashpots do not move). :attr:`force` is the force of the
     network's elements on that node (what holds the motion). The load's node must stay massless."""
 
-    def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None):
+    def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
+                 noise=UNCHANGED):
         if scene.network.mass[scene.network.load_node] > 0:
             raise ValueError(f"{scene.source}: the connector imposes the motion of the load's node "
                              f"{scene.network.nodes[scene.network.load_node]}, which must be massless")
-        super().__init__(scene, stepper, step)
+        super().__init__(scene, stepper, step, noise)
         if self.stepper != "implicit":
             raise ValueError(f"{scene.source}: the connector takes 'implicit' steps (the imposed motion is a "
                              "constraint)")
