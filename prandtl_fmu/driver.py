@@ -879,6 +879,9 @@ class Element(OutputMemo):
         loop = compile_loop(with_noise(scene, noise), stepper)
         if not step > 0:
             raise ValueError(f"state has step = {step!r}, must be > 0")
+        problem = noise_problem(noise, step)  # the state's step under the noise in use from then on
+        if problem:
+            raise ValueError(problem)
         model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
         m, k0, k3, c, k, eta, cs, friction = model
         _, x, v, force, _ = values
@@ -886,11 +889,11 @@ class Element(OutputMemo):
                    stored(x, k0, k3, k, u))
         if not all(math.isfinite(value) for value in outputs):
             raise ValueError(f"state has x = {x!r}, v = {v!r}: its reaction or energy is not finite")
-        self.set_step(step)
+        self.noise = noise
+        self.set_step(step)  # (its noise rule checked above with this noise)
         self.scene, self.branch_kernel = scene, kind
         self.model = model
         self._loop, self.stepper = loop, stepper
-        self.noise = noise
         self.x, self.v, self.force, self.initial_energy = values[1:]
         self._load = held(self.force)
         self._origin, self._steps, self._grid = clock
