@@ -3,7 +3,7 @@
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp] [--loader prandtl|pythonfmu]
-                      [--runtime python|native] [--fmi 2|3]
+                      [--runtime python|native] [--fmi 2|3] [--arrays]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
@@ -107,6 +107,10 @@ def _parser() -> argparse.ArgumentParser:
                             "element, FMI 2.0 or 3.0)")
     build.add_argument("--fmi", type=int, choices=(2, 3), default=2,
                        help="FMI version: 2 (default) or 3 (the native runtime only)")
+    build.add_argument("--arrays", action="store_true",
+                       help="native FMI 3.0 only: besides the scalars every master reads (u_1 .. u_n; a network's "
+                            "x_<node>, v_<node>), the same values as arrays (u; x and v) for masters that handle "
+                            "FMI 3.0 arrays")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
@@ -294,7 +298,7 @@ def _build(args) -> int:
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
         path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader,
-                         runtime=args.runtime, fmi=args.fmi)
+                         runtime=args.runtime, fmi=args.fmi, arrays=args.arrays)
     except (SceneError, ValueError, RuntimeError) as exc:
         return _error(exc)
     except OSError as exc:

@@ -416,7 +416,8 @@ def fmus3(fmus, tmp_path_factory):
 @pytest.mark.parametrize("name", quick_or_slow(["friction", "paper", "continuum"]))
 def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmus3, name):
     """FMPy's validator finds nothing; simulate_fmu with the scene's load gives the library's x, v, reaction and the
-    array u (n elongations, sized by the structural parameter n) bit for bit."""
+    elongations, the scalars u_1 .. u_n (n, a local constant as in FMI 2.0; the arrays' option:
+    tests/test_fmu_hosts.py), bit for bit."""
     from fmpy import read_model_description, simulate_fmu
     from fmpy.validation import validate_fmu
 
@@ -427,26 +428,25 @@ def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmu
     by_name = {v.name: v for v in description.modelVariables}
     scene = load_scene(scene_path)
     continuum = scene.branches.continuum
-    if continuum:  # no elongation per branch: n is -1, a local constant, as in FMI 2.0, and there is no u
-        assert by_name["n"].causality == "local" and int(by_name["n"].start) == -1 and "u" not in by_name
-    else:
-        assert by_name["n"].causality == "structuralParameter" and int(by_name["n"].start) == scene.branches.n
-        assert by_name["u"].dimensions[0].valueReference == by_name["n"].valueReference
+    n = -1 if continuum else scene.branches.n
+    elongations = [f"u_{i}" for i in range(1, n + 1)]  # none for the continuum: no elongation per branch
+    assert by_name["n"].causality == "local" and by_name["n"].type == "Int32" and int(by_name["n"].start) == n
+    assert "u" not in by_name and [name for name in by_name if name.startswith("u_")] == elongations
+    assert not [v.name for v in description.modelVariables if v.dimensions]
     stop = min(scene.solver.stop_time, 20.0)
     library = simulate(scene.with_solver(stop_time=stop), states=not continuum)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
-                          start_values={"scene_load": True},
-                          output=["x", "v", "reaction"] + ([] if continuum else ["u"]))
+                          start_values={"scene_load": True}, output=["x", "v", "reaction"] + elongations)
     for column in ("x", "v", "reaction"):
         np.testing.assert_array_equal(result[column], getattr(library, column))
     if not continuum:
-        np.testing.assert_array_equal(np.stack(result["u"]), library.u)
+        np.testing.assert_array_equal(np.column_stack([result[u] for u in elongations]), library.u)
     if name == "paper":  # exact: the stack unfolded, u read from the n elongations
         library = simulate(scene.with_solver(stop_time=stop), "exact", states=True)
         result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
-                              start_values={"scene_load": True, "stepper": "exact"}, output=["x", "u"])
+                              start_values={"scene_load": True, "stepper": "exact"}, output=["x"] + elongations)
         np.testing.assert_array_equal(result["x"], library.x)
-        np.testing.assert_array_equal(np.stack(result["u"]), library.u)
+        np.testing.assert_array_equal(np.column_stack([result[u] for u in elongations]), library.u)
 
 
 def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
@@ -479,7 +479,7 @@ def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
             element.advance(size, force)
             t += size
             assert slave.getFloat64([vr["x"], vr["v"], vr["reaction"]]) == [element.x, element.v, element.reaction]
-            assert slave.getFloat64([vr["u"]], nValues=3) == element.elongations().tolist()
+            assert slave.getFloat64([vr["u_1"], vr["u_2"], vr["u_3"]]) == element.elongations().tolist()
         state = slave.getFMUState()
         blob = bytearray(slave.serializeFMUState(state))
         blob[-12] ^= 0x40
@@ -578,10 +578,11 @@ def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(co
     t = np.arange(0, 5.0 + 1e-9, 0.05)
     signal = np.zeros(len(t), dtype=[("time", float), ("x", float), ("v", float)])
     signal["time"], signal["x"], signal["v"] = t, 0.3 * np.sin(t), 0.3 * np.cos(t)
-    three = simulate_fmu(str(fmus["fmi3"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force", "u"])
+    three = simulate_fmu(str(fmus["fmi3"]), stop_time=5.0, output_interval=0.05, input=signal,
+                         output=["force", "u_1", "u_2", "u_3"])
     two = simulate_fmu(str(fmus["python"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force"])
     np.testing.assert_array_equal(three["force"], two["force"])
-    assert np.ptp(three["force"]) > 0.1 and np.stack(three["u"]).shape == (len(t), 3)
+    assert np.ptp(three["force"]) > 0.1 and min(np.ptp(three[f"u_{i}"]) for i in (1, 2, 3)) > 0
 
 
 @pytest.mark.parametrize("name, settings", [
@@ -649,7 +650,7 @@ def test_the_native_fmu_s_page_describes_the_native_fmu_and_its_own_variables(fm
         if version == "fmi3":
             assert "fmi2" not in page
         if version == "fmi3":
-            assert "<td>u</td>" in page and "<td>Float64</td>" in page
+            assert "<td>u_1</td>" in page and "<td>Float64</td>" in page
 
 
 def test_the_fmi3_description_speaks_fmi3_and_gives_every_output_its_dependencies(fmus3):
@@ -663,6 +664,6 @@ def test_the_fmi3_description_speaks_fmi3_and_gives_every_output_its_dependencie
         assert categories and not any("fmi2" in text for text in categories), categories
         for unknown in root.find("ModelStructure"):
             assert unknown.get("dependencies") is not None, ET.tostring(unknown)
-        n = root.find("ModelVariables/UInt64[@name='n']")
+        n = root.find("ModelVariables/Int32[@name='n']")  # FMI 2.0's local constant (arrays: UInt64, structural)
         scene = load_scene(fmus3[name][1])
         assert n is not None and int(n.get("start")) == scene.branches.n >= 0

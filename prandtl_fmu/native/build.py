@@ -66,8 +66,12 @@ def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arra
     return network_build.build(scene_path, out, fmi, causality, arrays, compiler(), NativeBuildError)
 
 
-def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
-    """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it."""
+def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False) -> Path:
+    """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it.
+
+    FMI 3.0 offers the branch elongations as the scalars u_1 .. u_n (every master reads them: OMSimulator and ecos
+    read an FMI 3.0 array as a scalar); ``arrays`` (FMI 3.0 only) adds them as the array u, sized by the structural
+    parameter n. A network scene goes to :func:`build_native_network_fmu` (its nodes' x and v)."""
     from ..fmu.build import add_entry, build_fmu
     from ..fmu.documentation import index_html
     from ..scene import load_scene
@@ -76,7 +80,12 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
     if hasattr(scene, "network"):  # a [network] or [chain] scene
-        return build_native_network_fmu(scene_path, out, fmi, causality)
+        return build_native_network_fmu(scene_path, out, fmi, causality, arrays)
+    if arrays and fmi != 3:
+        raise NativeBuildError("arrays: the elongations u as an array are an FMI 3.0 option (fmi=3)")
+    if arrays and elongation_count(scene) == 0:
+        raise NativeBuildError("arrays: this scene has no branch elongations to offer as an array (no [branches], "
+                               "or a continuum): build it without arrays")
     if causality is not None and causality != scene.causality:
         from ..fmu.build import _with_causality
 
@@ -99,7 +108,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
             raise NativeBuildError("no stepper of the native runtime applies to this scene")
         compiled = kernels.compile_kernels(scene, steppers)
         objects, external = kernels.emit_objects(compiled, scratch)
-        (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path))
+        (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path, arrays))
         vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
         (scratch / "stubs.c").write_text(_stubs(external))
         library = scratch / f"{identifier}.so"
@@ -118,7 +127,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None) -> Path:
             errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
             raise NativeBuildError(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
         native_description = (_native_description(description) if fmi == 2
-                              else fmi3_description(root, scene, vr_u))
+                              else fmi3_description(root, scene, vr_u, arrays))
         platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
@@ -177,7 +186,20 @@ def _c_array(values) -> str:
     return "{" + ", ".join(repr(float(value)) for value in values) + "}"
 
 
-def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
+def elongation_count(scene) -> int:
+    """n, the branch elongations u_1 .. u_n an FMU offers: 0 without branches or for the continuum."""
+    branches = scene.branches
+    return 0 if branches is None or branches.continuum else branches.n
+
+
+def elongation_references(root) -> tuple:
+    """(VR_U, VR_TIME, VR_U_FIRST): the value references the native FMU adds after the PythonFMU FMU's ``root``:
+    the array u (FMI 3.0 with arrays), time (FMI 3.0), then the scalars u_1 .. u_n (FMI 3.0)."""
+    vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
+    return vr_u, vr_u + 1, vr_u + 2
+
+
+def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = False) -> str:
     from .. import scene as library_rules
     from ..kernels import stack
     from ..steppers import get_stepper
@@ -277,6 +299,12 @@ def _scene_header(scene, root, steppers, compiled, scene_path) -> str:
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",
+        # FMI 3.0: the scalars u_1 .. u_n always, the array u and its structural parameter n with arrays only
+        f"#define ARRAYS {int(arrays)}",
+        f"#define VR_U_FIRST {elongation_references(root)[2]}u /* u_1; u_i is VR_U_FIRST + i - 1 */",
+        "#define STRUCTURAL_N NB",
+        "#define HAS_STRUCTURAL ARRAYS",
+        '#define STRUCTURAL_TEXT "n is the scene\'s number of branches"',
         "typedef double* P;",
         "typedef int64_t (*advance_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t);",
@@ -436,12 +464,17 @@ def _stubs(undefined) -> str:
     return "\n".join(lines) + "\n"
 
 
-def fmi3_description(root, scene, vr_u) -> str:
-    """The FMI 3.0 model description from the FMI 2.0 one: the same scalars (Real -> Float64, with their value
-    references, units, causalities, variabilities, start values), n as a fixed structural parameter (UInt64) and
-    the elongations u, an array of n Float64 outputs (none without branches)."""
-    continuum = scene.branches is not None and scene.branches.continuum
-    n = 0 if scene.branches is None or continuum else scene.branches.n
+def fmi3_description(root, scene, vr_u, arrays: bool = False) -> str:
+    """The FMI 3.0 model description from the FMI 2.0 one (one list of variables: the PythonFMU FMU's): the same
+    scalars (Real -> Float64, Integer -> Int32, with their value references, units, causalities, variabilities,
+    start values and dependencies), the independent variable ``time`` and the branch elongations as the scalars
+    u_1 .. u_n (Float64 outputs, none without branches). With ``arrays`` also the array u of n Float64, sized by n,
+    which becomes a structural parameter (UInt64, fixed, start n >= 1); without, n stays what FMI 2.0 says, a local
+    Int32 constant (-1 for the continuum)."""
+    n = elongation_count(scene)
+    _, vr_time, vr_first = elongation_references(root)
+    if vr_time != vr_u + 1:
+        raise NativeBuildError("the FMI 3.0 description's value references do not follow the FMI 2.0 one's")
     top = ET.Element("fmiModelDescription", {
         "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
         "description": root.get("description", ""), "author": root.get("author", ""),
@@ -461,14 +494,15 @@ def fmi3_description(root, scene, vr_u) -> str:
             for category in top.find(name):
                 if category.get("description"):
                     category.set("description", category.get("description").replace("fmi2", "fmi3"))
-        if name == "UnitDefinitions":  # the independent variable's unit
+        if name == "UnitDefinitions":  # the independent variable's unit, and the elongations'
             units = top.find("UnitDefinitions")
             if units is None:
                 units = ET.SubElement(top, "UnitDefinitions")
-            if not any(unit.get("name") == "s" for unit in units):
-                ET.SubElement(ET.SubElement(units, "Unit", {"name": "s"}), "BaseUnit", {"s": "1"})
+            for unit, base in (("s", {"s": "1"}), ("m", {"m": "1"})):
+                if (unit == "s" or n) and not any(known.get("name") == unit for known in units):
+                    ET.SubElement(ET.SubElement(units, "Unit", {"name": unit}), "BaseUnit", base)
     variables = ET.SubElement(top, "ModelVariables")
-    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(vr_u + 1), "causality": "independent",
+    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(vr_time), "causality": "independent",
                                          "variability": "continuous", "unit": "s",
                                          "description": "the element's time"})
     scalars = list(root.find("ModelVariables"))
@@ -481,7 +515,7 @@ def fmi3_description(root, scene, vr_u) -> str:
         attributes = {"name": name, "valueReference": vr}
         if variable.get("description"):
             attributes["description"] = variable.get("description")
-        if name == "n" and not continuum:
+        if name == "n" and arrays:  # the array's size: a structural parameter, n >= 1 (arrays needs branches)
             ET.SubElement(variables, "UInt64", dict(attributes, causality="structuralParameter", variability="fixed",
                                                     start=str(n)))
             continue
@@ -500,31 +534,35 @@ def fmi3_description(root, scene, vr_u) -> str:
         ET.SubElement(variables, tag, attributes)
         if variable.get("causality") == "output":
             outputs.append(vr)
-    if n:
-        u = ET.SubElement(variables, "Float64", {
-            "name": "u", "valueReference": str(vr_u), "causality": "output", "variability": "continuous",
-            "unit": "m", "description": "elongations u_i of the springs of the Prandtl branches, in the scene's order"})
-        n_vr = next(v.get("valueReference") for v in scalars if v.get("name") == "n")
-        ET.SubElement(u, "Dimension", {"valueReference": n_vr})
-        outputs.append(str(vr_u))
-    structure = ET.SubElement(top, "ModelStructure")
     dependencies = {}
     old = root.find("ModelStructure/Outputs")
     for unknown in (old if old is not None else []):
         vr = index_to_vr[int(unknown.get("index"))]
         if unknown.get("dependencies") is not None:
             dependencies[vr] = " ".join(index_to_vr[int(i)] for i in unknown.get("dependencies").split())
-    if n:
-        dependencies[str(vr_u)] = ""  # the elongations are states: no direct dependency on an input
-    for vr in outputs:
-        attributes = {"valueReference": vr}
-        if vr in dependencies:
-            attributes["dependencies"] = dependencies[vr]
-        ET.SubElement(structure, "Output", attributes)
-    for vr in outputs:
-        attributes = {"valueReference": vr}
-        if vr in dependencies:
-            attributes["dependencies"] = dependencies[vr]
-        ET.SubElement(structure, "InitialUnknown", attributes)
+    # the elongations are states (the connector's too: they move at doStep only): no input acts on them directly
+    for i in range(1, n + 1):
+        vr = str(vr_first + i - 1)
+        ET.SubElement(variables, "Float64", {
+            "name": f"u_{i}", "valueReference": vr, "causality": "output", "variability": "continuous",
+            "unit": "m", "description": f"elongation u_{i} of the spring of Prandtl branch {i}"})
+        outputs.append(vr)
+        dependencies[vr] = ""
+    if arrays:
+        u = ET.SubElement(variables, "Float64", {
+            "name": "u", "valueReference": str(vr_u), "causality": "output", "variability": "continuous",
+            "unit": "m", "description": "elongations u_i of the springs of the Prandtl branches, in the scene's order "
+                                        "(the scalars u_1 .. u_n as one array)"})
+        n_vr = next(v.get("valueReference") for v in scalars if v.get("name") == "n")
+        ET.SubElement(u, "Dimension", {"valueReference": n_vr})
+        outputs.append(str(vr_u))
+        dependencies[str(vr_u)] = ""
+    structure = ET.SubElement(top, "ModelStructure")
+    for tag in ("Output", "InitialUnknown"):
+        for vr in outputs:
+            attributes = {"valueReference": vr}
+            if vr in dependencies:
+                attributes["dependencies"] = dependencies[vr]
+            ET.SubElement(structure, tag, attributes)
     ET.indent(top)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(top, encoding="unicode") + "\n"

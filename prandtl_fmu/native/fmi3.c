@@ -1,6 +1,7 @@
 /* The native FMU's FMI 3.0 co-simulation layer over the element (element.h) or the connector (connector.h): the
- * scalars of the FMI 2.0 FMU (Float64 for Real, the same value references), the structural parameter n (UInt64,
- * fixed) and the branch elongations u, an array of n Float64 (VR_U). The functions of model exchange, scheduled
+ * scalars of the FMI 2.0 FMU (Float64 for Real, the same value references) and the branch elongations as the
+ * scalars u_1 .. u_n (VR_U_FIRST + i - 1), which every master reads; built with arrays (ARRAYS), also the array u of
+ * n Float64 (VR_U), sized by the structural parameter n (UInt64, fixed). The functions of model exchange, scheduled
  * execution, clocks and event mode are refused with a logged reason.
  *
  * Every function first checks its instance (NULL: fmi3Error, nothing logged: there is no logger), the call
@@ -29,6 +30,9 @@
 #define STRUCTURAL_N NB
 #define HAS_STRUCTURAL 1
 #define STRUCTURAL_TEXT "n is the scene's number of branches"
+#endif
+#ifndef ARRAYS /* scene.h says whether the FMU offers arrays */
+#define ARRAYS 1
 #endif
 
 static void emit(void* instance, int status, const char* category, const char* message)
@@ -176,7 +180,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 H, fmi3B
     return (fmi3Status)status;
 }
 
-/* the elongations u (m), in the scene's order: VR_U, an array of n */
+/* the elongations u (m), in the scene's order: the array u (VR_U) or the scalars u_1 .. u_n */
 static void elongations(Instance* c, double* out)
 {
 #if NETWORK
@@ -191,14 +195,58 @@ static void elongations(Instance* c, double* out)
 #endif
 }
 
+#if !NETWORK && NB > 0
+/* the elongation of the scalar u_i at ``vr`` (VR_U_FIRST + i - 1), into ``value``: 1; 0 when vr is no u_i. ``u``
+ * holds the n elongations of one call, computed at its first u_i (NULL until then). Refused (-1, the reason
+ * logged): no memory, or u_i not a finite number. */
+static int elongation_scalar(Instance* c, fmi3ValueReference vr, double** u, double* value)
+{
+    size_t i;
+    if (vr < VR_U_FIRST || vr - VR_U_FIRST >= (fmi3ValueReference)NB)
+        return 0;
+    i = vr - VR_U_FIRST;
+    if (*u == NULL) {
+        *u = (double*)malloc(NB * sizeof(double));
+        if (*u == NULL) {
+            say(c, ST_ERROR, "fmi3GetFloat64 refused: no memory for the %d elongations", NB);
+            return -1;
+        }
+        elongations(c, *u);
+    }
+    if (!isfinite((*u)[i])) {
+        say(c, ST_ERROR, "fmi3GetFloat64 refused: u_%zu is %.17g, not a finite number", i + 1, (*u)[i]);
+        return -1;
+    }
+    *value = (*u)[i];
+    return 1;
+}
+#endif
+
+static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
+                              size_t nvalues);
+
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
                           size_t nvalues)
 {
-    size_t i, j, at = 0;
     BEGIN(fmi3GetFloat64, MASK_GET);
+    return get_float64(c, vr, nvr, values, nvalues);
+}
+
+/* fmi3GetFloat64 of an instance allowed to answer: the scalars (u_i among them: the n elongations computed once
+ * per call) and, with arrays, the arrays, each filling as many values as it has */
+static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
+                              size_t nvalues)
+{
+    size_t i, j, at = 0;
+#if !NETWORK && NB > 0
+    double* u = NULL; /* the elongations of this call, at its first u_i */
+#define GET_FLOAT64_END(status) do { free(u); return (status); } while (0)
+#else
+#define GET_FLOAT64_END(status) return (status)
+#endif
     if (!(nvr == 0 || given(c, vr, "fmi3GetFloat64", "valueReferences")) ||
         !(nvalues == 0 || given(c, values, "fmi3GetFloat64", "values")))
-        return fmi3Error;
+        GET_FLOAT64_END(fmi3Error);
     for (i = 0; i < nvr; i++) {
         const Var* var;
 #if NETWORK && ARRAYS
@@ -206,28 +254,39 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
             if (at + NN > nvalues) {
                 say(c, ST_ERROR, "fmi3GetFloat64 refused: %zu values asked, %s alone has %d", nvalues,
                     vr[i] == VR_XA ? "x" : "v", NN);
-                return fmi3Error;
+                GET_FLOAT64_END(fmi3Error);
             }
             if (node_values(c, vr[i] == VR_VA, values + at) != 0) {
                 say(c, ST_ERROR, "fmi3GetFloat64 refused: %s of a node is not a finite number (a non-finite input "
                     "or a motion refused)", vr[i] == VR_XA ? "x" : "v");
-                return fmi3Error;
+                GET_FLOAT64_END(fmi3Error);
             }
             at += NN;
             continue;
         }
 #endif
-        if (vr[i] == VR_U && NB > 0) {
+#if !NETWORK && NB > 0
+        if (at < nvalues) { /* a scalar u_i */
+            int found = elongation_scalar(c, vr[i], &u, values + at);
+            if (found < 0)
+                GET_FLOAT64_END(fmi3Error);
+            if (found) {
+                at++;
+                continue;
+            }
+        }
+#endif
+        if (ARRAYS && vr[i] == VR_U && NB > 0) {
             if (at + NB > nvalues) {
                 say(c, ST_ERROR, "fmi3GetFloat64 refused: %zu values asked, u alone has %d", nvalues, NB);
-                return fmi3Error;
+                GET_FLOAT64_END(fmi3Error);
             }
             elongations(c, values + at);
             for (j = 0; j < (size_t)NB; j++) {
                 if (!isfinite(values[at + j])) {
                     say(c, ST_ERROR, "fmi3GetFloat64 refused: u[%zu] is %.17g, not a finite number", j + 1,
                         values[at + j]);
-                    return fmi3Error;
+                    GET_FLOAT64_END(fmi3Error);
                 }
             }
             at += NB;
@@ -241,14 +300,15 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (var == NULL || at >= nvalues) {
             say(c, ST_ERROR, "fmi3GetFloat64 refused: no Float64 variable has value reference %u (or too few "
                 "values)", vr[i]);
-            return fmi3Error;
+            GET_FLOAT64_END(fmi3Error);
         }
         values[at] = real_value(c, var);
         if (!shown(c, var, values[at], "fmi3GetFloat64"))
-            return fmi3Error;
+            GET_FLOAT64_END(fmi3Error);
         at++;
     }
-    return fmi3OK;
+    GET_FLOAT64_END(fmi3OK);
+#undef GET_FLOAT64_END
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -471,15 +531,15 @@ fmi3Status fmi3GetUInt16(fmi3Instance instance, const fmi3ValueReference valueRe
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int32 values[], size_t nValues)
 {
-    size_t i; /* noise_seed, and n of the continuum: -1, a local constant (there is no array u then) */
+    size_t i; /* noise_seed, and n where it is a local constant (no array u: -1 for the continuum) */
     BEGIN(fmi3GetInt32, MASK_GET);
     if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3GetInt32"))
         return fmi3Error;
     for (i = 0; i < nValueReferences; i++) {
         const Var* var = find(valueReferences[i], T_INTEGER);
         if (var == NULL || i >= nValues) {
-            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not an Int32 variable (noise_seed, or n of "
-                "the continuum)", valueReferences[i]);
+            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not an Int32 variable (noise_seed, or n "
+                "where it is no structural parameter)", valueReferences[i]);
             return fmi3Error;
         }
         values[i] = integer_value(c, var);
