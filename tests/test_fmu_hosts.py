@@ -14,6 +14,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -300,3 +301,50 @@ def test_arrays_where_they_mean_nothing_are_refused_in_one_line(tmp_path):
         assert done.returncode == 2, (extra, done.stderr)
         assert len(done.stderr.strip().splitlines()) == 1 and "arrays" in done.stderr, done.stderr
         assert "Traceback" not in done.stderr and not out.exists()
+
+
+@pytest.mark.slow
+def test_ecos_own_binary_reads_every_scalar_of_the_fmi3_fmu(built, tmp_path):
+    """ecos' command-line binary (fmi4c, C++: no Python) ran the FMI 3.0 native FMU with its array u and got
+    nothing or garbage; with the scalars (the default) its CSV has x, v, reaction and u_1 .. u_n of the library's
+    run of the scene (scene_load, implicit; 6 decimals)."""
+    try:
+        import ecospy
+    except (ImportError, OSError) as exc:
+        pytest.skip(f"ecospy cannot load ({exc}): pip install 'prandtl_fmu[ecos]' and apt install libtbb12")
+    from prandtl_fmu import simulate
+
+    from .test_cosim import ALONE
+
+    shipped = Path(ecospy.__file__).parent / "binaries" / "ecos"
+    if not shipped.exists():
+        pytest.skip(f"ecospy {ecospy.__file__} ships no ecos binary for this platform")
+    binary = tmp_path / "ecos"  # the wheel loses the run bit of its binaries
+    shutil.copyfile(shipped, binary)
+    binary.chmod(0o755)
+    system = tmp_path / "system"
+    system.mkdir()
+    shutil.copyfile(built["element", "3"], system / "element.fmu")
+    (system / "SystemStructure.ssd").write_text(ALONE.format(stepper="implicit"))
+    step, stop = 0.05, 8.0
+    done = subprocess.run([str(binary), "simulate", "--path", str(system), "--stepSize", str(step), "--stopTime",
+                           str(stop), "--parameterSet", "initialValues"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = (tmp_path / "system.csv").read_text().splitlines()
+    header = [name.strip() for name in lines[0].split(",")]
+    rows = [line.split(",") for line in lines[1:]]
+    assert all(len(row) == len(rows[0]) for row in rows)
+    column = {name: np.array([float(row[j]) for row in rows]) for j, name in enumerate(header)
+              if name.endswith("[REAL]") or name == "time"}
+    scene = load_scene(built["element", "scene"])
+    library = simulate(scene.with_solver(stop_time=stop, output_interval=step), stepper="implicit", states=True)
+    count = len(rows)  # ecos writes the rows from t = 0 to stop, or to stop - step (its clock's rounding)
+    assert count in (len(library.time), len(library.time) - 1)
+    np.testing.assert_allclose(column["time"], library.time[:count], rtol=0, atol=1e-9)
+    for name in ("x", "v", "reaction"):
+        np.testing.assert_allclose(column[f"element::{name}[REAL]"], getattr(library, name)[:count], rtol=0,
+                                   atol=6e-7)
+    for i in range(scene.branches.n):
+        np.testing.assert_allclose(column[f"element::u_{i + 1}[REAL]"], library.u[:count, i], rtol=0, atol=6e-7)
+    assert np.ptp(library.u[:, 0]) > 0.05
