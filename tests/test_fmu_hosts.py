@@ -348,3 +348,23 @@ def test_ecos_own_binary_reads_every_scalar_of_the_fmi3_fmu(built, tmp_path):
     for i in range(scene.branches.n):
         np.testing.assert_allclose(column[f"element::u_{i + 1}[REAL]"], library.u[:count, i], rtol=0, atol=6e-7)
     assert np.ptp(library.u[:, 0]) > 0.05
+
+
+@pytest.mark.slow
+def test_the_native_package_is_the_native_fmu_s_own(built):
+    """Every entry readable by all (0644, the binary 0755); the page describes the native FMU and lists every
+    variable of its own description (u_i in FMI 3.0), nothing of PythonFMU's needs; no PythonFMU licence (its
+    loader is not in the native binary)."""
+    for name in SCENES:
+        for kind in ("2", "3", "3a"):
+            with zipfile.ZipFile(built[name, kind]) as archive:
+                modes = {info.filename: info.external_attr >> 16 & 0o777 for info in archive.infolist()}
+                page = archive.read("documentation/index.html").decode("utf-8")
+                root = ET.fromstring(archive.read("modelDescription.xml"))
+            assert not [entry for entry in modes if entry.startswith("documentation/licenses/")], modes
+            assert all(mode == (0o755 if entry.startswith("binaries/") else 0o644) for entry, mode in modes.items()), \
+                modes
+            assert "<b>native</b>" in page and "PYTHONHOME" not in page and "pythonfmu" not in page.lower()
+            assert all(f"<td>{name}</td>" in page for name in _variables(root)), kind
+            version = "fmi3" if kind != "2" else "fmi2"
+            assert f"{version}Discard" in page and ("fmi2" not in page if version == "fmi3" else True)

@@ -99,7 +99,10 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         with zipfile.ZipFile(python_fmu) as archive:
             description = archive.read("modelDescription.xml").decode("utf-8")
             kept = {name: archive.read(name) for name in archive.namelist()
-                    if name.startswith("documentation/") or name == "resources/scene.toml"
+                    # not documentation/licenses/: PythonFMU's licence goes with its loader, which the native
+                    # binary does not hold
+                    if (name.startswith("documentation/") and not name.startswith("documentation/licenses/"))
+                    or name == "resources/scene.toml"
                     or name.endswith("_OspModelDescription.xml")}
         root = ET.fromstring(description)
         identifier = root.find("CoSimulation").get("modelIdentifier")

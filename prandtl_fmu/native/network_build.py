@@ -420,7 +420,10 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
         with zipfile.ZipFile(python_fmu) as archive:
             description = archive.read("modelDescription.xml").decode("utf-8")
             kept = {name: archive.read(name) for name in archive.namelist()
-                    if name.startswith("documentation/") or name == "resources/scene.toml"
+                    # not documentation/licenses/: PythonFMU's licence goes with its loader, which the native
+                    # binary does not hold
+                    if (name.startswith("documentation/") and not name.startswith("documentation/licenses/"))
+                    or name == "resources/scene.toml"
                     or name.endswith("_OspModelDescription.xml")}
         root = ET.fromstring(description)
         identifier = root.find("CoSimulation").get("modelIdentifier")
