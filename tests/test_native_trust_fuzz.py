@@ -91,8 +91,10 @@ def sequence(rng, fmu, paths) -> list:
             commands.append(f"dump:{paths[0].parent / 'dumped.bin'}")
         elif kind == 19:
             commands.append(pick(["nullc", f"nulla:{pick(list(fmu.vr))}"]))
-        elif kind == 20 and fmu.fmi == 3 and "n" in fmu.vr:
-            commands.append(f"geta:u:{int(rng.integers(0, 5))}")
+        elif kind == 20 and fmu.fmi == 3 and any(name.startswith("u_") for name in fmu.vr):
+            # an elongation u_i (the array u with arrays) asked with 0 to 4 values
+            elongations = [name for name in fmu.vr if name == "u" or name.startswith("u_")]
+            commands.append(f"geta:{pick(elongations)}:{int(rng.integers(0, 5))}")
         else:
             commands.extend(START if rng.random() < 0.5 else ["reset"] + START)
     if rng.random() < 0.2:
