@@ -24,6 +24,7 @@ import numpy as np
 from numba.core import types
 from numba.extending import overload
 
+from . import libm
 from . import noise as brownian_tree
 from ._jit import kernel
 
@@ -207,11 +208,11 @@ def force_at(load, t):
     if kind == CONSTANT:
         return offset
     if kind == HARMONIC:
-        return offset + amplitude * np.cos(omega * t)
+        return offset + amplitude * libm.cos(omega * t)
     if kind == RANDOM:
         total = 0.0
         for j in range(time.shape[0]):
-            total += np.cos(time[j] * t + force[j])
+            total += libm.cos(time[j] * t + force[j])
         return offset + amplitude * total
     j = np.searchsorted(time, t, side="right")  # time[j-1] <= t < time[j]
     if j == 0:

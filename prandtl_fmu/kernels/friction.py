@@ -17,6 +17,7 @@ alpha]). The explicit steppers take Psi at the velocity of the start of the
 """
 import math
 
+from .. import libm
 from .._jit import kernel
 from ..loads import force_at
 from .smooth import smooth_force
@@ -28,7 +29,7 @@ def stribeck_part(friction, w):
     alpha, kinetic, stribeck, belt = friction
     if w == 0.0 or kinetic == alpha:
         return 0.0
-    return -math.copysign((alpha - kinetic) * -math.expm1(-abs(w) / stribeck), w)
+    return -math.copysign((alpha - kinetic) * -libm.expm1(-abs(w) / stribeck), w)
 
 
 @kernel
@@ -38,7 +39,7 @@ def sliding_force(friction, speed):
     alpha, kinetic, stribeck, belt = friction
     if kinetic == alpha:
         return alpha
-    return kinetic + (alpha - kinetic) * math.exp(-speed / stribeck)
+    return kinetic + (alpha - kinetic) * libm.exp(-speed / stribeck)
 
 
 @kernel

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from .. import libm
 from .._jit import kernel
 from .play import branch_count
 from .friction import sliding_force
@@ -210,7 +211,7 @@ def _cubic_only_root(x, lo, g, k3):
         return np.nan
     if k3 == 0.0:
         return np.nan
-    return np.cbrt((x + lo) ** 3 - g / k3) - x
+    return libm.cbrt((x + lo) ** 3 - g / k3) - x
 
 
 _EPS = 2.220446049250313e-16
@@ -254,7 +255,7 @@ def solve_held_increment(x, linear, offset, k0, k3, k, eta, cs, u, h, friction):
     a = 0.0
     phi_a = -abs(g_stuck) + alpha
     if drop > linear:
-        r_c = h * stribeck * math.log(drop / linear)
+        r_c = h * stribeck * libm.log(drop / linear)
         length = r_c / 16.0
         while a < r_c:
             b = min(a + length, r_c)

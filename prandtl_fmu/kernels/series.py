@@ -27,11 +27,11 @@ integrals along the path (FLOW). The memory stack does not apply (a relaxing
 branch forgets its history: no stack of reversal points describes it), so
 these branches always run on this kernel.
 """
-import math
 
 import numpy as np
 from numba.extending import overload
 
+from .. import libm
 from .._jit import kernel
 from .play import move, piece
 
@@ -44,7 +44,7 @@ def rates(z):
     without cancellation."""
     if z < 1e-4:
         return 1.0 - z * (0.5 - z / 6.0), 0.5 - z * (1.0 / 6.0 - z / 24.0)
-    return -math.expm1(-z) / z, (z + math.expm1(-z)) / (z * z)
+    return -libm.expm1(-z) / z, (z + libm.expm1(-z)) / (z * z)
 
 
 @kernel
@@ -55,7 +55,7 @@ def coefficients(rule, rate, h):
         return 1.0 - z, 1.0
     if rule == BACKWARD:
         return 1.0 / (1.0 + z), 1.0 / (1.0 + z)
-    return math.exp(-z), rates(z)[0]
+    return libm.exp(-z), rates(z)[0]
 
 
 @kernel
@@ -111,7 +111,7 @@ def _flow_dissipation(k, eta, rate, u0, u1, moved, dx, h):
             if rate == 0.0:
                 free = (b - u0) / v
             else:
-                free = -math.log1p(rate * (b - u0) / (rate * u0 - v)) / rate
+                free = -libm.log1p(rate * (b - u0) / (rate * u0 - v)) / rate
         if not free >= 0.0:
             free = 0.0
         free = min(free, h)

@@ -63,6 +63,7 @@ import numpy as np
 from numba.core import types
 from numba.extending import overload
 
+from .. import libm
 from .._jit import inline_kernel, kernel
 
 HEADER = 7
@@ -326,12 +327,12 @@ def _partial(table, j, t):
     if p == 0.0:
         return c * t, c * t * (e + 0.5 * g * t), c * t * (e * e + g * t * (e + g * t / 3.0))
     if g == 0.0:
-        density = c * e ** p
+        density = c * libm.pow(e, p)
         return density * t, density * e * t, density * e * e * t
     end = e + g * t
-    return (c * (end ** (p + 1.0) - e ** (p + 1.0)) / (g * (p + 1.0)),
-            c * (end ** (p + 2.0) - e ** (p + 2.0)) / (g * (p + 2.0)),
-            c * (end ** (p + 3.0) - e ** (p + 3.0)) / (g * (p + 3.0)))
+    return (c * (libm.pow(end, p + 1.0) - libm.pow(e, p + 1.0)) / (g * (p + 1.0)),
+            c * (libm.pow(end, p + 2.0) - libm.pow(e, p + 2.0)) / (g * (p + 2.0)),
+            c * (libm.pow(end, p + 3.0) - libm.pow(e, p + 3.0)) / (g * (p + 3.0)))
 
 
 @kernel

@@ -1104,7 +1104,8 @@ def initial_state(model, x, v, u, piece, force):
     work = workspace(n, count)
     piece2 = np.zeros(count, np.int64)
     u2 = np.zeros(count)
-    u2[extra:] = u
+    for e in range(u.shape[0]):  # not u2[extra:] = u, whose shape check formats its message with libm's log10
+        u2[extra + e] = u[e]
     status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
     if status < 0:
         return status
@@ -1137,7 +1138,8 @@ def initial_reaction(model, x, v, u, force):
         work = workspace(n, instant[1].shape[0])
         piece = np.zeros(instant[1].shape[0], np.int64)
         u2 = np.zeros(instant[1].shape[0])
-        u2[extra:] = u
+        for e in range(u.shape[0]):  # not u2[extra:] = u (libm's log10 in numba's shape check)
+            u2[extra + e] = u[e]
         status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, -1, 0.0, work)
         if status >= 0:
             held = work[5]
@@ -1182,7 +1184,8 @@ def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
     work = workspace(n, count)
     piece2 = np.zeros(count, np.int64)
     u2 = np.zeros(count)
-    u2[extra:] = u
+    for e in range(u.shape[0]):  # not u2[extra:] = u, whose shape check formats its message with libm's log10
+        u2[extra + e] = u[e]
     for e in range(kind.shape[0]):
         piece2[extra + e] = piece[e]
     status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, node, target - x[node], work)

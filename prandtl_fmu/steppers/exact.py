@@ -107,6 +107,7 @@ import math
 
 import numpy as np
 
+from .. import libm
 from .._jit import kernel
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
@@ -184,8 +185,8 @@ def _scaled_taylor(a, tau):
         return np.eye(size), a * 0.0, 0.0, -1
     squarings = 0
     if norm > 0.25:
-        squarings = int(math.ceil(math.log2(norm / 0.25)))
-    scale = tau / 2.0**squarings
+        squarings = int(math.ceil(libm.log2(norm / 0.25)))  # log2 is exact at powers of two
+    scale = libm.scalbn(tau, -squarings)  # tau / 2^squarings, rounded once
     b = a * scale
     result = np.eye(size)
     term = np.eye(size)
@@ -291,7 +292,7 @@ def _phase(m, k0, c, k, eta, load, t, x, u, direction, alpha):
         a[3, 2] = omega
         a[3, 4] = -omega
         y0[2] = (force_at(load, t) - reaction) / m
-        y0[3] = amplitude / m * math.sin(omega * t)
+        y0[3] = amplitude / m * libm.sin(omega * t)
         y0[4] = (offset - reaction) / m
     elif kind == CONSTANT:
         y0[2] = (offset - reaction) / m
@@ -501,7 +502,8 @@ def _saved(values):
 def _restore(values, saved):
     if values is None or saved is None:
         return
-    values[:] = saved
+    for i in range(saved.shape[0]):  # not values[:] = saved, whose shape check formats its message with libm's log10
+        values[i] = saved[i]
 
 
 def failure_reason_for(scene):
@@ -595,10 +597,10 @@ def _stick_end(load, t, span, push, alpha):
         c = (level - offset) / amplitude
         if abs(c) > 1.0:
             continue
-        root = math.acos(c)
+        root = libm.acos(c)
         for theta in (root, 2.0 * math.pi - root):
             # F'(s) = -A |omega| sin(|omega| s): an exit where F moves outwards through the level
-            if outward * -amplitude * math.sin(theta) <= 0.0:
+            if outward * -amplitude * libm.sin(theta) <= 0.0:
                 continue
             delta = np.fmod(theta - theta0 + 4.0 * math.pi, 2.0 * math.pi)
             if delta > 2.0 * math.pi - 1e-12:  # the root at theta0 itself, by rounding
@@ -765,7 +767,7 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm, budget):
         for j in range(6):
             size = max(size, abs(y[j]) * weights[j])
             rate = max(rate, abs(ay[j]) * weights[j])
-        spread = math.exp(norm * length)
+        spread = libm.exp(norm * length)
         first = spread * min(bound1 * size, bound0 * rate)  # bounds |v'| on [lo, b]
         second = spread * min(bound2 * size, bound1 * rate)  # bounds |v''|
         v = y[1]
@@ -818,7 +820,7 @@ def _cannot_reach(y, load, t, m, c, stiffness, up, down):
         response = forcing / denominator
         p0 = response.real
         p1 = (1j * omega * response).real
-        amplitude = abs(response)
+        amplitude = libm.hypot(response.real, response.imag)  # abs() of a complex calls libm's hypot
     e_x = y[0] - centre - p0
     e_v = y[1] - p1
     radius = amplitude + math.sqrt(e_x * e_x + e_v * e_v / omega0_sq)

@@ -53,6 +53,7 @@ import math
 
 import numpy as np
 
+from .. import libm
 from .._jit import kernel
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
@@ -90,8 +91,9 @@ def _system(m, k0, c, k, rate, load, t, x, v, u, direction, alpha, stuck, slippi
     if kind == HARMONIC:  # (amplitude / m) (cos, sin)(omega t), rotating
         a[LOAD_VARYING, LOAD_RATE] = -omega
         a[LOAD_RATE, LOAD_VARYING] = omega
-        y0[LOAD_VARYING] = amplitude / m * math.cos(omega * t)
-        y0[LOAD_RATE] = amplitude / m * math.sin(omega * t)
+        sine, cosine = libm.sincos(omega * t)
+        y0[LOAD_VARYING] = amplitude / m * cosine
+        y0[LOAD_RATE] = amplitude / m * sine
         y0[LOAD_CONSTANT] = (offset - spring) / m
     elif kind == CONSTANT:
         y0[LOAD_CONSTANT] = (offset - spring) / m
@@ -233,7 +235,7 @@ def _first_event(a, y0, ell, level, t, span, rho, budget):
         for i in range(size):
             size_y = max(size_y, abs(y[i]) * weights[i])
             rate_y = max(rate_y, abs(ay[i]) * weights[i])
-        spread = math.exp(norm * length)
+        spread = libm.exp(norm * length)
         rounding = 8.0 * _EPS * (abs(t) + lo + 1.0 / rho)
         decided = True
         for j in range(count):
