@@ -3,7 +3,7 @@
     prandtl-fmu run SCENE [--stepper S] [--step H] [--stop-time T] [--output-interval DT] [--out CSV]
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp] [--loader prandtl|pythonfmu]
-                      [--runtime python|native] [--fmi 2|3] [--arrays]
+                      [--runtime python|native] [--fmi 2|3] [--arrays] [--platforms P,P,...|all]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
@@ -111,6 +111,12 @@ def _parser() -> argparse.ArgumentParser:
                        help="native FMI 3.0 only: besides the scalars every master reads (u_1 .. u_n; a network's "
                             "x_<node>, v_<node>), the same values as arrays (u; x and v) for masters that handle "
                             "FMI 3.0 arrays")
+    build.add_argument("--platforms", metavar="P,P,...|all",
+                       help="native runtime only: the binaries the FMU holds, comma-separated: FMI 2.0's linux64, "
+                            "win64, darwin64 (a universal x86_64 + arm64 dylib) or FMI 3.0's x86_64-linux, "
+                            "aarch64-linux, x86_64-windows, x86_64-darwin, aarch64-darwin (either version's name for "
+                            "the same target), or all; default: this machine's. Linked by zig (Linux: glibc 2.17; "
+                            "macOS) and mingw-w64 (Windows): docs/platforms.md")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
@@ -298,7 +304,7 @@ def _build(args) -> int:
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
         path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader,
-                         runtime=args.runtime, fmi=args.fmi, arrays=args.arrays)
+                         runtime=args.runtime, fmi=args.fmi, arrays=args.arrays, platforms=args.platforms)
     except (SceneError, ValueError, RuntimeError) as exc:
         return _error(exc)
     except OSError as exc:

@@ -64,7 +64,7 @@ def _check_noise_seed(scene) -> None:
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
               causality: Optional[str] = None, osp: bool = False, loader: Optional[str] = None,
-              runtime: str = "python", fmi: int = 2, arrays: bool = False) -> Path:
+              runtime: str = "python", fmi: int = 2, arrays: bool = False, platforms=None) -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
 
@@ -81,13 +81,17 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     network scene goes to ``prandtl_fmu.native.build.build_native_network_fmu`` (ValueError where the native
     runtime has none). FMI 3.0 offers scalar variables only (the element's u_1 .. u_n, a network's x_<node> and
     v_<node>: every master reads them); ``arrays`` (native, FMI 3.0) adds them as arrays (u; x and v) for the
-    masters that handle arrays.
+    masters that handle arrays. ``platforms`` (native): the binaries the FMU holds, names of either FMI version
+    (comma-separated or a list) or "all"; None: this machine's (``prandtl_fmu/native/platforms.py``).
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")
     if arrays and (runtime != "native" or fmi != 3):
         raise ValueError("--arrays: arrays are an FMI 3.0 option of the native runtime: build with --runtime native "
                          "--fmi 3, or drop --arrays")
+    if platforms is not None and runtime != "native":
+        raise ValueError("--platforms: the PythonFMU runtime's binaries are PythonFMU's own: build with --runtime "
+                         "native, or drop --platforms")
     if runtime == "native" and loader is not None:
         raise ValueError(f"--loader {loader}: the native runtime has no PythonFMU loader (its binary is the FMU's "
                          "own C layer): drop --loader, or build with --runtime python")
@@ -109,7 +113,8 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
             raise ValueError(f"{target}: is a directory")
         if osp:
             _check_osp_name(native_scene.name)
-        built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality, arrays=arrays)
+        built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality, arrays=arrays,
+                             platforms=platforms)
         if osp:
             kind = causality or native_scene.causality
             write_atomically(target.parent / file_name(native_scene.name),

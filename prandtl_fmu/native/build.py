@@ -16,8 +16,10 @@ The element's white noise (``noise_intensity``, ``noise_seed``, ``noise_unit``):
 beside the deterministic one, the steppers' refusals of a noise as a table (``kernels.noise_refusal``), the
 scene's noise as the start values (``docs/native-route.md``).
 
-It needs a C compiler and linker (``cc`` or ``gcc``, or ``$CC``); without one the build stops with one line
-saying what to install. ``$PRANDTL_NATIVE_CFLAGS`` adds flags to the compile (the tests build with
+The binaries (one per platform: ``platforms.py``, docs/platforms.md) are linked by zig (Linux, glibc 2.17, and
+macOS) and mingw-w64 (Windows); the default build (this machine's platform) by zig where it is installed, else by
+the machine's C compiler (``cc`` or ``gcc``, or ``$CC``); a missing toolchain stops the build with one line saying
+what to install. ``$PRANDTL_NATIVE_CFLAGS`` adds flags to a build by the machine's compiler (the tests build with
 ``-fsanitize=address,undefined``: such a binary runs only in a host that loads the sanitizers' runtime).
 """
 from __future__ import annotations
@@ -25,14 +27,13 @@ from __future__ import annotations
 import hashlib
 import os
 import re
-import shutil
-import subprocess
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
 from . import kernels
+from . import platforms as targets
 
 HERE = Path(__file__).resolve().parent
 FMI_HEADERS = HERE.parent / "fmu" / "loader" / "src" / "fmi"
@@ -45,15 +46,8 @@ class NativeBuildError(ValueError):
     """A native FMU cannot be built (one line: the scene or the machine, and what to do)."""
 
 
-def compiler() -> str:
-    found = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-    if found is None:
-        raise NativeBuildError("a native FMU needs a C compiler and linker (cc or gcc, or set CC): install one "
-                               "(Debian/Ubuntu: apt-get install gcc; macOS: xcode-select --install)")
-    return found
-
-
-def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False) -> Path:
+def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False,
+                             platforms=None) -> Path:
     """Build the native FMU of the network scene (``[network]`` or ``[chain]``) at ``scene_path`` into ``out``: the
     element (force in at the load's node) or, with causality "displacement", the connector (its motion in, force
     out); ``arrays`` (FMI 3.0): also the nodes' x and v as arrays (scalars x_<node>, v_<node> in any case: masters
@@ -63,15 +57,18 @@ def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arra
 
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
-    return network_build.build(scene_path, out, fmi, causality, arrays, compiler(), NativeBuildError)
+    return network_build.build(scene_path, out, fmi, causality, arrays, NativeBuildError, platforms)
 
 
-def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False) -> Path:
+def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False, platforms=None) -> Path:
     """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it.
 
     FMI 3.0 offers the branch elongations as the scalars u_1 .. u_n (every master reads them: OMSimulator and ecos
     read an FMI 3.0 array as a scalar); ``arrays`` (FMI 3.0 only) adds them as the array u, sized by the structural
-    parameter n. A network scene goes to :func:`build_native_network_fmu` (its nodes' x and v)."""
+    parameter n. A network scene goes to :func:`build_native_network_fmu` (its nodes' x and v).
+
+    ``platforms``: the binaries the FMU holds (names of either FMI version, comma-separated, or "all"; None: this
+    machine's platform), each linked as ``platforms.py`` says; the names and the toolchains are checked first."""
     from ..fmu.build import add_entry, build_fmu
     from ..fmu.documentation import index_html
     from ..scene import load_scene
@@ -80,7 +77,9 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
     if hasattr(scene, "network"):  # a [network] or [chain] scene
-        return build_native_network_fmu(scene_path, out, fmi, causality, arrays)
+        return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms)
+    folders = targets.resolve(platforms, fmi)
+    chains = targets.toolchains(folders, default=platforms is None)
     if arrays and fmi != 3:
         raise NativeBuildError("arrays: the elongations u as an array are an FMI 3.0 option (fmi=3)")
     if arrays and elongation_count(scene) == 0:
@@ -91,7 +90,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
 
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
-    cc = compiler()
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
@@ -110,34 +108,23 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         if not steppers and not connector:
             raise NativeBuildError("no stepper of the native runtime applies to this scene")
         compiled = kernels.compile_kernels(scene, steppers)
-        objects, external = kernels.emit_objects(compiled, scratch)
         (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path, arrays))
         vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
-        (scratch / "stubs.c").write_text(_stubs(external))
-        library = scratch / f"{identifier}.so"
-        exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
-        exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
         headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
         n_vr = next((int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n"), 0)
-        command = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
-                   f"-DVR_U={vr_u}", f"-DVR_N={n_vr}", f"-DVR_TIME={vr_u + 1}",
-                   *os.environ.get("PRANDTL_NATIVE_CFLAGS", "").split(),  # e.g. a sanitizer, for the tests
-                   f"-I{scratch}", f"-I{headers}", str(HERE / f"fmi{fmi}.c"), str(scratch / "stubs.c"),
-                   *map(str, objects), "-o", str(library), "-lm", "-Wl,--no-undefined",
-                   f"-Wl,--version-script={exports}"]
-        done = subprocess.run(command, capture_output=True, text=True)
-        if done.returncode != 0:
-            errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
-            raise NativeBuildError(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
+        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
+                                             [scratch, headers], [f"VR_U={vr_u}", f"VR_N={n_vr}",
+                                                                  f"VR_TIME={vr_u + 1}"], fmi)
         native_description = (_native_description(description) if fmi == 2
                               else fmi3_description(root, scene, vr_u, arrays))
-        platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
         kept["documentation/index.html"] = index_html(native_description.encode("utf-8"), scene, runtime="native")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
             add_entry(archive, "modelDescription.xml", native_description)
-            add_entry(archive, f"binaries/{platform}/{identifier}.so", library.read_bytes(), mode=0o755)
+            for folder in folders:
+                add_entry(archive, f"binaries/{folder.name}/{identifier}.{folder.suffix}", binaries[folder.name],
+                          mode=0o755)
             for name, data in kept.items():
                 add_entry(archive, name, data)
         os.replace(partial, out)
@@ -246,6 +233,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
         "#ifndef PRANDTL_SCENE_H",
         "#define PRANDTL_SCENE_H",
         "#include <stdint.h>",
+        *targets.KERNEL_MACRO,
         f"#define NB {n}",
         # the library's rules (prandtl_fmu.scene), never written twice
         f"#define ADVANCE_BUDGET {float(library_rules.ADVANCE_BUDGET)!r} /* the most internal steps of one doStep */",
@@ -343,13 +331,13 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
                  + ", ".join(f'"{reason}"' for reason in kernels.STATE_CHECK_REASONS[1:]) + "};")
     for name, symbol in symbols.items():
         if name == "force_at":
-            lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) __asm__("{symbol}");')
+            lines.append(f'double scene_force_at(int64_t, P, P, P, int64_t, double, P) KERNEL("{symbol}");')
         elif name == "fold":
-            lines.append(f'int64_t stack_fold(P, P, double, P) __asm__("{symbol}");')
+            lines.append(f'int64_t stack_fold(P, P, double, P) KERNEL("{symbol}");')
         elif name == "state_check":
-            lines.append(f'int64_t state_check(P, P, P) __asm__("{symbol}");')
+            lines.append(f'int64_t state_check(P, P, P) KERNEL("{symbol}");')
         else:
-            lines.append(declarations[name.split("_")[0]].format(name=name) + f' __asm__("{symbol}");')
+            lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"
     functions = (("move", "cforce", "ctangent", "cstored", "cinitial", "elongations") if connector
                  else ("record", "stiffness", "initial", "elongations"))

@@ -5,9 +5,9 @@ with the scene's structure written into it: which effects are present, the numbe
 unpack C pointers into arrays (``numba.carray``) and the model tuple of the library
 (``driver.compile_model``), and call the library's own compiled kernels: each stepper's time loop
 ``run``, ``reaction``, ``kinetic``, ``stored``, ``tangent``, the massless equilibrium. numba compiles each
-into a ``cfunc``; their LLVM modules are emitted as object files by llvmlite. The numerics in the native
-FMU are therefore the library's, not a copy: the same source compiled by the same compiler for the same
-types, bit for bit (tests/test_native.py).
+into a ``cfunc``; their LLVM modules are emitted as object files by llvmlite, for each target
+(``platforms.py``). The numerics in the native FMU are therefore the library's, not a copy: the same source
+compiled by the same compiler for the same types, bit for bit (tests/test_native.py).
 
 What the objects need besides libm is numba's error path (a kernel that raises: Python's C API with the GIL)
 and ``numba_nextafter``: ``stubs.c`` provides them; the error path sets a flag that the FMI layer reads
@@ -61,7 +61,7 @@ _SIGNATURES = {
 
 _TEMPLATE = '''
 def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, None)
 
 
 def _load(kind, lk, lt, lf, nl):
@@ -93,7 +93,7 @@ def advance_noisy(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt,
 
 def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t):
     model = _model(p, kp, etap, csp)
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     x = xv[0]
     v = xv[1]
@@ -124,7 +124,7 @@ def force_at_c(kind, lk, lt, lf, nl, t, unused):
 
 def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
     model = _model(p, kp, etap, csp)
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     if {stack}:  # stack.fresh_state(params, x0) in place: one sticking piece, u_i = x - x0 + u0_i
         start(k, p[1] if {massive} else 0.0, u)
@@ -149,7 +149,7 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
 
 _CONNECTOR_TEMPLATE = '''
 def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, None)
 
 
 def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
@@ -159,7 +159,7 @@ def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
 
 
 def cforce(p, kp, etap, csp, up, x, v):
-    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
     return smooth_force(x, v, k0, k3, c) + branch_force(k, {u})
 
 
@@ -168,7 +168,7 @@ def ctangent(p, kp, etap, csp, up, x, direction):
 
 
 def cstored(p, kp, etap, csp, up, x):
-    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
     return stored(x, k0, k3, k, {u})
 
 
@@ -394,23 +394,6 @@ def _compile_fold(scene):
     signature = types.int64(types.CPointer(types.float64), types.CPointer(types.float64), types.float64,
                             types.CPointer(types.float64))
     return cfunc(signature, error_model="numpy")(fold)
-
-
-def emit_objects(compiled, folder) -> tuple:
-    """One object file per C function (position-independent, for a shared library). Returns their paths and the
-    symbols the modules declare without defining (what the link must provide: libm's, numba's error path)."""
-    import llvmlite.binding as llvm
-
-    machine = llvm.Target.from_default_triple().create_target_machine(reloc="pic", codemodel="default", opt=3)
-    paths, external = [], set()
-    for c_name, function in compiled:
-        module = llvm.parse_assembly(str(function._library._final_module))
-        external.update(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
-        external.update(g.name for g in module.global_variables if g.is_declaration)
-        path = folder / f"{c_name}.o"
-        path.write_bytes(machine.emit_object(module))
-        paths.append(path)
-    return paths, external
 
 
 def _compile_connector(scene, shape) -> list:

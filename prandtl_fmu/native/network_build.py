@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import subprocess
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
@@ -28,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .build import c_string, noise_lines
+from .platforms import KERNEL_MACRO
 
 HERE = Path(__file__).resolve().parent
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
@@ -284,6 +284,7 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
         "#define PRANDTL_SCENE_H",
         "#include <math.h>",
         "#include <stdint.h>",
+        *KERNEL_MACRO,
         "#define NETWORK 1",
         f"#define CONNECTOR {int(connector)}",
         f"#define ARRAYS {int(arrays)}",
@@ -355,11 +356,11 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
     ]
     for name, symbol in symbols.items():
         if name.startswith("advance_"):
-            lines.append(advance.format(name=name) + f' __asm__("{symbol}");')
+            lines.append(advance.format(name=name) + f' KERNEL("{symbol}");')
         elif name.startswith("noisy_"):
-            lines.append(noisy.format(name=name) + f' __asm__("{symbol}");')
+            lines.append(noisy.format(name=name) + f' KERNEL("{symbol}");')
         else:
-            lines.append(declarations[name] + f' __asm__("{symbol}");')
+            lines.append(declarations[name] + f' KERNEL("{symbol}");')
     lines.append(f"typedef int64_t (*advance_fn)({advance.split('(', 1)[1]};")
     lines.append("static const advance_fn ADVANCE[N_STEPPERS] = {" + ", ".join(f"advance_{s}" for s in steppers)
                  + "};")
@@ -392,15 +393,18 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
     return "\n".join(lines)
 
 
-def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, build_error) -> Path:
-    """Build the native FMU of the network scene at ``scene_path`` into ``out`` (see the module docstring)."""
+def build(scene_path, out, fmi: int, causality, arrays: bool, build_error, platforms=None) -> Path:
+    """Build the native FMU of the network scene at ``scene_path`` into ``out`` (see the module docstring), with
+    the binaries of ``platforms`` (``platforms.resolve``: None is this machine's)."""
     from ..fmu.build import _with_causality, add_entry, build_fmu
     from ..network.model import stepper_problem
     from ..scene import load_scene
-    from . import kernels as element_kernels
     from . import network_kernels
+    from . import platforms as targets
     from .build import FMI_HEADERS, _native_description, _stubs
 
+    folders = targets.resolve(platforms, fmi)
+    chains = targets.toolchains(folders, default=platforms is None)
     scene = load_scene(scene_path, check_stepper=False)
     if causality is not None and causality != scene.causality:
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
@@ -431,26 +435,15 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
         extra_vr = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
         digest = hashlib.sha256(Path(scene_path).read_bytes() + root.get("guid").encode()).hexdigest()
         compiled = network_kernels.compile_network(scene, steppers, connector)
-        objects, external = element_kernels.emit_objects(compiled, scratch)
         symbols = {name: function.native_name for name, function in compiled}
         try:
             header = scene_header(scene, root, steppers, symbols, digest, connector, arrays, extra_vr)
         except ValueError as exc:
             raise build_error(str(exc)) from None
         (scratch / "scene.h").write_text(header)
-        (scratch / "stubs.c").write_text(_stubs(external))
-        library = scratch / f"{identifier}.so"
-        exports = scratch / "exports.map"  # the FMI functions only: the kernels' symbols stay inside
-        exports.write_text(f"{{ global: fmi{fmi}*; local: *; }};\n")
         headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
-        command = [compiler, "-shared", "-fPIC", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-fvisibility=hidden",
-                   *os.environ.get("PRANDTL_NATIVE_CFLAGS", "").split(), f"-I{scratch}", f"-I{headers}",
-                   str(HERE / f"fmi{fmi}.c"), str(scratch / "stubs.c"), *map(str, objects), "-o", str(library),
-                   "-lm", "-Wl,--no-undefined", f"-Wl,--version-script={exports}"]
-        done = subprocess.run(command, capture_output=True, text=True)
-        if done.returncode != 0:
-            errors = [line for line in done.stderr.splitlines() if "error" in line] or done.stderr.splitlines()[-1:]
-            raise build_error(f"linking the native FMU failed: {errors[0].strip() if errors else done.returncode}")
+        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
+                                             [scratch, headers], [], fmi)
         native_description = (_native_description(description) if fmi == 2
                                else fmi3_network_description(root, scene, extra_vr, arrays, connector))
         try:  # the page of the native FMU from its own description, where the documentation knows networks
@@ -460,12 +453,13 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, compiler: str, bui
                                                           runtime="native")
         except Exception:  # noqa: BLE001 (the PythonFMU FMU's page stays)
             pass
-        platform = "linux64" if fmi == 2 else "x86_64-linux"
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(out.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
             add_entry(archive, "modelDescription.xml", native_description)
-            add_entry(archive, f"binaries/{platform}/{identifier}.so", library.read_bytes(), mode=0o755)
+            for folder in folders:
+                add_entry(archive, f"binaries/{folder.name}/{identifier}.{folder.suffix}", binaries[folder.name],
+                          mode=0o755)
             for name, data in kept.items():
                 add_entry(archive, name, data)
         os.replace(partial, out)
