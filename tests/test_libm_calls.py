@@ -24,7 +24,7 @@ from prandtl_fmu.scene import parse_scene
 
 from .conftest import SCENES as SCENE_FOLDER, base_tables, scene_text
 
-# each scene compiles its native kernels: 3 to 30 s
+# each scene compiles its native kernels: 3 to 65 s, about 9 minutes in all on 2 shared cores
 pytestmark = pytest.mark.slow
 
 # exact in every conforming C library (IEEE 754 fixes the result), or not arithmetic at all
