@@ -4,7 +4,7 @@
   line; a missing toolchain named with its package.
 * The win64 binary in a C host built by mingw-w64, under wine; the aarch64-linux binary in a C host built by
   aarch64-linux-gnu-gcc, under qemu-user: every output after every step equals the library's to the bit, for every
-  stepper (tests/c_host/cross_host.c).
+  stepper (tests/c_host/cross_host.c); a network's (NetworkElement's) the same way.
 * Every Linux binary (the default build's too) needs glibc 2.17 at most; the darwin binaries (a universal dylib for
   FMI 2.0's darwin64) export the FMI functions only and import libSystem only (read here from the Mach-O load
   commands: no Mac needed); the Windows binary exports the FMI functions only and imports KERNEL32 and msvcrt.
@@ -376,6 +376,7 @@ class Description:
         variables = list(root.iter("ScalarVariable")) if fmi == 2 else list(root.find("ModelVariables"))
         self.vr = {v.get("name"): int(v.get("valueReference")) for v in variables}
         self.identifier = root.find("CoSimulation").get("modelIdentifier")
+        self.outputs = [v.get("name") for v in variables if v.get("causality") == "output"]
 
 
 def compile_cross_host(compiler: str, fmi: int, out: Path) -> Path:
@@ -395,28 +396,41 @@ def expected(element, names):
     return [values[name] if name in values else element.energy_of(name) for name in names]
 
 
-def compare_with_the_library(run, fmu: Path, fmi: int, label: str):
+def compare_with_the_library(run, fmu: Path, fmi: int, label: str, network: bool = False):
     """Every stepper: 40 random communication steps (sizes not all multiples of the step, random forces) in the
-    host ``run(argv, stdin) -> stdout`` and in the library's Element; every output after every step, bit for bit."""
+    host ``run(argv, stdin) -> stdout`` and in the library's Element (a network's: NetworkElement); every output
+    after every step, bit for bit."""
     from prandtl_fmu import load_scene
     from prandtl_fmu.driver import Element
     from prandtl_fmu.native.kernels import applicable
 
     description = Description(fmu, fmi)
-    scene = load_scene(fmu.parent / "every_stepper.toml")
-    outputs = ["x", "v", "reaction", "stiffness"] + [name for name in ENERGIES if name in description.vr]
-    steppers = applicable(scene)
-    assert steppers == ["projected", "implicit", "symplectic", "verlet", "exact"]
+    if network:
+        from prandtl_fmu.native.network_build import steppers_of
+        from prandtl_fmu.network import NetworkElement
+
+        from .test_native_network import library_outputs
+
+        scene = load_scene(fmu.parent / "network.toml")
+        outputs = description.outputs
+        steppers = steppers_of(scene, False)
+        assert steppers
+    else:
+        scene = load_scene(fmu.parent / "every_stepper.toml")
+        outputs = ["x", "v", "reaction", "stiffness"] + [name for name in ENERGIES if name in description.vr]
+        steppers = applicable(scene)
+        assert steppers == ["projected", "implicit", "symplectic", "verlet", "exact"]
     for stepper in steppers:
         rng = np.random.default_rng(11)
         steps = [(float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))) for _ in range(40)]
-        element = Element(scene, stepper=stepper)
+        element = NetworkElement(scene, stepper=stepper) if network else Element(scene, stepper=stepper)
         want, time = [], 0.0
         for size, force in steps:
             element.time = time
             element.advance(size, force)
             time += size
-            want.append([bits(value) for value in expected(element, outputs)])
+            values = library_outputs(element, scene, outputs) if network else expected(element, outputs)
+            want.append([bits(value) for value in values])
         argv = [description.token, "file:///unused", str(description.vr["stepper"]), stepper,
                 str(description.vr["F"]), ",".join(str(description.vr[name]) for name in outputs)]
         stdout = run(argv, "".join(f"{bits(size)} {bits(force)}\n" for size, force in steps))
@@ -424,7 +438,7 @@ def compare_with_the_library(run, fmu: Path, fmi: int, label: str):
         assert len(got) == len(steps), (label, stepper, stdout[-2000:])
         for k, (row, reference) in enumerate(zip(got, want)):
             assert row == reference, (label, stepper, k, dict(zip(outputs, zip(row, reference))))
-        assert abs(element.x) > 1e-3  # it moved
+        assert np.max(np.abs(element.x)) > 1e-3  # it moved
 
 
 def _wine_env(prefix: Path) -> dict:
@@ -490,6 +504,38 @@ def test_the_aarch64_binary_under_qemu_is_the_library_bit_for_bit(fmu3, qemu_hos
     library = unpacked(fmu3, "aarch64-linux", tmp_path)
     compare_with_the_library(lambda argv, stdin: run_in_qemu(qemu_host, library, argv, stdin), fmu3, 3,
                              "aarch64-linux")
+
+
+@pytest.fixture(scope="module")
+def network_fmus(tmp_path_factory):
+    """A network's element FMU (tests/test_native_network.py's "joint": three masses, springs, a dashpot, a
+    slider), FMI 2.0 for win64 and FMI 3.0 for aarch64-linux."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from .test_native_network import SCENES as NETWORKS
+
+    _need_zig()
+    _need_mingw()
+    built = {}
+    for fmi, given in ((2, "win64"), (3, "aarch64-linux")):
+        folder = tmp_path_factory.mktemp(f"network{fmi}")
+        (folder / "network.toml").write_text(NETWORKS["joint"])
+        built[fmi] = build_fmu(folder / "network.toml", folder / "network.fmu", runtime="native", fmi=fmi,
+                               platforms=given)
+    return built
+
+
+@pytest.mark.slow
+def test_a_network_s_win64_and_aarch64_binaries_are_network_element_bit_for_bit(network_fmus, wine_host, qemu_host,
+                                                                              tmp_path):
+    """The network's own build (network_build.py) goes the same route: x_<node>, v_<node>, the reaction, the
+    energies and dissipations, every u after every step equal NetworkElement's, for each of its steppers."""
+    library = unpacked(network_fmus[2], "win64", tmp_path / "win64")
+    compare_with_the_library(lambda argv, stdin: run_in_wine(wine_host, library, argv, stdin), network_fmus[2], 2,
+                             "network win64", network=True)
+    library = unpacked(network_fmus[3], "aarch64-linux", tmp_path / "aarch64")
+    compare_with_the_library(lambda argv, stdin: run_in_qemu(qemu_host, library, argv, stdin), network_fmus[3], 3,
+                             "network aarch64-linux", network=True)
 
 
 if __name__ == "__main__":  # pragma: no cover
