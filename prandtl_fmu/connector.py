@@ -123,7 +123,7 @@ class Connector(OutputMemo):
     @property
     def force(self) -> float:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N) at the committed sample."""
-        m, k0, k3, c, k, eta, cs, friction = self.model
+        m, k0, k3, c, k, eta, cs, friction, memory = self.model
         return self._memo("force", lambda: float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)))
 
     def preview(self, x: float, v: float) -> float:
@@ -142,7 +142,7 @@ class Connector(OutputMemo):
 
     def stored_energy(self) -> float:
         """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""
-        m, k0, k3, c, k, eta, cs, friction = self.model
+        m, k0, k3, c, k, eta, cs, friction, memory = self.model
         return self._memo("stored_energy", lambda: float(stored(self.x, k0, k3, k, self.u)))
 
     def energy(self) -> dict:
@@ -188,7 +188,7 @@ class Connector(OutputMemo):
         c = self.model[3]
         if c is not None:
             account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
-        m, k0, k3, c, k, eta, cs, friction = self.model
+        m, k0, k3, c, k, eta, cs, friction, memory = self.model
         outputs = {"force": float(force[0]), "stored_energy": float(stored(x, k0, k3, k, u)),
                    "dissipated_sliders": float(account[SLIDERS]), "dissipated_damper": float(account[DAMPER])}
         for name, value in outputs.items():
@@ -238,8 +238,8 @@ class Connector(OutputMemo):
         if not isinstance(state["coefficients"], dict):
             raise ValueError("state has no table of coefficients")
         scene = with_coefficients(self.scene, **state["coefficients"])
-        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
-        m, k0, k3, c, k, eta, cs, friction = model
+        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, self.model[8]))
+        m, k0, k3, c, k, eta, cs, friction, memory = model
         x, v = values[1], values[2]
         outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, restored), stored(x, k0, k3, k, restored))
         if not all(math.isfinite(value) for value in outputs):

@@ -31,6 +31,11 @@ from .kernels.friction import reaction
 from .kernels.play import branch_force, move, write_elongations
 from .kernels.smooth import elastic_force
 from .loads import force_at, held, noise_problem, plus, with_white_noise
+from .memory import (check_memory_state, compile_memory, copy_memory, force_now, has_memory, memory_state,
+                     put_back, restore_memory)
+from .memory import delay as memory_delay
+from .memory.dahl import after as dahl_after
+from .memory.solve import solve_dahl_increment
 from .noise import new_cache
 from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
 from .stability import StabilityWarning, stability_problem
@@ -65,15 +70,23 @@ STACK_FROM = 64
 
 
 def compile_model(scene: Scene, branch_kernel: str = "play"):
-    """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta, cs, friction)``, ``None`` where absent.
+    """The kernel form of a scene's effects: ``(m, k0, k3, c, k, eta, cs, friction, memory)``, ``None`` where
+    absent.
 
     With ``branch_kernel="stack"``, ``k`` holds the memory stack's parameters
     and ``eta`` is None (see :func:`choose_branch_kernel`); the continuum
     always takes the stack (its parameters are a tuple). ``cs``: the series
     dashpots of the branches (an array, O(n) kernel only); ``friction``:
-    :func:`friction_model`.
+    :func:`friction_model`; ``memory``: the effects with memory and their state (``memory/__init__.py``).
     """
-    return _smooth_model(scene) + _branch_model(scene, branch_kernel) + (friction_model(scene),)
+    return _smooth_model(scene) + _branch_model(scene, branch_kernel) + (friction_model(scene), _memory_model(scene))
+
+
+def _memory_model(scene: Scene):
+    """The kernel form of the effects with memory (``memory/``), fresh at t = 0; memory.NONE without any."""
+    x0 = scene.mass.x0 if scene.mass is not None else 0.0
+    v0 = scene.mass.v0 if scene.mass is not None else 0.0
+    return compile_memory(scene, x0, v0)
 
 
 def _branch_model(scene: Scene, branch_kernel: str) -> tuple:
@@ -111,7 +124,7 @@ def with_scene_coefficients(scene: Scene, model: tuple) -> tuple:
     cs = model[6]
     if cs is not None:
         cs = np.ascontiguousarray(scene.branches.damping, dtype=float)
-    return _smooth_model(scene) + model[4:6] + (cs, friction_model(scene))
+    return _smooth_model(scene) + model[4:6] + (cs, friction_model(scene), model[8])
 
 
 def _smooth_model(scene: Scene):
@@ -176,7 +189,9 @@ def initial_state(scene: Scene, model, load):
     the element jumps at t = 0 to the equilibrium with F(0) (the play
     operator moves the branches) and v = 0. ElementError if none exists.
     """
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    if has_memory(memory) and scene.mass is None and c is None:
+        return _initial_with_memory(scene, model, load)
     if stack.is_stack(k):  # the memory stack: its state stands for the elongations
         u = stack.fresh_state(k, _initial_x(scene))
     else:
@@ -185,12 +200,38 @@ def initial_state(scene: Scene, model, load):
         return scene.mass.x0, scene.mass.v0, u
     force = force_at(load, 0.0)
     if c is not None:
-        return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / c, u
+        return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u) - force_now(memory, 0.0, 0.0, 0.0)) / c, u
     w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, None, u, 0.0)  # an instant: no dashpot relaxes
     if not math.isfinite(w):
         raise ElementError(_collapse_message(scene, 0.0, force) if not _hardening(scene) else
                            f"{scene.source}: the equilibrium with F = {float(force)!r} N at t = 0 overflows")
     move(k, eta, u, w, None)  # the O(n) kernel or the memory stack
+    return w, 0.0, u
+
+
+def _initial_with_memory(scene: Scene, model, load):
+    """The quasi-static massless element's equilibrium with F(0) when it has memory: the delay's history is
+    that equilibrium itself (so a delay on x acts as a spring of its gain at t = 0), the Dahl force moves along
+    the jump from 0 (``memory/``)."""
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    u = stack.fresh_state(k, 0.0) if stack.is_stack(k) else (
+        np.array(scene.branches.u0, dtype=float) if scene.branches is not None else None)
+    force = force_at(load, 0.0)
+    linear = scene.delay.gain if scene.delay is not None else 0.0
+    dahl = memory[2]
+    if dahl is not None:
+        w = solve_dahl_increment(dahl, 0.0, linear, -force, k0, k3, k, eta, None, u, 0.0)
+    else:
+        w = solve_increment(0.0, linear, -force, k0, k3, k, eta, None, u, 0.0)
+    if not math.isfinite(w):
+        raise ElementError(_collapse_message(scene, 0.0, force) if not _hardening(scene) else
+                           f"{scene.source}: the equilibrium with F = {float(force)!r} N at t = 0 overflows")
+    move(k, eta, u, w, None)
+    if memory[0] is not None:
+        buffer = memory[0][1]
+        buffer[1] = buffer[memory_delay.HEAD] = w
+    if dahl is not None:
+        dahl[1][0] = dahl_after(dahl, 0.0, w)[0]
     return w, 0.0, u
 
 
@@ -423,7 +464,7 @@ def _chunks(scene, name, loop, h, per_row, states, energy, progress, branch_kern
     n_out = n if states else 0
     account = np.zeros(4) if energy else None
     x, v, u = initial_state(scene, model, load)
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
 
     def piece(first, count):
         """Empty output arrays for rows first .. first + count - 1."""
@@ -645,7 +686,7 @@ class Element(OutputMemo):
 
     def _record(self) -> None:
         self._touch()
-        m, k0, k3, c, k, eta, cs, friction = self.model
+        m, k0, k3, c, k, eta, cs, friction, memory = self.model
         self._out[0] = (self.x, self.v, reaction(self.model, self._load, self.time, self.x, self.v,
                                                  branch_force(k, self.u)))
         self._energy_row[0] = (kinetic(m, self.v), stored(self.x, k0, k3, k, self.u), *self.account)
@@ -850,6 +891,8 @@ class Element(OutputMemo):
             "coefficients": self.coefficients(), "stepper": self.stepper, "step": self.h,
         }
         state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
+        if has_memory(self.model[8]):  # the effects with memory: the delay's buffer, the history, the Dahl force
+            state["memory"] = memory_state(self.model[8])
         return state
 
     def set_state(self, state: dict, noise=UNCHANGED) -> None:
@@ -882,8 +925,12 @@ class Element(OutputMemo):
         problem = noise_problem(noise, step)  # the state's step under the noise in use from then on
         if problem:
             raise ValueError(problem)
-        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None,))
-        m, k0, k3, c, k, eta, cs, friction = model
+        memory = copy_memory(self.model[8])
+        if has_memory(memory) or "memory" in state:
+            check_memory_state(memory, state.get("memory"))
+            restore_memory(memory, state["memory"])
+        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, memory))
+        m, k0, k3, c, k, eta, cs, friction, memory = model
         _, x, v, force, _ = values
         outputs = (reaction(model, held(force), values[0], x, v, branch_force(k, u)), kinetic(m, v),
                    stored(x, k0, k3, k, u))
@@ -907,11 +954,12 @@ class Element(OutputMemo):
         if self.u is not None:
             u = self.u[:stack.used(self.u)].copy() if self.branch_kernel == "stack" else self.u.copy()
         return ((self._origin, self._steps, self._grid), self.x, self.v, self.force, u, self.account.copy(),
-                self._out.copy(), self._energy_row.copy())
+                self._out.copy(), self._energy_row.copy(), copy_memory(self.model[8]))
 
     def rollback(self, checkpoint) -> None:
         """Return to a :meth:`checkpoint`, exactly."""
-        clock, self.x, self.v, self.force, u, account, out, energy_row = checkpoint
+        clock, self.x, self.v, self.force, u, account, out, energy_row, memory = checkpoint
+        put_back(self.model[8], memory)
         self._origin, self._steps, self._grid = clock
         self._touch()
         if u is not None:

@@ -92,6 +92,10 @@ class Scene:
     source: str = "<scene>"
     causality: str = "force"  # of its FMU: see CAUSALITIES
     friction: Optional[Friction] = None  # of the mass on the ground: ``[friction]``
+    # the effects with memory (memory/: the registry EFFECTS names them): ``[delay]``, ``[history]``, ``[dahl]``
+    delay: Optional[Any] = None
+    history: Optional[Any] = None
+    dahl: Optional[Any] = None
 
     def with_solver(self, **overrides) -> "Scene":
         """A copy with some solver settings replaced (``None`` values are ignored), checked."""
@@ -111,7 +115,7 @@ class Scene:
     @property
     def effects(self) -> list[str]:
         """Names of the tables present, in contract order."""
-        names = ["mass", "friction", "spring", "cubic", "damper", "branches"]
+        names = ["mass", "friction", "spring", "cubic", "damper", "branches", "delay", "history", "dahl"]
         return [name for name in names if getattr(self, name) is not None]
 
     @property
@@ -254,7 +258,7 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 # ---------------------------------------------------------------- parsing
 
 _TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "masing", "load", "solver",
-             "fmu"}
+             "fmu", "delay", "history", "dahl"}
 # (a scene with [network] or [chain] is a network: network/model.py reads it)
 # How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
 # with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
@@ -470,11 +474,51 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
         if causality == "displacement" and mass is not None:
             r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
                    "remove [mass] (the bodies hold the inertia) or use \"force\"")
-    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality, friction)
+    memory = _memory(source, doc)
+    if memory and causality == "displacement":
+        raise SceneError(f"{source}: [{next(iter(memory))}]: the connector (causality \"displacement\") does not carry "
+                         "the effects with memory yet: use the element (causality \"force\")")
+    scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality, friction, **memory)
+    if memory:
+        _check_memory_rules(scene)
     _check_noise_unit(scene)
     if check_stepper and causality == "force":  # the connector takes no time steps: no stepper to check
         _check_stepper_applies(scene, where="[solver] ")
     return scene
+
+
+def _memory(source, doc) -> dict:
+    """The effects with memory of the document (``memory.EFFECTS``: one reader per table)."""
+    from .memory import EFFECTS
+
+    return {name: module.read(_Reader(source, name, doc[name]), set(doc)) for name, module in EFFECTS.items()
+            if name in doc}
+
+
+def _check_memory_rules(scene) -> None:
+    """What the effects with memory need of the rest of the scene: a buffer (tau / step values) that fits in
+    memory, refused with the number before the run; and a step whose equation stays monotone (``implicit``
+    takes the delay inside the step when tau < step, and the quasi-static massless element has nothing but its
+    springs against a negative memory force)."""
+    quasi_static = scene.mass is None and not scene.has_dashpot
+    if scene.delay is not None and scene.delay.gain < 0 and (quasi_static or scene.delay.tau < scene.solver.step):
+        why = "on a massless element without a dashpot" if quasi_static else \
+            f"with tau = {scene.delay.tau!r} s below the step {scene.solver.step!r} s"
+        raise SceneError(f"{scene.source}: [delay] gain: a negative gain {why} makes the implicit equation of a "
+                         "step non-monotone (no unique solution): add [mass] or a [damper], or a longer tau")
+    if scene.history is not None and quasi_static and min(scene.history.weight) < 0:
+        raise SceneError(f"{scene.source}: [history] weight: a negative weight on a massless element without a "
+                         "dashpot makes the implicit equation of a step non-monotone: add [mass] or a [damper]")
+    if scene.delay is not None:
+        from .memory import delay
+
+        count = delay.size(scene.delay, scene.solver.step)
+        if count > 2**31:
+            raise SceneError(f"{scene.source}: [delay] tau: tau / step = {scene.delay.tau / scene.solver.step:.4g} "
+                             f"values in the delay's buffer, more than 2^31: a longer [solver] step or a shorter "
+                             "tau")
+        check_memory(8.0 * count, f"{scene.source}: [delay] tau = {scene.delay.tau!r} s (a buffer of {count} values "
+                                  f"at step {scene.solver.step!r} s)")
 
 
 def _mass(source, data) -> Mass:

@@ -45,6 +45,7 @@ import numpy as np
 
 from .driver import (ElementError, OutputGrid, choose_branch_kernel, compile_loop, compile_model,
                      friction_model, initial_state, _failure, _smooth_model)
+from .memory import NONE as NO_MEMORY, present as memory_effects
 from .kernels import batch as packed
 from .loads import HarmonicLoad
 from .resources import check_memory
@@ -139,15 +140,16 @@ def summarize_many(runs, quantities: Iterable[str], *, history: bool = False,
 
     The runs of one structure (stepper loop, effects present, branch kernel)
     are packed into a batch and run by one compiled call (``kernels/batch.py``).
-    A run whose load has a white noise goes alone through :func:`driver.simulate`, every step an output row
-    (:func:`_noisy_run`: the batch's packed load has no noise).
+    A run whose load has a white noise, or with effects with memory, goes alone through
+    :func:`driver.simulate`, every step an output row (:func:`_noisy_run`: the batch packs neither a noise nor a
+    memory's state).
     """
     quantities = list(quantities)
     energy = any(q in ENERGY_SUMMARIES for q in quantities)
     outcomes = [Outcome() for _ in runs]
     batches, branch_models = {}, {}
     for position, (scene, name) in enumerate(runs):
-        if getattr(scene.load, "noise", None) is not None:
+        if getattr(scene.load, "noise", None) is not None or memory_effects(scene):
             _noisy_run(outcomes[position], scene, name, quantities, history, branch_kernel)
             continue
         try:
@@ -189,7 +191,7 @@ class _Job:
         problem = stability_problem(scene, name, h)
         self.warning = f"{scene.source}: {problem}" if problem else ""
         self.model = _smooth_model(scene) + _branch_model(scene, name, branch_kernel, branch_models) \
-            + (friction_model(scene),)
+            + (friction_model(scene), NO_MEMORY)  # (a run with memory goes alone: _noisy_run)
         self.load = scene.load.compile()
         self.x, self.v, self.u = initial_state(scene, self.model, self.load)
 
@@ -248,7 +250,7 @@ class _Batch:
         return start, start + size
 
     def add(self, position: int, job: _Job):
-        m, k0, k3, c, k, eta, cs, friction = job.model
+        m, k0, k3, c, k, eta, cs, friction, memory = job.model
         kind, offset, amplitude, omega, table_time, table_force = job.load
         real = [m, k0, k3, c, job.x, job.v, job.h, job.rest, offset, amplitude, omega]
         real += list(friction) if friction is not None else [0.0] * 4
@@ -360,7 +362,7 @@ _EVERY_STEP = ("max_abs_x", "max_abs_v", "max_abs_reaction", "loop_area")
 
 def _noisy_run(outcome: Outcome, scene: Scene, name: str, quantities: list, history: bool,
                branch_kernel: Optional[str]) -> None:
-    """One run with a white noise (``kernels/batch.py`` packs loads without one): :func:`driver.simulate` with
+    """One run with a white noise or effects with memory (``kernels/batch.py`` packs neither): :func:`driver.simulate` with
     an output row after every step when a peak or loop_area is asked for (the same steps t_p = p h as the
     scene's own grid, so the same numbers), else on the scene's grid; the peaks, the final state and the
     energies from those rows, the late averages and the history from the rows of the scene's output grid."""

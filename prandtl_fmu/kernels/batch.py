@@ -120,7 +120,7 @@ def summary_loop(step):
             cs = present(model_template[6], damping_data[index[i, BRANCH_A]:index[i, BRANCH_B]])
             friction = present(model_template[7], (real[i, ALPHA], real[i, ALPHA_KINETIC], real[i, STRIBECK],
                                                    real[i, BELT]))
-            model = (m, k0, k3, c, k, eta, cs, friction)
+            model = (m, k0, k3, c, k, eta, cs, friction, (None, None, None))  # (no memory in a batch)
             load = (index[i, LOAD_KIND], real[i, OFFSET], real[i, AMPLITUDE], real[i, OMEGA],
                     table_data[index[i, TABLE_A]:index[i, TABLE_B]], table_data[index[i, TABLE_B]:index[i, TABLE_C]])
             u = present(state_template, state_data[index[i, STATE_A]:index[i, STATE_B]])

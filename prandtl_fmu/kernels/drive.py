@@ -22,7 +22,7 @@ def drive(model, u, x_start, xs, vs, durations, forces, energy):
     (``kernels/series.py``, FLOW: exact along the linear path; plain branches do not need them). With an
     ``energy`` account (not None), the sliders' dissipation is added to energy[1], the series dashpots' to
     energy[2]. Returns the last x."""
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     x = x_start
     for j in range(xs.shape[0]):
         move_branches(k, eta, cs, u, xs[j] - x, durations[j], FLOW, energy)
@@ -35,14 +35,14 @@ def drive(model, u, x_start, xs, vs, durations, forces, energy):
 def tangent(model, x, u, direction):
     """dF/dx at (x, u) for a motion in ``direction`` (+1 or -1): k0 + 3 k3 x^2 + the stiffnesses of the
     branches that stick (a branch on its threshold in ``direction`` slides and adds nothing)."""
-    m, k0, k3, c, k, eta, cs, friction = model  # at an instant, a series dashpot does not move
+    m, k0, k3, c, k, eta, cs, friction, memory = model  # at an instant, a series dashpot does not move
     return elastic_stiffness(x, k0, k3) + piece(k, eta, u, 0.0, direction)[1]
 
 
 @kernel
 def preview(model, u, dx, v, x):
     """The force at x = (current x) + dx without moving the branches (``x`` is the new displacement)."""
-    m, k0, k3, c, k, eta, cs, friction = model  # at an instant, a series dashpot does not move
+    m, k0, k3, c, k, eta, cs, friction, memory = model  # at an instant, a series dashpot does not move
     direction = 1.0 if dx >= 0.0 else -1.0
     return smooth_force(x, v, k0, k3, c) + piece(k, eta, u, dx, direction)[0]
 

@@ -20,6 +20,7 @@ import math
 from .. import libm
 from .._jit import kernel
 from ..loads import force_at
+from ..memory import force_now
 from .smooth import smooth_force
 
 
@@ -98,10 +99,10 @@ def book_friction(energy, friction, f, h, v1):
 @kernel
 def reaction(model, load, t, x, v, s):
     """The force of the effects on the point (N) in the state (x, v, branch force ``s``) at time t:
-    k0 x + k3 x^3 + c v + s, plus the friction's :func:`resistance` against the load F(t) (= F - m v'
+    k0 x + k3 x^3 + c v + s + the memory forces (``memory/``), plus the friction's :func:`resistance` against the load F(t) (= F - m v'
     while the mass sticks)."""
-    m, k0, k3, c, k, eta, cs, friction = model
-    others = smooth_force(x, v, k0, k3, c) + s
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    others = smooth_force(x, v, k0, k3, c) + s + force_now(memory, t, x, v)
     return others + _resisted(friction, load, t, v, others)
 
 

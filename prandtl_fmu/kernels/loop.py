@@ -50,7 +50,7 @@ def time_loop(step):
         of steps taken, fewer than asked if a step failed (non-finite result; the
         state returned is the one before that step).
         """
-        m, k0, k3, c, k, eta, cs, friction = model
+        m, k0, k3, c, k, eta, cs, friction, memory = model
         s = branch_force(k, u)
         p = 0
         for j in range(out.shape[0]):

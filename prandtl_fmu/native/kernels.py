@@ -61,7 +61,7 @@ _SIGNATURES = {
 
 _TEMPLATE = '''
 def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, (None, None, None))
 
 
 def _load(kind, lk, lt, lf, nl):
@@ -93,7 +93,7 @@ def advance_noisy(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt,
 
 def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t):
     model = _model(p, kp, etap, csp)
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     x = xv[0]
     v = xv[1]
@@ -124,7 +124,7 @@ def force_at_c(kind, lk, lt, lf, nl, t, unused):
 
 def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
     model = _model(p, kp, etap, csp)
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     if {stack}:  # stack.fresh_state(params, x0) in place: one sticking piece, u_i = x - x0 + u0_i
         start(k, p[1] if {massive} else 0.0, u)
@@ -149,7 +149,7 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
 
 _CONNECTOR_TEMPLATE = '''
 def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction})
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, (None, None, None))
 
 
 def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
@@ -159,7 +159,7 @@ def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
 
 
 def cforce(p, kp, etap, csp, up, x, v):
-    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
     return smooth_force(x, v, k0, k3, c) + branch_force(k, {u})
 
 
@@ -168,7 +168,7 @@ def ctangent(p, kp, etap, csp, up, x, direction):
 
 
 def cstored(p, kp, etap, csp, up, x):
-    m, k0, k3, c, k, eta, cs, friction = _model(p, kp, etap, csp)
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
     return stored(x, k0, k3, k, {u})
 
 

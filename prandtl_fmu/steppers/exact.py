@@ -113,6 +113,7 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
+from ..memory import refuse_memory
 
 ORDER = math.inf
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
@@ -120,6 +121,7 @@ STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accura
 
 def loop_for(scene):
     """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
+    refuse_memory(scene, "exact")
     if scene.mass is None:
         raise ValueError("'exact' needs [mass] (the massless element is solved exactly by 'implicit')")
     if scene.load.noise is not None:
@@ -407,7 +409,7 @@ def attempt(model, load, t, h, x, v, u, energy):
     why the step could not be taken at time ``when`` (then u and ``energy`` are restored): more than
     PHASE_BUDGET phases, more than 16 + 2 n phases in a row that do not advance t, an event search over its
     budget, a non-finite state. Books the energy account exactly (:func:`_book`)."""
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     saved_u = _saved(u)
     saved_energy = _saved(energy)
     alpha = _threshold(friction)

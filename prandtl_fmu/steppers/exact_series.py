@@ -383,7 +383,7 @@ def step(model, load, t, h, x, v, s, u, energy):
 def attempt(model, load, t, h, x, v, u, energy):
     """The exact motion from t to t + h: (x, v, failure, when), as ``exact.attempt`` (the same budgets and
     failures; at most 16 + 4 n phases in a row that do not advance t)."""
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     saved_u = _saved(u)
     saved_energy = _saved(energy)
     alpha = _threshold(friction)

@@ -45,6 +45,12 @@ friction (the literature proves 1/2 for convex boxes; ``docs/white-noise.md``). 
 sigma dB, backward Euler-Maruyama on the first-order SDE (v is then the step's mean rate, of size
 sigma / (c sqrt(h)): it has no limit as h -> 0); massless without one: refused (no solution).
 
+Effects with memory (``memory/``): the delay's and the history's forces at t_{p+1} are affine in the new
+state (the delayed instant interpolated inside the step when tau < h; the history's variables integrated
+exactly with x linear over the step), so they join G as a constant and a stiffness; Dahl's force at t_{p+1} is
+the exact Dahl operator over the increment w, a non-decreasing term of G solved by bracketing and Illinois
+(``memory/solve.py``). Their work is booked with the load's.
+
 Massless element (no [mass]): the same equation without the m terms. With a
 dashpot it is backward Euler on c x' = F - ...; without, the quasi-static
 element F(t_{p+1}) = k0 x + k3 x^3 + sum_i k_i u_i, i.e. the inverse of the
@@ -62,6 +68,9 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.series import BACKWARD, move_branches
 from ..loads import force_at, impulse, with_noise
+from ..memory import linear_force, record
+from ..memory.dahl import after
+from ..memory.solve import solve_dahl_increment
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
@@ -82,22 +91,39 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     force = force_at(load, t + h)
     force = with_noise(load, force, force + impulse(load, t, h) / h)  # the mean force over the step
     linear = _plus_damping(_inertia(m, h), c, h)
-    w, v1, f = _increment(friction, x, linear, _momentum(m, v, h) - force, k0, k3, k, eta, cs, u, h)
+    kept, stiffer = linear_force(memory, t, h, x, v)  # the delay's and the history's force: kept + stiffer w
+    dahl = memory[2]
+    if linear + stiffer < 0.0:  # a negative memory stiffness beyond the inertia's: no unique step (refused)
+        return np.nan, np.nan, s
+    w, v1, f = _increment(friction, dahl, x, linear + stiffer, _momentum(m, v, h) - force + kept, k0, k3, k, eta,
+                          cs, u, h)
     if not abs(w) < np.inf:  # no equilibrium: plastic collapse
         return np.nan, np.nan, s
-    book(energy, force, w, c, v1)
+    book(energy, force - kept - stiffer * w - _dahl_after(dahl, w), w, c, v1)  # the load's and the memory's work
     book_friction(energy, friction, f, h, v1)
     s = move_branches(k, eta, cs, u, w, h, BACKWARD, energy)
+    record(memory, t, h, x, v, x + w, v1)
     return x + w, v1, s
 
 
 @kernel
-def _increment(friction, x, linear, offset, k0, k3, k, eta, cs, u, h):
+def _dahl_after(dahl, w):
+    """The Dahl force at the step's end (0 without [dahl])."""
+    if dahl is None:
+        return 0.0
+    return after(dahl, dahl[1][0], w)[0]
+
+
+@kernel
+def _increment(friction, dahl, x, linear, offset, k0, k3, k, eta, cs, u, h):
     """(w, v1, f): the increment, the new velocity and the friction force on the mass (0 without friction)."""
+    if dahl is not None:  # (never with [friction]: the scene refuses both)
+        w = solve_dahl_increment(dahl, x, linear, offset, k0, k3, k, eta, cs, u, h)
+        return w, w / h, 0.0
     if friction is None:
         w = solve_increment(x, linear, offset, k0, k3, k, eta, cs, u, h)
         return w, w / h, 0.0

@@ -38,6 +38,10 @@ momentum, v <- v + h a + sigma dB / m (before the friction's projection), and to
 motion, x <- x + h v + sigma dB / c; the work booked is that of the step's mean force F + sigma dB / h.
 Strong order: about 1 measured with 7 branches, friction and series dashpots (``docs/white-noise.md``).
 
+Effects with memory (``memory/``): their forces at the old state join the load (the delay's y(t_p - tau)
+from its buffer, the history's sum_j w_j z_j, Dahl's F_d), then they move along the step (z_j integrated
+exactly with x linear, F_d by the exact Dahl operator over h v).
+
 Massless element with a dashpot (no [mass]): the same scheme on
 c x' = F - k0 x - k3 x^3 - sum_i k_i u_i, i.e. x <- x + h v with the rate
 v = (F(t_p) - k0 x - k3 x^3 - sum_i k_i u_i) / c of the old state; stable
@@ -52,6 +56,7 @@ from ..kernels.friction import book_friction, held_velocity
 from ..kernels.series import EXPLICIT, move_branches
 from ..kernels.smooth import elastic_force, smooth_force
 from ..loads import force_at, impulse, with_noise
+from ..memory import force_now, record
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
@@ -69,29 +74,32 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     force = force_at(load, t)
     force = with_noise(load, force, force + impulse(load, t, h) / h)  # the mean force over the step
+    force = force - force_now(memory, t, x, v)  # the load and the memory forces of the old state
     a = (force - smooth_force(x, v, k0, k3, c) - s) / m
     dx = h * v
     book(energy, force, dx, c, v)
     v1, f = held_velocity(friction, m / h, v + h * a, v)
     book_friction(energy, friction, f, h, v1)
     s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
+    record(memory, t, h, x, v, x + dx, v1)
     return x + dx, v1, s
 
 
 @kernel
 def step_massless(model, load, t, h, x, v, s, u, energy):
     """Massless element with a dashpot: ``v`` is the rate of the current state."""
-    m, k0, k3, c, k, eta, cs, friction = model
-    force = force_at(load, t)
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    force = force_at(load, t) - force_now(memory, t, x, v)
     kick = impulse(load, t, h)
     dx = with_noise(load, h * v, h * v + kick / c)  # c (x1 - x) = h c v + sigma dB
     book(energy, with_noise(load, force, force + kick / h), dx, c, with_noise(load, v, dx / h))
     s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
+    record(memory, t, h, x, v, x + dx, dx / h)
     x = x + dx
-    return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s) / c, s
+    return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s - force_now(memory, t + h, x, 0.0)) / c, s
 
 
 _loop = time_loop(step)

@@ -26,6 +26,7 @@ from ..kernels.friction import book_friction, held_velocity
 from ..kernels.series import FLOW, move_branches
 from ..kernels.smooth import damped, elastic_force, plus_damping
 from ..loads import force_at
+from ..memory import refuse_memory
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1
@@ -33,6 +34,7 @@ ORDER = 1
 
 def loop_for(scene):
     """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
+    refuse_memory(scene, "symplectic")
     if scene.mass is None:
         raise ValueError("'symplectic' needs [mass]; a massless element is solved by 'implicit'")
     if scene.load.noise is not None:
@@ -42,7 +44,7 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     dx = h * v
     s = move_branches(k, eta, cs, u, dx, h, FLOW, energy)
     x = x + dx

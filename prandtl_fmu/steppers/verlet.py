@@ -41,6 +41,7 @@ from ..kernels.friction import book_friction, held_velocity
 from ..kernels.series import FLOW, move_branches
 from ..kernels.smooth import damped, elastic_force, plus_damping, smooth_force
 from ..loads import force_at
+from ..memory import refuse_memory
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 2
@@ -48,6 +49,7 @@ ORDER = 2
 
 def loop_for(scene):
     """The compiled time loop for ``scene``; ValueError if the scheme does not apply."""
+    refuse_memory(scene, "verlet")
     if scene.mass is None:
         raise ValueError("'verlet' needs [mass]; a massless element is solved by 'implicit'")
     if scene.load.noise is not None:
@@ -57,7 +59,7 @@ def loop_for(scene):
 
 @kernel
 def step(model, load, t, h, x, v, s, u, energy):
-    m, k0, k3, c, k, eta, cs, friction = model
+    m, k0, k3, c, k, eta, cs, friction, memory = model
     force0 = force_at(load, t)
     half, f0 = held_velocity(friction, 2.0 * m / h, v + 0.5 * h * (force0 - smooth_force(x, v, k0, k3, c) - s) / m, v)
     dx = h * half

@@ -1,0 +1,97 @@
+"""``[dahl]``: Dahl's friction force on the mass (P. R. Dahl, *Solid friction damping of mechanical
+vibrations*, AIAA J. 14 (1976) 1675-1682; the form of Olsson, Astrom, Canudas de Wit, Gafvert & Lischinsky,
+*Friction models and friction compensation*, Eur. J. Control 4 (1998), eq. 6):
+
+    force on the point:  -F_d,   dF_d/dt = sigma (1 - F_d / F_c sgn v)^exponent v,   F_d(0) = 0,
+
+``sigma`` (N/m, > 0) the stiffness at a reversal, ``force`` F_c (N, > 0) the Coulomb level it approaches,
+``exponent`` (> 0, default 1). |F_d| <= F_c always. The law is rate independent: dF_d/dx = sigma (1 - F_d / F_c
+s)^exponent along a motion of sign s, so over a monotone increment dx (s = sgn dx, d = sigma |dx| / F_c,
+y = 1 - s F_d / F_c in [0, 2]) it is integrated exactly:
+
+    exponent = 1:   y1 = y exp(-d)                              (F_d relaxes exponentially in x towards s F_c)
+    exponent > 1:   y1 = y (1 + (exponent - 1) d y^(exponent - 1))^(-1 / (exponent - 1))
+    exponent < 1:   y1 = max(0, y^(1 - exponent) - (1 - exponent) d)^(1 / (1 - exponent))   (reaches F_c)
+
+and F_d1 = s F_c (1 - y1). The steppers move x linearly over a step, so this is the exact Dahl operator on
+their path: ``implicit`` solves for the step with F_d1 at the new x (a monotone term: dF_d1/d(dx) = sigma
+y1^exponent >= 0), ``projected`` takes F_d at the old state and moves it by h v.
+
+The *modified* Dahl model of the belt tensioner (Bastien, Michon, Manin & Dufour, J. Sound Vib. 302 (2007)),
+with upper and lower envelopes approached exponentially, is not built: its published equations could not be
+read from any source reachable here (``docs/memory.md``).
+
+The kernel form: ``((sigma, force, exponent), state)``, ``state[0]`` = F_d.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._jit import kernel
+from ..libm import exp, pow
+
+NAME = "dahl"
+
+
+@dataclass(frozen=True)
+class Dahl:
+    """Dahl's friction: stiffness ``sigma`` at reversal (N/m), Coulomb level ``force`` (N), ``exponent``."""
+
+    sigma: float
+    force: float
+    exponent: float = 1.0
+
+
+def read(r, scene_tables) -> Dahl:
+    r.only({"sigma", "force", "exponent", "kind"})
+    kind = r.string("kind", "dahl", choices=("dahl",))
+    del kind
+    if "friction" in scene_tables:
+        r.fail("sigma", "[dahl] and [friction] are two laws of the mass's friction on the ground: keep one")
+    return Dahl(r.number("sigma", positive=True), r.number("force", positive=True),
+                r.number("exponent", 1.0, positive=True))
+
+
+def compile(dahl: Dahl):
+    return (float(dahl.sigma), float(dahl.force), float(dahl.exponent)), np.zeros(1)
+
+
+def state(part) -> list:
+    return part[1].tolist()
+
+
+def restore(part, values) -> None:
+    (sigma, level, exponent), f = part
+    if len(values) != 1:
+        raise ValueError(f"state has {len(values)} Dahl forces, the element has 1")
+    if not abs(values[0]) <= level:
+        raise ValueError(f"state has a Dahl force {values[0]!r} beyond its level F_c = {level!r}")
+    f[0] = values[0]
+
+
+@kernel
+def after(part, fd, dx):
+    """(F_d after a monotone move dx from F_d = ``fd``, its slope dF_d/d(dx) there)."""
+    (sigma, level, exponent), f = part
+    if dx == 0.0:
+        return fd, sigma * pow(max(1.0 - abs(fd) / level, 0.0), exponent)  # (either side's slope: a bound)
+    s = 1.0 if dx > 0.0 else -1.0
+    y = max(1.0 - s * fd / level, 0.0)
+    d = sigma * abs(dx) / level
+    if exponent == 1.0:
+        y1 = y * exp(-d)
+    elif exponent > 1.0:
+        p = exponent - 1.0
+        y1 = y * pow(1.0 + p * d * pow(y, p), -1.0 / p)
+    else:
+        p = 1.0 - exponent
+        y1 = pow(max(pow(y, p) - p * d, 0.0), 1.0 / p)
+    y1 = min(y1, 2.0)
+    return s * level * (1.0 - y1), sigma * pow(y1, exponent)
+
+
+@kernel
+def force(part):
+    return part[1][0]
