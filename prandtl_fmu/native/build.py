@@ -76,6 +76,12 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
+    from ..memory import present
+
+    if not hasattr(scene, "network") and present(scene):
+        tables = ", ".join(f"[{name}]" for name in present(scene))
+        raise NativeBuildError(f"{scene.source}: {tables}: the native runtime does not carry the effects with memory "
+                               "yet: build with --runtime python")
     if hasattr(scene, "network"):  # a [network] or [chain] scene
         return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms)
     folders = targets.resolve(platforms, fmi)
@@ -114,7 +120,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         n_vr = next((int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n"), 0)
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
                                              [scratch, headers], [f"VR_U={vr_u}", f"VR_N={n_vr}",
-                                                                  f"VR_TIME={vr_u + 1}"], fmi)
+                                                                  f"VR_TIME={vr_u + 1}"], fmi, identifier)
         native_description = (_native_description(description) if fmi == 2
                               else fmi3_description(root, scene, vr_u, arrays))
         out.parent.mkdir(parents=True, exist_ok=True)
