@@ -197,5 +197,4 @@ def test_the_check_sees_libm(tmp_path):
         return math.cos(x) + math.pow(x, y) + abs(complex(x, y))
 
     found = libm_calls([("calls_libm", calls_libm)], tmp_path)
-    print(found)
     assert {"llvm.cos.f64", "llvm.pow.f64", "hypot"} <= set(found)
