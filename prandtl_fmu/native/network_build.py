@@ -443,7 +443,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, build_error, platf
         (scratch / "scene.h").write_text(header)
         headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
-                                             [scratch, headers], [], fmi)
+                                             [scratch, headers], [], fmi, identifier)
         native_description = (_native_description(description) if fmi == 2
                                else fmi3_network_description(root, scene, extra_vr, arrays, connector))
         try:  # the page of the native FMU from its own description, where the documentation knows networks

@@ -314,9 +314,11 @@ def universal(slices) -> bytes:
     return (header + table).ljust(offset, b"\0") + body
 
 
-def build_binaries(folders, chains, compiled, scratch, stubs, sources, includes, defines, fmi: int) -> tuple:
+def build_binaries(folders, chains, compiled, scratch, stubs, sources, includes, defines, fmi: int,
+                   identifier: str) -> tuple:
     """Every folder's binary: ``{folder name: bytes}`` and the seconds each took (emitting its objects and
-    linking). ``stubs(external)``: the C text of what the kernels' modules declare (``build._stubs``)."""
+    linking). ``stubs(external)``: the C text of what the kernels' modules declare (``build._stubs``);
+    ``identifier``: the model identifier, the binary's own name (a DLL's export name, a dylib's install name)."""
     import time
 
     binaries, seconds = {}, {}
@@ -328,7 +330,7 @@ def build_binaries(folders, chains, compiled, scratch, stubs, sources, includes,
             objects, external = emit_objects(compiled, where, target)
             (where / "stubs.c").write_text(stubs(external))
             out = link(target, chains[target.name], [*sources, where / "stubs.c"], objects, includes, defines,
-                       where / f"binary.{target.suffix}", fmi)
+                       where / f"{identifier}.{target.suffix}", fmi)
             slices.append((target.arch, out.read_bytes()))
         binaries[folder.name] = slices[0][1] if len(slices) == 1 else universal(slices)
         seconds[folder.name] = time.perf_counter() - started
