@@ -37,7 +37,8 @@ from .memory import delay as memory_delay
 from .memory.dahl import after as dahl_after
 from .memory.solve import solve_dahl_increment
 from .noise import new_cache
-from .scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, Scene, coefficients_of, with_coefficients
+from .scene import (ADVANCE_BUDGET, MAX_STEPS, MEMORY_COEFFICIENTS, SHORTEST_STEP, Scene, _coefficient_key,
+                    coefficients_of, with_coefficients)
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
@@ -812,9 +813,17 @@ class Element(OutputMemo):
         ValueError names the culprit and leaves the element unchanged.
         """
         scene = with_coefficients(self.scene, **values)
+        memory = [name for name in values if _coefficient_key(name) in MEMORY_COEFFICIENTS
+                  and values[name] != coefficients_of(self.scene)[name]]
+        if memory and (self._steps or self._origin or self.time):
+            raise ValueError(f"{memory[0]}: an effect with memory restarts with its coefficients: set them before "
+                             "the run (an FMU's fixed parameter), or reset the element")
         # c -> 0 on a massless element: 'projected' no longer applies, nor a noise (checked with the noise in use)
         loop = compile_loop(with_noise(scene, self.noise), self.stepper)
-        self.scene, self.model, self._loop = scene, with_scene_coefficients(scene, self.model), loop
+        model = with_scene_coefficients(scene, self.model)
+        if memory:  # (at the start: fresh, with the new coefficients)
+            model = model[:8] + (_memory_model(scene),)
+        self.scene, self.model, self._loop = scene, model, loop
         self._record()
 
     def set_stepper(self, name: str) -> None:
@@ -925,7 +934,7 @@ class Element(OutputMemo):
         problem = noise_problem(noise, step)  # the state's step under the noise in use from then on
         if problem:
             raise ValueError(problem)
-        memory = copy_memory(self.model[8])
+        memory = _memory_model(scene)  # the state's coefficients, its arrays filled below
         if has_memory(memory) or "memory" in state:
             check_memory_state(memory, state.get("memory"))
             restore_memory(memory, state["memory"])

@@ -138,15 +138,26 @@ COEFFICIENTS = {
     "stribeck_velocity": ("friction", "> 0"),
     "belt_velocity": ("friction", "finite"),
     "c_branch": ("branches", "> 0"),
+    # the effects with memory (an FMU's fixed parameters: they restart the memory, so they are set before a run)
+    "delay_gain": ("delay", "finite"),
+    "delay_tau": ("delay", "> 0"),
+    "history_weight": ("history", "finite"),
+    "history_rate": ("history", ">= 0"),
+    "dahl_sigma": ("dahl", "> 0"),
+    "dahl_force": ("dahl", "> 0"),
+    "dahl_exponent": ("dahl", "> 0"),
 }
+MEMORY_COEFFICIENTS = ("delay_gain", "delay_tau", "history_weight", "history_rate", "dahl_sigma", "dahl_force",
+                       "dahl_exponent")
 # Branch dashpots are coefficients too: ``c_branch`` (one for every branch, a scene with ``count = n``) or
 # ``c_branch[i]`` (i = 1..n, a scene that lists its branches).
 
 
 def _coefficient_key(name: str) -> str:
     """The COEFFICIENTS key of a coefficient name (``c_branch[3]`` -> ``c_branch``)."""
-    if name.startswith("c_branch[") and name.endswith("]"):
-        return "c_branch"
+    for listed in ("c_branch", "history_weight", "history_rate"):  # one per branch / per term: name[i]
+        if name.startswith(listed + "[") and name.endswith("]"):
+            return listed
     return name
 
 
@@ -167,6 +178,13 @@ def coefficients_of(scene: "Scene") -> dict:
         if friction.stribeck_velocity is not None:  # plain Coulomb: alpha_kinetic is alpha
             values.update(alpha_kinetic=friction.alpha_kinetic, stribeck_velocity=friction.stribeck_velocity)
         values["belt_velocity"] = friction.belt_velocity
+    if scene.delay is not None:
+        values.update(delay_gain=scene.delay.gain, delay_tau=scene.delay.tau)
+    if scene.history is not None:
+        values.update({f"history_weight[{j + 1}]": w for j, w in enumerate(scene.history.weight)})
+        values.update({f"history_rate[{j + 1}]": r for j, r in enumerate(scene.history.rate)})
+    if scene.dahl is not None:
+        values.update(dahl_sigma=scene.dahl.sigma, dahl_force=scene.dahl.force, dahl_exponent=scene.dahl.exponent)
     if scene.has_series_dashpots:
         damping = scene.branches.damping
         if scene.branches.shared_damping:
@@ -252,7 +270,28 @@ def with_coefficients(scene: Scene, **values) -> Scene:
         cubic = CubicSpring(float(values.get("k3", cubic.k3)))
     if damper is not None:
         damper = Damper(float(values.get("c", damper.c)))
-    return replace(scene, mass=mass, spring=spring, cubic=cubic, damper=damper, friction=friction, branches=branches)
+    memory = {}
+    if scene.delay is not None:
+        memory["delay"] = replace(scene.delay, gain=float(values.get("delay_gain", scene.delay.gain)),
+                                  tau=float(values.get("delay_tau", scene.delay.tau)))
+    if scene.history is not None:
+        history = scene.history
+        memory["history"] = replace(
+            history, weight=tuple(float(values.get(f"history_weight[{j + 1}]", w)) for j, w in enumerate(history.weight)),
+            rate=tuple(float(values.get(f"history_rate[{j + 1}]", r)) for j, r in enumerate(history.rate)))
+    if scene.dahl is not None:
+        memory["dahl"] = replace(scene.dahl, sigma=float(values.get("dahl_sigma", scene.dahl.sigma)),
+                                 force=float(values.get("dahl_force", scene.dahl.force)),
+                                 exponent=float(values.get("dahl_exponent", scene.dahl.exponent)))
+    changed = replace(scene, mass=mass, spring=spring, cubic=cubic, damper=damper, friction=friction,
+                      branches=branches, **memory)
+    if memory:
+        try:
+            _check_memory_rules(changed)
+        except SceneError as exc:  # the culprit is the coefficient set, not the scene file
+            culprit = next((name for name in values if _coefficient_key(name) in MEMORY_COEFFICIENTS), "memory")
+            raise ValueError(f"{culprit}: {str(exc).split(': ', 2)[-1]}") from None
+    return changed
 
 
 # ---------------------------------------------------------------- parsing

@@ -22,6 +22,9 @@ UNITS = {
     "N/m3": {"kg": 1, "m": -2, "s": -2},
     "N.s/m": {"kg": 1, "s": -1},
     "J": {"kg": 1, "m": 2, "s": -2},
+    "1/s": {"s": -1},
+    "N/(m.s)": {"kg": 1, "s": -3},
+    "1": {},
     # a white noise's intensity, N sqrt(s): FMI's base-unit exponents are integers, so the name alone says it
     "N.s0.5": None,
 }

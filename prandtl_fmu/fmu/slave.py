@@ -65,6 +65,17 @@ EFFECT_PARAMETERS = [
     ("belt_velocity", "friction", "m/s", -DBL_MAX, Fmi2Variability.tunable,
      "velocity of the ground the mass rubs on (a moving belt); 0: fixed ground"),
 ]
+# The effects with memory (memory/): fixed parameters (they restart the memory), units by what they act on.
+MEMORY_PARAMETERS = {
+    "delay_gain": ("delay", None, -DBL_MAX, "gain of the delayed force -gain y(t - tau), y = x or v ([delay] acts_on)"),
+    "delay_tau": ("delay", "s", SMALLEST, "delay tau of the delayed force; must be > 0"),
+    "history_weight": ("history", None, -DBL_MAX,
+                       "weight w_j of the history kernel sum_j w_j exp(-r_j t) of the force -int kappa(t - s) y(s) ds"),
+    "history_rate": ("history", "1/s", 0.0, "rate r_j of the history kernel; must be >= 0"),
+    "dahl_sigma": ("dahl", "N/m", SMALLEST, "Dahl's friction: stiffness at a reversal; must be > 0"),
+    "dahl_force": ("dahl", "N", SMALLEST, "Dahl's friction: the Coulomb level F_c it approaches; must be > 0"),
+    "dahl_exponent": ("dahl", "1", SMALLEST, "Dahl's friction: the exponent of (1 - F_d / F_c sgn v); must be > 0"),
+}
 # The branches' series dashpots: c_branch (one for every branch) or c_branch[i], as the scene gives them.
 SERIES_DASHPOT = ("N.s/m", SMALLEST, Fmi2Variability.tunable,
                   "dashpot in series with the spring and slider of {which}: relaxation rate k_i / c_i; must be > 0")
@@ -154,6 +165,17 @@ class PrandtlElement(NoiseParameters, SlaveBase):
                 unit, low, variability, text = SERIES_DASHPOT
                 which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
                 parameters.append((name, "branches", unit, low, variability, text.format(which=which)))
+        for name in self.parameters:
+            key = name.split("[")[0]
+            if key in MEMORY_PARAMETERS:
+                table, unit, low, text = MEMORY_PARAMETERS[key]
+                on_v = getattr(getattr(self.scene, table), "acts_on", "x") == "v"
+                if key == "delay_gain":
+                    unit = "N.s/m" if on_v else "N/m"
+                elif key == "history_weight":
+                    unit = "N/m" if on_v else "N/(m.s)"
+                parameters.append((name, table, unit, low, Fmi2Variability.fixed,
+                                   text + (f" (term {name[len(key) + 1:-1]})" if "[" in name else "")))
         for name, table, unit, low, variability, text in parameters:
             if name not in self.parameters:
                 continue  # an absent effect has no parameter
@@ -219,9 +241,10 @@ class PrandtlElement(NoiseParameters, SlaveBase):
 
     def _set_parameter(self, name, value):
         """Setter of an effect's parameter: a fixed one (x0, v0) cannot change after initialization."""
-        if self.initialized and name in ("x0", "v0") and value != self.parameters[name]:
-            self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (the initial state) and cannot "
-                       "change after initialization; the element is unchanged")
+        if self.initialized and (name in ("x0", "v0") or name.split("[")[0] in MEMORY_PARAMETERS) \
+                and value != self.parameters[name]:
+            self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (the initial state, or an effect "
+                       "with memory) and cannot change after initialization; the element is unchanged")
         self.parameters[name] = value
 
     def _settings_problem(self):
