@@ -980,12 +980,24 @@ def pow(x, y):
     if x < 0.0 and kind == 0:
         return _NAN
     sign = -1.0 if negative_odd else 1.0
+    l_hi, l_lo = _ln_dd(ax)
+    return _exp_of_product(y, l_hi, l_lo, sign)
+
+
+@inline_kernel
+def _ln_dd(ax):
+    """ln ax as a double-double (l_hi, l_lo) for a positive finite ax: :func:`_log_dd` plus k ln 2."""
     k, m_hi, m_lo = _log_dd(ax)
     dk = np.float64(k)
     a, b = _two_product(dk, _LN2_DD_HI)
     l_hi, l_lo = _two_sum(a, m_hi)
     l_lo += b + dk * _LN2_DD_LO + m_lo
-    l_hi, l_lo = _fast_two_sum(l_hi, l_lo)
+    return _fast_two_sum(l_hi, l_lo)
+
+
+@inline_kernel
+def _exp_of_product(y, l_hi, l_lo, sign):
+    """sign e^(y (l_hi + l_lo)) for a finite nonzero y: the product as a double-double into exp's reduction."""
     z = y * l_hi
     if z > 709.8:
         return sign * _INF
@@ -995,3 +1007,22 @@ def pow(x, y):
     err += y * l_lo
     z, err = _fast_two_sum(z, err)
     return sign * _exp_dd(z, err)
+
+
+@kernel
+def pow3(x, y0, y1, y2):
+    """(x^y0, x^y1, x^y2), each bit for bit :func:`pow`'s, with the logarithm of a positive finite x computed
+    once (the continuum's closed forms take eta^(p+1), eta^(p+2), eta^(p+3) of one eta: the logarithm is most
+    of pow's cost)."""
+    x = np.float64(x)
+    y0 = np.float64(y0)
+    y1 = np.float64(y1)
+    y2 = np.float64(y2)
+    if not (x > 0.0 and x < _INF) or x == 1.0:
+        return pow(x, y0), pow(x, y1), pow(x, y2)
+    l_hi, l_lo = _ln_dd(x)
+    # pow's path for x > 0 finite, x != 1 and y finite nonzero; the other y by pow itself
+    r0 = _exp_of_product(y0, l_hi, l_lo, 1.0) if y0 != 0.0 and abs(y0) < _INF else pow(x, y0)
+    r1 = _exp_of_product(y1, l_hi, l_lo, 1.0) if y1 != 0.0 and abs(y1) < _INF else pow(x, y1)
+    r2 = _exp_of_product(y2, l_hi, l_lo, 1.0) if y2 != 0.0 and abs(y2) < _INF else pow(x, y2)
+    return r0, r1, r2

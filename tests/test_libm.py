@@ -480,6 +480,21 @@ def test_scalbn_is_ldexp(in_python):
     assert math.isnan(libm.scalbn(NAN, 3)) and libm.scalbn(3.0, -1075) == 2 * TINY
 
 
+def test_pow3_is_pow_three_times(in_python):
+    """pow3 shares the logarithm of x between its three powers and gives pow's bits, compiled and in Python,
+    for every kind of x and y (special values and the ones pow3 leaves to pow included)."""
+    rng = np.random.default_rng(7)
+    specials = [0.0, -0.0, 1.0, -1.0, INF, -INF, NAN, 0.5, 2.0, -3.0]
+    pairs = pow_arguments(rng, 400)
+    xs = [x for x, _ in pairs] + specials + [TINY, MAX]
+    ys = [y for _, y in pairs] + specials
+    for i, x in enumerate(xs):
+        three = [ys[(3 * i + j) % len(ys)] for j in range(3)]
+        expected = [bits(libm.pow(x, y)) for y in three]
+        assert [bits(v) for v in libm.pow3(x, *three)] == expected, (x, three)
+        assert [bits(v) for v in in_python.pow3(x, *three)] == expected, (x, three)
+
+
 def test_sincos_is_sin_and_cos():
     rng = np.random.default_rng(5)
     for x in [float(v) for v in log_uniform(rng, 500)] + hard_arguments("cos"):
@@ -515,6 +530,7 @@ def _compiled_afresh():
     for name in PAIRS:
         getattr(module, name)(0.5, 0.25)
     module.scalbn(0.5, -3)
+    module.pow3(0.5, 1.5, 2.5, 3.5)
     compiled = {name: value for name, value in vars(module).items()
                 if isinstance(value, CPUDispatcher) and value.signatures and not value.targetoptions.get("inline")}
     assert {"_reduce_large", "_log_dd", "_exp_dd", "cos", "pow", "scalbn"} <= set(compiled)

@@ -330,9 +330,11 @@ def _partial(table, j, t):
         density = c * libm.pow(e, p)
         return density * t, density * e * t, density * e * e * t
     end = e + g * t
-    return (c * (libm.pow(end, p + 1.0) - libm.pow(e, p + 1.0)) / (g * (p + 1.0)),
-            c * (libm.pow(end, p + 2.0) - libm.pow(e, p + 2.0)) / (g * (p + 2.0)),
-            c * (libm.pow(end, p + 3.0) - libm.pow(e, p + 3.0)) / (g * (p + 3.0)))
+    end1, end2, end3 = libm.pow3(end, p + 1.0, p + 2.0, p + 3.0)  # libm.pow's bits, one logarithm per base
+    e1, e2, e3 = libm.pow3(e, p + 1.0, p + 2.0, p + 3.0)
+    return (c * (end1 - e1) / (g * (p + 1.0)),
+            c * (end2 - e2) / (g * (p + 2.0)),
+            c * (end3 - e3) / (g * (p + 3.0)))
 
 
 @kernel
