@@ -4,7 +4,7 @@ the platform's libm (before) and ``prandtl_fmu.libm`` (after), in one process.
 Before: a second copy of the package, imported under a private name with its on-disk cache off, in which every
 module that calls ``libm.<f>`` is given a stand-in module whose functions are numba's ``math.*``/``np.*`` (what the
 kernels called before the switch: ``math.cos``, ``math.sin`` and ``math.cos`` of one argument for ``sincos``,
-``abs`` of a complex for ``hypot``, ``x / 2.0 ** -n`` for ``scalbn``, ``x ** y`` for ``pow``, ...). After: the
+``abs`` of a complex for ``hypot``, ``x / 2.0 ** -n`` for ``scalbn``, ``x ** y`` for ``pow`` and ``pow3``, ...). After: the
 installed package. The kernels differ in nothing else.
 
 Problems (``CASES``):
@@ -62,6 +62,7 @@ def platform_libm():
     shim.hypot = njit(lambda x, y: abs(complex(x, y)))
     shim.log2 = njit(lambda x: math.log2(x))
     shim.pow = njit(lambda x, y: x ** y)
+    shim.pow3 = njit(lambda x, y0, y1, y2: (x ** y0, x ** y1, x ** y2))
     shim.scalbn = njit(lambda x, n: x / 2.0 ** -n)
     return shim
 

@@ -33,7 +33,8 @@ measures every one against mpmath, ``docs/libm.md`` has the figures: at most 0.8
 * scalbn: musl's ``scalbn.c`` (x 2^n by at most three exact scalings, one rounding into the subnormals);
 * log2 and pow (written here): ln x in double-double to a relative 2^-68 (a table of ln(j/64) in
   double-double, then 2 atanh s with |s| <= 0.0056), log2 x = k + ln m / ln 2 rounded once (k exactly at
-  2^k); pow x^y = e^(y ln|x|) with y ln|x| a double-double whose tail enters exp's reduction.
+  2^k); pow x^y = e^(y ln|x|) with y ln|x| a double-double whose tail enters exp's reduction; pow3 three
+  powers of one base, its logarithm computed once, each pow's bits.
 
 Special values are those of C99 Annex F (signed zeros, infinities, NaN, overflow to inf, gradual underflow);
 floating-point exceptions are not raised (nothing reads them). Every function takes and returns float64,
