@@ -10,7 +10,8 @@ names (``--platforms all``). Reported:
 * ``size``: each binary's bytes and the FMU's;
 * ``step``: one doStep of one internal step under F = 0.3 N and one getReal of every output, in the C host of
   tests/c_host/cross_host.c (built for each platform: gcc, mingw-w64, aarch64-linux-gnu-gcc), against the library's
-  compiled step alone (``Element.advance`` of 1000 steps, per step), both in the same run. The win64 binary runs
+  compiled step alone (``Element.advance`` of 1000 steps, per step), timed just before each run of the host: the
+  ratio is the median of the runs' ratios (the machine is shared: its load drifts between runs). The win64 binary runs
   under wine and the aarch64 one under qemu-user: their figures are **emulated** (qemu translates every
   instruction; wine runs x86-64 code natively but its own loader and C library), quoted as the ratio only.
   Medians of ``--repeat`` runs.
@@ -67,7 +68,7 @@ def timed_build(fmi, folder):
         platforms.build_binaries = build_binaries
 
 
-def library_step(stepper, h, count=200, repeat=5):
+def library_step(stepper, h, count=100, repeat=1):
     """Seconds of one internal step of the library's compiled kernel (a 1000-step advance, per step)."""
     element = Element(load_scene(SCENE), stepper=stepper)
     element.advance(1000 * h, 0.3)
@@ -95,10 +96,11 @@ def runner(platform_name, folder):
 
 
 def host_step(fmu, fmi, platform_name, folder, stepper, h, count, repeat):
-    """Seconds per doStep + getReal of every output of one platform's binary in its C host, or None."""
+    """(seconds per doStep + getReal of every output of one platform's binary in its C host, the median of the
+    ratios to the library's step timed just before each run: the machine's load drifts), or (None, why)."""
     found = runner(platform_name, folder)
     if found is None:
-        return None, "no runner here"
+        return None, None, "no runner here"
     prefix, compiler, label = found
     root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
     variables = list(root.iter("ScalarVariable")) if fmi == 2 else list(root.find("ModelVariables"))
@@ -114,13 +116,15 @@ def host_step(fmu, fmi, platform_name, folder, stepper, h, count, repeat):
         extra = [] if "mingw" in compiler else ["-D_POSIX_C_SOURCE=200809L"]
         subprocess.run([compiler, "-std=c99", "-O2", *extra, f"-DFMI_VERSION={fmi}", f"-I{HEADERS[fmi]}", str(HOST),
                         "-o", str(host), *([] if "mingw" in compiler else ["-ldl"])], check=True)
-    runs = []
+    runs, ratios = [], []
     for _ in range(repeat):
+        reference = library_step(stepper, h)
         done = subprocess.run([*prefix, str(host), str(library), token, "file:///unused", vr["stepper"], stepper,
                                vr["F"], ",".join(outputs), f"time:{count}:{h!r}:0.3"], capture_output=True,
                               text=True, check=True)
         runs.append(float(done.stdout.split()[-1]) / count)
-    return float(np.median(runs)), label
+        ratios.append(runs[-1] / reference)
+    return float(np.median(runs)), float(np.median(ratios)), label
 
 
 def main():
@@ -144,7 +148,7 @@ def main():
                 rows.append({"what": "binary", "fmi": fmi, "platform": name, "seconds": round(spent, 2),
                              "bytes": sizes[name], "stepper": "", "us_per_step": "", "ratio_to_library": "",
                              "run": ""})
-        library = {stepper: library_step(stepper, h) for stepper in STEPPERS}
+        library = {stepper: library_step(stepper, h, count=200, repeat=args.repeat) for stepper in STEPPERS}
         for stepper in STEPPERS:
             rows.append({"what": "library step", "fmi": "", "platform": "", "seconds": "", "bytes": "",
                          "stepper": stepper, "us_per_step": round(library[stepper] * 1e6, 4), "ratio_to_library": 1,
@@ -153,12 +157,12 @@ def main():
             fmu = built[fmi][0]
             for stepper in STEPPERS:
                 emulated = platform_name in ("win64", "aarch64-linux")
-                step, label = host_step(fmu, fmi, platform_name, folder, stepper, h,
-                                        args.count // 5 if emulated else args.count, args.repeat)
+                step, ratio, label = host_step(fmu, fmi, platform_name, folder, stepper, h,
+                                               args.count // 5 if emulated else args.count, args.repeat)
                 rows.append({"what": "doStep", "fmi": fmi, "platform": platform_name, "seconds": "", "bytes": "",
                              "stepper": stepper,
                              "us_per_step": "" if step is None or emulated else round(step * 1e6, 4),
-                             "ratio_to_library": "" if step is None else round(step / library[stepper], 2),
+                             "ratio_to_library": "" if step is None else round(ratio, 2),
                              "run": label})
     for row in rows:
         print(row)
