@@ -132,7 +132,7 @@ def _delay_linear(part, t, h, x, v):
 def _history_linear(part, h, x, v):
     if part is None:
         return 0.0, 0.0
-    if part[0][2] == 0.0:
+    if part[0][1] == 0.0:
         a, b = history.terms(part, h, x)
         return a + b * x, b
     a, b = history.terms(part, h, v)
@@ -193,7 +193,7 @@ def _record_delay(part, t, h, x, v, x1, v1):
 def _record_history(part, h, x, v, x1, v1):
     if part is None:
         return
-    if part[0][2] == 0.0:
+    if part[0][1] == 0.0:
         history.record(part, h, x, x1)
     else:
         history.record(part, h, v, v1)

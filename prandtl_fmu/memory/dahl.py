@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..libm import exp, pow
 
 NAME = "dahl"
@@ -73,12 +73,12 @@ def restore(part, values) -> None:
     f[0] = values[0]
 
 
-@kernel
+@inline_kernel
 def after(part, fd, dx):
     """(F_d after a monotone move dx from F_d = ``fd``, its slope dF_d/d(dx) there)."""
     (sigma, level, exponent), f = part
     if dx == 0.0:
-        return fd, sigma * pow(max(1.0 - abs(fd) / level, 0.0), exponent)  # (either side's slope: a bound)
+        return fd, sigma * _power(max(1.0 - abs(fd) / level, 0.0), exponent)  # (either side's slope: a bound)
     s = 1.0 if dx > 0.0 else -1.0
     y = max(1.0 - s * fd / level, 0.0)
     d = sigma * abs(dx) / level
@@ -91,9 +91,19 @@ def after(part, fd, dx):
         p = 1.0 - exponent
         y1 = pow(max(pow(y, p) - p * d, 0.0), 1.0 / p)
     y1 = min(y1, 2.0)
-    return s * level * (1.0 - y1), sigma * pow(y1, exponent)
+    return s * level * (1.0 - y1), sigma * _power(y1, exponent)
 
 
-@kernel
+@inline_kernel
+def _power(y, exponent):
+    """y^exponent, without the general power for Dahl's usual exponents 1 and 2."""
+    if exponent == 1.0:
+        return y
+    if exponent == 2.0:
+        return y * y
+    return pow(y, exponent)
+
+
+@inline_kernel
 def force(part):
     return part[1][0]

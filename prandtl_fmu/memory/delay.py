@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel
 
 NAME = "delay"
 HEAD = 2  # buffer entries before the ring
@@ -81,12 +81,12 @@ def restore(part, values) -> None:
     buffer[:] = values
 
 
-@kernel
+@inline_kernel
 def _ring(buffer, j):
     return buffer[HEAD + j % (buffer.shape[0] - HEAD)]
 
 
-@kernel
+@inline_kernel
 def delayed(part, q, t, y_now):
     """y(q), q <= t, from the buffer and the current value ``y_now`` at t."""
     (gain, tau, on_v, grid), buffer = part
@@ -106,7 +106,7 @@ def delayed(part, q, t, y_now):
     return y_j + (q - j * grid) / grid * (_ring(buffer, j + 1) - y_j)
 
 
-@kernel
+@inline_kernel
 def terms(part, t, h, y_now):
     """(a, b): the delayed value y(t + h - tau) = a + b y(t + h) (b = 0 when tau >= h)."""
     (gain, tau, on_v, grid), buffer = part
@@ -117,7 +117,7 @@ def terms(part, t, h, y_now):
     return (1.0 - theta) * y_now, theta
 
 
-@kernel
+@inline_kernel
 def record(part, t, h, y0, y1):
     """After a step from (t, y0) to (t + h, y1): the grid points in (t, t + h] receive y along the step."""
     (gain, tau, on_v, grid), buffer = part

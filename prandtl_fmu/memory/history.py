@@ -18,8 +18,9 @@ with y linear along it (the steppers move x linearly), z_j is integrated exactly
 (series in a below 0.5, where the closed forms cancel; a = 0: phi0 = phi1 = h / 2, the trapezoid), implicit in
 y(t + h) for ``implicit``.
 
-The kernel form: ``((weight, rate, on_v), z, cache)``: ``cache`` holds (h, E, phi0, phi1) of the last step
-size, a function of h alone (it never changes a result).
+The kernel form: ``((n, on_v), data)``, one array (one array: every array a kernel receives costs a reference
+count per call): ``data[0]`` the step h of the cached coefficients, then the n weights, the n rates, the n
+z_j (the state), and E, phi0, phi1 of that h (n each: a function of h alone, they never change a result).
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..libm import exp, expm1
 
 NAME = "history"
@@ -55,29 +56,34 @@ def read(r, scene_tables) -> History:
     return History(tuple(float(w) for w in weight), tuple(float(q) for q in rate), acts_on)
 
 
+W, R, Z, E, P0, P1 = range(6)  # the blocks of data after data[0]
+
+
 def compile(history: History):
     n = len(history.weight)
-    weight = np.array(history.weight, dtype=float)
-    rate = np.array(history.rate, dtype=float)
-    return (weight, rate, 1.0 if history.acts_on == "v" else 0.0), np.zeros(n), np.zeros(1 + 3 * n)
+    data = np.zeros(1 + 6 * n)
+    data[1:1 + n] = history.weight
+    data[1 + n:1 + 2 * n] = history.rate
+    return (n, 1.0 if history.acts_on == "v" else 0.0), data
 
 
 def state(part) -> list:
-    return part[1].tolist()
+    (n, on_v), data = part
+    return data[1 + Z * n:1 + (Z + 1) * n].tolist()
 
 
 def restore(part, values) -> None:
-    z = part[1]
-    if len(values) != z.shape[0]:
-        raise ValueError(f"state has {len(values)} history variables, the element has {z.shape[0]}")
-    z[:] = np.asarray(values, dtype=float)
+    (n, on_v), data = part
+    if len(values) != n:
+        raise ValueError(f"state has {len(values)} history variables, the element has {n}")
+    data[1 + Z * n:1 + (Z + 1) * n] = np.asarray(values, dtype=float)
+    data[0] = 0.0  # (the cached coefficients are recomputed)
 
 
 @kernel
 def weights(a):
     """(E, phi0 / h, phi1 / h) of a = rate h >= 0 (see the module docstring)."""
     if a < 0.5:  # the series of (1 - E - a E) / a^2 = sum_{n>=2} (-a)^(n-2) (n - 1) / n!, and of (1 - E) / a
-        term0, term1 = 0.5, 1.0  # n = 2 terms: (n-1)/n! and 1/(n-1)!
         s0, s1 = 0.0, 0.0
         power = 1.0
         factorial = 2.0
@@ -94,47 +100,44 @@ def weights(a):
     return e, phi0, g1 - phi0
 
 
-@kernel
-def _coefficients(part, h):
-    (weight, rate, on_v), z, cache = part
-    n = z.shape[0]
-    if cache[0] != h:
+@inline_kernel
+def _coefficients(n, data, h):
+    if data[0] != h:
         for j in range(n):
-            e, p0, p1 = weights(rate[j] * h)
-            cache[1 + j] = e
-            cache[1 + n + j] = p0 * h
-            cache[1 + 2 * n + j] = p1 * h
-        cache[0] = h
-    return cache
+            e, p0, p1 = weights(data[1 + R * n + j] * h)
+            data[1 + E * n + j] = e
+            data[1 + P0 * n + j] = p0 * h
+            data[1 + P1 * n + j] = p1 * h
+        data[0] = h
 
 
-@kernel
+@inline_kernel
 def terms(part, h, y_now):
     """(A, B): the history force after a step of h = A + B y(t + h)."""
-    (weight, rate, on_v), z, cache = part
-    n = z.shape[0]
-    c = _coefficients(part, h)
+    (n, on_v), data = part
+    _coefficients(n, data, h)
     a = 0.0
     b = 0.0
     for j in range(n):
-        a += weight[j] * (c[1 + j] * z[j] + c[1 + n + j] * y_now)
-        b += weight[j] * c[1 + 2 * n + j]
+        w = data[1 + W * n + j]
+        a += w * (data[1 + E * n + j] * data[1 + Z * n + j] + data[1 + P0 * n + j] * y_now)
+        b += w * data[1 + P1 * n + j]
     return a, b
 
 
-@kernel
+@inline_kernel
 def force(part):
-    (weight, rate, on_v), z, cache = part
+    (n, on_v), data = part
     total = 0.0
-    for j in range(z.shape[0]):
-        total += weight[j] * z[j]
+    for j in range(n):
+        total += data[1 + W * n + j] * data[1 + Z * n + j]
     return total
 
 
-@kernel
+@inline_kernel
 def record(part, h, y0, y1):
-    (weight, rate, on_v), z, cache = part
-    n = z.shape[0]
-    c = _coefficients(part, h)
+    (n, on_v), data = part
+    _coefficients(n, data, h)
     for j in range(n):
-        z[j] = c[1 + j] * z[j] + c[1 + n + j] * y0 + c[1 + 2 * n + j] * y1
+        k = 1 + Z * n + j
+        data[k] = data[1 + E * n + j] * data[k] + data[1 + P0 * n + j] * y0 + data[1 + P1 * n + j] * y1
