@@ -31,11 +31,13 @@ import numpy as np
 from .driver import (ElementError, OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model,
                      restore_branch_state, with_scene_coefficients, _smooth_model)
 from .kernels import stack
-from .kernels.drive import drive, preview, tangent
+from .kernels.drive import drive, drive_with_memory, preview, tangent
+from .memory import (check_memory_state, copy_memory, force_now, has_memory, memory_state, put_back,
+                     restore_memory, tangent_now)
 from .kernels.play import branch_force, write_elongations
 from .kernels.smooth import smooth_force
 from .kernels.energy import stored
-from .scene import Scene, coefficients_of, with_coefficients
+from .scene import MEMORY_COEFFICIENTS, Scene, _coefficient_key, coefficients_of, with_coefficients
 
 # energy account of the connector: work is not booked (no load), energy[1] = sliders, energy[2] = dashpot
 SLIDERS, DAMPER = 1, 2
@@ -81,6 +83,9 @@ def displacement_response(scene: Scene, x, v=None, energy: bool = False, time=No
     if time is None:
         if scene.has_series_dashpots:
             raise ValueError("the branches have series dashpots (rate dependent): give the times of the samples")
+        if scene.delay is not None or scene.history is not None:
+            raise ValueError("the scene has a [delay] or a [history] (they depend on time): give the times of the "
+                             "samples")
     else:
         times = np.ascontiguousarray(time, dtype=float).reshape(-1)
         if times.shape != xs.shape or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0) \
@@ -91,7 +96,10 @@ def displacement_response(scene: Scene, x, v=None, energy: bool = False, time=No
     u = _initial_u(scene, model)
     forces = np.empty_like(xs)
     account = np.zeros(3) if energy else None
-    drive(model, u, 0.0, xs, vs, durations, forces, account)
+    if has_memory(model[8]):  # the delay needs the samples' times: time = None means all at t = 0
+        drive_with_memory(model, u, 0.0, 0.0, 0.0, xs, vs, durations, forces, account)
+    else:
+        drive(model, u, 0.0, xs, vs, durations, forces, account)
     return (forces, float(account[SLIDERS])) if energy else forces
 
 
@@ -124,11 +132,16 @@ class Connector(OutputMemo):
     def force(self) -> float:
         """k0 x + k3 x^3 + c v + sum_i k_i u_i (N) at the committed sample."""
         m, k0, k3, c, k, eta, cs, friction, memory = self.model
-        return self._memo("force", lambda: float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)))
+        return self._memo("force", lambda: float(smooth_force(self.x, self.v, k0, k3, c) + branch_force(k, self.u)
+                                                 + force_now(memory, self.time, self.x, self.v)))
 
     def preview(self, x: float, v: float) -> float:
         """The force if the flanges moved (monotonically) from the committed x to ``x``, at velocity
         ``v``; the state does not change."""
+        if has_memory(self.model[8]):  # the move at this instant, on a copy (Dahl's force moves with x)
+            twin = self.copy()
+            twin.move_to(x, v)
+            return twin.force
         return float(preview(self.model, self.u, x - self.x, v, x))
 
     def stiffness(self, v: Optional[float] = None) -> float:
@@ -138,7 +151,8 @@ class Connector(OutputMemo):
         and adds nothing; one that the motion takes off its threshold sticks."""
         v = self.v if v is None else v
         direction = self.direction if v == 0 else math.copysign(1.0, v)
-        return self._memo(("stiffness", direction), lambda: float(tangent(self.model, self.x, self.u, direction)))
+        return self._memo(("stiffness", direction), lambda: float(tangent(self.model, self.x, self.u, direction)
+                                                                  + tangent_now(self.model[8], direction)))
 
     def stored_energy(self) -> float:
         """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""
@@ -163,6 +177,7 @@ class Connector(OutputMemo):
         twin = Connector.__new__(Connector)
         twin.__dict__.update(self.__dict__)
         twin.u = None if self.u is None else self.u.copy()
+        twin.model = self.model[:8] + (copy_memory(self.model[8]),)
         twin.account = self.account.copy()
         twin._touch()
         return twin
@@ -182,9 +197,14 @@ class Connector(OutputMemo):
         dx = x - self.x
         u, account, force = self.u, self.account.copy(), np.empty(1)
         saved = None if u is None else u[:stack.used(u)].copy() if stack.is_stack(self.model[4]) else u.copy()
+        saved_memory = copy_memory(self.model[8])
         self._touch()
-        drive(self.model, u, self.x, np.array([x]), np.array([float(v)]), np.array([time - self.time]), force,
-              account)
+        if has_memory(self.model[8]):
+            drive_with_memory(self.model, u, self.x, self.v, self.time, np.array([x]), np.array([float(v)]),
+                              np.array([time - self.time]), force, account)
+        else:
+            drive(self.model, u, self.x, np.array([x]), np.array([float(v)]), np.array([time - self.time]), force,
+                  account)
         c = self.model[3]
         if c is not None:
             account[DAMPER] += c * (self.v * self.v + self.v * v + v * v) * (time - self.time) / 3.0
@@ -195,6 +215,7 @@ class Connector(OutputMemo):
             if not math.isfinite(value):
                 if saved is not None:
                     u[:saved.shape[0]] = saved
+                put_back(self.model[8], saved_memory)
                 raise ElementError(f"the sample x = {x!r}, v = {v!r} at t = {time!r} s refused: {name} would not "
                                    "be finite (an overflow); the connector is unchanged")
         self.account[:] = account
@@ -203,12 +224,23 @@ class Connector(OutputMemo):
         self.x, self.v, self.time = float(x), float(v), time
 
     def set_coefficients(self, **values) -> None:
-        """Change k0, k3 or c (ValueError names the culprit, nothing changed)."""
-        unknown = {name for name in values if name not in ("k0", "k3", "c") and not name.startswith("c_branch")}
+        """Change k0, k3, c, c_branch, or (before the first move: they restart the memory) the coefficients of
+        the effects with memory (ValueError names the culprit, nothing changed)."""
+        unknown = {name for name in values if name not in ("k0", "k3", "c") and not name.startswith("c_branch")
+                   and _coefficient_key(name) not in MEMORY_COEFFICIENTS}
         if unknown:
-            raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c, c_branch)")
-        self.scene = with_coefficients(self.scene, **values)
+            raise ValueError(f"{sorted(unknown)[0]}: not a coefficient of the connector (k0, k3, c, c_branch, and "
+                             "those of [delay], [history], [dahl])")
+        scene = with_coefficients(self.scene, **values)
+        memory = [name for name in values if _coefficient_key(name) in MEMORY_COEFFICIENTS
+                  and values[name] != coefficients_of(self.scene)[name]]
+        if memory and (self.time or self.x or self.v):
+            raise ValueError(f"{memory[0]}: an effect with memory restarts with its coefficients: set them before "
+                             "the first move, or reset the connector")
+        self.scene = scene
         self.model = with_scene_coefficients(self.scene, self.model)
+        if memory:
+            self.model = self.model[:8] + (compile_model(scene, self.branch_kernel)[8],)
         self._touch()
 
     def coefficients(self) -> dict:
@@ -223,6 +255,8 @@ class Connector(OutputMemo):
                  "branch_kernel": self.branch_kernel, "energy_account": self.account.tolist(),
                  "coefficients": self.coefficients()}
         state["u"], state["u_reference"] = branch_state(self.scene, self.model[4], self.branch_kernel, self.u)
+        if has_memory(self.model[8]):
+            state["memory"] = memory_state(self.model[8])
         return state
 
     def set_state(self, state: dict) -> None:
@@ -238,10 +272,15 @@ class Connector(OutputMemo):
         if not isinstance(state["coefficients"], dict):
             raise ValueError("state has no table of coefficients")
         scene = with_coefficients(self.scene, **state["coefficients"])
-        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, self.model[8]))
+        memory = compile_model(scene, self.branch_kernel)[8]  # the state's coefficients, its arrays filled below
+        if has_memory(memory) or "memory" in state:
+            check_memory_state(memory, state.get("memory"))
+            restore_memory(memory, state["memory"])
+        model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, memory))
         m, k0, k3, c, k, eta, cs, friction, memory = model
         x, v = values[1], values[2]
-        outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, restored), stored(x, k0, k3, k, restored))
+        outputs = (smooth_force(x, v, k0, k3, c) + branch_force(k, restored) + force_now(memory, values[0], x, v),
+                   stored(x, k0, k3, k, restored))
         if not all(math.isfinite(value) for value in outputs):
             raise ValueError(f"state has x = {x!r}, v = {v!r}: its force or energy is not finite")
         self.scene = scene

@@ -514,9 +514,6 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
             r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
                    "remove [mass] (the bodies hold the inertia) or use \"force\"")
     memory = _memory(source, doc)
-    if memory and causality == "displacement":
-        raise SceneError(f"{source}: [{next(iter(memory))}]: the connector (causality \"displacement\") does not carry "
-                         "the effects with memory yet: use the element (causality \"force\")")
     scene = Scene(name, mass, spring, cubic, damper, branches, load, solver, source, causality, friction, **memory)
     if memory:
         _check_memory_rules(scene)
@@ -539,8 +536,10 @@ def _check_memory_rules(scene) -> None:
     memory, refused with the number before the run; and a step whose equation stays monotone (``implicit``
     takes the delay inside the step when tau < step, and the quasi-static massless element has nothing but its
     springs against a negative memory force)."""
-    quasi_static = scene.mass is None and not scene.has_dashpot
-    if scene.delay is not None and scene.delay.gain < 0 and (quasi_static or scene.delay.tau < scene.solver.step):
+    quasi_static = scene.mass is None and not scene.has_dashpot and scene.causality == "force"  # (the connector
+    # solves nothing: its motion is given)
+    if scene.delay is not None and scene.delay.gain < 0 and scene.causality == "force" \
+            and (quasi_static or scene.delay.tau < scene.solver.step):
         why = "on a massless element without a dashpot" if quasi_static else \
             f"with tau = {scene.delay.tau!r} s below the step {scene.solver.step!r} s"
         raise SceneError(f"{scene.source}: [delay] gain: a negative gain {why} makes the implicit equation of a "

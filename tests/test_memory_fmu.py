@@ -118,3 +118,55 @@ def test_memory_parameters_set_before_initialization_are_the_library_with_them(f
         element.advance(0.004, 0.5)
         assert slave.get("x", "reaction") == [element.x, element.reaction]
     slave.close()
+
+
+CONNECTOR = """name = "tensioner-connector"
+
+[spring]
+k0 = 25.0
+
+[dahl]
+sigma = 400.0
+force = 1.5
+
+[history]
+weight = [2.0]
+rate = [30.0]
+
+[fmu]
+causality = "displacement"
+
+[solver]
+step = 0.001
+stop_time = 1.0
+output_interval = 0.01
+"""
+
+
+def test_the_connector_fmu_with_memory_is_the_library_bit_for_bit(tmp_path):
+    from prandtl_fmu.connector import Connector
+
+    scene_path = tmp_path / "connector.toml"
+    scene_path.write_text(CONNECTOR)
+    path = str(build_fmu(scene_path, tmp_path / "connector.fmu"))
+    variables = {v.name: v for v in read_model_description(path).modelVariables}
+    assert variables["dahl_sigma"].variability == "fixed" and variables["history_weight[1]"].unit == "N/(m.s)"
+    connector = Connector(load_scene(scene_path))
+    slave = Slave(path, start_values={"x": 0.0, "v": 0.0})
+    connector.move_to(0.0, 0.0, 0.0)
+    rng = np.random.default_rng(8)
+    x = 0.0
+    for _ in range(80):
+        size = int(rng.integers(1, 6)) * 0.002
+        x += float(rng.normal(0.0, 0.004))
+        slave.set("x", x)
+        slave.set("v", 0.1)
+        assert slave.get("force") == connector.preview(x, 0.1)  # an input set, not stepped: the preview
+        start = slave.time
+        slave.step(size)  # the sample belongs to the step's start time, as the library's move_to at that time
+        connector.move_to(x, 0.1, start)
+        assert slave.get("force") == connector.force
+    with pytest.raises(FMICallException):
+        slave.set("dahl_force", 2.0)
+    assert any("dahl_force" in message and "fixed" in message for _, message in slave.messages)
+    slave.close()

@@ -35,6 +35,7 @@ from ..driver import ElementError
 from ..scene import coefficient_problem
 from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete
+from .slave import memory_parameters
 from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
 PARAMETERS = [  # (name, table of the scene, unit, description)
@@ -105,6 +106,11 @@ class PrandtlConnector(SlaveBase):
                 name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
                 min=SMALLEST if name.startswith("c_branch") else 0.0, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
                 setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
+        for name, table, unit, low, variability, text in memory_parameters(self.scene, self.parameters):
+            self.register_variable(real(
+                name, unit=unit, causality=Fmi2Causality.parameter, variability=variability, min=low, max=DBL_MAX,
+                description=text, getter=lambda name=name: self.parameters[name],
+                setter=lambda value, name=name: self._set_fixed(name, value)))
         self.register_variable(Integer(
             "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
             description="number of Prandtl branches (from the scene); -1 for the continuous element",
@@ -147,6 +153,14 @@ class PrandtlConnector(SlaveBase):
         except (ElementError, ValueError) as exc:
             self.connector.reset()
             self._fail(f"initialization refused: {exc}")
+        self._initialized = True
+
+    def _set_fixed(self, name, value):
+        """Setter of a fixed parameter (an effect with memory): refused after initialization."""
+        if getattr(self, "_initialized", False) and value != self.parameters[name]:
+            self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (an effect with memory) and cannot "
+                       "change after initialization; the connector is unchanged")
+        self.parameters[name] = value
 
     def _hand_over_parameters(self):
         """None, or why a parameter set by the master is refused (nothing changed then)."""
@@ -157,7 +171,10 @@ class PrandtlConnector(SlaveBase):
         changed = {name: value for name, value in self.parameters.items()
                    if value != self.connector.coefficients()[name]}
         if changed:
-            self.connector.set_coefficients(**changed)
+            try:
+                self.connector.set_coefficients(**changed)
+            except ValueError as exc:
+                return f"parameter {exc}"
         return None
 
     def do_step(self, current_time, step_size):

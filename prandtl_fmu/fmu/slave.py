@@ -76,6 +76,26 @@ MEMORY_PARAMETERS = {
     "dahl_force": ("dahl", "N", SMALLEST, "Dahl's friction: the Coulomb level F_c it approaches; must be > 0"),
     "dahl_exponent": ("dahl", "1", SMALLEST, "Dahl's friction: the exponent of (1 - F_d / F_c sgn v); must be > 0"),
 }
+
+
+def memory_parameters(scene, names) -> list:
+    """The rows (name, table, unit, min, variability, description) of the memory effects' parameters among
+    ``names`` (fixed: they restart the memory), with the units of what each acts on."""
+    rows = []
+    for name in names:
+        key = name.split("[")[0]
+        if key in MEMORY_PARAMETERS:
+            table, unit, low, text = MEMORY_PARAMETERS[key]
+            on_v = getattr(getattr(scene, table), "acts_on", "x") == "v"
+            if key == "delay_gain":
+                unit = "N.s/m" if on_v else "N/m"
+            elif key == "history_weight":
+                unit = "N/m" if on_v else "N/(m.s)"
+            rows.append((name, table, unit, low, Fmi2Variability.fixed,
+                         text + (f" (term {name[len(key) + 1:-1]})" if "[" in name else "")))
+    return rows
+
+
 # The branches' series dashpots: c_branch (one for every branch) or c_branch[i], as the scene gives them.
 SERIES_DASHPOT = ("N.s/m", SMALLEST, Fmi2Variability.tunable,
                   "dashpot in series with the spring and slider of {which}: relaxation rate k_i / c_i; must be > 0")
@@ -165,17 +185,7 @@ class PrandtlElement(NoiseParameters, SlaveBase):
                 unit, low, variability, text = SERIES_DASHPOT
                 which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
                 parameters.append((name, "branches", unit, low, variability, text.format(which=which)))
-        for name in self.parameters:
-            key = name.split("[")[0]
-            if key in MEMORY_PARAMETERS:
-                table, unit, low, text = MEMORY_PARAMETERS[key]
-                on_v = getattr(getattr(self.scene, table), "acts_on", "x") == "v"
-                if key == "delay_gain":
-                    unit = "N.s/m" if on_v else "N/m"
-                elif key == "history_weight":
-                    unit = "N/m" if on_v else "N/(m.s)"
-                parameters.append((name, table, unit, low, Fmi2Variability.fixed,
-                                   text + (f" (term {name[len(key) + 1:-1]})" if "[" in name else "")))
+        parameters += memory_parameters(self.scene, self.parameters)
         for name, table, unit, low, variability, text in parameters:
             if name not in self.parameters:
                 continue  # an absent effect has no parameter

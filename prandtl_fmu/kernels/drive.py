@@ -12,6 +12,7 @@ from .series import FLOW, move_branches
 from .stack import X as stack_x
 from .stack import move as stack_move
 from .smooth import elastic_stiffness, smooth_force
+from ..memory import force_now, record
 
 
 @kernel
@@ -28,6 +29,21 @@ def drive(model, u, x_start, xs, vs, durations, forces, energy):
         move_branches(k, eta, cs, u, xs[j] - x, durations[j], FLOW, energy)
         x = xs[j]
         forces[j] = smooth_force(x, vs[j], k0, k3, c) + branch_force(k, u)
+    return x
+
+
+@kernel
+def drive_with_memory(model, u, x_start, v_start, t_start, xs, vs, durations, forces, energy):
+    """:func:`drive` for a scene with effects with memory (``memory/``): along each sample's linear path from
+    the last one (at ``t_start`` + the durations), the delay's buffer, the history's variables and the Dahl
+    force move too, and each force adds their sum at the sample. Returns the last x."""
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    x, v, t = x_start, v_start, t_start
+    for j in range(xs.shape[0]):
+        move_branches(k, eta, cs, u, xs[j] - x, durations[j], FLOW, energy)
+        record(memory, t, durations[j], x, v, xs[j], vs[j])
+        x, v, t = xs[j], vs[j], t + durations[j]
+        forces[j] = smooth_force(x, v, k0, k3, c) + branch_force(k, u) + force_now(memory, t, x, v)
     return x
 
 

@@ -170,6 +170,21 @@ def _dahl_now(part):
 
 
 @kernel
+def tangent_now(memory, direction):
+    """d(memory force)/dx at an instant for a motion in ``direction``: Dahl's sigma (1 - F_d / F_c s)^exponent
+    (the delay and the history add nothing at an instant)."""
+    return _dahl_tangent(memory[2], direction)
+
+
+@kernel
+def _dahl_tangent(part, direction):
+    if part is None:
+        return 0.0
+    sigma, level, exponent = part[0]
+    return sigma * dahl._power(max(1.0 - direction * part[1][0] / level, 0.0), exponent)
+
+
+@kernel
 def record(memory, t, h, x, v, x1, v1):
     """After a step from (t, x, v) to (t + h, x1, v1): the delay's buffer, the history's variables and the
     Dahl force move along it."""

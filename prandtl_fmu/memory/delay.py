@@ -121,6 +121,8 @@ def terms(part, t, h, y_now):
 def record(part, t, h, y0, y1):
     """After a step from (t, y0) to (t + h, y1): the grid points in (t, t + h] receive y along the step."""
     (gain, tau, on_v, grid), buffer = part
+    if not h > 0.0:  # an instant (the connector's move at one time): no grid point is crossed
+        return
     end = t + h
     j = int(buffer[0]) + 1
     capacity = buffer.shape[0] - HEAD
