@@ -25,6 +25,7 @@ what to install. ``$PRANDTL_NATIVE_CFLAGS`` adds flags to a build by the machine
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import re
 import tempfile
@@ -76,12 +77,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
-    from ..memory import present
-
-    if not hasattr(scene, "network") and present(scene):
-        tables = ", ".join(f"[{name}]" for name in present(scene))
-        raise NativeBuildError(f"{scene.source}: {tables}: the native runtime does not carry the effects with memory "
-                               "yet: build with --runtime python")
     if hasattr(scene, "network"):  # a [network] or [chain] scene
         return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms)
     folders = targets.resolve(platforms, fmi)
@@ -175,6 +170,54 @@ def noise_lines(scene, connector: bool) -> list:
             f"#define NOISE_SCENE {{{float(sigma)!r}, {int(seed)}, {float(unit)!r}}} /* the scene's [load] noise */",
             f"#define NOISE_SEED_LIMIT {float(NOISE_SEED_LIMIT)!r} /* fmu.common: an FMI Integer's seed is below */",
             *[f"static const char {name.upper()}_WORDS[] = {c_string(text)};" for name, text in words.items()]]
+
+
+ELEMENT_ARGS = "P, P, P, P, P, P, P, int64_t"  # p, k, eta, cs, u; the memory: mp, ms, nd (kernels.py)
+# The most values of a delay's buffer (tau / step): a larger one is refused with the number (8 bytes each, 512 MiB);
+# the library's bound is the machine's memory (scene._check_memory_rules)
+DELAY_BOUND = 2**26
+
+
+def memory_lines(scene) -> list:
+    """scene.h's lines of the effects with memory (kernels.memory_layout): which are present, their parameters'
+    names, start values and rules (scene.COEFFICIENTS: 0 finite, 1 > 0, 2 >= 0), the state's layout and the rules
+    of scene._check_memory_rules (the delay's grid, the buffer's bound, whether the element is quasi-static)."""
+    from ..memory import delay as memory_delay
+    from ..scene import COEFFICIENTS, _coefficient_key, coefficients_of
+
+    layout = kernels.memory_layout(scene)
+    names = layout["names"]
+    if scene.delay is not None:  # element.h's delay_size is memory.delay.size; its bound is DELAY_BOUND
+        ratio = math.ceil(scene.delay.tau / scene.solver.step)
+        if memory_delay.size(scene.delay, scene.solver.step) != memory_delay.HEAD + ratio + 4:
+            raise NativeBuildError("the delay's buffer size is not memory.delay.size's: update element.h")
+        if ratio > DELAY_BOUND:
+            raise NativeBuildError(f"{scene.source}: [delay] tau: tau / step = {scene.delay.tau / scene.solver.step:.4g} "
+                                   f"values in the delay's buffer, more than the native runtime's bound of "
+                                   f"{DELAY_BOUND} ({DELAY_BOUND * 8 // 2**20} MiB): a longer [solver] step or a "
+                                   "shorter tau, or --runtime python")
+    values = coefficients_of(scene)
+    rules = {"finite": 0, "> 0": 1, ">= 0": 2}
+    return [
+        f"#define HAS_MEMORY {int(bool(names))}",
+        f"#define HAS_DELAY {int(layout['delay'])}",
+        f"#define HAS_DAHL {int(layout['dahl'])}",
+        f"#define NH {layout['nh']} /* the history's terms */",
+        f"#define N_MEMP {max(len(names), 1)}",
+        f"#define N_MEMORY_PARAMS {len(names)}",
+        f"#define MEM_HISTORY_AT {names.index('history_weight[1]') if layout['nh'] else 0} /* in mp */",
+        f"#define MEM_DAHL_AT {names.index('dahl_sigma') if layout['dahl'] else 0} /* in mp: sigma, force, exponent */",
+        f"#define MEM_DAHL_STATE {layout['dahl_state']}",
+        f"#define MEM_FIXED {layout['fixed']} /* the memory's state before the delay's buffer */",
+        f"#define DELAY_HEAD {memory_delay.HEAD}",
+        f"#define DELAY_GRID {float(scene.solver.step)!r} /* the delay's grid: the scene's step */",
+        f"#define DELAY_BOUND {DELAY_BOUND}.0 /* the most values of the delay's buffer */",
+        f"#define QUASI_STATIC {int(scene.mass is None and scene.damper is None)}",
+        "static const char* MEM_NAMES[] = {" + ", ".join([c_string(name) for name in names] or ['""']) + "};",
+        f"static const double MEM_SCENE[N_MEMP] = {_c_array(values[name] for name in names)};",
+        "static const int MEM_RULE[N_MEMP] = {" + ", ".join(
+            [str(rules[COEFFICIENTS[_coefficient_key(name)][1]]) for name in names] or ["0"]) + "};",
+    ]
 
 
 def _c_array(values) -> str:
@@ -303,10 +346,11 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
         "#define HAS_STRUCTURAL ARRAYS",
         '#define STRUCTURAL_TEXT "n is the scene\'s number of branches"',
         "typedef double* P;",
-        "typedef int64_t (*advance_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        f"typedef int64_t (*advance_fn)({ELEMENT_ARGS}, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t);",
-        "typedef int64_t (*noisy_fn)(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        f"typedef int64_t (*noisy_fn)({ELEMENT_ARGS}, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t, double, int64_t, double, int64_t*);",
+        *memory_lines(scene),
         *noise_lines(scene, scene.causality == "displacement"),
         # the library's refusal of a white noise by each stepper (steppers' loop_for), NULL: it takes one
         "static const char* NOISE_REFUSAL[] = {" + ", ".join(
@@ -314,15 +358,16 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
                                                                    for name in steppers)] + ["NULL"]) + "};",
     ]
     variants = [suffix for suffix, _ in kernels.variants(scene)]
+    e = ELEMENT_ARGS  # the element's arrays and its memory (kernels.py)
     declarations = {
-        "advance": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+        "advance": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
                    "int64_t)",
-        "noisy": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+        "noisy": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
                  "int64_t, double, int64_t, double, int64_t*)",
-        "record": "int64_t {name}(P, P, P, P, P, P, P, P, P, int64_t, P, P, P, int64_t, double)",
-        "stiffness": "double {name}(P, P, P, P, P, P)",
-        "initial": "int64_t {name}(P, P, P, P, P, P, int64_t, P, P, P, int64_t)",
-        "elongations": "int64_t {name}(P, P, P, P, P, P)",
+        "record": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double)",
+        "stiffness": "double {name}(" + e + ", P)",
+        "initial": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t)",
+        "elongations": "int64_t {name}(" + e + ", P)",
         "move": "int64_t {name}(P, P, P, P, P, double, P, P, P, P, P)",
         "cforce": "double {name}(P, P, P, P, P, double, double)",
         "ctangent": "double {name}(P, P, P, P, P, double, double)",
@@ -370,23 +415,24 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
     lines += [
         "enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };",
         "enum { W_F, W_X, W_V, W_REACTION, W_STIFFNESS, W_ENERGY, W_PARAM, W_CBRANCH, W_STEP, W_SCENE_LOAD, "
-        "W_STEPPER, W_N, W_FORCE, W_NOISE_INTENSITY, W_NOISE_SEED, W_NOISE_UNIT };",
+        "W_STEPPER, W_N, W_FORCE, W_NOISE_INTENSITY, W_NOISE_SEED, W_NOISE_UNIT, W_MEMORY };",
         "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
         "static const Var VARS[] = {",
     ]
     count = 0
+    memory_names = kernels.memory_layout(scene)["names"]
     for variable in root.find("ModelVariables"):
         name = variable.get("name")
         vr = int(variable.get("valueReference"))
         type_name = next(child.tag for child in variable if child.tag in TYPES)
-        what, index = _what(name)
+        what, index = _what(name, memory_names)
         lines.append(f'    {{{vr}, {TYPES[type_name]}, {what}, {index}, "{name}"}},')
         count += 1
     lines += ["};", f"#define N_VARS {count}", "#endif", ""]
     return "\n".join(lines)
 
 
-def _what(name: str) -> tuple:
+def _what(name: str, memory_names=()) -> tuple:
     fixed = {"F": "W_F", "x": "W_X", "v": "W_V", "reaction": "W_REACTION", "stiffness": "W_STIFFNESS",
              "force": "W_FORCE", "step": "W_STEP", "scene_load": "W_SCENE_LOAD", "stepper": "W_STEPPER", "n": "W_N",
              "noise_intensity": "W_NOISE_INTENSITY", "noise_seed": "W_NOISE_SEED", "noise_unit": "W_NOISE_UNIT"}
@@ -396,6 +442,8 @@ def _what(name: str) -> tuple:
         return "W_ENERGY", ENERGIES.index(name)
     if name in kernels.PARAMETERS:
         return "W_PARAM", kernels.PARAMETERS.index(name)
+    if name in memory_names:
+        return "W_MEMORY", list(memory_names).index(name)
     if name == "c_branch":
         return "W_CBRANCH", -1
     match = re.fullmatch(r"c_branch\[(\d+)\]", name)

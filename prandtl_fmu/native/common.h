@@ -18,7 +18,7 @@ extern __thread int prandtl_kernel_failed;
 
 /* MAX_STEPS, SHORTEST_STEP, ADVANCE_BUDGET and the magnitudes of a coefficient: scene.h, from prandtl_fmu.scene */
 #define STATE_MAGIC "PRANDTL-FMU-STATE"
-#define STATE_VERSION 2 /* 2: the white noise's settings (issue 34) */
+#define STATE_VERSION 3 /* 2: the white noise's settings (issue 34); 3: the effects with memory (issue 35) */
 /* the scratch of state_check (a memory-stack state and n elongations) */
 #define STATE_SCRATCH (NB_ARR + NB)
 

@@ -10,6 +10,12 @@
  * outputs would not be finite, the state unchanged;
  * fmi2Error for a bad start value, a non-finite time or a bad FMU state, checked field by field; logged even
  * with logging off, never a NULL category).
+ *
+ * The effects with memory (memory/: [delay], [history], [dahl]): their parameters are the FMU's fixed ones (mp),
+ * their state an array on the heap (mem: the history's variables, the Dahl force, the delay's buffer of nd values,
+ * sized at the exit of initialization mode and at a reset from the delay's tau in use, kernels.memory_layout),
+ * handed to every kernel, which rebuilds the library's tuple from them. A checkpoint copies it, an FMU state
+ * carries it after its fixed part (state.h: STATE_EXTRA).
  */
 #ifndef PRANDTL_ELEMENT_H
 #define PRANDTL_ELEMENT_H
@@ -31,6 +37,10 @@ typedef struct {
     int64_t steps;
     double force;         /* the load of the last advance: force, plus the scene's [load] with scene_load */
     int scene_load;
+    double mp[N_MEMP];    /* the effects with memory: their parameters in use (kernels.memory_layout) */
+    int64_t nd;           /* the delay's buffer: its values (memory.delay.size at the tau in use; 0: no delay) */
+    int64_t mem_len;      /* the memory's state: MEM_FIXED + nd values */
+    double* mem;          /* ... on the heap (NULL in a state blob: its values follow the blob's fixed part) */
 } Element;
 
 typedef struct {
@@ -42,8 +52,16 @@ typedef struct {
     int scene_load, stepper_valid, initialized;
     char stepper[32];
     Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
-    uint64_t checksum;
+    double mpar[N_MEMP]; /* the memory's parameters the master set */
+    uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
+/* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
+#define MEM_MAX ((int64_t)MEM_FIXED + (int64_t)DELAY_BOUND + DELAY_HEAD + 5)
+#define STATE_EXTRA(s) ((s)->element.mem_len >= 0 && (s)->element.mem_len <= MEM_MAX ? \
+                        (size_t)(s)->element.mem_len : (size_t)-1)
+#define INSTANCE_EXTRA(c) ((size_t)(c)->el.mem_len)
+#define RELEASE_INSTANCE(c) release_memory(c)
+#define INSTANCE_FAILED(c) ((c)->memory_failed)
 
 /* what an advance changes (driver.Element.checkpoint): a step that fails is rolled back from it; the branches'
  * state is copied in its part in use only (the memory stack's pieces), into the instance's buffer */
@@ -72,6 +90,9 @@ typedef struct {
     int64_t noise_cache[NOISE_CACHE_SIZE]; /* the Brownian tree's cache: scratch, never in the state */
     Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
     double saved_u[SAVED_U];
+    double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
+    double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
+    int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
 } Instance;
 
 /* ------------------------------------------------------------------ the element */
@@ -93,7 +114,8 @@ static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 static double* kernel_k(Element* e) { return e->play ? (double*)K_PLAY : FOLDS ? e->kst : (double*)K; }
 static double* kernel_eta(Element* e) { return e->play ? (double*)ETA_PLAY : (double*)ETA; }
 static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
-#define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e)
+static double* memory_of(Element* e) { return e->mem != NULL ? e->mem : e->mp; } /* (no memory: never read) */
+#define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e), (e)->mp, memory_of(e), (e)->nd
 #define KERNEL(e, name) ((e)->play ? (damped(e) ? name##_cp : name##_np) : (damped(e) ? name##_c : name##_n))
 
 static void record(Element* e, double t)
@@ -102,6 +124,115 @@ static void record(Element* e, double t)
     double xv[2] = {e->x, e->v};
     KERNEL(e, record)(BRANCHES(e), xv, e->account, e->out, e->erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
                       t);
+}
+
+/* ------------------------------------------------------------------ the effects with memory */
+
+/* the delay's buffer for the tau in mp (memory.delay.size: HEAD + ceil(tau / grid) + 4; 0 without a delay), or -1
+ * beyond DELAY_BOUND values */
+static int64_t delay_size(const double* mp)
+{
+    double ratio;
+    if (!HAS_DELAY)
+        return 0;
+    ratio = ceil(mp[1] / DELAY_GRID);
+    if (!(ratio <= DELAY_BOUND))
+        return -1;
+    return DELAY_HEAD + (int64_t)ratio + 4;
+}
+
+/* why the memory's parameters mp cannot be used, or NULL: each one's rule (scene.coefficient_problem), then
+ * scene._check_memory_rules (a monotone step; a buffer within DELAY_BOUND values) */
+static const char* memory_problem(const double* mp, char* buffer, size_t size)
+{
+    char a[40], b[40];
+    int i;
+    for (i = 0; i < N_MEMORY_PARAMS; i++) {
+        double value = mp[i];
+        if (!isfinite(value)) {
+            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", MEM_NAMES[i], value);
+            return buffer;
+        }
+        if (magnitude_problem(MEM_NAMES[i], value, 0, buffer, size))
+            return buffer;
+        if ((MEM_RULE[i] == 1 && !(value > 0)) || (MEM_RULE[i] == 2 && value < 0)) {
+            snprintf(buffer, size, "parameter %s: must be %s 0, got %.17g", MEM_NAMES[i], MEM_RULE[i] == 1 ? ">" : ">=",
+                     value);
+            return buffer;
+        }
+    }
+    if (HAS_DELAY && mp[0] < 0 && (QUASI_STATIC || mp[1] < DELAY_GRID)) {
+        char why[128];
+        if (QUASI_STATIC)
+            snprintf(why, sizeof why, "on a massless element without a dashpot");
+        else
+            snprintf(why, sizeof why, "with tau = %s s below the step %s s", python_repr(mp[1], a, sizeof a),
+                     python_repr(DELAY_GRID, b, sizeof b));
+        snprintf(buffer, size, "parameter delay_gain: a negative gain %s makes the implicit equation of a step "
+                 "non-monotone (no unique solution): add [mass] or a [damper], or a longer tau", why);
+        return buffer;
+    }
+    for (i = 0; i < (QUASI_STATIC ? NH : 0); i++)
+        if (mp[MEM_HISTORY_AT + i] < 0) {
+            snprintf(buffer, size, "parameter history_weight[%d]: a negative weight on a massless element without a "
+                     "dashpot makes the implicit equation of a step non-monotone: add [mass] or a [damper]", i + 1);
+            return buffer;
+        }
+    if (delay_size(mp) < 0) {
+        snprintf(buffer, size, "parameter delay_tau = %s: tau / step = %.4g values in the delay's buffer, more than "
+                 "the native runtime's bound of %.0f (%.0f MiB): a shorter tau, or a longer [solver] step in the scene",
+                 python_repr(mp[1], a, sizeof a), mp[1] / DELAY_GRID, DELAY_BOUND, DELAY_BOUND * 8 / 1048576);
+        return buffer;
+    }
+    return NULL;
+}
+
+/* the memory's state (and the checkpoint's) of ``length`` values: NULL, or why not (out of memory; the instance
+ * keeps its arrays) */
+static const char* allocate_memory(Instance* c, int64_t length, char* buffer, size_t size)
+{
+    double *mem, *saved;
+    if (c->el.mem != NULL && length == c->el.mem_len)
+        return NULL;
+    mem = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
+    saved = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
+    if (mem == NULL || saved == NULL) {
+        free(mem);
+        free(saved);
+        snprintf(buffer, size, "out of memory for the state of the effects with memory (%.0f values: the delay's "
+                 "buffer at tau = %.17g s)", (double)length, HAS_DELAY ? c->el.mp[1] : 0.0);
+        return buffer;
+    }
+    free(c->el.mem);
+    free(c->saved_mem);
+    c->el.mem = mem;
+    c->saved_mem = saved;
+    c->el.mem_len = length;
+    return NULL;
+}
+
+/* the memory's state sized for the parameters in use (el.mp: the delay's tau), at the exit of initialization mode
+ * and at a reset: NULL, or why not */
+static const char* size_memory(Instance* c, char* buffer, size_t size)
+{
+    int64_t nd = delay_size(c->el.mp);
+    const char* problem;
+    if (!HAS_MEMORY)
+        return NULL;
+    if (nd < 0)
+        return memory_problem(c->el.mp, buffer, size);
+    problem = allocate_memory(c, MEM_FIXED + nd, buffer, size);
+    if (problem == NULL)
+        c->el.nd = nd;
+    return problem;
+}
+
+static void release_memory(Instance* c)
+{
+    free(c->el.mem);
+    free(c->saved_mem);
+    c->el.mem = c->saved_mem = NULL;
+    c->el.mem_len = c->el.nd = 0;
 }
 
 /* Element.reset(force): the initial state under the force held; 0 when a massless element has no equilibrium */
@@ -260,7 +391,8 @@ static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
 /* Element._use_branch_kernel("play"): the stack's n elongations, for a stepper that does not take it */
 static void unfold(Element* e)
 {
-    (damped(e) ? elongations_c : elongations_n)(e->p, e->kst, (double*)ETA, e->cs, e->u, e->up);
+    (damped(e) ? elongations_c : elongations_n)(e->p, e->kst, (double*)ETA, e->cs, e->u, e->mp, memory_of(e), e->nd,
+                                                e->up);
     e->play = 1;
     record(e, element_time(e));
 }
@@ -285,6 +417,7 @@ static void hand_over(Instance* c)
     if (!HAS_STRIBECK)
         e->p[P_ALPHA_KINETIC] = e->p[P_ALPHA];
     memcpy(e->cs, c->cbranch, sizeof e->cs);
+    memcpy(e->mp, c->mpar, sizeof e->mp); /* fixed: they change before initialization only (reset sizes them) */
     if (changed)
         record(e, element_time(e));
     if (FOLDS && c->initialized && stepper != e->stepper) { /* Element.set_stepper (reset chooses afresh) */
@@ -303,6 +436,8 @@ static void hand_over(Instance* c)
 static const char* settings_problem(Instance* c, char* buffer, size_t size)
 {
     const char* problem = parameter_problem(c->par, c->cbranch, buffer, size);
+    if (problem == NULL)
+        problem = memory_problem(c->mpar, buffer, size);
     return problem ? problem : stepper_problem(c, buffer, size);
 }
 
@@ -373,6 +508,7 @@ static double real_value(Instance* c, const Var* var)
     case W_ENERGY: return energy(e, var->index);
     case W_PARAM: return c->par[var->index];
     case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
+    case W_MEMORY: return c->mpar[var->index];
     case W_STEP: return c->step;
     case W_NOISE_INTENSITY: return c->noise_set.sigma;
     case W_NOISE_UNIT: return c->noise_set.unit;
@@ -402,13 +538,82 @@ static void defaults(Instance* c)
     c->last_step_failed = 0;
     c->noise_set = SCENE_NOISE;
     memset(c->noise_cache, 0, sizeof c->noise_cache); /* a new cache (noise.new_cache) */
-    memset(&c->el, 0, sizeof c->el);
+    memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
+    {
+        double* mem = c->el.mem; /* the memory's arrays are kept (size_memory resizes them) */
+        int64_t length = c->el.mem_len;
+        memset(&c->el, 0, sizeof c->el);
+        c->el.mem = mem;
+        c->el.mem_len = length;
+    }
     hand_over(c);
     prandtl_kernel_failed = 0;
+    {
+        char buffer[256];
+        const char* problem = size_memory(c, buffer, sizeof buffer);
+        c->memory_failed = problem != NULL;
+        if (problem != NULL) {
+            say(c, ST_ERROR, "instantiation refused: %s", problem);
+            return;
+        }
+    }
     reset(&c->el, 0.0);
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
+
+/* the checksum of a state: its fixed part up to the checksum, then its memory's state (element.mem_len values,
+ * which the caller knows the blob holds) */
+static uint64_t state_checksum(const State* s)
+{
+    uint64_t hash = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+    const unsigned char* tail = (const unsigned char*)(s + 1);
+    size_t i, n = (size_t)s->element.mem_len * sizeof(double);
+    for (i = 0; i < n; i++) {
+        hash ^= tail[i];
+        hash *= 1099511628211ULL;
+    }
+    return hash;
+}
+
+/* why the memory's state of a state blob (its parameters in use, its values after the fixed part) cannot be
+ * restored, or NULL: memory.check_memory_state's rules (the buffer's size for its tau, its grid index, the Dahl
+ * force within F_c) and numbers only */
+static const char* memory_state_problem(const State* s, char* buffer, size_t size)
+{
+    const Element* e = &s->element;
+    const double* mem = (const double*)(s + 1);
+    const char* problem;
+    int64_t i, nd;
+    if (!HAS_MEMORY)
+        return e->mem_len == 0 && e->nd == 0 ? NULL : "it holds the memory of effects this element has not";
+    problem = memory_problem(e->mp, buffer, size);
+    if (problem != NULL)
+        return problem;
+    nd = delay_size(e->mp);
+    if (e->nd != nd || e->mem_len != MEM_FIXED + nd) {
+        snprintf(buffer, size, "its memory holds %.0f values, the element's at tau = %.17g s holds %.0f (a delay "
+                 "buffer of %.0f)", (double)e->mem_len, HAS_DELAY ? e->mp[1] : 0.0, (double)(MEM_FIXED + nd), (double)nd);
+        return buffer;
+    }
+    for (i = 0; i < e->mem_len; i++)
+        if (!isfinite(mem[i]))
+            return "its memory holds a non-finite value";
+    if (HAS_DELAY) {
+        double last = mem[MEM_FIXED];
+        if (!(last >= 0 && last == floor(last) && last <= MAX_STEPS)) {
+            snprintf(buffer, size, "it has a delay buffer whose grid index is %.17g", last);
+            return buffer;
+        }
+    }
+    if (HAS_DAHL && !(fabs(mem[MEM_DAHL_STATE]) <= e->mp[MEM_DAHL_AT + 1])) {
+        char a[40], b[40];
+        snprintf(buffer, size, "it has a Dahl force %s beyond its level F_c = %s", python_repr(mem[MEM_DAHL_STATE],
+                 a, sizeof a), python_repr(e->mp[MEM_DAHL_AT + 1], b, sizeof b));
+        return buffer;
+    }
+    return NULL;
+}
 
 static void capture(const Instance* c, State* s)
 {
@@ -425,7 +630,11 @@ static void capture(const Instance* c, State* s)
     s->initialized = c->initialized;
     memcpy(s->stepper, c->stepper, sizeof s->stepper);
     s->noise_set = c->noise_set;
-    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+    memcpy(s->mpar, c->mpar, sizeof s->mpar);
+    s->element.mem = NULL;
+    if (c->el.mem_len > 0)
+        memcpy((double*)(s + 1), c->el.mem, (size_t)c->el.mem_len * sizeof(double));
+    s->checksum = state_checksum(s);
 }
 
 /* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
@@ -436,7 +645,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const char* problem;
     int i;
     const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
-                                    fnv1a((const unsigned char*)s, offsetof(State, checksum)));
+                                    state_checksum(s));
     if (head != NULL)
         return head;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
@@ -456,6 +665,9 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         return problem;
     if (!HAS_STRIBECK && e->p[P_ALPHA_KINETIC] != e->p[P_ALPHA])
         return "it holds a non-finite or out-of-range value";
+    problem = memory_state_problem(s, buffer, size); /* the memory's parameters in use and its state */
+    if (problem != NULL)
+        return problem;
     for (i = 0; i < 4; i++) /* numbers only, as the library's saved state */
         if (!(isfinite(e->account[i]) && isfinite(e->erow[2 + i])))
             return "its energy account is not finite";
@@ -508,14 +720,24 @@ static int restore(Instance* c, const State* s)
         memcpy(trial->stepper, s->stepper, sizeof trial->stepper);
         trial->stepper[sizeof trial->stepper - 1] = 0;
         trial->step = s->step;
+        memcpy(trial->mpar, s->mpar, sizeof trial->mpar);
         problem = settings_problem(trial, buffer, sizeof buffer);
         free(trial);
     }
+    if (problem == NULL && HAS_MEMORY) /* the memory's arrays sized for the state's */
+        problem = allocate_memory(c, s->element.mem_len, buffer, sizeof buffer);
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
     }
-    c->el = s->element;
+    {
+        double* mem = c->el.mem; /* the instance's arrays, with the state's values */
+        c->el = s->element;
+        c->el.mem = mem;
+        if (HAS_MEMORY)
+            memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
+    }
+    memcpy(c->mpar, s->mpar, sizeof c->mpar);
     c->F = s->F;
     c->step = s->step;
     c->start_time = s->start_time;
@@ -702,8 +924,11 @@ static int core_exit_initialization(Instance* c)
         problem = buffer;
     }
     if (problem == NULL) {
-        Load l = load_of(0.0, 1, NULL, NULL);
         hand_over(c);
+        problem = size_memory(c, buffer, sizeof buffer); /* the delay's buffer for the tau set */
+    }
+    if (problem == NULL) {
+        Load l = load_of(0.0, 1, NULL, NULL);
         force = c->F;
         if (c->scene_load) { /* F plus the scene's load at the start time */
             double xv[2] = {0.0, 0.0};
@@ -744,6 +969,8 @@ static void checkpoint(Instance* c)
     k->scene_load = e->scene_load;
     k->used = e->play ? NB : branch_state_used(e->u);
     memcpy(c->saved_u, e->play ? e->up : e->u, k->used * sizeof(double));
+    if (HAS_MEMORY) /* the memory's state (memory.copy_memory) */
+        memcpy(c->saved_mem, e->mem, (size_t)e->mem_len * sizeof(double));
 }
 
 static void rollback(Instance* c)
@@ -761,6 +988,8 @@ static void rollback(Instance* c)
     e->steps = k->steps;
     e->scene_load = k->scene_load;
     memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
+    if (HAS_MEMORY) /* memory.put_back */
+        memcpy(e->mem, c->saved_mem, (size_t)e->mem_len * sizeof(double));
 }
 
 /* the first output (x, v, reaction, stiffness, an energy) that is not a number to show after a step, or NULL */
@@ -852,7 +1081,7 @@ static int core_do_step(Instance* c, double t, double H)
 static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
 {
     if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP ||
-                         var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT)) {
+                         var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT || var->what == W_MEMORY)) {
         say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
         return ST_ERROR;
     }
@@ -860,6 +1089,13 @@ static int core_check_float(Instance* c, const Var* var, unsigned vr, double val
         value != c->par[var->index]) {
         say(c, ST_ERROR, "parameter %s = %.17g refused: %s is fixed (the initial state) and cannot change after "
             "initialization; the element is unchanged", PARAM_NAMES[var->index], value, PARAM_NAMES[var->index]);
+        return ST_ERROR;
+    }
+    if (var->what == W_MEMORY && c->initialized && value != c->mpar[var->index]) { /* slave._set_parameter */
+        char shown[40];
+        say(c, ST_ERROR, "parameter %s = %s refused: %s is fixed (the initial state, or an effect with memory) and "
+            "cannot change after initialization; the element is unchanged", MEM_NAMES[var->index],
+            python_repr(value, shown, sizeof shown), MEM_NAMES[var->index]);
         return ST_ERROR;
     }
     return ST_OK;
@@ -871,6 +1107,9 @@ static void core_set_float(Instance* c, const Var* var, double value)
         c->F = value;
     else if (var->what == W_PARAM) {
         c->par[var->index] = value;
+        c->handed = 0;
+    } else if (var->what == W_MEMORY) {
+        c->mpar[var->index] = value; /* checked when handed over (the next exit of initialization mode) */
         c->handed = 0;
     } else if (var->what == W_CBRANCH) {
         int j;

@@ -93,6 +93,14 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
         return NULL;
     }
     defaults(c);
+#ifdef INSTANCE_FAILED
+    if (INSTANCE_FAILED(c)) { /* logged */
+        RELEASE_INSTANCE(c);
+        free(c->name);
+        free(c);
+        return NULL;
+    }
+#endif
     return c;
 }
 
@@ -101,6 +109,9 @@ void fmi2FreeInstance(fmi2Component comp)
     Instance* c = (Instance*)comp;
     if (c == NULL)
         return;
+#ifdef RELEASE_INSTANCE
+    RELEASE_INSTANCE(c);
+#endif
     free(c->name);
     free(c);
 }
@@ -145,6 +156,10 @@ fmi2Status fmi2Reset(fmi2Component comp)
 {
     BEGIN(fmi2Reset, ANY_PHASE);
     defaults(c);
+#ifdef INSTANCE_FAILED
+    if (INSTANCE_FAILED(c))
+        return fmi2Error; /* logged */
+#endif
     return fmi2OK;
 }
 
@@ -394,7 +409,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, si
     if (!given(c, state, "fmi2SerializedFMUstateSize", "FMUstate") ||
         !given(c, size, "fmi2SerializedFMUstateSize", "size"))
         return fmi2Error;
-    *size = sizeof(State);
+    *size = STATE_BYTES(STATE_EXTRA((State*)state));
     return fmi2OK;
 }
 

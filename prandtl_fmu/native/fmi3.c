@@ -112,6 +112,14 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
         return NULL;
     }
     defaults(c);
+#ifdef INSTANCE_FAILED
+    if (INSTANCE_FAILED(c)) { /* logged */
+        RELEASE_INSTANCE(c);
+        free(c->name);
+        free(c);
+        return NULL;
+    }
+#endif
     return c;
 }
 
@@ -120,6 +128,9 @@ void fmi3FreeInstance(fmi3Instance instance)
     Instance* c = (Instance*)instance;
     if (c == NULL)
         return;
+#ifdef RELEASE_INSTANCE
+    RELEASE_INSTANCE(c);
+#endif
     free(c->name);
     free(c);
 }
@@ -158,6 +169,10 @@ fmi3Status fmi3Reset(fmi3Instance instance)
 {
     BEGIN(fmi3Reset, ANY_PHASE);
     defaults(c);
+#ifdef INSTANCE_FAILED
+    if (INSTANCE_FAILED(c))
+        return fmi3Error; /* logged */
+#endif
     return fmi3OK;
 }
 
@@ -466,7 +481,7 @@ fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state,
     if (!given(c, state, "fmi3SerializedFMUStateSize", "FMUState") ||
         !given(c, size, "fmi3SerializedFMUStateSize", "size"))
         return fmi3Error;
-    *size = sizeof(State);
+    *size = STATE_BYTES(STATE_EXTRA((State*)state));
     return fmi3OK;
 }
 

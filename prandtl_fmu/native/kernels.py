@@ -16,22 +16,27 @@ and ``numba_nextafter``: ``stubs.c`` provides them; the error path sets a flag t
 The C signatures (every pointer to doubles; ``kind`` the load's kind, ``lk`` = offset, amplitude, omega of
 the load, ``lt``/``lf``/``nl`` its table):
 
-* ``advance(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t_base, first, h, steps)`` -> steps
-  taken (``kernels/loop.py``: out = x, v, reaction; erow = the energy row);
+* ``advance(p, k, eta, cs, u, mp, ms, nd, xv, account, out, erow, kind, lk, lt, lf, nl, t_base, first, h, steps)``
+  -> steps taken (``kernels/loop.py``: out = x, v, reaction; erow = the energy row);
 * ``advance_noisy(..., steps, sigma, seed, unit, cache)``: the same under the load plus a white noise, the load
   tuple's seventh entry ``(sigma, seed, unit, cache)`` (``loads.WhiteNoise``; ``cache``: the Brownian tree's
   int64 cache of :data:`NOISE_CACHE_SIZE`, any content valid), for the steppers that take a noise
   (:func:`noise_refusal`);
-* ``record(p, k, eta, cs, u, xv, account, out, erow, kind, lk, lt, lf, nl, t)``: the outputs of the state;
-* ``stiffness(p, k, eta, cs, u, xv)`` -> the tangent stiffness;
-* ``initial(p, k, eta, cs, u, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
-  equilibrium (``driver.initial_state``);
+* ``record(p, k, eta, cs, u, mp, ms, nd, xv, account, out, erow, kind, lk, lt, lf, nl, t)``: the outputs of the
+  state;
+* ``stiffness(p, k, eta, cs, u, mp, ms, nd, xv)`` -> the tangent stiffness;
+* ``initial(p, k, eta, cs, u, mp, ms, nd, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
+  equilibrium (``driver.initial_state``); it also makes the memory fresh (``driver._memory_model``, and
+  ``driver._initial_with_memory`` for a massless element without a dashpot);
 * ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``);
-* ``elongations(p, k, eta, cs, u, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``);
+* ``elongations(p, k, eta, cs, u, mp, ms, nd, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``);
 * ``state_check(k, state, scratch)`` (memory-stack scenes): why a restored stack state is not one, or 0
   (:func:`compile_state_check`).
 
-``p`` holds the coefficients in :data:`PARAMETERS` order. A scene with ``[damper]`` gets every function
+``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
+(``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
+cache, the Dahl force, then the delay's buffer of ``nd`` values, sized by the FMU at its initialization from the
+delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A scene with ``[damper]`` gets every function
 twice, with c and without (c = 0 is no dashpot at all in the library's model: ``driver._smooth_model``).
 """
 from __future__ import annotations
@@ -47,21 +52,24 @@ NOISE_CACHE_SIZE = CACHE_SIZE  # the int64s of the Brownian tree's cache (noise.
 _PTR = "types.CPointer(types.float64)"
 # a white noise's entry of the load tuple, (sigma, seed, unit, cache) (loads.WhiteNoise.compile)
 _NOISE = "types.float64, types.int64, types.float64, types.CPointer(types.int64)"
+# the element's arrays: p, k, eta, cs, u, then the memory's parameters, state and delay buffer length (mp, ms, nd)
+_ELEMENT = f"{', '.join([_PTR] * 7)}, types.int64"
 _SIGNATURES = {
-    "advance": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
+    "advance": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
                "types.float64, types.int64, types.float64, types.int64)",
-    "advance_noisy": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
-                     f"types.float64, types.int64, types.float64, types.int64, {_NOISE})",
-    "record": f"types.int64({', '.join([_PTR] * 9)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64)",
-    "stiffness": f"types.float64({', '.join([_PTR] * 6)})",
-    "initial": f"types.int64({', '.join([_PTR] * 6)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
+    "advance_noisy": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, "
+                     f"types.int64, types.float64, types.int64, types.float64, types.int64, {_NOISE})",
+    "record": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
+              "types.float64)",
+    "stiffness": f"types.float64({_ELEMENT}, {_PTR})",
+    "initial": f"types.int64({_ELEMENT}, {_PTR}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
     "force_at": f"types.float64(types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, {_PTR})",
-    "elongations": f"types.int64({', '.join([_PTR] * 6)})",
+    "elongations": f"types.int64({_ELEMENT}, {_PTR})",
 }
 
 _TEMPLATE = '''
-def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, (None, None, None))
+def _model(p, kp, etap, csp, mp, msp, nd):
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, {memory})
 
 
 def _load(kind, lk, lt, lf, nl):
@@ -73,26 +81,27 @@ def _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep):
             (sigma, seed, unit, carray(cachep, ({noise_cache},))))
 
 
-def advance(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps):
-    x, v, taken = run(_model(p, kp, etap, csp), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base, first,
-                      h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
+def advance(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h,
+            steps):
+    x, v, taken = run(_model(p, kp, etap, csp, mp, msp, nd), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base,
+                      first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
     xv[0] = x
     xv[1] = v
     return taken
 
 
-def advance_noisy(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h, steps,
-                  sigma, seed, unit, cachep):
+def advance_noisy(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h,
+                  steps, sigma, seed, unit, cachep):
     load = _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep)
-    x, v, taken = run_noisy(_model(p, kp, etap, csp), load, xv[0], xv[1], {u}, t_base, first, h, steps,
+    x, v, taken = run_noisy(_model(p, kp, etap, csp, mp, msp, nd), load, xv[0], xv[1], {u}, t_base, first, h, steps,
                             carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
     xv[0] = x
     xv[1] = v
     return taken
 
 
-def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t):
-    model = _model(p, kp, etap, csp)
+def record(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
     m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     x = xv[0]
@@ -107,14 +116,14 @@ def record(p, kp, etap, csp, up, xv, accountp, outp, erowp, kind, lk, lt, lf, nl
     return 0
 
 
-def stiffness(p, kp, etap, csp, up, xv):
+def stiffness(p, kp, etap, csp, up, mp, msp, nd, xv):
     direction = -1.0 if xv[1] < 0 else 1.0
-    return tangent(_model(p, kp, etap, csp), xv[0], {u}, direction)
+    return tangent(_model(p, kp, etap, csp, mp, msp, nd), xv[0], {u}, direction)
 
 
-def elongations(p, kp, etap, csp, up, outp):
+def elongations(p, kp, etap, csp, up, mp, msp, nd, outp):
     if {has_branches}:
-        write_elongations(_model(p, kp, etap, csp)[4], {u}, carray(outp, ({n},)))
+        write_elongations(_model(p, kp, etap, csp, mp, msp, nd)[4], {u}, carray(outp, ({n},)))
     return 0
 
 
@@ -122,12 +131,13 @@ def force_at_c(kind, lk, lt, lf, nl, t, unused):
     return force_at(_load(kind, lk, lt, lf, nl), t)
 
 
-def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
-    model = _model(p, kp, etap, csp)
+def initial(p, kp, etap, csp, up, mp, msp, nd, xv, kind, lk, lt, lf, nl):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
     m, k0, k3, c, k, eta, cs, friction, memory = model
     u = {u}
     if {stack}:  # stack.fresh_state(params, x0) in place: one sticking piece, u_i = x - x0 + u0_i
         start(k, p[1] if {massive} else 0.0, u)
+{fresh}
     if {massive}:
         xv[0] = p[1]
         xv[1] = p[2]
@@ -135,8 +145,9 @@ def initial(p, kp, etap, csp, up, xv, kind, lk, lt, lf, nl):
     force = force_at(_load(kind, lk, lt, lf, nl), 0.0)
     if {damped}:
         xv[0] = 0.0
-        xv[1] = (force - elastic_force(0.0, k0, k3) - branch_force(k, u)) / p[5]
+        xv[1] = (force - elastic_force(0.0, k0, k3) - branch_force(k, u) - force_now(memory, 0.0, 0.0, 0.0)) / p[5]
         return 1
+{quasi_static}
     w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, None, u, 0.0)
     if not (abs(w) < np.inf):
         return 0
@@ -223,7 +234,128 @@ def structure(scene, unfolded=False) -> dict:
         "has_branches": "True" if n else "False",
         "friction": friction_source,
         "massive": "True" if scene.mass is not None else "False",
+        **memory_source(scene),
     }
+
+
+_MARK_X0, _MARK_V0 = 1.0 + 1000 / 1024, 1.0 + 1001 / 1024  # the initial state's marks (memory_layout)
+
+
+def memory_layout(scene) -> dict:
+    """Where the effects with memory sit in the kernels' ``mp`` (parameters) and ``ms`` (state) arrays, found in
+    the library's own kernel form (``memory.compile_memory``) of the scene with each parameter and x0, v0 set to a
+    distinct mark: a mark in a part's parameter tuple is read from ``mp``, one in its arrays is written there by
+    the fresh memory (``initial``); every other entry is the library's constant.
+
+    ``mp``: the FMU's memory parameters (``names``: delay_gain, delay_tau, history_weight[j], history_rate[j],
+    dahl_sigma, dahl_force, dahl_exponent, those of the effects present). ``ms``: every part's arrays in kernel
+    order, the delay's buffer last (``fixed`` values before it; its ``nd`` values are ``memory.delay.size`` at the
+    tau in use). Returns the names, ``parts`` (per effect: None, or (params' sources, [(offset, length or None
+    for the buffer, {index: source of its fresh value})])), ``fixed``, ``nh``, and the offsets the C layer checks
+    a state with (``dahl_state``: the Dahl force; ``delay``, ``dahl``: whether present)."""
+    from ..memory import EFFECTS, compile_memory
+    from ..scene import MEMORY_COEFFICIENTS, _coefficient_key, coefficients_of, with_coefficients
+
+    names = [name for name in coefficients_of(scene) if _coefficient_key(name) in MEMORY_COEFFICIENTS]
+    layout = {"names": names, "parts": [None, None, None], "fixed": 0, "dahl_state": 0,
+              "nh": len(scene.history.weight) if scene.history is not None else 0,
+              "delay": scene.delay is not None, "dahl": scene.dahl is not None}
+    if not names:
+        return layout
+    marks = {1.0 + (j + 1) / 1024: f"mp[{j}]" for j in range(len(names))}
+    marked = with_coefficients(scene, **{name: value for value, name in zip(marks, names)})
+    massive = scene.mass is not None
+    marks[_MARK_X0] = "p[1]" if massive else "0.0"  # driver._memory_model: x0, v0 of a massless element are 0
+    marks[_MARK_V0] = "p[2]" if massive else "0.0"
+    memory = compile_memory(marked, _MARK_X0, _MARK_V0)
+
+    def source(value):
+        if isinstance(value, float) and value in marks:
+            return marks[value]
+        if isinstance(value, np.ndarray):  # an array of parameters (history's weights or rates): a slice of mp
+            first = marks.get(float(value[0]), "")
+            start = int(first[3:-1]) if first.startswith("mp[") else -1
+            if start < 0 or [marks.get(float(v)) for v in value] != [f"mp[{start + i}]" for i in range(len(value))]:
+                raise ValueError("the native runtime cannot pass a memory parameter array that is not the FMU's")
+            return f"carray(mp, ({len(names)},))[{start}:{start + len(value)}]"
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"the native runtime cannot pass a memory parameter {value!r}")
+        return repr(int(value)) if isinstance(value, (int, np.integer)) else repr(float(value))
+
+    offset = 0
+    arrays_of = {}
+    for index, (name, part) in enumerate(zip(EFFECTS, memory)):
+        if part is None:
+            continue
+        params = [source(value) for value in part[0]]
+        arrays = []
+        for array in part[1:]:
+            if name == "delay":  # its buffer, sized at run time: placed last
+                arrays.append([None, None, array])
+                continue
+            arrays.append([offset, array.shape[0], array])
+            offset += array.shape[0]
+        layout["parts"][index] = (params, arrays)
+        arrays_of[name] = arrays
+    layout["fixed"] = offset
+    for index, (name, part) in enumerate(zip(EFFECTS, memory)):
+        if part is None:
+            continue
+        for entry in layout["parts"][index][1]:
+            offset_, length, array = entry
+            if offset_ is None:
+                entry[0] = offset
+            entry[2] = {i: marks[value] if value in marks else repr(float(value))
+                        for i, value in enumerate(array.tolist()) if value != 0.0}
+    if layout["dahl"]:
+        layout["dahl_state"] = arrays_of["dahl"][0][0]
+    return layout
+
+
+def memory_source(scene) -> dict:
+    """The generated source of the memory: the tuple of ``driver.compile_model`` (``memory``), the fresh memory
+    at t = 0 (``fresh``: ``compile_memory``'s values) and the massless element's start without a dashpot
+    (``quasi_static``: ``driver._initial_with_memory``), as lines of the ``initial`` kernel."""
+    layout = memory_layout(scene)
+    if not layout["names"]:
+        return {"memory": "(None, None, None)", "fresh": "", "quasi_static": ""}
+    fixed = layout["fixed"]
+    parts = []
+    fresh = ["    # the fresh memory (memory.compile_memory): its constants, the parameters in use, x0 and v0",
+             f"    state = carray(msp, ({fixed} + nd,))",
+             f"    for j in range({fixed} + nd):",
+             "        state[j] = 0.0"]
+    buffer_marks = {}
+    for index, part in enumerate(layout["parts"]):
+        if part is None:
+            parts.append("None")
+            continue
+        params, arrays = part
+        views = []
+        for offset, length, values in arrays:
+            if length is None:  # the delay's buffer
+                views.append(f"carray(msp, ({fixed} + nd,))[{fixed}:{fixed} + nd]")
+                buffer_marks = values
+            else:
+                views.append(f"carray(msp, ({fixed},))[{offset}:{offset + length}]")
+            fresh += [f"    state[{offset + i}] = {value}" for i, value in values.items()]
+        parts.append(f"(({', '.join(params)}{',' if len(params) == 1 else ''}), {', '.join(views)})")
+    quasi = []
+    if scene.mass is None and scene.damper is None:  # driver._initial_with_memory
+        gain = "mp[0]" if layout["delay"] else "0.0"  # delay_gain: the first name
+        quasi = [f"    linear = {gain}",
+                 ("    w = solve_dahl_increment(memory[2], 0.0, linear, -force, k0, k3, k, eta, None, u, 0.0)"
+                  if layout["dahl"] else
+                  "    w = solve_increment(0.0, linear, -force, k0, k3, k, eta, None, u, 0.0)"),
+                 "    if not (abs(w) < np.inf):",
+                 "        return 0",
+                 "    move(k, eta, u, w, None)"]
+        if layout["delay"]:  # the history y(0) is the equilibrium: where compile_memory put x0
+            quasi += ["    buffer = memory[0][1]"] + [f"    buffer[{i}] = w" for i in buffer_marks]
+        if layout["dahl"]:
+            quasi.append("    memory[2][1][0] = dahl_after(memory[2], 0.0, w)[0]")
+        quasi += ["    xv[0] = w", "    xv[1] = 0.0", "    return 1"]
+    return {"memory": "(" + ", ".join(parts) + ")", "fresh": "\n".join(fresh), "quasi_static": "\n".join(quasi)}
 
 
 def is_stack_scene(scene) -> bool:
@@ -330,6 +462,9 @@ def compile_kernels(scene, steppers) -> list:
     from ..kernels.smooth import elastic_force
     from ..kernels.stack import start
     from ..loads import force_at
+    from ..memory import force_now
+    from ..memory.dahl import after as dahl_after
+    from ..memory.solve import solve_dahl_increment
     from ..steppers import get_stepper
 
     checks = [("state_check", compile_state_check(scene))] if is_stack_scene(scene) else []
@@ -351,6 +486,8 @@ def compile_kernels(scene, steppers) -> list:
                                  tangent=tangent, branch_force=branch_force, move=move,
                                  solve_increment=solve_increment, write_elongations=write_elongations,
                                  elastic_force=elastic_force, force_at=force_at, start=start,
+                                 force_now=force_now, solve_dahl_increment=solve_dahl_increment,
+                                 dahl_after=dahl_after,
                                  run=get_stepper(stepper).loop_for(quiet) if stepper else None,
                                  run_noisy=get_stepper(stepper).loop_for(noisy) if takes_noise else None)
                 exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
