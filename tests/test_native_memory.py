@@ -440,3 +440,17 @@ def test_the_memory_binary_runs_clean_in_a_sanitized_c_host_and_is_the_library(s
     assert run.status("setr:delay_tau:0.5") == ERROR and run.status("restore") == OK, run.out[-3000:]
     assert run.said("delay_tau is fixed (the initial state, or an effect with memory)"), run.logs
     assert run.said("initialization refused: parameter dahl_exponent: must be > 0, got 0"), run.logs
+
+
+def test_the_native_connector_refuses_the_memory_in_one_line(tmp_path):
+    """The library's connector carries memory (kernels/drive.py), the native connector's kernels not yet: the build
+    stops before anything is compiled, naming the tables and what to do."""
+    from prandtl_fmu.native.build import NativeBuildError, build_native_fmu
+
+    path = tmp_path / "connector.toml"
+    path.write_text(MASSLESS.replace('name = "massless-delay"', 'name = "connector-delay"\n\n[fmu]\ncausality = '
+                                     '"displacement"'))
+    with pytest.raises(NativeBuildError, match=r"\[delay\], \[dahl\]: the native connector does not carry the effects "
+                                               r"with memory yet") as refused:
+        build_native_fmu(path, tmp_path / "connector.fmu")
+    assert "\n" not in str(refused.value)

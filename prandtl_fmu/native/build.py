@@ -91,6 +91,12 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
 
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
+    from ..memory import present
+
+    if connector and present(scene):  # the connector's kernels (kernels.py _CONNECTOR_TEMPLATE) carry none yet
+        tables = ", ".join(f"[{name}]" for name in present(scene))
+        raise NativeBuildError(f"{scene.source}: {tables}: the native connector does not carry the effects with "
+                               "memory yet: build the element (causality \"force\"), or with --runtime python")
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
