@@ -223,6 +223,27 @@ class Instance:
         self.fmu.freeInstance()
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_memory_parameters_are_fixed_with_their_units_and_the_fmu_validates(fmus, fmi):
+    """The memory's parameters are the PythonFMU FMU's (fixed, their units and start values); FMPy's validator finds
+    nothing."""
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    path, _ = fmus[fmi]
+    assert validate_fmu(str(path)) == []
+    variables = {v.name: v for v in read_model_description(str(path)).modelVariables}
+    expected = {"delay_gain": ("N/m", 0.7), "delay_tau": ("s", 0.023), "history_weight[1]": ("N/m", 0.4),
+                "history_weight[2]": ("N/m", -0.1), "history_rate[1]": ("1/s", 1.3), "history_rate[2]": ("1/s", 0.0),
+                "dahl_sigma": ("N/m", 30.0), "dahl_force": ("N", 0.2), "dahl_exponent": ("1", 1.0)}
+    for name, (unit, start) in expected.items():
+        assert variables[name].causality == "parameter" and variables[name].variability == "fixed"
+        assert (variables[name].unit, float(variables[name].start)) == (unit, start)
+    instance = Instance(str(path))
+    assert instance.get(*expected) == [start for _, start in expected.values()]
+    instance.close()
+
+
 def uneven_steps(seed, count=60):
     """(size, force): communication steps of 1 to 8 internal steps, not multiples of each other in sequence."""
     rng = np.random.default_rng(seed)
