@@ -8,6 +8,7 @@ element without a dashpot, which starts at the library's equilibrium with its de
 fixed parameter is refused after initialization, a bad one at initialization with the library's words, a forged
 memory in a state is refused; the binary runs clean under AddressSanitizer and UBSan in the C host.
 """
+import ctypes
 import os
 import shutil
 import struct
@@ -336,6 +337,15 @@ def test_a_state_whose_memory_does_not_fit_is_refused(fmus, fmi):
         with pytest.raises(FMICallException):
             instance.restore(bad)
         assert instance.said(words), (words, instance.messages[-2:])
+    # a state in the master's memory whose count of values was written over: refused before it is read
+    state = instance.fmu.getFMUstate() if fmi == 2 else instance.fmu.getFMUState()
+    assert ctypes.string_at(state.value, len(blob)) == blob
+    at = blob.find(struct.pack("<qq", length - layout["fixed"], length))  # Element's nd, mem_len
+    assert at > 0 and blob.find(struct.pack("<qq", length - layout["fixed"], length), at + 1) < 0
+    ctypes.memmove(state.value + at + 8, struct.pack("<q", length + 1000), 8)
+    with pytest.raises(FMICallException):
+        instance.fmu.setFMUstate(state) if fmi == 2 else instance.fmu.setFMUState(state)
+    assert instance.said("its memory's count of values is not the one it was made with")
     x = instance.get("x")
     instance.restore(blob)  # the genuine one
     assert instance.get("x") == x and instance.step(0.01, 0.1) == OK

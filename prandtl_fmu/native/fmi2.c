@@ -409,7 +409,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, si
     if (!given(c, state, "fmi2SerializedFMUstateSize", "FMUstate") ||
         !given(c, size, "fmi2SerializedFMUstateSize", "size"))
         return fmi2Error;
-    *size = STATE_BYTES(STATE_EXTRA((State*)state));
+    *size = core_state_size(state);
     return fmi2OK;
 }
 

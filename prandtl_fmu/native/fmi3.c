@@ -481,7 +481,7 @@ fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state,
     if (!given(c, state, "fmi3SerializedFMUStateSize", "FMUState") ||
         !given(c, size, "fmi3SerializedFMUStateSize", "size"))
         return fmi3Error;
-    *size = STATE_BYTES(STATE_EXTRA((State*)state));
+    *size = core_state_size(state);
     return fmi3OK;
 }
 

@@ -1,25 +1,55 @@
 /* The FMU state of the native FMU, for both FMI layers (fmi2.c, fmi3.c) over the element or the connector
- * (their State, capture, state_problem, restore): a checked blob, never applied before it is checked. */
+ * (their State, capture, state_problem, restore): a checked blob, never applied before it is checked.
+ *
+ * A blob is a State, then STATE_EXTRA(s) doubles (the element's memory: element.h; none elsewhere). Its size in
+ * bytes is kept on the heap just before it, out of the master's reach: a state the master wrote over (its
+ * memory's count among what it changed) is never read beyond what was allocated. */
 #ifndef PRANDTL_STATE_H
 #define PRANDTL_STATE_H
 
-/* the doubles a state holds after its fixed part (the element's memory: element.h), (size_t)-1 when out of range */
+/* the doubles a state holds after its fixed part, (size_t)-1 when out of range */
 #ifndef STATE_EXTRA
 #define STATE_EXTRA(s) ((size_t)0)
 #define INSTANCE_EXTRA(c) ((size_t)0)
 #endif
 #define STATE_BYTES(extra) (sizeof(State) + (extra) * sizeof(double))
 
+typedef union { size_t bytes; double align; } StateHead; /* before each blob: its size */
+
+static State* state_new(size_t bytes)
+{
+    StateHead* head = (StateHead*)malloc(sizeof(StateHead) + bytes);
+    if (head == NULL)
+        return NULL;
+    head->bytes = bytes;
+    return (State*)(head + 1);
+}
+
+static size_t state_bytes(const void* state) { return ((const StateHead*)state - 1)->bytes; }
+
+static void state_delete(void* state)
+{
+    if (state != NULL)
+        free((StateHead*)state - 1);
+}
+
+/* whether the blob's own count of values after its fixed part is what it was allocated with */
+static int state_whole(const void* state)
+{
+    size_t extra = STATE_EXTRA((const State*)state);
+    return extra != (size_t)-1 && STATE_BYTES(extra) == state_bytes(state);
+}
+
 static int core_get_state(Instance* c, void** state)
 {
     size_t bytes = STATE_BYTES(INSTANCE_EXTRA(c));
-    State* s = *state && STATE_BYTES(STATE_EXTRA((State*)*state)) == bytes ? (State*)*state : (State*)malloc(bytes);
+    State* s = *state && state_bytes(*state) == bytes ? (State*)*state : state_new(bytes);
     if (s == NULL) {
         say(c, ST_ERROR, FMI "Get" FMU_STATE " failed: out of memory");
         return ST_ERROR;
     }
     if (*state != NULL && *state != s) /* a state of another size (the memory's): replaced */
-        free(*state);
+        state_delete(*state);
     capture(c, s);
     *state = s;
     return ST_OK;
@@ -31,20 +61,28 @@ static int core_set_state(Instance* c, const void* state)
         say(c, ST_ERROR, "FMU state refused (NULL); the instance is unchanged");
         return ST_ERROR;
     }
+    if (!state_whole(state)) {
+        say(c, ST_ERROR, "FMU state refused (its memory's count of values is not the one it was made with: the "
+            "state was altered); the instance is unchanged");
+        return ST_ERROR;
+    }
     return restore(c, (const State*)state);
 }
 
 static void core_free_state(void** state)
 {
     if (state != NULL) {
-        free(*state);
+        state_delete(*state);
         *state = NULL;
     }
 }
 
+/* the bytes of a serialized state: the blob as it was allocated */
+static size_t core_state_size(const void* state) { return state_bytes(state); }
+
 static int core_serialize(Instance* c, const void* state, char* bytes, size_t size)
 {
-    size_t needed = STATE_BYTES(STATE_EXTRA((const State*)state));
+    size_t needed = state_bytes(state);
     if (size < needed) {
         say(c, ST_ERROR, FMI "SerializeFMUstate refused: %zu bytes given, %zu needed", size, needed);
         return ST_ERROR;
@@ -54,7 +92,7 @@ static int core_serialize(Instance* c, const void* state, char* bytes, size_t si
 }
 
 /* a blob of bytes (of any alignment) into a state, checked whole before it is one: into *state when the master
- * hands one (FMI: overwritten), else into a new one */
+ * hands one (FMI: overwritten; a state of this FMU replaced, its size may differ), else into a new one */
 static int core_deserialize(Instance* c, const char* bytes, size_t size, void** state)
 {
     char buffer[256];
@@ -62,21 +100,21 @@ static int core_deserialize(Instance* c, const char* bytes, size_t size, void** 
     State* s;
     size_t extra = 0;
     if (size >= sizeof(State)) { /* the fixed part says how many values follow it */
-        s = (State*)malloc(sizeof(State));
+        s = state_new(sizeof(State));
         if (s == NULL) {
             say(c, ST_ERROR, "FMU state refused: out of memory");
             return ST_ERROR;
         }
         memcpy(s, bytes, sizeof(State));
         extra = STATE_EXTRA(s);
-        free(s);
+        state_delete(s);
     }
     if (size < sizeof(State) || extra == (size_t)-1 || size != STATE_BYTES(extra)) {
         say(c, ST_ERROR, "FMU state refused (%zu bytes: not a serialized state of this FMU, which has %zu)", size,
             STATE_BYTES(extra == (size_t)-1 ? 0 : extra));
         return ST_ERROR;
     }
-    s = (State*)malloc(size);
+    s = state_new(size);
     if (s == NULL) {
         say(c, ST_ERROR, "FMU state refused: out of memory");
         return ST_ERROR;
@@ -84,11 +122,11 @@ static int core_deserialize(Instance* c, const char* bytes, size_t size, void** 
     memcpy(s, bytes, size);
     problem = state_problem(s, buffer, sizeof buffer);
     if (problem != NULL) {
-        free(s);
+        state_delete(s);
         say(c, ST_ERROR, "FMU state refused (%s)", problem);
         return ST_ERROR;
     }
-    free(*state); /* the master's state, if any, is overwritten: replaced (its size may differ) */
+    state_delete(*state);
     *state = s;
     return ST_OK;
 }
