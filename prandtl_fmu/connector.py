@@ -34,6 +34,7 @@ from .kernels import stack
 from .kernels.drive import drive, drive_with_memory, preview, tangent
 from .memory import (check_memory_state, copy_memory, force_now, has_memory, memory_state, put_back,
                      restore_memory, tangent_now)
+from .memory import time_problem as memory_time_problem
 from .kernels.play import branch_force, write_elongations
 from .kernels.smooth import smooth_force
 from .kernels.energy import stored
@@ -194,6 +195,9 @@ class Connector(OutputMemo):
             raise ValueError(f"the motion must be finite, got x = {x!r}, v = {v!r}")
         if not (math.isfinite(time) and time >= self.time):
             raise ValueError(f"time {time!r} goes back (the connector is at t = {self.time!r})")
+        problem = memory_time_problem(self.model[8], self.time, time)
+        if problem:
+            raise ValueError(f"the sample at t = {time!r} s refused: {problem}")
         dx = x - self.x
         u, account, force = self.u, self.account.copy(), np.empty(1)
         saved = None if u is None else u[:stack.used(u)].copy() if stack.is_stack(self.model[4]) else u.copy()
@@ -274,8 +278,8 @@ class Connector(OutputMemo):
         scene = with_coefficients(self.scene, **state["coefficients"])
         memory = compile_model(scene, self.branch_kernel)[8]  # the state's coefficients, its arrays filled below
         if has_memory(memory) or "memory" in state:
-            check_memory_state(memory, state.get("memory"))
-            restore_memory(memory, state["memory"])
+            check_memory_state(memory, state.get("memory"), values[0])
+            restore_memory(memory, state["memory"], values[0])
         model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, memory))
         m, k0, k3, c, k, eta, cs, friction, memory = model
         x, v = values[1], values[2]

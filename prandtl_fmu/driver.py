@@ -33,12 +33,14 @@ from .kernels.smooth import elastic_force
 from .loads import force_at, held, noise_problem, plus, with_white_noise
 from .memory import (check_memory_state, compile_memory, copy_memory, force_now, has_memory, memory_state,
                      put_back, restore_memory)
+from .memory import time_problem as memory_time_problem
 from .memory import delay as memory_delay
 from .memory.dahl import after as dahl_after
 from .memory.solve import solve_dahl_increment
 from .noise import new_cache
 from .scene import (ADVANCE_BUDGET, MAX_STEPS, MEMORY_COEFFICIENTS, SHORTEST_STEP, Scene, _coefficient_key,
                     coefficients_of, with_coefficients)
+from .scene import _check_memory_rules as check_memory_rules
 from .stability import StabilityWarning, stability_problem
 from .steppers import get_stepper
 
@@ -769,6 +771,8 @@ class Element(OutputMemo):
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
                                "advance: advance by shorter durations (communication steps) or with a larger step")
         problem = noise_problem(self.noise, self.h, self.time + duration)  # the Brownian tree's end
+        if problem is None:
+            problem = memory_time_problem(self.model[8], self.time, self.time + duration)
         if problem:
             raise ElementError(f"{self.scene.source}: the advance to t = {self.time + duration!r} s refused: "
                                f"{problem}")
@@ -820,10 +824,11 @@ class Element(OutputMemo):
                              "the run (an FMU's fixed parameter), or reset the element")
         # c -> 0 on a massless element: 'projected' no longer applies, nor a noise (checked with the noise in use)
         loop = compile_loop(with_noise(scene, self.noise), self.stepper)
-        model = with_scene_coefficients(scene, self.model)
-        if memory:  # (at the start: fresh, with the new coefficients)
-            model = model[:8] + (_memory_model(scene),)
-        self.scene, self.model, self._loop = scene, model, loop
+        if memory:  # (at the start: the initial state with the new coefficients, fresh memory included)
+            self.scene, self._loop = scene, loop
+            self.reset(self.force)
+            return
+        self.scene, self.model, self._loop = scene, with_scene_coefficients(scene, self.model), loop
         self._record()
 
     def set_stepper(self, name: str) -> None:
@@ -874,6 +879,12 @@ class Element(OutputMemo):
         problem = noise_problem(self.noise, step)
         if problem:
             raise ValueError(problem)
+        if has_memory(self.model[8]):  # (a negative delay gain with tau below the step: not monotone)
+            try:
+                check_memory_rules(dataclasses.replace(self.scene, solver=dataclasses.replace(self.scene.solver,
+                                                                                               step=float(step))))
+            except ValueError as exc:
+                raise ValueError(f"step = {step!r}: {str(exc).split(': ', 2)[-1]}") from None
         self.h = float(step)
 
     def stability_problem(self) -> Optional[str]:
@@ -936,8 +947,8 @@ class Element(OutputMemo):
             raise ValueError(problem)
         memory = _memory_model(scene)  # the state's coefficients, its arrays filled below
         if has_memory(memory) or "memory" in state:
-            check_memory_state(memory, state.get("memory"))
-            restore_memory(memory, state["memory"])
+            check_memory_state(memory, state.get("memory"), values[0])
+            restore_memory(memory, state["memory"], values[0])
         model = with_scene_coefficients(scene, _smooth_model(scene) + model + (None, memory))
         m, k0, k3, c, k, eta, cs, friction, memory = model
         _, x, v, force, _ = values

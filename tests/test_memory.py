@@ -506,3 +506,83 @@ def test_the_connector_with_memory_is_its_equations_along_a_given_path(exponent)
         assert other.force == forces[j]
     s_up = 2.0 + 50.0 * max(1.0 - fd / 0.5, 0.0) ** exponent  # the tangent: the spring and Dahl's slope
     assert connector.stiffness(1.0) == pytest.approx(s_up, rel=1e-12)
+
+
+QUASI_STATIC = """
+[spring]
+k0 = 1.0
+[branches]
+k = [2.0, 1.0]
+eta = [0.05, 0.2]
+[dahl]
+sigma = {sigma}
+force = 0.5
+exponent = 2.0
+[delay]
+gain = 0.3
+tau = 0.0105
+[load]
+kind = "harmonic"
+amplitude = 1.5
+omega = 3.0
+"""
+
+
+@slow
+def test_the_adversarial_reviews_cases_stay_fixed():
+    """Found by a review (each reproduced before its fix): a delay buffer restored with a grid index that does
+    not match its time; a connector's history after a restored state and an instant move; times the delay's
+    grid cannot carry (negative, beyond 2^52 steps, going back); the Dahl force moved by x1 - x instead of the
+    solved increment (with a stiff Dahl law the equilibrium missed by sigma ulp(x)); memory coefficients set on a
+    massless element at its start that kept the old equilibrium."""
+    from prandtl_fmu.connector import Connector
+    from prandtl_fmu.driver import ElementError
+
+    s = scene(QUASI_STATIC.format(sigma=50.0), step=1e-3, stop=3.0)
+    element = Element(s)
+    element.advance(2.0, 0.0, scene_load=True)
+    state = element.get_state()
+    for index in (0.0, 1e6, 1e300):
+        forged = json.loads(json.dumps(state))
+        forged["memory"]["delay"][0] = index
+        with pytest.raises(ValueError, match="grid index"):
+            Element(s).set_state(forged)
+    # the stiff Dahl law: F = reaction at every step of the quasi-static element, to the springs' rounding
+    stiff = simulate(scene(QUASI_STATIC.format(sigma=1e12), step=1e-3, stop=2.0)).columns()
+    force = 1.5 * np.cos(3.0 * stiff["time"])
+    assert np.max(np.abs(stiff["reaction"] - force)) < 1e-9
+    # memory coefficients at the start: the new initial equilibrium, as a fresh element's
+    changed = Element(s)
+    changed.reset(2.0)
+    changed.set_coefficients(dahl_sigma=200.0, delay_gain=0.5)
+    fresh = Element(parse_scene(QUASI_STATIC.format(sigma=200.0).replace("gain = 0.3", "gain = 0.5") + """
+[solver]
+stepper = "implicit"
+step = 0.001
+stop_time = 3.0
+output_interval = 0.001
+"""))
+    fresh.reset(2.0)
+    assert (changed.x, changed.get_state()["memory"]) == (fresh.x, fresh.get_state()["memory"])
+    # times the delay cannot carry
+    for start, words in ((-5.0, "negative"), (1e16, "2\\^52")):
+        late = Element(s)
+        late.time = start
+        with pytest.raises(ElementError, match=words):
+            late.advance(0.01, 0.0)
+    back = Element(s)
+    back.advance(1.0, 0.0)
+    back.time = 0.5
+    with pytest.raises(ElementError, match="goes back"):
+        back.advance(0.01, 0.0)
+    # the connector's history after a restored state and an instant move
+    c = scene(CONNECTOR.format(exponent=1.0), step=1e-3, stop=1.0)
+    first = Connector(c)
+    first.move_to(0.01, 0.1, 0.01)
+    first.move_to(0.02, 0.1, 0.02)
+    second = Connector(c)
+    second.set_state(json.loads(json.dumps(first.get_state())))
+    for connector in (first, second):
+        connector.move_to(0.03, 0.1, 0.02)
+        connector.move_to(0.035, 0.1, 0.03)
+    assert second.force == first.force and second.get_state() == first.get_state()

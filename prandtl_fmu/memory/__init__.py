@@ -36,6 +36,14 @@ def present(scene) -> list:
     return [name for name in EFFECTS if getattr(scene, name, None) is not None]
 
 
+def time_problem(memory, start: float, end: float):
+    """Why an advance from ``start`` to ``end`` cannot be carried by the memory, or None (the delay's buffer:
+    ``delay.time_problem``)."""
+    if memory[0] is None:
+        return None
+    return delay.time_problem(memory[0], start, end)
+
+
 def refuse_memory(scene, stepper: str) -> None:
     """ValueError if ``scene`` has effects with memory: only ``implicit`` and ``projected`` carry them."""
     names = present(scene)
@@ -65,15 +73,19 @@ def memory_state(memory) -> dict:
     return {name: EFFECTS[name].state(part) for name, part in zip(EFFECTS, memory) if part is not None}
 
 
-def restore_memory(memory, saved) -> None:
-    """Put saved :func:`memory_state` data back into ``memory`` (in place); ValueError if it does not fit.
-    Check with :func:`check_memory_state` first where nothing may change on a refusal."""
+def restore_memory(memory, saved, time: float) -> None:
+    """Put saved :func:`memory_state` data back into ``memory`` (in place) for an element at ``time``;
+    ValueError if it does not fit. Check with :func:`check_memory_state` first where nothing may change on a
+    refusal."""
     for name, part in zip(EFFECTS, memory):
         if part is not None:
-            EFFECTS[name].restore(part, saved[name])
+            if name == "delay":
+                delay.restore(part, saved[name], time)
+            else:
+                EFFECTS[name].restore(part, saved[name])
 
 
-def check_memory_state(memory, saved) -> None:
+def check_memory_state(memory, saved, time: float) -> None:
     """ValueError naming what in ``saved`` does not fit ``memory`` (nothing changes)."""
     from ..driver import number_list
 
@@ -83,10 +95,8 @@ def check_memory_state(memory, saved) -> None:
     if sorted(saved) != sorted(names):
         raise ValueError(f"state has the memory of {sorted(saved) or 'no effect'}, the element has "
                          f"{names or 'none'}")
-    copy = copy_memory(memory)
-    for name, part in zip(EFFECTS, copy):
-        if part is not None:
-            EFFECTS[name].restore(part, number_list(saved[name], name).tolist())
+    restore_memory(copy_memory(memory), {name: number_list(values, name).tolist() for name, values in saved.items()},
+                   time)
 
 
 def copy_memory(memory):
@@ -185,13 +195,14 @@ def _dahl_tangent(part, direction):
 
 
 @kernel
-def record(memory, t, h, x, v, x1, v1):
+def record(memory, t, h, x, v, x1, v1, dx):
     """After a step from (t, x, v) to (t + h, x1, v1): the delay's buffer, the history's variables and the
-    Dahl force move along it."""
+    Dahl force move along it; ``dx`` the increment the step solved for (x1 - x may differ from it by a
+    rounding, which Dahl's stiffness would turn into a force)."""
     d, s, f = memory
     _record_delay(d, t, h, x, v, x1, v1)
     _record_history(s, h, x, v, x1, v1)
-    _record_dahl(f, x1 - x)
+    _record_dahl(f, dx)
 
 
 @kernel

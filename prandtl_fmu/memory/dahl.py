@@ -33,6 +33,7 @@ from .._jit import inline_kernel, kernel
 from ..libm import exp, pow
 
 NAME = "dahl"
+MAX_EXPONENT = 100.0
 
 
 @dataclass(frozen=True)
@@ -52,8 +53,11 @@ def read(r, scene_tables) -> Dahl:
     r.string("kind", "dahl", choices=("dahl",))
     if "friction" in scene_tables:
         r.fail("sigma", "[dahl] and [friction] are two laws of the mass's friction on the ground: keep one")
-    return Dahl(r.number("sigma", positive=True), r.number("force", positive=True),
-                r.number("exponent", 1.0, positive=True))
+    exponent = r.number("exponent", 1.0, positive=True)
+    if exponent > MAX_EXPONENT:
+        r.fail("exponent", f"must be <= {MAX_EXPONENT:g} (sigma 2^exponent, the slope at a reversal, would "
+                           f"overflow), got {exponent!r}")
+    return Dahl(r.number("sigma", positive=True), r.number("force", positive=True), exponent)
 
 
 def compile(dahl: Dahl):

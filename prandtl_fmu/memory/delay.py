@@ -69,16 +69,34 @@ def state(part) -> list:
     return part[1].tolist()
 
 
-def restore(part, values) -> None:
-    """Put a saved buffer back (in place); ValueError if it does not fit."""
-    buffer = part[1]
+def restore(part, values, time: float) -> None:
+    """Put a saved buffer back (in place) for an element at ``time``; ValueError if it does not fit."""
+    (gain, tau, on_v, grid), buffer = part
     if len(values) != buffer.shape[0]:
         raise ValueError(f"state has a delay buffer of {len(values)} values, the element's holds "
                          f"{buffer.shape[0]} (tau / step changed?)")
     values = np.asarray(values, dtype=float)
-    if not (values[0] >= 0 and values[0] == int(values[0])):
-        raise ValueError(f"state has a delay buffer whose grid index is {values[0]!r}")
+    expected = max(math.floor(time / grid), 0)  # the last grid point recorded, to a rounding of the clock
+    if not (values[0] >= 0 and values[0] == int(values[0]) and abs(values[0] - expected) <= 1):
+        raise ValueError(f"state has a delay buffer whose grid index is {values[0]!r}, at t = {time!r} s it is "
+                         f"{expected}")
     buffer[:] = values
+
+
+def time_problem(delay_part, start: float, end: float):
+    """Why an advance from ``start`` to ``end`` (s) cannot be carried by the delay's buffer, or None: its grid
+    counts from t = 0 in integers (below 2^52 steps of it, where a time still resolves the grid), and it
+    cannot go back before what it recorded."""
+    (gain, tau, on_v, grid), buffer = delay_part
+    if start < 0:
+        return f"a [delay] counts its history from t = 0: the time {start!r} s is negative"
+    if end / grid >= 2.0**52:
+        return (f"a [delay]'s buffer counts time in steps of {grid!r} s below 2^52: t = {end!r} s is beyond "
+                "(the clock no longer resolves its grid)")
+    if start < (buffer[0] - 1) * grid:
+        return (f"the time goes back to {start!r} s, before what the [delay]'s buffer recorded (up to "
+                f"{buffer[0] * grid!r} s): its past would be wrong")
+    return None
 
 
 @inline_kernel
@@ -97,13 +115,13 @@ def delayed(part, q, t, y_now):
     if q >= t_last:
         if t > t_last:
             y_last = _ring(buffer, last)
-            return y_last + (q - t_last) / (t - t_last) * (y_now - y_last)
+            return y_last + min((q - t_last) / (t - t_last), 1.0) * (y_now - y_last)
         return y_now
     j = int(q / grid)
     oldest = last - (buffer.shape[0] - HEAD) + 1
     j = min(max(j, oldest), last - 1)
     y_j = _ring(buffer, j)
-    return y_j + (q - j * grid) / grid * (_ring(buffer, j + 1) - y_j)
+    return y_j + min(max((q - j * grid) / grid, 0.0), 1.0) * (_ring(buffer, j + 1) - y_j)
 
 
 @inline_kernel

@@ -19,7 +19,7 @@ with y linear along it (the steppers move x linearly), z_j is integrated exactly
 y(t + h) for ``implicit``.
 
 The kernel form: ``((n, on_v), data)``, one array (one array: every array a kernel receives costs a reference
-count per call): ``data[0]`` the step h of the cached coefficients, then the n weights, the n rates, the n
+count per call): ``data[0]`` the step h of the cached coefficients (NaN: none), then the n weights, the n rates, the n
 z_j (the state), and E, phi0, phi1 of that h (n each: a function of h alone, they never change a result).
 """
 from __future__ import annotations
@@ -62,6 +62,7 @@ W, R, Z, E, P0, P1 = range(6)  # the blocks of data after data[0]
 def compile(history: History):
     n = len(history.weight)
     data = np.zeros(1 + 6 * n)
+    data[0] = np.nan  # no coefficients cached yet (NaN equals no step, 0 included)
     data[1:1 + n] = history.weight
     data[1 + n:1 + 2 * n] = history.rate
     return (n, 1.0 if history.acts_on == "v" else 0.0), data
@@ -77,7 +78,7 @@ def restore(part, values) -> None:
     if len(values) != n:
         raise ValueError(f"state has {len(values)} history variables, the element has {n}")
     data[1 + Z * n:1 + (Z + 1) * n] = np.asarray(values, dtype=float)
-    data[0] = 0.0  # (the cached coefficients are recomputed)
+    data[0] = np.nan  # (the cached coefficients are recomputed)
 
 
 @kernel

@@ -106,7 +106,7 @@ def step(model, load, t, h, x, v, s, u, energy):
     book(energy, force - kept - stiffer * w - _dahl_after(dahl, w), w, c, v1)  # the load's and the memory's work
     book_friction(energy, friction, f, h, v1)
     s = move_branches(k, eta, cs, u, w, h, BACKWARD, energy)
-    record(memory, t, h, x, v, x + w, v1)
+    record(memory, t, h, x, v, x + w, v1, w)
     return x + w, v1, s
 
 

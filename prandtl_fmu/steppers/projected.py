@@ -84,7 +84,7 @@ def step(model, load, t, h, x, v, s, u, energy):
     v1, f = held_velocity(friction, m / h, v + h * a, v)
     book_friction(energy, friction, f, h, v1)
     s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
-    record(memory, t, h, x, v, x + dx, v1)
+    record(memory, t, h, x, v, x + dx, v1, dx)
     return x + dx, v1, s
 
 
@@ -97,7 +97,7 @@ def step_massless(model, load, t, h, x, v, s, u, energy):
     dx = with_noise(load, h * v, h * v + kick / c)  # c (x1 - x) = h c v + sigma dB
     book(energy, with_noise(load, force, force + kick / h), dx, c, with_noise(load, v, dx / h))
     s = move_branches(k, eta, cs, u, dx, h, EXPLICIT, energy)
-    record(memory, t, h, x, v, x + dx, dx / h)
+    record(memory, t, h, x, v, x + dx, dx / h, dx)
     x = x + dx
     return x, (force_at(load, t + h) - elastic_force(x, k0, k3) - s - force_now(memory, t + h, x, 0.0)) / c, s
 
