@@ -373,7 +373,9 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
         "record": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double)",
         "stiffness": "double {name}(" + e + ", P)",
         "initial": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t)",
-        "elongations": "int64_t {name}(" + e + ", P)",
+        # the connector's own (kernels._CONNECTOR_SIGNATURES: no memory)
+        "elongations": ("int64_t {name}(P, P, P, P, P, P)" if scene.causality == "displacement"
+                        else "int64_t {name}(" + e + ", P)"),
         "move": "int64_t {name}(P, P, P, P, P, double, P, P, P, P, P)",
         "cforce": "double {name}(P, P, P, P, P, double, double)",
         "ctangent": "double {name}(P, P, P, P, P, double, double)",
