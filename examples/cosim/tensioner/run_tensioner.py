@@ -7,7 +7,8 @@ by the span tension's fluctuation at 40 Hz: ``belt-span.toml``, a network scene,
 (input F: an external torque on the arm; outputs x_arm, v_arm). The tensioner, ``tensioner.toml``, is the
 connector FMU of its torsion spring and Dahl friction (docs/memory.md): inputs the arm's angle and velocity,
 output its torque. A Gauss-Seidel master over FMPy (this script) steps the span with F = -torque of the last
-step, then hands the span's new x_arm, v_arm to the tensioner. Together they are the element of
+step, then hands the span's new x_arm, v_arm to the tensioner; ``--master libcosim`` runs the same system from
+``SystemStructure.ssd`` (SSP 1.0: the torque reaches the span through a linear transformation of factor -1). Together they are the element of
 ``tensioner-with-belt.toml``, which the library steps implicitly at h = 1e-7 s: the reference. Prints the
 error max |x - x_ref| on the 1e-4 s grid at communication steps H = 4e-4 ... 5e-5 s and the measured order
 (about 1: the torque is held over each step); writes DIR/convergence.csv; --plot draws the arm's torque
@@ -15,6 +16,7 @@ against its angle.
 """
 import argparse
 import csv
+import shutil
 import sys
 from pathlib import Path
 
@@ -37,6 +39,7 @@ def build(folder):
     folder.mkdir(parents=True, exist_ok=True)
     build_fmu(HERE / "belt-span.toml", folder / "belt-span.fmu")
     build_fmu(HERE / "tensioner.toml", folder / "tensioner.fmu")
+    shutil.copyfile(HERE / "SystemStructure.ssd", folder / "SystemStructure.ssd")
     return folder
 
 
@@ -76,6 +79,38 @@ def gauss_seidel(folder, step, stop_time):
     return {name: np.array(values) for name, values in columns.items()}
 
 
+def run_libcosim(folder, step, stop_time):
+    """The same system from SystemStructure.ssd in libcosim (its fixed-step algorithm: both FMUs step at once,
+    then the outputs are exchanged; the torque reaches the span through the SSD's linear transformation of
+    factor -1). libcosim counts time in integer nanoseconds."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_ssp_file(str(folder), step_size=round(step * 1_000_000_000))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    span = execution.slave_index_from_instance_name("span")
+    tensioner = execution.slave_index_from_instance_name("tensioner")
+
+    def reference(slave, name):
+        return next(v.reference for v in execution.slave_variables(slave) if v.name.decode() == name)
+
+    arm = [reference(span, "x_arm"), reference(span, "v_arm")]
+    force = [reference(tensioner, "force")]
+    columns = {name: [] for name in ("time", "x", "v", "torque")}
+    for k in range(round(stop_time / step)):
+        execution.step(1)
+        x, v = observer.last_real_values(span, arm)
+        for name, value in zip(columns, ((k + 1) * step, x, v, observer.last_real_values(tensioner, force)[0])):
+            columns[name].append(value)
+    return {name: np.array(values) for name, values in columns.items()}
+
+
+MASTERS = {"gauss-seidel": gauss_seidel, "libcosim": run_libcosim}
+
+
 def reference(stop_time):
     """The library's element of tensioner-with-belt.toml: (times, x) on the GRID."""
     from prandtl_fmu import load_scene, simulate
@@ -85,12 +120,12 @@ def reference(stop_time):
     return result["time"], result["x"]
 
 
-def convergence(folder, stop_time=0.1, steps=STEPS):
-    """Rows (H, error, order) of the coupled runs against the reference."""
+def convergence(folder, stop_time=0.1, steps=STEPS, master="gauss-seidel"):
+    """Rows (H, error, order) of the coupled runs (``master``: a key of MASTERS) against the reference."""
     times, x_ref = reference(stop_time)
     rows, last = [], None
     for step in steps:
-        run = gauss_seidel(folder, step, stop_time)
+        run = MASTERS[master](folder, step, stop_time)
         every = round(GRID / step) if step < GRID else 1
         on_grid = run["x"][every - 1::every] if step <= GRID else np.interp(times[1:], run["time"], run["x"])
         error = float(np.max(np.abs(on_grid[:len(times) - 1] - x_ref[1:len(on_grid) + 1])))
@@ -104,12 +139,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out/tensioner")
     parser.add_argument("--stop-time", type=float, default=0.1)
+    parser.add_argument("--master", choices=sorted(MASTERS), default="gauss-seidel",
+                        help="this script's Gauss-Seidel loop over FMPy, or libcosim on SystemStructure.ssd")
     parser.add_argument("--plot", help="a PNG of the arm's torque against its angle (needs the plot extra)")
     args = parser.parse_args()
     if args.plot:
         require_extras("plot")
     folder = build(args.out)
-    rows = convergence(folder, args.stop_time)
+    rows = convergence(folder, args.stop_time, master=args.master)
     with open(Path(folder) / "convergence.csv", "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["communication_step", "max_error_x", "order"])
