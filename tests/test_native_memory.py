@@ -385,11 +385,28 @@ def test_a_memory_parameter_is_fixed_and_checked_with_the_library_s_rules(fmus):
     assert instance.said("parameter delay_tau = 0.5 refused: delay_tau is fixed (the initial state, or an effect with "
                          "memory) and cannot change after initialization")
     instance.set("delay_tau", 0.023)  # the same value: allowed
+    element = Element(load_scene(scene_path))
+    element.advance(0.01, 0.0)
+    with pytest.raises(ElementError) as library:  # a master going back before what the delay recorded
+        element.time = 0.002
+        element.advance(0.01, 0.0)
+    instance.time = 0.002
+    assert instance.step(0.01, 0.0) == DISCARD
+    words = "the time goes back to 0.002 s, before what the [delay]'s buffer recorded (up to "
+    assert words in str(library.value) and instance.said(words + "0.01 s): its past would be wrong"), \
+        (library.value, instance.messages[-1])
     instance.close()
     with pytest.raises(ValueError) as library:
         Element(load_scene(scene_path)).set_coefficients(delay_gain=-0.3, delay_tau=0.0005)
     reason = str(library.value).split(": ", 1)[1]
+    element = Element(load_scene(scene_path))
+    element.set_coefficients(delay_gain=-0.3)
+    with pytest.raises(ValueError) as library:
+        element.set_step(0.05)
+    step_reason = str(library.value)
     for start, words in (({"delay_gain": -0.3, "delay_tau": 0.0005}, reason),
+                         ({"delay_gain": -0.3, "step": 0.05}, "parameter " + step_reason),
+                         ({"dahl_exponent": 150.0}, "parameter dahl_exponent: must be <= 100 (sigma 2^exponent"),
                          ({"dahl_sigma": -1.0}, "parameter dahl_sigma: must be > 0, got -1"),
                          ({"history_rate[1]": -2.0}, "parameter history_rate[1]: must be >= 0, got -2"),
                          ({"delay_tau": 1e6}, "tau / step = 1e+09 values in the delay's buffer, more than the native "

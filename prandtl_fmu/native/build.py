@@ -188,6 +188,7 @@ def memory_lines(scene) -> list:
     """scene.h's lines of the effects with memory (kernels.memory_layout): which are present, their parameters'
     names, start values and rules (scene.COEFFICIENTS: 0 finite, 1 > 0, 2 >= 0), the state's layout and the rules
     of scene._check_memory_rules (the delay's grid, the buffer's bound, whether the element is quasi-static)."""
+    from ..memory import dahl as memory_dahl
     from ..memory import delay as memory_delay
     from ..scene import COEFFICIENTS, _coefficient_key, coefficients_of
 
@@ -204,6 +205,8 @@ def memory_lines(scene) -> list:
                                    "shorter tau, or --runtime python")
     values = coefficients_of(scene)
     rules = {"finite": 0, "> 0": 1, ">= 0": 2}
+    markers = sorted(offset + i for part in layout["parts"] if part is not None for offset, _, fresh in part[1]
+                     for i, source in fresh.items() if source == "np.nan")
     return [
         f"#define HAS_MEMORY {int(bool(names))}",
         f"#define HAS_DELAY {int(layout['delay'])}",
@@ -219,6 +222,10 @@ def memory_lines(scene) -> list:
         f"#define DELAY_GRID {float(scene.solver.step)!r} /* the delay's grid: the scene's step */",
         f"#define DELAY_BOUND {DELAY_BOUND}.0 /* the most values of the delay's buffer */",
         f"#define QUASI_STATIC {int(scene.mass is None and scene.damper is None)}",
+        f"#define DAHL_MAX_EXPONENT {float(memory_dahl.MAX_EXPONENT)!r} /* memory.dahl.MAX_EXPONENT */",
+        # the fresh memory's NaN entries (the history's cache marker): the values a state may hold as NaN
+        f"#define N_MEM_MARKERS {len(markers)}",
+        "static const int MEM_MARKERS[] = {" + ", ".join(str(i) for i in markers or [-1]) + "};",
         "static const char* MEM_NAMES[] = {" + ", ".join([c_string(name) for name in names] or ['""']) + "};",
         f"static const double MEM_SCENE[N_MEMP] = {_c_array(values[name] for name in names)};",
         "static const int MEM_RULE[N_MEMP] = {" + ", ".join(

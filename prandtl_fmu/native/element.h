@@ -172,6 +172,11 @@ static const char* memory_problem(const double* mp, char* buffer, size_t size)
                  "non-monotone (no unique solution): add [mass] or a [damper], or a longer tau", why);
         return buffer;
     }
+    if (HAS_DAHL && mp[MEM_DAHL_AT + 2] > DAHL_MAX_EXPONENT) {
+        snprintf(buffer, size, "parameter dahl_exponent: must be <= 100 (sigma 2^exponent, the slope at a reversal, "
+                 "would overflow), got %s", python_repr(mp[MEM_DAHL_AT + 2], a, sizeof a));
+        return buffer;
+    }
     for (i = 0; i < (QUASI_STATIC ? NH : 0); i++)
         if (mp[MEM_HISTORY_AT + i] < 0) {
             snprintf(buffer, size, "parameter history_weight[%d]: a negative weight on a massless element without a "
@@ -182,6 +187,47 @@ static const char* memory_problem(const double* mp, char* buffer, size_t size)
         snprintf(buffer, size, "parameter delay_tau = %s: tau / step = %.4g values in the delay's buffer, more than "
                  "the native runtime's bound of %.0f (%.0f MiB): a shorter tau, or a longer [solver] step in the scene",
                  python_repr(mp[1], a, sizeof a), mp[1] / DELAY_GRID, DELAY_BOUND, DELAY_BOUND * 8 / 1048576);
+        return buffer;
+    }
+    return NULL;
+}
+
+/* Element.set_step's rule with memory: a negative delay gain with tau below the step in use, or NULL */
+static const char* memory_step_problem(const double* mp, double step, char* buffer, size_t size)
+{
+    char a[40], b[40], c[40];
+    if (!(HAS_DELAY && !QUASI_STATIC && mp[0] < 0 && mp[1] < step))
+        return NULL;
+    snprintf(buffer, size, "parameter step = %s: a negative gain with tau = %s s below the step %s s makes the implicit "
+             "equation of a step non-monotone (no unique solution): add [mass] or a [damper], or a longer tau",
+             python_repr(step, a, sizeof a), python_repr(mp[1], b, sizeof b), python_repr(step, c, sizeof c));
+    return buffer;
+}
+
+/* memory.delay.time_problem: why an advance from ``start`` to ``end`` (s) cannot be carried by the delay's buffer
+ * (its grid counts from t = 0 below 2^52 steps, and cannot go back before what it recorded), or NULL */
+static const char* delay_time_problem(const Element* e, double start, double end, char* buffer, size_t size)
+{
+    char a[40], b[40];
+    double recorded;
+    if (!HAS_DELAY)
+        return NULL;
+    recorded = e->mem[MEM_FIXED];
+    if (start < 0) {
+        snprintf(buffer, size, "a [delay] counts its history from t = 0: the time %s s is negative",
+                 python_repr(start, a, sizeof a));
+        return buffer;
+    }
+    if (end / DELAY_GRID >= 4503599627370496.0) {
+        snprintf(buffer, size, "a [delay]'s buffer counts time in steps of %s s below 2^52: t = %s s is beyond (the "
+                 "clock no longer resolves its grid)", python_repr(DELAY_GRID, a, sizeof a),
+                 python_repr(end, b, sizeof b));
+        return buffer;
+    }
+    if (start < (recorded - 1) * DELAY_GRID) {
+        snprintf(buffer, size, "the time goes back to %s s, before what the [delay]'s buffer recorded (up to %s s): "
+                 "its past would be wrong", python_repr(start, a, sizeof a),
+                 python_repr(recorded * DELAY_GRID, b, sizeof b));
         return buffer;
     }
     return NULL;
@@ -331,6 +377,11 @@ static const char* advance(Element* e, double duration, double force, int scene_
                  duration, whole + (rest > 0), h, ADVANCE_BUDGET);
         return buffer;
     }
+    {
+        const char* problem = delay_time_problem(e, element_time(e), element_time(e) + duration, buffer, size);
+        if (problem != NULL)
+            return problem;
+    }
     l = load_of(force, scene_load, noise, cache);
     e->force = force;
     e->scene_load = scene_load;
@@ -438,7 +489,9 @@ static const char* settings_problem(Instance* c, char* buffer, size_t size)
     const char* problem = parameter_problem(c->par, c->cbranch, buffer, size);
     if (problem == NULL)
         problem = memory_problem(c->mpar, buffer, size);
-    return problem ? problem : stepper_problem(c, buffer, size);
+    if (problem == NULL)
+        problem = stepper_problem(c, buffer, size);
+    return problem ? problem : memory_step_problem(c->mpar, c->step, buffer, size);
 }
 
 /* slave._hand_over_settings: why the settings the master set cannot be handed over, or NULL, in its order: a noise
@@ -596,13 +649,19 @@ static const char* memory_state_problem(const State* s, char* buffer, size_t siz
                  "buffer of %.0f)", (double)e->mem_len, HAS_DELAY ? e->mp[1] : 0.0, (double)(MEM_FIXED + nd), (double)nd);
         return buffer;
     }
-    for (i = 0; i < e->mem_len; i++)
-        if (!isfinite(mem[i]))
+    for (i = 0; i < e->mem_len; i++) {
+        int marker = 0, j;
+        for (j = 0; j < N_MEM_MARKERS; j++) /* (a cache's marker may be NaN: recomputed at the next step) */
+            marker |= MEM_MARKERS[j] == i && isnan(mem[i]);
+        if (!isfinite(mem[i]) && !marker)
             return "its memory holds a non-finite value";
-    if (HAS_DELAY) {
-        double last = mem[MEM_FIXED];
-        if (!(last >= 0 && last == floor(last) && last <= MAX_STEPS)) {
-            snprintf(buffer, size, "it has a delay buffer whose grid index is %.17g", last);
+    }
+    if (HAS_DELAY) { /* memory.delay.restore: the last grid point recorded, to a rounding of the clock */
+        double last = mem[MEM_FIXED], expected = fmax(floor(element_time(e) / DELAY_GRID), 0.0);
+        if (!(last >= 0 && last == floor(last) && last <= MAX_STEPS && fabs(last - expected) <= 1)) {
+            char a[40], b[40];
+            snprintf(buffer, size, "it has a delay buffer whose grid index is %s, at t = %s s it is %.0f",
+                     python_repr(last, a, sizeof a), python_repr(element_time(e), b, sizeof b), expected);
             return buffer;
         }
     }

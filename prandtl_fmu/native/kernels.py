@@ -241,6 +241,16 @@ def structure(scene, unfolded=False) -> dict:
 _MARK_X0, _MARK_V0 = 1.0 + 1000 / 1024, 1.0 + 1001 / 1024  # the initial state's marks (memory_layout)
 
 
+def _literal(value: float) -> str:
+    """A float as generated source (NaN and the infinities as numpy's names)."""
+    value = float(value)
+    if value != value:
+        return "np.nan"
+    if abs(value) == float("inf"):
+        return "np.inf" if value > 0 else "-np.inf"
+    return repr(value)
+
+
 def memory_layout(scene) -> dict:
     """Where the effects with memory sit in the kernels' ``mp`` (parameters) and ``ms`` (state) arrays, found in
     the library's own kernel form (``memory.compile_memory``) of the scene with each parameter and x0, v0 set to a
@@ -305,8 +315,8 @@ def memory_layout(scene) -> dict:
             offset_, length, array = entry
             if offset_ is None:
                 entry[0] = offset
-            entry[2] = {i: marks[value] if value in marks else repr(float(value))
-                        for i, value in enumerate(array.tolist()) if value != 0.0}
+            entry[2] = {i: marks[value] if value in marks else _literal(value)
+                        for i, value in enumerate(array.tolist()) if value != 0.0}  # (a NaN marker too)
     if layout["dahl"]:
         layout["dahl_state"] = arrays_of["dahl"][0][0]
     return layout
