@@ -51,8 +51,8 @@ typedef struct {
     double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
     int scene_load, stepper_valid, initialized;
     char stepper[32];
-    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     double mpar[N_MEMP]; /* the memory's parameters the master set */
+    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
 /* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
@@ -643,6 +643,8 @@ static const char* memory_state_problem(const State* s, char* buffer, size_t siz
     problem = memory_problem(e->mp, buffer, size);
     if (problem != NULL)
         return problem;
+    if (s->initialized && memcmp(s->mpar, e->mp, sizeof e->mp) != 0) /* fixed: set before initialization */
+        return "its memory's parameters in use are not those set";
     nd = delay_size(e->mp);
     if (e->nd != nd || e->mem_len != MEM_FIXED + nd) {
         snprintf(buffer, size, "its memory holds %.0f values, the element's at tau = %.17g s holds %.0f (a delay "
