@@ -95,7 +95,7 @@ def time_problem(delay_part, start: float, end: float):
                 "(the clock no longer resolves its grid)")
     if start < (buffer[0] - 1) * grid:
         return (f"the time goes back to {start!r} s, before what the [delay]'s buffer recorded (up to "
-                f"{buffer[0] * grid!r} s): its past would be wrong")
+                f"{float(buffer[0] * grid)!r} s): its past would be wrong")
     return None
 
 
