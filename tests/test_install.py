@@ -37,10 +37,12 @@ def test_a_wheel_in_a_fresh_venv_with_core_dependencies_and_fmpy_builds_and_runs
     wheel, = (tmp_path / "dist").glob("prandtl_fmu-*.whl")
     _run([sys.executable, "-m", "venv", str(tmp_path / "venv")])
     bin_ = tmp_path / "venv" / "bin"
-    _run([str(bin_ / "python"), "-m", "pip", "install", "--quiet", f"{wheel}", "fmpy"])
+    # no PYTHONPATH: a checkout on it holds the egg-info that `pip wheel` wrote, and pip would then take the
+    # package for installed and skip it (no prandtl-fmu script in the venv)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    _run([str(bin_ / "python"), "-m", "pip", "install", "--quiet", f"{wheel}", "fmpy"], env=env)
     work = tmp_path / "work"  # not the checkout: nothing of it on the path
     work.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     version = _run([str(bin_ / "prandtl-fmu"), "--version"], cwd=work, env=env).stdout
     assert version.startswith("prandtl-fmu ")
     built = _run([str(bin_ / "prandtl-fmu"), "build", "paper-section-8", "-o", "element.fmu"], cwd=work, env=env)

@@ -528,8 +528,9 @@ def test_the_native_runtime_takes_the_native_builder_or_says_networks_are_not_th
         build_fmu(scene_path, tmp_path / "chain.fmu", runtime="native")
     calls = []
 
-    def builder(path, out, fmi=2, causality=None):
+    def builder(path, out, fmi=2, causality=None, **options):  # (arrays, platforms: their defaults here)
         calls.append((path, out, fmi, causality))
+        assert not options.get("arrays") and options.get("platforms") in (None, [], ())
         return out
 
     monkeypatch.setattr(native_build, "build_native_network_fmu", builder, raising=False)

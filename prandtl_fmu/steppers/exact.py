@@ -183,11 +183,12 @@ def _scaled_taylor(a, tau):
             column += abs(a[i, j])
         norm = max(norm, column)
     norm *= tau
-    if not norm < np.inf:
+    if not norm < 2.0**1000:  # (norm / 0.25 must stay finite: int() of an infinite log2 is undefined in
+        # compiled code, and LLVM, seeing through our own log2, once turned it into ~2^63 squarings)
         return np.eye(size), a * 0.0, 0.0, -1
     squarings = 0
     if norm > 0.25:
-        squarings = int(math.ceil(libm.log2(norm / 0.25)))  # log2 is exact at powers of two
+        squarings = int(math.ceil(libm.log2(norm / 0.25)))  # log2 is exact at powers of two; <= 1002 here
     scale = libm.scalbn(tau, -squarings)  # tau / 2^squarings, rounded once
     b = a * scale
     result = np.eye(size)
