@@ -545,9 +545,11 @@ def _check_memory_rules(scene) -> None:
             f"with tau = {scene.delay.tau!r} s below the step {scene.solver.step!r} s"
         raise SceneError(f"{scene.source}: [delay] gain: a negative gain {why} makes the implicit equation of a "
                          "step non-monotone (no unique solution): add [mass] or a [damper], or a longer tau")
-    if scene.dahl is not None and scene.dahl.exponent > 100.0:  # (memory.dahl.MAX_EXPONENT)
-        raise SceneError(f"{scene.source}: [dahl] exponent: must be <= 100 (sigma 2^exponent, the slope at a "
-                         f"reversal, would overflow), got {scene.dahl.exponent!r}")
+    from .memory.dahl import MAX_EXPONENT
+
+    if scene.dahl is not None and scene.dahl.exponent > MAX_EXPONENT:
+        raise SceneError(f"{scene.source}: [dahl] exponent: must be <= {MAX_EXPONENT:g} (sigma 2^exponent, the "
+                         f"slope at a reversal, would overflow), got {scene.dahl.exponent!r}")
     if scene.history is not None and quasi_static and min(scene.history.weight) < 0:
         raise SceneError(f"{scene.source}: [history] weight: a negative weight on a massless element without a "
                          "dashpot makes the implicit equation of a step non-monotone: add [mass] or a [damper]")

@@ -53,11 +53,9 @@ def read(r, scene_tables) -> Dahl:
     r.string("kind", "dahl", choices=("dahl",))
     if "friction" in scene_tables:
         r.fail("sigma", "[dahl] and [friction] are two laws of the mass's friction on the ground: keep one")
-    exponent = r.number("exponent", 1.0, positive=True)
-    if exponent > MAX_EXPONENT:
-        r.fail("exponent", f"must be <= {MAX_EXPONENT:g} (sigma 2^exponent, the slope at a reversal, would "
-                           f"overflow), got {exponent!r}")
-    return Dahl(r.number("sigma", positive=True), r.number("force", positive=True), exponent)
+    # (exponent <= MAX_EXPONENT: scene._check_memory_rules, which also checks a coefficient set later)
+    return Dahl(r.number("sigma", positive=True), r.number("force", positive=True),
+                r.number("exponent", 1.0, positive=True))
 
 
 def compile(dahl: Dahl):
