@@ -91,12 +91,6 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
 
         scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
     connector = scene.causality == "displacement"
-    from ..memory import present
-
-    if connector and present(scene):  # the connector's kernels (kernels.py _CONNECTOR_TEMPLATE) carry none yet
-        tables = ", ".join(f"[{name}]" for name in present(scene))
-        raise NativeBuildError(f"{scene.source}: {tables}: the native connector does not carry the effects with "
-                               "memory yet: build the element (causality \"force\"), or with --runtime python")
     out = Path(out)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
@@ -221,7 +215,8 @@ def memory_lines(scene) -> list:
         f"#define DELAY_HEAD {memory_delay.HEAD}",
         f"#define DELAY_GRID {float(scene.solver.step)!r} /* the delay's grid: the scene's step */",
         f"#define DELAY_BOUND {DELAY_BOUND}.0 /* the most values of the delay's buffer */",
-        f"#define QUASI_STATIC {int(scene.mass is None and scene.damper is None)}",
+        # scene._check_memory_rules' quasi-static element (the connector solves nothing: its motion is given)
+        f"#define QUASI_STATIC {int(scene.mass is None and scene.damper is None and scene.causality == 'force')}",
         f"#define DAHL_MAX_EXPONENT {float(memory_dahl.MAX_EXPONENT)!r} /* memory.dahl.MAX_EXPONENT */",
         # the fresh memory's NaN entries (the history's cache marker): the values a state may hold as NaN
         f"#define N_MEM_MARKERS {len(markers)}",
@@ -380,14 +375,15 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
         "record": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double)",
         "stiffness": "double {name}(" + e + ", P)",
         "initial": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t)",
-        # the connector's own (kernels._CONNECTOR_SIGNATURES: no memory)
+        # the connector's own (kernels._CONNECTOR_SIGNATURES: the element's arrays and memory; its elongations
+        # the branches' arrays alone)
         "elongations": ("int64_t {name}(P, P, P, P, P, P)" if scene.causality == "displacement"
                         else "int64_t {name}(" + e + ", P)"),
-        "move": "int64_t {name}(P, P, P, P, P, double, P, P, P, P, P)",
-        "cforce": "double {name}(P, P, P, P, P, double, double)",
-        "ctangent": "double {name}(P, P, P, P, P, double, double)",
-        "cstored": "double {name}(P, P, P, P, P, double)",
-        "cinitial": "int64_t {name}(P, P, P, P, P)",
+        "move": "int64_t {name}(" + e + ", double, double, double, P, P, P, P, P)",
+        "cforce": "double {name}(" + e + ", double, double, double)",
+        "ctangent": "double {name}(" + e + ", double, double)",
+        "cstored": "double {name}(" + e + ", double)",
+        "cinitial": "int64_t {name}(" + e + ")",
     }
     if not folds:
         lines.append("#define stack_fold(k, u, x, state) 0")

@@ -209,15 +209,6 @@ static const char* head_problem(const char* header, uint32_t version, uint32_t s
     return NULL;
 }
 
-#if NETWORK || !CONNECTOR /* the element and the network take a load; the element connector a motion */
-/* ------------------------------------------------------------------ the white noise (loads.WhiteNoise) */
-
-/* a white noise sigma xi(t) on the force: its intensity sigma (N sqrt(s); 0: none), the seed of its Brownian path
- * (an FMI Integer, 32 bits: 0 <= seed < 2^31) and the Brownian tree's time unit (s). What the master set, and what
- * was handed over to the kernels; the path is a function of (seed, time) alone, drawn by the kernels (noise.py) */
-typedef struct { double sigma; int64_t seed; double unit; } Noise;
-static const Noise SCENE_NOISE = NOISE_SCENE; /* the start values: the scene's [load] noise, or none */
-
 /* Python's repr of a double (the shortest digits that read back, a ".0" on an integral value, an exponent below
  * 1e-4 and from 1e16 on): what the PythonFMU FMU's messages show */
 static const char* python_repr(double value, char* buffer, size_t size)
@@ -241,6 +232,169 @@ static const char* python_repr(double value, char* buffer, size_t size)
         snprintf(buffer, size, "%.*f", precision - 1 - exponent, value);
     return buffer;
 }
+
+#if !NETWORK && CONNECTOR
+/* ------------------------------------------------------------------ the effects with memory (memory/)
+ *
+ * The rules of their parameters and of a saved memory, on plain arrays: ``mp`` the parameters (the names of
+ * kernels.memory_layout, MEM_NAMES), ``mem`` the state (MEM_FIXED values, then the delay's buffer of nd). Written
+ * for the element and the connector alike (the element's rules are under !CONNECTOR); element.h still holds its
+ * own copy of the first three, which it can drop for these. */
+
+/* the delay's buffer for the tau in mp (memory.delay.size: HEAD + ceil(tau / grid) + 4; 0 without a delay), or -1
+ * beyond DELAY_BOUND values */
+static int64_t delay_size(const double* mp)
+{
+    double ratio;
+    if (!HAS_DELAY)
+        return 0;
+    ratio = ceil(mp[1] / DELAY_GRID);
+    if (!(ratio <= DELAY_BOUND))
+        return -1;
+    return DELAY_HEAD + (int64_t)ratio + 4;
+}
+
+/* why the memory's parameters mp cannot be used, or NULL: each one's rule (scene.coefficient_problem), then
+ * scene._check_memory_rules (the element's: a monotone step; both: Dahl's exponent; the native runtime's: a buffer
+ * within DELAY_BOUND values) */
+static const char* memory_problem(const double* mp, char* buffer, size_t size)
+{
+    char a[40], b[40];
+    int i;
+    for (i = 0; i < N_MEMORY_PARAMS; i++) {
+        double value = mp[i];
+        if (!isfinite(value)) {
+            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", MEM_NAMES[i], value);
+            return buffer;
+        }
+        if (magnitude_problem(MEM_NAMES[i], value, 0, buffer, size))
+            return buffer;
+        if ((MEM_RULE[i] == 1 && !(value > 0)) || (MEM_RULE[i] == 2 && value < 0)) {
+            snprintf(buffer, size, "parameter %s: must be %s 0, got %.17g", MEM_NAMES[i], MEM_RULE[i] == 1 ? ">" : ">=",
+                     value);
+            return buffer;
+        }
+    }
+    if (HAS_DELAY && !CONNECTOR && mp[0] < 0 && (QUASI_STATIC || mp[1] < DELAY_GRID)) { /* (the connector solves
+                                                                                         nothing: its motion is given) */
+        char why[128];
+        if (QUASI_STATIC)
+            snprintf(why, sizeof why, "on a massless element without a dashpot");
+        else
+            snprintf(why, sizeof why, "with tau = %s s below the step %s s", python_repr(mp[1], a, sizeof a),
+                     python_repr(DELAY_GRID, b, sizeof b));
+        snprintf(buffer, size, "parameter delay_gain: a negative gain %s makes the implicit equation of a step "
+                 "non-monotone (no unique solution): add [mass] or a [damper], or a longer tau", why);
+        return buffer;
+    }
+    if (HAS_DAHL && mp[MEM_DAHL_AT + 2] > DAHL_MAX_EXPONENT) {
+        snprintf(buffer, size, "parameter dahl_exponent: must be <= 100 (sigma 2^exponent, the slope at a reversal, "
+                 "would overflow), got %s", python_repr(mp[MEM_DAHL_AT + 2], a, sizeof a));
+        return buffer;
+    }
+    for (i = 0; i < (QUASI_STATIC ? NH : 0); i++)
+        if (mp[MEM_HISTORY_AT + i] < 0) {
+            snprintf(buffer, size, "parameter history_weight[%d]: a negative weight on a massless element without a "
+                     "dashpot makes the implicit equation of a step non-monotone: add [mass] or a [damper]", i + 1);
+            return buffer;
+        }
+    if (delay_size(mp) < 0) {
+        snprintf(buffer, size, "parameter delay_tau = %s: tau / step = %.4g values in the delay's buffer, more than "
+                 "the native runtime's bound of %.0f (%.0f MiB): a shorter tau, or a longer [solver] step in the scene",
+                 python_repr(mp[1], a, sizeof a), mp[1] / DELAY_GRID, DELAY_BOUND, DELAY_BOUND * 8 / 1048576);
+        return buffer;
+    }
+    return NULL;
+}
+
+/* memory.delay.time_problem: why a move from ``start`` to ``end`` (s) cannot be carried by the delay's buffer in
+ * ``mem`` (its grid counts from t = 0 below 2^52 steps, and cannot go back before what it recorded), or NULL */
+static const char* delay_time_problem(const double* mem, double start, double end, char* buffer, size_t size)
+{
+    char a[40], b[40];
+    double recorded;
+    if (!HAS_DELAY)
+        return NULL;
+    recorded = mem[MEM_FIXED];
+    if (start < 0) {
+        snprintf(buffer, size, "a [delay] counts its history from t = 0: the time %s s is negative",
+                 python_repr(start, a, sizeof a));
+        return buffer;
+    }
+    if (end / DELAY_GRID >= 4503599627370496.0) {
+        snprintf(buffer, size, "a [delay]'s buffer counts time in steps of %s s below 2^52: t = %s s is beyond (the "
+                 "clock no longer resolves its grid)", python_repr(DELAY_GRID, a, sizeof a),
+                 python_repr(end, b, sizeof b));
+        return buffer;
+    }
+    if (start < (recorded - 1) * DELAY_GRID) {
+        snprintf(buffer, size, "the time goes back to %s s, before what the [delay]'s buffer recorded (up to %s s): "
+                 "its past would be wrong", python_repr(start, a, sizeof a),
+                 python_repr(recorded * DELAY_GRID, b, sizeof b));
+        return buffer;
+    }
+    return NULL;
+}
+
+/* why a saved memory (``mem_len`` values ``mem``, a delay's buffer of ``nd``) cannot be restored under the
+ * parameters mp at ``time``, or NULL: memory.check_memory_state's rules (the buffer's size for its tau, its grid
+ * index, the Dahl force within F_c) and numbers only (a NaN only where a fresh memory holds one, MEM_MARKERS) */
+static const char* memory_values_problem(const double* mp, const double* mem, int64_t nd, int64_t mem_len,
+                                         double time, char* buffer, size_t size)
+{
+    int64_t i, expected_nd;
+    if (!HAS_MEMORY)
+        return mem_len == 0 && nd == 0 ? NULL : "it holds the memory of effects this element has not";
+    expected_nd = delay_size(mp);
+    if (nd != expected_nd || mem_len != MEM_FIXED + expected_nd) {
+        snprintf(buffer, size, "its memory holds %.0f values, the element's at tau = %.17g s holds %.0f (a delay "
+                 "buffer of %.0f)", (double)mem_len, HAS_DELAY ? mp[1] : 0.0, (double)(MEM_FIXED + expected_nd),
+                 (double)expected_nd);
+        return buffer;
+    }
+    for (i = 0; i < mem_len; i++) {
+        int marker = 0, j;
+        for (j = 0; j < N_MEM_MARKERS; j++)
+            marker |= MEM_MARKERS[j] == i && isnan(mem[i]);
+        if (!isfinite(mem[i]) && !marker)
+            return "its memory holds a non-finite value";
+    }
+    if (HAS_DELAY) { /* memory.delay.restore: the last grid point recorded, to a rounding of the clock */
+        double last = mem[MEM_FIXED], expected = fmax(floor(time / DELAY_GRID), 0.0);
+        if (!(last >= 0 && last == floor(last) && last <= MAX_STEPS && fabs(last - expected) <= 1)) {
+            char a[40], b[40];
+            snprintf(buffer, size, "it has a delay buffer whose grid index is %s, at t = %s s it is %.0f",
+                     python_repr(last, a, sizeof a), python_repr(time, b, sizeof b), expected);
+            return buffer;
+        }
+    }
+    if (HAS_DAHL && !(fabs(mem[MEM_DAHL_STATE]) <= mp[MEM_DAHL_AT + 1])) {
+        char a[40], b[40];
+        snprintf(buffer, size, "it has a Dahl force %s beyond its level F_c = %s", python_repr(mem[MEM_DAHL_STATE],
+                 a, sizeof a), python_repr(mp[MEM_DAHL_AT + 1], b, sizeof b));
+        return buffer;
+    }
+    return NULL;
+}
+
+/* memory.restore_memory: the cached values a restored memory recomputes (the history's coefficients of a step,
+ * marked NaN as fresh: a function of the step alone, they never change a result) */
+static void forget_memory_cache(double* mem)
+{
+    int j;
+    for (j = 0; j < N_MEM_MARKERS; j++)
+        mem[MEM_MARKERS[j]] = NAN;
+}
+#endif
+
+#if NETWORK || !CONNECTOR /* the element and the network take a load; the element connector a motion */
+/* ------------------------------------------------------------------ the white noise (loads.WhiteNoise) */
+
+/* a white noise sigma xi(t) on the force: its intensity sigma (N sqrt(s); 0: none), the seed of its Brownian path
+ * (an FMI Integer, 32 bits: 0 <= seed < 2^31) and the Brownian tree's time unit (s). What the master set, and what
+ * was handed over to the kernels; the path is a function of (seed, time) alone, drawn by the kernels (noise.py) */
+typedef struct { double sigma; int64_t seed; double unit; } Noise;
+static const Noise SCENE_NOISE = NOISE_SCENE; /* the start values: the scene's [load] noise, or none */
 
 /* why the noise's settings break a rule, or NULL: NoiseParameters._hand_over_noise's checks, in its order (the
  * seed an FMU takes, NOISE_SEED_LIMIT, then loads.white_noise: the intensity, the seed, the unit), and its words

@@ -7,6 +7,14 @@
  * input sample at the communication point (the branches follow the exact play update along the line from the
  * last committed x, series dashpots relax over the time between samples, the dashpot dissipates
  * c (v0^2 + v0 v + v^2) dt / 3); initialization moves the element from x = 0 to the first input.
+ *
+ * The effects with memory (memory/: [delay], [history], [dahl]) as the element carries them (element.h): their
+ * parameters are the FMU's fixed ones (mp), their state an array on the heap (mem: the history's variables, the Dahl
+ * force, the delay's buffer of nd values, sized at instantiation, at the exit of initialization mode and at a reset
+ * from the delay's tau in use), handed to every kernel, which rebuilds the library's tuple from them; a move
+ * carries them along the path (kernels/drive.py drive_with_memory), the force and the tangent add theirs. The
+ * preview and the checkpoint have arrays of their own; an FMU state carries the memory after its fixed part
+ * (state.h: STATE_EXTRA), under its checksum.
  */
 #ifndef PRANDTL_CONNECTOR_H
 #define PRANDTL_CONNECTOR_H
@@ -18,6 +26,10 @@ typedef struct {
     double x, v, time, direction; /* the committed sample; the direction of the last motion */
     double u[NB_ARR];
     double account[3];  /* [1] the sliders, [2] the dashpots (connector.SLIDERS, DAMPER) */
+    double mp[N_MEMP];  /* the effects with memory: their parameters in use (kernels.memory_layout) */
+    int64_t nd;         /* the delay's buffer: its values (memory.delay.size at the tau in use; 0: no delay) */
+    int64_t mem_len;    /* the memory's state: MEM_FIXED + nd values */
+    double* mem;        /* ... on the heap (NULL in a state blob: its values follow the blob's fixed part) */
 } Element;
 
 typedef struct {
@@ -27,8 +39,16 @@ typedef struct {
     Element element;
     double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
     int initialized;
-    uint64_t checksum;
+    double mpar[N_MEMP]; /* the memory's parameters the master set */
+    uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
+/* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
+#define MEM_MAX ((int64_t)MEM_FIXED + (int64_t)DELAY_BOUND + DELAY_HEAD + 5)
+#define STATE_EXTRA(s) ((s)->element.mem_len >= 0 && (s)->element.mem_len <= MEM_MAX ? \
+                        (size_t)(s)->element.mem_len : (size_t)-1)
+#define INSTANCE_EXTRA(c) ((size_t)(c)->el.mem_len)
+#define RELEASE_INSTANCE(c) release_memory(c)
+#define INSTANCE_FAILED(c) ((c)->memory_failed)
 
 typedef struct {
     char* name;
@@ -43,18 +63,27 @@ typedef struct {
     char stepper[32];
     Element preview;  /* the outputs' state (on the heap with the instance, never a large copy on the host's stack) */
     Element saved;    /* core_do_step's checkpoint: a step whose outputs overflow is rolled back */
+    double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
+    int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
 } Instance;
 
 static double element_time(const Element* e) { return e->time; }
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
+static double* memory_of(const Element* e) { return e->mem != NULL ? e->mem : (double*)e->mp; } /* (none: unread) */
+/* the arrays every kernel takes: the coefficients, the branches', the memory's (kernels._CONNECTOR_SIGNATURES);
+ * ARRAYS(e, mem) with the memory's state ``mem`` (a state blob's: read only, by the force and the energy) */
+#define ARRAYS(e, mem) (double*)(e)->p, (double*)K, (double*)ETA, (double*)(e)->cs, (double*)(e)->u, \
+                       (double*)(e)->mp, (double*)(mem), (e)->nd
+#define ARRAYS_OF(e) ARRAYS(e, memory_of(e))
+#define KERNEL(e, name) (damped(e) ? name##_c : name##_n)
+
 /* Connector.move_to: commit (x, v) at ``time`` */
 static void move_to(Element* e, double x, double v, double time)
 {
     double dx = x - e->x, xs = x, vs = v, duration = time - e->time, force;
-    (damped(e) ? move_c : move_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u, e->x, &xs, &vs, &duration, &force,
-                                  e->account);
+    KERNEL(e, move)(ARRAYS_OF(e), e->x, e->v, e->time, &xs, &vs, &duration, &force, e->account);
     if (damped(e))
         e->account[2] += e->p[P_C] * (e->v * e->v + e->v * v + v * v) * (time - e->time) / 3.0;
     if (dx != 0)
@@ -64,23 +93,79 @@ static void move_to(Element* e, double x, double v, double time)
     e->time = time;
 }
 
-/* Connector.reset: x = 0, v = 0, the scene's u0 (or a fresh memory stack), time 0 */
+/* Connector.reset: x = 0, v = 0, the scene's u0 (or a fresh memory stack), a fresh memory, time 0 */
 static void reset(Element* e)
 {
     memcpy(e->u, U0, sizeof e->u);
-    (damped(e) ? cinitial_c : cinitial_n)(e->p, (double*)K, (double*)ETA, e->cs, e->u);
+    KERNEL(e, cinitial)(ARRAYS_OF(e));
     e->x = e->v = e->time = 0.0;
     e->direction = 1.0;
     memset(e->account, 0, sizeof e->account);
 }
 
+/* the coefficients the master set go to the element (at initialization and at every step) */
 static void hand_over(Instance* c)
 {
     memcpy(c->el.p, c->par, sizeof c->el.p);
     memcpy(c->el.cs, c->cbranch, sizeof c->el.cs);
 }
 
-/* a copy of an element, its branches' state in the part in use only (the memory stack's pieces, as stack.used) */
+/* ------------------------------------------------------------------ the memory's arrays */
+
+/* the memory's state of ``length`` values for the element, its preview and its checkpoint: NULL, or why not (out of
+ * memory; the instance keeps its arrays) */
+static const char* allocate_memory(Instance* c, int64_t length, char* buffer, size_t size)
+{
+    double* arrays[3];
+    int i;
+    if (c->el.mem != NULL && length == c->el.mem_len)
+        return NULL;
+    for (i = 0; i < 3; i++)
+        arrays[i] = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
+    if (arrays[0] == NULL || arrays[1] == NULL || arrays[2] == NULL) {
+        for (i = 0; i < 3; i++)
+            free(arrays[i]);
+        snprintf(buffer, size, "out of memory for the state of the effects with memory (%.0f values: the delay's "
+                 "buffer at tau = %.17g s)", (double)length, HAS_DELAY ? c->mpar[1] : 0.0);
+        return buffer;
+    }
+    free(c->el.mem);
+    free(c->preview.mem);
+    free(c->saved.mem);
+    c->el.mem = arrays[0];
+    c->preview.mem = arrays[1];
+    c->saved.mem = arrays[2];
+    c->el.mem_len = c->preview.mem_len = c->saved.mem_len = length;
+    return NULL;
+}
+
+/* the memory's state sized for the parameters in use (el.mp: the delay's tau), at instantiation, at the exit of
+ * initialization mode and at a reset: NULL, or why not */
+static const char* size_memory(Instance* c, char* buffer, size_t size)
+{
+    int64_t nd = delay_size(c->el.mp);
+    const char* problem;
+    if (!HAS_MEMORY)
+        return NULL;
+    if (nd < 0)
+        return memory_problem(c->el.mp, buffer, size);
+    problem = allocate_memory(c, MEM_FIXED + nd, buffer, size);
+    if (problem == NULL)
+        c->el.nd = nd;
+    return problem;
+}
+
+static void release_memory(Instance* c)
+{
+    free(c->el.mem);
+    free(c->preview.mem);
+    free(c->saved.mem);
+    c->el.mem = c->preview.mem = c->saved.mem = NULL;
+    c->el.mem_len = c->el.nd = 0;
+}
+
+/* a copy of an element (Connector.copy), its branches' state in the part in use only (the memory stack's pieces, as
+ * stack.used), its memory's state into ``to``'s own array (allocated with the element's: allocate_memory) */
 static void copy_element(Element* to, const Element* from)
 {
     memcpy(to->p, from->p, sizeof to->p);
@@ -91,6 +176,11 @@ static void copy_element(Element* to, const Element* from)
     to->direction = from->direction;
     memcpy(to->account, from->account, sizeof to->account);
     memcpy(to->u, from->u, branch_state_used(from->u) * sizeof(double));
+    memcpy(to->mp, from->mp, sizeof to->mp);
+    to->nd = from->nd;
+    to->mem_len = from->mem_len;
+    if (from->mem_len > 0) /* memory.copy_memory */
+        memcpy(to->mem, from->mem, (size_t)from->mem_len * sizeof(double));
 }
 
 /* the committed element moved to the inputs set last, in c->preview */
@@ -112,6 +202,7 @@ static double real_value(Instance* c, const Var* var)
     case W_V: return c->v_in;
     case W_PARAM: return c->par[var->index];
     case W_CBRANCH: return c->cbranch[var->index < 0 ? 0 : var->index];
+    case W_MEMORY: return c->mpar[var->index];
     }
     if (var->what == W_ENERGY && var->index == 4)
         return c->el.account[2]; /* the dashpots: up to the last doStep */
@@ -120,16 +211,13 @@ static double real_value(Instance* c, const Var* var)
     preview = previewed(c);
     switch (var->what) {
     case W_FORCE:
-        return (damped(preview) ? cforce_c : cforce_n)(preview->p, (double*)K, (double*)ETA, preview->cs, preview->u,
-                                                       preview->x, preview->v);
+        return KERNEL(preview, cforce)(ARRAYS_OF(preview), preview->x, preview->v, preview->time);
     case W_STIFFNESS:
         direction = preview->v == 0 ? preview->direction : copysign(1.0, preview->v);
-        return (damped(preview) ? ctangent_c : ctangent_n)(preview->p, (double*)K, (double*)ETA, preview->cs,
-                                                           preview->u, preview->x, direction);
+        return KERNEL(preview, ctangent)(ARRAYS_OF(preview), preview->x, direction);
     case W_ENERGY:
         if (var->index == 1)
-            return (damped(preview) ? cstored_c : cstored_n)(preview->p, (double*)K, (double*)ETA, preview->cs,
-                                                             preview->u, preview->x);
+            return KERNEL(preview, cstored)(ARRAYS_OF(preview), preview->x);
         return preview->account[1]; /* dissipated_sliders */
     }
     return NAN;
@@ -139,30 +227,84 @@ static void defaults(Instance* c)
 {
     memcpy(c->par, P_SCENE, sizeof c->par);
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
+    memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
     c->x_in = c->v_in = 0.0;
     c->start_time = 0.0;
     c->initialized = 0;
     c->phase = INSTANTIATED;
     c->last_step_failed = 0;
-    memset(&c->el, 0, sizeof c->el);
+    {
+        double* mem = c->el.mem; /* the memory's arrays are kept (size_memory resizes them) */
+        int64_t length = c->el.mem_len;
+        memset(&c->el, 0, sizeof c->el);
+        c->el.mem = mem;
+        c->el.mem_len = length;
+    }
     hand_over(c);
+    memcpy(c->el.mp, c->mpar, sizeof c->el.mp);
+    {
+        char buffer[256];
+        const char* problem = size_memory(c, buffer, sizeof buffer);
+        c->memory_failed = problem != NULL;
+        if (problem != NULL) {
+            say(c, ST_ERROR, "instantiation refused: %s", problem);
+            return;
+        }
+    }
+    prandtl_kernel_failed = 0;
     reset(&c->el);
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
+
+/* the checksum of a state: its fixed part up to the checksum, then its memory's state (element.mem_len values,
+ * which the caller knows the blob holds) */
+static uint64_t state_checksum(const State* s)
+{
+    uint64_t hash = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+    const unsigned char* tail = (const unsigned char*)(s + 1);
+    size_t i, n = (size_t)s->element.mem_len * sizeof(double);
+    for (i = 0; i < n; i++) {
+        hash ^= tail[i];
+        hash *= 1099511628211ULL;
+    }
+    return hash;
+}
 
 static void capture(const Instance* c, State* s)
 {
     memset(s, 0, sizeof *s);
     FILL_HEAD(s);
     s->element = c->el;
+    s->element.mem = NULL;
     s->x_in = c->x_in;
     s->v_in = c->v_in;
     s->start_time = c->start_time;
     memcpy(s->par, c->par, sizeof s->par);
     memcpy(s->cbranch, c->cbranch, sizeof s->cbranch);
     s->initialized = c->initialized;
-    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
+    memcpy(s->mpar, c->mpar, sizeof s->mpar);
+    if (c->el.mem_len > 0)
+        memcpy((double*)(s + 1), c->el.mem, (size_t)c->el.mem_len * sizeof(double));
+    s->checksum = state_checksum(s);
+}
+
+/* why the memory of a state blob (its parameters in use and set, its values after the fixed part) cannot be
+ * restored, or NULL (Connector.set_state: memory.check_memory_state) */
+static const char* memory_state_problem(const State* s, char* buffer, size_t size)
+{
+    const Element* e = &s->element;
+    const char* problem;
+    if (!HAS_MEMORY)
+        return memory_values_problem(e->mp, NULL, e->nd, e->mem_len, e->time, buffer, size);
+    problem = memory_problem(e->mp, buffer, size);
+    if (problem == NULL)
+        problem = memory_problem(s->mpar, buffer, size);
+    if (problem != NULL)
+        return problem;
+    if (s->initialized && memcmp(s->mpar, e->mp, sizeof e->mp) != 0) /* fixed: set before initialization */
+        return "its memory's parameters in use are not those set";
+    return memory_values_problem(e->mp, (const double*)(s + 1), e->nd, e->mem_len, e->time, buffer, size);
 }
 
 /* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
@@ -173,7 +315,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const char* problem;
     int i;
     const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
-                                    fnv1a((const unsigned char*)s, offsetof(State, checksum)));
+                                    state_checksum(s));
     if (head != NULL)
         return head;
     if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
@@ -192,6 +334,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     problem = parameter_problem(e->p, e->cs, buffer, size); /* the coefficients in use, as the setters' */
     if (problem == NULL)
         problem = parameter_problem(s->par, s->cbranch, buffer, size);
+    if (problem == NULL) /* the memory's parameters and state */
+        problem = memory_state_problem(s, buffer, size);
     if (problem == NULL && STACK) { /* the memory stack: stack.restore's rules, compiled (state_check) */
         double* scratch = (double*)malloc(STATE_SCRATCH * sizeof(double));
         int64_t code;
@@ -205,6 +349,17 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         if (code != 0)
             return STATE_CHECK_REASONS[code - 1];
     }
+    if (problem == NULL) { /* Connector.set_state: its force (the memory's with it) and energy are numbers */
+        const double* mem = HAS_MEMORY ? (const double*)(s + 1) : e->mp;
+        double force, energy;
+        prandtl_kernel_failed = 0;
+        force = KERNEL(e, cforce)(ARRAYS(e, mem), e->x, e->v, e->time);
+        energy = KERNEL(e, cstored)(ARRAYS(e, mem), e->x);
+        if (prandtl_kernel_failed || !(isfinite(force) && isfinite(energy))) {
+            snprintf(buffer, size, "it has x = %.17g, v = %.17g: its force or energy is not finite", e->x, e->v);
+            return buffer;
+        }
+    }
     return problem;
 }
 
@@ -212,42 +367,70 @@ static int restore(Instance* c, const State* s)
 {
     char buffer[256];
     const char* problem = state_problem(s, buffer, sizeof buffer);
+    if (problem == NULL && HAS_MEMORY) /* the memory's arrays sized for the state's */
+        problem = allocate_memory(c, s->element.mem_len, buffer, sizeof buffer);
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
     }
-    c->el = s->element;
+    {
+        double* mem = c->el.mem; /* the instance's arrays, with the state's values */
+        c->el = s->element;
+        c->el.mem = mem;
+        if (HAS_MEMORY) {
+            memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
+            forget_memory_cache(mem);
+        }
+    }
     c->x_in = s->x_in;
     c->v_in = s->v_in;
     c->start_time = s->start_time;
     memcpy(c->par, s->par, sizeof c->par);
     memcpy(c->cbranch, s->cbranch, sizeof c->cbranch);
+    memcpy(c->mpar, s->mpar, sizeof c->mpar);
     return ST_OK;
 }
 
 /* ------------------------------------------------------------------ stepping */
 
+/* fmi2/3ExitInitializationMode: the coefficients checked and handed over, the memory sized for its parameters, the
+ * element moved from x = 0 to the first input (connector_slave.exit_initialization_mode) */
 static int core_exit_initialization(Instance* c)
 {
-    char buffer[512];
+    char buffer[512], shown[40];
     const char* problem;
     if (c->phase != INITIALIZING) {
         say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
         return ST_ERROR;
     }
     problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
+    if (problem == NULL)
+        problem = memory_problem(c->mpar, buffer, sizeof buffer);
     if (problem == NULL && !(isfinite(c->x_in) && isfinite(c->v_in))) {
         snprintf(buffer, sizeof buffer, "input x = %.17g, v = %.17g refused: the motion must be finite", c->x_in,
                  c->v_in);
         problem = buffer;
     }
+    if (problem == NULL) {
+        hand_over(c);
+        memcpy(c->el.mp, c->mpar, sizeof c->el.mp); /* fixed: handed over here only */
+        problem = size_memory(c, buffer, sizeof buffer); /* the delay's buffer for the tau set */
+    }
+    if (problem == NULL) {
+        char why[400];
+        reset(&c->el);
+        c->el.time = c->start_time;
+        if (delay_time_problem(memory_of(&c->el), c->el.time, c->el.time, why, sizeof why) != NULL) {
+            snprintf(buffer, sizeof buffer, "the sample at t = %s s refused: %s",
+                     python_repr(c->el.time, shown, sizeof shown), why);
+            problem = buffer;
+            reset(&c->el);
+        }
+    }
     if (problem != NULL) {
         say(c, ST_ERROR, "initialization refused: %s", problem);
         return ST_ERROR;
     }
-    hand_over(c);
-    reset(&c->el);
-    c->el.time = c->start_time;
     move_to(&c->el, c->x_in, c->v_in, c->el.time); /* from x = 0 to the first input, monotonically */
     c->initialized = 1;
     c->phase = STEPPING;
@@ -272,10 +455,10 @@ static const Var* unshowable_output(Instance* c, double* value)
 /* fmi2/3DoStep; the FMI layer checked the call sequence */
 static int core_do_step(Instance* c, double t, double H)
 {
-    char buffer[512];
+    char buffer[512], why[400], shown[40];
     const char* problem;
     const Var* overflowed;
-    double value;
+    double value, time;
     if (c->phase != STEPPING) {
         say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
             "Terminate");
@@ -297,13 +480,18 @@ static int core_do_step(Instance* c, double t, double H)
             c->v_in);
         return ST_DISCARD;
     }
+    /* the input sample belongs to the communication point: commit it (the master's clock only moves forward) */
+    time = t > c->el.time ? t : c->el.time;
+    if (delay_time_problem(memory_of(&c->el), c->el.time, time, why, sizeof why) != NULL) { /* Connector.move_to */
+        say(c, ST_DISCARD, "step from t = %.17g refused: the sample at t = %s s refused: %s; the state is unchanged",
+            t, python_repr(time, shown, sizeof shown), why);
+        return ST_DISCARD;
+    }
     copy_element(&c->saved, &c->el);
     hand_over(c);
-    /* the input sample belongs to the communication point: commit it (the master's clock only moves forward) */
-    move_to(&c->el, c->x_in, c->v_in, t > c->el.time ? t : c->el.time);
+    move_to(&c->el, c->x_in, c->v_in, time);
     overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
     if (overflowed != NULL || !(isfinite(c->el.x) && isfinite(c->el.v))) {
-        double time = c->el.time;
         copy_element(&c->el, &c->saved);
         say(c, ST_DISCARD, "the step to t = %.17g with x = %.17g, v = %.17g refused: %s would be %.17g, not finite "
             "(an overflow); the state is unchanged", time, c->x_in, c->v_in,
@@ -316,8 +504,16 @@ static int core_do_step(Instance* c, double t, double H)
 
 static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
 {
-    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_PARAM || var->what == W_CBRANCH)) {
+    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_PARAM || var->what == W_CBRANCH ||
+                         var->what == W_MEMORY)) {
         say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
+        return ST_ERROR;
+    }
+    if (var->what == W_MEMORY && c->initialized && value != c->mpar[var->index]) { /* connector_slave._set_fixed */
+        char shown[40];
+        say(c, ST_ERROR, "parameter %s = %s refused: %s is fixed (an effect with memory) and cannot change after "
+            "initialization; the connector is unchanged", MEM_NAMES[var->index],
+            python_repr(value, shown, sizeof shown), MEM_NAMES[var->index]);
         return ST_ERROR;
     }
     return ST_OK;
@@ -332,6 +528,8 @@ static void core_set_float(Instance* c, const Var* var, double value)
         c->v_in = value;
     else if (var->what == W_PARAM)
         c->par[var->index] = value;
+    else if (var->what == W_MEMORY)
+        c->mpar[var->index] = value; /* checked when handed over (the next exit of initialization mode) */
     else
         for (j = 0; j < NB; j++)
             if (var->index < 0 || var->index == j)

@@ -159,49 +159,59 @@ def initial(p, kp, etap, csp, up, mp, msp, nd, xv, kind, lk, lt, lf, nl):
 
 
 _CONNECTOR_TEMPLATE = '''
-def _model(p, kp, etap, csp):
-    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, (None, None, None))
+def _model(p, kp, etap, csp, mp, msp, nd):
+    return ({m}, {k0}, {k3}, {c}, {k}, {eta}, {cs}, {friction}, {memory})
 
 
-def move(p, kp, etap, csp, up, x_start, xp, vp, dp, fp, accountp):
-    drive(_model(p, kp, etap, csp), {u}, x_start, carray(xp, (1,)), carray(vp, (1,)), carray(dp, (1,)),
-          carray(fp, (1,)), carray(accountp, (3,)))
+def move(p, kp, etap, csp, up, mp, msp, nd, x_start, v_start, t_start, xp, vp, dp, fp, accountp):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
+    if {has_memory}:  # connector.Connector.move_to: the memory moves along the path too
+        drive_with_memory(model, {u}, x_start, v_start, t_start, carray(xp, (1,)), carray(vp, (1,)),
+                          carray(dp, (1,)), carray(fp, (1,)), carray(accountp, (3,)))
+    else:
+        drive(model, {u}, x_start, carray(xp, (1,)), carray(vp, (1,)), carray(dp, (1,)), carray(fp, (1,)),
+              carray(accountp, (3,)))
     return 0
 
 
-def cforce(p, kp, etap, csp, up, x, v):
-    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
-    return smooth_force(x, v, k0, k3, c) + branch_force(k, {u})
+def cforce(p, kp, etap, csp, up, mp, msp, nd, x, v, t):
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
+    return smooth_force(x, v, k0, k3, c) + branch_force(k, {u}) + force_now(memory, t, x, v)
 
 
-def ctangent(p, kp, etap, csp, up, x, direction):
-    return tangent(_model(p, kp, etap, csp), x, {u}, direction)
+def ctangent(p, kp, etap, csp, up, mp, msp, nd, x, direction):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
+    return tangent(model, x, {u}, direction) + tangent_now(model[8], direction)
 
 
-def cstored(p, kp, etap, csp, up, x):
-    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp)
+def cstored(p, kp, etap, csp, up, mp, msp, nd, x):
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
     return stored(x, k0, k3, k, {u})
 
 
-def cinitial(p, kp, etap, csp, up):
-    k = _model(p, kp, etap, csp)[4]
+def cinitial(p, kp, etap, csp, up, mp, msp, nd):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
+    k = model[4]
     u = {u}
     if {stack}:  # stack.fresh_state(params, 0.0) in place
         start(k, 0.0, u)
+{fresh}
     return 1
 
 
 def elongations(p, kp, etap, csp, up, outp):
     if {has_branches}:
-        write_elongations(_model(p, kp, etap, csp)[4], {u}, carray(outp, ({n},)))
+        write_elongations({k}, {u}, carray(outp, ({n},)))
     return 0
 '''
+# the connector's arrays are the element's (p, k, eta, cs, u, mp, ms, nd); its elongations take none of the memory
+# (the FMI 3.0 layer calls them with the branches' arrays alone)
 _CONNECTOR_SIGNATURES = {
-    "move": f"types.int64({', '.join([_PTR] * 5)}, types.float64, {', '.join([_PTR] * 5)})",
-    "cforce": f"types.float64({', '.join([_PTR] * 5)}, types.float64, types.float64)",
-    "ctangent": f"types.float64({', '.join([_PTR] * 5)}, types.float64, types.float64)",
-    "cstored": f"types.float64({', '.join([_PTR] * 5)}, types.float64)",
-    "cinitial": f"types.int64({', '.join([_PTR] * 5)})",
+    "move": f"types.int64({_ELEMENT}, types.float64, types.float64, types.float64, {', '.join([_PTR] * 5)})",
+    "cforce": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64)",
+    "ctangent": f"types.float64({_ELEMENT}, types.float64, types.float64)",
+    "cstored": f"types.float64({_ELEMENT}, types.float64)",
+    "cinitial": f"types.int64({_ELEMENT})",
     "elongations": f"types.int64({', '.join([_PTR] * 6)})",
 }
 
@@ -545,20 +555,25 @@ def _compile_fold(scene):
 
 def _compile_connector(scene, shape) -> list:
     """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cforce``, ``ctangent``, ``cstored``,
-    ``cinitial``, ``elongations``, each ``_<variant>``."""
+    ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
+    ``drive_with_memory``, the force and the tangent add the memory's (``memory.force_now``, ``tangent_now``) and
+    ``cinitial`` makes the memory fresh, as ``connector.Connector`` does."""
     from numba import carray, cfunc, njit, types
 
-    from ..kernels.drive import drive, tangent
+    from ..kernels.drive import drive, drive_with_memory, tangent
     from ..kernels.energy import stored
     from ..kernels.play import branch_force, write_elongations
     from ..kernels.smooth import smooth_force
     from ..kernels.stack import start
+    from ..memory import force_now, tangent_now
 
     compiled = []
+    has_memory = "True" if memory_layout(scene)["names"] else "False"
     for suffix, damped in variants(scene):
-        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", **shape)
-        namespace = dict(carray=carray, drive=drive, tangent=tangent, stored=stored, branch_force=branch_force,
-                         write_elongations=write_elongations, smooth_force=smooth_force, start=start)
+        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", has_memory=has_memory, **shape)
+        namespace = dict(carray=carray, np=np, drive=drive, drive_with_memory=drive_with_memory, tangent=tangent,
+                         stored=stored, branch_force=branch_force, write_elongations=write_elongations,
+                         smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now)
         exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)
         namespace["_model"] = njit(inline="always")(namespace["_model"])
         for name, signature in _CONNECTOR_SIGNATURES.items():
