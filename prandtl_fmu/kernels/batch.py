@@ -42,6 +42,7 @@ from numba.extending import overload
 
 from .play import branch_force
 from .friction import reaction as reaction_of
+from ..memory import prepare
 
 # columns of ``real``
 M, K0, K3, C, X0, V0, H, REST, OFFSET, AMPLITUDE, OMEGA, ALPHA, ALPHA_KINETIC, STRIBECK, BELT = range(15)
@@ -149,6 +150,7 @@ def summary_loop(step):
                     t, size = (full_steps + index[i, TAIL_STEPS]) * h, rest
                 else:
                     break
+                prepare(model[8], size)  # the memory's coefficients of this step (none without memory)
                 x1, v1, s1 = step(model, load, t, size, x, v, s, u, energy)
                 if not (abs(x1) < np.inf and abs(v1) < np.inf):
                     failed_at, failed_step = t, size

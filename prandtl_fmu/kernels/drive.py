@@ -12,7 +12,7 @@ from .series import FLOW, move_branches
 from .stack import X as stack_x
 from .stack import move as stack_move
 from .smooth import elastic_stiffness, smooth_force
-from ..memory import force_now, record
+from ..memory import force_now, prepare, record
 
 
 @kernel
@@ -41,6 +41,7 @@ def drive_with_memory(model, u, x_start, v_start, t_start, xs, vs, durations, fo
     x, v, t = x_start, v_start, t_start
     for j in range(xs.shape[0]):
         move_branches(k, eta, cs, u, xs[j] - x, durations[j], FLOW, energy)
+        prepare(memory, durations[j])
         record(memory, t, durations[j], x, v, xs[j], vs[j], xs[j] - x)
         x, v, t = xs[j], vs[j], t + durations[j]
         forces[j] = smooth_force(x, v, k0, k3, c) + branch_force(k, u) + force_now(memory, t, x, v)

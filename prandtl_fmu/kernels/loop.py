@@ -28,6 +28,7 @@ from .._jit import generic_kernel
 from .energy import kinetic, stored
 from .play import branch_force, write_elongations
 from .friction import reaction
+from ..memory import prepare
 
 
 def time_loop(step):
@@ -52,6 +53,7 @@ def time_loop(step):
         """
         m, k0, k3, c, k, eta, cs, friction, memory = model
         s = branch_force(k, u)
+        prepare(memory, h)  # the memory's coefficients of h, once (memory/__init__.py)
         p = 0
         for j in range(out.shape[0]):
             for _ in range(steps_per_row):

@@ -117,6 +117,20 @@ def put_back(memory, copy) -> None:
 
 
 @kernel
+def prepare(memory, h):
+    """Before steps of size ``h``: the history's coefficients of that h (``history.prepare``). Every time loop
+    calls it before its steps (a step without it is refused: its force is NaN)."""
+    _prepare_history(memory[1], h)
+
+
+@kernel
+def _prepare_history(part, h):
+    if part is None:
+        return
+    history.prepare(part, h)
+
+
+@kernel
 def linear_force(memory, t, h, x, v):
     """(A, B): the delay's and the history's force at the end of a step from (t, x, v) as A + B w, w the
     increment of x (v1 = w / h): implicit in the new state."""

@@ -101,8 +101,12 @@ def weights(a):
     return e, phi0, g1 - phi0
 
 
-@inline_kernel
-def _coefficients(n, data, h):
+@kernel
+def prepare(part, h):
+    """Cache E, phi0, phi1 of a step ``h`` (recomputed only when h changes). Called by the time loops before
+    their steps (``memory.prepare``), never inside a step: the steps' code then holds no call, which measured
+    9 ns of projected's 65 ns step."""
+    (n, on_v), data = part
     if data[0] != h:
         for j in range(n):
             e, p0, p1 = weights(data[1 + R * n + j] * h)
@@ -114,9 +118,11 @@ def _coefficients(n, data, h):
 
 @inline_kernel
 def terms(part, h, y_now):
-    """(A, B): the history force after a step of h = A + B y(t + h)."""
+    """(A, B): the history force after a step of h = A + B y(t + h); NaN if :func:`prepare` was not called for
+    this h (a loud failure of the step, never a wrong number)."""
     (n, on_v), data = part
-    _coefficients(n, data, h)
+    if data[0] != h:
+        return np.nan, np.nan
     a = 0.0
     b = 0.0
     for j in range(n):
@@ -137,8 +143,11 @@ def force(part):
 
 @inline_kernel
 def record(part, h, y0, y1):
+    """z_j after a step of h from y0 to y1 (nothing if :func:`prepare` was not called for this h: the step's
+    force was NaN, and the step is refused)."""
     (n, on_v), data = part
-    _coefficients(n, data, h)
+    if data[0] != h:
+        return
     for j in range(n):
         k = 1 + Z * n + j
         data[k] = data[1 + E * n + j] * data[k] + data[1 + P0 * n + j] * y0 + data[1 + P1 * n + j] * y1
