@@ -20,7 +20,7 @@ sys.path.insert(0, ROOT)
 from common import write_rows  # noqa: E402
 
 from prandtl_fmu import STEPPERS, load_scene, simulate  # noqa: E402
-from prandtl_fmu.driver import ElementError  # noqa: E402
+from prandtl_fmu.stepping import ElementError  # noqa: E402
 from prandtl_fmu.stability import StabilityWarning  # noqa: E402
 from prandtl_fmu.steppers import get_stepper  # noqa: E402
 

@@ -16,7 +16,7 @@ __version__ = "0.1.0"
 
 # The names above are imported when first used (PEP 562): ``import prandtl_fmu.scene`` (or the command
 # line's ``scenes``, ``--version``) does not define every kernel.
-_HOMES = {"Element": "driver", "Result": "driver", "simulate": "driver", "STEPPERS": "steppers",
+_HOMES = {"Element": "element", "Result": "driver", "simulate": "driver", "STEPPERS": "steppers",
           "Scene": "scene", "SceneError": "scene", "load_scene": "scene", "parse_scene": "scene"}
 
 

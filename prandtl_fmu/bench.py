@@ -388,7 +388,7 @@ def plots(rows, folder):
 
 def run(folder: str, quick: bool = False, progress=None) -> str:
     """Run the benchmark and write its files into ``folder``; return the report (Markdown)."""
-    from .driver import _progress_bar
+    from .stepping import _progress_bar
 
     os.makedirs(folder, exist_ok=True)
     cases = [(10, 20.0), (100, 20.0)] if quick else [(10, 500.0), (100, 500.0), (1500, 500.0)]

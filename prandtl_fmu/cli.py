@@ -66,7 +66,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .driver import ENERGY_COLUMNS
+    from .stepping import ENERGY_COLUMNS
     from .steppers import STEPPERS
 
     from . import __version__
@@ -418,7 +418,8 @@ def _sweep(args) -> int:
 
 
 def _run(args) -> int:
-    from .driver import ElementError, energy_columns, simulate_chunks
+    from .driver import simulate_chunks
+    from .stepping import ElementError, energy_columns
     from .resources import ResourceError, check_disk
 
     try:
@@ -491,7 +492,7 @@ def _run(args) -> int:
 
 
 def _column_count(scene, args) -> int:
-    from .driver import energy_columns
+    from .stepping import energy_columns
     from .network.model import NetworkScene
 
     if isinstance(scene, NetworkScene):
@@ -503,7 +504,7 @@ def _column_count(scene, args) -> int:
 
 def _run_network(args, scene) -> int:
     """``run`` for a network scene: the columns time, x_<node>, v_<node>, F, reaction (network/driver.py)."""
-    from .driver import ElementError
+    from .stepping import ElementError
     from .network.driver import simulate_chunks
 
     try:

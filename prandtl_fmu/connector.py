@@ -28,8 +28,10 @@ from typing import Optional
 
 import numpy as np
 
-from .driver import (ElementError, OutputMemo, branch_state, number_list, plain_number, choose_branch_kernel, compile_model,
-                     restore_branch_state, with_scene_coefficients, _smooth_model)
+from .compiled import (branch_state, choose_branch_kernel, compile_model, restore_branch_state,
+                       with_scene_coefficients, _smooth_model)
+from .saved_state import number_list, plain_number
+from .stepping import ElementError, OutputMemo
 from .kernels import stack
 from .kernels.drive import drive, drive_with_memory, preview, tangent
 from .memory import (check_memory_state, copy_memory, force_now, has_memory, memory_state, put_back,

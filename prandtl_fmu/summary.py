@@ -43,8 +43,8 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from .driver import (ElementError, OutputGrid, choose_branch_kernel, compile_loop, compile_model,
-                     friction_model, initial_state, _failure, _smooth_model)
+from .compiled import choose_branch_kernel, compile_loop, compile_model, friction_model, _smooth_model
+from .stepping import ElementError, OutputGrid, initial_state, _failure
 from .memory import NONE as NO_MEMORY, present as memory_effects
 from .kernels import batch as packed
 from .loads import HarmonicLoad
@@ -366,7 +366,8 @@ def _noisy_run(outcome: Outcome, scene: Scene, name: str, quantities: list, hist
     an output row after every step when a peak or loop_area is asked for (the same steps t_p = p h as the
     scene's own grid, so the same numbers), else on the scene's grid; the peaks, the final state and the
     energies from those rows, the late averages and the history from the rows of the scene's output grid."""
-    from .driver import energy_columns, simulate
+    from .driver import simulate
+    from .stepping import energy_columns
 
     try:
         problem = summary_problem(scene, name, quantities)

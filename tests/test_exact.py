@@ -137,7 +137,7 @@ def test_exact_keeps_an_energy_account():
 def test_the_element_s_energy_account_is_booked_by_exact_and_survives_a_state_round_trip(series):
     """exact books work and dissipation like every stepper (no NaN any more): an element's account continues
     through a switch to exact and back, survives plain JSON (get_state / set_state), and a reset zeroes it."""
-    from prandtl_fmu.driver import Element
+    from prandtl_fmu.element import Element
 
     branches = {"k": [0.5, 0.3], "eta": [0.1, 0.3], "c": [0.4, 2.0]} if series else None
     element = Element(make_scene(cubic=None, **({"branches": branches} if branches else {})), stepper="implicit")

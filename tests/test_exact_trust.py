@@ -12,7 +12,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from prandtl_fmu import simulate
-from prandtl_fmu.driver import Element, ElementError
+from prandtl_fmu.element import Element
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.loads import plus
 from prandtl_fmu.steppers import exact
 

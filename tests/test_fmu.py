@@ -12,7 +12,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from prandtl_fmu import Element, load_scene, parse_scene, simulate
-from prandtl_fmu.driver import ENERGY_COLUMNS, energy_columns
+from prandtl_fmu.stepping import ENERGY_COLUMNS, energy_columns
 from prandtl_fmu.fmu.build import build_fmu
 from prandtl_fmu.fmu.documentation import equations
 from prandtl_fmu.steppers import STEPPERS

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import Element, load_scene
-from prandtl_fmu.driver import ENERGY_COLUMNS
+from prandtl_fmu.stepping import ENERGY_COLUMNS
 from prandtl_fmu.fmu.build import build_fmu
 from fmpy.fmi1 import FMICallException
 

@@ -21,7 +21,7 @@ import pytest
 
 from prandtl_fmu import load_scene
 from prandtl_fmu.connector import Connector
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 
 from .conftest import base_tables, scene_text
 

@@ -9,7 +9,7 @@ import pytest
 
 from prandtl_fmu import Element, STEPPERS, load_scene, parse_scene, simulate
 from prandtl_fmu.cli import main
-from prandtl_fmu.driver import ElementError
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.effects import Branches, Mass
 from prandtl_fmu.loads import HarmonicLoad
 from prandtl_fmu.stability import StabilityWarning, stability_problem

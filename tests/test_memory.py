@@ -13,7 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from prandtl_fmu.driver import Element, simulate
+from prandtl_fmu.driver import simulate
+from prandtl_fmu.element import Element
 from prandtl_fmu.scene import SceneError, parse_scene
 
 slow = pytest.mark.slow
@@ -536,7 +537,7 @@ def test_the_adversarial_reviews_cases_stay_fixed():
     solved increment (with a stiff Dahl law the equilibrium missed by sigma ulp(x)); memory coefficients set on a
     massless element at its start that kept the old equilibrium."""
     from prandtl_fmu.connector import Connector
-    from prandtl_fmu.driver import ElementError
+    from prandtl_fmu.stepping import ElementError
 
     s = scene(QUASI_STATIC.format(sigma=50.0), step=1e-3, stop=3.0)
     element = Element(s)

@@ -7,7 +7,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from prandtl_fmu import load_scene
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 from prandtl_fmu.fmu.build import build_fmu
 
 from .fmu_tools import Slave

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import load_scene, parse_scene, simulate
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 from prandtl_fmu.native.kernels import NATIVE_STEPPERS
 
 from .conftest import SCENES as SCENE_FOLDER, base_tables, scene_text

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import parse_scene
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 
 from .conftest import base_tables, scene_text
 from .native_host import Extracted, compile_host, run_host

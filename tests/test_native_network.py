@@ -472,7 +472,7 @@ def test_a_step_with_no_equilibrium_is_discarded_with_the_library_s_reason(built
     steps on under a force the chain can hold."""
     from fmpy.fmi1 import FMICallException
 
-    from prandtl_fmu.driver import ElementError
+    from prandtl_fmu.stepping import ElementError
 
     fmu, _ = built["massless", 2, None, False, False]
     scene = scene_of("massless")

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import load_scene, parse_scene, simulate
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 from prandtl_fmu.loads import WhiteNoise
 from prandtl_fmu.native.kernels import applicable, noise_refusal
 from prandtl_fmu.network import NetworkElement

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import load_scene, parse_scene
-from prandtl_fmu.driver import Element
+from prandtl_fmu.element import Element
 
 from .conftest import ROOT, base_tables, scene_text
 from .test_native import ENERGIES, SOLVER, same, step_both, steppers_of

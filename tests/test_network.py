@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from prandtl_fmu.driver import ElementError
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.driver import simulate as simulate_element
 from prandtl_fmu.network import NetworkConnector, NetworkElement, NetworkScene, simulate, simulate_chunks
 from prandtl_fmu.scene import SceneError, parse_scene

@@ -13,7 +13,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from prandtl_fmu import load_scene
-from prandtl_fmu.driver import ElementError
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.fmu.build import build_fmu
 from prandtl_fmu.fmu.documentation import network_equations
 from prandtl_fmu.network import NetworkConnector, NetworkElement, simulate

@@ -3,7 +3,8 @@ every check is made against the noise in use, not the scene's own (issue 34; the
 import numpy as np
 import pytest
 
-from prandtl_fmu.driver import Element, ElementError
+from prandtl_fmu.element import Element
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.loads import WhiteNoise, noise_problem
 from prandtl_fmu.network import NetworkElement
 from prandtl_fmu.scene import SceneError, parse_scene

@@ -401,7 +401,7 @@ def compare_with_the_library(run, fmu: Path, fmi: int, label: str, network: bool
     host ``run(argv, stdin) -> stdout`` and in the library's Element (a network's: NetworkElement); every output
     after every step, bit for bit."""
     from prandtl_fmu import load_scene
-    from prandtl_fmu.driver import Element
+    from prandtl_fmu.element import Element
     from prandtl_fmu.native.kernels import applicable
 
     description = Description(fmu, fmi)

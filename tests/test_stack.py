@@ -139,7 +139,7 @@ def test_steppers_give_the_same_motion_with_the_stack_over_a_million_steps(stepp
         load={"kind": "table", "time": np.concatenate([[0.0], times]),
               "force": rng.uniform(-1.5, 1.5, len(times) + 1)},
         solver={"stepper": stepper, "step": 1e-3, "stop_time": 1000.0, "output_interval": 1.0})
-    from prandtl_fmu.driver import choose_branch_kernel
+    from prandtl_fmu.compiled import choose_branch_kernel
 
     assert choose_branch_kernel(scene, stepper) == "stack"
     fast = simulate(scene, states=True, energy=True)  # chosen automatically: the stack

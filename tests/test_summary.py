@@ -8,7 +8,8 @@ import pytest
 
 from prandtl_fmu import parse_scene
 from prandtl_fmu import summary as summary_module
-from prandtl_fmu.driver import ElementError, simulate
+from prandtl_fmu.driver import simulate
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.scene import SceneError
 from prandtl_fmu.stability import StabilityWarning
 from prandtl_fmu.steppers import STEPPERS

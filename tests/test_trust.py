@@ -12,7 +12,7 @@ import pytest
 
 from prandtl_fmu import Element, parse_scene, simulate
 from prandtl_fmu import driver
-from prandtl_fmu.driver import ElementError
+from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.effects import Damper, Mass, Spring
 from prandtl_fmu.kernels.increment import solve_increment
 from prandtl_fmu.kernels import stack
@@ -513,7 +513,7 @@ def test_outputs_read_from_the_memo_are_those_of_the_state_after_every_kind_of_c
     stiffness equal a fresh computation from the state."""
     from prandtl_fmu import Element
     from prandtl_fmu.connector import Connector
-    from prandtl_fmu.driver import _energy_columns
+    from prandtl_fmu.stepping import _energy_columns
     from prandtl_fmu.kernels.drive import tangent
 
     element = Element(make_scene())

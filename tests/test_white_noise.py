@@ -295,7 +295,7 @@ def test_paper_scene_with_noise_equals_a_plain_implementation(stepper):
     text = text.replace("step = 1e-3", "step = 0.015625").replace("output_interval = 0.1",
                                                                    "output_interval = 0.015625")
     scene = parse_scene(text, "<paper>")
-    from prandtl_fmu.driver import choose_branch_kernel
+    from prandtl_fmu.compiled import choose_branch_kernel
 
     assert choose_branch_kernel(scene, stepper) == "stack"
     result = simulate(scene)

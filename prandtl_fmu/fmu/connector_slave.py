@@ -31,7 +31,7 @@ from pythonfmu import Fmi2Causality, Fmi2Variability, Integer
 
 from .. import __version__
 from ..connector import Connector
-from ..driver import ElementError
+from ..stepping import ElementError
 from ..scene import coefficient_problem
 from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
 from .description import RealVariable, complete

@@ -27,7 +27,7 @@ import copy
 from pythonfmu import Fmi2Causality, Fmi2Variability
 
 from .. import __version__
-from ..driver import ElementError
+from ..stepping import ElementError
 from ..network import NetworkConnector
 from ..scene import SceneError
 from .common import DBL_MAX, SMALLEST, Refused, SlaveBase, finite_number

@@ -33,7 +33,7 @@ depends directly on F (a master that sets F sees the outputs change at the next 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, String
 
 from .. import __version__
-from ..driver import UNCHANGED, ElementError
+from ..stepping import UNCHANGED, ElementError
 from ..loads import force_at
 from ..network import NetworkElement
 from ..network.model import NETWORK_STEPPERS, stepper_problem

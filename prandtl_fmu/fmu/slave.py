@@ -40,7 +40,8 @@ from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, String
 from pythonfmu.enums import Fmi2Status
 
 from .. import __version__
-from ..driver import Element, ElementError
+from ..element import Element
+from ..stepping import ElementError
 from ..loads import force_at
 from ..steppers import STEPPERS
 from .common import DBL_MAX, SMALLEST, NoiseParameters, SlaveBase, finite_number

@@ -19,7 +19,8 @@ import numpy as np
 
 from . import kernels
 from .model import NetworkScene, stepper_problem
-from ..driver import UNCHANGED, ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration, with_noise
+from ..compiled import with_noise
+from ..stepping import UNCHANGED, ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration
 from ..loads import force_at, held, noise_problem, plus, with_white_noise
 from ..noise import new_cache
 from ..scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, SceneError

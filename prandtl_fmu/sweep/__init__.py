@@ -178,7 +178,7 @@ def _run(client, the_plan: Plan, runs_per_task: int, store: Optional[Store], pro
     import pyarrow as pa
     from distributed import as_completed
 
-    from ..driver import _progress_bar
+    from ..stepping import _progress_bar
 
     done = store.finished() if store is not None else set()
     todo = [(first, stop) for first, stop in the_plan.tasks(runs_per_task) if first not in done]
