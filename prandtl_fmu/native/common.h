@@ -263,15 +263,16 @@ static const char* memory_problem(const double* mp, char* buffer, size_t size)
     int i;
     for (i = 0; i < N_MEMORY_PARAMS; i++) {
         double value = mp[i];
-        if (!isfinite(value)) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", MEM_NAMES[i], value);
+        if (!isfinite(value)) { /* (the values in the library's words: Python's repr) */
+            snprintf(buffer, size, "parameter %s: must be finite, got %s", MEM_NAMES[i],
+                     python_repr(value, a, sizeof a));
             return buffer;
         }
         if (magnitude_problem(MEM_NAMES[i], value, 0, buffer, size))
             return buffer;
         if ((MEM_RULE[i] == 1 && !(value > 0)) || (MEM_RULE[i] == 2 && value < 0)) {
-            snprintf(buffer, size, "parameter %s: must be %s 0, got %.17g", MEM_NAMES[i], MEM_RULE[i] == 1 ? ">" : ">=",
-                     value);
+            snprintf(buffer, size, "parameter %s: must be %s 0, got %s", MEM_NAMES[i], MEM_RULE[i] == 1 ? ">" : ">=",
+                     python_repr(value, a, sizeof a));
             return buffer;
         }
     }

@@ -73,17 +73,17 @@ static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
 static double* memory_of(const Element* e) { return e->mem != NULL ? e->mem : (double*)e->mp; } /* (none: unread) */
 /* the arrays every kernel takes: the coefficients, the branches', the memory's (kernels._CONNECTOR_SIGNATURES);
- * ARRAYS(e, mem) with the memory's state ``mem`` (a state blob's: read only, by the force and the energy) */
-#define ARRAYS(e, mem) (double*)(e)->p, (double*)K, (double*)ETA, (double*)(e)->cs, (double*)(e)->u, \
+ * KERNEL_ARGS(e, mem) with the memory's state ``mem`` (a state blob's: read only, by the force and the energy) */
+#define KERNEL_ARGS(e, mem) (double*)(e)->p, (double*)K, (double*)ETA, (double*)(e)->cs, (double*)(e)->u, \
                        (double*)(e)->mp, (double*)(mem), (e)->nd
-#define ARRAYS_OF(e) ARRAYS(e, memory_of(e))
+#define KERNEL_ARGS_OF(e) KERNEL_ARGS(e, memory_of(e))
 #define KERNEL(e, name) (damped(e) ? name##_c : name##_n)
 
 /* Connector.move_to: commit (x, v) at ``time`` */
 static void move_to(Element* e, double x, double v, double time)
 {
     double dx = x - e->x, xs = x, vs = v, duration = time - e->time, force;
-    KERNEL(e, move)(ARRAYS_OF(e), e->x, e->v, e->time, &xs, &vs, &duration, &force, e->account);
+    KERNEL(e, move)(KERNEL_ARGS_OF(e), e->x, e->v, e->time, &xs, &vs, &duration, &force, e->account);
     if (damped(e))
         e->account[2] += e->p[P_C] * (e->v * e->v + e->v * v + v * v) * (time - e->time) / 3.0;
     if (dx != 0)
@@ -97,7 +97,7 @@ static void move_to(Element* e, double x, double v, double time)
 static void reset(Element* e)
 {
     memcpy(e->u, U0, sizeof e->u);
-    KERNEL(e, cinitial)(ARRAYS_OF(e));
+    KERNEL(e, cinitial)(KERNEL_ARGS_OF(e));
     e->x = e->v = e->time = 0.0;
     e->direction = 1.0;
     memset(e->account, 0, sizeof e->account);
@@ -211,13 +211,13 @@ static double real_value(Instance* c, const Var* var)
     preview = previewed(c);
     switch (var->what) {
     case W_FORCE:
-        return KERNEL(preview, cforce)(ARRAYS_OF(preview), preview->x, preview->v, preview->time);
+        return KERNEL(preview, cforce)(KERNEL_ARGS_OF(preview), preview->x, preview->v, preview->time);
     case W_STIFFNESS:
         direction = preview->v == 0 ? preview->direction : copysign(1.0, preview->v);
-        return KERNEL(preview, ctangent)(ARRAYS_OF(preview), preview->x, direction);
+        return KERNEL(preview, ctangent)(KERNEL_ARGS_OF(preview), preview->x, direction);
     case W_ENERGY:
         if (var->index == 1)
-            return KERNEL(preview, cstored)(ARRAYS_OF(preview), preview->x);
+            return KERNEL(preview, cstored)(KERNEL_ARGS_OF(preview), preview->x);
         return preview->account[1]; /* dissipated_sliders */
     }
     return NAN;
@@ -353,8 +353,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         const double* mem = HAS_MEMORY ? (const double*)(s + 1) : e->mp;
         double force, energy;
         prandtl_kernel_failed = 0;
-        force = KERNEL(e, cforce)(ARRAYS(e, mem), e->x, e->v, e->time);
-        energy = KERNEL(e, cstored)(ARRAYS(e, mem), e->x);
+        force = KERNEL(e, cforce)(KERNEL_ARGS(e, mem), e->x, e->v, e->time);
+        energy = KERNEL(e, cstored)(KERNEL_ARGS(e, mem), e->x);
         if (prandtl_kernel_failed || !(isfinite(force) && isfinite(energy))) {
             snprintf(buffer, size, "it has x = %.17g, v = %.17g: its force or energy is not finite", e->x, e->v);
             return buffer;
