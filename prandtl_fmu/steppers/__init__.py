@@ -23,6 +23,9 @@ A stepper module defines
 * a docstring with the update formula and the stability of the scheme.
 
 To add a scheme: write one such module and add it to ``STEPPERS`` below.
+``exact`` is three modules: ``exact.py`` (the registered stepper: plain branches, and the choice of loop),
+``exact_series.py`` (branches with series dashpots) and ``exact_common.py`` (what both use: the matrix
+exponential, the step's budgets and the words of a failed step).
 """
 from . import exact, implicit, projected, symplectic, verlet
 

@@ -9,7 +9,7 @@ y' = A y of dimension 6 + n:
     y = (xi, v, load (2 states), load and the spring's force at the phase's start / m, the friction / m, u_1..u_n)
 
 with xi = x - x(t_e) (lengths stay exact relative to the phase's start), the harmonic or ramp part of the load
-generated as in ``exact.py``, and y(tau) = expm(A tau) y(0) (``exact._expm_times``: one scaled Taylor series
+generated as in ``exact.py``, and y(tau) = expm(A tau) y(0) (``exact_common._expm_times``: one scaled Taylor series
 for every case, A holding only rates). Friction on the mass (plain Coulomb on a fixed ground) adds the
 constant force -alpha sign(v) while the mass slides; while it sticks (v = 0, x frozen) the branches still
 relax, so the net force F(t) - reaction(t) moves and the stick ends where it leaves [-alpha, alpha].
@@ -59,9 +59,9 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, force_at
-from .exact import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, PHASE_BUDGET, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
-                    TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, _damping, _expm_times, _linear_spring, _motion,
-                    _next_break, _restore, _saved, _threshold, explain)
+from .exact_common import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, PHASE_BUDGET, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
+                           TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, _damping, _expm_times, _linear_spring, _motion,
+                           _next_break, _restore, _saved, _threshold, explain)
 
 XI, V, LOAD_VARYING, LOAD_RATE, LOAD_CONSTANT, FRICTION, BRANCH0 = 0, 1, 2, 3, 4, 5, 6
 # what an event does: a sticking branch slips (up, down), a slipping one sticks, the mass stops, it is released
