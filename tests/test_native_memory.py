@@ -859,9 +859,10 @@ def test_a_forged_connector_state_is_refused(connector_fmu, fmi):
 
 def test_the_connector_s_memory_parameters_are_fixed_and_checked_with_the_library_s_rules(connector_fmu):
     """Set in initialization mode they are Connector.set_coefficients, bit for bit; after initialization a change is
-    refused in the PythonFMU connector's words; at initialization a bad one is refused with the library's reason,
-    a tau whose buffer is beyond the native bound with the number, a start time the delay cannot count from with
-    the library's words (Connector.move_to)."""
+    refused in the PythonFMU connector's words; a sample beyond what the delay's grid counts is a Discard in the
+    library's words; at initialization a bad one is refused with the library's reason, a tau whose buffer is
+    beyond the native bound with the number, a start time the delay cannot count from with the library's words
+    (Connector.move_to)."""
     from fmpy.fmi1 import FMICallException
     from prandtl_fmu.connector import Connector
 
@@ -882,6 +883,12 @@ def test_the_connector_s_memory_parameters_are_fixed_and_checked_with_the_librar
     assert instance.said("parameter dahl_force = 2.0 refused: dahl_force is fixed (an effect with memory) and cannot "
                          "change after initialization; the connector is unchanged")
     instance.set("dahl_force", 0.4)  # the same value: allowed
+    with pytest.raises(ValueError) as library_refusal:  # beyond 2^52 of the delay's grid steps
+        library.connector.copy().move_to(0.01, 0.1, 1e13)
+    instance.time = 1e13
+    assert instance.move(0.001, 0.01, 0.1) == DISCARD
+    assert instance.said(str(library_refusal.value) + "; the state is unchanged"), (library_refusal.value,
+                                                                                 instance.messages[-1])
     instance.close()
     reasons = {}
     for start in ({"dahl_exponent": 150.0}, {"dahl_sigma": -1.0}, {"history_rate[1]": -2.0}):

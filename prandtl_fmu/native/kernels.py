@@ -33,6 +33,12 @@ the load, ``lt``/``lf``/``nl`` its table):
 * ``state_check(k, state, scratch)`` (memory-stack scenes): why a restored stack state is not one, or 0
   (:func:`compile_state_check`).
 
+The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(..., x_start, v_start, t_start, x,
+v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
+with memory, else ``drive``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
+slope added), ``cstored(..., x)``; ``cinitial(...)`` (a fresh memory stack and memory); ``elongations(p, k, eta, cs,
+u, out)`` (the branches' arrays alone).
+
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
 (``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
 cache, the Dahl force, then the delay's buffer of ``nd`` values, sized by the FMU at its initialization from the
