@@ -50,6 +50,7 @@ import numpy as np
 
 from .._jit import generic_kernel, inline_kernel, kernel
 from ..loads import force_at, impulse, with_noise
+from .chain import chain_step
 
 SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
 GROUND = -1
@@ -546,7 +547,18 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
     Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
     (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number, -4 when the
-    linear system is too ill-conditioned to be solved in double precision."""
+    linear system is too ill-conditioned to be solved in double precision. A massless chain takes its O(n)
+    programme (``chain.py``), every other network (or a chain past that programme's budget) the active-set
+    method."""
+    status = chain_step(model, x, piece, force, fixed_node, work[0], work[5])
+    if status != -1:
+        return status
+    return active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work)
+
+
+@kernel
+def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work):
+    """:func:`solve_step` by the active-set method of the module docstring, for every network."""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     elements = kind.shape[0]
