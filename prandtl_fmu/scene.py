@@ -26,7 +26,8 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .effects import (SAMPLING_RULES, Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
+from . import schema
+from .effects import (Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
                       sample_spectrum)
 from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad, WhiteNoise, noise_problem
 from .resources import ResourceError, check_memory
@@ -297,19 +298,26 @@ def with_coefficients(scene: Scene, **values) -> Scene:
 
 # ---------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "mass", "friction", "spring", "cubic", "damper", "branches", "masing", "load", "solver",
-             "fmu", "delay", "history", "dahl"}
+_TOP_KEYS = schema.top_level("element")
 # (a scene with [network] or [chain] is a network: network/model.py reads it)
-# How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element
-# with its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
-CAUSALITIES = ("force", "displacement")
+CAUSALITIES = schema.CAUSALITIES  # how the FMU of a scene is driven: ``[fmu] causality``
+_SCHEMA = object()  # a reader's argument left to the schema
 
 
 class _Reader:
-    """Reads one TOML table and names the culprit of any broken rule."""
+    """Reads one TOML table by the schema (``schema.py``) and names the culprit of any broken rule.
 
-    def __init__(self, source: str, table: str, data: Any):
+    The keys a table allows, each key's default and its bounds are the schema's: ``only(form)`` refuses the keys
+    of no such form, ``number(key)`` (``integer``, ``numbers``, ``string``, ``boolean``) reads a key with the
+    schema's default and bounds. A key the schema lacks, or a default or bound that contradicts it (a reader of
+    ``memory/`` that states its own), is a :class:`schema.SchemaError`: a bug, never the scene's fault.
+    ``schema_table`` names the schema's table when ``table``, the name in messages, differs (``network.spring 2``).
+    """
+
+    def __init__(self, source: str, table: str, data: Any, schema_table: Optional[str] = None):
         self.source, self.table = source, table
+        self.schema = schema.table(schema_table or table)
+        self.form = None
         if not isinstance(data, dict):
             self.fail(None, f"must be a table, got {_kind(data)}")
         self.data = data
@@ -318,71 +326,122 @@ class _Reader:
         where = f"[{self.table}] {key}" if key else f"[{self.table}]"
         raise SceneError(f"{self.source}: {where}: {rule}")
 
-    def only(self, allowed):
+    def only(self, form=None):
+        """Refuse a key that ``form`` (the schema's; None: the table's only form) does not allow. A set of key
+        names stands for the form that has exactly these keys."""
+        if isinstance(form, (set, frozenset)):
+            form = self.schema.form_of(form)
+        allowed = self.schema.keys(form)
+        self.form = form
         for key in self.data:
             if key not in allowed:
                 self.fail(key, f"unknown key (allowed here: {', '.join(sorted(allowed))})")
 
-    def number(self, key, default=None, *, minimum=None, positive=False):
-        if key not in self.data:
-            if default is None:
-                self.fail(key, "missing (required)")
-            return float(default)
-        return self._check_number(key, self.data[key], minimum, positive)
+    def key(self, name: str, method: str) -> "schema.Key":
+        """The schema's key ``name`` (of the form named by ``only``, if any), which ``method`` must be able to
+        read."""
+        key = self.schema.key(name, self.form)
+        if method not in (schema.TYPES[key.type] or "").split():
+            raise schema.SchemaError(f"[{self.schema.name}] {name}: a {key.type}, not read by {method}()")
+        return key
 
-    def _check_number(self, key, value, minimum, positive):
+    def _agree(self, key, **stated):
+        """A reader that states a default or a bound must state the schema's."""
+        for what, value in stated.items():
+            if value is not _SCHEMA and value != getattr(key, what):
+                raise schema.SchemaError(f"[{self.schema.name}] {key.name}: {what} {value!r} is not the schema's "
+                                         f"{getattr(key, what)!r}")
+
+    def _default(self, key):
+        """The value of the absent ``key``, or the refusal of a missing one."""
+        default = key.default
+        if default is schema.REQUIRED or default is schema.OPTIONAL:
+            self.fail(key.name, "missing (required)")
+        if isinstance(default, schema.SameAs):
+            return self.number(default.key)
+        return default
+
+    def number(self, name, default=_SCHEMA, *, minimum=_SCHEMA, positive=_SCHEMA):
+        key = self.key(name, "number")
+        self._agree(key, default=default, minimum=minimum, positive=positive)
+        if name not in self.data:
+            return float(self._default(key))
+        return self._check_number(name, self.data[name], key)
+
+    def _check_number(self, name, value, key):
+        """``value`` of ``key`` (``name`` in messages: ``k[2]`` for an item of a list), checked."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(key, f"must be a number, got {_kind(value)}")
+            self.fail(name, f"must be a number, got {_kind(value)}")
         try:
             value = float(value)
         except OverflowError:  # an integer beyond the doubles
-            self.fail(key, "must be finite, got an integer beyond the range of a double")
+            self.fail(name, "must be finite, got an integer beyond the range of a double")
         if not math.isfinite(value):
-            self.fail(key, f"must be finite, got {value}")
-        if self.table != "solver":  # the solver's times have their own rules
-            problem = magnitude_problem(value, coefficient=self.table != "load" and key.split("[")[0] not in VALUES)
+            self.fail(name, f"must be finite, got {value}")
+        if self.schema.numbers != "times":  # the solver's times have their own rules
+            problem = magnitude_problem(value, coefficient=self.schema.numbers == "coefficients" and not key.value)
             if problem:
-                self.fail(key, problem)
-        if positive and not value > 0:
-            self.fail(key, f"must be > 0, got {value!r}")
-        if minimum is not None and value < minimum:
-            self.fail(key, f"must be >= {minimum}, got {value!r}")
+                self.fail(name, problem)
+        if key.positive and not value > 0:
+            self.fail(name, f"must be > 0, got {value!r}")
+        if key.minimum is not None and value < key.minimum:
+            self.fail(name, f"must be >= {key.minimum}, got {value!r}")
         return value
 
-    def integer(self, key, *, minimum):
-        if key not in self.data:
-            self.fail(key, "missing (required)")
-        value = self.data[key]
+    def integer(self, name, *, minimum=_SCHEMA):
+        key = self.key(name, "integer")
+        self._agree(key, minimum=minimum)
+        if name not in self.data:
+            return self._default(key)
+        value = self.data[name]
         if isinstance(value, bool) or not isinstance(value, int):
-            self.fail(key, f"must be an integer, got {_kind(value)}")
-        if value < minimum:
-            self.fail(key, f"must be >= {minimum}, got {value}")
+            self.fail(name, f"must be an integer, got {_kind(value)}")
+        if key.minimum is not None and value < key.minimum:
+            self.fail(name, f"must be >= {key.minimum}, got {value}")
         return value
 
-    def numbers(self, key, *, minimum=None, positive=False, length=None):
-        if key not in self.data:
-            self.fail(key, "missing (required)")
-        values = self.data[key]
+    def numbers(self, name, *, minimum=_SCHEMA, positive=_SCHEMA, length=None):
+        """A list of numbers; ``length``: the count it must have (the other lists'). An absent key with a default
+        is ``length`` times the default."""
+        key = self.key(name, "numbers")
+        self._agree(key, minimum=minimum, positive=positive)
+        if name not in self.data:
+            default = self._default(key)
+            if length is None:
+                raise schema.SchemaError(f"[{self.schema.name}] {name}: a default list needs its length")
+            return np.full(length, float(default))
+        values = self.data[name]
         if not isinstance(values, list):
-            self.fail(key, f"must be a list of numbers, got {_kind(values)}")
+            self.fail(name, f"must be a list of numbers, got {_kind(values)}")
         if not values:
-            self.fail(key, "must not be empty")
+            self.fail(name, "must not be empty")
         if length is not None and len(values) != length:
-            self.fail(key, f"must have {length} values like the other lists, got {len(values)}")
-        checked = [self._check_number(f"{key}[{i + 1}]", v, minimum, positive) for i, v in enumerate(values)]
+            self.fail(name, f"must have {length} values like the other lists, got {len(values)}")
+        checked = [self._check_number(f"{name}[{i + 1}]", v, key) for i, v in enumerate(values)]
         return np.array(checked, dtype=float)
 
-    def string(self, key, default=None, choices=None):
-        if key not in self.data:
-            if default is None:
-                self.fail(key, "missing (required)")
-            return default
-        value = self.data[key]
+    def string(self, name, default=_SCHEMA, choices=_SCHEMA):
+        key = self.key(name, "string")
+        self._agree(key, default=default)
+        if choices is not _SCHEMA and tuple(choices or ()) != tuple(key.choice_names() or ()):
+            raise schema.SchemaError(f"[{self.schema.name}] {name}: choices {choices!r} are not the schema's")
+        if name not in self.data:
+            return self._default(key)
+        value = self.data[name]
         if not isinstance(value, str):
-            self.fail(key, f"must be a string, got {_kind(value)}")
-        if choices is not None and value not in choices:
-            self.fail(key, f"must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+            self.fail(name, f"must be a string, got {_kind(value)}")
+        allowed = key.choice_names()
+        if allowed is not None and value not in allowed:
+            self.fail(name, f"must be one of {', '.join(repr(c) for c in allowed)}, got {value!r}")
         return value
+
+    def boolean(self, name):
+        key = self.key(name, "boolean")
+        if name not in self.data:
+            return self._default(key)
+        if not isinstance(self.data[name], bool):
+            self.fail(name, f"must be true or false, got {_kind(self.data[name])}")
+        return self.data[name]
 
 
 def _kind(value) -> str:
@@ -487,16 +546,16 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
     spring = cubic = damper = branches = None
     if "spring" in doc:
         r = _Reader(source, "spring", doc["spring"])
-        r.only({"k0"})
-        spring = Spring(r.number("k0", minimum=0.0))
+        r.only()
+        spring = Spring(r.number("k0"))
     if "cubic" in doc:
         r = _Reader(source, "cubic", doc["cubic"])
-        r.only({"k3"})
-        cubic = CubicSpring(r.number("k3", minimum=0.0))
+        r.only()
+        cubic = CubicSpring(r.number("k3"))
     if "damper" in doc:
         r = _Reader(source, "damper", doc["damper"])
-        r.only({"c"})
-        damper = Damper(r.number("c", minimum=0.0))
+        r.only()
+        damper = Damper(r.number("c"))
     if "branches" in doc:
         branches = _branches(source, doc["branches"])
     if "masing" in doc:  # a backbone curve: its parallel spring and its Iwan spectrum of branches
@@ -509,8 +568,8 @@ def _scene_from_document(doc, source, check_stepper) -> Scene:
     causality = "force"
     if "fmu" in doc:
         r = _Reader(source, "fmu", doc["fmu"])
-        r.only({"causality"})
-        causality = r.string("causality", "force", choices=CAUSALITIES)
+        r.only()
+        causality = r.string("causality")
         if causality == "displacement" and mass is not None:
             r.fail("causality", '"displacement" is the connector, the massless element between two bodies: '
                    "remove [mass] (the bodies hold the inertia) or use \"force\"")
@@ -567,27 +626,27 @@ def _check_memory_rules(scene) -> None:
 
 def _mass(source, data) -> Mass:
     r = _Reader(source, "mass", data)
-    r.only({"m", "x0", "v0"})
-    return Mass(m=r.number("m", positive=True), x0=r.number("x0", 0.0), v0=r.number("v0", 0.0))
+    r.only()
+    return Mass(m=r.number("m"), x0=r.number("x0"), v0=r.number("v0"))
 
 
 def _friction(source, data, mass) -> Friction:
     r = _Reader(source, "friction", data)
-    r.only({"alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity"})
+    r.only()
     if mass is None:
         r.fail(None, "friction of the mass on the ground needs [mass] (a massless element has no mass to hold)")
-    alpha = r.number("alpha", positive=True)
-    kinetic = r.number("alpha_kinetic", alpha, minimum=0.0)
+    alpha = r.number("alpha")
+    kinetic = r.number("alpha_kinetic")  # default: alpha
     if kinetic > alpha:
         r.fail("alpha_kinetic", f"must be <= alpha = {alpha!r} (the sliding force falls from alpha at rest to "
                f"alpha_kinetic at speed), got {kinetic!r}")
     stribeck = None
     if "stribeck_velocity" in r.data:
-        stribeck = r.number("stribeck_velocity", positive=True)
+        stribeck = r.number("stribeck_velocity")
     elif kinetic < alpha:
         r.fail("stribeck_velocity", "missing (required when alpha_kinetic < alpha: the speed over which the "
                "sliding force falls)")
-    return Friction(alpha, kinetic, stribeck, r.number("belt_velocity", 0.0))
+    return Friction(alpha, kinetic, stribeck, r.number("belt_velocity"))
 
 
 def _series_damping(r, n: int, shared: bool):
@@ -595,63 +654,57 @@ def _series_damping(r, n: int, shared: bool):
     if "c" not in r.data:
         return None
     if shared and not isinstance(r.data["c"], list):
-        value = r._check_number("c", r.data["c"], None, True)
-        return np.full(n, value)
+        return np.full(n, r.number("c"))
     if shared:
         r.fail("c", "give one value for every branch with count = n, got a list")
-    return r.numbers("c", positive=True, length=n)
+    return r.numbers("c", length=n)
 
 
 def _branches(source, data):
     r = _Reader(source, "branches", data)
-    listed = {"k", "eta", "alpha", "u0", "c"}
-    sampled = {"count", "k_total", "eta_range", "u0", "sampling", "c"}
-    continuous = {"continuum", "k_total", "eta_range"}
     if "continuum" in r.data:
-        if not isinstance(r.data["continuum"], bool):
-            r.fail("continuum", f"must be true or false, got {_kind(r.data['continuum'])}")
-        if r.data["continuum"]:
+        if r.boolean("continuum"):
             if "c" in r.data:
                 r.fail("c", "series dashpots are not available with continuum = true (sample it with count = n)")
             if "density" in r.data:
-                r.only({"continuum", "density"})
+                r.only("density continuum")
                 return _density(r)
-            r.only(continuous)
+            r.only("continuum")
             return _continuum(r)
         r = _Reader(source, "branches", {key: v for key, v in data.items() if key != "continuum"})
     if "density" in r.data:
-        r.only({"count", "density", "sampling", "c"})
+        r.only("density count")
         if "count" not in r.data:
             r.fail("density", "give count = n for n sampled branches, or continuum = true for the continuum")
         n = _branch_count(r)
-        rule = r.string("sampling", "mean", choices=SAMPLING_RULES + ("mean",))
+        rule = r.string("sampling")
         sampled_branches = _density(r).sample(n, rule)
         damping = _series_damping(r, sampled_branches.n, shared=True)
         if damping is None:
             return sampled_branches
         return replace(sampled_branches, damping=damping, shared_damping=True)
     if "count" in r.data or "k_total" in r.data or "eta_range" in r.data:
-        r.only(sampled)
+        r.only("count")
         n = _branch_count(r)
         k_total, ends = _spectrum(r)
-        rule = r.string("sampling", "right", choices=SAMPLING_RULES)
+        rule = r.string("sampling")
         branches = sample_spectrum(n, k_total, ends, rule)  # right end points s_i = i / n: eq. (7.19)
         stiffness, eta = branches.stiffness, branches.yield_displacement
     else:
-        r.only(listed)
-        stiffness = r.numbers("k", positive=True)
+        r.only("lists")
+        stiffness = r.numbers("k")
         n = len(stiffness)
         if "eta" in r.data and "alpha" in r.data:
             r.fail("alpha", "give either eta or alpha, not both")
         if "eta" in r.data:
-            eta = r.numbers("eta", minimum=0.0, length=n)
+            eta = r.numbers("eta", length=n)
         elif "alpha" in r.data:
-            eta = r.numbers("alpha", minimum=0.0, length=n) / stiffness
+            eta = r.numbers("alpha", length=n) / stiffness
             if not np.all(np.isfinite(eta)):
                 r.fail("alpha", "alpha / k overflows")
         else:
             r.fail("eta", "missing (give eta or alpha)")
-    u0 = r.numbers("u0", length=n) if "u0" in r.data else np.zeros(n)
+    u0 = r.numbers("u0", length=n)
     bad = np.flatnonzero(np.abs(u0) > eta)
     if bad.size:
         i = int(bad[0])
@@ -664,7 +717,7 @@ def _branches(source, data):
 
 
 def _branch_count(r) -> int:
-    n = r.integer("count", minimum=1)
+    n = r.integer("count")
     try:
         check_memory(n * BYTES_PER_BRANCH, f"{r.source}: [branches] count = {n}",
                      hint="use [branches] continuum = true for the limit of many branches")
@@ -676,11 +729,11 @@ def _branch_count(r) -> int:
 def _density(branches_reader) -> ContinuousBranches:
     """The spectrum of ``[branches] density = { kind = ... }``: Segalman's Iwan model or piecewise."""
     r = _Reader(branches_reader.source, "branches.density", branches_reader.data["density"])
-    kind = r.string("kind", choices=("iwan", "piecewise"))
+    kind = r.string("kind")
     if kind == "iwan":
-        r.only({"kind", "F_S", "K_T", "chi", "beta"})
-        F_S, K_T = r.number("F_S", positive=True), r.number("K_T", positive=True)
-        chi, beta = r.number("chi"), r.number("beta", minimum=0.0)
+        r.only("iwan")
+        F_S, K_T = r.number("F_S"), r.number("K_T")
+        chi, beta = r.number("chi"), r.number("beta")
         if not chi > -1.0:
             r.fail("chi", f"must be > -1 (the density phi^chi must be integrable at 0), got {chi!r}")
         try:
@@ -691,11 +744,11 @@ def _density(branches_reader) -> ContinuousBranches:
             r.fail("F_S", "with K_T, chi, beta gives no finite spectrum (phi_max or the density overflows or "
                    "underflows)")
         return spectrum
-    r.only({"kind", "s", "k", "eta"})
-    k = r.numbers("k", minimum=0.0)
+    r.only("piecewise")
+    k = r.numbers("k")
     if not np.any(k > 0):
         r.fail("k", "at least one segment needs a stiffness density > 0")
-    eta = r.numbers("eta", minimum=0.0, length=len(k) + 1)
+    eta = r.numbers("eta", length=len(k) + 1)
     drops = np.flatnonzero(np.diff(eta) < 0)
     if drops.size:
         r.fail(f"eta[{int(drops[0]) + 2}]", "eta(s) must be non-decreasing")
@@ -719,8 +772,8 @@ def _density(branches_reader) -> ContinuousBranches:
 
 def _spectrum(r):
     """k_total and eta_range = [a, b] of a spectrum."""
-    k_total = r.number("k_total", positive=True)
-    ends = r.numbers("eta_range", minimum=0.0)
+    k_total = r.number("k_total")
+    ends = r.numbers("eta_range")
     if len(ends) != 2:
         r.fail("eta_range", f"must be [a, b] (two numbers), got {len(ends)} values")
     return k_total, ends
@@ -743,38 +796,36 @@ def _masing(source, doc) -> tuple:
         if other in doc:
             r.fail(None, f"gives the branches and their parallel spring by a backbone curve: remove [{other}] "
                    "(a scene gives its branches one way)")
-    kind = r.string("kind", choices=("bilinear", "hyperbolic", "ramberg_osgood"))
+    kind = r.string("kind")
     smooth = {"count", "x_max", "spacing"}
-    keys = {"bilinear": {"k", "f_y", "alpha"}, "hyperbolic": {"k", "f_u"} | smooth,
-            "ramberg_osgood": {"k", "f_y", "a", "r"} | smooth}[kind]
     if kind == "bilinear":
         for key in sorted(smooth & set(r.data)):
             r.fail(key, "the bilinear backbone is one branch and a spring exactly: no count, x_max or spacing")
-    r.only(keys | {"kind"})
-    k = r.number("k", positive=True)
+    r.only(kind)
+    k = r.number("k")
     if kind == "bilinear":
-        alpha = r.number("alpha", 0.0, minimum=0.0)
+        alpha = r.number("alpha")
         if not alpha < 1.0:
             r.fail("alpha", f"must be < 1 (the post-yield stiffness alpha k below the initial k), got {alpha!r}")
-        k0, branches = masing.iwan_branches(masing.Bilinear(k, r.number("f_y", positive=True), alpha))
+        k0, branches = masing.iwan_branches(masing.Bilinear(k, r.number("f_y"), alpha))
     else:
         if kind == "hyperbolic":
-            backbone = masing.Hyperbolic(k, r.number("f_u", positive=True))
+            backbone = masing.Hyperbolic(k, r.number("f_u"))
         else:
-            f_y, a, exponent = r.number("f_y", positive=True), r.number("a", positive=True), r.number("r")
+            f_y, a, exponent = r.number("f_y"), r.number("a"), r.number("r")
             if not exponent > 1.0:
                 r.fail("r", f"must be > 1 (the exponent of x = F/k (1 + a |F/f_y|^(r-1))), got {exponent!r}")
             backbone = masing.RambergOsgood(k, f_y, a, exponent)
         if "x_max" not in r.data:
             r.fail("x_max", "missing (required: the largest |x| the element will see, in m; the smooth backbone "
                    "is interpolated at nodes up to it)")
-        x_max = r.number("x_max", positive=True)
-        count = r.integer("count", minimum=1) if "count" in r.data else 100
+        x_max = r.number("x_max")
+        count = r.integer("count")
         try:
             check_memory(count * BYTES_PER_BRANCH, f"{source}: [masing] count = {count}")
         except ResourceError as exc:
             raise SceneError(str(exc)) from None
-        spacing = r.string("spacing", "force", choices=masing.SPACINGS)
+        spacing = r.string("spacing")
         try:
             k0, branches = masing.iwan_branches(backbone, count, x_max, spacing)
         except ValueError as exc:
@@ -788,29 +839,29 @@ NOISE_KEYS = ("noise_intensity", "noise_seed", "noise_unit")
 
 def _load(source, data) -> Load:
     r = _Reader(source, "load", data)
-    kind = r.string("kind", choices=("harmonic", "constant", "table", "random", "white_noise"))
+    kind = r.string("kind")
     if kind == "white_noise":
         for key in ("noise_intensity", "noise_seed"):
             if key in r.data:
                 r.fail(key, "a white_noise load is the noise itself: give its intensity and seed")
-        r.only({"kind", "intensity", "seed", "offset", "noise_unit"})
+        r.only("white_noise")
         noise = _white_noise(r, "intensity", "seed")
-        return ConstantLoad(r.number("offset", 0.0), noise)
+        return ConstantLoad(r.number("offset"), noise)
     noise = _white_noise(r, "noise_intensity", "noise_seed") if "noise_intensity" in r.data else None
     if "noise_intensity" not in r.data:
         for key in NOISE_KEYS:
             if key in r.data:
                 r.fail(key, "needs noise_intensity (the white noise's sigma, N sqrt(s))")
     if kind == "harmonic":
-        r.only({"kind", "amplitude", "omega", "offset", *NOISE_KEYS})
-        return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset", 0.0), noise)
+        r.only("harmonic")
+        return HarmonicLoad(r.number("amplitude"), r.number("omega"), r.number("offset"), noise)
     if kind == "constant":
-        r.only({"kind", "value", *NOISE_KEYS})
+        r.only("constant")
         return ConstantLoad(r.number("value"), noise)
     if kind == "random":
         return _random_load(r, noise)
-    r.only({"kind", "time", "force", *NOISE_KEYS})
-    time = r.numbers("time", minimum=0.0)
+    r.only("table")
+    time = r.numbers("time")
     force = r.numbers("force", length=len(time))
     steps = np.diff(time)
     if np.any(steps < 0):
@@ -831,9 +882,9 @@ def _check_noise_unit(scene) -> None:
 def _white_noise(r, intensity_key, seed_key) -> Optional[WhiteNoise]:
     """The white noise sigma xi(t) of [load] (``docs/white-noise.md``), or None when sigma = 0 (no noise at all).
     ``noise_unit`` (s, default 1): the Brownian tree's time unit, a property of the path, never of the step."""
-    intensity = r.number(intensity_key, minimum=0.0)
+    intensity = r.number(intensity_key)
     seed = _seed(r, seed_key)
-    unit = r.number("noise_unit", 1.0, positive=True)
+    unit = r.number("noise_unit")
     if intensity == 0.0:
         return None
     return WhiteNoise(intensity, seed, unit)
@@ -841,38 +892,32 @@ def _white_noise(r, intensity_key, seed_key) -> Optional[WhiteNoise]:
 
 def _seed(r, key) -> int:
     """A seed: an integer, 0 <= seed < 2^63 (a Philox key and a TOML integer)."""
-    seed = r.integer(key, minimum=0)
+    seed = r.integer(key)
     if seed >= 2**63:
         r.fail(key, f"must be < 2^63, got {seed}")
     return seed
 
 
 def _random_load(r, noise=None) -> RandomLoad:
-    r.only({"kind", "seed", "rms", "band", "components", "offset", *NOISE_KEYS})
+    r.only("random")
     seed = _seed(r, "seed")
-    band = r.numbers("band", minimum=0.0)
+    band = r.numbers("band")
     if len(band) != 2 or not band[0] < band[1]:
         r.fail("band", f"must be [omega_min, omega_max] (rad/s) with omega_min < omega_max, got {list(band)}")
-    components = r.integer("components", minimum=1) if "components" in r.data else 100
+    components = r.integer("components")
     try:
         check_memory(components * 16, f"{r.source}: [load] components = {components}")
     except ResourceError as exc:
         raise SceneError(str(exc)) from None
-    return RandomLoad(seed, r.number("rms", minimum=0.0), float(band[0]), float(band[1]), components,
-                      r.number("offset", 0.0), noise)
+    return RandomLoad(seed, r.number("rms"), float(band[0]), float(band[1]), components, r.number("offset"),
+                      noise)
 
 
 def _solver(source, data) -> Solver:
-    from .steppers import STEPPERS
-
     r = _Reader(source, "solver", data)
-    r.only({"stepper", "step", "stop_time", "output_interval"})
-    solver = Solver(
-        stepper=r.string("stepper", "projected", choices=tuple(STEPPERS)),
-        step=r.number("step", positive=True),
-        stop_time=r.number("stop_time", positive=True),
-        output_interval=r.number("output_interval", positive=True),
-    )
+    r.only()
+    solver = Solver(stepper=r.string("stepper"), step=r.number("step"), stop_time=r.number("stop_time"),
+                    output_interval=r.number("output_interval"))
     _check_solver(solver, source, where="[solver] ")
     return solver
 

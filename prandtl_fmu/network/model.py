@@ -24,7 +24,8 @@ from typing import Optional
 import numpy as np
 
 from . import kernels
-from ..scene import SceneError, Solver, _Reader, _check_noise_unit, _check_solver, _kind, _load, _solver, CAUSALITIES
+from .. import schema
+from ..scene import SceneError, Solver, _Reader, _check_noise_unit, _check_solver, _kind, _load, _solver
 from ..loads import ConstantLoad
 
 KINDS = {"spring": kernels.SPRING, "dashpot": kernels.DASHPOT, "slider": kernels.SLIDER, "branch": kernels.BRANCH,
@@ -217,7 +218,7 @@ def check_stepper(scene: NetworkScene, where: str) -> None:
 # ------------------------------------------------------------------ reading
 
 ELEMENT_TABLES = ("mass", "friction", "spring", "cubic", "damper", "branches")
-TOP_KEYS = {"name", "network", "chain", "load", "solver", "fmu"}
+TOP_KEYS = schema.top_level("network")
 
 
 def network_scene(doc: dict, source: str, check: bool = True) -> NetworkScene:
@@ -243,8 +244,8 @@ def network_scene(doc: dict, source: str, check: bool = True) -> NetworkScene:
     causality = "force"
     if "fmu" in doc:
         r = _Reader(source, "fmu", doc["fmu"])
-        r.only({"causality"})
-        causality = r.string("causality", "force", choices=CAUSALITIES)
+        r.only()
+        causality = r.string("causality")
         if causality == "displacement" and network.mass[network.load_node] > 0:
             r.fail("causality", f'"displacement" imposes the motion of load node {network.nodes[network.load_node]}'
                    ", which must then be massless (the bodies hold its inertia): give it mass 0 or use \"force\"")
@@ -274,15 +275,15 @@ def _node_names(r, key, count=None):
 
 def _network(source, data) -> Network:
     r = _Reader(source, "network", data)
-    r.only({"nodes", "mass", "x0", "v0", "load_node"} | set(KINDS))
+    r.only()
     nodes = _node_names(r, "nodes")
     n = len(nodes)
-    mass = r.numbers("mass", minimum=0.0, length=n)
-    x0 = r.numbers("x0", length=n) if "x0" in r.data else np.zeros(n)
-    v0 = r.numbers("v0", length=n) if "v0" in r.data else np.zeros(n)
+    mass = r.numbers("mass", length=n)
+    x0 = r.numbers("x0", length=n)
+    v0 = r.numbers("v0", length=n)
     load_node = n - 1
     if "load_node" in r.data:
-        name = r.string("load_node", choices=None)
+        name = r.string("load_node")
         if name not in nodes:
             r.fail("load_node", f"must be one of the nodes ({', '.join(nodes)}), got {name!r}")
         load_node = nodes.index(name)
@@ -303,9 +304,8 @@ def _network(source, data) -> Network:
 
 
 def _element(source, kind, index, table, nodes) -> Element:
-    r = _Reader(source, f"network.{kind} {index + 1}", table)
-    keys = {"between", "name"} | set(KEYS[kind]) | ({"u0"} if kind == "branch" else set())
-    r.only(keys)
+    r = _Reader(source, f"network.{kind} {index + 1}", table, schema_table=f"network.{kind}")
+    r.only()
     between = table.get("between")
     if not isinstance(between, list) or len(between) != 2 or not all(isinstance(b, str) for b in between):
         r.fail("between", f"must be [i, j]: two node names or \"ground\", got {between!r}")
@@ -326,26 +326,26 @@ def _element(source, kind, index, table, nodes) -> Element:
     if flip:
         ends.reverse()
     if kind == "branch":
-        k = r.number("k", positive=True)
-        eta = r.number("eta", minimum=0.0)
-        c = r.number("c", positive=True) if "c" in table else 0.0
-        u0 = r.number("u0", 0.0)
+        k = r.number("k")
+        eta = r.number("eta")
+        c = r.number("c") if "c" in table else 0.0
+        u0 = r.number("u0")
         if abs(u0) > eta:
             r.fail("u0", f"must lie in [-eta, eta] = [{-eta!r}, {eta!r}], got {u0!r}")
         return Element(kind, name, tuple(ends), k, eta, c, -u0 if flip else u0)
     key = KEYS[kind][0]
-    return Element(kind, name, tuple(ends), r.number(key, minimum=0.0))
+    return Element(kind, name, tuple(ends), r.number(key))
 
 
-def _per_node(r, key, count, minimum=0.0, required=True):
+def _per_node(r, key, count, required=True):
     """A scalar or a list of ``count`` numbers."""
     if key not in r.data:
         if required:
             r.fail(key, "missing (required)")
         return None
     if isinstance(r.data[key], list):
-        return r.numbers(key, minimum=minimum, length=count)
-    return np.full(count, r.number(key, minimum=minimum))
+        return r.numbers(key, length=count)
+    return np.full(count, r.number(key))
 
 
 def _chain(source, data) -> Network:
@@ -353,8 +353,8 @@ def _chain(source, data) -> Network:
     (named by the node: alpha_n3), an optional dashpot of each node to the support (c_n3) and spring from n1
     to the ground (wall: k_wall); the load on the last node."""
     r = _Reader(source, "chain", data)
-    r.only({"n", "m", "k", "alpha", "c", "k_wall"})
-    n = r.integer("n", minimum=1)
+    r.only()
+    n = r.integer("n")
     if n > 10_000_000:
         r.fail("n", f"must be <= 10000000, got {n}")
     nodes = tuple(f"n{i + 1}" for i in range(n))
@@ -368,7 +368,7 @@ def _chain(source, data) -> Network:
     c = _per_node(r, "c", n, required=False)
     elements = []
     if "k_wall" in r.data:
-        elements.append(Element("spring", "wall", (0, -1), r.number("k_wall", positive=True)))
+        elements.append(Element("spring", "wall", (0, -1), r.number("k_wall")))
     for i in range(n - 1):
         elements.append(Element("spring", f"spring_{i + 1}", (i, i + 1), float(k[i])))
     for i in range(n):
