@@ -21,7 +21,7 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
 from common import write_rows  # noqa: E402
 from prandtl_fmu import simulate  # noqa: E402
-from prandtl_fmu.bench import paper_scene  # noqa: E402
+from prandtl_fmu.bench.paper import paper_scene  # noqa: E402
 
 STEPS = 200_000
 SHORT = 20_000

@@ -24,7 +24,7 @@ import numpy as np
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
 from prandtl_fmu import simulate  # noqa: E402
-from prandtl_fmu.bench import paper_scene  # noqa: E402
+from prandtl_fmu.bench.paper import paper_scene  # noqa: E402
 
 LOOP_NS = (3, 10, 100, 1500, None)  # None: the continuum
 CONVERGENCE_NS = (3, 10, 30, 100, 300, 1000, 3000)

@@ -150,7 +150,7 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--resume", action="store_true", help="finish the sweep in --out: run only its unfinished "
                                                              "tasks")
     commands.add_parser("scenes", help="list the scenes shipped in the package")
-    bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench.py)")
+    bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench/)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
     bench.add_argument("--out", default="out/bench", help="folder for the CSV, plots and report (default out/bench)")
     bench.add_argument("--from-csv", action="store_true", help="redo the plots and report from the CSV files in --out")
@@ -266,7 +266,7 @@ def _main(argv) -> int:
         print("\n".join(packaged_scenes()))
         return 0
     if args.command == "bench" and args.networks:
-        from .network.bench import run as network_bench
+        from .bench.networks import run as network_bench
 
         print(network_bench(args.out, args.quick))
         return 0
@@ -274,7 +274,7 @@ def _main(argv) -> int:
         missing = _missing("scipy", "matplotlib", "fmpy")
         if missing:
             return _error(f"bench needs {', '.join(missing)}: pip install 'prandtl_fmu[bench,fmpy]'")
-        from .bench import main as bench
+        from .bench.work_precision import main as bench
 
         return bench(args.out, args.quick, args.from_csv)
     return 2

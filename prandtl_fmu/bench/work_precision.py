@@ -1,6 +1,6 @@
 """What accuracy costs in time: ``python -m prandtl_fmu bench [--quick] [--out DIR]``.
 
-Problem: the paper's section 8 scene (m = 1, k0 = 0, k_i = 1/n, eta_i = 0.1 +
+Problem (``paper.py``): the paper's section 8 scene (m = 1, k0 = 0, k_i = 1/n, eta_i = 0.1 +
 i/n, F = 0.45 cos(0.5 t)) with n = 10, 100, 1500 branches over T = 500 s
 (``--quick``: n = 10, 100 over T = 20 s, under a minute). Reference: the
 ``exact`` stepper. Error: the sup over the output grid (every 0.1 s) of
@@ -35,59 +35,12 @@ import platform
 import sys
 import tempfile
 import time
-from dataclasses import replace
 
 import numpy as np
 
-from .driver import simulate
-from .effects import ContinuousBranches
-from .loads import force_at
-
-PAPER_TABLE_1 = {  # (q, n): (alpha, C) as printed in Bastien & Schatzman (2002), Table 1
-    ("inf", 3): (1.00162, 0.71734), ("inf", 10): (1.00166, 0.75184), ("inf", 100): (1.00177, 0.83276),
-    ("inf", 700): (1.00125, 0.83106), ("inf", 1500): (1.00164, 0.83188),
-    ("2", 3): (1.00165, 0.75175), ("2", 10): (1.00278, 0.85304), ("2", 100): (1.00196, 1.34671),
-    ("2", 700): (1.00215, 2.00740), ("2", 1500): (1.00215, 2.36276),
-}
-OUTPUT = 0.1
-
-
-def paper_scene(n, stop_time: float, rule: str = "right"):
-    """The paper's section 8 scene up to ``stop_time``, with n branches sampled from its spectrum k(s) = 1,
-    eta(s) = s + 0.1 (by ``rule``: "right" is eq. 7.19), or the continuum itself for ``n=None``."""
-    from .scene import parse_scene
-
-    root = os.path.join(os.path.dirname(__file__), "..", "scenes", "paper-section-8.toml")
-    if os.path.exists(root):
-        with open(root) as fh:
-            scene = parse_scene(fh.read(), root)
-    else:  # installed without the repository: the same scene, written out
-        scene = parse_scene(_PAPER_SCENE, "paper-section-8.toml")
-    spectrum = ContinuousBranches.linear(1.0, 0.1, 1.1)
-    branches = spectrum if n is None else spectrum.sample(n, rule)
-    return replace(scene, branches=branches).with_solver(stop_time=stop_time, output_interval=OUTPUT)
-
-
-_PAPER_SCENE = """
-name = "paper-section-8"
-[mass]
-m = 1.0
-[spring]
-k0 = 0.0
-[branches]
-count = 100
-k_total = 1.0
-eta_range = [0.1, 1.1]
-[load]
-kind = "harmonic"
-amplitude = 0.45
-omega = 0.5
-[solver]
-stepper = "projected"
-step = 1e-3
-stop_time = 500.0
-output_interval = 0.1
-"""
+from ..driver import simulate
+from ..loads import force_at
+from .paper import OUTPUT, PAPER_TABLE_1, paper_scene
 
 
 def _timed(function):
@@ -124,7 +77,7 @@ def fmu_rows(scene, reference, quick, folder, bar):
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
-    from .fmu.build import build_fmu
+    from ..fmu.build import build_fmu
 
     path = os.path.join(folder, f"scene-{scene.branches.n}.toml")
     _write_scene(scene, path)
@@ -388,7 +341,7 @@ def plots(rows, folder):
 
 def run(folder: str, quick: bool = False, progress=None) -> str:
     """Run the benchmark and write its files into ``folder``; return the report (Markdown)."""
-    from .stepping import _progress_bar
+    from ..stepping import _progress_bar
 
     os.makedirs(folder, exist_ok=True)
     cases = [(10, 20.0), (100, 20.0)] if quick else [(10, 500.0), (100, 500.0), (1500, 500.0)]

@@ -52,8 +52,8 @@ output_interval = {PERIOD!r}
 
 def measure(n: int, dynamic: bool) -> dict:
     """Seconds and active-set iterations per step of one period of the chain of n nodes."""
-    from . import kernels
-    from .driver import initial_state
+    from ..network import kernels
+    from ..network.driver import initial_state
 
     scene = chain_scene(n, dynamic)
     network = scene.network
