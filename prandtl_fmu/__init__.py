@@ -5,9 +5,31 @@
     result = simulate(scene, stepper="projected")
     result.time, result.x, result.v, result.reaction
 
-The layout follows the architecture: ``effects`` (what is simulated),
-``steppers`` (how, one module per scheme), ``driver`` (how far; joins them),
-``kernels`` (compiled building blocks), ``fmu`` (the FMI glue).
+The layout follows the architecture: a scene (``scene.py``; its effects in ``effects.py``, what is simulated)
+is compiled once into flat arrays (``compiled.py``), a stepper (``steppers/``, one module per scheme: how)
+advances it with compiled building blocks (``kernels/``), and two drivers run it (how far): the batch driver
+``driver.py`` (``simulate``) and the stateful ``element.py`` (``Element``, what every FMU runs), which share
+``stepping.py``. ``fmu/`` and ``native/`` are the FMI glue of the two runtimes; ``bench/``, ``sweep/`` and
+``cli.py`` are tools on top.
+
+The layers, bottom to top. A module imports from its own layer and those below, never from one above, and no
+import circle exists (``tests/test_layout.py`` checks both from the sources, with a short list of known
+exceptions and their reasons):
+
+1. base: ``__init__``, ``_jit``, ``libm``, ``noise``, ``outputs``, ``resources``, ``saved_state``
+2. loads and effects with memory, compiled: ``loads``, ``memory``, ``memory.dahl``, ``memory.delay``,
+   ``memory.history``
+3. kernels: ``kernels``, ``memory.solve``, ``network.kernels``, ``network.chain``
+4. steppers: ``steppers``
+5. scenes: ``schema``, ``effects``, ``masing``, ``scene``, ``stability``, ``network.model``
+6. a run's parts: ``compiled``, ``stepping``
+7. the stepped objects and the network's driver: ``element``, ``connector``, ``network``, ``network.driver``
+8. the batch driver and the summaries of runs: ``driver``, ``summary``
+9. the FMUs: ``fmu``, ``native``
+10. tools: ``sweep``, ``identify``, ``plots``, ``bench``
+11. the command line: ``cli``, ``__main__``
+
+This ``__init__`` imports nothing at load: its public names resolve on first use.
 """
 import importlib
 
