@@ -436,8 +436,32 @@ def api_reference() -> str:
     return "\n".join(lines)
 
 
+# --------------------------------------------------------------------------------------------- the code layout
+
+def _first_paragraph(docstring: str) -> str:
+    return " ".join(docstring.strip().split("\n\n")[0].split())
+
+
+def code_layout() -> str:
+    """The package's own account of its layers (its docstring), and every module with the first paragraph of its
+    docstring, read from the sources (nothing imported)."""
+    import ast
+
+    package = ROOT / "prandtl_fmu"
+    top = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8"))) or ""
+    lines = ["From `prandtl_fmu/__init__.py`:", "", textwrap.indent(top.strip(), "> ", lambda line: True), "",
+             "| module | what it holds |", "|---|---|"]
+    for path in sorted(package.rglob("*.py")):
+        if "loader" in path.relative_to(package).parts[:-1] and path.name != "__init__.py":
+            continue  # the FMU loader's build helpers
+        name = path.relative_to(ROOT).with_suffix("").as_posix().replace("/", ".").removesuffix(".__init__")
+        docstring = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8"))) or "(no docstring)"
+        lines.append(f"| `{name}` | {_cell(_first_paragraph(docstring).replace('``', '`'))} |")
+    return "\n".join(lines) + "\n"
+
+
 GENERATED = {"scene_reference": scene_reference, "stepper_table": stepper_table, "fmu_variables": fmu_variables,
-             "api_reference": api_reference}
+             "api_reference": api_reference, "code_layout": code_layout}
 
 
 def _digest_of(name: str) -> str:
