@@ -243,9 +243,9 @@ CONNECTOR_VARIANTS = {
     "[damper]": _CONNECTOR_BASE + "[damper]\nc = 0.1\n",
     "[branches]": _CONNECTOR_BASE + "[branches]\nk = [1.0, 2.0]\neta = [0.1, 0.2]\n",
     "[branches] continuum": _CONNECTOR_BASE + "[branches]\ncontinuum = true\nk_total = 1.0\neta_range = [0.1, 0.2]\n",
-    "[delay] (PythonFMU only)": _CONNECTOR_BASE + "[delay]\ngain = 0.1\ntau = 0.5\n",
-    "[history] (PythonFMU only)": _CONNECTOR_BASE + "[history]\nweight = [0.1]\nrate = [1.0]\n",
-    "[dahl] (PythonFMU only)": _CONNECTOR_BASE + "[dahl]\nsigma = 10.0\nforce = 0.1\n",
+    "[delay]": _CONNECTOR_BASE + "[delay]\ngain = 0.1\ntau = 0.5\n",
+    "[history]": _CONNECTOR_BASE + "[history]\nweight = [0.1]\nrate = [1.0]\n",
+    "[dahl]": _CONNECTOR_BASE + "[dahl]\nsigma = 10.0\nforce = 0.1\n",
 }
 # A network of every kind of element; its node and element names are replaced by placeholders in the table.
 _NETWORK = """[network]
@@ -280,11 +280,11 @@ PLACEHOLDERS = {"NodeA": "<node>", "NodeB": "<node>", "SpringX": "<spring>", "Da
                 "SliderX": "<slider>", "BranchX": "<branch>", "CubicX": "<cubic>"}
 
 
-def _descriptions(text: str, folder: pathlib.Path, label: str, native: bool = True) -> dict:
+def _descriptions(text: str, folder: pathlib.Path, label: str) -> dict:
     """``{"2.0": root, "3.0": root}``: the model descriptions of the scene ``text``'s FMUs. FMI 2.0: the FMU that
     ``build_fmu`` builds (the PythonFMU runtime; the native FMI 2.0 FMU declares the same variables, with
     ``needsExecutionTool="false"``); FMI 3.0: the native runtime's description made from it, as the native build
-    makes it (without compiling kernels); ``native=False``: a scene the native runtime refuses, FMI 2.0 only."""
+    makes it (without compiling kernels)."""
     from prandtl_fmu.fmu.build import build_fmu
     from prandtl_fmu.scene import load_scene
 
@@ -308,7 +308,7 @@ def _descriptions(text: str, folder: pathlib.Path, label: str, native: bool = Tr
         from prandtl_fmu.native.build import fmi3_description
 
         fmi3 = fmi3_description(root, scene, count)
-    return {"2.0": root, "3.0": ET.fromstring(fmi3)} if native else {"2.0": root}
+    return {"2.0": root, "3.0": ET.fromstring(fmi3)}
 
 
 def _variables(root, fmi: str) -> dict:
@@ -346,7 +346,7 @@ def _variable_table(variants: dict, folder: pathlib.Path, network: bool = False)
     seen = {}  # generalized name -> {"2.0": info, "3.0": info, "in": [labels]}
     order = []
     for label, text in variants.items():
-        descriptions = _descriptions(text, folder, label, native="PythonFMU only" not in label)
+        descriptions = _descriptions(text, folder, label)
         for fmi, root in descriptions.items():
             for name, info in _variables(root, fmi).items():
                 general, description = _generalized(name, info[4])

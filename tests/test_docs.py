@@ -184,22 +184,30 @@ def test_the_site_builds_with_no_warning(tmp_path):
 
 
 # What runs a page's blocks in order, in a child process: Python blocks in one namespace, bash blocks by bash.
+# (Guarded: a block that starts worker processes, dask's, has them import this script again.)
 RUNNER = r'''
-import json, os, subprocess, sys, traceback
-blocks = json.load(open(sys.argv[1]))
-namespace = {"__name__": "__main__"}
-for block in blocks:
-    print(f"=== {block['where']} ({block['language']})", flush=True)
-    if block["language"] == "python":
-        try:
-            exec(compile(block["text"], block["where"], "exec"), namespace)
-        except BaseException:
-            traceback.print_exc()
-            sys.exit(f"{block['where']}: the Python block failed")
-    else:
-        done = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", block["text"]])
-        if done.returncode:
-            sys.exit(f"{block['where']}: the bash block exited {done.returncode}")
+import json, subprocess, sys, traceback
+
+
+def main():
+    blocks = json.load(open(sys.argv[1]))
+    namespace = {"__name__": "__main__"}
+    for block in blocks:
+        print(f"=== {block['where']} ({block['language']})", flush=True)
+        if block["language"] == "python":
+            try:
+                exec(compile(block["text"], block["where"], "exec"), namespace)
+            except BaseException:
+                traceback.print_exc()
+                sys.exit(f"{block['where']}: the Python block failed")
+        else:
+            done = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", block["text"]])
+            if done.returncode:
+                sys.exit(f"{block['where']}: the bash block exited {done.returncode}")
+
+
+if __name__ == "__main__":
+    main()
 '''
 
 
