@@ -7,8 +7,8 @@ it with ``GENERATED[NAME]()``, computed from the code itself so that the page ca
   reads by;
 * ``stepper_table``: each stepper's order (its ``ORDER``), its scheme (its docstring's first line) and which
   scenes it takes (its own ``loop_for`` asked on one scene per effect: the refusal it gives, word for word);
-* ``fmu_variables``: every variable of the FMUs, from the model descriptions of FMUs built by ``build_fmu``
-  (FMI 2.0, both runtimes) and the native runtime's FMI 3.0 description of the same;
+* ``fmu_variables``: every variable of the FMUs, from the model descriptions the builds write (FMI 2.0, both
+  runtimes; FMI 3.0, the native runtime), for a scene of each effect;
 * ``api_reference``: mkdocstrings blocks for the public names ``prandtl_fmu`` exports, found where they live now.
 
 The hook also makes the README the site's home page (``index.md``) and turns a link to a file of the repository
@@ -247,6 +247,17 @@ CONNECTOR_VARIANTS = {
     "[history]": _CONNECTOR_BASE + "[history]\nweight = [0.1]\nrate = [1.0]\n",
     "[dahl]": _CONNECTOR_BASE + "[dahl]\nsigma = 10.0\nforce = 0.1\n",
 }
+# The scenes whose descriptions the tables show: every effect at once, so that a formula (the reaction's, the
+# stored energy's) names every term it can have.
+DESCRIBED = {
+    "force": _ELEMENT_BASE + "[spring]\nk0 = 1.0\n[cubic]\nk3 = 1.0\n[damper]\nc = 0.1\n[branches]\nk = [1.0, 2.0]\n"
+                             "eta = [0.1, 0.2]\nc = [1.0, 2.0]\n[friction]\nalpha = 0.1\nalpha_kinetic = 0.05\n"
+                             "stribeck_velocity = 0.1\n[delay]\ngain = 0.1\ntau = 0.5\n[history]\nweight = [0.1, 0.2]\n"
+                             "rate = [1.0, 2.0]\n",
+    "displacement": _CONNECTOR_BASE + "[cubic]\nk3 = 1.0\n[damper]\nc = 0.1\n[branches]\nk = [1.0, 2.0]\n"
+                                      "eta = [0.1, 0.2]\n[delay]\ngain = 0.1\ntau = 0.5\n[history]\nweight = [0.1]\n"
+                                      "rate = [1.0]\n[dahl]\nsigma = 10.0\nforce = 0.1\n",
+}
 # A network of every kind of element; its node and element names are replaced by placeholders in the table.
 _NETWORK = """[network]
 nodes = ["NodeA", "NodeB"]
@@ -281,23 +292,32 @@ PLACEHOLDERS = {"NodeA": "<node>", "NodeB": "<node>", "SpringX": "<spring>", "Da
 
 
 def _descriptions(text: str, folder: pathlib.Path, label: str) -> dict:
-    """``{"2.0": root, "3.0": root}``: the model descriptions of the scene ``text``'s FMUs. FMI 2.0: the FMU that
-    ``build_fmu`` builds (the PythonFMU runtime; the native FMI 2.0 FMU declares the same variables, with
-    ``needsExecutionTool="false"``); FMI 3.0: the native runtime's description made from it, as the native build
-    makes it (without compiling kernels)."""
-    from prandtl_fmu.fmu.build import build_fmu
+    """``{"2.0": root, "3.0": root}``: the model descriptions of the FMUs of the scene ``text``, FMI 2.0 (both
+    runtimes declare the same variables; the PythonFMU one is asked for) and 3.0 (the native runtime's).
+
+    From ``prandtl_fmu.fmu.description.model_description``, the one source both runtimes' builds write their
+    descriptions from; where it is not there yet, from the FMU ``build_fmu`` builds and the FMI 3.0 description the
+    native build makes from it (without compiling kernels)."""
     from prandtl_fmu.scene import load_scene
 
     stem = re.sub(r"\W+", "_", label).strip("_") or "scene"
     path = folder / f"{stem}.toml"
     solver = _S.replace('"implicit"', '"projected"') if "continuum = true" in text else _S  # (implicit refuses it)
     path.write_text(f'name = "{stem}"\n' + text + solver, encoding="utf-8")
-    fmu = build_fmu(path, folder / f"{stem}.fmu")
+    scene = load_scene(path, check_stepper=False)
+    try:
+        from prandtl_fmu.fmu.description import model_description
+    except ImportError:
+        model_description = None
+    if model_description is not None:
+        return {"2.0": ET.fromstring(model_description(scene, fmi=2, runtime="python")),
+                "3.0": ET.fromstring(model_description(scene, fmi=3))}
     import zipfile
 
-    with zipfile.ZipFile(fmu) as archive:
+    from prandtl_fmu.fmu.build import build_fmu
+
+    with zipfile.ZipFile(build_fmu(path, folder / f"{stem}.fmu")) as archive:
         root = ET.fromstring(archive.read("modelDescription.xml"))
-    scene = load_scene(path, check_stepper=False)
     count = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
     if hasattr(scene, "network"):
         from prandtl_fmu.native.network_build import fmi3_network_description
@@ -334,30 +354,32 @@ def _generalized(name: str, description: str) -> tuple:
     for token, placeholder in PLACEHOLDERS.items():
         name, description = name.replace(token, placeholder), description.replace(token, placeholder)
     index = re.search(r"(?:_(\d+)|\[(\d+)\])$", name)
-    if index and not name.startswith(("k_", "spring_")):
+    if index:
         number = index.group(1) or index.group(2)
         name = name[:index.start()] + ("_<i>" if index.group(1) else "[<i>]")
-        description = re.sub(rf"\b{number}\b", "<i>", description)
+        description = re.sub(rf"(?<![\w.]){number}(?![\w.])|(?<=_){number}(?![\w.])", "<i>", description)
     return name, description
 
 
-def _variable_table(variants: dict, folder: pathlib.Path, network: bool = False) -> list:
-    """The rows of one kind of FMU: every variable of every variant, with the variants it appears in."""
+def _variable_table(variants: dict, folder: pathlib.Path, network: bool = False, described: str = "") -> list:
+    """The rows of one kind of FMU: every variable of every variant, with the variants it appears in, described as
+    the FMU of the scene ``described`` (every effect at once) describes it."""
     seen = {}  # generalized name -> {"2.0": info, "3.0": info, "in": [labels]}
     order = []
+    richest = {}  # generalized name -> its description in the FMU of ``described``
+    if described:
+        for fmi, root in _descriptions(described, folder, "described").items():
+            richest.update(_generalized(name, info[4]) for name, info in _variables(root, fmi).items())
     for label, text in variants.items():
-        descriptions = _descriptions(text, folder, label)
-        for fmi, root in descriptions.items():
+        for fmi, root in _descriptions(text, folder, label).items():
             for name, info in _variables(root, fmi).items():
                 general, description = _generalized(name, info[4])
-                info = info[:4] + (description,)
+                info = info[:4] + (richest.get(general, description),)
                 if general not in seen:
                     seen[general] = {"in": []}
                     order.append(general)
                 entry = seen[general]
-                # the description of the richest scene: the element's formulas name the terms present
-                if fmi not in entry or len(info[4]) > len(entry[fmi][4]):
-                    entry[fmi] = info
+                entry.setdefault(fmi, info)
                 if label not in entry["in"]:
                     entry["in"].append(label)
     labels = list(variants)
@@ -385,12 +407,13 @@ def fmu_variables() -> str:
         folder = pathlib.Path(scratch)
         lines = ["### The element (`PrandtlElement`, causality \"force\")", "",
                  "Built from the scene `[mass] m = 1` and from it with one table more each: **in** names the "
-                 "scenes whose FMU has the variable (all of them: *always*).", ""]
-        lines += _variable_table(ELEMENT_VARIANTS, folder)
+                 "scenes whose FMU has the variable (all of them: *always*). The descriptions are those of a scene "
+                 "with every effect at once (a formula names every term it can have).", ""]
+        lines += _variable_table(ELEMENT_VARIANTS, folder, described=DESCRIBED["force"])
         lines += ["", "### The connector (`PrandtlConnector`, causality \"displacement\")", "",
                   "Built from the massless scene `[spring] k0 = 1`, `[fmu] causality = \"displacement\"` and from "
                   "it with one table more each.", ""]
-        lines += _variable_table(CONNECTOR_VARIANTS, folder)
+        lines += _variable_table(CONNECTOR_VARIANTS, folder, described=DESCRIBED["displacement"])
         lines += ["", "### A network (`PrandtlNetwork`)", "",
                   "Built from a network of two nodes with one element of each kind; `<node>` stands for each "
                   "node's name, `<spring>`, `<branch>`... for each element's.", ""]
