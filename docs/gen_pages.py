@@ -66,6 +66,8 @@ def _rule(table, key) -> str:
         parts.append("> 0")
     if key.minimum is not None:
         parts.append(f">= {key.minimum:g}")
+    if key.maximum is not None:
+        parts.append(f"<= {key.maximum:g}")
     choices = key.choice_names()
     if choices:
         parts.append("one of " + ", ".join(f'`"{choice}"`' for choice in choices))

@@ -398,6 +398,8 @@ class _Reader:
             self.fail(name, f"must be an integer, got {_kind(value)}")
         if key.minimum is not None and value < key.minimum:
             self.fail(name, f"must be >= {key.minimum}, got {value}")
+        if key.maximum is not None and value > key.maximum:
+            self.fail(name, f"must be <= {key.maximum}, got {value}")
         return value
 
     def numbers(self, name, *, minimum=_SCHEMA, positive=_SCHEMA, length=None):

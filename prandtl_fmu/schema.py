@@ -78,7 +78,8 @@ TYPES = {
 class Key:
     """One key of a table: its ``type`` (a key of TYPES), ``unit``, ``default`` (REQUIRED, OPTIONAL, a value or
     SameAs), bounds (``positive``: > 0; ``minimum``: >= minimum; ``choices``: a tuple of strings or Names),
-    ``value`` (a value such as an initial state, not a coefficient: only |value| <= 1e50), ``meaning`` (one line),
+    ``maximum`` (an integer's: <= maximum), ``value`` (a value such as an initial state, not a coefficient: only
+    |value| <= 1e50), ``meaning`` (one line),
     ``rule`` (what the reader's own code checks besides) and, for an OPTIONAL key, what its absence means."""
 
     name: str
@@ -88,6 +89,7 @@ class Key:
     default: Any = REQUIRED
     positive: bool = False
     minimum: Optional[float] = None
+    maximum: Optional[int] = None
     choices: Any = None
     value: bool = False
     rule: str = ""
@@ -193,7 +195,7 @@ _K_TOTAL = Key("k_total", "number", "stiffness of the spectrum: k(s) = k_total o
 _ETA_RANGE = Key("eta_range", "list of numbers", "[a, b]: elastic ranges eta(s) = a + (b - a) s, s in [0, 1]", "m",
                  minimum=0.0, rule="two numbers; a < b for the continuum")
 _COUNT = Key("count", "integer", "number n of sampled branches", minimum=1,
-             rule="n branches must fit in memory (256 bytes each)")
+             rule="n branches must fit in the memory available")
 _SHARED_DASHPOT = Key("c", "number", "a dashpot in series with every branch's spring and slider (the series "
                       "model): rate-dependent hysteresis", "N s/m", default=OPTIONAL, positive=True,
                       absent="no series dashpots", rule="one number for every branch (not a list)")
@@ -210,7 +212,8 @@ _NOISE = (
         absent="required with noise_intensity", rule=f"{SEED_RULE}; only with noise_intensity"),
     Key("noise_unit", "number", "the Brownian tree's time unit: a property of the path, not of the step; the "
         "coarsest step is a good choice", "s", default=1.0, positive=True,
-        rule="the step >= 2^-40 units, stop_time <= 2^52 units; only with noise_intensity"),
+        rule="the step >= 2^-40 units, stop_time <= 2^52 units; only with a noise (noise_intensity, or the "
+             "white_noise kind)"),
 )
 _LOAD_KIND = Key("kind", "string", "the force history", choices=("harmonic", "constant", "table", "random",
                                                                   "white_noise"))
@@ -407,7 +410,7 @@ SCHEMA = {table.name: table for table in (
         Key("gain", "number", "gain (either sign)", "N/m on x, N s/m on v",
             rule="a negative gain: refused on a massless element without a dashpot, and with tau < step"),
         Key("tau", "number", "the delay", "s", positive=True,
-            rule="a buffer of ceil(tau / step) + 6 values must fit in memory (and 2^31)"),
+            rule="its buffer, about tau / step values, must fit in the memory available (and hold at most 2^31)"),
         _ACTS_ON,
     ], source="Lamarque, Bastien & Holland, SIAM J. Numer. Anal. 41 (2003) (docs/memory.md)"),
     _table("history", "a convolution force on the mass: -int_0^t sum_j weight_j exp(-rate_j (t - s)) y(s) ds", [
@@ -465,7 +468,7 @@ SCHEMA = {table.name: table for table in (
         _BETWEEN, _ELEMENT_NAME, Key("k3", "number", "coefficient", "N/m^3", minimum=0.0)], many=True),
     _table("chain", "the chain sliding on a fixed support: nodes n1 .. n<n>, springs between neighbours, a slider "
            "of each node on the support, the load on the last node", [
-               Key("n", "integer", "number of nodes", minimum=1, rule="<= 10^7"),
+               Key("n", "integer", "number of nodes", minimum=1, maximum=10_000_000),
                Key("m", "number or list of numbers", "mass of each node (0: the quasi-static chain)", "kg",
                    minimum=0.0, rule="a list: one per node"),
                Key("k", "number or list of numbers", "springs between neighbours", "N/m", default=OPTIONAL,

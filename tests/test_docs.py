@@ -163,12 +163,10 @@ def test_the_block_reader_finds_fences_markers_and_indented_blocks(tmp_path):
 @pytest.mark.slow
 def test_the_site_builds_with_no_warning(tmp_path):
     try:
-        import mkdocs  # noqa: F401
-        import material  # noqa: F401
-        import mkdocstrings  # noqa: F401
-    except ImportError as exc:
-        print(f"skipped: the documentation tools are not installed ({exc}): pip install -e \".[docs]\"")
-        pytest.skip(f"the documentation tools are not installed ({exc.name}): pip install -e \".[docs]\"")
+        import mkdocs  # noqa: F401  (its theme and plugins missing, with mkdocs there, fail the build: a broken extra)
+    except ImportError:
+        print("skipped: mkdocs is not installed: pip install -e \".[docs]\"")
+        pytest.skip("mkdocs is not installed: pip install -e \".[docs]\"")
     done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-d", str(tmp_path / "site")],
                           cwd=ROOT, capture_output=True, text=True, timeout=1800,
                           env=dict(os.environ, NO_MKDOCS_2_WARNING="1"))

@@ -355,8 +355,6 @@ def _chain(source, data) -> Network:
     r = _Reader(source, "chain", data)
     r.only()
     n = r.integer("n")
-    if n > 10_000_000:
-        r.fail("n", f"must be <= 10000000, got {n}")
     nodes = tuple(f"n{i + 1}" for i in range(n))
     mass = _per_node(r, "m", n)
     k = _per_node(r, "k", n - 1, required=n > 1) if n > 1 else np.zeros(0)
