@@ -100,11 +100,11 @@ def scene_reference() -> str:
         "",
         f"**Numbers.** A *coefficient* (every number of a physical table unless marked *a value*) is 0 or has "
         f"|value| in [{_power(SMALLEST_MAGNITUDE)}, {_power(LARGEST_MAGNITUDE)}]; *a value* (an initial state, a "
-        f"belt's speed, every number of `[load]`) has |value| <= {_power(LARGEST_MAGNITUDE)}; the `[solver]` times have their own "
-        "rules. Every number is finite. An integer is a number; a number is not an integer.",
+        f"belt's speed, every number of `[load]`) has |value| <= {_power(LARGEST_MAGNITUDE)}; the `[solver]` times "
+        "have their own rules. Every number is finite. An integer is a number; a number is not an integer.",
         "",
-        "**Rule** lists what the reader refuses: the bounds, then (after the bounds) what the reader's code "
-        "checks between keys. **Forms**: a table with several forms takes the keys of one of them, chosen as "
+        "**Rule** lists what the reader refuses: the bounds, then what the reader's code checks besides (what ties "
+        "keys together). **Forms**: a table with several forms takes the keys of one of them, chosen as "
         "its line says.",
         "",
         "**Top level.** An element scene may hold "
