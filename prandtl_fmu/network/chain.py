@@ -24,10 +24,18 @@ a lazy shift and a lazy added linear function, so a step of the programme costs 
 search for the next zero crosses. Backward: g_N = F, and g_j = the point of [g_(j+1) - alpha_j, g_(j+1) +
 alpha_j] (within C_j's domain) nearest to g*_j.
 
-Then node c_j sticks where its window did not clip g_j (its slider's force is strictly inside); a sticking
-node keeps its place exactly, and the others follow from it through the elongations g_j / k_j (with no node
-sticking, from the wall). Work: a stated budget of crossings (:data:`BUDGET_PER_NODE`); past it, or where the
-chain's form is not met, :func:`chain_step` returns -1 and the active-set method takes the step.
+The programme's lazy sums carry roundings that grow with n and with the spread of the stiffnesses (a
+segment's slope is a difference of two running sums of 1 / k), so only its decisions are kept: node c_j
+sticks where its window did not clip g_j, and the others slip the way their force says. From those, the
+tensions and places are settled exactly (:func:`_settle`: between two sticking nodes, one unknown tension
+that the springs' elongations fix; the same linear algebra the active-set method does at its last
+iteration), and the answer is checked: every sticking slider within its range, every slipping node moving
+its slider's way. A sticking node keeps its place exactly.
+
+Work: a stated budget of crossings (:data:`BUDGET_PER_NODE`). Past it, where the chain's form is not met, or
+where the settled answer fails its check (a decision the roundings turned: a slider within a rounding of its
+threshold), :func:`chain_step` returns -1 and the active-set method takes the step, warm-started from the
+programme's pieces.
 """
 import numpy as np
 
@@ -37,11 +45,11 @@ SPRING, SLIDER = 0, 2  # kernels.py's kinds (a test checks they agree)
 GROUND = -1
 BUDGET_PER_NODE = 64  # segments a step's zero searches may cross, per node (plus a constant): then refused
 BUDGET_CONSTANT = 1000
-# a node's slider: slipping (at its force, a tie included), sticking, or sticking with its force inside its range
-# by more than MARGIN (relative): such a node keeps its place exactly (a tie computed with a rounding error
-# never does)
-SLIPPING, STUCK, STUCK_HELD = 0, 1, 2
-MARGIN = 1e-9
+# a node's slider in the programme's answer: slipping (at its force, a tie included) or sticking
+SLIPPING, STUCK = 0, 1
+# the settled answer's check: a rounding of each of the n terms summed along the chain, relative to the largest
+# force and place (past it the active-set method takes the step)
+ROUNDING = 64.0 * np.finfo(np.float64).eps
 
 
 @kernel
@@ -144,7 +152,7 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
     """The programme of the module docstring on N springs: ``k[j]``, ``y[j]`` = k_j e_j, ``alpha[j]`` the
     slider at node j (the node after spring j), ``wall`` whether spring 0 exists (else g_0 = 0 and the
     programme starts at spring 1), ``force`` the load on node N-1. Writes the tensions ``g`` and ``stuck[j]``
-    (SLIPPING, STUCK or STUCK_HELD). Returns 1, -2 when no tensions balance the load (it
+    (SLIPPING or STUCK). Returns 1, -2 when no tensions balance the load (it
     is beyond the sliders' reach), -1 past ``budget`` crossings."""
     n = k.shape[0]
     first = 0 if wall else 1
@@ -152,8 +160,7 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
         if not abs(force) <= alpha[0]:
             return -2
         g[0] = 0.0
-        margin = alpha[0] - abs(force)
-        stuck[0] = SLIPPING if margin <= 0.0 else (STUCK_HELD if margin > MARGIN * alpha[0] else STUCK)
+        stuck[0] = STUCK if abs(force) < alpha[0] else SLIPPING
         return 1
     capacity = 2 * n + 4
     left = np.empty((capacity, 4))
@@ -252,24 +259,25 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
         a = alpha[j]
         low_window, high_window = following - a, following + a
         if j == n - 1 and (low_window > highs[j] or high_window < lows[j]):
-            return -2
+            excess = max(low_window - highs[j], lows[j] - high_window)
+            reach = abs(force)
+            for i in range(n):
+                reach += alpha[i]
+            return -2 if excess > ROUNDING * n * reach else -1  # (a tie the sums' roundings decide: not here)
         value = minimiser[j]
-        state = STUCK_HELD
+        state = STUCK
         if value <= low_window:  # (a tie is a clip: the slider is at its force)
             value = low_window
             state = SLIPPING
         elif value >= high_window:
             value = high_window
             state = SLIPPING
-        elif min(value - low_window, high_window - value) <= MARGIN * (abs(following) + a + abs(value)):
-            state = STUCK
         g[j] = min(max(value, lows[j]), highs[j])
         stuck[j] = state
         following = g[j]
     if not wall:
         g[0] = 0.0
-        margin = alpha[0] - abs(g[1])
-        stuck[0] = SLIPPING if margin <= 0.0 else (STUCK_HELD if margin > MARGIN * alpha[0] else STUCK)
+        stuck[0] = STUCK if abs(g[1]) < alpha[0] else SLIPPING
     return 1
 
 
@@ -277,8 +285,9 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
 def chain_step(model, x, piece, force, fixed_node, d, term):
     """The implicit step of a massless chain: the increments ``d`` of the nodes, each element's force
     ``term`` and the sliders' pieces (0 sticking, +-1 slipping). Returns 1, -2 when no equilibrium exists, -3
-    on a non-finite number, -1 when the network is not a massless chain or the programme ran past its
-    budget (the active-set method then takes the step: nothing was written)."""
+    on a non-finite number, -1 when the active-set method is to take the step: the network is not a massless
+    chain, the programme ran past its budget, or its answer did not pass the check of :func:`_settle` (only
+    the pieces may then have been written: the programme's, a warm start)."""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     order = np.empty(n, np.int64)
@@ -286,6 +295,8 @@ def chain_step(model, x, piece, force, fixed_node, d, term):
     slider_at = np.empty(n, np.int64)
     if not chain_form(model, fixed_node, order, spring_to, slider_at):
         return -1
+    if not abs(force) < np.inf:
+        return -3
     wall = spring_to[0] >= 0
     stiffness = np.ones(n)
     y = np.zeros(n)
@@ -296,6 +307,8 @@ def chain_step(model, x, piece, force, fixed_node, d, term):
             stiffness[j] = coef[e, 0]
             elongation = x[order[j]] - (x[order[j - 1]] if j > 0 else 0.0)
             y[j] = stiffness[j] * elongation
+            if not abs(y[j]) < np.inf:
+                return -3
         if slider_at[j] >= 0:
             alpha[j] = coef[slider_at[j], 0]
     g = np.empty(n)
@@ -303,14 +316,21 @@ def chain_step(model, x, piece, force, fixed_node, d, term):
     status = chain_tensions(stiffness, y, alpha, wall, force, BUDGET_PER_NODE * n + BUDGET_CONSTANT, g, stuck)
     if status < 0:
         return status
+    # the programme's answer says which sliders stick and which way the others slip; the tensions and places
+    # are then settled exactly from that (its lazy sums carry roundings that grow with n and the spread of k)
+    slip = np.zeros(n)  # a slipping node's slider force: +-alpha (0 for a node that sticks or has none)
     held = np.empty(n, np.bool_)
     for j in range(n):
-        held[j] = stuck[j] == STUCK_HELD and slider_at[j] >= 0
+        held[j] = stuck[j] != SLIPPING and alpha[j] > 0.0
+        if not held[j]:
+            following = g[j + 1] if j + 1 < n else force
+            slip[j] = alpha[j] if following - g[j] > 0.0 else -alpha[j]
+        e = slider_at[j]
+        if e >= 0:
+            piece[e] = 0 if held[j] else (1 if slip[j] > 0.0 else -1)
     places = np.empty(n)
-    _places(x, order, stiffness, g, alpha, held, wall, force, places)
-    for j in range(n):
-        if not abs(places[j]) < np.inf:
-            return -3
+    if not _settle(x, order, stiffness, alpha, force, wall, held, slip, g, places):
+        return -1
     for j in range(n):
         node = order[j]
         d[node] = 0.0 if held[j] else places[j] - x[node]
@@ -319,54 +339,76 @@ def chain_step(model, x, piece, force, fixed_node, d, term):
             term[e] = g[j] if ends[e, 1] == GROUND or ends[e, 0] == node else -g[j]
         e = slider_at[j]
         if e >= 0:
-            following = g[j + 1] if j + 1 < n else force
-            if stuck[j] != SLIPPING:
-                piece[e] = 0
-                term[e] = following - g[j]
-            else:
-                piece[e] = 1 if following - g[j] > 0.0 else -1
-                term[e] = coef[e, 0] * piece[e]
+            term[e] = ((g[j + 1] if j + 1 < n else force) - g[j]) if held[j] else slip[j]
     return 1
 
 
 @kernel
-def _places(x, order, stiffness, g, alpha, held, wall, force, places):
-    """The nodes' new places from the tensions: node j is the one before it plus g_j / k_j, from the wall or
-    from a node that keeps its place (``held``). Without a wall and with no node held (every slider at its
-    force, or within MARGIN of it), the chain's place is the minimiser over its translation t of
-    sum_j alpha_j |d_j(t)| - F d_(N-1)(t), the place where the sliders' forces balance F: a weighted median."""
+def _settle(x, order, stiffness, alpha, force, wall, held, slip, g, places):
+    """The tensions ``g`` and places of the chain where the ``held`` nodes keep their place and every other
+    node's slider pulls with ``slip``: between two held nodes the tensions are G + (the slips' partial
+    sums), G such that the springs' elongations add up to the held nodes' distance; from the last held node
+    on, the load sets them; before the first one, the wall's place (0) or g_0 = 0 without a wall. Then the
+    check: every held slider's force within its range, every slipping node moving its slider's way (to a
+    rounding). False where it fails, or where nothing holds the chain (no wall, no node held)."""
     n = g.shape[0]
-    places[0] = g[0] / stiffness[0] if wall else 0.0
-    for j in range(1, n):
-        places[j] = places[j - 1] + g[j] / stiffness[j]
-    first = -1
+    previous = -1  # the last held node
+    for b in range(n + 1):
+        if b < n and not held[b]:
+            continue
+        if b == n:  # the tail: from the load's node back to the last held node, the load sets the tensions
+            following = force
+            for j in range(n - 1, previous, -1):
+                g[j] = following - slip[j]
+                following = g[j]
+            if previous < 0:
+                if not wall:
+                    return False  # nothing holds the chain: the active-set method says why (or how)
+                places[0] = g[0] / stiffness[0]
+                previous = 0
+            for j in range(previous + 1, n):
+                places[j] = places[j - 1] + g[j] / stiffness[j]
+            break
+        places[b] = x[order[b]]
+        if previous < 0 and not wall:  # springs 1 .. b, g_0 = 0: set by the slips; places back from b
+            following = 0.0
+            for j in range(1, b + 1):
+                following += slip[j - 1]
+                g[j] = following
+            g[0] = 0.0
+            for j in range(b - 1, -1, -1):
+                places[j] = places[j + 1] - g[j + 1] / stiffness[j + 1]
+        else:  # springs first .. b: g_j = G + partial sums, their elongations fill the distance
+            first = previous + 1
+            distance = places[b] - (places[previous] if previous >= 0 else 0.0)
+            partial = 0.0
+            weights = 0.0
+            known = 0.0
+            for j in range(first, b + 1):
+                g[j] = partial
+                weights += 1.0 / stiffness[j]
+                known += partial / stiffness[j]
+                if j < b:
+                    partial += slip[j]
+            common = (distance - known) / weights
+            for j in range(first, b + 1):
+                g[j] += common
+            for j in range(first, b):
+                places[j] = (places[j - 1] if j > 0 else 0.0) + g[j] / stiffness[j]
+        previous = b
+    # the check (the tolerance: a rounding of each term summed along the chain, at the largest force and place)
+    forces = abs(force)
+    lengths = 0.0
+    for j in range(n):
+        if not abs(g[j]) < np.inf or not abs(places[j]) < np.inf:
+            return False
+        forces = max(forces, alpha[j], abs(g[j]))
+        lengths = max(lengths, abs(places[j]), abs(x[order[j]]))
     for j in range(n):
         if held[j]:
-            first = j
-            break
-    if first < 0 and not wall:
-        # d_j(t) = t - tau_j with tau_j = x_j - places_j: phi'(t) = sum_j alpha_j sign(t - tau_j) - F, which
-        # rises from -sum alpha - F to sum alpha - F; its zero is at some tau_j (that node keeps its place)
-        tau = np.empty(n)
-        for j in range(n):
-            tau[j] = x[order[j]] - places[j]
-        ranked = np.argsort(tau)
-        slope = -force
-        for j in range(n):
-            slope -= alpha[j]
-        median = ranked[n - 1]
-        for i in range(n):
-            slope += 2.0 * alpha[ranked[i]]
-            if slope >= 0.0:
-                median = ranked[i]
-                break
-        held[median] = True
-        first = median
-    if first < 0:  # with a wall, nothing held: the places from the wall
-        return
-    places[first] = x[order[first]]
-    if not wall:  # before the first node held: back from it (with a wall: from the wall)
-        for j in range(first - 1, -1, -1):
-            places[j] = places[j + 1] - g[j + 1] / stiffness[j + 1]
-    for j in range(first + 1, n):
-        places[j] = x[order[j]] if held[j] else places[j - 1] + g[j] / stiffness[j]
+            following = g[j + 1] if j + 1 < n else force
+            if abs(following - g[j]) > alpha[j] + ROUNDING * n * forces:
+                return False
+        elif slip[j] != 0.0 and (places[j] - x[order[j]]) * slip[j] < -ROUNDING * n * lengths * alpha[j]:
+            return False
+    return True
