@@ -14,17 +14,17 @@ from __future__ import annotations
 
 import hashlib
 import os
-import re
 import shutil
 import sys
 import tempfile
 import zipfile
 from pathlib import Path
 from typing import Optional, Union
-from xml.sax.saxutils import escape as xml_escape
 
 from ..outputs import write_atomically
-from ..scene import SceneError, load_scene, scene_path as resolve_scene
+from ..scene import load_scene, scene_path as resolve_scene
+from .archive import add_entry, built_scene, file_stem
+from .description import is_network, model_identifier
 
 LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
 MODEL_IDENTIFIER = "PrandtlElement"
@@ -42,24 +42,6 @@ def _digest(scene_bytes: bytes, loader: str) -> str:
     from .._jit import source_digest
 
     return hashlib.sha256(scene_bytes + loader.encode() + source_digest().encode()).hexdigest()[:12]
-
-
-def file_stem(name: str) -> str:
-    """A scene name as a file name: data, never a path. Letters, digits, '-', '_' and '.' are kept, anything
-    else becomes '_'; no leading dot; an empty result is 'prandtl_element'."""
-    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".")[:100]
-    return stem or "prandtl_element"
-
-
-def _check_noise_seed(scene) -> None:
-    """An FMU's noise_seed is an FMI Integer (32 bits): a scene's seed beyond it is refused here, naming the
-    user's scene (the slave checks it again where PythonFMU copies the scene)."""
-    from .common import NOISE_SEED_LIMIT
-
-    noise = getattr(scene.load, "noise", None)
-    if noise is not None and noise.seed >= NOISE_SEED_LIMIT:
-        raise SceneError(f"{scene.source}: [load] the noise's seed {noise.seed}: an FMU's noise_seed is an FMI "
-                         "Integer (32 bits): it must be < 2^31")
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
@@ -99,7 +81,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         from .osp import file_name, osp_model_description, port_variables
 
         native_scene = load_scene(scene_path, check_stepper=False)
-        network = _is_network(native_scene)
+        network = is_network(native_scene)
         if network:
             from ..native import build as native_build
 
@@ -125,18 +107,14 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     from pythonfmu import FmuBuilder
 
     from . import loader as native
-    from .osp import file_name, model_identifier, osp_model_description, port_variables
+    from .osp import file_name, osp_model_description, port_variables
 
     loader = "prandtl" if loader is None else loader
     if loader not in native.LOADERS:
         raise ValueError(f"--loader: must be one of {', '.join(native.LOADERS)}, got {loader!r}")
     if loader == "prandtl" and native.stale():
         raise RuntimeError(native.stale())
-    scene = load_scene(scene_path, check_stepper=causality != "displacement")
-    _check_noise_seed(scene)
-    scene_bytes = Path(resolve_scene(scene_path)).read_bytes()
-    if causality is not None:
-        scene, scene_bytes = _with_causality(scene, scene_bytes, causality)
+    scene, scene_bytes = built_scene(scene_path, causality)
     out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
     if out.is_dir():
         raise ValueError(f"{out}: is a directory")
@@ -161,7 +139,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
         network_marker = "\n_NETWORK = False\n"
         if entry.count(network_marker) != 1:
             raise RuntimeError("entry.py has lost its _NETWORK line")
-        entry = entry.replace(network_marker, f"\n_NETWORK = {_is_network(scene)}\n")
+        entry = entry.replace(network_marker, f"\n_NETWORK = {is_network(scene)}\n")
         script.write_text(entry, encoding="utf-8")
         (staging / "scene.toml").write_bytes(scene_bytes)
         (staging / file_name(identifier)).write_text(osp_text, encoding="utf-8")
@@ -192,13 +170,6 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     return out
 
 
-def _is_network(scene) -> bool:
-    """Whether a scene is a network ([network] or [chain]): its FMUs are ``network_slave.py``'s."""
-    from ..network.model import NetworkScene
-
-    return isinstance(scene, NetworkScene)
-
-
 def _check_osp_name(name: str) -> None:
     if file_stem(name) != name:
         raise ValueError(f"--osp: the scene name {name!r} is not a plain file name, and libcosim looks for "
@@ -206,51 +177,18 @@ def _check_osp_name(name: str) -> None:
                          "'-', '_' and '.'")
 
 
-def _with_causality(scene, scene_bytes: bytes, causality: str):
-    """The scene (and its text) with ``[fmu] causality`` set; SceneError if its own table says otherwise."""
-    from ..scene import CAUSALITIES, SceneError, parse_scene
-
-    if causality not in CAUSALITIES:
-        raise SceneError(f"--causality: must be one of {', '.join(CAUSALITIES)}, got {causality!r}")
-    if b"[fmu]" in scene_bytes or scene.causality != "force":
-        if scene.causality != causality:
-            raise SceneError(f"{scene.source}: [fmu] causality = {scene.causality!r} contradicts --causality "
-                             f"{causality}: change one of them")
-        return scene, scene_bytes
-    text = scene_bytes.rstrip(b"\n") + f'\n\n[fmu]\ncausality = "{causality}"\n'.encode()
-    return parse_scene(text, scene.source), text
-
-
-def add_entry(archive: zipfile.ZipFile, name: str, data, mode: int = 0o644) -> None:
-    """Write ``data`` (bytes or text) as the regular file ``name`` of ``archive``, deflated, with ``mode`` (0644:
-    what every FMU has; ZipFile.writestr with a bare name writes 0600, which a master running as another user
-    cannot read once unpacked)."""
-    info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
-    info.compress_type = zipfile.ZIP_DEFLATED
-    info.external_attr = (0o100000 | mode) << 16
-    archive.writestr(info, data)
-
-
 def _finish(fmu: Path, scene, loader: str) -> None:
-    """Name the model after the scene (``modelName``; the ``modelIdentifier``, which names the binaries,
-    stays :data:`MODEL_IDENTIFIER`), put the patched loader in place of PythonFMU's where there is one (with
-    ``loader="prandtl"``; PythonFMU's licence in ``documentation/licenses/``) and add
-    ``documentation/index.html``."""
+    """Put the patched loader in place of PythonFMU's where there is one (with ``loader="prandtl"``; PythonFMU's
+    licence in ``documentation/licenses/``) and add ``documentation/index.html``. (The model description is the
+    slave's, ``description.fmi2_root``: named after the scene, with the units, bounds and dependencies.)"""
     from . import loader as native
     from .documentation import index_html
 
     with zipfile.ZipFile(fmu) as archive:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
-    model_name = xml_escape(scene.name, {'"': "&quot;"})
     with zipfile.ZipFile(fmu, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         for info, data in entries:
             if info.filename == "modelDescription.xml":
-                text = data.decode("utf-8")
-                text, count = re.subn(r'(<fmiModelDescription\b[^>]*?\smodelName=")[^"]*(")',
-                                      lambda m: m.group(1) + model_name + m.group(2), text, count=1)
-                if count != 1:
-                    raise RuntimeError("modelDescription.xml written by PythonFMU has no modelName attribute")
-                data = text.encode("utf-8")
                 model_description = data
             if loader == "prandtl":
                 data = native.replacement(info.filename) or data

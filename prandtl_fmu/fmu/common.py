@@ -12,16 +12,14 @@ import ctypes
 import json
 import math
 import os
-import sys
 
-from pythonfmu import Boolean, Fmi2Slave, Integer, Real, String
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
+from pythonfmu import __version__ as pythonfmu_version
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from ..scene import load_scene
-
-DBL_MAX = sys.float_info.max
-SMALLEST = 5e-324  # the smallest positive double: FMI's min is inclusive, and 0 is refused
+from .description import NOISE_SEED_LIMIT, check_noise_settings, fmi2_root, variables
 
 
 class Refused(Exception):
@@ -30,6 +28,24 @@ class Refused(Exception):
 
 def finite_number(value) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+
+
+def register_variables(slave, accessors: dict) -> set:
+    """Register the FMU's variables (``description.variables`` of the slave's scene, in value-reference order)
+    with PythonFMU, each with its getter and setter, ``accessors[name] = (getter, setter)`` (setter None: the
+    variable cannot be set). Returns the names of the fixed variables (a setter refuses them after
+    initialization)."""
+    kinds = {"Float64": Real, "Int32": Integer, "Boolean": Boolean, "String": String}
+    for row in variables(slave.scene):
+        getter, setter = accessors[row.name]
+        variable = kinds[row.type](row.name, causality=Fmi2Causality[row.causality],
+                                   variability=Fmi2Variability[row.variability], description=row.description,
+                                   getter=getter, setter=setter)
+        slave.register_variable(variable)
+        if variable.value_reference != row.value_reference:
+            raise RuntimeError(f"{row.name}: value reference {variable.value_reference}, the description's is "
+                               f"{row.value_reference}")
+    return {row.name for row in variables(slave.scene) if row.variability == "fixed"}
 
 
 class SlaveBase(Fmi2Slave):
@@ -51,6 +67,11 @@ class SlaveBase(Fmi2Slave):
         branches = getattr(self.scene, "branches", None)  # a network scene has none: its slaves have no n
         # the variable n: the number of branches, -1 for the continuous element
         self.n = 0 if branches is None else -1 if branches.continuum else branches.n
+
+    def to_xml(self, model_options=dict()):
+        """The model description PythonFMU's builder writes: ``description.fmi2_root`` of the scene (the native
+        FMU's too)."""
+        return fmi2_root(self.scene, guid=str(self.guid), generation_tool=f"PythonFMU {pythonfmu_version}")
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         if not finite_number(start_time):
@@ -179,8 +200,6 @@ class SlaveBase(Fmi2Slave):
 
 # ------------------------------------------------------------ the white noise an FMU generates (issue 34)
 
-NOISE_SEED_LIMIT = 2 ** 31  # an FMI 2.0 Integer is 32 bits: an FMU's seed is below this
-
 
 class NoiseParameters:
     """The parameters ``noise_intensity`` (sigma, N sqrt(s)), ``noise_seed`` and ``noise_unit`` (s) of a slave
@@ -200,28 +219,10 @@ class NoiseParameters:
             raise SceneError(f"{self.scene.source}: [load] seed {self.noise_seed}: an FMU's noise_seed is an FMI "
                              f"Integer (32 bits): it must be < 2^31")
 
-    def _register_noise(self):
-        from pythonfmu import Fmi2Causality, Fmi2Variability
-
-        from .description import RealVariable
-
-        self.register_variable(RealVariable(
-            "noise_intensity", unit="N.s0.5", min=0.0, max=DBL_MAX, causality=Fmi2Causality.parameter,
-            variability=Fmi2Variability.tunable,
-            description="intensity sigma (N sqrt(s)) of the white noise the FMU adds to the force: F + sigma xi(t), "
-                        "xi = dB/dt; 0: none; must be >= 0 (docs/white-noise.md)",
-            getter=lambda: self.noise_intensity, setter=lambda value: setattr(self, "noise_intensity", value)))
-        self.register_variable(Integer(
-            "noise_seed", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            description="seed of the white noise's Brownian path (0 <= seed < 2^31): the path is a function of the "
-                        "seed and the time alone",
-            getter=lambda: self.noise_seed, setter=lambda value: setattr(self, "noise_seed", value)))
-        self.register_variable(RealVariable(
-            "noise_unit", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            min=SMALLEST, max=DBL_MAX,
-            description="time unit of the Brownian tree (a property of the path, not of the step): about one "
-                        "normal per internal step when the step is the unit over a power of two; must be > 0",
-            getter=lambda: self.noise_unit, setter=lambda value: setattr(self, "noise_unit", value)))
+    def _noise_accessors(self) -> dict:
+        """The getters and setters of noise_intensity, noise_seed, noise_unit (``register_variables``)."""
+        return {name: (lambda name=name: getattr(self, name), lambda value, name=name: setattr(self, name, value))
+                for name in ("noise_intensity", "noise_seed", "noise_unit")}
 
     def _noise_settings(self) -> tuple:
         return (self.noise_intensity, self.noise_seed, self.noise_unit)
@@ -248,12 +249,7 @@ class NoiseParameters:
     def _check_noise_state(settings: dict):
         """The white noise of a saved state's settings (None: none), against which the library checks the
         state's stepper and coefficients; ValueError if a setting breaks a rule."""
-        from ..loads import white_noise
-
-        seed = settings["noise_seed"]
-        if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < NOISE_SEED_LIMIT):
-            raise ValueError(f"noise_seed = {seed!r}: must be an integer, 0 <= seed < 2^31")
-        return white_noise(settings["noise_intensity"], seed, settings["noise_unit"])
+        return check_noise_settings(settings["noise_intensity"], settings["noise_seed"], settings["noise_unit"])
 
     def _set_noise_values(self, settings: dict) -> None:
         self.noise_intensity = settings["noise_intensity"]

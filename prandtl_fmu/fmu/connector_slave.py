@@ -27,30 +27,14 @@ NaN with fmi2OK); a bad parameter or input at ``fmi2ExitInitializationMode``
 fails that call with the logged reason.
 """
 
-from pythonfmu import Fmi2Causality, Fmi2Variability, Integer
-
-from .. import __version__
 from ..connector import Connector
 from ..stepping import ElementError
 from ..scene import coefficient_problem
-from .common import DBL_MAX, SMALLEST, SlaveBase, finite_number
-from .description import RealVariable, complete
-from .slave import memory_parameters
-from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
-
-PARAMETERS = [  # (name, table of the scene, unit, description)
-    ("k0", "spring", "N/m", "stiffness of the linear spring: force k0 x"),
-    ("k3", "cubic", "N/m3", "coefficient of the cubic spring: force k3 x^3"),
-    ("c", "damper", "N.s/m", "dashpot coefficient: force c v"),
-]
+from .common import SlaveBase, finite_number, register_variables
 
 
 class PrandtlConnector(SlaveBase):
-    author = "prandtl_fmu"
-    description = ("Generalized Prandtl element (dry-friction hysteresis) as a connector between two bodies: "
-                   "relative motion x, v in, force out; the springs, dashpot and Prandtl branches of its scene "
-                   "(documentation/index.html)")
-    version = __version__
+    """The element as a connector (module docstring); its variables: ``description.connector_variables``."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -65,64 +49,21 @@ class PrandtlConnector(SlaveBase):
     # ------------------------------------------------------------ variables
 
     def _register(self):
-        real = RealVariable
-        self.register_variable(real(
-            "x", unit="m", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=0.0,
-            description="relative displacement of the two flanges (linear between communication points)",
-            getter=lambda: self.x, setter=lambda value: setattr(self, "x", value)))
-        self.register_variable(real(
-            "v", unit="m/s", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=0.0, description="relative velocity of the two flanges",
-            getter=lambda: self.v, setter=lambda value: setattr(self, "v", value)))
-        outputs = [
-            ("force", "N", f"force the element transmits: {reaction_formula(self.scene)}",
-             lambda: self._current().force),
-            ("stiffness", "N/m", "tangent stiffness dF/dx for a motion in the direction of v (of the last motion "
-             f"when v = 0): {stiffness_formula(self.scene)}", lambda: self._current().stiffness()),
-            ("stored_energy", "J", f"elastic energy {stored_energy_formula(self.scene)}",
-             lambda: self._current().stored_energy()),
-        ]
-        if self.scene.branches is not None:
-            outputs.append(("dissipated_sliders", "J", "work dissipated by the sliders since the start: "
-                            "sum alpha_i |slip_i|", lambda: self._current().energy()["dissipated_sliders"]))
-        if self.scene.damper is not None or self.scene.has_series_dashpots:
-            outputs.append(("dissipated_damper", "J", "work dissipated by the dashpot and the branches' series "
-                            "dashpots up to the last doStep (v linear between communication points)",
-                            lambda: self.connector.energy()["dissipated_damper"]))
-        for name, unit, text, getter in outputs:
-            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
-        parameters = list(PARAMETERS)
+        """The FMU's variables (``description.connector_variables``), each read and set here."""
+        accessors = {
+            "x": (lambda: self.x, lambda value: setattr(self, "x", value)),
+            "v": (lambda: self.v, lambda value: setattr(self, "v", value)),
+            "force": (lambda: self._current().force, None),
+            "stiffness": (lambda: self._current().stiffness(), None),
+            "stored_energy": (lambda: self._current().stored_energy(), None),
+            "dissipated_sliders": (lambda: self._current().energy()["dissipated_sliders"], None),
+            "dissipated_damper": (lambda: self.connector.energy()["dissipated_damper"], None),
+            "n": (lambda: self.n, None),
+        }
         for name in self.parameters:
-            if name.startswith("c_branch"):
-                which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
-                parameters.append((name, "branches", "N.s/m", f"dashpot in series with the spring and slider of "
-                                   f"{which} (the force relaxes over the time between samples); must be > 0"))
-        for name, table, unit, text in parameters:
-            if name not in self.parameters:
-                continue  # an absent effect has no parameter
-            self.register_variable(real(
-                name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-                min=SMALLEST if name.startswith("c_branch") else 0.0, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
-        for name, table, unit, low, variability, text in memory_parameters(self.scene, self.parameters):
-            self.register_variable(real(
-                name, unit=unit, causality=Fmi2Causality.parameter, variability=variability, min=low, max=DBL_MAX,
-                description=text, getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self._set_fixed(name, value)))
-        self.register_variable(Integer(
-            "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
-            description="number of Prandtl branches (from the scene); -1 for the continuous element",
-            getter=lambda: self.n))
-
-    def to_xml(self, model_options=dict()):
-        root = super().to_xml(model_options)
-        # The force depends directly on both inputs (springs on x, dashpot on v); the stiffness on x (the
-        # cubic spring, which branches stick) and on v (the direction); the energies on x.
-        depends = {"force": ("x", "v"), "stiffness": ("x", "v"), "stored_energy": ("x",),
-                   "dissipated_sliders": ("x",)}
-        return complete(root, list(self.vars.values()), output_dependencies=depends)
+            accessors[name] = (lambda name=name: self.parameters[name],
+                               lambda value, name=name: self._set_parameter(name, value))
+        self._fixed = register_variables(self, accessors)
 
     # ------------------------------------------------------------ the element at the inputs
 
@@ -155,9 +96,9 @@ class PrandtlConnector(SlaveBase):
             self._fail(f"initialization refused: {exc}")
         self._initialized = True
 
-    def _set_fixed(self, name, value):
-        """Setter of a fixed parameter (an effect with memory): refused after initialization."""
-        if getattr(self, "_initialized", False) and value != self.parameters[name]:
+    def _set_parameter(self, name, value):
+        """Setter of a parameter: a fixed one (an effect with memory) is refused after initialization."""
+        if name in self._fixed and getattr(self, "_initialized", False) and value != self.parameters[name]:
             self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (an effect with memory) and cannot "
                        "change after initialization; the connector is unchanged")
         self.parameters[name] = value

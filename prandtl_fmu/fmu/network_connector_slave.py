@@ -24,25 +24,18 @@ output at inputs the library refuses is refused (fmi2Error, never NaN with fmi2O
 """
 import copy
 
-from pythonfmu import Fmi2Causality, Fmi2Variability
-
-from .. import __version__
 from ..stepping import ElementError
 from ..network import NetworkConnector
 from ..scene import SceneError
-from .common import DBL_MAX, SMALLEST, Refused, SlaveBase, finite_number
-from .description import RealVariable, complete
-from .network_slave import check_unique, network_outputs, parameter_variables, rebuilt, restored
+from .common import Refused, SlaveBase, finite_number, register_variables
+from .network_slave import output_getters, rebuilt, restored
 
 STEPPER = "implicit"  # the connector's only one: the imposed motion is a constraint
 
 
 class PrandtlNetworkConnector(SlaveBase):
-    author = "prandtl_fmu"
-    description = ("Network of nodes joined by springs, dashpots, sliders, Prandtl branches and cubic springs as "
-                   "a connector: the motion x, v of its load's node in, the force that holds it out "
-                   "(documentation/index.html)")
-    version = __version__
+    """A network as a connector (module docstring); its variables: ``description.network_connector_variables``."""
+
     check_stepper = False  # the connector takes implicit steps whatever the scene's [solver] stepper
 
     def __init__(self, **kwargs):
@@ -63,43 +56,18 @@ class PrandtlNetworkConnector(SlaveBase):
     # ------------------------------------------------------------ variables
 
     def _register(self):
-        real = RealVariable
-        network = self.scene.network
-        node = self.load_node
-        x0, v0 = self.x, self.v
-        self.register_variable(real(
-            "x", unit="m", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=x0,
-            description=f"displacement of the load's node {node} (linear between communication points)",
-            getter=lambda: self.x, setter=lambda value: setattr(self, "x", value)))
-        self.register_variable(real(
-            "v", unit="m/s", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=v0, description=f"velocity of the load's node {node}",
-            getter=lambda: self.v, setter=lambda value: setattr(self, "v", value)))
-        others = [name for name in network.nodes if name != node]
-        outputs = [("force", "N", f"force of the network's elements on its load's node {node} (what holds the "
-                    "imposed motion)", lambda: self._current().force)]
-        outputs += network_outputs(network, self._current, nodes=others)
-        for name, unit, text, getter in outputs:
-            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
-        for name, unit, low, text in parameter_variables(network, exclude=(f"m_{node}",)):
-            self.register_variable(real(
-                name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-                min=low, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
-        self.register_variable(real(
-            "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            min=SMALLEST, max=DBL_MAX, description="internal time step h of the implicit steps; must be > 0",
-            getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
-        check_unique(self.vars.values())
-
-    def to_xml(self, model_options=dict()):
-        root = super().to_xml(model_options)
-        # every output shows the network moved to the inputs set now: all depend directly on x and v
-        depends = {var.name: ("x", "v") for var in self.vars.values()
-                   if var.causality is not None and var.causality.name == "output"}
-        return complete(root, list(self.vars.values()), output_dependencies=depends)
+        """The FMU's variables (``description.network_connector_variables``), each read and set here."""
+        accessors = {
+            "x": (lambda: self.x, lambda value: setattr(self, "x", value)),
+            "v": (lambda: self.v, lambda value: setattr(self, "v", value)),
+            "force": (lambda: self._current().force, None),
+            "step": (lambda: self.step, lambda value: setattr(self, "step", value)),
+            **output_getters(self.scene.network, self._current),
+        }
+        for name in self.parameters:
+            accessors[name] = (lambda name=name: self.parameters[name],
+                               lambda value, name=name: self.parameters.__setitem__(name, value))
+        register_variables(self, accessors)
 
     # ------------------------------------------------------------ the network at the inputs
 

@@ -30,62 +30,15 @@ The outputs after ``doStep(t, H)`` are those of the network at t + H under the F
 depends directly on F (a master that sets F sees the outputs change at the next step).
 """
 
-from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, String
-
-from .. import __version__
 from ..stepping import UNCHANGED, ElementError
 from ..loads import force_at
 from ..network import NetworkElement
-from ..network.model import NETWORK_STEPPERS, stepper_problem
 from ..scene import SceneError
-from .common import DBL_MAX, SMALLEST, NoiseParameters, SlaveBase, finite_number
-from .description import RealVariable, complete
-
-# the unit and meaning of a coefficient, by its scene key (network/model.py KEYS) and the element's kind
-COEFFICIENTS = {
-    ("spring", "k"): ("N/m", 0.0, "stiffness of the spring {name}: force k (x_i - x_j)"),
-    ("dashpot", "c"): ("N.s/m", 0.0, "coefficient of the dashpot {name}: force c (v_i - v_j)"),
-    ("slider", "alpha"): ("N", 0.0, "threshold of the Saint-Venant slider {name}: force in alpha sign(v_i - v_j)"),
-    ("branch", "k"): ("N/m", SMALLEST, "stiffness of the Prandtl branch {name} (force k u); must be > 0"),
-    ("branch", "eta"): ("m", 0.0, "elastic range of the Prandtl branch {name}: |u| <= eta, threshold k eta"),
-    ("branch", "c"): ("N.s/m", 0.0, "series dashpot of the Prandtl branch {name} (relaxation rate k / c); 0: none"),
-    ("cubic", "k3"): ("N/m3", 0.0, "coefficient of the cubic spring {name}: force k3 (x_i - x_j)^3"),
-}
-
-
-def _end(network, j) -> str:
-    return "the ground" if j < 0 else network.nodes[j]
-
-
-def parameter_variables(network, exclude=()) -> list:
-    """(name, unit, min, description) of every network parameter, in ``Network.parameters()`` order."""
-    described = {}
-    for node, mass in zip(network.nodes, network.mass):
-        described[f"m_{node}"] = ("kg", 0.0, f"mass of node {node}; 0: a massless node (in equilibrium at every "
-                                  "instant)")
-    for e in network.elements:
-        where = f"{e.name} (between {_end(network, e.between[0])} and {_end(network, e.between[1])})"
-        for key in e.coefficients():
-            unit, low, text = COEFFICIENTS[(e.kind, key)]
-            described[f"{key}_{e.name}"] = (unit, low, text.format(name=where))
-    names = [name for name in network.parameters() if name not in exclude]
-    return [(name,) + described[name] for name in names]
-
-
-def check_unique(variables) -> None:
-    """A scene whose names would give two FMU variables the same name is refused at build time."""
-    seen = set()
-    for var in variables:
-        if var.name in seen:
-            raise SceneError(f"two FMU variables would be named {var.name!r}: rename a node or an element")
-        seen.add(var.name)
+from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
 
 class PrandtlNetwork(NoiseParameters, SlaveBase):
-    author = "prandtl_fmu"
-    description = ("Network of nodes joined by springs, dashpots, sliders, Prandtl branches and cubic springs "
-                   "under a force F at its load's node (documentation/index.html)")
-    version = __version__
+    """A network under a force (module docstring); its variables: ``description.network_variables``."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -104,47 +57,20 @@ class PrandtlNetwork(NoiseParameters, SlaveBase):
     # ------------------------------------------------------------ variables
 
     def _register(self):
-        real = RealVariable
-        network = self.scene.network
-        load_node = network.nodes[network.load_node]
-        self.register_variable(real(
-            "F", unit="N", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=0.0,
-            description=f"external force on the load's node {load_node}, held over each step",
-            getter=lambda: self.F, setter=lambda value: setattr(self, "F", value)))
-        outputs = network_outputs(network, lambda: self.element)
-        outputs.insert(2 * network.n, (
-            "reaction", "N", "force of the elements on the ground (the sum over the elements with an end at the "
-            "ground), at the end of the last step", lambda: self.element.reaction))
-        for name, unit, text, getter in outputs:
-            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
-        for name, unit, low, text in parameter_variables(network):
-            self.register_variable(real(
-                name, unit=unit, causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-                min=low, max=DBL_MAX, description=text, getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self.parameters.__setitem__(name, value)))
-        self.register_variable(real(
-            "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            min=SMALLEST, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
-            getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
-        self.register_variable(Boolean(
-            "scene_load", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            description="true: the force on the load's node is F plus the scene's [load] F_scene(t), evaluated at "
-                        "every internal step as in the library (with no input connected the FMU reproduces the "
-                        "library's run of its scene); false (default): F alone",
-            getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
-        self._register_noise()
-        self.register_variable(String(
-            "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            description="time stepper: " + stepper_choices(self.scene),
-            getter=lambda: self.stepper, setter=lambda value: setattr(self, "stepper", value)))
-        check_unique(self.vars.values())
-
-    def to_xml(self, model_options=dict()):
-        root = super().to_xml(model_options)
-        # no direct feedthrough: the outputs are those of the state at the end of the last step
-        return complete(root, list(self.vars.values()), output_dependencies={})
+        """The FMU's variables (``description.network_variables``), each read and set here."""
+        accessors = {
+            "F": (lambda: self.F, lambda value: setattr(self, "F", value)),
+            "reaction": (lambda: self.element.reaction, None),
+            "step": (lambda: self.step, lambda value: setattr(self, "step", value)),
+            "scene_load": (lambda: self.scene_load, lambda value: setattr(self, "scene_load", value)),
+            "stepper": (lambda: self.stepper, lambda value: setattr(self, "stepper", value)),
+            **self._noise_accessors(),
+            **output_getters(self.scene.network, lambda: self.element),
+        }
+        for name in self.parameters:
+            accessors[name] = (lambda name=name: self.parameters[name],
+                               lambda value, name=name: self.parameters.__setitem__(name, value))
+        register_variables(self, accessors)
 
     # ------------------------------------------------------------ stepping
 
@@ -261,50 +187,22 @@ class PrandtlNetwork(NoiseParameters, SlaveBase):
         self._handed_over = None
 
 
-def network_outputs(network, stepped, nodes=None) -> list:
-    """(name, unit, description, getter) of the outputs of a network's FMU, read from the library's stepped
-    object ``stepped()``: x_<node>, v_<node> (of ``nodes``, default all), the energy account under the element
-    FMU's names, dissipated_<kind>_<name> of every dissipating element, u_<branch> of every branch."""
-    outputs = []
+def output_getters(network, stepped) -> dict:
+    """name -> (getter, None) of the outputs a network's FMU may have (``description.network_outputs``), read from
+    the library's stepped object ``stepped()``."""
+    getters = {}
     for i, node in enumerate(network.nodes):
-        if nodes is None or node in nodes:
-            outputs.append((f"x_{node}", "m", f"displacement of node {node}", lambda i=i: stepped().x[i]))
-            outputs.append((f"v_{node}", "m/s", f"velocity of node {node}", lambda i=i: stepped().v[i]))
-    kinds = {e.kind for e in network.elements}
-    energy = [
-        ("kinetic_energy", "kinetic energy sum_j m_j v_j^2/2", True),
-        ("stored_energy", "elastic energy of the springs, cubic springs and branches", True),
-        ("work", "work done on the load's node since the start (as the stepper books it)", True),
-        ("dissipated_sliders", "work dissipated by the sliders and the branches' sliders",
-         bool(kinds & {"slider", "branch"})),
-        ("dissipated_damper", "work dissipated by the dashpots and the branches' series dashpots",
-         bool(kinds & {"dashpot", "branch"})),
-        ("energy_residual", "work - dissipated - change of kinetic and stored energy: dissipated (> 0) or "
-         "created (< 0) by the scheme itself", True),
-    ]
-    for name, text, present in energy:
-        if present:
-            outputs.append((name, "J", text, lambda name=name: stepped().energy()[name]))
+        getters[f"x_{node}"] = (lambda i=i: stepped().x[i], None)
+        getters[f"v_{node}"] = (lambda i=i: stepped().v[i], None)
+    for name in ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+                 "energy_residual"):
+        getters[name] = (lambda name=name: stepped().energy()[name], None)
     for e, element in enumerate(network.elements):
         if element.kind in ("slider", "branch", "dashpot"):
-            outputs.append((f"dissipated_{element.kind}_{element.name}", "J",
-                            f"work dissipated by the {element.kind} {element.name} since the start",
-                            lambda e=e: stepped().dissipated[e]))
-    for e, element in enumerate(network.elements):
+            getters[f"dissipated_{element.kind}_{element.name}"] = (lambda e=e: stepped().dissipated[e], None)
         if element.kind == "branch":
-            outputs.append((f"u_{element.name}", "m", f"elongation of the spring of branch {element.name} "
-                            "(|u| <= eta)", lambda e=e: stepped().u[e]))
-    return outputs
-
-
-def stepper_choices(scene) -> str:
-    """The network steppers, each with whether it applies to this network (and why not)."""
-    texts = []
-    for name in NETWORK_STEPPERS:
-        problem = stepper_problem(scene, name)
-        texts.append(f"{name}" + (" (default)" if name == scene.solver.stepper else "")
-                     + (f" (does not apply as built: {problem})" if problem else ""))
-    return "; ".join(texts)
+            getters[f"u_{element.name}"] = (lambda e=e: stepped().u[e], None)
+    return getters
 
 
 def rebuilt(element, stepper, step):

@@ -21,13 +21,6 @@ NAMESPACE = "https://open-simulation-platform.com/OspModelDescription/1.0.1"
 
 # (force variable, velocity variable, displacement variable) per causality
 PORT_VARIABLES = {"force": ("F", "v", "x"), "displacement": ("force", "v", "x")}
-MODEL_IDENTIFIERS = {"force": "PrandtlElement", "displacement": "PrandtlConnector"}
-NETWORK_IDENTIFIERS = {"force": "PrandtlNetwork", "displacement": "PrandtlNetworkConnector"}
-
-
-def model_identifier(scene) -> str:
-    """The modelIdentifier of a scene's FMU (the slave class's name)."""
-    return (NETWORK_IDENTIFIERS if hasattr(scene, "network") else MODEL_IDENTIFIERS)[scene.causality]
 
 
 def port_variables(scene, causality: str = None) -> tuple:

@@ -36,71 +36,17 @@ finite. A step the library cannot take (``ElementError``: its step budget, a
 non-finite result) is a Discard with the library's reason.
 """
 
-from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, String
 from pythonfmu.enums import Fmi2Status
 
-from .. import __version__
 from ..element import Element
 from ..stepping import ElementError
 from ..loads import force_at
 from ..steppers import STEPPERS
-from .common import DBL_MAX, SMALLEST, NoiseParameters, SlaveBase, finite_number
-from .description import RealVariable, complete
-from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
+from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
-# Parameters of the effects: (name, table of the scene, unit, min, variability, description).
-EFFECT_PARAMETERS = [
-    ("m", "mass", "kg", SMALLEST, Fmi2Variability.tunable, "mass of the point; must be > 0"),
-    ("x0", "mass", "m", -DBL_MAX, Fmi2Variability.fixed, "initial displacement"),
-    ("v0", "mass", "m/s", -DBL_MAX, Fmi2Variability.fixed, "initial velocity"),
-    ("k0", "spring", "N/m", 0.0, Fmi2Variability.tunable, "stiffness of the linear spring: force k0 x"),
-    ("k3", "cubic", "N/m3", 0.0, Fmi2Variability.tunable, "coefficient of the cubic spring: force k3 x^3"),
-    ("c", "damper", "N.s/m", 0.0, Fmi2Variability.tunable, "dashpot coefficient: force c v"),
-    ("alpha", "friction", "N", SMALLEST, Fmi2Variability.tunable,
-     "friction of the mass on the ground: static threshold alpha_S; must be > 0 and >= alpha_kinetic"),
-    ("alpha_kinetic", "friction", "N", 0.0, Fmi2Variability.tunable,
-     "friction of the mass on the ground: sliding force at speed (Stribeck); must be <= alpha"),
-    ("stribeck_velocity", "friction", "m/s", SMALLEST, Fmi2Variability.tunable,
-     "friction of the mass on the ground: the slip speed over which the sliding force falls from alpha to "
-     "alpha_kinetic; must be > 0"),
-    ("belt_velocity", "friction", "m/s", -DBL_MAX, Fmi2Variability.tunable,
-     "velocity of the ground the mass rubs on (a moving belt); 0: fixed ground"),
-]
-# The effects with memory (memory/): fixed parameters (they restart the memory), units by what they act on.
-MEMORY_PARAMETERS = {
-    "delay_gain": ("delay", None, -DBL_MAX, "gain of the delayed force -gain y(t - tau), y = x or v ([delay] acts_on)"),
-    "delay_tau": ("delay", "s", SMALLEST, "delay tau of the delayed force; must be > 0"),
-    "history_weight": ("history", None, -DBL_MAX,
-                       "weight w_j of the history kernel sum_j w_j exp(-r_j t) of the force -int kappa(t - s) y(s) ds"),
-    "history_rate": ("history", "1/s", 0.0, "rate r_j of the history kernel; must be >= 0"),
-    "dahl_sigma": ("dahl", "N/m", SMALLEST, "Dahl's friction: stiffness at a reversal; must be > 0"),
-    "dahl_force": ("dahl", "N", SMALLEST, "Dahl's friction: the Coulomb level F_c it approaches; must be > 0"),
-    "dahl_exponent": ("dahl", "1", SMALLEST, "Dahl's friction: the exponent of (1 - F_d / F_c sgn v); must be > 0"),
-}
-
-
-def memory_parameters(scene, names) -> list:
-    """The rows (name, table, unit, min, variability, description) of the memory effects' parameters among
-    ``names`` (fixed: they restart the memory), with the units of what each acts on."""
-    rows = []
-    for name in names:
-        key = name.split("[")[0]
-        if key in MEMORY_PARAMETERS:
-            table, unit, low, text = MEMORY_PARAMETERS[key]
-            on_v = getattr(getattr(scene, table), "acts_on", "x") == "v"
-            if key == "delay_gain":
-                unit = "N.s/m" if on_v else "N/m"
-            elif key == "history_weight":
-                unit = "N/m" if on_v else "N/(m.s)"
-            rows.append((name, table, unit, low, Fmi2Variability.fixed,
-                         text + (f" (term {name[len(key) + 1:-1]})" if "[" in name else "")))
-    return rows
-
-
-# The branches' series dashpots: c_branch (one for every branch) or c_branch[i], as the scene gives them.
-SERIES_DASHPOT = ("N.s/m", SMALLEST, Fmi2Variability.tunable,
-                  "dashpot in series with the spring and slider of {which}: relaxation rate k_i / c_i; must be > 0")
-
+# the energy account's outputs (those of the effects present are the FMU's: description.element_variables)
+ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+            "dissipated_friction", "energy_residual")
 
 def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None":
     """Why the parameters a master set (or a saved state holds) cannot be used, or None."""
@@ -120,11 +66,7 @@ def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None
 
 
 class PrandtlElement(NoiseParameters, SlaveBase):
-    author = "prandtl_fmu"
-    description = ("Generalized Prandtl element (dry-friction hysteresis) under a force F: the springs, dashpot "
-                   "and Prandtl branches (spring in series with a Coulomb slider) of its scene, with or without a "
-                   "mass (documentation/index.html)")
-    version = __version__
+    """The element under a force (module docstring); its variables: ``description.element_variables``."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -143,86 +85,26 @@ class PrandtlElement(NoiseParameters, SlaveBase):
     # ------------------------------------------------------------ variables
 
     def _register(self):
-        real = RealVariable
-        self.register_variable(real(
-            "F", unit="N", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-            min=-DBL_MAX, max=DBL_MAX, start=0.0, description="external force on the element, held over each step",
-            getter=lambda: self.F, setter=lambda value: setattr(self, "F", value)))
-        outputs = [
-            ("x", "m", "displacement of the point", lambda: self.element.x),
-            ("v", "m/s", "velocity of the point", lambda: self.element.v),
-            ("reaction", "N", f"force of the element on the point: {reaction_formula(self.scene)}"
-             + (" (= F - m v')" if self.scene.mass is not None else "")
-             + ("; while the mass sticks, the friction holds it against the F set now" if self.scene.friction
-                else ""),
-             lambda: self.element.reaction_under(self.F, bool(self.scene_load))),
-            ("stiffness", "N/m", "tangent stiffness d(reaction)/dx at the current state for a motion in the "
-             f"direction of v (of increasing x when v = 0): {stiffness_formula(self.scene)}",
-             self.element.stiffness),
-        ]
-        energy = [  # the energy account, for the effects present
-            ("kinetic_energy", "kinetic_energy", "mass", "kinetic energy m v^2/2"),
-            ("stored_energy", "stored_energy", None, f"elastic energy {stored_energy_formula(self.scene)}"),
-            ("work", "work", None, "work done by F since the start (as the stepper books it; 'exact' exactly)"),
-            ("dissipated_sliders", "dissipated_sliders", "branches", "work dissipated by the sliders: sum alpha_i |slip_i|"),
-            ("dissipated_damper", "dissipated_damper", "damper", "work dissipated by the dashpot"),
-            ("dissipated_friction", "dissipated_friction", "friction",
-             "work dissipated by the friction of the mass on the ground"),
-            ("energy_residual", "energy_residual", None,
-             "work - dissipated - change of kinetic and stored energy: dissipated (> 0) or created (< 0) by the "
-             "scheme itself"),
-        ]
-        for name, key, table, text in energy:
-            if name == "dissipated_damper" and self.scene.has_series_dashpots:
-                table, text = None, "work dissipated by the dashpot and the branches' series dashpots"
-            if table is None or getattr(self.scene, table) is not None:
-                outputs.append((name, "J", text, lambda key=key: self.element.energy_of(key)))
-        for name, unit, text, getter in outputs:
-            self.register_variable(real(name, unit=unit, causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous, description=text, getter=getter))
-        parameters = list(EFFECT_PARAMETERS)
+        """The FMU's variables (``description.element_variables``), each read and set here."""
+        element = lambda: self.element  # noqa: E731
+        accessors = {
+            "F": (lambda: self.F, lambda value: setattr(self, "F", value)),
+            "x": (lambda: element().x, None),
+            "v": (lambda: element().v, None),
+            "reaction": (lambda: element().reaction_under(self.F, bool(self.scene_load)), None),
+            "stiffness": (lambda: element().stiffness(), None),
+            "step": (lambda: self.step, lambda value: setattr(self, "step", value)),
+            "scene_load": (lambda: self.scene_load, lambda value: setattr(self, "scene_load", value)),
+            "stepper": (lambda: self.stepper, lambda value: setattr(self, "stepper", value)),
+            "n": (lambda: self.n, None),
+            **self._noise_accessors(),
+        }
+        for name in ENERGIES:
+            accessors[name] = (lambda name=name: element().energy_of(name), None)
         for name in self.parameters:
-            if name.startswith("c_branch"):
-                unit, low, variability, text = SERIES_DASHPOT
-                which = "every branch" if name == "c_branch" else f"branch {name[9:-1]}"
-                parameters.append((name, "branches", unit, low, variability, text.format(which=which)))
-        parameters += memory_parameters(self.scene, self.parameters)
-        for name, table, unit, low, variability, text in parameters:
-            if name not in self.parameters:
-                continue  # an absent effect has no parameter
-            self.register_variable(real(
-                name, unit=unit, causality=Fmi2Causality.parameter, variability=variability,
-                min=low, max=DBL_MAX, description=text,
-                getter=lambda name=name: self.parameters[name],
-                setter=lambda value, name=name: self._set_parameter(name, value)))
-        self.register_variable(real(
-            "step", unit="s", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            min=SMALLEST, max=DBL_MAX, description="internal time step h of the stepper; must be > 0",
-            getter=lambda: self.step, setter=lambda value: setattr(self, "step", value)))
-        self.register_variable(Boolean(
-            "scene_load", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            description="true: the force on the element is F plus the scene's [load] F_scene(t), evaluated at "
-                        "every internal step as in the library (with no input connected the FMU reproduces the "
-                        "library's run of its scene); false (default): F alone",
-            getter=lambda: self.scene_load, setter=lambda value: setattr(self, "scene_load", value)))
-        self._register_noise()
-        self.register_variable(String(
-            "stepper", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable,
-            description="time stepper: " + ", ".join(STEPPERS),
-            getter=lambda: self.stepper, setter=lambda value: setattr(self, "stepper", value)))
-        self.register_variable(Integer(
-            "n", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
-            description="number of Prandtl branches (from the scene); -1 for the continuous element",
-            getter=lambda: self.n))
-
-    def to_xml(self, model_options=dict()):
-        root = super().to_xml(model_options)
-        # No output depends directly on the input F: x, v and the branch
-        # elongations are states, and the reaction is a function of them;
-        # except with friction on the mass, which holds a stuck mass against F
-        # (then the reaction is F itself).
-        dependencies = {"reaction": ["F"]} if self.scene.friction is not None else {}
-        return complete(root, list(self.vars.values()), output_dependencies=dependencies)
+            accessors[name] = (lambda name=name: self.parameters[name],
+                               lambda value, name=name: self._set_parameter(name, value))
+        self._fixed = register_variables(self, accessors)
 
     # ------------------------------------------------------------ stepping
 
@@ -252,8 +134,7 @@ class PrandtlElement(NoiseParameters, SlaveBase):
 
     def _set_parameter(self, name, value):
         """Setter of an effect's parameter: a fixed one (x0, v0) cannot change after initialization."""
-        if self.initialized and (name in ("x0", "v0") or name.split("[")[0] in MEMORY_PARAMETERS) \
-                and value != self.parameters[name]:
+        if self.initialized and name in self._fixed and value != self.parameters[name]:
             self._fail(f"parameter {name} = {value!r} refused: {name} is fixed (the initial state, or an effect "
                        "with memory) and cannot change after initialization; the element is unchanged")
         self.parameters[name] = value

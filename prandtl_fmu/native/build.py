@@ -1,14 +1,15 @@
 """``build_native_fmu``: an FMI 2.0 or 3.0 co-simulation FMU of a scene (the element or the connector) whose
 binary holds no Python.
 
-The FMU has the PythonFMU FMU's model description (the same variables, names, value references, units,
-causalities, documentation: it is built first, in a scratch folder, and its ``modelDescription.xml`` is
-taken with ``needsExecutionTool="false"``; FMI 3.0's is derived from it) and a binary linked from
+The FMU's model description is ``fmu/description.py``'s (the PythonFMU FMU's variables: names, value references,
+units, causalities, start values; FMI 3.0's with what FMI 3.0 adds), written with ``needsExecutionTool="false"``;
+the C layer's table of variables (scene.h's ``VARS``) is made from the same list. The FMU is packed by
+``assemble.py``; its binary is linked from
 
 * the scene's kernels, compiled by numba from the library's own sources (``kernels.py``), as objects;
-* ``stubs.c``, generated here: numba's error path, which a kernel reaches only when it raises, sets a
+* ``stubs.c``, generated (``assemble.stubs``): numba's error path, which a kernel reaches only when it raises, sets a
   flag instead of calling Python; the few functions of numba's runtime that ``exact``'s arrays call
-  (:data:`NRT`); ``numba_nextafter`` is C's ``nextafter``;
+  (``assemble.NRT``); ``numba_nextafter`` is C's ``nextafter``;
 * ``fmi2.c`` or ``fmi3.c``, the FMI layer, over ``element.h`` or ``connector.h`` (with ``common.h``,
   ``state.h``) and the generated ``scene.h``.
 
@@ -26,25 +27,16 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
 import re
 import tempfile
-import xml.etree.ElementTree as ET
-import zipfile
 from pathlib import Path
 
 from . import kernels
 from . import platforms as targets
+from .assemble import C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, new_guid, noise_lines, pack, stubs
 
-HERE = Path(__file__).resolve().parent
-FMI_HEADERS = HERE.parent / "fmu" / "loader" / "src" / "fmi"
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
             "dissipated_friction", "energy_residual")
-TYPES = {"Real": "T_REAL", "Integer": "T_INTEGER", "Boolean": "T_BOOLEAN", "String": "T_STRING"}
-
-
-class NativeBuildError(ValueError):
-    """A native FMU cannot be built (one line: the scene or the machine, and what to do)."""
 
 
 def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False,
@@ -58,7 +50,7 @@ def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arra
 
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
-    return network_build.build(scene_path, out, fmi, causality, arrays, NativeBuildError, platforms)
+    return network_build.build(scene_path, out, fmi, causality, arrays, platforms)
 
 
 def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False, platforms=None) -> Path:
@@ -70,106 +62,43 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
 
     ``platforms``: the binaries the FMU holds (names of either FMI version, comma-separated, or "all"; None: this
     machine's platform), each linked as ``platforms.py`` says; the names and the toolchains are checked first."""
-    from ..fmu.build import add_entry, build_fmu
-    from ..fmu.documentation import index_html
+    from ..fmu import description
+    from ..fmu.archive import built_scene
     from ..scene import load_scene
 
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
-    if hasattr(scene, "network"):  # a [network] or [chain] scene
+    if description.is_network(scene):  # a [network] or [chain] scene
         return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms)
     folders = targets.resolve(platforms, fmi)
     chains = targets.toolchains(folders, default=platforms is None)
     if arrays and fmi != 3:
         raise NativeBuildError("arrays: the elongations u as an array are an FMI 3.0 option (fmi=3)")
-    if arrays and elongation_count(scene) == 0:
+    if arrays and description.elongation_count(scene) == 0:
         raise NativeBuildError("arrays: this scene has no branch elongations to offer as an array (no [branches], "
                                "or a continuum): build it without arrays")
-    if causality is not None and causality != scene.causality:
-        from ..fmu.build import _with_causality
-
-        scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
+    scene, scene_bytes = built_scene(scene_path, causality)  # checked as the PythonFMU build checks it
     connector = scene.causality == "displacement"
-    out = Path(out)
+    identifier = description.model_identifier(scene)
+    guid = new_guid()
+    variables = description.variables(scene)  # FMI 2.0's, the C layer's table; FMI 3.0's extras by the macros
+    references = description.fmi3_references(scene)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
-        python_fmu = build_fmu(scene_path, scratch / "python.fmu", causality=causality)
-        with zipfile.ZipFile(python_fmu) as archive:
-            description = archive.read("modelDescription.xml").decode("utf-8")
-            kept = {name: archive.read(name) for name in archive.namelist()
-                    # not documentation/licenses/: PythonFMU's licence goes with its loader, which the native
-                    # binary does not hold
-                    if (name.startswith("documentation/") and not name.startswith("documentation/licenses/"))
-                    or name == "resources/scene.toml"
-                    or name.endswith("_OspModelDescription.xml")}
-        root = ET.fromstring(description)
-        identifier = root.find("CoSimulation").get("modelIdentifier")
         steppers = [] if connector else kernels.applicable(scene)
         if not steppers and not connector:
             raise NativeBuildError("no stepper of the native runtime applies to this scene")
         compiled = kernels.compile_kernels(scene, steppers)
-        (scratch / "scene.h").write_text(_scene_header(scene, root, steppers, compiled, scene_path, arrays))
-        vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
-        headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
-        n_vr = next((int(v.get("valueReference")) for v in root.iter("ScalarVariable") if v.get("name") == "n"), 0)
-        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
-                                             [scratch, headers], [f"VR_U={vr_u}", f"VR_N={n_vr}",
-                                                                  f"VR_TIME={vr_u + 1}"], fmi, identifier)
-        native_description = (_native_description(description) if fmi == 2
-                              else fmi3_description(root, scene, vr_u, arrays))
-        out.parent.mkdir(parents=True, exist_ok=True)
-        partial = out.with_name(out.name + ".partial")
-        kept["documentation/index.html"] = index_html(native_description.encode("utf-8"), scene, runtime="native")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            add_entry(archive, "modelDescription.xml", native_description)
-            for folder in folders:
-                add_entry(archive, f"binaries/{folder.name}/{identifier}.{folder.suffix}", binaries[folder.name],
-                          mode=0o755)
-            for name, data in kept.items():
-                add_entry(archive, name, data)
-        os.replace(partial, out)
-    return out
-
-
-def _native_description(description: str) -> str:
-    text = description.replace('needsExecutionTool="true"', 'needsExecutionTool="false"')
-    return re.sub(r'generationTool="[^"]*"', 'generationTool="prandtl_fmu (native runtime)"', text, count=1)
-
-
-def c_string(text: str) -> str:
-    """A C string literal of ``text``."""
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
-
-
-def noise_words() -> dict:
-    """The PythonFMU's words for each rule of the noise's parameters (``NoiseParameters._check_noise_state``:
-    the seed an FMU takes, then ``loads.white_noise``), what follows "name = value: " in its message."""
-    from ..fmu.common import NoiseParameters
-
-    words = {}
-    for name, bad in (("noise_intensity", -1.0), ("noise_seed", -1), ("noise_unit", 0.0)):
-        try:
-            NoiseParameters._check_noise_state({"noise_intensity": 0.0, "noise_seed": 0, "noise_unit": 1.0,
-                                                name: bad})
-        except ValueError as exc:
-            words[name] = str(exc).split(": ", 1)[1]
-    return words
-
-
-def noise_lines(scene, connector: bool) -> list:
-    """scene.h's lines of the white noise: the Brownian tree's cache size, the scene's noise (the start values of
-    noise_intensity, noise_seed, noise_unit: none for a connector, whose motion comes in), the seed's bound and
-    the words of the parameters' rules (the PythonFMU's, :func:`noise_words`)."""
-    from ..fmu.common import NOISE_SEED_LIMIT
-
-    noise = None if connector else scene.load.noise
-    sigma, seed, unit = (noise.intensity, noise.seed, noise.unit) if noise is not None else (0.0, 0, 1.0)
-    words = noise_words()
-    return [f"#define NOISE_CACHE_SIZE {kernels.NOISE_CACHE_SIZE} /* noise.CACHE_SIZE: int64s */",
-            f"#define NOISE_SCENE {{{float(sigma)!r}, {int(seed)}, {float(unit)!r}}} /* the scene's [load] noise */",
-            f"#define NOISE_SEED_LIMIT {float(NOISE_SEED_LIMIT)!r} /* fmu.common: an FMI Integer's seed is below */",
-            *[f"static const char {name.upper()}_WORDS[] = {c_string(text)};" for name, text in words.items()]]
+        (scratch / "scene.h").write_text(_scene_header(scene, variables, guid, steppers, compiled, scene_bytes,
+                                                       arrays))
+        n_vr = next((row.value_reference for row in variables if row.name == "n"), 0)
+        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
+                                             [scratch, FMI_HEADERS[fmi]],
+                                             [f"VR_U={references['u']}", f"VR_N={n_vr}",
+                                              f"VR_TIME={references['time']}"], fmi, identifier)
+        text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
+        return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
 
 
 ELEMENT_ARGS = "P, P, P, P, P, P, P, int64_t"  # p, k, eta, cs, u; the memory: mp, ms, nd (kernels.py)
@@ -233,20 +162,11 @@ def _c_array(values) -> str:
     return "{" + ", ".join(repr(float(value)) for value in values) + "}"
 
 
-def elongation_count(scene) -> int:
-    """n, the branch elongations u_1 .. u_n an FMU offers: 0 without branches or for the continuum."""
-    branches = scene.branches
-    return 0 if branches is None or branches.continuum else branches.n
+def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, arrays: bool = False) -> str:
+    """scene.h of the element or connector: its arrays, the library's rules, the kernels' symbols, the variables
+    (``variables``: the FMI 2.0 list of ``fmu/description.py``, by value reference)."""
+    from ..fmu.description import fmi3_references
 
-
-def elongation_references(root) -> tuple:
-    """(VR_U, VR_TIME, VR_U_FIRST): the value references the native FMU adds after the PythonFMU FMU's ``root``:
-    the array u (FMI 3.0 with arrays), time (FMI 3.0), then the scalars u_1 .. u_n (FMI 3.0)."""
-    vr_u = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
-    return vr_u, vr_u + 1, vr_u + 2
-
-
-def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = False) -> str:
     from .. import scene as library_rules
     from ..kernels import stack
     from ..steppers import get_stepper
@@ -283,8 +203,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
     load = scene.load.compile()
     kind, offset, amplitude, omega, times, forces = load[:6]  # (a noise: its settings are parameters)
     symbols = {name: function.native_name for name, function in compiled}
-    guid = root.get("guid")
-    digest = hashlib.sha256(Path(scene_path).read_bytes() + guid.encode()).hexdigest()
+    digest = hashlib.sha256(scene_bytes + guid.encode()).hexdigest()
     lines = [
         "/* generated by prandtl_fmu.native.build for one scene: do not edit */",
         "#ifndef PRANDTL_SCENE_H",
@@ -349,7 +268,7 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",
         # FMI 3.0: the scalars u_1 .. u_n always, the array u and its structural parameter n with arrays only
         f"#define ARRAYS {int(arrays)}",
-        f"#define VR_U_FIRST {elongation_references(root)[2]}u /* u_1; u_i is VR_U_FIRST + i - 1 */",
+        f"#define VR_U_FIRST {fmi3_references(scene)['u_1']}u /* u_1; u_i is VR_U_FIRST + i - 1 */",
         "#define STRUCTURAL_N NB",
         "#define HAS_STRUCTURAL ARRAYS",
         '#define STRUCTURAL_TEXT "n is the scene\'s number of branches"',
@@ -432,12 +351,9 @@ def _scene_header(scene, root, steppers, compiled, scene_path, arrays: bool = Fa
     ]
     count = 0
     memory_names = kernels.memory_layout(scene)["names"]
-    for variable in root.find("ModelVariables"):
-        name = variable.get("name")
-        vr = int(variable.get("valueReference"))
-        type_name = next(child.tag for child in variable if child.tag in TYPES)
-        what, index = _what(name, memory_names)
-        lines.append(f'    {{{vr}, {TYPES[type_name]}, {what}, {index}, "{name}"}},')
+    for row in variables:
+        what, index = _what(row.name, memory_names)
+        lines.append(f'    {{{row.value_reference}, {C_TYPES[row.type]}, {what}, {index}, "{row.name}"}},')
         count += 1
     lines += ["};", f"#define N_VARS {count}", "#endif", ""]
     return "\n".join(lines)
@@ -463,162 +379,12 @@ def _what(name: str, memory_names=()) -> tuple:
     raise NativeBuildError(f"the native runtime does not know the FMU variable {name!r}")
 
 
-# numba's runtime for the arrays a kernel allocates (exact's matrix exponential): the few functions the modules call,
-# with numba's MemInfo layout (numba/core/runtime/nrt.cpp, 0.58-0.68: refct, dtor, dtor_info, data, size,
-# external allocator; the modules define NRT_incref/NRT_decref themselves and read refct and data in place)
-NRT_PROVIDED = {"NRT_Allocate", "NRT_Free", "NRT_MemInfo_alloc", "NRT_MemInfo_alloc_aligned",
-                "NRT_MemInfo_alloc_safe_aligned", "NRT_MemInfo_call_dtor"}
-NRT = """
-#include <stdint.h>
-typedef void (*NRT_dtor_function)(void* data, size_t size, void* info);
-typedef struct { size_t refct; NRT_dtor_function dtor; void* dtor_info; void* data; size_t size; void* allocator; } NRT_MemInfo;
-void* NRT_Allocate(size_t size) { return malloc(size); }
-void NRT_Free(void* ptr) { free(ptr); }
-static NRT_MemInfo* meminfo(size_t size, unsigned align)
-{
-    NRT_MemInfo* mi = (NRT_MemInfo*)malloc(sizeof(NRT_MemInfo) + size + 2 * (size_t)align);
-    uintptr_t data;
-    if (mi == NULL) { prandtl_kernel_failed = 1; return NULL; }
-    data = (uintptr_t)(mi + 1);
-    if (align > 1 && data % align)
-        data += align - data % align;
-    mi->refct = 1; mi->dtor = NULL; mi->dtor_info = NULL; mi->data = (void*)data; mi->size = size; mi->allocator = NULL;
-    return mi;
-}
-NRT_MemInfo* NRT_MemInfo_alloc(size_t size) { return meminfo(size, 0); }
-NRT_MemInfo* NRT_MemInfo_alloc_aligned(size_t size, unsigned align) { return meminfo(size, align); }
-NRT_MemInfo* NRT_MemInfo_alloc_safe_aligned(size_t size, unsigned align) { return meminfo(size, align); }
-void NRT_MemInfo_call_dtor(NRT_MemInfo* mi)
-{
-    if (mi->dtor) mi->dtor(mi->data, mi->size, mi->dtor_info);
-    free(mi);
-}
-"""
+def fmi3_description(root, scene, vr_u=None, arrays: bool = False) -> str:
+    """The native FMU's FMI 3.0 description of the element or connector ``scene``
+    (``description.model_description(scene, 3)``), with the GUID of its FMI 2.0 description ``root``, for a
+    caller that holds that one (docs/gen_pages.py); ``vr_u``, if given, must be the array u's value reference."""
+    from ..fmu import description
 
-
-def _stubs(undefined) -> str:
-    """C definitions of what the objects need from Python and numba (see the module docstring); ``undefined``:
-    the symbols the kernels' modules declare."""
-    lines = ["/* generated: numba's error path without Python (prandtl_fmu.native.build) */", "#include <math.h>",
-             "#include <stdlib.h>", "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
-    if any(symbol.startswith("NRT_") for symbol in undefined):
-        lines.append(NRT)
-    for symbol in sorted(undefined):
-        if symbol in NRT_PROVIDED:
-            continue
-        if symbol == "numba_nextafter":
-            lines.append("double numba_nextafter(double a, double b) { return nextafter(a, b); }")
-        elif symbol == "numba_frexp":  # numba's helpers (_helperlib.c), the same special cases
-            lines.append("double numba_frexp(double x, int* e) { if (!isfinite(x) || x == 0) { *e = 0; return x; } "
-                         "return frexp(x, e); }")
-        elif symbol == "numba_ldexp":
-            lines.append("double numba_ldexp(double x, int e) { return isfinite(x) && x != 0 && e ? ldexp(x, e) : x; }")
-        elif symbol.startswith("PyExc_"):
-            lines.append(f"void* {symbol} = dummy;")
-        elif symbol.startswith(("Py", "_Py", "NRT_", "numba_")):
-            lines.append(f"void* {symbol}(void) {{ prandtl_kernel_failed = 1; return dummy; }}")
-    return "\n".join(lines) + "\n"
-
-
-def fmi3_description(root, scene, vr_u, arrays: bool = False) -> str:
-    """The FMI 3.0 model description from the FMI 2.0 one (one list of variables: the PythonFMU FMU's): the same
-    scalars (Real -> Float64, Integer -> Int32, with their value references, units, causalities, variabilities,
-    start values and dependencies), the independent variable ``time`` and the branch elongations as the scalars
-    u_1 .. u_n (Float64 outputs, none without branches). With ``arrays`` also the array u of n Float64, sized by n,
-    which becomes a structural parameter (UInt64, fixed, start n >= 1); without, n stays what FMI 2.0 says, a local
-    Int32 constant (-1 for the continuum)."""
-    n = elongation_count(scene)
-    _, vr_time, vr_first = elongation_references(root)
-    if vr_time != vr_u + 1:
-        raise NativeBuildError("the FMI 3.0 description's value references do not follow the FMI 2.0 one's")
-    top = ET.Element("fmiModelDescription", {
-        "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
-        "description": root.get("description", ""), "author": root.get("author", ""),
-        "version": root.get("version", ""), "generationTool": "prandtl_fmu (native runtime)",
-        "variableNamingConvention": "structured"})
-    cosim = root.find("CoSimulation")
-    ET.SubElement(top, "CoSimulation", {
-        "modelIdentifier": cosim.get("modelIdentifier"), "needsExecutionTool": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
-        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-        "hasEventMode": "false"})
-    for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
-        if root.find(name) is not None:
-            top.append(root.find(name))
-        if name == "LogCategories" and top.find(name) is not None:  # the statuses are FMI 3.0's
-            for category in top.find(name):
-                if category.get("description"):
-                    category.set("description", category.get("description").replace("fmi2", "fmi3"))
-        if name == "UnitDefinitions":  # the independent variable's unit, and the elongations'
-            units = top.find("UnitDefinitions")
-            if units is None:
-                units = ET.SubElement(top, "UnitDefinitions")
-            for unit, base in (("s", {"s": "1"}), ("m", {"m": "1"})):
-                if (unit == "s" or n) and not any(known.get("name") == unit for known in units):
-                    ET.SubElement(ET.SubElement(units, "Unit", {"name": unit}), "BaseUnit", base)
-    variables = ET.SubElement(top, "ModelVariables")
-    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(vr_time), "causality": "independent",
-                                         "variability": "continuous", "unit": "s",
-                                         "description": "the element's time"})
-    scalars = list(root.find("ModelVariables"))
-    index_to_vr = {}
-    outputs = []
-    for position, variable in enumerate(scalars, start=1):
-        name, vr = variable.get("name"), variable.get("valueReference")
-        index_to_vr[position] = vr
-        kind = next(child for child in variable if child.tag in TYPES)
-        attributes = {"name": name, "valueReference": vr}
-        if variable.get("description"):
-            attributes["description"] = variable.get("description")
-        if name == "n" and arrays:  # the array's size: a structural parameter, n >= 1 (arrays needs branches)
-            ET.SubElement(variables, "UInt64", dict(attributes, causality="structuralParameter", variability="fixed",
-                                                    start=str(n)))
-            continue
-        for key in ("causality", "variability", "initial"):
-            if variable.get(key):
-                attributes[key] = variable.get(key)
-        if kind.tag == "String":
-            element = ET.SubElement(variables, "String", attributes)
-            if kind.get("start") is not None:
-                ET.SubElement(element, "Start", {"value": kind.get("start")})
-            continue
-        tag = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}[kind.tag]
-        for key in ("start", "unit", "min", "max"):
-            if kind.get(key) is not None:
-                attributes[key] = kind.get(key)
-        ET.SubElement(variables, tag, attributes)
-        if variable.get("causality") == "output":
-            outputs.append(vr)
-    dependencies = {}
-    old = root.find("ModelStructure/Outputs")
-    for unknown in (old if old is not None else []):
-        vr = index_to_vr[int(unknown.get("index"))]
-        if unknown.get("dependencies") is not None:
-            dependencies[vr] = " ".join(index_to_vr[int(i)] for i in unknown.get("dependencies").split())
-    # the elongations are states (the connector's too: they move at doStep only): no input acts on them directly
-    for i in range(1, n + 1):
-        vr = str(vr_first + i - 1)
-        ET.SubElement(variables, "Float64", {
-            "name": f"u_{i}", "valueReference": vr, "causality": "output", "variability": "continuous",
-            "unit": "m", "description": f"elongation u_{i} of the spring of Prandtl branch {i}"})
-        outputs.append(vr)
-        dependencies[vr] = ""
-    if arrays:
-        u = ET.SubElement(variables, "Float64", {
-            "name": "u", "valueReference": str(vr_u), "causality": "output", "variability": "continuous",
-            "unit": "m", "description": "elongations u_i of the springs of the Prandtl branches, in the scene's order "
-                                        "(the scalars u_1 .. u_n as one array)"})
-        n_vr = next(v.get("valueReference") for v in scalars if v.get("name") == "n")
-        ET.SubElement(u, "Dimension", {"valueReference": n_vr})
-        outputs.append(str(vr_u))
-        dependencies[str(vr_u)] = ""
-    structure = ET.SubElement(top, "ModelStructure")
-    for tag in ("Output", "InitialUnknown"):
-        for vr in outputs:
-            attributes = {"valueReference": vr}
-            if vr in dependencies:
-                attributes["dependencies"] = dependencies[vr]
-            ET.SubElement(structure, tag, attributes)
-    ET.indent(top)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(top, encoding="unicode") + "\n"
+    if vr_u is not None and vr_u != description.fmi3_references(scene)["u"]:
+        raise NativeBuildError(f"vr_u = {vr_u}: the FMI 3.0 description's is {description.fmi3_references(scene)['u']}")
+    return description.model_description(scene, 3, root.get("guid", ""), arrays=arrays)

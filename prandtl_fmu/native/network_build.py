@@ -2,12 +2,11 @@
 (FMI 2.0 or 3.0), the generated ``scene.h`` and the link. :func:`prandtl_fmu.native.build.build_native_network_fmu`
 is the entry.
 
-The variables are the PythonFMU FMU's of the scene (``fmu/network_slave.py``, ``fmu/network_connector_slave.py``:
-the same names, value references, units, causalities and semantics; that FMU is built first, in a scratch folder,
-and its ``modelDescription.xml`` is taken with ``needsExecutionTool="false"``). FMI 3.0's is derived from it, with
-``time`` and, with ``arrays``, the structural parameter ``n_nodes`` and the nodes' x and v as arrays (``x`` and
-``v``; the connector's ``x_nodes`` and ``v_nodes``) besides the scalars x_<node>, v_<node> (OMSimulator and ecos
-read an FMI 3.0 array as a scalar: the arrays are an option).
+The variables are ``fmu/description.py``'s, those of the PythonFMU FMU of the scene (``fmu/network_slave.py``,
+``fmu/network_connector_slave.py``: the same names, value references, units, causalities and semantics), written
+with ``needsExecutionTool="false"``; FMI 3.0 adds ``time`` and, with ``arrays``, the structural parameter
+``n_nodes`` and the nodes' x and v as arrays (``x`` and ``v``; the connector's ``x_nodes`` and ``v_nodes``) besides
+the scalars x_<node>, v_<node> (OMSimulator and ecos read an FMI 3.0 array as a scalar: the arrays are an option).
 
 The parameters' rules are the library's (``network.model``: ``Network.with_parameters``, ``check_topology``,
 ``stepper_problem``), written into ``scene.h`` as tables: each parameter's rule, and what a mass can break (a node
@@ -18,18 +17,14 @@ node needs a dashpot on it) is :func:`noise_rule`'s, its parameters' rules ``com
 from __future__ import annotations
 
 import hashlib
-import os
 import tempfile
-import xml.etree.ElementTree as ET
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from .build import c_string, noise_lines
+from .assemble import C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, new_guid, noise_lines, pack, stubs
 from .platforms import KERNEL_MACRO
 
-HERE = Path(__file__).resolve().parent
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
 
 
@@ -88,99 +83,6 @@ def steppers_of(scene, connector: bool) -> list:
     if connector:
         return ["implicit"]
     return [name for name in ("implicit", "projected") if stepper_problem(with_noise(scene, None), name) is None]
-
-
-def fmi3_network_description(root, scene, extra_vr, arrays: bool, connector: bool) -> str:
-    """The FMI 3.0 description from the FMI 2.0 one: the same scalars (Real -> Float64, with their value references,
-    units, causalities, variabilities, start values, dependencies), ``time``; with ``arrays`` the structural
-    parameter ``n_nodes`` (UInt64, fixed) and the nodes' x and v as arrays of n_nodes Float64 (``x`` and ``v``;
-    the connector's ``x_nodes`` and ``v_nodes``: its inputs are x and v)."""
-    top = ET.Element("fmiModelDescription", {
-        "fmiVersion": "3.0", "modelName": root.get("modelName"), "instantiationToken": root.get("guid"),
-        "description": root.get("description", ""), "author": root.get("author", ""),
-        "version": root.get("version", ""), "generationTool": "prandtl_fmu (native runtime)",
-        "variableNamingConvention": "structured"})
-    cosim = root.find("CoSimulation")
-    ET.SubElement(top, "CoSimulation", {
-        "modelIdentifier": cosim.get("modelIdentifier"), "needsExecutionTool": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
-        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-        "hasEventMode": "false"})
-    for name in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
-        if root.find(name) is not None:
-            top.append(root.find(name))
-        if name == "LogCategories" and top.find(name) is not None:
-            for category in top.find(name):
-                if category.get("description"):
-                    category.set("description", category.get("description").replace("fmi2", "fmi3"))
-        if name == "UnitDefinitions":
-            units = top.find("UnitDefinitions")
-            if units is None:
-                units = ET.SubElement(top, "UnitDefinitions")
-            if not any(unit.get("name") == "s" for unit in units):
-                ET.SubElement(ET.SubElement(units, "Unit", {"name": "s"}), "BaseUnit", {"s": "1"})
-    variables = ET.SubElement(top, "ModelVariables")
-    ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(extra_vr["time"]),
-                                         "causality": "independent", "variability": "continuous", "unit": "s",
-                                         "description": "the network's time"})
-    scalars = list(root.find("ModelVariables"))
-    index_to_vr, name_to_vr, outputs = {}, {}, []
-    for position, variable in enumerate(scalars, start=1):
-        name, vr = variable.get("name"), variable.get("valueReference")
-        index_to_vr[position] = vr
-        name_to_vr[name] = vr
-        kind = next(child for child in variable if child.tag in ("Real", "Integer", "Boolean", "String"))
-        attributes = {"name": name, "valueReference": vr}
-        if variable.get("description"):
-            attributes["description"] = variable.get("description")
-        for key in ("causality", "variability", "initial"):
-            if variable.get(key):
-                attributes[key] = variable.get(key)
-        if kind.tag == "String":
-            element = ET.SubElement(variables, "String", attributes)
-            if kind.get("start") is not None:
-                ET.SubElement(element, "Start", {"value": kind.get("start")})
-            continue
-        tag = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}[kind.tag]
-        for key in ("start", "unit", "min", "max"):
-            if kind.get(key) is not None:
-                attributes[key] = kind.get(key)
-        ET.SubElement(variables, tag, attributes)
-        if variable.get("causality") == "output":
-            outputs.append(vr)
-    dependencies = {}
-    old = root.find("ModelStructure/Outputs")
-    for unknown in (old if old is not None else []):
-        if unknown.get("dependencies") is not None:
-            dependencies[index_to_vr[int(unknown.get("index"))]] = " ".join(
-                index_to_vr[int(i)] for i in unknown.get("dependencies").split())
-    if arrays:
-        network = scene.network
-        n = network.n
-        ET.SubElement(variables, "UInt64", {"name": "n_nodes", "valueReference": str(extra_vr["n_nodes"]),
-                                            "causality": "structuralParameter", "variability": "fixed",
-                                            "start": str(n), "description": "number of nodes: the length of the "
-                                            "arrays of the nodes' x and v"})
-        shown = ", ".join(network.nodes[:5]) + (", ..." if n > 5 else "")
-        for name, unit, what in (("x", "m", "displacement"), ("v", "m/s", "velocity")):
-            vr = str(extra_vr[f"{name}_nodes"])
-            array = ET.SubElement(variables, "Float64", {
-                "name": f"{name}_nodes" if connector else name, "valueReference": vr, "causality": "output",
-                "variability": "continuous", "unit": unit,
-                "description": f"{what} of every node, in the nodes' order ({shown})"})
-            ET.SubElement(array, "Dimension", {"valueReference": str(extra_vr["n_nodes"])})
-            outputs.append(vr)
-            dependencies[vr] = " ".join(name_to_vr[i] for i in ("x", "v")) if connector else ""
-    structure = ET.SubElement(top, "ModelStructure")
-    for tag in ("Output", "InitialUnknown"):
-        for vr in outputs:
-            attributes = {"valueReference": vr}
-            if vr in dependencies:
-                attributes["dependencies"] = dependencies[vr]
-            ET.SubElement(structure, tag, attributes)
-    ET.indent(top)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(top, encoding="unicode") + "\n"
 
 
 # ------------------------------------------------------------------ scene.h
@@ -242,9 +144,9 @@ def noise_rule(scene) -> tuple:
     return int(problem is None), problem or ""
 
 
-def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extra_vr) -> str:
-    """scene.h of the network: its arrays, the parameters' rules, the kernels' symbols, the variables of the FMI
-    2.0 description ``root`` (indexed by value reference)."""
+def scene_header(scene, variables, guid, steppers, symbols, digest, connector, arrays, extra_vr) -> str:
+    """scene.h of the network: its arrays, the parameters' rules, the kernels' symbols, the variables (``variables``:
+    the FMI 2.0 list of ``fmu/description.py``, indexed by value reference)."""
     from .. import scene as library_rules
     from ..network import kernels as nk
 
@@ -256,7 +158,6 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
     for i, row in enumerate(table):
         if row[1] >= 0:
             mass_param[row[1]] = i
-    guid = root.get("guid")
     slider_only, floating, part = topology_tables(network)
     load = scene.load.compile()
     load_kind, offset, amplitude, omega, times, forces = load[:6]
@@ -374,15 +275,12 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
         "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
         "static const Var VARS[] = { /* VARS[vr]: the variable of value reference vr (a hole: vr = UINT32_MAX) */",
     ]
-    types = {"Real": "T_REAL", "Boolean": "T_BOOLEAN", "String": "T_STRING", "Integer": "T_INTEGER"}
     known = meanings(scene, connector)
     table_of = {}
-    for variable in root.find("ModelVariables"):
-        name = variable.get("name")
-        if name not in known:
-            raise ValueError(f"the native runtime does not know the FMU variable {name!r}")
-        type_name = next(child.tag for child in variable if child.tag in types)
-        table_of[int(variable.get("valueReference"))] = (types[type_name], *known[name], name)
+    for row in variables:
+        if row.name not in known:
+            raise ValueError(f"the native runtime does not know the FMU variable {row.name!r}")
+        table_of[row.value_reference] = (C_TYPES[row.type], *known[row.name], row.name)
     for vr in range(max(table_of) + 1):
         if vr in table_of:
             type_code, what, index, name = table_of[vr]
@@ -393,74 +291,56 @@ def scene_header(scene, root, steppers, symbols, digest, connector, arrays, extr
     return "\n".join(lines)
 
 
-def build(scene_path, out, fmi: int, causality, arrays: bool, build_error, platforms=None) -> Path:
+def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) -> Path:
     """Build the native FMU of the network scene at ``scene_path`` into ``out`` (see the module docstring), with
-    the binaries of ``platforms`` (``platforms.resolve``: None is this machine's)."""
-    from ..fmu.build import _with_causality, add_entry, build_fmu
+    the binaries of ``platforms`` (``platforms.resolve``: None is this machine's); NativeBuildError names what stops
+    it."""
+    from ..fmu import description
+    from ..fmu.archive import built_scene
     from ..network.model import stepper_problem
-    from ..scene import load_scene
     from . import network_kernels
     from . import platforms as targets
-    from .build import FMI_HEADERS, _native_description, _stubs
 
     folders = targets.resolve(platforms, fmi)
     chains = targets.toolchains(folders, default=platforms is None)
-    scene = load_scene(scene_path, check_stepper=False)
-    if causality is not None and causality != scene.causality:
-        scene, _ = _with_causality(scene, Path(scene_path).read_bytes(), causality)
+    scene, scene_bytes = built_scene(scene_path, causality)  # checked as the PythonFMU build checks it
     connector = scene.causality == "displacement"
     if arrays and fmi != 3:
-        raise build_error("arrays: the nodes' x and v as arrays are an FMI 3.0 option (fmi=3)")
+        raise NativeBuildError("arrays: the nodes' x and v as arrays are an FMI 3.0 option (fmi=3)")
     steppers = steppers_of(scene, connector)
     if not connector and scene.solver.stepper not in steppers:
-        raise build_error(f"{scene.source}: [solver] stepper: {stepper_problem(scene, scene.solver.stepper)}")
+        raise NativeBuildError(f"{scene.source}: [solver] stepper: {stepper_problem(scene, scene.solver.stepper)}")
+    identifier = description.model_identifier(scene)
+    guid = new_guid()
+    variables = description.variables(scene)  # FMI 2.0's, the C layer's table; FMI 3.0's extras by the macros
+    extra_vr = description.fmi3_references(scene)
+    text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
     if connector:
         scene = scene.with_solver(stepper="implicit")
-    out = Path(out)
+    digest = hashlib.sha256(scene_bytes + guid.encode()).hexdigest()
     with tempfile.TemporaryDirectory(prefix="prandtl_native_network_") as scratch:
         scratch = Path(scratch)
-        # the model description (variables, value references, units, documentation) is the PythonFMU FMU's
-        python_fmu = build_fmu(scene_path, scratch / "python.fmu", causality=causality)
-        with zipfile.ZipFile(python_fmu) as archive:
-            description = archive.read("modelDescription.xml").decode("utf-8")
-            kept = {name: archive.read(name) for name in archive.namelist()
-                    # not documentation/licenses/: PythonFMU's licence goes with its loader, which the native
-                    # binary does not hold
-                    if (name.startswith("documentation/") and not name.startswith("documentation/licenses/"))
-                    or name == "resources/scene.toml"
-                    or name.endswith("_OspModelDescription.xml")}
-        root = ET.fromstring(description)
-        identifier = root.find("CoSimulation").get("modelIdentifier")
-        count = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
-        extra_vr = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
-        digest = hashlib.sha256(Path(scene_path).read_bytes() + root.get("guid").encode()).hexdigest()
         compiled = network_kernels.compile_network(scene, steppers, connector)
         symbols = {name: function.native_name for name, function in compiled}
         try:
-            header = scene_header(scene, root, steppers, symbols, digest, connector, arrays, extra_vr)
+            header = scene_header(scene, variables, guid, steppers, symbols, digest, connector, arrays, extra_vr)
         except ValueError as exc:
-            raise build_error(str(exc)) from None
+            raise NativeBuildError(str(exc)) from None
         (scratch / "scene.h").write_text(header)
-        headers = FMI_HEADERS if fmi == 2 else HERE / "fmi3"
-        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, _stubs, [HERE / f"fmi{fmi}.c"],
-                                             [scratch, headers], [], fmi, identifier)
-        native_description = (_native_description(description) if fmi == 2
-                               else fmi3_network_description(root, scene, extra_vr, arrays, connector))
-        try:  # the page of the native FMU from its own description, where the documentation knows networks
-            from ..fmu.documentation import index_html
+        binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
+                                             [scratch, FMI_HEADERS[fmi]], [], fmi, identifier)
+        return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
 
-            kept["documentation/index.html"] = index_html(native_description.encode("utf-8"), scene,
-                                                          runtime="native")
-        except Exception:  # noqa: BLE001 (the PythonFMU FMU's page stays)
-            pass
-        out.parent.mkdir(parents=True, exist_ok=True)
-        partial = out.with_name(out.name + ".partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            add_entry(archive, "modelDescription.xml", native_description)
-            for folder in folders:
-                add_entry(archive, f"binaries/{folder.name}/{identifier}.{folder.suffix}", binaries[folder.name],
-                          mode=0o755)
-            for name, data in kept.items():
-                add_entry(archive, name, data)
-        os.replace(partial, out)
-    return out
+
+def fmi3_network_description(root, scene, extra_vr=None, arrays: bool = False, connector=None) -> str:
+    """The native FMU's FMI 3.0 description of the network ``scene`` (``description.model_description(scene,
+    3)``), with the GUID of its FMI 2.0 description ``root``, for a caller that holds that one
+    (docs/gen_pages.py); ``extra_vr`` and ``connector``, if given, must be the scene's."""
+    from ..fmu import description
+
+    if extra_vr is not None and dict(extra_vr) != description.fmi3_references(scene):
+        raise NativeBuildError(f"{extra_vr}: the FMI 3.0 description's value references are "
+                               f"{description.fmi3_references(scene)}")
+    if connector is not None and connector != (scene.causality == "displacement"):
+        raise NativeBuildError(f"connector = {connector}: the scene's causality is {scene.causality!r}")
+    return description.model_description(scene, 3, root.get("guid", ""), arrays=arrays)
