@@ -28,8 +28,6 @@ from .stability import StabilityWarning, stability_problem
 from .stepping import (ENERGY_COLUMNS, FRICTION_COLUMN, ElementError, OutputGrid, _advance, _energy_columns, _failure,
                        _progress_bar, energy_columns, initial_state, integrate)
 from .steppers import get_stepper
-# memory/__init__.py (another engineer's) imports number_list from here: remove once it imports saved_state's
-from .saved_state import number_list  # noqa: F401
 
 
 # About how long one compiled call of simulate_chunks runs (s): Python, and so a signal's handler and the

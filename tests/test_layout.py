@@ -40,9 +40,6 @@ LAYERS = [
 # Imports that break the rules, each with its reason and what removes it: (importer, imported module as named
 # in the import statement). Keep this list short; an entry that is no longer needed fails the test.
 KNOWN_EXCEPTIONS = {
-    ("memory", "driver"):
-        "memory/__init__.py's check_memory_state takes number_list from driver.py (which re-exports it for this "
-        "alone): its home is saved_state.py, one import line (issue 36)",
     ("scene", "network.model"):
         "load_scene hands a [network] or [chain] document to network/model.py's reader, which builds on "
         "scene.py's reader: removed when that dispatch moves above both or the reader's common part below "

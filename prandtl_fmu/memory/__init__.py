@@ -87,7 +87,7 @@ def restore_memory(memory, saved, time: float) -> None:
 
 def check_memory_state(memory, saved, time: float) -> None:
     """ValueError naming what in ``saved`` does not fit ``memory`` (nothing changes)."""
-    from ..driver import number_list
+    from ..saved_state import number_list
 
     if not isinstance(saved, dict):
         raise ValueError(f"state has memory = {saved!r:.60}, not a table")
