@@ -90,7 +90,7 @@ def _heading(table) -> str:
 def scene_reference() -> str:
     """Every table and key of a scene file, from the schema the reader reads by."""
     from prandtl_fmu import schema
-    from prandtl_fmu.scene import LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE
+    from prandtl_fmu.scene_tables import LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE
 
     lines = [
         "Every key below is read by the scene reader with exactly this type, default and bound: the reader takes "

@@ -16,14 +16,15 @@ The layers, bottom to top. A module imports from its own layer and those below, 
 import circle exists (``tests/test_layout.py`` checks both from the sources, with a short list of known
 exceptions and their reasons):
 
-1. base: ``__init__``, ``_jit``, ``libm``, ``noise``, ``outputs``, ``resources``, ``saved_state``
+1. base: ``__init__``, ``network`` (its lazy __init__), ``_jit``, ``libm``, ``noise``, ``outputs``,
+   ``resources``, ``saved_state``
 2. loads and effects with memory, compiled: ``loads``, ``memory``, ``memory.dahl``, ``memory.delay``,
    ``memory.history``
 3. kernels: ``kernels``, ``memory.solve``, ``network.kernels``, ``network.chain``
 4. steppers: ``steppers``
-5. scenes: ``schema``, ``effects``, ``masing``, ``scene``, ``stability``, ``network.model``
+5. scenes: ``schema``, ``effects``, ``masing``, ``scene_tables``, ``scene``, ``stability``, ``network.model``
 6. a run's parts: ``compiled``, ``stepping``
-7. the stepped objects and the network's driver: ``element``, ``connector``, ``network``, ``network.driver``
+7. the stepped objects and the network's driver: ``element``, ``connector``, ``network.driver``
 8. the batch driver and the summaries of runs: ``driver``, ``summary``
 9. the FMUs: ``fmu``, ``native``
 10. tools: ``sweep``, ``identify``, ``plots``, ``bench``

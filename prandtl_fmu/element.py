@@ -26,8 +26,8 @@ from .memory import (check_memory_state, copy_memory, has_memory, memory_state, 
 from .memory import time_problem as memory_time_problem
 from .noise import new_cache
 from .saved_state import number_list, plain_number
-from .scene import (ADVANCE_BUDGET, MAX_STEPS, MEMORY_COEFFICIENTS, SHORTEST_STEP, Scene, _coefficient_key,
-                    coefficients_of, with_coefficients)
+from .scene import ADVANCE_BUDGET, MEMORY_COEFFICIENTS, Scene, _coefficient_key, coefficients_of, with_coefficients
+from .scene_tables import MAX_STEPS, SHORTEST_STEP
 from .scene import _check_memory_rules as check_memory_rules
 from .stability import stability_problem
 from .steppers import get_stepper

@@ -1,7 +1,7 @@
 """The scene format as data: every table of a scene file and every key, with its type, unit, default, bounds and
 meaning.
 
-This table is what the readers obey and what the reference says, so the two cannot part: ``scene._Reader`` (and
+This table is what the readers obey and what the reference says, so the two cannot part: ``scene_tables._Reader`` (and
 through it ``network/model.py`` and the readers of ``memory/``) takes from here the keys a table allows, each
 key's default and its bounds, and refuses to read a key that is not here (:class:`SchemaError`, a programming
 error); ``docs/gen_pages.py`` writes the scene reference of the documentation site from here.
@@ -15,7 +15,7 @@ What is enforced where:
 * by the reader, from the fields of :class:`Key`: presence (``default``), the type, ``positive`` (> 0),
   ``minimum`` (>= minimum), ``choices``, and the magnitude of every number (a *coefficient* is 0 or has
   |value| in [1e-50, 1e50]; a *value*, ``Key.value``, only |value| <= 1e50; the ``[solver]`` times have their
-  own rules): ``scene.magnitude_problem``;
+  own rules): ``scene_tables.magnitude_problem``;
 * by the readers' own code, and said in ``Key.rule``: what ties keys together (``alpha_kinetic <= alpha``, lists
   of equal length, ``|u0| <= eta``) and the few bounds whose refusal explains itself (``chi > -1``).
 """

@@ -14,7 +14,8 @@ from prandtl_fmu import parse_scene
 from prandtl_fmu.connector import Connector
 from prandtl_fmu.element import Element
 from prandtl_fmu.stepping import ElementError
-from prandtl_fmu.scene import (ADVANCE_BUDGET, LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE, SceneError, with_coefficients)
+from prandtl_fmu.scene import ADVANCE_BUDGET, SceneError, with_coefficients
+from prandtl_fmu.scene_tables import LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE
 
 from .conftest import base_tables, make_scene, scene_text
 

@@ -8,9 +8,25 @@ Math. Probl. Eng. 2009) is the shorthand ``[chain]``.
 * ``driver.py``: whole runs and the stepped objects the FMUs drive.
 
 A one-node network with its elements to the ground is the generalized Prandtl element.
+
+This ``__init__`` imports nothing at load (its names resolve on first use, PEP 562): the scene reader imports
+``network.model`` without the drivers, which sit above it.
 """
-from .driver import NetworkConnector, NetworkElement, NetworkResult, columns_of, simulate, simulate_chunks
-from .model import Network, NetworkScene
+import importlib
 
 __all__ = ["Network", "NetworkScene", "NetworkElement", "NetworkConnector", "NetworkResult", "simulate",
            "simulate_chunks", "columns_of"]
+_HOMES = {"Network": "model", "NetworkScene": "model", "NetworkElement": "driver", "NetworkConnector": "driver",
+          "NetworkResult": "driver", "simulate": "driver", "simulate_chunks": "driver", "columns_of": "driver"}
+
+
+def __getattr__(name):
+    if name in _HOMES:
+        value = getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

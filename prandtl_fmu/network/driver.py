@@ -23,7 +23,8 @@ from ..compiled import with_noise
 from ..stepping import UNCHANGED, ElementError, OutputGrid, OutputMemo, _progress_bar, split_duration
 from ..loads import force_at, held, noise_problem, plus, with_white_noise
 from ..noise import new_cache
-from ..scene import ADVANCE_BUDGET, MAX_STEPS, SHORTEST_STEP, SceneError
+from ..scene import ADVANCE_BUDGET
+from ..scene_tables import MAX_STEPS, SHORTEST_STEP, SceneError
 
 ENERGY_COLUMNS = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
                   "energy_residual")

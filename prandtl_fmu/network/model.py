@@ -25,7 +25,7 @@ import numpy as np
 
 from . import kernels
 from .. import schema
-from ..scene import SceneError, Solver, _Reader, _check_noise_unit, _check_solver, _kind, _load, _solver
+from ..scene_tables import SceneError, Solver, _Reader, _check_noise_unit, _check_solver, _kind, _load, _solver
 from ..loads import ConstantLoad
 
 KINDS = {"spring": kernels.SPRING, "dashpot": kernels.DASHPOT, "slider": kernels.SLIDER, "branch": kernels.BRANCH,
@@ -133,7 +133,7 @@ class Network:
 
 
 def _checked(name, value, minimum, positive=False):
-    from ..scene import magnitude_problem
+    from ..scene_tables import magnitude_problem
 
     problem = magnitude_problem(value)
     if problem:
