@@ -53,7 +53,17 @@ ROUNDING = 64.0 * np.finfo(np.float64).eps
 
 
 @kernel
-def chain_form(model, fixed_node, order, spring_to, slider_at):
+def chain_form(model, fixed_node, order, spring_to, slider_at, links=None):
+    """Whether ``model`` is a massless chain (:func:`_chain_form`); ``links``: (n, 4) integers it works in (None:
+    allocated here)."""
+    if links is None:
+        links = np.empty((model[0].shape[0], 4), np.int64)
+        return _chain_form(model, fixed_node, order, spring_to, slider_at, links)
+    return _chain_form(model, fixed_node, order, spring_to, slider_at, links)
+
+
+@kernel
+def _chain_form(model, fixed_node, order, spring_to, slider_at, links):
     """Whether ``model`` is a massless chain (see the module docstring): fills ``order`` (the path's nodes
     from the far end to the load's node), ``spring_to[j]`` (the spring between order[j-1] and order[j]; for
     j = 0 the wall's spring or -1) and ``slider_at[j]`` (the slider at order[j] or -1)."""
@@ -64,9 +74,12 @@ def chain_form(model, fixed_node, order, spring_to, slider_at):
     for j in range(n):
         if mass[j] != 0.0:
             return False
-    neighbours = np.full((n, 2), -1, np.int64)
-    degree = np.zeros(n, np.int64)
-    slider_of = np.full(n, -1, np.int64)
+    neighbours = links[:, 0:2]  # the two springs of each node, its degree, its slider
+    degree = links[:, 2]
+    slider_of = links[:, 3]
+    neighbours[:] = -1
+    degree[:] = 0
+    slider_of[:] = -1
     wall = -1
     for e in range(kind.shape[0]):
         i, j = ends[e, 0], ends[e, 1]
@@ -148,7 +161,16 @@ def _move(src, i, s_shift, s_slope, s_value, dst, k, d_shift, d_slope, d_value):
 
 
 @kernel
-def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
+def chain_tensions(k, y, alpha, wall, force, budget, g, stuck, stacks=None):
+    """:func:`_tensions`; ``stacks``: the arrays it works in (:func:`scratch`'s first; None: allocated here)."""
+    if stacks is None:
+        n = k.shape[0]
+        return _tensions(k, y, alpha, wall, force, budget, g, stuck, (np.empty((2, 2 * n + 4, 4)), np.empty((3, n))))
+    return _tensions(k, y, alpha, wall, force, budget, g, stuck, stacks)
+
+
+@kernel
+def _tensions(k, y, alpha, wall, force, budget, g, stuck, stacks):
     """The programme of the module docstring on N springs: ``k[j]``, ``y[j]`` = k_j e_j, ``alpha[j]`` the
     slider at node j (the node after spring j), ``wall`` whether spring 0 exists (else g_0 = 0 and the
     programme starts at spring 1), ``force`` the load on node N-1. Writes the tensions ``g`` and ``stuck[j]``
@@ -162,14 +184,10 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
         g[0] = 0.0
         stuck[0] = STUCK if abs(force) < alpha[0] else SLIPPING
         return 1
-    capacity = 2 * n + 4
-    left = np.empty((capacity, 4))
-    right = np.empty((capacity, 4))
+    left, right = stacks[0][0], stacks[0][1]
     lo = -np.inf if wall else -alpha[0]
     hi = np.inf if wall else alpha[0]
-    minimiser = np.empty(n)
-    lows = np.empty(n)
-    highs = np.empty(n)
+    minimiser, lows, highs = stacks[1][0], stacks[1][1], stacks[1][2]
     # C_first' = (g - y) / k on [lo, hi], on the right stack; the left one is empty
     n_left, n_right = 0, 1
     l_shift, l_slope, l_value = 0.0, 0.0, 0.0
@@ -282,26 +300,40 @@ def chain_tensions(k, y, alpha, wall, force, budget, g, stuck):
 
 
 @kernel
-def chain_step(model, x, piece, force, fixed_node, d, term):
+def scratch(n):
+    """The arrays a chain step of n nodes works in, allocated once for a run of steps (the time loops): a large
+    array allocated at every step is fresh memory from the system, a page fault for every page it touches."""
+    return (np.empty((2, 2 * n + 4, 4)), np.empty((3, n))), np.empty((6, n)), np.empty((4, n), np.int64), \
+        np.empty((n, 4), np.int64)
+
+
+@kernel
+def chain_step(model, x, piece, force, fixed_node, d, term, work=None):
     """The implicit step of a massless chain: the increments ``d`` of the nodes, each element's force
     ``term`` and the sliders' pieces (0 sticking, +-1 slipping). Returns 1, -2 when no equilibrium exists, -3
     on a non-finite number, -1 when the active-set method is to take the step: the network is not a massless
     chain, the programme ran past its budget, or its answer did not pass the check of :func:`_settle` (only
-    the pieces may then have been written: the programme's, a warm start)."""
+    the pieces may then have been written: the programme's, a warm start). ``work``: :func:`scratch` (None:
+    allocated here)."""
+    if work is None:
+        return _chain_step(model, x, piece, force, fixed_node, d, term, scratch(model[0].shape[0]))
+    return _chain_step(model, x, piece, force, fixed_node, d, term, work)
+
+
+@kernel
+def _chain_step(model, x, piece, force, fixed_node, d, term, work):
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
-    order = np.empty(n, np.int64)
-    spring_to = np.empty(n, np.int64)
-    slider_at = np.empty(n, np.int64)
-    if not chain_form(model, fixed_node, order, spring_to, slider_at):
+    stacks, reals, integers, links = work
+    order, spring_to, slider_at, stuck = integers[0], integers[1], integers[2], integers[3]
+    stiffness, y, alpha, g, slip, places = reals[0], reals[1], reals[2], reals[3], reals[4], reals[5]
+    if not chain_form(model, fixed_node, order, spring_to, slider_at, links):
         return -1
     if not abs(force) < np.inf:
         return -3
     wall = spring_to[0] >= 0
-    stiffness = np.ones(n)
-    y = np.zeros(n)
-    alpha = np.zeros(n)
     for j in range(n):
+        stiffness[j], y[j], alpha[j] = 1.0, 0.0, 0.0
         e = spring_to[j]
         if e >= 0:
             stiffness[j] = coef[e, 0]
@@ -311,24 +343,22 @@ def chain_step(model, x, piece, force, fixed_node, d, term):
                 return -3
         if slider_at[j] >= 0:
             alpha[j] = coef[slider_at[j], 0]
-    g = np.empty(n)
-    stuck = np.empty(n, np.int64)
-    status = chain_tensions(stiffness, y, alpha, wall, force, BUDGET_PER_NODE * n + BUDGET_CONSTANT, g, stuck)
+    status = chain_tensions(stiffness, y, alpha, wall, force, BUDGET_PER_NODE * n + BUDGET_CONSTANT, g, stuck,
+                            stacks)
     if status < 0:
         return status
     # the programme's answer says which sliders stick and which way the others slip; the tensions and places
     # are then settled exactly from that (its lazy sums carry roundings that grow with n and the spread of k)
-    slip = np.zeros(n)  # a slipping node's slider force: +-alpha (0 for a node that sticks or has none)
-    held = np.empty(n, np.bool_)
+    held = links[:, 0]  # (chain_form is done with it) 1 where the node keeps its place
     for j in range(n):
-        held[j] = stuck[j] != SLIPPING and alpha[j] > 0.0
+        slip[j] = 0.0  # a slipping node's slider force: +-alpha (0 for a node that sticks or has none)
+        held[j] = 1 if stuck[j] != SLIPPING and alpha[j] > 0.0 else 0
         if not held[j]:
             following = g[j + 1] if j + 1 < n else force
             slip[j] = alpha[j] if following - g[j] > 0.0 else -alpha[j]
         e = slider_at[j]
         if e >= 0:
             piece[e] = 0 if held[j] else (1 if slip[j] > 0.0 else -1)
-    places = np.empty(n)
     if not _settle(x, order, stiffness, alpha, force, wall, held, slip, g, places):
         return -1
     for j in range(n):

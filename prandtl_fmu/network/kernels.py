@@ -51,6 +51,7 @@ import numpy as np
 from .._jit import generic_kernel, inline_kernel, kernel
 from ..loads import force_at, impulse, with_noise
 from .chain import chain_step
+from .chain import scratch as chain_scratch
 
 SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
 GROUND = -1
@@ -542,15 +543,16 @@ def _directional(model, x, u, piece, d, p, h, force, v, tau):
 
 
 @kernel
-def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work):
+def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work, chain_work=None):
     """The increment d (work[0]) of one implicit step and the force each element carries (work[5]); the
     pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
     Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
     (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number, -4 when the
     linear system is too ill-conditioned to be solved in double precision. A massless chain takes its O(n)
     programme (``chain.py``), every other network (or a chain past that programme's budget) the active-set
-    method."""
-    status = chain_step(model, x, piece, force, fixed_node, work[0], work[5])
+    method. ``chain_work``: the arrays the chain's programme works in (``chain.scratch``; None: allocated by
+    it)."""
+    status = chain_step(model, x, piece, force, fixed_node, work[0], work[5], chain_work)
     if status != -1:
         return status
     return active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work)
@@ -832,13 +834,13 @@ def commit(model, x, v, u, piece, h, force, work, energy, dissipated):
 
 
 @kernel
-def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
+def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated, chain_work=None):
     """One implicit step from t to t + h (the load at t + h). Returns (status, reaction): status the
     iterations taken, or < 0 when the step could not be taken (see :func:`solve_step`; the state is then
     unchanged but for the pieces)."""
     force = force_at(load, t + h)
     force = with_noise(load, force, force + impulse(load, t, h) / h)  # a white noise: the step's mean force
-    status = solve_step(model, x, v, u, piece, h, force, -1, 0.0, work)
+    status = solve_step(model, x, v, u, piece, h, force, -1, 0.0, work, chain_work)
     if status < 0:
         return status, np.nan
     return status, commit(model, x, v, u, piece, h, force, work, energy, dissipated)
@@ -871,9 +873,10 @@ def forces_now(model, x, v, u, term):
 
 
 @kernel
-def projected_step(model, load, t, h, x, v, u, piece, work, energy, dissipated):
+def projected_step(model, load, t, h, x, v, u, piece, work, energy, dissipated, chain_work=None):
     """One step of the paper's scheme (every force at t, the load at t): see the module's docstring.
-    Every node has a mass and there is no slider (the driver checks)."""
+    Every node has a mass and there is no slider (the driver checks). (``chain_work``: the time loop's, unused
+    here.)"""
     mass, kind, ends, coef, load_node, has_cubic = model
     n = mass.shape[0]
     force = force_at(load, t)
@@ -980,11 +983,12 @@ def _time_loop(step):
         step failed (status < 0; the state is the one before that step)."""
         p = 0
         status = 0
+        chain_work = chain_scratch(x.shape[0])  # once per run of steps (chain.py: a massless chain's own step)
         for j in range(out.shape[0]):
             reaction = 0.0
             for _ in range(steps_per_row):
                 status, reaction = step(model, load, t_base + (first_step + p) * h, h, x, v, u, piece, work,
-                                        energy, dissipated)
+                                        energy, dissipated, chain_work)
                 if status < 0:
                     return p, status
                 p += 1
