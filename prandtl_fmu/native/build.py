@@ -168,6 +168,7 @@ def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, array
     from ..fmu.description import fmi3_references
 
     from .. import scene as library_rules
+    from .. import stability
     from ..kernels import stack
     from ..steppers import get_stepper
 
@@ -261,6 +262,12 @@ def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, array
         f'static const char STEPPER_LIST[] = "{", ".join(steppers)}";',
         "static const int TAKES_STACK[] = {" + ", ".join(
             [str(int(kernels.takes_stack(name))) for name in steppers] + ["0"]) + "};",
+        # stability.check's kind of each stepper and its findings (element.h words them as stability.explain)
+        "static const int64_t STEPPER_STABILITY[] = {" + ", ".join(
+            [str(stability.stepper_kind(name)) for name in steppers] + ["0"]) + "};",
+        f"enum {{ STABLE = {stability.STABLE}, LEAPFROG_UNSTABLE = {stability.LEAPFROG_UNSTABLE}, "
+        f"RELAXATION_UNSTABLE = {stability.RELAXATION_UNSTABLE}, GROWTH_UNSTABLE = {stability.GROWTH_UNSTABLE}, "
+        f"STRIBECK_UNRESOLVED = {stability.STRIBECK_UNRESOLVED}, SERIES_UNSTABLE = {stability.SERIES_UNSTABLE} }};",
         "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
             [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
@@ -317,6 +324,8 @@ def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, array
             lines.append(f'int64_t stack_fold(P, P, double, P) KERNEL("{symbol}");')
         elif name == "state_check":
             lines.append(f'int64_t state_check(P, P, P) KERNEL("{symbol}");')
+        elif name == "stability":
+            lines.append(f'int64_t stability_check(P, P, double, double, int64_t, P) KERNEL("{symbol}");')
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"

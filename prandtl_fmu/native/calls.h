@@ -1,3 +1,12 @@
+/* THE C LAYER'S RULE (every C file of this folder): it marshals values (an FMI call's arguments to and from the
+ * instance, the instance's arrays to and from the kernels, an FMU state to and from its blob), validates calls (the
+ * call sequence, the pointers, every value a master sets or a state holds, by the library's rules as scene.h tables
+ * them, refused in the library's words) and calls kernels (the library's numerics, compiled by numba: kernels.py,
+ * network_kernels.py). It computes nothing of the model: every number of a step, an output, an energy, an
+ * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
+ * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
+ * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
+ * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* What both FMI layers (fmi2.c, fmi3.c) check of a call before anything runs: the instance, the call sequence (a
  * mask of the phases a function is allowed in, as modelica/Reference-FMUs' fmi2Functions.c and fmi3Functions.c do,
  * after the state machines of the FMI 2.0 and 3.0 standards for co-simulation) and the pointers it is handed. A

@@ -1,3 +1,12 @@
+/* THE C LAYER'S RULE (every C file of this folder): it marshals values (an FMI call's arguments to and from the
+ * instance, the instance's arrays to and from the kernels, an FMU state to and from its blob), validates calls (the
+ * call sequence, the pointers, every value a master sets or a state holds, by the library's rules as scene.h tables
+ * them, refused in the library's words) and calls kernels (the library's numerics, compiled by numba: kernels.py,
+ * network_kernels.py). It computes nothing of the model: every number of a step, an output, an energy, an
+ * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
+ * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
+ * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
+ * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* What the native FMU's element (element.h) and connector (connector.h) share: logging, the parameters'
  * rules (the library's magnitudes included, from scene.h), the variables' table, which values may be shown, the
  * checksum of a state. Glue only, no numerics. */
@@ -69,6 +78,30 @@ static const char* PARAM_NAMES[N_PARAMS] = {"m", "x0", "v0", "k0", "k3", "c", "a
 
 #endif
 
+/* Python's repr of a double (the shortest digits that read back, a ".0" on an integral value, an exponent below
+ * 1e-4 and from 1e16 on): what the PythonFMU FMU's messages show */
+static const char* python_repr(double value, char* buffer, size_t size)
+{
+    char digits[40];
+    int precision = 1, exponent;
+    if (!isfinite(value) || value == 0.0) {
+        snprintf(buffer, size, "%s", isnan(value) ? "nan" : isinf(value) ? (value > 0 ? "inf" : "-inf")
+                                     : signbit(value) ? "-0.0" : "0.0");
+        return buffer;
+    }
+    do
+        snprintf(digits, sizeof digits, "%.*e", precision - 1, value);
+    while (strtod(digits, NULL) != value && ++precision <= 17);
+    exponent = atoi(strchr(digits, 'e') + 1);
+    if (exponent < -4 || exponent >= 16)
+        snprintf(buffer, size, "%s", digits); /* d.ddde+XX, as Python's (two exponent digits at least) */
+    else if (exponent >= precision - 1)
+        snprintf(buffer, size, "%.1f", value); /* an integral value: exact in fixed notation */
+    else
+        snprintf(buffer, size, "%.*f", precision - 1 - exponent, value);
+    return buffer;
+}
+
 /* scene.magnitude_problem: a finite nonzero coefficient's |value| lies in [SMALLEST_MAGNITUDE, LARGEST_MAGNITUDE];
    a value's (is_value: scene.VALUES) is at most LARGEST_MAGNITUDE */
 static const char* magnitude_problem(const char* name, double value, int is_value, char* buffer, size_t size)
@@ -94,31 +127,35 @@ static const char* magnitude_problem(const char* name, double value, int is_valu
 }
 
 #if !NETWORK
-/* scene.coefficient_problem and the rule alpha_kinetic <= alpha: the message, or NULL */
+/* scene.coefficient_problem and the rule alpha_kinetic <= alpha (scene.with_coefficients): the message in the
+ * library's words (its values as Python's repr), or NULL */
 static const char* parameter_problem(const double* par, const double* cbranch, char* buffer, size_t size)
 {
+    char a[40], b[40];
     int i;
     for (i = 0; i < N_PARAMS; i++) {
         double value = par[i];
         if (!P_PRESENT[i]) {
             if (!isfinite(value)) { /* never read by a kernel, but a state must hold no such number */
-                snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
+                snprintf(buffer, size, "parameter %s: must be finite, got %s", PARAM_NAMES[i],
+                         python_repr(value, a, sizeof a));
                 return buffer;
             }
             continue;
         }
         if (!isfinite(value)) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", PARAM_NAMES[i], value);
+            snprintf(buffer, size, "parameter %s: must be finite, got %s", PARAM_NAMES[i],
+                         python_repr(value, a, sizeof a));
             return buffer;
         }
         if (magnitude_problem(PARAM_NAMES[i], value, P_VALUE[i], buffer, size))
             return buffer;
         if (P_RULE[i] == 1 && !(value > 0)) {
-            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", PARAM_NAMES[i], value);
+            snprintf(buffer, size, "parameter %s: must be > 0, got %s", PARAM_NAMES[i], python_repr(value, a, sizeof a));
             return buffer;
         }
         if (P_RULE[i] == 2 && value < 0) {
-            snprintf(buffer, size, "parameter %s: must be >= 0, got %.17g", PARAM_NAMES[i], value);
+            snprintf(buffer, size, "parameter %s: must be >= 0, got %s", PARAM_NAMES[i], python_repr(value, a, sizeof a));
             return buffer;
         }
     }
@@ -126,19 +163,19 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
         char name[32];
         snprintf(name, sizeof name, "c_branch[%d]", i + 1);
         if (!isfinite(cbranch[i])) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", name, cbranch[i]);
+            snprintf(buffer, size, "parameter %s: must be finite, got %s", name, python_repr(cbranch[i], a, sizeof a));
             return buffer;
         }
         if (magnitude_problem(name, cbranch[i], 0, buffer, size))
             return buffer;
         if (!(cbranch[i] > 0)) {
-            snprintf(buffer, size, "parameter %s: must be > 0, got %.17g", name, cbranch[i]);
+            snprintf(buffer, size, "parameter %s: must be > 0, got %s", name, python_repr(cbranch[i], a, sizeof a));
             return buffer;
         }
     }
     if (HAS_STRIBECK && par[P_ALPHA_KINETIC] > par[P_ALPHA]) {
-        snprintf(buffer, size, "parameter alpha_kinetic = %.17g: must be <= alpha = %.17g",
-                 par[P_ALPHA_KINETIC], par[P_ALPHA]);
+        snprintf(buffer, size, "parameter alpha_kinetic: alpha_kinetic must be <= alpha, got alpha_kinetic = %s and "
+                 "alpha = %s", python_repr(par[P_ALPHA_KINETIC], a, sizeof a), python_repr(par[P_ALPHA], b, sizeof b));
         return buffer;
     }
     if (!CONNECTOR && !HAS_MASS && HAS_DAMPER && !(par[P_C] > 0)) {
@@ -209,37 +246,12 @@ static const char* head_problem(const char* header, uint32_t version, uint32_t s
     return NULL;
 }
 
-/* Python's repr of a double (the shortest digits that read back, a ".0" on an integral value, an exponent below
- * 1e-4 and from 1e16 on): what the PythonFMU FMU's messages show */
-static const char* python_repr(double value, char* buffer, size_t size)
-{
-    char digits[40];
-    int precision = 1, exponent;
-    if (!isfinite(value) || value == 0.0) {
-        snprintf(buffer, size, "%s", isnan(value) ? "nan" : isinf(value) ? (value > 0 ? "inf" : "-inf")
-                                     : signbit(value) ? "-0.0" : "0.0");
-        return buffer;
-    }
-    do
-        snprintf(digits, sizeof digits, "%.*e", precision - 1, value);
-    while (strtod(digits, NULL) != value && ++precision <= 17);
-    exponent = atoi(strchr(digits, 'e') + 1);
-    if (exponent < -4 || exponent >= 16)
-        snprintf(buffer, size, "%s", digits); /* d.ddde+XX, as Python's (two exponent digits at least) */
-    else if (exponent >= precision - 1)
-        snprintf(buffer, size, "%.1f", value); /* an integral value: exact in fixed notation */
-    else
-        snprintf(buffer, size, "%.*f", precision - 1 - exponent, value);
-    return buffer;
-}
-
-#if !NETWORK && CONNECTOR
+#if !NETWORK
 /* ------------------------------------------------------------------ the effects with memory (memory/)
  *
  * The rules of their parameters and of a saved memory, on plain arrays: ``mp`` the parameters (the names of
- * kernels.memory_layout, MEM_NAMES), ``mem`` the state (MEM_FIXED values, then the delay's buffer of nd). Written
- * for the element and the connector alike (the element's rules are under !CONNECTOR); element.h still holds its
- * own copy of the first three, which it can drop for these. */
+ * kernels.memory_layout, MEM_NAMES), ``mem`` the state (MEM_FIXED values, then the delay's buffer of nd). The
+ * element's and the connector's (the element's own rules are under !CONNECTOR). */
 
 /* the delay's buffer for the tau in mp (memory.delay.size: HEAD + ceil(tau / grid) + 4; 0 without a delay), or -1
  * beyond DELAY_BOUND values */

@@ -1,3 +1,12 @@
+/* THE C LAYER'S RULE (every C file of this folder): it marshals values (an FMI call's arguments to and from the
+ * instance, the instance's arrays to and from the kernels, an FMU state to and from its blob), validates calls (the
+ * call sequence, the pointers, every value a master sets or a state holds, by the library's rules as scene.h tables
+ * them, refused in the library's words) and calls kernels (the library's numerics, compiled by numba: kernels.py,
+ * network_kernels.py). It computes nothing of the model: every number of a step, an output, an energy, an
+ * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
+ * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
+ * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
+ * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* The native FMU's connector (a massless scene between two bodies: x, v in, force out), shared by its FMI 2.0
  * (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
@@ -6,7 +15,7 @@
  * the inputs set last without committing (a preview: a copy of the state moved there); fmi2DoStep commits the
  * input sample at the communication point (the branches follow the exact play update along the line from the
  * last committed x, series dashpots relax over the time between samples, the dashpot dissipates
- * c (v0^2 + v0 v + v^2) dt / 3); initialization moves the element from x = 0 to the first input.
+ * c (v0^2 + v0 v + v^2) dt / 3: the kernel move); initialization moves the element from x = 0 to the first input.
  *
  * The effects with memory (memory/: [delay], [history], [dahl]) as the element carries them (element.h): their
  * parameters are the FMU's fixed ones (mp), their state an array on the heap (mem: the history's variables, the Dahl
@@ -84,8 +93,6 @@ static void move_to(Element* e, double x, double v, double time)
 {
     double dx = x - e->x, xs = x, vs = v, duration = time - e->time, force;
     KERNEL(e, move)(KERNEL_ARGS_OF(e), e->x, e->v, e->time, &xs, &vs, &duration, &force, e->account);
-    if (damped(e))
-        e->account[2] += e->p[P_C] * (e->v * e->v + e->v * v + v * v) * (time - e->time) / 3.0;
     if (dx != 0)
         e->direction = copysign(1.0, dx);
     e->x = x;

@@ -1,3 +1,12 @@
+/* THE C LAYER'S RULE (every C file of this folder): it marshals values (an FMI call's arguments to and from the
+ * instance, the instance's arrays to and from the kernels, an FMU state to and from its blob), validates calls (the
+ * call sequence, the pointers, every value a master sets or a state holds, by the library's rules as scene.h tables
+ * them, refused in the library's words) and calls kernels (the library's numerics, compiled by numba: kernels.py,
+ * network_kernels.py). It computes nothing of the model: every number of a step, an output, an energy, an
+ * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
+ * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
+ * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
+ * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* The native FMU's element, shared by its FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
  * Every number comes from the library's kernels, compiled by numba for this scene (native/kernels.py)
@@ -19,8 +28,6 @@
  */
 #ifndef PRANDTL_ELEMENT_H
 #define PRANDTL_ELEMENT_H
-#include <complex.h>
-
 #include "common.h"
 
 typedef struct {
@@ -128,70 +135,6 @@ static void record(Element* e, double t)
 
 /* ------------------------------------------------------------------ the effects with memory */
 
-/* the delay's buffer for the tau in mp (memory.delay.size: HEAD + ceil(tau / grid) + 4; 0 without a delay), or -1
- * beyond DELAY_BOUND values */
-static int64_t delay_size(const double* mp)
-{
-    double ratio;
-    if (!HAS_DELAY)
-        return 0;
-    ratio = ceil(mp[1] / DELAY_GRID);
-    if (!(ratio <= DELAY_BOUND))
-        return -1;
-    return DELAY_HEAD + (int64_t)ratio + 4;
-}
-
-/* why the memory's parameters mp cannot be used, or NULL: each one's rule (scene.coefficient_problem), then
- * scene._check_memory_rules (a monotone step; a buffer within DELAY_BOUND values) */
-static const char* memory_problem(const double* mp, char* buffer, size_t size)
-{
-    char a[40], b[40];
-    int i;
-    for (i = 0; i < N_MEMORY_PARAMS; i++) {
-        double value = mp[i];
-        if (!isfinite(value)) {
-            snprintf(buffer, size, "parameter %s: must be finite, got %.17g", MEM_NAMES[i], value);
-            return buffer;
-        }
-        if (magnitude_problem(MEM_NAMES[i], value, 0, buffer, size))
-            return buffer;
-        if ((MEM_RULE[i] == 1 && !(value > 0)) || (MEM_RULE[i] == 2 && value < 0)) {
-            snprintf(buffer, size, "parameter %s: must be %s 0, got %.17g", MEM_NAMES[i], MEM_RULE[i] == 1 ? ">" : ">=",
-                     value);
-            return buffer;
-        }
-    }
-    if (HAS_DELAY && mp[0] < 0 && (QUASI_STATIC || mp[1] < DELAY_GRID)) {
-        char why[128];
-        if (QUASI_STATIC)
-            snprintf(why, sizeof why, "on a massless element without a dashpot");
-        else
-            snprintf(why, sizeof why, "with tau = %s s below the step %s s", python_repr(mp[1], a, sizeof a),
-                     python_repr(DELAY_GRID, b, sizeof b));
-        snprintf(buffer, size, "parameter delay_gain: a negative gain %s makes the implicit equation of a step "
-                 "non-monotone (no unique solution): add [mass] or a [damper], or a longer tau", why);
-        return buffer;
-    }
-    if (HAS_DAHL && mp[MEM_DAHL_AT + 2] > DAHL_MAX_EXPONENT) {
-        snprintf(buffer, size, "parameter dahl_exponent: must be <= 100 (sigma 2^exponent, the slope at a reversal, "
-                 "would overflow), got %s", python_repr(mp[MEM_DAHL_AT + 2], a, sizeof a));
-        return buffer;
-    }
-    for (i = 0; i < (QUASI_STATIC ? NH : 0); i++)
-        if (mp[MEM_HISTORY_AT + i] < 0) {
-            snprintf(buffer, size, "parameter history_weight[%d]: a negative weight on a massless element without a "
-                     "dashpot makes the implicit equation of a step non-monotone: add [mass] or a [damper]", i + 1);
-            return buffer;
-        }
-    if (delay_size(mp) < 0) {
-        snprintf(buffer, size, "parameter delay_tau = %s: tau / step = %.4g values in the delay's buffer, more than "
-                 "the native runtime's bound of %.0f (%.0f MiB): a shorter tau, or a longer [solver] step in the scene",
-                 python_repr(mp[1], a, sizeof a), mp[1] / DELAY_GRID, DELAY_BOUND, DELAY_BOUND * 8 / 1048576);
-        return buffer;
-    }
-    return NULL;
-}
-
 /* Element.set_step's rule with memory: a negative delay gain with tau below the step in use, or NULL */
 static const char* memory_step_problem(const double* mp, double step, char* buffer, size_t size)
 {
@@ -202,35 +145,6 @@ static const char* memory_step_problem(const double* mp, double step, char* buff
              "equation of a step non-monotone (no unique solution): add [mass] or a [damper], or a longer tau",
              python_repr(step, a, sizeof a), python_repr(mp[1], b, sizeof b), python_repr(step, c, sizeof c));
     return buffer;
-}
-
-/* memory.delay.time_problem: why an advance from ``start`` to ``end`` (s) cannot be carried by the delay's buffer
- * (its grid counts from t = 0 below 2^52 steps, and cannot go back before what it recorded), or NULL */
-static const char* delay_time_problem(const Element* e, double start, double end, char* buffer, size_t size)
-{
-    char a[40], b[40];
-    double recorded;
-    if (!HAS_DELAY)
-        return NULL;
-    recorded = e->mem[MEM_FIXED];
-    if (start < 0) {
-        snprintf(buffer, size, "a [delay] counts its history from t = 0: the time %s s is negative",
-                 python_repr(start, a, sizeof a));
-        return buffer;
-    }
-    if (end / DELAY_GRID >= 4503599627370496.0) {
-        snprintf(buffer, size, "a [delay]'s buffer counts time in steps of %s s below 2^52: t = %s s is beyond (the "
-                 "clock no longer resolves its grid)", python_repr(DELAY_GRID, a, sizeof a),
-                 python_repr(end, b, sizeof b));
-        return buffer;
-    }
-    if (start < (recorded - 1) * DELAY_GRID) {
-        snprintf(buffer, size, "the time goes back to %s s, before what the [delay]'s buffer recorded (up to %s s): "
-                 "its past would be wrong", python_repr(start, a, sizeof a),
-                 python_repr(recorded * DELAY_GRID, b, sizeof b));
-        return buffer;
-    }
-    return NULL;
 }
 
 /* the memory's state (and the checkpoint's) of ``length`` values: NULL, or why not (out of memory; the instance
@@ -378,7 +292,7 @@ static const char* advance(Element* e, double duration, double force, int scene_
         return buffer;
     }
     {
-        const char* problem = delay_time_problem(e, element_time(e), element_time(e) + duration, buffer, size);
+        const char* problem = delay_time_problem(e->mem, element_time(e), element_time(e) + duration, buffer, size);
         if (problem != NULL)
             return problem;
     }
@@ -635,45 +549,15 @@ static uint64_t state_checksum(const State* s)
 static const char* memory_state_problem(const State* s, char* buffer, size_t size)
 {
     const Element* e = &s->element;
-    const double* mem = (const double*)(s + 1);
     const char* problem;
-    int64_t i, nd;
     if (!HAS_MEMORY)
-        return e->mem_len == 0 && e->nd == 0 ? NULL : "it holds the memory of effects this element has not";
+        return memory_values_problem(e->mp, NULL, e->nd, e->mem_len, element_time(e), buffer, size);
     problem = memory_problem(e->mp, buffer, size);
     if (problem != NULL)
         return problem;
     if (s->initialized && memcmp(s->mpar, e->mp, sizeof e->mp) != 0) /* fixed: set before initialization */
         return "its memory's parameters in use are not those set";
-    nd = delay_size(e->mp);
-    if (e->nd != nd || e->mem_len != MEM_FIXED + nd) {
-        snprintf(buffer, size, "its memory holds %.0f values, the element's at tau = %.17g s holds %.0f (a delay "
-                 "buffer of %.0f)", (double)e->mem_len, HAS_DELAY ? e->mp[1] : 0.0, (double)(MEM_FIXED + nd), (double)nd);
-        return buffer;
-    }
-    for (i = 0; i < e->mem_len; i++) {
-        int marker = 0, j;
-        for (j = 0; j < N_MEM_MARKERS; j++) /* (a cache's marker may be NaN: recomputed at the next step) */
-            marker |= MEM_MARKERS[j] == i && isnan(mem[i]);
-        if (!isfinite(mem[i]) && !marker)
-            return "its memory holds a non-finite value";
-    }
-    if (HAS_DELAY) { /* memory.delay.restore: the last grid point recorded, to a rounding of the clock */
-        double last = mem[MEM_FIXED], expected = fmax(floor(element_time(e) / DELAY_GRID), 0.0);
-        if (!(last >= 0 && last == floor(last) && last <= MAX_STEPS && fabs(last - expected) <= 1)) {
-            char a[40], b[40];
-            snprintf(buffer, size, "it has a delay buffer whose grid index is %s, at t = %s s it is %.0f",
-                     python_repr(last, a, sizeof a), python_repr(element_time(e), b, sizeof b), expected);
-            return buffer;
-        }
-    }
-    if (HAS_DAHL && !(fabs(mem[MEM_DAHL_STATE]) <= e->mp[MEM_DAHL_AT + 1])) {
-        char a[40], b[40];
-        snprintf(buffer, size, "it has a Dahl force %s beyond its level F_c = %s", python_repr(mem[MEM_DAHL_STATE],
-                 a, sizeof a), python_repr(e->mp[MEM_DAHL_AT + 1], b, sizeof b));
-        return buffer;
-    }
-    return NULL;
+    return memory_values_problem(e->mp, (const double*)(s + 1), e->nd, e->mem_len, element_time(e), buffer, size);
 }
 
 static void capture(const Instance* c, State* s)
@@ -795,8 +679,10 @@ static int restore(Instance* c, const State* s)
         double* mem = c->el.mem; /* the instance's arrays, with the state's values */
         c->el = s->element;
         c->el.mem = mem;
-        if (HAS_MEMORY)
+        if (HAS_MEMORY) { /* memory.restore_memory: the cached values are recomputed, never taken from a state */
             memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
+            forget_memory_cache(mem);
+        }
     }
     memcpy(c->mpar, s->mpar, sizeof c->mpar);
     c->F = s->F;
@@ -816,149 +702,55 @@ static int restore(Instance* c, const State* s)
 
 /* ------------------------------------------------------------------ stability warnings (stability.py) */
 
-/* log of explicit Euler's amplitude factor of the stiffest mode per period (per step without oscillation) */
-static double log_growth_per_period(int massive, double m, double c, double K, double h)
-{
-    double worst = -INFINITY, sigma, omega_sq, scale;
-    double complex modes[2], root;
-    int count, i;
-    if (!massive) {
-        double factor;
-        if (!(c > 0))
-            return 0.0;
-        factor = fabs(1.0 - h * (K / c));
-        return factor > 0 ? log(factor) : -INFINITY;
-    }
-    sigma = c / (2.0 * m);
-    omega_sq = K / m;
-    if (!(isfinite(sigma) && isfinite(omega_sq)))
-        return INFINITY;
-    scale = fmax(sigma, sqrt(omega_sq));
-    if (scale == 0.0) {
-        modes[0] = 0.0;
-        count = 1;
-    } else {
-        root = scale * csqrt((sigma / scale) * (sigma / scale) - omega_sq / scale / scale + 0.0 * I);
-        modes[0] = -sigma + root;
-        modes[1] = -sigma - root;
-        count = 2;
-    }
-    for (i = 0; i < count; i++) {
-        double factor = cabs(1.0 + h * modes[i]), log_factor, frequency;
-        if (!isfinite(creal(modes[i])) || !isfinite(cimag(modes[i])) || !isfinite(factor))
-            return INFINITY;
-        log_factor = factor > 0 ? log(factor) : -INFINITY;
-        frequency = fabs(cimag(modes[i]));
-        if (frequency > 0.0 && log_factor > 0.0)
-            log_factor *= fmax(1.0, 2.0 * 3.141592653589793 / (frequency * h));
-        worst = fmax(worst, log_factor);
-    }
-    return worst;
-}
-
-static double allowed_growth(int massive, double m, double c, double K)
-{
-    double sigma, omega_sq, scale;
-    if (!massive)
-        return 1.0;
-    sigma = c / (2.0 * m);
-    omega_sq = K / m;
-    if (!(isfinite(sigma) && isfinite(omega_sq)))
-        return 1.0;
-    scale = fmax(sigma, sqrt(omega_sq));
-    if (scale == 0.0)
-        return 1.0;
-    return (sigma / scale) * (sigma / scale) - omega_sq / scale / scale < 0 ? 2.0 : 1.0; /* oscillates */
-}
-
-static double step_limit(int massive, double m, double c, double K)
-{
-    double log_limit = log(allowed_growth(massive, m, c, K)) + 1e-12, low = -745.0, high = 709.0;
-    int i;
-    if (log_growth_per_period(massive, m, c, K, exp(high)) <= log_limit)
-        return INFINITY;
-    if (log_growth_per_period(massive, m, c, K, exp(low)) > log_limit)
-        return 0.0;
-    for (i = 0; i < 200; i++) {
-        double middle = 0.5 * (low + high);
-        if (log_growth_per_period(massive, m, c, K, exp(middle)) <= log_limit)
-            low = middle;
-        else
-            high = middle;
-    }
-    return exp(low);
-}
-
-/* stability.stability_problem for the element's stepper and step at its state: the message, or NULL */
+/* stability.stability_problem for the element's stepper and step at its state: what the library's check (the kernel
+ * stability_check, stability.check) finds, in stability.explain's words: the message, or NULL */
 static const char* stability_problem(const Element* e, char* buffer, size_t size)
 {
     const char* stepper = STEPPER_NAMES[e->stepper];
-    double h = e->h, m = e->p[P_M], c = HAS_DAMPER ? e->p[P_C] : 0.0;
-    double K = (HAS_SPRING ? e->p[P_K0] : 0.0) + (HAS_CUBIC ? 3.0 * e->p[P_K3] * e->x * e->x : 0.0) + K_SUM;
-    int i;
-    if (strcmp(stepper, "symplectic") == 0 || strcmp(stepper, "verlet") == 0) {
-        double omega;
-        if (HAS_MASS) {
-            omega = sqrt(K / m);
-            if (omega * h >= 2.0) {
-                snprintf(buffer, size, "stepper '%s' is beyond its stability limit: omega h = %.3g >= 2 (omega = "
-                         "sqrt(K/m) = %.6g rad/s with every branch sticking); use 'implicit' or h < %.3g s",
-                         stepper, omega * h, omega, 2.0 / omega);
-                return buffer;
-            }
-        }
-    } else if (strcmp(stepper, "projected") == 0 && (HAS_MASS || c != 0.0) && K != 0.0 &&
-               log_growth_per_period(HAS_MASS, m, c, K, h) > log(allowed_growth(HAS_MASS, m, c, K)) + 1e-12) {
-        double limit = step_limit(HAS_MASS, m, c, K);
-        char advice[128];
+    double out[4] = {0.0, 0.0, 0.0, 0.0};
+    char advice[128], growth[64];
+    int64_t found = stability_check((double*)e->p, (double*)e->cs, e->x, e->h, STEPPER_STABILITY[e->stepper], out);
+    switch (found) {
+    case LEAPFROG_UNSTABLE:
+        snprintf(buffer, size, "stepper '%s' is beyond its stability limit: omega h = %.3g >= 2 (omega = sqrt(K/m) = "
+                 "%.6g rad/s with every branch sticking); use 'implicit' or h < %.3g s", stepper, out[0], out[1],
+                 out[2]);
+        return buffer;
+    case RELAXATION_UNSTABLE:
+    case GROWTH_UNSTABLE: {
+        int relaxation = found == RELAXATION_UNSTABLE;
+        double limit = relaxation ? out[2] : out[3];
         if (limit > 0)
             snprintf(advice, sizeof advice, "use 'implicit' or h <= %.3g s", limit);
         else
             snprintf(advice, sizeof advice, "use 'implicit' (no step is small enough)");
-        if (!HAS_MASS) {
+        if (relaxation) {
             snprintf(buffer, size, "stepper 'projected' is unstable here: h K / c = %.3g > 2 (K = %.6g N/m with "
-                     "every branch sticking); %s", h * K / c, K, advice);
-        } else {
-            double omega = sqrt(K / m), log_growth = log_growth_per_period(1, m, c, K, h);
-            char growth[64];
-            if (log_growth < 709.0 && isfinite(exp(log_growth)))
-                snprintf(growth, sizeof growth, "x%.3g", exp(log_growth));
-            else
-                snprintf(growth, sizeof growth, "beyond any float");
-            snprintf(buffer, size, "stepper 'projected' is beyond its stability limit: omega h = %.3g (omega = "
-                     "sqrt(K/m) = %.6g rad/s with every branch sticking) makes the amplitude grow %s per period; %s",
-                     omega * h, omega, growth, advice);
+                     "every branch sticking); %s", out[0], out[1], advice);
+            return buffer;
         }
+        if (isfinite(out[2]))
+            snprintf(growth, sizeof growth, "x%.3g", out[2]);
+        else
+            snprintf(growth, sizeof growth, "beyond any float");
+        snprintf(buffer, size, "stepper 'projected' is beyond its stability limit: omega h = %.3g (omega = sqrt(K/m) "
+                 "= %.6g rad/s with every branch sticking) makes the amplitude grow %s per period; %s", out[0], out[1],
+                 growth, advice);
         return buffer;
     }
-    if (HAS_STRIBECK && strcmp(stepper, "exact") != 0) {
-        double drop = (e->p[P_ALPHA] - e->p[P_ALPHA_KINETIC]) / e->p[P_STRIBECK], inertia = m / h + c;
-        if (drop != 0.0 && drop > inertia) {
-            snprintf(buffer, size, "[friction]: the Stribeck drop (alpha - alpha_kinetic) / stribeck_velocity = %.6g "
-                     "N.s/m exceeds m/h + c = %.6g N.s/m: the step cannot resolve it (the implicit step may have "
-                     "several roots; 'implicit' takes the least slip); use h < %.3g s", drop, inertia,
-                     m / fmax(drop - c, 1e-300));
-            return buffer;
-        }
+    case STRIBECK_UNRESOLVED:
+        snprintf(buffer, size, "[friction]: the Stribeck drop (alpha - alpha_kinetic) / stribeck_velocity = %.6g N.s/m "
+                 "exceeds m/h + c = %.6g N.s/m: the step cannot resolve it (the implicit step may have several roots; "
+                 "'implicit' takes the least slip); use h < %.3g s", out[0], out[1], out[2]);
+        return buffer;
+    case SERIES_UNSTABLE:
+        snprintf(buffer, size, "stepper 'projected' relaxes the series dashpots explicitly and is unstable here: "
+                 "h k_i / c_i = %.3g > 2 (branch %.0f); use 'implicit', 'verlet' or h <= %.3g s", out[0], out[1],
+                 out[2]);
+        return buffer;
+    default:
+        return NULL;
     }
-    if (HAS_SERIES && strcmp(stepper, "projected") == 0) {
-        double fastest = -INFINITY;
-        int which = 0;
-        for (i = 0; i < NB; i++) {
-            double rate = K_BRANCH[i] / e->cs[i];
-            if (rate > fastest) {
-                fastest = rate;
-                which = i;
-            }
-        }
-        if (h * fastest > 2.0) {
-            snprintf(buffer, size, "stepper 'projected' relaxes the series dashpots explicitly and is unstable here: "
-                     "h k_i / c_i = %.3g > 2 (branch %d); use 'implicit', 'verlet' or h <= %.3g s", h * fastest,
-                     which + 1, 2.0 / fastest);
-            return buffer;
-        }
-    }
-    return NULL;
 }
 
 static void warn_if_unstable(Instance* c)

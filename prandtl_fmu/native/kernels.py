@@ -31,11 +31,13 @@ the load, ``lt``/``lf``/``nl`` its table):
 * ``force_at(kind, lk, lt, lf, nl, t, unused)`` -> F(t) of the load (``loads.force_at``);
 * ``elongations(p, k, eta, cs, u, mp, ms, nd, out)``: the n elongations u_i into ``out`` (the FMI 3.0 array ``u``);
 * ``state_check(k, state, scratch)`` (memory-stack scenes): why a restored stack state is not one, or 0
-  (:func:`compile_state_check`).
+  (:func:`compile_state_check`);
+* ``stability(p, cs, x, h, kind, out)`` (the element): ``stability.check``'s finding for the step in use, its
+  numbers in ``out`` (:func:`compile_stability`).
 
 The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(..., x_start, v_start, t_start, x,
 v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
-with memory, else ``drive``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
+with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
 slope added), ``cstored(..., x)``; ``cinitial(...)`` (a fresh memory stack and memory); ``elongations(p, k, eta, cs,
 u, out)`` (the branches' arrays alone).
 
@@ -171,12 +173,15 @@ def _model(p, kp, etap, csp, mp, msp, nd):
 
 def move(p, kp, etap, csp, up, mp, msp, nd, x_start, v_start, t_start, xp, vp, dp, fp, accountp):
     model = _model(p, kp, etap, csp, mp, msp, nd)
+    v_end, duration = vp[0], dp[0]
     if {has_memory}:  # connector.Connector.move_to: the memory moves along the path too
         drive_with_memory(model, {u}, x_start, v_start, t_start, carray(xp, (1,)), carray(vp, (1,)),
                           carray(dp, (1,)), carray(fp, (1,)), carray(accountp, (3,)))
     else:
         drive(model, {u}, x_start, carray(xp, (1,)), carray(vp, (1,)), carray(dp, (1,)), carray(fp, (1,)),
               carray(accountp, (3,)))
+    if {damped}:  # Connector.move_to: the dashpot's dissipation, v linear over the sample
+        accountp[2] += p[5] * (v_start * v_start + v_start * v_end + v_end * v_end) * duration / 3.0
     return 0
 
 
@@ -496,6 +501,7 @@ def compile_kernels(scene, steppers) -> list:
     checks = [("state_check", compile_state_check(scene))] if is_stack_scene(scene) else []
     if scene.causality == "displacement":
         return _compile_connector(scene, structure(scene)) + checks
+    checks.append(("stability", compile_stability(scene)))
     compiled = []
     compiled_force = False
     quiet, noisy = with_noise(scene, None), with_a_noise(scene)  # the two loads a stepper's loop is compiled for
@@ -537,6 +543,38 @@ def compile_kernels(scene, steppers) -> list:
     return compiled + checks
 
 
+def compile_stability(scene):
+    """``stability(p, cs, x, h, kind, out)`` -> what ``stability.check`` finds for the element's coefficients ``p``
+    (:data:`PARAMETERS` order), series dashpots ``cs``, displacement ``x``, step ``h`` and stepper ``kind``
+    (``stability.stepper_kind``), its numbers in ``out`` (4 doubles): the library's own check, whose findings the
+    C layer words as ``stability.explain`` does. The scene's structure (which effects are present, the branches'
+    stiffness) is fixed here, as the library reads it from the scene."""
+    from numba import carray, cfunc, types
+
+    from ..stability import check
+
+    massive = scene.mass is not None
+    has_spring, has_cubic, has_damper = (scene.spring is not None, scene.cubic is not None,
+                                         scene.damper is not None)
+    stribeck = scene.friction is not None and scene.friction.stribeck_velocity is not None
+    k_sum = float(scene.branches.stiffness_sum) if scene.branches is not None else 0.0
+    k_branch = (np.asarray(scene.branches.stiffness, dtype=np.float64) if scene.has_series_dashpots
+                else np.zeros(0))
+    n = k_branch.size
+
+    def stability(p, csp, x, h, kind, outp):
+        m = p[0] if massive else 0.0
+        c = p[5] if has_damper else 0.0
+        k0 = p[3] if has_spring else 0.0
+        k3 = p[4] if has_cubic else 0.0
+        drop = (p[6] - p[7]) / p[8] if stribeck else 0.0  # effects.Friction.drop_slope
+        return check(kind, massive, m, c, k0, k3, x, k_sum, drop, k_branch, carray(csp, (n,)), h, carray(outp, (4,)))
+
+    pointer = types.CPointer(types.float64)
+    return cfunc(types.int64(pointer, pointer, types.float64, types.float64, types.int64, pointer),
+                 error_model="numpy")(stability)
+
+
 def _compile_fold(scene):
     """``fold(kp, u, x, state)`` -> 1, or 0 when the n elongations ``u`` are not admissible: the stack's
     parameters ``kp`` refer to ``u`` and ``state`` is the fresh stack at x (``driver.Element._use_branch_kernel``:
@@ -576,7 +614,8 @@ def _compile_connector(scene, shape) -> list:
     compiled = []
     has_memory = "True" if memory_layout(scene)["names"] else "False"
     for suffix, damped in variants(scene):
-        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", has_memory=has_memory, **shape)
+        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False",
+                                            has_memory=has_memory, **shape)
         namespace = dict(carray=carray, np=np, drive=drive, drive_with_memory=drive_with_memory, tangent=tangent,
                          stored=stored, branch_force=branch_force, write_elongations=write_elongations,
                          smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now)

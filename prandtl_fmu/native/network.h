@@ -1,3 +1,12 @@
+/* THE C LAYER'S RULE (every C file of this folder): it marshals values (an FMI call's arguments to and from the
+ * instance, the instance's arrays to and from the kernels, an FMU state to and from its blob), validates calls (the
+ * call sequence, the pointers, every value a master sets or a state holds, by the library's rules as scene.h tables
+ * them, refused in the library's words) and calls kernels (the library's numerics, compiled by numba: kernels.py,
+ * network_kernels.py). It computes nothing of the model: every number of a step, an output, an energy, an
+ * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
+ * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
+ * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
+ * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* The native FMU of a network (issue 32: nodes joined by springs, dashpots, sliders, Prandtl branches and cubic
  * springs), the element (force in at the load's node) or, with CONNECTOR, the connector (the load node's motion
  * in, force out), shared by the FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
