@@ -70,6 +70,120 @@ class Slave:
         self.fmu.freeInstance()
 
 
+OK, DISCARD, ERROR = 0, 2, 3  # FMI's statuses (2.0 and 3.0)
+
+
+class NativeInstance:
+    """One instance of a native FMU (FMI 2.0 or 3.0) through FMPy, its messages kept; ``start``: values set in
+    initialization mode (``refused``: the status of a refused exit of initialization mode, else None);
+    ``start_time``: the experiment's."""
+
+    def __init__(self, fmu, name="element", start=None, start_time=0.0):
+        from fmpy import extract, read_model_description
+
+        md = read_model_description(fmu)
+        self.fmi = 3 if md.fmiVersion.startswith("3") else 2
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.types = {v.name: v.type for v in md.modelVariables}
+        self.messages = []
+        self.time = 0.0
+        folder = extract(fmu)
+        if self.fmi == 2:
+            from fmpy import calloc, free
+            from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                                   fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+            self._logger = fmi2CallbackLoggerTYPE(self._log2)  # kept alive with the instance
+            callbacks = fmi2CallbackFunctions()
+            callbacks.logger = self._logger
+            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            self._callbacks = callbacks
+            self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder,
+                                 modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+            self.fmu.instantiate(callbacks=callbacks, loggingOn=False)
+            self.fmu.setupExperiment(startTime=start_time)
+        else:
+            from fmpy.fmi3 import FMU3Slave
+
+            self.fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=folder,
+                                 modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+            self.fmu.instantiate(loggingOn=False, logMessage=self._log3)
+        self.time = start_time
+        if self.fmi == 2:
+            self.fmu.enterInitializationMode()
+        else:
+            self.fmu.enterInitializationMode(startTime=start_time)
+        for key, value in (start or {}).items():
+            self.set(key, value)
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self.fmu.exitInitializationMode()
+            self.refused = None
+        except FMICallException as exc:  # (kept: the refusal's words are in the messages)
+            self.refused = exc.status
+
+    def _log2(self, env, instance, status, category, message):
+        self.messages.append((status, message.decode("utf-8", "replace")))
+
+    def _log3(self, env, status, category, message):
+        self.messages.append((status, message.decode("utf-8", "replace")))
+
+    def set(self, name, value):
+        kind, vr = self.types[name], [self.vr[name]]
+        if kind == "String":
+            self.fmu.setString(vr, [value])
+        elif kind == "Boolean":
+            self.fmu.setBoolean(vr, [value])
+        elif kind in ("Integer", "Int32"):
+            (self.fmu.setInteger if self.fmi == 2 else self.fmu.setInt32)(vr, [value])
+        else:
+            (self.fmu.setReal if self.fmi == 2 else self.fmu.setFloat64)(vr, [value])
+
+    def get(self, *names):
+        return list((self.fmu.getReal if self.fmi == 2 else self.fmu.getFloat64)([self.vr[n] for n in names]))
+
+    def step(self, size, force):
+        """One doStep from the instance's time under ``force``; its status (FMPy raises beyond a warning)."""
+        self.set("F", force)
+        return self.do_step(size)
+
+    def move(self, size, x, v):
+        """A connector's doStep from the instance's time with the motion (x, v) set; its status."""
+        self.set("x", x)
+        self.set("v", v)
+        return self.do_step(size)
+
+    def do_step(self, size):
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self.fmu.doStep(self.time, size)
+        except FMICallException as exc:
+            return exc.status
+        self.time += size
+        return OK
+
+    def serialize(self) -> bytes:
+        if self.fmi == 2:
+            return bytes(self.fmu.serializeFMUstate(self.fmu.getFMUstate()))
+        return bytes(self.fmu.serializeFMUState(self.fmu.getFMUState()))
+
+    def restore(self, blob):
+        if self.fmi == 2:
+            self.fmu.setFMUstate(self.fmu.deSerializeFMUstate(blob))
+        else:
+            self.fmu.setFMUState(self.fmu.deserializeFMUState(blob))
+
+    def said(self, words):
+        return [message for _, message in self.messages if words in message]
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
 def rss_bytes():
     with open("/proc/self/statm") as fh:
         return int(fh.read().split()[1]) * ctypes.sizeof(ctypes.c_char) * 4096
