@@ -33,6 +33,8 @@ from .loads import ConstantLoad
 from .resources import ResourceError, check_memory
 from .scene_tables import (Load, SceneError, Solver, VALUES, _Reader, _check_noise_unit, _check_solver, _kind, _load,
                            _solver, magnitude_problem)
+# the scene's bounds, read as scene.<name> by the FMU builds (their C rules) and the tests
+from .scene_tables import LARGEST_MAGNITUDE, MAX_STEPS, SHORTEST_STEP, SMALLEST_MAGNITUDE  # noqa: F401
 
 # Memory per branch at the peak of a run: the scene's arrays, the kernel's sorted copies, the memory stack's ten
 # rows and their temporaries, an Element's saved state. Measured 197 bytes (n = 10^6, projected; the issue's
