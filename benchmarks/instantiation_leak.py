@@ -1,6 +1,6 @@
 """What one FMU instantiation keeps in the host (README, "PythonFMU 0.7.0, worked around").
 
-Builds the FMU of the paper's scene with each native loader (ours, ``prandtl_fmu/fmu/loader``, and
+Builds the FMU of the paper's scene with each native loader (ours, ``prandtl_fmu/fmu/python/loader``, and
 PythonFMU's stock one) and the connector example's point mass (a plain PythonFMU slave; ``run_connector.build``
 gives it our loader), then, in a fresh process for each: 50 warm-up cycles of instantiate, initialize, one
 doStep, terminate, free through FMPy, then ``--cycles`` more, and the growth of ``sys.getallocatedblocks()``

@@ -78,7 +78,7 @@ def main():
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--out", default="docs/bench/network_fmu_overhead.csv")
     args = parser.parse_args()
-    from prandtl_fmu.native.build import build_native_network_fmu
+    from prandtl_fmu.fmu.native.build import build_native_network_fmu
     from prandtl_fmu.scene import parse_scene
 
     rows = []

@@ -40,7 +40,7 @@ from common import write_rows  # noqa: E402
 
 from prandtl_fmu import Element, load_scene  # noqa: E402
 from prandtl_fmu.fmu.build import build_fmu  # noqa: E402
-from prandtl_fmu.native import platforms  # noqa: E402
+from prandtl_fmu.fmu.native import platforms  # noqa: E402
 
 SCENE = ROOT / "scenes" / "paper-section-8.toml"
 HOST = ROOT / "tests" / "c_host" / "cross_host.c"

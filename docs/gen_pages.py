@@ -322,12 +322,12 @@ def _descriptions(text: str, folder: pathlib.Path, label: str) -> dict:
         root = ET.fromstring(archive.read("modelDescription.xml"))
     count = max(int(v.get("valueReference")) for v in root.iter("ScalarVariable")) + 1
     if hasattr(scene, "network"):
-        from prandtl_fmu.native.network_build import fmi3_network_description
+        from prandtl_fmu.fmu.native.network_build import fmi3_network_description
 
         extra = {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
         fmi3 = fmi3_network_description(root, scene, extra, False, scene.causality == "displacement")
     else:
-        from prandtl_fmu.native.build import fmi3_description
+        from prandtl_fmu.fmu.native.build import fmi3_description
 
         fmi3 = fmi3_description(root, scene, count)
     return {"2.0": root, "3.0": ET.fromstring(fmi3)}

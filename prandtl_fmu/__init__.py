@@ -9,8 +9,8 @@ The layout follows the architecture: a scene (``scene.py``; its effects in ``eff
 is compiled once into flat arrays (``compiled.py``), a stepper (``steppers/``, one module per scheme: how)
 advances it with compiled building blocks (``kernels/``), and two drivers run it (how far): the batch driver
 ``driver.py`` (``simulate``) and the stateful ``element.py`` (``Element``, what every FMU runs), which share
-``stepping.py``. ``fmu/`` and ``native/`` are the FMI glue of the two runtimes; ``bench/``, ``sweep/`` and
-``cli.py`` are tools on top.
+``stepping.py``. ``fmu/`` is the FMI glue of the two runtimes (``fmu/python/``, ``fmu/native/``);
+``bench/``, ``sweep/`` and ``cli.py`` are tools on top.
 
 The layers, bottom to top. A module imports from its own layer and those below, never from one above, and no
 import circle exists (``tests/test_layout.py`` checks both from the sources, with a short list of known
@@ -26,7 +26,7 @@ exceptions and their reasons):
 6. a run's parts: ``compiled``, ``stepping``
 7. the stepped objects and the network's driver: ``element``, ``connector``, ``network.driver``
 8. the batch driver and the summaries of runs: ``driver``, ``summary``
-9. the FMUs: ``fmu``, ``native``
+9. the FMUs of both runtimes: ``fmu``
 10. tools: ``sweep``, ``identify``, ``plots``, ``bench``
 11. the command line: ``cli``, ``__main__``
 

@@ -15,7 +15,7 @@ folder, never beside the sources:
   sources at another place, an FMU extracted to a new temporary folder, finds
   the same cache);
 * the package name is part of the folder: the library bundled in an FMU is
-  imported under a private name (``fmu/entry.py``), and cached code names the
+  imported under a private name (``fmu/python/entry.py``), and cached code names the
   modules it was compiled in, so the FMU never loads code compiled for the
   installed ``prandtl_fmu`` nor the other way round;
 * inside an FMU the sources sit in a temporary folder that the importer

@@ -28,7 +28,7 @@ Two more checks, for every stepper that takes steps:
 
 The arithmetic is one compiled kernel, :func:`check` (the modes in real arithmetic, ``prandtl_fmu.libm``'s log,
 exp and hypot: the same bits everywhere): :func:`stability_problem` calls it for the library and words what it
-finds (:func:`explain`); the native FMU calls the same kernel, compiled into its binary (native/kernels.py), and
+finds (:func:`explain`); the native FMU calls the same kernel, compiled into its binary (fmu/native/kernels.py), and
 its C layer words the same findings in the same words.
 """
 from __future__ import annotations

@@ -92,7 +92,7 @@ def pytest_unconfigure(config):
     The stock loader (built with ``loader="pythonfmu"`` by the tests that compare it with ours) frees its
     interpreter state in a static destructor and writes to it again from its library destructor in exit():
     a use-after-free that corrupts the heap when the block was reused meanwhile (SIGABRT after every result
-    is out; prandtl_fmu/fmu/loader fixes it in ours). Processes that loaded only our FMUs exit normally.
+    is out; prandtl_fmu/fmu/python/loader fixes it in ours). Processes that loaded only our FMUs exit normally.
     PRANDTL_FMU_FULL_EXIT=1 exits normally in any case.
     """
     tools = sys.modules.get("tests.fmu_tools")

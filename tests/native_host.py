@@ -19,7 +19,7 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / "c_host" / "fmi2_host.c"
-FMI_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "loader" / "src" / "fmi"
+FMI_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "python" / "loader" / "src" / "fmi"
 _BUILT = {}
 
 
@@ -95,7 +95,7 @@ def run_host(host: Path, fmu: Extracted, commands, logging: bool = False, env=No
 # ------------------------------------------------------------------ the trust host (issue 31)
 
 TRUST_SOURCE = HERE / "c_host" / "trust_host.c"
-FMI3_HEADERS = HERE.parent / "prandtl_fmu" / "native" / "fmi3"
+FMI3_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "native" / "fmi3"
 SANITIZERS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 # a leak, an invalid access or undefined behaviour ends the process with an error: the tests see it
 SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:exitcode=86", "UBSAN_OPTIONS": "halt_on_error=1:exitcode=87"}

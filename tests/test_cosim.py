@@ -73,7 +73,7 @@ def test_the_example_force_source_gives_f0_of_the_amplitude_set_during_initializ
     from fmpy.fmi2 import FMU2Slave
     from pythonfmu import FmuBuilder
 
-    from prandtl_fmu.fmu.loader import install as install_loader
+    from prandtl_fmu.fmu.python.loader import install as install_loader
 
     FmuBuilder.build_FMU(ROOT / "examples" / "cosim" / "prandtl_example_harmonic_force.py",
                          dest=tmp_path / "HarmonicForce.fmu")

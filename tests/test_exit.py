@@ -1,6 +1,6 @@
 """Processes that ran the FMU exit cleanly (issue: the SIGABRT "corrupted double-linked list" at interpreter exit).
 
-Root cause (found with valgrind, fixed in prandtl_fmu/fmu/loader): PythonFMU 0.7.0's loader keeps its
+Root cause (found with valgrind, fixed in prandtl_fmu/fmu/python/loader): PythonFMU 0.7.0's loader keeps its
 interpreter state in a global std::shared_ptr whose static destructor runs in exit()'s handlers, and then
 assigns to that destroyed shared_ptr from the library's destructor function in _dl_fini: a reference count
 decremented inside a freed 128-byte block, and a second destruction when it reaches zero. Numba's and LLVM's
@@ -52,7 +52,7 @@ def _plain_fmus(folder):
     """The plain slave's FMU with PythonFMU's stock loader and with ours."""
     from pythonfmu import FmuBuilder
 
-    from prandtl_fmu.fmu.loader import install
+    from prandtl_fmu.fmu.python.loader import install
 
     source = folder / "exit_probe.py"
     source.write_text(PLAIN_SLAVE)

@@ -33,7 +33,7 @@ LAYERS = [
     ("the stepped objects, and the network's own driver",
      ["element", "connector", "network.driver"]),
     ("the batch driver and the summaries of runs", ["driver", "summary"]),
-    ("the FMUs of both runtimes", ["fmu", "native"]),
+    ("the FMUs of both runtimes", ["fmu"]),
     ("tools built on the library", ["sweep", "identify", "plots", "bench"]),
     ("the command line", ["cli", "__main__"]),
 ]

@@ -1,5 +1,5 @@
 """The compiled kernels call no libm function (issue 33, "one number everywhere"): the native kernels' objects,
-built as ``prandtl_fmu.native`` builds them, declare no transcendental function and need none from the link.
+built as ``prandtl_fmu.fmu.native`` builds them, declare no transcendental function and need none from the link.
 
 glibc's, Windows' and musl's cos, sin, exp, log, pow, hypot, cbrt, ... differ in their last bits; the kernels call
 ``prandtl_fmu.libm`` instead, so that the library in process and every FMU binary compute the same bits. What is
@@ -119,7 +119,7 @@ omega = 5.0
 
 
 def element_kernels(text, causality):
-    from prandtl_fmu.native import kernels
+    from prandtl_fmu.fmu.native import kernels
 
     scene = parse_scene(text + (f'\n[fmu]\ncausality = "{causality}"\n' if causality != "force" else ""), "s.toml")
     steppers = [] if scene.causality == "displacement" else kernels.applicable(scene)
@@ -127,8 +127,8 @@ def element_kernels(text, causality):
 
 
 def network_kernels(text, causality):
-    from prandtl_fmu.native import network_kernels
-    from prandtl_fmu.native.network_build import steppers_of
+    from prandtl_fmu.fmu.native import network_kernels
+    from prandtl_fmu.fmu.native.network_build import steppers_of
 
     if causality == "displacement":  # the load node's motion is imposed: it is massless
         text = text.replace("mass = [1.0,", "mass = [0.0,") + f'\n[fmu]\ncausality = "{causality}"\n'

@@ -1,4 +1,4 @@
-"""The FMU's native loader (``prandtl_fmu/fmu/loader``: PythonFMU 0.7.0's, patched) against the stock one.
+"""The FMU's native loader (``prandtl_fmu/fmu/python/loader``: PythonFMU 0.7.0's, patched) against the stock one.
 
 Each test runs the same scene's FMU under both loaders where the stock loader behaves differently, so that
 the test shows the defect it guards against (and would fail if the patched library were not in the FMU).
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from prandtl_fmu.fmu import loader
+from prandtl_fmu.fmu.python import loader
 
 pytest.importorskip("fmpy")
 
@@ -63,7 +63,7 @@ def test_the_prebuilt_library_is_built_from_the_sources_in_the_repository():
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="no g++ on this machine: the prebuilt library is used as is")
 def test_the_sources_compile_without_a_warning(tmp_path):
-    """What ``python -m prandtl_fmu.fmu.loader`` does, into a scratch file: -Wall is silent."""
+    """What ``python -m prandtl_fmu.fmu.python.loader`` does, into a scratch file: -Wall is silent."""
     import sysconfig
 
     if not (Path(sysconfig.get_paths()["include"]) / "Python.h").is_file():

@@ -15,7 +15,7 @@ import pytest
 
 from prandtl_fmu import load_scene, parse_scene, simulate
 from prandtl_fmu.element import Element
-from prandtl_fmu.native.kernels import NATIVE_STEPPERS
+from prandtl_fmu.fmu.native.kernels import NATIVE_STEPPERS
 
 from .conftest import SCENES as SCENE_FOLDER, base_tables, scene_text
 from .native_host import Extracted, compile_host, run_host
@@ -94,7 +94,7 @@ def quick_or_slow(names):
 
 
 def steppers_of(scene):
-    from prandtl_fmu.native.kernels import applicable
+    from prandtl_fmu.fmu.native.kernels import applicable
 
     return applicable(scene)
 

@@ -1,6 +1,6 @@
 """The effects with memory ([delay], [history], [dahl]) in the native FMU (issue 35), FMI 2.0 and 3.0.
 
-The kernels rebuild the library's memory tuple from the C layer's arrays (native/kernels.py: memory_layout), so the
+The kernels rebuild the library's memory tuple from the C layer's arrays (fmu/native/kernels.py: memory_layout), so the
 native FMU is driver.Element bit for bit: over uneven communication steps for both steppers that carry memory
 (implicit, projected), through a refused step (the memory's checkpoint), after a state serialized and restored in
 another instance, with memory parameters set before initialization (Element.set_coefficients), and for a massless
@@ -25,7 +25,7 @@ from prandtl_fmu import load_scene
 from prandtl_fmu.element import Element
 from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.memory import delay as memory_delay
-from prandtl_fmu.native.kernels import memory_layout
+from prandtl_fmu.fmu.native.kernels import memory_layout
 
 pytest.importorskip("fmpy")
 from .fmu_tools import NativeInstance as Instance  # noqa: E402  (after the skip: it imports FMPy)
@@ -543,8 +543,8 @@ def connector_fmu(tmp_path_factory):
 
 
 class DrivenConnector:
-    """connector.Connector driven as fmu/connector_slave.py drives it: memory coefficients ``start`` set before the
-    first move, reset at the start time and moved to the first input; the outputs at the inputs set last are a
+    """connector.Connector driven as fmu/python/connector_slave.py drives it: memory coefficients ``start`` set before
+    the first move, reset at the start time and moved to the first input; the outputs at the inputs set last are a
     copy's moved there (the preview), the dashpots' account the committed one's; a doStep commits the inputs at the
     communication point."""
 

@@ -19,7 +19,7 @@ import pytest
 from prandtl_fmu import load_scene, parse_scene, simulate
 from prandtl_fmu.element import Element
 from prandtl_fmu.loads import WhiteNoise
-from prandtl_fmu.native.kernels import applicable, noise_refusal
+from prandtl_fmu.fmu.native.kernels import applicable, noise_refusal
 from prandtl_fmu.network import NetworkElement
 from prandtl_fmu.network import simulate as simulate_network
 
@@ -392,7 +392,7 @@ def test_a_restored_state_carries_the_noise_settings(built):
 def pythonfmu_words(settings) -> str:
     """What the PythonFMU FMU says of these noise settings (NoiseParameters: the seed an FMU takes, then
     loads.white_noise's rules), after "parameter "."""
-    from prandtl_fmu.fmu.common import NoiseParameters
+    from prandtl_fmu.fmu.python.common import NoiseParameters
 
     with pytest.raises(ValueError) as refused:
         NoiseParameters._check_noise_state(settings)
@@ -492,7 +492,7 @@ def test_a_stepper_that_takes_no_noise_refuses_it_with_the_library_reason(built)
 def test_a_massless_load_node_without_a_dashpot_refuses_the_noise(built):
     """network.model.stepper_problem: m_b = 0 set under the noise is refused (set_parameters), and so is the noise
     turned on over a massless b (set_noise), with the library's words; without the noise m_b = 0 applies."""
-    from prandtl_fmu.native.network_build import noise_rule
+    from prandtl_fmu.fmu.native.network_build import noise_rule
 
     fmu, path = built["network", 2]
     damped, reason = noise_rule(load_scene(path))

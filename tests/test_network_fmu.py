@@ -518,9 +518,9 @@ def test_a_native_host_runs_the_network_fmu_with_the_recipe(fmus, tmp_path):
 
 
 def test_the_native_runtime_takes_the_native_builder_or_says_networks_are_not_there(fmus, tmp_path, monkeypatch):
-    """Without prandtl_fmu.native.build.build_native_network_fmu the native runtime refuses a network with one
+    """Without prandtl_fmu.fmu.native.build.build_native_network_fmu the native runtime refuses a network with one
     line; with it, build_fmu hands it the scene, the target and the options."""
-    from prandtl_fmu.native import build as native_build
+    from prandtl_fmu.fmu.native import build as native_build
 
     _, scene_path = fmus["chain"]
     monkeypatch.delattr(native_build, "build_native_network_fmu", raising=False)

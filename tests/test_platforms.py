@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prandtl_fmu.native import platforms
-from prandtl_fmu.native.platforms import PlatformError, resolve
+from prandtl_fmu.fmu.native import platforms
+from prandtl_fmu.fmu.native.platforms import PlatformError, resolve
 
 from .conftest import base_tables, scene_text
 
@@ -403,11 +403,11 @@ def compare_with_the_library(run, fmu: Path, fmi: int, label: str, network: bool
     after every step, bit for bit."""
     from prandtl_fmu import load_scene
     from prandtl_fmu.element import Element
-    from prandtl_fmu.native.kernels import applicable
+    from prandtl_fmu.fmu.native.kernels import applicable
 
     description = Description(fmu, fmi)
     if network:
-        from prandtl_fmu.native.network_build import steppers_of
+        from prandtl_fmu.fmu.native.network_build import steppers_of
         from prandtl_fmu.network import NetworkElement
 
         from .test_native_network import library_outputs

@@ -1,4 +1,4 @@
-"""The PythonFMU FMU (our loader, ``prandtl_fmu/fmu/loader``, and the slaves) against a hostile FMI 2.0 host.
+"""The PythonFMU FMU (our loader, ``prandtl_fmu/fmu/python/loader``, and the slaves) against a hostile FMI 2.0 host.
 
 Driven through ctypes, not FMPy, so that a test can pass what FMPy never does: a NULL instance, NULL argument
 pointers, made-up state pointers, calls out of order, NaN and inf times. Where the stock loader crashed, the
@@ -350,7 +350,7 @@ for kind, path in zip(("element", "connector"), sys.argv[1:3]):
 
 def test_under_the_stock_loader_the_slaves_refuse_a_bad_clock_and_survive(tmp_path):
     """PythonFMU's stock loader passes NaN, inf and negative steps on: the slaves refuse them (fmi2Fatal there, as
-    every refusal, see fmu/common.py) with the reason, and step on. The element used to raise outside its step's
+    every refusal, see fmu/python/common.py) with the reason, and step on. The element used to raise outside its step's
     guard (the library's 'time must be finite'), a bare exception for which that loader freed the instance's
     objects, and took a negative step as a Discard."""
     paths = [build(tmp_path, ELEMENT_SCENE, "element", loader="pythonfmu"),

@@ -31,7 +31,7 @@ def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml", runtime="pytho
     from pythonfmu import FmuBuilder
 
     from prandtl_fmu.fmu.build import build_fmu
-    from prandtl_fmu.fmu.loader import install as install_loader
+    from prandtl_fmu.fmu.python.loader import install as install_loader
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -39,7 +39,7 @@ def build(folder, scene=ROOT / "scenes" / "paper-section-8.toml", runtime="pytho
     source = HERE / "prandtl_example_harmonic_force.py"
     try:
         FmuBuilder.build_FMU(source, dest=folder / "HarmonicForce.fmu")
-        install_loader(folder / "HarmonicForce.fmu")  # our patched PythonFMU loader (prandtl_fmu/fmu/loader)
+        install_loader(folder / "HarmonicForce.fmu")  # our patched PythonFMU loader (prandtl_fmu/fmu/python/loader)
     finally:  # let the FMU import its own copy when loaded in this process
         sys.modules.pop(source.stem, None)
         if str(source.parent) in sys.path:

@@ -1,13 +1,12 @@
-"""The FMI glue: an FMI 2.0 co-simulation FMU of a scene, built with PythonFMU.
+"""The FMUs of a scene, in two runtimes: the FMI glue, no numerics of its own.
 
-* ``slave.py``: the slave class (variables <-> :class:`prandtl_fmu.Element`); ``connector_slave.py``: the
-  element as a connector (motion in, force out);
-* ``network_slave.py``, ``network_connector_slave.py``: the same two for a network scene ([network],
-  [chain]: :class:`prandtl_fmu.network.NetworkElement`, :class:`~prandtl_fmu.network.NetworkConnector`);
-* ``entry.py``: the FMU's script: imports the bundled library, hands over the slave class;
-* ``description.py``: the FMU's variables and its modelDescription.xml (FMI 2.0 and 3.0), for both runtimes: the
-  slaves register their variables from it, the native build (``prandtl_fmu/native``) writes its description from it;
-* ``archive.py``: what the builds of both runtimes share (the scene an FMU is built from, its files);
-* ``build.py``: :func:`build_fmu` (also ``python build_fmu.py``);
-* ``documentation.py``: the FMU's ``documentation/index.html``.
+* ``description.py``: the FMU's variables (one list for both runtimes) and its modelDescription.xml, FMI 2.0 and 3.0;
+* ``osp.py``: the OSP interface description (libcosim's ``<modelName>_OspModelDescription.xml``);
+* ``archive.py``: what both builds share (the scene an FMU is built from, its file names, its zip entries);
+* ``documentation.py``: the FMU's ``documentation/index.html``;
+* ``build.py``: :func:`build_fmu` (also ``python build_fmu.py``, ``prandtl-fmu build``), for either runtime;
+* ``python/``: the PythonFMU runtime (FMI 2.0): the slaves over the library's stepped objects, the FMU's script,
+  the patched loader, its build;
+* ``native/``: the native runtime (FMI 2.0 and 3.0): the library's kernels compiled into the binary, the C FMI
+  layer, its build for each platform.
 """

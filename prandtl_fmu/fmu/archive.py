@@ -2,8 +2,8 @@
 
 :func:`built_scene` reads and checks the scene (its stepper unless the FMU is a connector, the noise's seed an FMU
 can take), applies the causality a build asks for and returns the text the FMU keeps as ``resources/scene.toml``;
-:func:`file_stem` makes a scene's name a file name; :func:`add_entry` writes a file into the FMU's zip archive as
-every FMU's file is written.
+:func:`file_stem` makes a scene's name a file name (:func:`check_osp_name`: or refuses it); :func:`add_entry`
+writes a file into the FMU's zip archive as every FMU's file is written.
 """
 from __future__ import annotations
 
@@ -54,6 +54,15 @@ def file_stem(name: str) -> str:
     else becomes '_'; no leading dot; an empty result is 'prandtl_element'."""
     stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".")[:100]
     return stem or "prandtl_element"
+
+
+def check_osp_name(name: str) -> None:
+    """An OSP interface description is written beside the FMU under the scene's name: a name that is not a plain
+    file name is refused (ValueError)."""
+    if file_stem(name) != name:
+        raise ValueError(f"--osp: the scene name {name!r} is not a plain file name, and libcosim looks for "
+                         "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
+                         "'-', '_' and '.'")
 
 
 def add_entry(archive: zipfile.ZipFile, name: str, data, mode: int = 0o644) -> None:

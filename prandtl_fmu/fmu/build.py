@@ -1,47 +1,22 @@
-"""Build the FMU of a scene: ``build_fmu(scene_path, out)``.
+"""Build the FMU of a scene: ``build_fmu(scene_path, out)``, for either runtime (also ``python build_fmu.py`` and
+``prandtl-fmu build``).
 
-A network scene ([network] or [chain]) gets the network's slaves (``network_slave.py``,
-``network_connector_slave.py``; model identifiers ``PrandtlNetwork``, ``PrandtlNetworkConnector``), the
-others the element's. The FMU holds, in ``resources/``: the slave script under a unique module name
-(``prandtl_slave_<digest>``, the digest of the scene and the library's
-sources), a copy of the library (``prandtl_fmu/``, the code the tests run),
-the scene (``scene.toml``) and the OSP interface description
-(``<modelIdentifier>_OspModelDescription.xml``, see ``osp.py``); ``documentation/index.html`` with the
-equations and the variables. The host needs Python with numpy and numba (and
-nothing else): PythonFMU FMUs run in the host's Python.
+``runtime="python"`` (the default): the PythonFMU runtime's FMU (``fmu/python/build.py``: the slave script, a copy
+of the library and the scene in ``resources/``; it runs in the host's Python). ``runtime="native"``: an FMU whose
+binary holds the scene's compiled kernels and a C FMI layer, no Python (``fmu/native/build.py``; a network scene:
+``fmu/native/network_build.py``). Both take their model description from ``fmu/description.py`` and the scene
+from ``fmu/archive.py``.
 """
 from __future__ import annotations
 
-import hashlib
 import os
-import shutil
-import sys
-import tempfile
-import zipfile
 from pathlib import Path
 from typing import Optional, Union
 
 from ..outputs import write_atomically
 from ..scene import load_scene, scene_path as resolve_scene
-from .archive import add_entry, built_scene, file_stem
-from .description import is_network, model_identifier
-
-LIBRARY = Path(__file__).resolve().parent.parent  # the prandtl_fmu package
-MODEL_IDENTIFIER = "PrandtlElement"
-
-
-def _library_files():
-    for path in sorted(LIBRARY.rglob("*.py")):
-        if "__pycache__" not in path.parts:
-            yield path
-
-
-def _digest(scene_bytes: bytes, loader: str) -> str:
-    """The scene, the native loader and the library's sources (the digest that also names the kernel cache,
-    ``_jit.py``): FMUs that differ in any of them never share their script's module in a host."""
-    from .._jit import source_digest
-
-    return hashlib.sha256(scene_bytes + loader.encode() + source_digest().encode()).hexdigest()[:12]
+from .archive import check_osp_name, file_stem
+from .description import is_network
 
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
@@ -54,17 +29,17 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     (SceneError if the scene's table says otherwise). With ``osp``, also write
     ``<modelName>_OspModelDescription.xml`` beside the FMU, where libcosim looks for it (it is always inside
     the FMU, in ``resources/``). ``loader`` is the FMU's native library on Linux x86-64: "prandtl" (None: the
-    default), PythonFMU 0.7.0's patched (``loader/``: a refused call is fmi2Error and the instance stays usable), or "pythonfmu",
-    PythonFMU's own (refusals fmi2Fatal); the other platforms always get PythonFMU's own. The scene is checked
-    first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
+    default), PythonFMU 0.7.0's patched (``fmu/python/loader/``: a refused call is fmi2Error and the instance stays
+    usable), or "pythonfmu", PythonFMU's own (refusals fmi2Fatal); the other platforms always get PythonFMU's own.
+    The scene is checked first (:class:`SceneError` on any broken rule). Returns the path of the FMU.
 
     ``runtime="native"``: an FMU whose binary holds the scene's compiled kernels and a C FMI layer, no Python
-    (``prandtl_fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); a ``loader`` is refused with it. A
-    network scene goes to ``prandtl_fmu.native.build.build_native_network_fmu`` (ValueError where the native
+    (``prandtl_fmu/fmu/native``: the element, FMI 2.0 or, with ``fmi=3``, 3.0); a ``loader`` is refused with it. A
+    network scene goes to ``prandtl_fmu.fmu.native.build.build_native_network_fmu`` (ValueError where the native
     runtime has none). FMI 3.0 offers scalar variables only (the element's u_1 .. u_n, a network's x_<node> and
     v_<node>: every master reads them); ``arrays`` (native, FMI 3.0) adds them as arrays (u; x and v) for the
     masters that handle arrays. ``platforms`` (native): the binaries the FMU holds, names of either FMI version
-    (comma-separated or a list) or "all"; None: this machine's (``prandtl_fmu/native/platforms.py``).
+    (comma-separated or a list) or "all"; None: this machine's (``prandtl_fmu/fmu/native/platforms.py``).
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")
@@ -77,123 +52,32 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if runtime == "native" and loader is not None:
         raise ValueError(f"--loader {loader}: the native runtime has no PythonFMU loader (its binary is the FMU's "
                          "own C layer): drop --loader, or build with --runtime python")
-    if runtime == "native":
-        from .osp import file_name, osp_model_description, port_variables
+    if runtime == "python":
+        if fmi != 2:
+            raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
+        from .python.build import build_python_fmu
 
-        native_scene = load_scene(scene_path, check_stepper=False)
-        network = is_network(native_scene)
-        if network:
-            from ..native import build as native_build
-
-            build_native = getattr(native_build, "build_native_network_fmu", None)
-            if build_native is None:
-                raise ValueError("--runtime native: networks are not in the native runtime yet")
-        else:
-            from ..native.build import build_native_fmu as build_native
-        target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
-        if target.is_dir():
-            raise ValueError(f"{target}: is a directory")
-        if osp:
-            _check_osp_name(native_scene.name)
-        built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality, arrays=arrays,
-                             platforms=platforms)
-        if osp:
-            kind = causality or native_scene.causality
-            write_atomically(target.parent / file_name(native_scene.name),
-                             osp_model_description(kind, port_variables(native_scene, kind)).encode("utf-8"))
-        return built
-    if fmi != 2:
-        raise ValueError(f"--fmi {fmi}: the PythonFMU runtime builds FMI 2.0 FMUs only")
-    from pythonfmu import FmuBuilder
-
-    from . import loader as native
+        return build_python_fmu(scene_path, out, causality, osp, loader)
     from .osp import file_name, osp_model_description, port_variables
 
-    loader = "prandtl" if loader is None else loader
-    if loader not in native.LOADERS:
-        raise ValueError(f"--loader: must be one of {', '.join(native.LOADERS)}, got {loader!r}")
-    if loader == "prandtl" and native.stale():
-        raise RuntimeError(native.stale())
-    scene, scene_bytes = built_scene(scene_path, causality)
-    out = Path(out) if out is not None else Path.cwd() / f"{file_stem(scene.name)}.fmu"
-    if out.is_dir():
-        raise ValueError(f"{out}: is a directory")
-    if out.suffix != ".fmu":
-        raise ValueError(f"{out}: the FMU file name must end in .fmu")
-    if not out.parent.is_dir():
-        raise ValueError(f"{out}: the folder {out.parent} does not exist")
-    sidecar = out.parent / file_name(scene.name) if osp else None
+    native_scene = load_scene(scene_path, check_stepper=False)
+    if is_network(native_scene):
+        from .native import build as native_build
+
+        build_native = getattr(native_build, "build_native_network_fmu", None)
+        if build_native is None:
+            raise ValueError("--runtime native: networks are not in the native runtime yet")
+    else:
+        from .native.build import build_native_fmu as build_native
+    target = Path(out) if out is not None else Path.cwd() / f"{file_stem(native_scene.name)}.fmu"
+    if target.is_dir():
+        raise ValueError(f"{target}: is a directory")
     if osp:
-        _check_osp_name(scene.name)
-    identifier = model_identifier(scene)
-    osp_text = osp_model_description(scene.causality, port_variables(scene))
-    module = f"prandtl_slave_{_digest(scene_bytes, loader)}"
-    with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
-        staging = Path(staging)
-        script = staging / f"{module}.py"
-        entry = (LIBRARY / "fmu" / "entry.py").read_text(encoding="utf-8")
-        marker = '\n_CAUSALITY = "force"\n'
-        if entry.count(marker) != 1:
-            raise RuntimeError("entry.py has lost its _CAUSALITY line")
-        entry = entry.replace(marker, f'\n_CAUSALITY = "{scene.causality}"\n')
-        network_marker = "\n_NETWORK = False\n"
-        if entry.count(network_marker) != 1:
-            raise RuntimeError("entry.py has lost its _NETWORK line")
-        entry = entry.replace(network_marker, f"\n_NETWORK = {is_network(scene)}\n")
-        script.write_text(entry, encoding="utf-8")
-        (staging / "scene.toml").write_bytes(scene_bytes)
-        (staging / file_name(identifier)).write_text(osp_text, encoding="utf-8")
-        package = staging / "prandtl_fmu"
-        for path in _library_files():
-            target = package / path.relative_to(LIBRARY)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(path, target)
-        built = staging / "out" / f"{MODEL_IDENTIFIER}.fmu"
-        built.parent.mkdir()
-        try:
-            FmuBuilder.build_FMU(script, dest=built, project_files=[package, staging / "scene.toml",
-                                                                    staging / file_name(identifier)],
-                                 canGetAndSetFMUstate=True, canSerializeFMUstate=True)
-        finally:
-            # The builder imported the slave (and its private copy of the
-            # library) from the staging folder: forget them, so that the FMU,
-            # when loaded in this process, imports its own resources.
-            for name in [name for name in sys.modules if name == module or name.startswith(f"_{module}_lib")]:
-                del sys.modules[name]
-            if str(staging) in sys.path:
-                sys.path.remove(str(staging))
-        _finish(built, scene, loader)
-        # into place in one rename, with the usual mode: a failed build never leaves a half-written FMU behind
-        write_atomically(out, Path(built).read_bytes())
-    if sidecar is not None:
-        write_atomically(sidecar, osp_text.encode("utf-8"))
-    return out
-
-
-def _check_osp_name(name: str) -> None:
-    if file_stem(name) != name:
-        raise ValueError(f"--osp: the scene name {name!r} is not a plain file name, and libcosim looks for "
-                         "<modelName>_OspModelDescription.xml beside the FMU: name the scene with letters, digits, "
-                         "'-', '_' and '.'")
-
-
-def _finish(fmu: Path, scene, loader: str) -> None:
-    """Put the patched loader in place of PythonFMU's where there is one (with ``loader="prandtl"``; PythonFMU's
-    licence in ``documentation/licenses/``) and add ``documentation/index.html``. (The model description is the
-    slave's, ``description.fmi2_root``: named after the scene, with the units, bounds and dependencies.)"""
-    from . import loader as native
-    from .documentation import index_html
-
-    with zipfile.ZipFile(fmu) as archive:
-        entries = [(info, archive.read(info)) for info in archive.infolist()]
-    with zipfile.ZipFile(fmu, "w", compression=zipfile.ZIP_DEFLATED) as archive:
-        for info, data in entries:
-            if info.filename == "modelDescription.xml":
-                model_description = data
-            if loader == "prandtl":
-                data = native.replacement(info.filename) or data
-            if not info.is_dir():  # PythonFMU writes some entries 0600: readable by all, as every FMU's
-                info.external_attr = (0o100000 | (0o755 if (info.external_attr >> 16) & 0o111 else 0o644)) << 16
-            archive.writestr(info, data)
-        add_entry(archive, "documentation/licenses/PythonFMU.txt", native.LICENSE.read_bytes())
-        add_entry(archive, "documentation/index.html", index_html(model_description, scene))
+        check_osp_name(native_scene.name)
+    built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality, arrays=arrays,
+                         platforms=platforms)
+    if osp:
+        kind = causality or native_scene.causality
+        write_atomically(target.parent / file_name(native_scene.name),
+                         osp_model_description(kind, port_variables(native_scene, kind)).encode("utf-8"))
+    return built

@@ -5,11 +5,11 @@ the scene's kind and ``[fmu] causality`` decide) as :class:`Variable` rows, in v
 causality, variability, unit, start, min/max, description, value reference and, for an output, the inputs it
 depends on directly. :func:`model_description` writes ``modelDescription.xml`` from them, FMI 2.0 or 3.0.
 
-* The PythonFMU slaves (``fmu/*slave.py``) register the FMI 2.0 list with PythonFMU, each variable with its getter
-  and setter (:func:`register` in ``fmu/common.py``), and hand PythonFMU the FMI 2.0 description (:func:`fmi2_root`)
-  as their own.
-* The native build (``native/build.py``, ``native/network_build.py``) writes the same description (FMI 2.0, or
-  FMI 3.0 with what FMI 3.0 adds) and its C table of variables from the same list.
+* The PythonFMU slaves (``fmu/python/*slave.py``) register the FMI 2.0 list with PythonFMU, each variable with its
+  getter and setter (``register_variables`` in ``fmu/python/common.py``), and hand PythonFMU the FMI 2.0
+  description (:func:`fmi2_root`) as their own.
+* The native build (``fmu/native/build.py``, ``fmu/native/network_build.py``) writes the same description (FMI
+  2.0, or FMI 3.0 with what FMI 3.0 adds) and its C table of variables from the same list.
 
 FMI 3.0 adds to the FMI 2.0 scalars, under new value references after them (:func:`fmi3_references`): the
 independent variable ``time``; for the element, its branch elongations as the scalars u_1 .. u_n and, with
@@ -237,7 +237,7 @@ def _scene_load_variable(where: str) -> Variable:
 
 
 def element_variables(scene) -> list:
-    """The element with its force input F (``fmu/slave.py``)."""
+    """The element with its force input F (``fmu/python/slave.py``)."""
     from ..scene import coefficients_of
     from ..steppers import STEPPERS
     from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
@@ -292,7 +292,7 @@ def element_variables(scene) -> list:
 
 
 def connector_variables(scene) -> list:
-    """The element as a connector: x, v in, force out (``fmu/connector_slave.py``)."""
+    """The element as a connector: x, v in, force out (``fmu/python/connector_slave.py``)."""
     from ..scene import coefficients_of
     from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
@@ -412,7 +412,7 @@ def stepper_choices(scene) -> str:
 
 
 def network_variables(scene) -> list:
-    """A network under a force F at its load's node (``fmu/network_slave.py``): no output depends directly on F
+    """A network under a force F at its load's node (``fmu/python/network_slave.py``): no output depends directly on F
     (they are those of the state at the end of the last step)."""
     network = scene.network
     load_node = network.nodes[network.load_node]
@@ -431,7 +431,7 @@ def network_variables(scene) -> list:
 
 def network_connector_variables(scene) -> list:
     """A network as a connector: the motion x, v of its load's node in, the force out
-    (``fmu/network_connector_slave.py``): every output shows the network moved to the inputs set now, so all
+    (``fmu/python/network_connector_slave.py``): every output shows the network moved to the inputs set now, so all
     depend directly on x and v."""
     network = scene.network
     j = network.load_node

@@ -103,7 +103,7 @@ def build(folder):
     from pythonfmu import FmuBuilder
 
     from prandtl_fmu.fmu.build import build_fmu
-    from prandtl_fmu.fmu.loader import install as install_loader
+    from prandtl_fmu.fmu.python.loader import install as install_loader
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -111,7 +111,7 @@ def build(folder):
     source = HERE / "prandtl_example_mass.py"
     try:
         FmuBuilder.build_FMU(source, dest=folder / "PointMass.fmu")
-        install_loader(folder / "PointMass.fmu")  # our patched PythonFMU loader (prandtl_fmu/fmu/loader)
+        install_loader(folder / "PointMass.fmu")  # our patched PythonFMU loader (prandtl_fmu/fmu/python/loader)
     finally:  # let the FMU import its own copy when loaded in this process
         sys.modules.pop(source.stem, None)
         if str(source.parent) in sys.path:

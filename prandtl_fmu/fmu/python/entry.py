@@ -69,8 +69,8 @@ _drop_duplicate_path_entries(_HERE)
 try:
     _import_library(_HERE)
     _slave_module = importlib.import_module(_LIBRARY + {
-        (False, "force"): ".fmu.slave", (False, "displacement"): ".fmu.connector_slave",
-        (True, "force"): ".fmu.network_slave", (True, "displacement"): ".fmu.network_connector_slave",
+        (False, "force"): ".fmu.python.slave", (False, "displacement"): ".fmu.python.connector_slave",
+        (True, "force"): ".fmu.python.network_slave", (True, "displacement"): ".fmu.python.network_connector_slave",
     }[_NETWORK, _CAUSALITY])
 except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
     raise ImportError(

@@ -151,11 +151,13 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
         if (magnitude_problem(PARAM_NAMES[i], value, P_VALUE[i], buffer, size))
             return buffer;
         if (P_RULE[i] == 1 && !(value > 0)) {
-            snprintf(buffer, size, "parameter %s: must be > 0, got %s", PARAM_NAMES[i], python_repr(value, a, sizeof a));
+            snprintf(buffer, size, "parameter %s: must be > 0, got %s", PARAM_NAMES[i],
+                     python_repr(value, a, sizeof a));
             return buffer;
         }
         if (P_RULE[i] == 2 && value < 0) {
-            snprintf(buffer, size, "parameter %s: must be >= 0, got %s", PARAM_NAMES[i], python_repr(value, a, sizeof a));
+            snprintf(buffer, size, "parameter %s: must be >= 0, got %s", PARAM_NAMES[i],
+                     python_repr(value, a, sizeof a));
             return buffer;
         }
     }

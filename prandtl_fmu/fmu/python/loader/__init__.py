@@ -29,8 +29,8 @@ these changes, each marked ``prandtl_fmu:`` in the code:
    one whose end is not finite) is refused with fmi2Error and the reason; ``fmi2LastSuccessfulTime``
    is the start time before any step (the stock loader: NaN).
 
-The slave is told by the ``pythonfmu_loader`` keyword argument (``fmu/common.py``) and the
-``__prandtl_loader__`` mark in its script's globals (``fmu/entry.py``) that it runs under this
+The slave is told by the ``pythonfmu_loader`` keyword argument (``fmu/python/common.py``) and the
+``__prandtl_loader__`` mark in its script's globals (``fmu/python/entry.py``) that it runs under this
 loader; under the stock one (the Windows binary PythonFMU ships, or an FMU built with
 ``loader="pythonfmu"``) it keeps compensating that loader's reference counting, and refusals are
 fmi2Fatal there. Even so, once in CI a process that had made 400 refused calls through the stock
@@ -42,7 +42,7 @@ The library is prebuilt (``linux64/``, committed, with the digest of the sources
 in ``linux64/SOURCE_SHA256``; a test checks that they match) because a user's machine need not have
 a compiler. Rebuild after editing ``src/``::
 
-    python -m prandtl_fmu.fmu.loader
+    python -m prandtl_fmu.fmu.python.loader
 
 It needs g++ (C++17) and Python's headers. Like PythonFMU's, it is built for Python's stable ABI,
 takes the Python symbols from the host process, and links libstdc++ dynamically: it needs glibc
@@ -103,7 +103,7 @@ def install(fmu: os.PathLike) -> None:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
     import io
 
-    from ...outputs import write_atomically
+    from ....outputs import write_atomically
 
     rewritten = io.BytesIO()
     with zipfile.ZipFile(rewritten, "w", compression=zipfile.ZIP_DEFLATED) as archive:
@@ -116,9 +116,9 @@ def install(fmu: os.PathLike) -> None:
 def stale() -> Optional[str]:
     """Why the prebuilt library does not match the sources (None if it does)."""
     if not LINUX64.is_file() or not STAMP.is_file():
-        return f"{LINUX64} is missing: run python -m prandtl_fmu.fmu.loader"
+        return f"{LINUX64} is missing: run python -m prandtl_fmu.fmu.python.loader"
     if STAMP.read_text().strip() != source_digest():
-        return f"{LINUX64} was built from other sources than {SOURCES}: run python -m prandtl_fmu.fmu.loader"
+        return f"{LINUX64} was built from other sources than {SOURCES}: run python -m prandtl_fmu.fmu.python.loader"
     return None
 
 

@@ -14,7 +14,7 @@ import zipfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-FMI_HEADERS = {2: HERE.parent / "fmu" / "loader" / "src" / "fmi", 3: HERE / "fmi3"}
+FMI_HEADERS = {2: HERE.parent / "python" / "loader" / "src" / "fmi", 3: HERE / "fmi3"}
 # the C layer's type of a variable (scene.h's VARS), by its type in fmu/description.py
 C_TYPES = {"Float64": "T_REAL", "Int32": "T_INTEGER", "Boolean": "T_BOOLEAN", "String": "T_STRING"}
 
@@ -37,7 +37,7 @@ def c_string(text: str) -> str:
 def noise_words() -> dict:
     """The words of each rule of the noise's parameters (``description.check_noise_settings``: the seed an FMU
     takes, then ``loads.white_noise``), what follows "name = value: " in the PythonFMU slave's message."""
-    from ..fmu.description import check_noise_settings
+    from ..description import check_noise_settings
 
     words = {}
     for name, bad in (("noise_intensity", -1.0), ("noise_seed", -1), ("noise_unit", 0.0)):
@@ -53,8 +53,8 @@ def noise_lines(scene, connector: bool) -> list:
     """scene.h's lines of the white noise: the Brownian tree's cache size, the scene's noise (the start values of
     noise_intensity, noise_seed, noise_unit: none for a connector, whose motion comes in), the seed's bound and
     the words of the parameters' rules (:func:`noise_words`)."""
-    from ..fmu.description import NOISE_SEED_LIMIT
-    from ..noise import CACHE_SIZE
+    from ..description import NOISE_SEED_LIMIT
+    from ...noise import CACHE_SIZE
 
     noise = None if connector else scene.load.noise
     sigma, seed, unit = (noise.intensity, noise.seed, noise.unit) if noise is not None else (0.0, 0, 1.0)
@@ -69,9 +69,9 @@ def pack(out, description_text: str, scene, scene_bytes: bytes, identifier: str,
     """Write the native FMU ``out`` (in one rename: a failed build leaves no half-written FMU): its model
     description, the binary of each folder, its page (``documentation/index.html``, from the description), the
     scene's text and its OSP interface description."""
-    from ..fmu.archive import add_entry
-    from ..fmu.documentation import index_html
-    from ..fmu.osp import file_name, osp_model_description, port_variables
+    from ..archive import add_entry
+    from ..documentation import index_html
+    from ..osp import file_name, osp_model_description, port_variables
 
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -126,7 +126,7 @@ void NRT_MemInfo_call_dtor(NRT_MemInfo* mi)
 def stubs(undefined) -> str:
     """C definitions of what the objects need from Python and numba (see the module docstring); ``undefined``:
     the symbols the kernels' modules declare."""
-    lines = ["/* generated: numba's error path without Python (prandtl_fmu.native.build) */", "#include <math.h>",
+    lines = ["/* generated: numba's error path without Python (prandtl_fmu.fmu.native.build) */", "#include <math.h>",
              "#include <stdlib.h>", "__thread int prandtl_kernel_failed;", "static char dummy[64];"]
     if any(symbol.startswith("NRT_") for symbol in undefined):
         lines.append(NRT)

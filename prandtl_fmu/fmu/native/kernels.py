@@ -37,9 +37,9 @@ the load, ``lt``/``lf``/``nl`` its table):
 
 The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(..., x_start, v_start, t_start, x,
 v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
-with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
-slope added), ``cstored(..., x)``; ``cinitial(...)`` (a fresh memory stack and memory); ``elongations(p, k, eta, cs,
-u, out)`` (the branches' arrays alone).
+with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cforce(..., x, v,
+t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cstored(..., x)``; ``cinitial(...)``
+(a fresh memory stack and memory); ``elongations(p, k, eta, cs, u, out)`` (the branches' arrays alone).
 
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
 (``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..noise import CACHE_SIZE
+from ...noise import CACHE_SIZE
 
 PARAMETERS = ("m", "x0", "v0", "k0", "k3", "c", "alpha", "alpha_kinetic", "stribeck_velocity", "belt_velocity")
 NATIVE_STEPPERS = ("projected", "implicit", "symplectic", "verlet", "exact")
@@ -284,8 +284,8 @@ def memory_layout(scene) -> dict:
     tau in use). Returns the names, ``parts`` (per effect: None, or (params' sources, [(offset, length or None
     for the buffer, {index: source of its fresh value})])), ``fixed``, ``nh``, and the offsets the C layer checks
     a state with (``dahl_state``: the Dahl force; ``delay``, ``dahl``: whether present)."""
-    from ..memory import EFFECTS, compile_memory
-    from ..scene import MEMORY_COEFFICIENTS, _coefficient_key, coefficients_of, with_coefficients
+    from ...memory import EFFECTS, compile_memory
+    from ...scene import MEMORY_COEFFICIENTS, _coefficient_key, coefficients_of, with_coefficients
 
     names = [name for name in coefficients_of(scene) if _coefficient_key(name) in MEMORY_COEFFICIENTS]
     layout = {"names": names, "parts": [None, None, None], "fixed": 0, "dahl_state": 0,
@@ -392,14 +392,14 @@ def memory_source(scene) -> dict:
 def is_stack_scene(scene) -> bool:
     """Whether the scene's branches run on the memory stack (``driver.choose_branch_kernel``: many branches with an
     admissible initial state, or the continuum)."""
-    from ..driver import choose_branch_kernel
+    from ...driver import choose_branch_kernel
 
     return scene.branches is not None and choose_branch_kernel(scene, "projected") == "stack"
 
 
 def takes_stack(stepper) -> bool:
     """Whether the stepper runs on the memory stack (every one but ``exact``)."""
-    from ..steppers import get_stepper
+    from ...steppers import get_stepper
 
     return bool(getattr(get_stepper(stepper), "BRANCH_STACK", False))
 
@@ -414,7 +414,7 @@ def folds(scene) -> bool:
 
 def state_size(scene) -> int:
     """The length of the branches' state: n elongations, or the memory stack's state (``stack.fresh_state``)."""
-    from ..kernels import stack
+    from ...kernels import stack
 
     branches = scene.branches
     if branches is not None and branches.continuum:
@@ -435,7 +435,7 @@ def variants(scene) -> list:
 def applicable(scene) -> list:
     """The native steppers that apply to ``scene`` without its white noise (``loop_for`` accepts it): the FMU's
     parameters turn a noise on and off, and a stepper that takes none refuses it then (:func:`noise_refusal`)."""
-    from ..steppers import get_stepper
+    from ...steppers import get_stepper
 
     names = []
     for name in NATIVE_STEPPERS:
@@ -458,7 +458,7 @@ def with_noise(scene, noise):
 
 def with_a_noise(scene):
     """The scene with a white noise on its load (the steppers' rules read only that there is one)."""
-    from ..loads import WhiteNoise
+    from ...loads import WhiteNoise
 
     return with_noise(scene, WhiteNoise(1.0, 0))
 
@@ -468,7 +468,7 @@ def noise_refusal(scene, stepper) -> "str | None":
     with a noise, what ``Element.set_noise`` and ``set_stepper`` call), or None when it takes one. A rule of the
     scene's structure (which effects), never of a coefficient the FMU may change: a massless element keeps its
     dashpot in the native runtime (c > 0, common.h)."""
-    from ..steppers import get_stepper
+    from ...steppers import get_stepper
 
     try:
         get_stepper(stepper).loop_for(with_a_noise(scene))
@@ -485,18 +485,18 @@ def compile_kernels(scene, steppers) -> list:
     (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
 
-    from ..kernels.drive import tangent
-    from ..kernels.energy import kinetic, stored
-    from ..kernels.friction import reaction
-    from ..kernels.increment import solve_increment
-    from ..kernels.play import branch_force, move, write_elongations
-    from ..kernels.smooth import elastic_force
-    from ..kernels.stack import start
-    from ..loads import force_at
-    from ..memory import force_now
-    from ..memory.dahl import after as dahl_after
-    from ..memory.solve import solve_dahl_increment
-    from ..steppers import get_stepper
+    from ...kernels.drive import tangent
+    from ...kernels.energy import kinetic, stored
+    from ...kernels.friction import reaction
+    from ...kernels.increment import solve_increment
+    from ...kernels.play import branch_force, move, write_elongations
+    from ...kernels.smooth import elastic_force
+    from ...kernels.stack import start
+    from ...loads import force_at
+    from ...memory import force_now
+    from ...memory.dahl import after as dahl_after
+    from ...memory.solve import solve_dahl_increment
+    from ...steppers import get_stepper
 
     checks = [("state_check", compile_state_check(scene))] if is_stack_scene(scene) else []
     if scene.causality == "displacement":
@@ -551,7 +551,7 @@ def compile_stability(scene):
     stiffness) is fixed here, as the library reads it from the scene."""
     from numba import carray, cfunc, types
 
-    from ..stability import check
+    from ...stability import check
 
     massive = scene.mass is not None
     has_spring, has_cubic, has_damper = (scene.spring is not None, scene.cubic is not None,
@@ -581,7 +581,7 @@ def _compile_fold(scene):
     ``stack.prepare`` then ``stack.fresh_state``)."""
     from numba import carray, cfunc, types
 
-    from ..kernels.stack import refer, start
+    from ...kernels.stack import refer, start
 
     n, size = scene.branches.n, state_size(scene)
 
@@ -604,12 +604,12 @@ def _compile_connector(scene, shape) -> list:
     ``cinitial`` makes the memory fresh, as ``connector.Connector`` does."""
     from numba import carray, cfunc, njit, types
 
-    from ..kernels.drive import drive, drive_with_memory, tangent
-    from ..kernels.energy import stored
-    from ..kernels.play import branch_force, write_elongations
-    from ..kernels.smooth import smooth_force
-    from ..kernels.stack import start
-    from ..memory import force_now, tangent_now
+    from ...kernels.drive import drive, drive_with_memory, tangent
+    from ...kernels.energy import stored
+    from ...kernels.play import branch_force, write_elongations
+    from ...kernels.smooth import smooth_force
+    from ...kernels.stack import start
+    from ...memory import force_now, tangent_now
 
     compiled = []
     has_memory = "True" if memory_layout(scene)["names"] else "False"
@@ -651,7 +651,7 @@ def compile_state_check(scene):
 
     from numba import carray, cfunc, njit, types
 
-    from ..kernels import stack
+    from ...kernels import stack
 
     branches = scene.branches
     continuum = branches.continuum

@@ -18,8 +18,8 @@ from pythonfmu import __version__ as pythonfmu_version
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from ..scene import load_scene
-from .description import NOISE_SEED_LIMIT, check_noise_settings, fmi2_root, variables
+from ...scene import load_scene
+from ..description import NOISE_SEED_LIMIT, check_noise_settings, fmi2_root, variables
 
 
 class Refused(Exception):
@@ -214,7 +214,7 @@ class NoiseParameters:
         self.noise_seed = noise.seed if noise else 0
         self.noise_unit = noise.unit if noise else 1.0
         if self.noise_seed >= NOISE_SEED_LIMIT:
-            from ..scene import SceneError
+            from ...scene import SceneError
 
             raise SceneError(f"{self.scene.source}: [load] seed {self.noise_seed}: an FMU's noise_seed is an FMI "
                              f"Integer (32 bits): it must be < 2^31")
@@ -229,7 +229,7 @@ class NoiseParameters:
 
     def _hand_over_noise(self, element) -> bool:
         """Hand the noise the master set to the library's ``element``; False (logged: fmi2Discard) if refused."""
-        from ..loads import white_noise
+        from ...loads import white_noise
 
         try:
             if not (isinstance(self.noise_seed, int) and 0 <= self.noise_seed < NOISE_SEED_LIMIT):

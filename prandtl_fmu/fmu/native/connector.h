@@ -10,7 +10,7 @@
 /* The native FMU's connector (a massless scene between two bodies: x, v in, force out), shared by its FMI 2.0
  * (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
- * What fmu/connector_slave.py and connector.Connector do around the library's kernels (compiled for this scene,
+ * What fmu/python/connector_slave.py and connector.Connector do around the library's kernels (compiled for this scene,
  * declared in "scene.h"), in the same order of floating-point operations: the outputs show the element moved to
  * the inputs set last without committing (a preview: a copy of the state moved there); fmi2DoStep commits the
  * input sample at the communication point (the branches follow the exact play update along the line from the

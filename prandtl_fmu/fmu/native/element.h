@@ -9,10 +9,10 @@
  * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
 /* The native FMU's element, shared by its FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
- * Every number comes from the library's kernels, compiled by numba for this scene (native/kernels.py)
+ * Every number comes from the library's kernels, compiled by numba for this scene (fmu/native/kernels.py)
  * and declared in the generated "scene.h" with the scene's constants, the variables of the FMU (the same
  * names and value references as the PythonFMU FMU of the scene) and the kernels' symbols. This file does
- * what fmu/slave.py and driver.Element do around them, in the same order of floating-point operations:
+ * what fmu/python/slave.py and driver.Element do around them, in the same order of floating-point operations:
  * the element's clock (origin + steps * grid), a duration split into whole steps and a last shorter one,
  * the parameters handed over at a step (a white noise turned off first, one turned on last), the refusals
  * (fmi2Discard for a bad input, a step of more internal steps than ADVANCE_BUDGET, a step that fails or whose

@@ -30,10 +30,10 @@ The outputs after ``doStep(t, H)`` are those of the network at t + H under the F
 depends directly on F (a master that sets F sees the outputs change at the next step).
 """
 
-from ..stepping import UNCHANGED, ElementError
-from ..loads import force_at
-from ..network import NetworkElement
-from ..scene import SceneError
+from ...stepping import UNCHANGED, ElementError
+from ...loads import force_at
+from ...network import NetworkElement
+from ...scene import SceneError
 from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
 

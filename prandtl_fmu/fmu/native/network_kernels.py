@@ -1,7 +1,7 @@
 """The network's compiled kernels as C functions of one network scene (no Python inside): the native FMU of a
 ``[network]`` or ``[chain]`` scene (issue 32).
 
-As :mod:`prandtl_fmu.native.kernels` does for the element: small Python functions, generated here with the
+As :mod:`prandtl_fmu.fmu.native.kernels` does for the element: small Python functions, generated here with the
 scene's sizes written into them, unpack C pointers (``numba.carray``) into the library's model tuple
 ``(mass, kind, ends, coef, load_node, has_cubic)``, its load tuple and its workspace, and call the library's own
 compiled kernels (:mod:`prandtl_fmu.network.kernels`): the time loops ``run_implicit`` and ``run_projected``,
@@ -144,14 +144,14 @@ def compile_network(scene, steppers, connector: bool) -> list:
     import numpy as np
     from numba import carray, cfunc, njit, types
 
-    from ..network import kernels as nk
-    from ..network.driver import loop_for
+    from ...network import kernels as nk
+    from ...network.driver import loop_for
 
     network = scene.network
     n, e = network.n, len(network.elements)
     shape = dict(n=n, e=e, n1=n + 1, row=2 * n + 2, noise_cache=NOISE_CACHE_SIZE)
     source = _TEMPLATE.format(**shape)
-    from ..loads import force_at
+    from ...loads import force_at
 
     names = ["energies", "initial", "load_force"] + (["move", "jump"] if connector else [])
     compiled = []

@@ -27,9 +27,9 @@ NaN with fmi2OK); a bad parameter or input at ``fmi2ExitInitializationMode``
 fails that call with the logged reason.
 """
 
-from ..connector import Connector
-from ..stepping import ElementError
-from ..scene import coefficient_problem
+from ...connector import Connector
+from ...stepping import ElementError
+from ...scene import coefficient_problem
 from .common import SlaveBase, finite_number, register_variables
 
 

@@ -38,10 +38,10 @@ non-finite result) is a Discard with the library's reason.
 
 from pythonfmu.enums import Fmi2Status
 
-from ..element import Element
-from ..stepping import ElementError
-from ..loads import force_at
-from ..steppers import STEPPERS
+from ...element import Element
+from ...stepping import ElementError
+from ...loads import force_at
+from ...steppers import STEPPERS
 from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
 # the energy account's outputs (those of the effects present are the FMU's: description.element_variables)
@@ -50,7 +50,7 @@ ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "di
 
 def settings_problem(parameters: dict, stepper, step, scene_load) -> "str | None":
     """Why the parameters a master set (or a saved state holds) cannot be used, or None."""
-    from ..scene import coefficient_problem
+    from ...scene import coefficient_problem
 
     for name, value in parameters.items():
         problem = coefficient_problem(name, value)

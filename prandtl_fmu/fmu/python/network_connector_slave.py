@@ -24,9 +24,9 @@ output at inputs the library refuses is refused (fmi2Error, never NaN with fmi2O
 """
 import copy
 
-from ..stepping import ElementError
-from ..network import NetworkConnector
-from ..scene import SceneError
+from ...stepping import ElementError
+from ...network import NetworkConnector
+from ...scene import SceneError
 from .common import Refused, SlaveBase, finite_number, register_variables
 from .network_slave import output_getters, rebuilt, restored
 

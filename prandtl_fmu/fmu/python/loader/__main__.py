@@ -1,4 +1,4 @@
-"""``python -m prandtl_fmu.fmu.loader``: rebuild the patched loader from its sources (see ``__init__.py``)."""
+"""``python -m prandtl_fmu.fmu.python.loader``: rebuild the patched loader from its sources (see ``__init__.py``)."""
 import subprocess
 import sys
 

@@ -12,7 +12,7 @@
  * in, force out), shared by the FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
  * Every number comes from the library's network kernels, compiled by numba for this scene
- * (native/network_kernels.py) and declared in the generated "scene.h" with the scene's arrays (the kinds and
+ * (fmu/native/network_kernels.py) and declared in the generated "scene.h" with the scene's arrays (the kinds and
  * ends of the elements, the scene's coefficients, x0, v0, u0), the parameters' rules (prandtl_fmu.network.model:
  * Network.with_parameters, check_topology and stepper_problem, as tables) and the FMU's variables (value reference
  * = index in VARS). This file does what network.driver.NetworkElement and NetworkConnector do around the kernels,
