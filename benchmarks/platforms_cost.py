@@ -44,7 +44,8 @@ from prandtl_fmu.fmu.native import platforms  # noqa: E402
 
 SCENE = ROOT / "scenes" / "paper-section-8.toml"
 HOST = ROOT / "tests" / "c_host" / "cross_host.c"
-HEADERS = {2: ROOT / "prandtl_fmu" / "fmu" / "loader" / "src" / "fmi", 3: ROOT / "prandtl_fmu" / "native" / "fmi3"}
+HEADERS = {2: ROOT / "prandtl_fmu" / "fmu" / "python" / "loader" / "src" / "fmi",
+           3: ROOT / "prandtl_fmu" / "fmu" / "native" / "fmi3"}
 WINE = "/usr/lib/wine/wine64"
 STEPPERS = ("projected", "implicit")
 

@@ -32,8 +32,8 @@ from .conftest import base_tables, scene_text
 
 HERE = Path(__file__).resolve().parent
 HOST_SOURCE = HERE / "c_host" / "cross_host.c"
-FMI2_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "loader" / "src" / "fmi"
-FMI3_HEADERS = HERE.parent / "prandtl_fmu" / "native" / "fmi3"
+FMI2_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "python" / "loader" / "src" / "fmi"
+FMI3_HEADERS = HERE.parent / "prandtl_fmu" / "fmu" / "native" / "fmi3"
 WINE = "/usr/lib/wine/wine64"
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
             "dissipated_friction", "energy_residual")
