@@ -54,12 +54,14 @@ class Names:
     """Choices that another module registers (the steppers' names), read when first needed: the schema imports
     nothing of the package, so that every module may import it."""
 
-    module: str
+    module: str  # relative to this package (".steppers")
     attribute: str
     extra: tuple = ()
 
     def resolve(self) -> tuple:
-        return tuple(getattr(importlib.import_module(self.module), self.attribute)) + self.extra
+        # relative to this package: inside an FMU the library is a private copy under another name, and an
+        # absolute "prandtl_fmu..." would load the host's installed one (or fail where there is none)
+        return tuple(getattr(importlib.import_module(self.module, __package__), self.attribute)) + self.extra
 
 
 # The types a key may have, and the reader's method that reads each (None: read by the reader's own code).
@@ -179,9 +181,9 @@ def _table(name, meaning, keys=None, *, forms=None, **options) -> Table:
 
 # ------------------------------------------------------------------------------------------------- the keys
 
-_STEPPERS = Names("prandtl_fmu.steppers", "STEPPERS")
-_SAMPLING = Names("prandtl_fmu.effects", "SAMPLING_RULES")
-_SPACINGS = Names("prandtl_fmu.masing", "SPACINGS")
+_STEPPERS = Names(".steppers", "STEPPERS")
+_SAMPLING = Names(".effects", "SAMPLING_RULES")
+_SPACINGS = Names(".masing", "SPACINGS")
 # How the FMU of a scene is driven (``[fmu] causality``): "force" (force in; x, v, reaction out: the element with
 # its mass, or massless) or "displacement" (the connector: x, v in; force out; massless only).
 CAUSALITIES = ("force", "displacement")
@@ -315,7 +317,7 @@ SCHEMA = {table.name: table for table in (
                    _COUNT, _DENSITY,
                    Key("sampling", "string", "how each cell's eta_i is taken: \"mean\" its stiffness-weighted "
                        "mean (keeps each segment's stiffness and strength), \"midpoint\", \"right\"",
-                       default="mean", choices=Names("prandtl_fmu.effects", "SAMPLING_RULES", ("mean",))),
+                       default="mean", choices=Names(".effects", "SAMPLING_RULES", ("mean",))),
                    _SHARED_DASHPOT),
            },
            choose="by the keys given: lists (k with eta or alpha); count = n with k_total and eta_range (the "
