@@ -229,11 +229,31 @@ def _step_variable(scene, text="internal time step h of the stepper; must be > 0
                  max=DBL_MAX)
 
 
-def _scene_load_variable(where: str) -> Variable:
+def scene_load_start(scene) -> bool:
+    """``scene_load``'s start value: a scene that names a force history is a scene with that load, so a fresh FMU
+    run with no input connected (``fmpy simulate``) reproduces the library's run of its scene; a scene whose load
+    is nothing (no [load], or a constant 0 with at most a noise, which has parameters of its own) starts false."""
+    from ..loads import ConstantLoad
+
+    load = scene.load
+    return not (isinstance(load, ConstantLoad) and load.value == 0.0)
+
+
+def scene_load_notice(scene, where: str = "the element") -> str:
+    """The message an FMU logs (status warning, whatever ``loggingOn`` says) when it leaves initialization with
+    ``scene_load`` true: a master that connects F is told that the scene's load is added to it, and how not."""
+    kind = type(scene.load).__name__.replace("Load", "").lower()
+    return (f"scene_load is true: the force on {where} is the input F plus the scene's [load] ({kind}) at every "
+            "internal step; set the parameter scene_load to false to drive it by F alone")
+
+
+def _scene_load_variable(scene, where: str) -> Variable:
+    start = scene_load_start(scene)
     return Variable("scene_load", "Boolean", "parameter", "tunable",
                     f"true: the force on {where} is F plus the scene's [load] F_scene(t), evaluated at every "
                     "internal step as in the library (with no input connected the FMU reproduces the library's run "
-                    "of its scene); false (default): F alone", start=False)
+                    "of its scene; logged as a warning at the end of initialization); false: F alone. Starts "
+                    + ("true: the scene names a load" if start else "false: the scene names no load"), start=start)
 
 
 def element_variables(scene) -> list:
@@ -284,7 +304,7 @@ def element_variables(scene) -> list:
             rows.append(_parameter(name, "N.s/m", SMALLEST, "tunable", "dashpot in series with the spring and "
                                    f"slider of {which}: relaxation rate k_i / c_i; must be > 0", value))
     rows += memory_parameters(scene, values)
-    rows += [_step_variable(scene), _scene_load_variable("the element"), *_noise_variables(scene),
+    rows += [_step_variable(scene), _scene_load_variable(scene, "the element"), *_noise_variables(scene),
              Variable("stepper", "String", "parameter", "tunable", "time stepper: " + ", ".join(STEPPERS),
                       start=scene.solver.stepper),
              _n_variable(scene)]
@@ -423,7 +443,7 @@ def network_variables(scene) -> list:
         "reaction", "N", "force of the elements on the ground (the sum over the elements with an end at the "
         "ground), at the end of the last step"))
     rows += outputs + network_parameters(network)
-    rows += [_step_variable(scene), _scene_load_variable("the load's node"), *_noise_variables(scene),
+    rows += [_step_variable(scene), _scene_load_variable(scene, "the load's node"), *_noise_variables(scene),
              Variable("stepper", "String", "parameter", "tunable", "time stepper: " + stepper_choices(scene),
                       start=scene.solver.stepper)]
     return rows
