@@ -9,11 +9,14 @@ folder, never beside the sources:
         / <package name>-<digest of every source file of the package> / <subpackage> / ...
 
 * numba invalidates a cached function when *its own* source changes, not when
-  a function it calls in another file does; the digest of the whole package
-  in the folder name makes any edit anywhere start a fresh cache, and stands
-  for the source stamp numba would take from the file (so a copy of the same
-  sources at another place, an FMU extracted to a new temporary folder, finds
-  the same cache);
+  a function it calls in another file does; the folder name is a digest of
+  every module compiled code can reach (:func:`kernel_digest`: the modules that
+  define kernels and, through their imports, everything they import from the
+  package), so an edit to any of them starts a fresh cache, while an edit to the
+  command line, the FMU glue, the docs' generator or a benchmark recompiles
+  nothing. It stands for the source stamp numba would take from the file (so a
+  copy of the same sources at another place, an FMU extracted to a new temporary
+  folder, finds the same cache);
 * the package name is part of the folder: the library bundled in an FMU is
   imported under a private name (``fmu/python/entry.py``), and cached code names the
   modules it was compiled in, so the FMU never loads code compiled for the
@@ -31,6 +34,7 @@ process).
 import hashlib
 import os
 import pathlib
+import re
 
 from numba import njit
 from numba.core import caching
@@ -50,11 +54,58 @@ def source_digest() -> str:
     return sha.hexdigest()[:16]
 
 
+# an import inside the package, as text: "from .x import", "from ..a.b import c, d", "from . import a, b"
+_IMPORT = re.compile(r"^[ \t]*from[ \t]+(\.+)([\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[\w \t,]*)", re.MULTILINE)
+_DEFINES_KERNELS = re.compile(r"^@(kernel|inline_kernel|generic_kernel|njit)\b", re.MULTILINE)
+
+
+def _module_file(parts: tuple):
+    """The source file of the package's module ``parts`` (relative to the package), or None."""
+    path = _PACKAGE.joinpath(*parts)
+    for candidate in (path.with_suffix(".py"), path / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def kernel_digest() -> str:
+    """A digest of the sources compiled code can depend on: every module that defines a kernel (a function under
+    ``@kernel``, ``@inline_kernel``, ``@generic_kernel`` or ``@njit``) and, transitively, every module of the
+    package it imports (at any depth of the file: a kernel reads the globals of its module when it compiles,
+    and a loop is built from kernels that other modules hand it). Imports are read as text, over-approximated
+    (a name imported from a package may be a module of it): a module too many costs a recompilation, never a
+    stale entry."""
+    texts = {}
+    for path in _PACKAGE.rglob("*.py"):
+        if "__pycache__" not in path.parts:
+            texts[path] = path.read_text(encoding="utf-8", errors="replace")
+    pending = [path for path, text in texts.items() if _DEFINES_KERNELS.search(text)]
+    reached = set(pending)
+    while pending:
+        path = pending.pop()
+        here = path.relative_to(_PACKAGE).parent.parts
+        for dots, module, names in _IMPORT.findall(texts[path]):
+            if len(dots) - 1 > len(here):
+                continue  # above the package
+            base = here[:len(here) - (len(dots) - 1)] + tuple(p for p in module.split(".") if p)
+            targets = [_module_file(base)] + [_module_file(base + (name,))
+                                              for name in re.split(r"[\s,()]+", names) if name.isidentifier()]
+            for target in targets:
+                if target is not None and target not in reached:
+                    reached.add(target)
+                    pending.append(target)
+    sha = hashlib.sha256()
+    for path in sorted(reached):
+        sha.update(str(path.relative_to(_PACKAGE).as_posix()).encode())
+        sha.update(texts[path].encode("utf-8", errors="replace"))
+    return sha.hexdigest()[:16]
+
+
 def cache_root() -> pathlib.Path:
     """The folder of this package's compiled code (see the module docstring)."""
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "numba")
-    return pathlib.Path(base) / f"{_PACKAGE_NAME.lstrip('_')}-{source_digest()}"
+    return pathlib.Path(base) / f"{_PACKAGE_NAME.lstrip('_')}-{kernel_digest()}"
 
 
 def _usable_root():

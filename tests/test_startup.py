@@ -85,8 +85,11 @@ def test_a_second_process_compiles_nothing_and_gets_the_same_numbers(tmp_path):
 
 
 def test_the_cache_folder_follows_the_sources(tmp_path):
-    """An edit of any source file gives another cache folder (numba alone would miss an edit of a callee in
-    another file); the same sources at another place give the same one (an FMU extracted anew)."""
+    """An edit of a source file that compiled code can reach gives another cache folder (numba alone would miss
+    an edit of a callee in another file): a kernel's module, and a module a kernel module imports (libm.py, whose
+    functions the kernels call); an edit of a module no kernel reaches (the command line, the FMU glue) keeps the
+    folder, so the compiled code stays. The same sources at another place give the same one (an FMU extracted
+    anew)."""
     import shutil
 
     import prandtl_fmu
@@ -110,9 +113,17 @@ def test_the_cache_folder_follows_the_sources(tmp_path):
         shutil.copytree(package, target, ignore=shutil.ignore_patterns("__pycache__"))
         copies.append(target.parent)
     assert folder_of(copies[0]) == folder_of(copies[1])
-    kernel = copies[1] / "prandtl_fmu" / "kernels" / "smooth.py"
-    kernel.write_text(kernel.read_text() + "\n# an edit\n")
-    assert folder_of(copies[0]) != folder_of(copies[1])
+    for outside in ("cli.py", "fmu/python/slave.py", "sweep/spec.py"):
+        glue = copies[1] / "prandtl_fmu" / outside
+        glue.write_text(glue.read_text() + "\n# an edit\n")
+        assert folder_of(copies[0]) == folder_of(copies[1]), f"an edit of {outside} changed the cache folder"
+    seen = {folder_of(copies[1])}
+    for reached in ("kernels/smooth.py", "libm.py", "kernels/loop.py", "steppers/projected.py"):
+        source = copies[1] / "prandtl_fmu" / reached
+        source.write_text(source.read_text() + "\n# an edit\n")
+        folder = folder_of(copies[1])
+        assert folder not in seen, f"an edit of {reached} kept the cache folder"
+        seen.add(folder)
 
 
 def test_no_usable_cache_folder_means_no_cache_not_a_cache_beside_the_sources(tmp_path):
