@@ -465,6 +465,9 @@ def qemu_host(tmp_path_factory):
         pytest.skip("aarch64-linux-gnu-gcc is not installed (apt-get install gcc-aarch64-linux-gnu)")
     if qemu is None:
         pytest.skip("qemu-aarch64 is not installed (apt-get install qemu-user)")
+    if not os.path.exists("/usr/aarch64-linux-gnu/include/stdio.h"):
+        # the compiler without its C library: --no-install-recommends leaves it out
+        pytest.skip("the aarch64 C library's headers are not installed (apt-get install libc6-dev-arm64-cross)")
     folder = tmp_path_factory.mktemp("qemu")
     return qemu, compile_cross_host(compiler, 3, folder / "cross_host")
 
