@@ -47,14 +47,14 @@ if _PROGRAM:
         signal.signal(_signum, _stop_while_loading)
 
 import argparse  # noqa: E402  (after the handlers above)
+import math  # noqa: E402
 import tempfile  # noqa: E402
 import warnings  # noqa: E402
 
-import numpy as np  # noqa: E402
-
-from .outputs import AtomicFile, write_atomically
-from .scene import SceneError, load_scene
-from .stability import StabilityWarning
+# Light imports only (the standard library and the package's base): `--help`, `--version`, `scenes` and a bad
+# option answer without loading numpy or numba; each command imports what it runs.
+from .catalog import SceneError  # noqa: E402
+from .outputs import AtomicFile, write_atomically  # noqa: E402
 
 
 _SCENE_HELP = "scene file (TOML), or the name of a packaged scene (see: prandtl-fmu scenes)"
@@ -66,8 +66,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .stepping import ENERGY_COLUMNS
-    from .steppers import STEPPERS
+    from .steppers import STEPPERS  # the names: no stepper is imported
 
     from . import __version__
 
@@ -83,10 +82,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", help="CSV file to write (default: standard output)")
     run.add_argument("--states", action="store_true", help="add the columns u[1]..u[n]")
     run.add_argument("--energy", action="store_true",
-                     help="add the energy account: " + ", ".join(ENERGY_COLUMNS)
-                     + " (and dissipated_friction before the residual, with [friction])")
+                     help="add the energy account: kinetic_energy, stored_energy, work, dissipated_sliders, "
+                          "dissipated_damper (and dissipated_friction, with [friction]), energy_residual")
     run.add_argument("--plot", help="PNG file: hysteresis loop (reaction against x) and x(t)")
-    build = commands.add_parser("build", help="build the FMI 2.0 co-simulation FMU of a scene")
+    build = commands.add_parser("build", help="build the FMI 2.0 or 3.0 (--fmi 3) co-simulation FMU of a scene")
     build.add_argument("scene", help=_SCENE_HELP)
     build.add_argument("-o", "--out", help="FMU file to write (default: ./<scene name>.fmu)")
     build.add_argument("--causality", choices=("force", "displacement"),
@@ -251,7 +250,11 @@ def _end_process(status: int) -> None:
 
 def _main(argv) -> int:
     warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow chatter: errors are reported as one line
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    if not (sys.argv[1:] if argv is None else argv):  # a bare `prandtl-fmu`: what it does and its commands
+        parser.print_help(sys.stderr)
+        return 2
+    args = parser.parse_args(argv)
     if args.command == "run":
         return _run(args)
     if args.command == "build":
@@ -261,7 +264,7 @@ def _main(argv) -> int:
     if args.command == "sweep":
         return _sweep(args)
     if args.command == "scenes":
-        from .scene import packaged_scenes
+        from .catalog import packaged_scenes
 
         print("\n".join(packaged_scenes()))
         return 0
@@ -383,6 +386,8 @@ def _sweep(args) -> int:
 
     if args.workers is not None and args.workers < 1:
         return _error(f"--workers must be >= 1, got {args.workers}")
+    from .scene import load_scene
+
     if args.workers is not None and args.scheduler:
         return _error("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
     out = args.out
@@ -419,14 +424,16 @@ def _sweep(args) -> int:
 
 def _run(args) -> int:
     from .driver import simulate_chunks
-    from .stepping import ElementError, energy_columns
+    from .scene import load_scene
+    from .stability import StabilityWarning
+    from .stepping import ElementError
     from .resources import ResourceError, check_disk
 
     try:
-        scene = load_scene(args.scene, check_stepper=args.stepper is None).with_solver(
-            stepper=args.stepper, step=args.step, stop_time=args.stop_time,
-            output_interval=args.output_interval,
-        )
+        scene = load_scene(args.scene, check_stepper=args.stepper is None)
+        _check_step_option(scene, args)
+        scene = scene.with_solver(stepper=args.stepper, step=args.step, stop_time=args.stop_time,
+                                  output_interval=args.output_interval)
         _check_output_path(args.out, "--out")
         if args.plot and _missing("matplotlib"):
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
@@ -491,6 +498,23 @@ def _run(args) -> int:
     return 0
 
 
+def _check_step_option(scene, args) -> None:
+    """A ``--step`` that the scene's output interval is not a whole multiple of, with no ``--output-interval``:
+    the one line says which option to add (the scene's rule would blame its output_interval key)."""
+    if args.step is None or args.output_interval is not None:
+        return
+    if not (isinstance(args.step, float) and math.isfinite(args.step) and args.step > 0):
+        return  # the scene's rules say why
+    interval = scene.solver.output_interval
+    ratio = interval / args.step
+    if round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-9 * ratio:
+        return
+    how = "is longer than" if args.step > interval else "does not divide"
+    suggestion = math.ceil(ratio * (1 - 1e-9)) * args.step
+    raise SceneError(f"--step {args.step!r} {how} the scene's output interval of {interval!r} s: give "
+                     f"--output-interval too, a whole multiple of the step (e.g. --output-interval {suggestion:.6g})")
+
+
 def _column_count(scene, args) -> int:
     from .stepping import energy_columns
     from .network.model import NetworkScene
@@ -540,6 +564,8 @@ def _run_network(args, scene) -> int:
         _discard(sink)
         return _error(f"cannot write {args.out or 'the output'}: {exc.strerror or exc}")
     if args.plot:
+        import numpy as np
+
         from .network.driver import NetworkResult
         from .plots import plot_network
 
@@ -563,6 +589,8 @@ def _error(exc) -> int:
 
 
 def _print_warnings(caught) -> None:
+    from .stability import StabilityWarning
+
     for warning in caught:
         if issubclass(warning.category, StabilityWarning):
             print(f"warning: {warning.message}", file=sys.stderr)
@@ -647,6 +675,8 @@ class _PlotRows:
         self.stride, self.seen, self.parts, self.kept, self.first = 1, 0, [], 0, None
 
     def add(self, chunk) -> None:
+        import numpy as np
+
         if self.first is None:
             self.first = chunk
         index = self.seen + np.arange(chunk.time.shape[0])
@@ -661,6 +691,8 @@ class _PlotRows:
             self.parts, self.kept = [table], table.shape[0]
 
     def result(self):
+        import numpy as np
+
         from .driver import Result
 
         table = np.concatenate(self.parts)

@@ -27,6 +27,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 from . import schema
+from .catalog import SCENES, closest_scenes, packaged_scenes, scene_path, unknown_scene  # noqa: F401 (re-exported)
 from .effects import (Branches, ContinuousBranches, CubicSpring, Damper, Friction, Mass, Spring,
                       sample_spectrum)
 from .loads import ConstantLoad
@@ -270,27 +271,8 @@ CAUSALITIES = schema.CAUSALITIES  # how the FMU of a scene is driven: ``[fmu] ca
 
 
 
-# The example scenes shipped in the package (``scenes/`` of the repository links here).
-PACKAGED_SCENES = pathlib.Path(__file__).resolve().parent / "scenes"
-
-
-def packaged_scenes() -> list:
-    """The names of the scenes shipped in the package ("paper-section-8", "hard/step-load", ...)."""
-    return sorted(path.relative_to(PACKAGED_SCENES).with_suffix("").as_posix()
-                  for path in PACKAGED_SCENES.rglob("*.toml"))
-
-
-def scene_path(name_or_path: Union[str, os.PathLike]) -> str:
-    """A scene file's path: ``name_or_path`` itself when it is an existing file, else the packaged scene of that
-    name (``paper-section-8``, ``hard/step-load``, with or without ``.toml``), else ``name_or_path`` (whose
-    reading then fails with a message that lists the packaged scenes)."""
-    path = os.fspath(name_or_path)
-    if os.path.exists(path):
-        return path
-    name = path[:-5] if path.endswith(".toml") else path
-    if name in packaged_scenes():
-        return str(PACKAGED_SCENES / f"{name}.toml")
-    return path
+# The example scenes shipped in the package (``scenes/`` of the repository links here): ``catalog.py``
+PACKAGED_SCENES = pathlib.Path(SCENES)
 
 
 def load_scene(path: Union[str, os.PathLike], check_stepper: bool = True) -> Scene:
@@ -339,9 +321,8 @@ def read_document(path: Union[str, os.PathLike]) -> tuple:
     """``(document, source)``: a scene file (or packaged scene) parsed as TOML but not yet checked, for a caller
     that changes some keys before :func:`scene_from_document` (a sweep). SceneError on an unreadable file."""
     source = scene_path(path)
-    if not os.path.exists(source) and os.sep not in source and "/" not in source:
-        raise SceneError(f"{source}: no such scene file, and no packaged scene of that name (packaged: "
-                         f"{', '.join(packaged_scenes())})")
+    if not os.path.exists(source) and (os.sep not in source and "/" not in source or closest_scenes(source)):
+        raise unknown_scene(source)  # a name, or a path that looks like a misspelt packaged name
     return read_toml(source, "the scene"), source
 
 

@@ -12,6 +12,7 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from . import schema
+from .catalog import SceneError
 from .loads import ConstantLoad, HarmonicLoad, RandomLoad, TableLoad, WhiteNoise, noise_problem
 from .resources import ResourceError, check_memory
 
@@ -41,10 +42,6 @@ VALUES = ("x0", "v0", "u0", "belt_velocity")
 
 
 Load = Union[ConstantLoad, HarmonicLoad, TableLoad, RandomLoad]
-
-
-class SceneError(ValueError):
-    """A scene (or an override of it) breaks a rule; the message is one line."""
 
 
 @dataclass(frozen=True)

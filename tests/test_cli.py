@@ -106,9 +106,61 @@ def test_version_scenes_and_a_packaged_scene_named_without_a_path(tmp_path, caps
 
 
 def test_a_name_that_is_neither_a_file_nor_a_packaged_scene_is_one_line(capsys):
-    assert main(["run", "paper-section-9"]) == 2
+    """A misspelt name gets the closest packaged names (a name given without its folder too), not the whole
+    list; a name close to nothing gets where the list is."""
+    from prandtl_fmu.catalog import packaged_scenes
+
+    for given, closest in (("paper-section-9", "paper-section-8"), ("paper-sectoin-8", "paper-section-8"),
+                           ("step-lod", "hard/step-load"), ("networks/chain-masless", "networks/chain-massless")):
+        assert main(["run", given]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and given in err and f"did you mean {closest}" in err, err
+        assert sum(name in err.split() for name in packaged_scenes()) <= 3, err
+    assert main(["run", "qqqqqq"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "paper-section-9" in err and "paper-section-8" in err
+    assert err.count("\n") == 1 and "did you mean" not in err and "prandtl-fmu scenes" in err
+
+
+def test_a_bare_command_prints_the_usage_and_the_commands(capsys):
+    assert main([]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    for command in ("run", "build", "fit", "sweep", "scenes", "bench"):
+        assert command in captured.err
+    assert captured.err.startswith("usage: prandtl-fmu")
+
+
+def test_build_help_names_both_fmi_versions(capsys):
+    try:
+        main(["--help"])
+    except SystemExit as exit_:
+        assert exit_.code == 0
+    assert "FMI 2.0 or 3.0" in capsys.readouterr().out
+
+
+def test_a_step_the_output_interval_is_no_multiple_of_suggests_the_option(tmp_path, capsys):
+    out = tmp_path / "never.csv"
+    for step, how, suggestion in (("0.5", "is longer than", "--output-interval 0.5"),
+                                  ("0.03", "does not divide", "--output-interval 0.12")):
+        assert main(["run", "paper-section-8", "--step", step, "--stop-time", "1", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"--step {step} {how}" in err and suggestion in err, err
+        assert not out.exists()
+    # with the suggested option the run goes
+    assert main(["run", "paper-section-8", "--step", "0.5", "--output-interval", "0.5", "--stop-time", "1",
+                 "--out", str(out)]) == 0
+    _, rows = read_csv(out)
+    assert [float(r[0]) for r in rows] == [0.0, 0.5, 1.0]
+
+
+def test_help_version_and_scenes_load_neither_numpy_nor_numba():
+    """Printing a help text compiles nothing: a fresh interpreter answers --help, --version, scenes and a bare
+    command without importing numba or numpy (the cost a user pays before anything runs)."""
+    for argv in (["--help"], ["--version"], ["scenes"], [], ["build", "--help"]):
+        code = ("import sys\nfrom prandtl_fmu.cli import main\ntry:\n    main(%r)\nexcept SystemExit:\n    pass\n"
+                "print(sorted(m for m in ('numba', 'numpy') if m in sys.modules))" % (argv,))
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+        assert done.stdout.strip().splitlines()[-1] == "[]", (argv, done.stdout[-500:], done.stderr[-500:])
 
 
 def test_build_writes_an_fmu_and_prints_its_path(tmp_path, capsys):

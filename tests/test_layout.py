@@ -20,7 +20,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "prandtl_fmu"
 # "network", the network package's __init__.
 LAYERS = [
     ("base: compiled-code helpers and tools every layer may use",
-     ["", "network", "_jit", "libm", "noise", "outputs", "resources", "saved_state"]),
+     ["", "network", "_jit", "catalog", "libm", "noise", "outputs", "resources", "saved_state"]),
     ("loads and effects with memory, in their compiled form",
      ["loads", "memory", "memory.dahl", "memory.delay", "memory.history"]),
     ("kernels: compiled building blocks of the steps",
@@ -270,7 +270,7 @@ def test_the_graph_reader_sees_every_kind_of_import():
     _, edges = import_graph()
     assert ("driver", "network.driver") in edges  # function-level: simulate hands a network scene over
     assert ("sweep", "sweep.runs") in edges  # from .runs import ... in a package's __init__
-    assert ("steppers", "steppers.exact") in edges  # from . import exact, ...
+    assert ("steppers.exact", "steppers.exact_series") in edges  # from . import exact_series
     assert ("fmu.description", "") in edges  # from .. import __version__
     assert ("compiled", "memory") in edges  # from .memory import compile_memory
     assert ("stepping", "memory.dahl") in edges and ("stepping", "memory") in edges  # a submodule, and its package

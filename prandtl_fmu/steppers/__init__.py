@@ -27,15 +27,39 @@ To add a scheme: write one such module and add it to ``STEPPERS`` below.
 ``exact_series.py`` (branches with series dashpots) and ``exact_common.py`` (what both use: the matrix
 exponential, the step's budgets and the words of a failed step).
 """
-from . import exact, implicit, projected, symplectic, verlet
+import importlib
+from collections.abc import Mapping
 
-STEPPERS = {
-    "projected": projected,
-    "implicit": implicit,
-    "symplectic": symplectic,
-    "verlet": verlet,
-    "exact": exact,
-}
+
+class _Registry(Mapping):
+    """Stepper name -> its module, imported when first asked for: the names (a command line's choices, a scene's
+    check) are known without defining a single kernel, and a run imports only the stepper it uses."""
+
+    def __init__(self, *names: str):
+        self._names = names
+
+    def __getitem__(self, name):
+        if name not in self._names:
+            raise KeyError(name)
+        return importlib.import_module(f"{__name__}.{name}")
+
+    def __contains__(self, name):
+        return name in self._names  # without importing it (Mapping's own would)
+
+    def __iter__(self):
+        return iter(self._names)
+
+    def __len__(self):
+        return len(self._names)
+
+
+STEPPERS = _Registry(
+    "projected",
+    "implicit",
+    "symplectic",
+    "verlet",
+    "exact",
+)
 
 
 def get_stepper(name: str):
