@@ -1,0 +1,96 @@
+"""The frequency domain: what an element does at each amplitude, and a mass on it at each frequency.
+
+Two questions that engineers who model joints and friction dampers ask first (docs/frequency.md):
+
+* :func:`describe_amplitudes`: the element driven in displacement, x = A sin(theta), theta = 2 pi f t, to
+  its steady cycle; its first harmonic F_1 = a_1 sin(theta) + b_1 cos(theta) gives the effective stiffness
+  K(A) = a_1 / A (N/m, the in-phase part: the describing function), the energy dissipated per cycle
+  D(A) = oint F dx = pi A b_1 (J), and the loss factor D / (pi K A^2) = b_1 / a_1. Exact (closed-form
+  integrals over the piecewise-linear cycle) for springs and Prandtl branches, a refined quadrature with a
+  stated relative accuracy otherwise (``describing.py``);
+* :func:`frequency_response`: a scene with a mass under F = F0 cos(2 pi f t): the steady first harmonic of
+  x, x_1 = amplitude cos(2 pi f t + phase) (m, radians), frequency by frequency, swept up and down with
+  continuation where the response has several branches (``response.py``).
+
+A scene needs no ``[load]`` or ``[solver]`` for either (:func:`read_scene`): both drive the element themselves
+and choose their steps; a ``[solver]`` table, when present, names the stepper of the frequency response.
+Bad input raises :class:`FrequencyError` (a ValueError) with one line naming the culprit.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Union
+
+import numpy as np
+
+# The relative accuracy of K, D and of the response's first harmonic unless asked otherwise.
+DEFAULT_TOLERANCE = 1e-3
+
+# The solver settings a scene without [solver] is read with (its step is replaced by the methods' own).
+_NO_SOLVER = {"step": 1e-3, "stop_time": 1.0, "output_interval": 1e-3}
+
+
+class FrequencyError(ValueError):
+    """Bad input, or a computation that cannot reach its stated accuracy: one line saying which and why."""
+
+
+def read_scene(path: Union[str, os.PathLike]):
+    """``(scene, stepper)``: the scene file (or packaged scene) ``path``, read without needing ``[load]`` or
+    ``[solver]``, and the stepper its ``[solver]`` names (None when it has none). SceneError on a broken rule;
+    FrequencyError for a network scene."""
+    from ..scene import read_document
+
+    return scene_of_document(*read_document(path))
+
+
+def parse_scene(text: Union[str, bytes], source: str = "<scene>"):
+    """:func:`read_scene` for scene TOML text (``source`` names it in messages)."""
+    from ..scene import toml_document
+
+    return scene_of_document(toml_document(text, source), source)
+
+
+def scene_of_document(doc: dict, source: str):
+    """:func:`read_scene` for a parsed TOML document."""
+    from ..scene import scene_from_document
+
+    if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
+        raise FrequencyError(f"{source}: describe takes an element scene ([mass], [spring], [branches], ...), "
+                             "not a [network] or [chain]")
+    named = None
+    if isinstance(doc, dict) and isinstance(doc.get("solver"), dict) and "stepper" in doc["solver"]:
+        named = doc["solver"]["stepper"]
+    if isinstance(doc, dict) and "solver" not in doc:
+        doc = dict(doc, solver=dict(_NO_SOLVER))
+    scene = scene_from_document(doc, source, check_stepper=False)
+    return scene, (scene.solver.stepper if named is not None else None)
+
+
+def positive_values(values, name: str) -> np.ndarray:
+    """``values`` as a 1-D float array of finite numbers > 0; FrequencyError naming ``name`` otherwise."""
+    try:
+        array = np.array(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise FrequencyError(f"{name}: must be numbers, got {values!r:.80}") from None
+    if array.size == 0:
+        raise FrequencyError(f"{name}: at least one value is needed")
+    for value in array.tolist():
+        if not (math.isfinite(value) and value > 0):
+            raise FrequencyError(f"{name}: every value must be a finite number > 0, got {value!r}")
+    return array
+
+
+def check_tolerance(tolerance) -> float:
+    """The relative accuracy asked for, checked: 1e-12 <= tolerance < 1 (FrequencyError otherwise)."""
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not math.isfinite(tolerance) \
+            or not 1e-12 <= tolerance < 1:
+        raise FrequencyError(f"tolerance: must be a number in [1e-12, 1), got {tolerance!r}")
+    return float(tolerance)
+
+
+from .describing import Description, describe_amplitudes  # noqa: E402
+from .response import Response, frequency_response  # noqa: E402
+
+__all__ = ["DEFAULT_TOLERANCE", "Description", "FrequencyError", "Response", "describe_amplitudes",
+           "frequency_response", "parse_scene", "read_scene"]
