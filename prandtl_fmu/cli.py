@@ -10,6 +10,7 @@
     prandtl-fmu sweep SCENE SWEEP.toml [--scheduler ADDRESS] [--workers N] [--out DIR] [--resume]
     prandtl-fmu scenes
     prandtl-fmu bench [--quick] [--out DIR] [--from-csv] [--networks]
+    prandtl-fmu bench --table1 [--protocol paper|search|quick|...] [--out DIR] [--resume] [--workers N] [--n N]
     prandtl-fmu --version
 
 SCENE is a scene file, or the name of a scene shipped in the package
@@ -156,6 +157,17 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--networks", action="store_true",
                        help="the cost of a step of the chain on a support (dynamic and massless) for n = 10 .. "
                             "10,000 nodes (--quick: up to 1,000): network_scaling.csv, .png, network_report.md")
+    table1 = bench.add_argument_group("the paper's Table 1 and figures 3-5 (prandtl_fmu/bench/table1.py)")
+    table1.add_argument("--table1", action="store_true", help="eps(h) = |u_h - u_{h/2}| in lockstep on the memory "
+                        "stack, the fits and the convention search: DIR/table1_paper.csv, candidates, figure3-5.png")
+    table1.add_argument("--protocol", help="paper (R = 99, h 1e-6 .. 1e-2, T = 500: hours), search (12 h from "
+                        "1e-4), search-theta1, search-theta05, search-symplectic, quick (default)")
+    table1.add_argument("--resume", action="store_true", help="continue the runs already in --out")
+    table1.add_argument("--workers", type=int, help="dask workers (the sweep extra); 1: in this process")
+    table1.add_argument("--scheduler", help="an existing dask scheduler tcp://host:port")
+    table1.add_argument("--n", type=int, action="append", help="only this n (repeatable)")
+    table1.add_argument("--limit", type=int, help="at most this many new (n, h) runs, then the (partial) tables")
+    table1.add_argument("--no-figures", action="store_true", help="skip the figures 3-5")
     return parser
 
 
@@ -268,6 +280,15 @@ def _main(argv) -> int:
 
         print("\n".join(packaged_scenes()))
         return 0
+    if args.command == "bench" and (args.table1 or args.protocol or args.resume or args.workers or args.scheduler
+                                    or args.n or args.limit or args.no_figures):
+        from .bench.table1 import main as table1
+
+        if not args.table1 or args.quick or args.networks or args.from_csv:
+            return _error("bench: --protocol, --resume, --workers, --scheduler, --n, --limit, --no-figures go with "
+                          "--table1, and --table1 alone (not with --quick, --networks, --from-csv)")
+        return table1(args.out, args.protocol or "quick", args.resume, args.workers, args.scheduler, args.n,
+                      args.limit, not args.no_figures)
     if args.command == "bench" and args.networks:
         from .bench.networks import run as network_bench
 
