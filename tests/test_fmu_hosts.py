@@ -75,8 +75,9 @@ def _variables(root) -> dict:
 def test_fmi3_offers_the_elongations_as_scalars_and_the_array_only_as_an_option(built, name):
     """By default no FMI 3.0 variable is an array (OMSimulator and ecos read one as a scalar): u_1 .. u_n are
     Float64 outputs with no direct dependency, n the FMI 2.0 local Int32 constant; every FMI 2.0 variable is there
-    with its value reference and type, and its dependencies. With arrays: the array u sized by n, which is then a
-    structural parameter (UInt64, start n >= 1), besides the same scalars."""
+    with its type and its dependencies, in its order after time, under its FMI 3.0 value reference: its 1-based
+    position in ModelVariables (issue 44.1). With arrays: the array u sized by n, which is then a structural
+    parameter (UInt64, start n >= 1), besides the same scalars."""
     n = load_scene(built[name, "scene"]).branches.n
     two = _variables(_root(built[name, "2"]))
     for kind in ("3", "3a"):
@@ -85,14 +86,16 @@ def test_fmi3_offers_the_elongations_as_scalars_and_the_array_only_as_an_option(
         assert not [v for v, _ in three.values() if v.find("Dimension") is not None] if kind == "3" else \
             [v.get("name") for v, _ in three.values() if v.find("Dimension") is not None] == ["u"]
         types = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
+        position = {name: str(at) for at, name in enumerate(three, start=1)}
+        assert [v.get("valueReference") for v, _ in three.values()] == list(position.values())
+        assert list(three)[1:len(two) + 1] == list(two)  # time, then the FMI 2.0 variables in their order
         for variable, (element, tag) in two.items():
             if variable == "n" and kind == "3a":
-                assert three["n"][1] == "UInt64" and element.get("valueReference") == three["n"][0].get(
-                    "valueReference")
+                assert three["n"][1] == "UInt64" and three["n"][0].get("valueReference") == position["n"]
                 assert three["n"][0].get("causality") == "structuralParameter" and three["n"][0].get("start") == str(n)
                 continue
             assert three[variable][1] == types[tag], variable
-            assert three[variable][0].get("valueReference") == element.get("valueReference"), variable
+            assert three[variable][0].get("valueReference") == position[variable], variable
             assert three[variable][0].get("causality") == element.get("causality"), variable
         if kind == "3":
             assert three["n"][1] == "Int32" and three["n"][0].get("causality") == "local"

@@ -11,10 +11,12 @@ depends on directly. :func:`model_description` writes ``modelDescription.xml`` f
 * The native build (``fmu/native/build.py``, ``fmu/native/network_build.py``) writes the same description (FMI
   2.0, or FMI 3.0 with what FMI 3.0 adds) and its C table of variables from the same list.
 
-FMI 3.0 adds to the FMI 2.0 scalars, under new value references after them (:func:`fmi3_references`): the
-independent variable ``time``; for the element, its branch elongations as the scalars u_1 .. u_n and, with
-``arrays``, the array ``u`` sized by ``n`` (a structural parameter then); for a network, with ``arrays``, the
-structural parameter ``n_nodes`` and the nodes' x and v as arrays (the connector's ``x_nodes``, ``v_nodes``).
+FMI 3.0 adds to the FMI 2.0 scalars (:func:`fmi3_references`): the independent variable ``time`` first; for the
+element, its branch elongations as the scalars u_1 .. u_n and, with ``arrays``, the array ``u`` sized by ``n`` (a
+structural parameter then); for a network, with ``arrays``, the structural parameter ``n_nodes`` and the nodes' x
+and v as arrays (the connector's ``x_nodes``, ``v_nodes``), after them. In FMI 3.0 every value reference is the
+variable's 1-based position in ModelVariables (OMSimulator reads FMI 3.0's dependencies as FMI 2.0's positions:
+both readings then name the same variable); FMI 2.0 keeps 0, 1, 2, ... in order (PythonFMU's numbering).
 
 A Real's start value is written with 16 significant digits when they give the value back, 17 otherwise (every
 start is the double the FMU holds); min and max with 17.
@@ -499,47 +501,55 @@ def _with(row: Variable, **changes) -> Variable:
 
 
 def fmi3_references(scene) -> dict:
-    """The value references FMI 3.0 adds after the FMI 2.0 variables (``count`` of them): the element's ``u``
-    (the array), ``time``, ``u_1`` (u_i is u_1 + i - 1); a network's ``time``, ``n_nodes``, ``x_nodes``,
-    ``v_nodes`` (its arrays)."""
-    count = len(variables(scene))
+    """The value references of what FMI 3.0 adds to the FMI 2.0 variables: ``time``; the element's ``u_1`` (u_i is
+    u_1 + i - 1) and ``u`` (the array; None without elongations); a network's ``n_nodes``, ``x_nodes``,
+    ``v_nodes`` (its arrays, with ``arrays``); and ``offset``, what FMI 3.0 adds to an FMI 2.0 value reference.
+    The same with or without ``arrays`` (its variables come last, the structural n stays where n is)."""
+    rows = variables(scene, fmi=3, arrays=True) if is_network(scene) or elongation_count(scene) else \
+        variables(scene, fmi=3)
+    by_name = {row.name: row.value_reference for row in rows}
+    offset = by_name[variables(scene)[0].name]  # the first FMI 2.0 variable's (its FMI 2.0 value reference is 0)
     if is_network(scene):
-        return {"time": count, "n_nodes": count + 1, "x_nodes": count + 2, "v_nodes": count + 3}
-    return {"u": count, "time": count + 1, "u_1": count + 2}
+        arrays = ("x_nodes", "v_nodes") if scene.causality == "displacement" else ("x", "v")
+        return {"time": by_name["time"], "n_nodes": by_name["n_nodes"], "x_nodes": by_name[arrays[0]],
+                "v_nodes": by_name[arrays[1]], "offset": offset}
+    return {"time": by_name["time"], "u": by_name.get("u"), "u_1": by_name.get("u_1", len(rows) + 1),
+            "offset": offset}
 
 
 def _fmi3_variables(scene, rows, arrays: bool) -> list:
-    references = fmi3_references(scene)
+    """FMI 3.0's list: ``time``, the FMI 2.0 rows, then what FMI 3.0 adds; every value reference the variable's
+    1-based position in ModelVariables. FMI 3.0 names an output's dependencies by value reference, FMI 2.0 by that
+    position: OMSimulator (2.x) reads FMI 3.0's as positions, and with this rule both readings name the same
+    variable (issue 44; ``time`` has one too: FMI 3.0 gives every variable, the independent one included, a value
+    reference, and 0 is left unused)."""
     network = is_network(scene)
-    time = _real("time", "s", "independent", "continuous", f"the {'network' if network else 'element'}'s time",
-                 value_reference=references["time"])
+    time = _real("time", "s", "independent", "continuous", f"the {'network' if network else 'element'}'s time")
+    extra = []
     if network:
-        extra = []
         if arrays:
             net = scene.network
             connector = scene.causality == "displacement"
             extra.append(Variable("n_nodes", "UInt64", "structuralParameter", "fixed", "number of nodes: the length "
-                                  "of the arrays of the nodes' x and v", value_reference=references["n_nodes"],
-                                  start=net.n))
+                                  "of the arrays of the nodes' x and v", start=net.n))
             shown = ", ".join(net.nodes[:5]) + (", ..." if net.n > 5 else "")
             for name, unit, what in (("x", "m", "displacement"), ("v", "m/s", "velocity")):
                 extra.append(_with(_output(f"{name}_nodes" if connector else name, unit,
                                            f"{what} of every node, in the nodes' order ({shown})",
-                                           ("x", "v") if connector else ()),
-                                   value_reference=references[f"{name}_nodes"], dimension="n_nodes"))
-        return [time] + rows + extra
-    n = elongation_count(scene)
-    if arrays:  # the array's size: a structural parameter, n >= 1 (arrays needs branches)
-        rows = [Variable("n", "UInt64", "structuralParameter", "fixed", row.description,
-                         value_reference=row.value_reference, start=n) if row.name == "n" else row for row in rows]
-    # the elongations are states (the connector's too: they move at doStep only): no input acts on them directly
-    extra = [_with(_output(f"u_{i}", "m", f"elongation u_{i} of the spring of Prandtl branch {i}"),
-                   value_reference=references["u_1"] + i - 1) for i in range(1, n + 1)]
-    if arrays:
-        extra.append(_with(_output("u", "m", "elongations u_i of the springs of the Prandtl branches, in the "
-                                   "scene's order (the scalars u_1 .. u_n as one array)"),
-                           value_reference=references["u"], dimension="n"))
-    return [time] + rows + extra
+                                           ("x", "v") if connector else ()), dimension="n_nodes"))
+    else:
+        n = elongation_count(scene)
+        if arrays:  # the array's size: a structural parameter, n >= 1 (arrays needs branches)
+            rows = [Variable("n", "UInt64", "structuralParameter", "fixed", row.description, start=n)
+                    if row.name == "n" else row for row in rows]
+        # the elongations are states (the connector's too: they move at doStep only): no input acts on them
+        # directly
+        extra = [_output(f"u_{i}", "m", f"elongation u_{i} of the spring of Prandtl branch {i}")
+                 for i in range(1, n + 1)]
+        if arrays:
+            extra.append(_with(_output("u", "m", "elongations u_i of the springs of the Prandtl branches, in the "
+                                       "scene's order (the scalars u_1 .. u_n as one array)"), dimension="n"))
+    return [_with(row, value_reference=position) for position, row in enumerate([time] + rows + extra, start=1)]
 
 
 # ------------------------------------------------------------------ the XML

@@ -23,6 +23,22 @@ class NativeBuildError(ValueError):
     """A native FMU cannot be built (one line: the scene or the machine, and what to do)."""
 
 
+def c_variables(scene, fmi: int, arrays: bool = False) -> list:
+    """The rows of the C layer's table of variables (scene.h's ``VARS``): the FMI 2.0 variables of
+    ``fmu/description.py`` (their types as the C layer knows them), each under its value reference in the FMI version
+    built (FMI 3.0: its 1-based position in ModelVariables). What FMI 3.0 adds (time, u_i, the arrays) the FMI 3.0
+    layer finds by scene.h's VR_* macros, from the same list (``description.fmi3_references``)."""
+    import dataclasses
+
+    from .. import description
+
+    rows = description.variables(scene)
+    if fmi == 2:
+        return rows
+    references = {row.name: row.value_reference for row in description.variables(scene, fmi, arrays)}
+    return [dataclasses.replace(row, value_reference=references[row.name]) for row in rows]
+
+
 def new_guid() -> str:
     """A native FMU's GUID (FMI 3.0: instantiation token), new for every build: a state or an instance of
     another build is refused."""

@@ -33,7 +33,8 @@ from pathlib import Path
 
 from . import kernels
 from . import platforms as targets
-from .assemble import C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, new_guid, noise_lines, pack, stubs
+from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
+                       pack, stubs)
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
             "dissipated_friction", "energy_residual")
@@ -82,7 +83,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
     connector = scene.causality == "displacement"
     identifier = description.model_identifier(scene)
     guid = new_guid()
-    variables = description.variables(scene)  # FMI 2.0's, the C layer's table; FMI 3.0's extras by the macros
+    variables = c_variables(scene, fmi, arrays)  # the C layer's table; FMI 3.0's extras by the macros
     references = description.fmi3_references(scene)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
@@ -95,7 +96,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         n_vr = next((row.value_reference for row in variables if row.name == "n"), 0)
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
                                              [scratch, FMI_HEADERS[fmi]],
-                                             [f"VR_U={references['u']}", f"VR_N={n_vr}",
+                                             [f"VR_U={references['u'] or 4294967295}u", f"VR_N={n_vr}",
                                               f"VR_TIME={references['time']}"], fmi, identifier)
         text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
         return pack(out, text, scene, scene_bytes, identifier, folders, binaries)

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .assemble import C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, new_guid, noise_lines, pack, stubs
+from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
+                       pack, stubs)
 from .platforms import KERNEL_MACRO
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
@@ -312,7 +313,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
         raise NativeBuildError(f"{scene.source}: [solver] stepper: {stepper_problem(scene, scene.solver.stepper)}")
     identifier = description.model_identifier(scene)
     guid = new_guid()
-    variables = description.variables(scene)  # FMI 2.0's, the C layer's table; FMI 3.0's extras by the macros
+    variables = c_variables(scene, fmi, arrays)  # the C layer's table; FMI 3.0's extras by the macros
     extra_vr = description.fmi3_references(scene)
     text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
     if connector:
