@@ -149,6 +149,9 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--out", metavar="DIR", help="folder of the Parquet files (default: ./<scene name>-sweep)")
     sweep.add_argument("--resume", action="store_true", help="finish the sweep in --out: run only its unfinished "
                                                              "tasks")
+    from .frequency.cli import add_parser as add_describe  # issue 47: the frequency domain
+
+    add_describe(commands, _SCENE_HELP)
     commands.add_parser("scenes", help="list the scenes shipped in the package")
     bench = commands.add_parser("bench", help="work-precision benchmark of every method (see prandtl_fmu/bench/)")
     bench.add_argument("--quick", action="store_true", help="short horizon, n = 10 and 100 (under a minute)")
@@ -275,6 +278,10 @@ def _main(argv) -> int:
         return _fit(args)
     if args.command == "sweep":
         return _sweep(args)
+    if args.command == "describe":
+        from .frequency.cli import run as describe
+
+        return describe(args)
     if args.command == "scenes":
         from .catalog import packaged_scenes
 

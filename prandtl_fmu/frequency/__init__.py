@@ -22,7 +22,8 @@ import math
 import os
 from typing import Union
 
-import numpy as np
+# Light at import (the standard library only): the command line builds its parser from here without loading
+# numpy or numba; the methods load with their first use (``__getattr__``).
 
 # The relative accuracy of K, D and of the response's first harmonic unless asked otherwise.
 DEFAULT_TOLERANCE = 1e-3
@@ -67,8 +68,12 @@ def scene_of_document(doc: dict, source: str):
     return scene, (scene.solver.stepper if named is not None else None)
 
 
-def positive_values(values, name: str) -> np.ndarray:
+def positive_values(values, name: str):
     """``values`` as a 1-D float array of finite numbers > 0; FrequencyError naming ``name`` otherwise."""
+    import numpy as np
+
+    if isinstance(values, (str, bytes)):
+        raise FrequencyError(f"{name}: must be numbers, got {values!r:.80}")
     try:
         array = np.array(values, dtype=float).reshape(-1)
     except (TypeError, ValueError):
@@ -89,8 +94,17 @@ def check_tolerance(tolerance) -> float:
     return float(tolerance)
 
 
-from .describing import Description, describe_amplitudes  # noqa: E402
-from .response import Response, frequency_response  # noqa: E402
+_LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",
+         "frequency_response": "response", "NotSettled": "response"}
 
-__all__ = ["DEFAULT_TOLERANCE", "Description", "FrequencyError", "Response", "describe_amplitudes",
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response", "describe_amplitudes",
            "frequency_response", "parse_scene", "read_scene"]

@@ -1,0 +1,179 @@
+"""``prandtl-fmu describe``: the frequency domain from the command line (docs/frequency.md).
+
+    prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--tolerance TOL] [--out CSV] [--plot PNG]
+    prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... [--sweep up|down|both]
+                         [--stepper S] [--tolerance TOL] [--scheduler ADDRESS | --workers N] [--out CSV]
+                         [--plot PNG]
+
+The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``, the second
+``frequency,amplitude,phase,sweep,steps_per_period,periods,error`` (phase in radians). Exit status 2 on bad
+input (one line naming the culprit, nothing written), 1 when a computation cannot reach its accuracy (one line
+saying what was reached, nothing written), 0 otherwise.
+"""
+from __future__ import annotations
+
+import math
+import sys
+
+_EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A) (J per cycle), loss_factor "
+           "D/(pi K A^2), method (exact or quadrature), error (estimated relative error; 0: rounding only); or "
+           "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
+           "cos(2 pi f t + phase)), sweep (up or down), steps_per_period, periods, error. Exit status 2 on bad "
+           "input, 1 when a result cannot reach the tolerance.")
+
+
+def add_parser(commands, scene_help: str) -> None:
+    """The ``describe`` subcommand on the subparsers ``commands``."""
+    from ..steppers import STEPPERS
+
+    describe = commands.add_parser(
+        "describe", epilog=_EPILOG,
+        help="the frequency domain: K(A), D(A) and the loss factor of the element driven in displacement "
+             "(--amplitudes), or the steady response of its mass to F0 cos(2 pi f t) (--force-amplitude)")
+    describe.add_argument("scene", help=scene_help + "; needs no [load] or [solver]")
+    describe.add_argument("--amplitudes", metavar="A1,A2,...",
+                          help="displacement amplitudes (m, > 0): the describing function at each")
+    describe.add_argument("--frequency", metavar="F",
+                          help="frequency (Hz, > 0) of the cycles of --amplitudes: needed by a rate-dependent "
+                               "element (dashpot, series dashpots, delay, history)")
+    describe.add_argument("--force-amplitude", metavar="F0",
+                          help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass: the frequency response")
+    describe.add_argument("--frequencies", metavar="f1,f2,...", help="forcing frequencies (Hz, > 0)")
+    describe.add_argument("--sweep", choices=("up", "down", "both"),
+                          help="sweep direction(s) of the frequency response (default: both for a nonlinear scene)")
+    describe.add_argument("--stepper", choices=list(STEPPERS),
+                          help="stepper of the frequency response (default: the scene's [solver] stepper, else "
+                               "exact where it applies, else verlet, else implicit)")
+    describe.add_argument("--tolerance", metavar="TOL", default="1e-3",
+                          help="relative accuracy of the first harmonic (default 1e-3)")
+    describe.add_argument("--scheduler", metavar="ADDRESS",
+                          help="run the frequencies on a running dask scheduler (tcp://host:8786)")
+    describe.add_argument("--workers", metavar="N",
+                          help="run the frequencies on a LocalCluster of N worker processes")
+    describe.add_argument("--out", help="CSV file to write (default: standard output)")
+    describe.add_argument("--plot", metavar="PNG",
+                          help="figure: K(A) and the loss factor against A (log axes), or the frequency response "
+                               "by sweep; closed forms drawn over")
+
+
+def _numbers(text, option: str) -> list:
+    """The comma-separated numbers of ``option``, each finite and > 0; ValueError naming the option."""
+    values = []
+    for item in str(text).split(","):
+        item = item.strip()
+        try:
+            value = float(item)
+        except ValueError:
+            raise ValueError(f"{option}: {item!r} is not a number") from None
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{option}: every value must be a finite number > 0, got {item!r}")
+        values.append(value)
+    return values
+
+
+def _check(args) -> dict:
+    """Every option checked before any work: the parsed values, or ValueError naming the culprit."""
+    by_amplitude = args.amplitudes is not None
+    by_force = args.force_amplitude is not None
+    if by_amplitude == by_force:
+        raise ValueError("give either --amplitudes (the describing function) or --force-amplitude with "
+                         "--frequencies (the frequency response)" + (", not both" if by_amplitude else ""))
+    if by_amplitude:
+        for option, value in (("--frequencies", args.frequencies), ("--sweep", args.sweep),
+                              ("--stepper", args.stepper), ("--scheduler", args.scheduler),
+                              ("--workers", args.workers)):
+            if value is not None:
+                raise ValueError(f"{option} belongs to the frequency response (--force-amplitude), not to "
+                                 "--amplitudes")
+    else:
+        if args.frequencies is None:
+            raise ValueError("--force-amplitude needs --frequencies (Hz)")
+        if args.frequency is not None:
+            raise ValueError("--frequency sets the cycles of --amplitudes; the frequency response takes "
+                             "--frequencies")
+    values = {"tolerance": _numbers(args.tolerance, "--tolerance")[0]}
+    if not values["tolerance"] < 1 or values["tolerance"] < 1e-12:
+        raise ValueError(f"--tolerance: must be in [1e-12, 1), got {args.tolerance}")
+    if by_amplitude:
+        values["amplitudes"] = _numbers(args.amplitudes, "--amplitudes")
+        values["frequency"] = None if args.frequency is None else _numbers(args.frequency, "--frequency")[0]
+    else:
+        values["force_amplitude"] = _numbers(args.force_amplitude, "--force-amplitude")[0]
+        values["frequencies"] = _numbers(args.frequencies, "--frequencies")
+        if args.workers is not None:
+            if not args.workers.strip().isdigit() or int(args.workers) < 1:
+                raise ValueError(f"--workers: must be a whole number >= 1, got {args.workers!r}")
+            if args.scheduler:
+                raise ValueError("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
+            values["workers"] = int(args.workers)
+    return values
+
+
+def run(args) -> int:
+    """The ``describe`` command; returns the exit status."""
+    from ..catalog import SceneError
+    from ..cli import _check_image_path, _check_output_path, _missing
+    from . import FrequencyError
+
+    try:
+        values = _check(args)
+        if args.plot and _missing("matplotlib"):
+            raise ValueError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
+        if (args.scheduler or args.workers) and _missing("distributed"):
+            raise ValueError("--scheduler and --workers need dask.distributed: pip install 'prandtl_fmu[sweep]'")
+        _check_output_path(args.out, "--out")
+        _check_image_path(args.plot, "--plot")
+        from . import read_scene
+
+        scene, named = read_scene(args.scene)
+        if "amplitudes" in values:
+            from .describing import describe_amplitudes
+
+            result = describe_amplitudes(scene, values["amplitudes"], values["frequency"],
+                                         tolerance=values["tolerance"])
+        else:
+            from .response import NotSettled, frequency_response
+
+            try:
+                result = frequency_response(scene, values["force_amplitude"], values["frequencies"],
+                                            tolerance=values["tolerance"], stepper=args.stepper or named,
+                                            sweep=args.sweep, scheduler=args.scheduler,
+                                            workers=values.get("workers"))
+            except NotSettled as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 1
+    except (FrequencyError, SceneError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    text = csv_text(result.columns())
+    if args.out:
+        from ..outputs import write_output
+
+        write_output(args.out, text.encode())
+    else:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    if args.plot:
+        from .plots import plot_description, plot_response
+
+        (plot_description if "amplitudes" in values else plot_response)(result, scene, args.plot)
+    return 0
+
+
+def csv_text(columns: dict) -> str:
+    """The CSV of ``columns`` (name -> values): a header, then one row per value, floats in full precision."""
+    names = list(columns)
+    rows = zip(*(list(values) for values in columns.values()))
+    lines = [",".join(names)]
+    for row in rows:
+        lines.append(",".join(_cell(value) for value in row))
+    return "\n".join(lines) + "\n"
+
+
+def _cell(value) -> str:
+    value = value.item() if hasattr(value, "item") else value  # a numpy scalar
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    return repr(float(value))
