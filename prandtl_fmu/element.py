@@ -180,7 +180,8 @@ class Element(OutputMemo):
     def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
         """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is
         ``force`` plus the scene's ``[load]`` F(t), evaluated by the stepper as in :func:`simulate` (the
-        element's ``time`` is the load's clock).
+        element's ``time`` is the load's clock). A duration below 1e-9 h, like a remainder below it after the
+        whole steps, is rounding of a master's clock (:func:`split_duration`): it changes nothing.
 
         ElementError (state unchanged) when a step cannot be taken.
         """
@@ -202,6 +203,10 @@ class Element(OutputMemo):
             raise ValueError(f"duration {duration!r} s is {duration / h:.3g} steps of h = {h!r} s: more than 2^53 "
                              "cannot be counted exactly; advance by shorter durations or with a larger step")
         whole, rest = split_duration(duration, h)
+        # below rounding of h: no step, and the clock stays on its grid (the time setter takes the master's next
+        # communication point, within 1e-9 h of it, as this instant)
+        if not (whole or rest):
+            return
         if whole + (rest > 0) > ADVANCE_BUDGET:
             raise ElementError(f"{self.scene.source}: an advance of {duration!r} s takes {whole + (rest > 0):.4g} "
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "

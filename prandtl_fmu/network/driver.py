@@ -394,6 +394,8 @@ class NetworkElement(OutputMemo):
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is more than 2^53 steps of h = {h!r} s")
         whole, rest = split_duration(duration, h)
+        if not (whole or rest):  # shorter than rounding of h: no step, the clock on its grid (Element.advance)
+            return
         if whole + (rest > 0) > ADVANCE_BUDGET:
             raise ElementError(f"{self.scene.source}: an advance of {duration!r} s takes {whole + (rest > 0):.4g} "
                                f"steps of h = {h!r} s, more than the budget of {ADVANCE_BUDGET:.0e} steps of one "
@@ -587,6 +589,8 @@ class NetworkConnector(NetworkElement):
         node = self.scene.network.load_node
         x_start = float(self.x[node])
         duration = time - start
+        if split_duration(duration, self.h) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
+            duration = 0.0
         try:
             if duration == 0:
                 status, held = kernels.jump_node(self.model, self.x, self.v, self.u, self.piece, self.account,
