@@ -406,10 +406,11 @@ def run(folder: str, protocol_name: str = "paper", resume: bool = False, workers
         todo = todo[:limit]
     started = time.perf_counter()
     bar = _bar(sum(protocol.work(h) for _, _, h in todo), f"table 1 ({protocol.name})")
-    use_dask = dask and todo and (scheduler is not None or (workers if workers is not None else os.cpu_count() or 1) > 1)
+    pool = workers if workers is not None else os.cpu_count() or 1
+    use_dask = dask and todo and (scheduler is not None or pool > 1)
     try:
         if use_dask:
-            _run_dask(folder, protocol, todo, done, scheduler, workers or os.cpu_count() or 1, bar)
+            _run_dask(folder, protocol, todo, done, scheduler, pool, bar)
         else:
             for n, j, h in todo:
                 record = measure_task(n, j, h, protocol.T, protocol.stepper, protocol.theta)
