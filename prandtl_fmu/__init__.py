@@ -27,7 +27,7 @@ exceptions and their reasons):
 7. the stepped objects and the network's driver: ``element``, ``connector``, ``network.driver``
 8. the batch driver and the summaries of runs: ``driver``, ``summary``
 9. the FMUs of both runtimes: ``fmu``
-10. tools: ``sweep``, ``identify``, ``plots``, ``bench``
+10. tools: ``sweep``, ``identify``, ``plots``, ``bench``, ``frequency``
 11. the command line: ``cli``, ``__main__``
 
 This ``__init__`` imports nothing at load: its public names resolve on first use.

@@ -34,7 +34,7 @@ LAYERS = [
      ["element", "connector", "network.driver"]),
     ("the batch driver and the summaries of runs", ["driver", "summary"]),
     ("the FMUs of both runtimes", ["fmu"]),
-    ("tools built on the library", ["sweep", "identify", "plots", "bench"]),
+    ("tools built on the library", ["sweep", "identify", "plots", "bench", "frequency"]),
     ("the command line", ["cli", "__main__"]),
 ]
 

@@ -112,7 +112,6 @@ def _check(args) -> dict:
 def run(args) -> int:
     """The ``describe`` command; returns the exit status."""
     from ..catalog import SceneError
-    from ..cli import _check_image_path, _check_output_path, _missing
     from . import FrequencyError
 
     try:
@@ -122,7 +121,14 @@ def run(args) -> int:
         if (args.scheduler or args.workers) and _missing("distributed"):
             raise ValueError("--scheduler and --workers need dask.distributed: pip install 'prandtl_fmu[sweep]'")
         _check_output_path(args.out, "--out")
-        _check_image_path(args.plot, "--plot")
+        _check_output_path(args.plot, "--plot")
+        if args.plot:
+            from ..plots import image_format
+
+            try:
+                image_format(args.plot)
+            except ValueError as exc:  # it names the extensions matplotlib writes
+                raise ValueError(f"--plot {exc}") from None
         from . import read_scene
 
         scene, named = read_scene(args.scene)
@@ -158,6 +164,28 @@ def run(args) -> int:
 
         (plot_description if "amplitudes" in values else plot_response)(result, scene, args.plot)
     return 0
+
+
+def _missing(*modules) -> list:
+    """The modules of an extra that cannot be imported."""
+    import importlib.util
+
+    return [name for name in modules if importlib.util.find_spec(name) is None]
+
+
+def _check_output_path(path, option: str) -> None:
+    """ValueError (one line) when ``path`` cannot be written: checked before any work."""
+    import os
+
+    if not path:
+        return
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        raise ValueError(f"{option} {path}: is a directory")
+    if not os.path.isdir(folder):
+        raise ValueError(f"{option} {path}: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise ValueError(f"{option} {path}: not writable")
 
 
 def csv_text(columns: dict) -> str:
