@@ -49,9 +49,11 @@ one matrix exponential takes the state there. It is checked at the start of
 the phase and at every turning point. For a constant load the zeros of v
 come from the rule above, so a sliding phase of any length also costs O(1).
 
-Bounded work (issue 31). A step takes at most PHASE_BUDGET phases, its event
-searches at most WALK_BUDGET intervals of the subdivision and zeros of v in
-all, each root refinement at most REFINE_LIMIT iterations (Illinois, then
+Bounded work (issues 31 and 44). A step of length h takes at most
+EVENT_FLOOR + EVENT_RATE h phases (events per simulated second: events that
+pile up in finite time, a Zeno motion, end the step), the search for each
+event at most WALK_BUDGET intervals of the subdivision and zeros of v, each
+root refinement at most REFINE_LIMIT iterations (Illinois, then
 bisection, which reaches adjacent doubles within that many halvings), and
 each matrix exponential at most 30 Taylor terms and log2(|A| tau / 0.25)
 squarings. A step that would need more fails (:func:`attempt` says which
@@ -122,9 +124,9 @@ from ..loads import CONSTANT, HARMONIC, RANDOM, TABLE, force_at
 
 from ..memory import refuse_memory
 from . import exact_series
-from .exact_common import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, PHASE_BUDGET, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
-                           TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, _damping, _expm_times, _linear_spring, _matmul,
-                           _matvec, _motion, _next_break, _restore, _saved, _threshold, explain)
+from .exact_common import (_EPS, EVENT_FLOOR, EVENT_RATE, ILLINOIS_LIMIT, NOT_FINITE, REFINE_LIMIT,  # noqa: F401
+                           SEARCH_EXHAUSTED, STALLED, TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, phase_budget, _damping,
+                           _expm_times, _linear_spring, _matmul, _matvec, _motion, _next_break, _restore, _saved, _threshold, explain)
 
 ORDER = math.inf
 
@@ -275,8 +277,8 @@ def step(model, load, t, h, x, v, s, u, energy):
 def attempt(model, load, t, h, x, v, u, energy):
     """The exact motion from t to t + h, phase by phase: (x, v, failure, when). ``failure`` is TOOK_STEP, or
     why the step could not be taken at time ``when`` (then u and ``energy`` are restored): more than
-    PHASE_BUDGET phases, more than 16 + 2 n phases in a row that do not advance t, an event search over its
-    budget, a non-finite state. Books the energy account exactly (:func:`_book`)."""
+    EVENT_FLOOR + EVENT_RATE h phases, more than 16 + 2 n phases in a row that do not advance t, an event search
+    over its budget, a non-finite state. Books the energy account exactly (:func:`_book`)."""
     m, k0, k3, c, k, eta, cs, friction, memory = model
     saved_u = _saved(u)
     saved_energy = _saved(energy)
@@ -287,10 +289,12 @@ def attempt(model, load, t, h, x, v, u, energy):
     released = False  # a stick phase just ended with the net force at the threshold: slide now
     failure = TOOK_STEP
     phases = 0
-    budget = np.full(1, WALK_BUDGET)  # the intervals the event searches of this step may take
+    most_phases = phase_budget(h)
+    budget = np.full(1, WALK_BUDGET)  # the intervals the search for the next event may take
     while t < end:  # phases; each ends at an event, a load kink or t + h
         phases += 1
-        if phases > PHASE_BUDGET:
+        budget[0] = WALK_BUDGET
+        if phases > most_phases:
             failure = TOO_MANY_PHASES
             break
         span = min(end, _next_break(load, t)) - t
@@ -437,7 +441,7 @@ def _stick_end(load, t, span, push, alpha):
 @kernel
 def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sliding, budget):
     """(tau, which) of the first event of the phase in (0, span], or (span, NO_EVENT); (span, EXHAUSTED) when
-    the step's ``budget`` (intervals of the walk and zeros of v, counted down from :data:`WALK_BUDGET`) ran out.
+    the event's ``budget`` (intervals of the walk and zeros of v, counted down from :data:`WALK_BUDGET`) ran out.
 
     x is monotone between zeros of v: the search walks from one zero of v to
     the next (:func:`_next_zero`) and checks the levels on each monotone

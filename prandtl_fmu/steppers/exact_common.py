@@ -22,8 +22,17 @@ _EPS = 2.220446049250313e-16
 
 # The bounds on the work of one step (issue 31): a step that needs more fails (the loop returns fewer steps,
 # the driver's ElementError / fmi2Discard; each module's ``failure_reason`` says which bound ran out), never a loop.
-PHASE_BUDGET = 100_000  # phases (events) in one step
-WALK_BUDGET = 100_000  # intervals of the validated subdivisions (and zeros of v walked over) of one step
+# The bounds are per event and per simulated second, never per step: a step of any length (one output interval
+# of 500 s, a master's long communication step) runs, and the answer does not depend on how the run is cut.
+EVENT_FLOOR = 100_000  # phases (events) any step may take ...
+EVENT_RATE = 100_000  # ... plus this many per simulated second of the step (Zeno: events piling up in finite time)
+WALK_BUDGET = 100_000  # intervals of the validated subdivisions (and zeros of v walked over) searching one event
+
+
+@kernel
+def phase_budget(h):
+    """The phases (events) a step of length ``h`` (s) may take: EVENT_FLOOR + EVENT_RATE h."""
+    return EVENT_FLOOR + EVENT_RATE * h
 ILLINOIS_LIMIT = 64  # Illinois iterations of one root refinement, then bisection ...
 REFINE_LIMIT = 64 + 1200  # ... which reaches adjacent doubles from any bracket within 1200 halvings
 
@@ -34,12 +43,12 @@ TOOK_STEP, TOO_MANY_PHASES, STALLED, SEARCH_EXHAUSTED, NOT_FINITE = 0, 1, 2, 3, 
 def explain(failure: int, when: float) -> str:
     """The line that says which bound of the step ran out (``failure``, from ``attempt``) at time ``when``."""
     return {TOOK_STEP: "",
-            TOO_MANY_PHASES: f"more than {PHASE_BUDGET} events in one step, at t = {when!r} s (a step of 'exact' "
-                             "takes at most that many: output more often, or use another stepper)",
+            TOO_MANY_PHASES: f"more than {EVENT_FLOOR} + {EVENT_RATE} events per simulated second in one step, "
+                             f"at t = {when!r} s (events piling up in time: a Zeno motion the exact stepper cannot "
+                             "follow; use another stepper)",
             STALLED: f"more than 16 + 2 n events at one instant t = {when!r} s (events that do not advance time)",
-            SEARCH_EXHAUSTED: f"the event searches of one step took more than {WALK_BUDGET} intervals, at t = "
-                              f"{when!r} s (a step of 'exact' takes at most that many: output more often, or "
-                              "use another stepper)",
+            SEARCH_EXHAUSTED: f"the search for one event took more than {WALK_BUDGET} intervals, at t = "
+                              f"{when!r} s (a search of 'exact' takes at most that many: use another stepper)",
             NOT_FINITE: f"the state became non-finite at t = {when!r} s"}.get(failure, f"failure {failure}")
 
 

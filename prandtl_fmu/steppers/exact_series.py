@@ -41,7 +41,7 @@ both thresholds) slips to the side of v, else of v', and sticks only with no flo
 stuck, fired its level at once, stuck again, ... for ever). An event is a sign change beyond the rounding of
 g_j's terms (8 ulps), so a branch that has just stuck on its threshold, or creeps exactly at v = lambda_i eta_i,
 fires nothing. Events at one instant are finitely many: more than 16 + 4 n phases in a row that do not
-advance t fail the step, as do the budgets of ``exact.py`` (phases, walk intervals of the step, refinement
+advance t fail the step, as do the budgets of ``exact.py`` (phases per simulated second, walk intervals per event, refinement
 iterations): the driver reports a failed step, never a silent stop, never a loop.
 
 The cost of a phase is a few dozen (6 + n)-square matrix exponentials per interval of the walk, whose length
@@ -59,9 +59,9 @@ from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
 from ..loads import CONSTANT, HARMONIC, force_at
-from .exact_common import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, PHASE_BUDGET, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
-                           TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, _damping, _expm_times, _linear_spring, _motion,
-                           _next_break, _restore, _saved, _threshold, explain)
+from .exact_common import (_EPS, ILLINOIS_LIMIT, NOT_FINITE, REFINE_LIMIT, SEARCH_EXHAUSTED, STALLED,
+                           TOO_MANY_PHASES, TOOK_STEP, WALK_BUDGET, phase_budget, _damping, _expm_times,
+                           _linear_spring, _motion, _next_break, _restore, _saved, _threshold, explain)
 
 XI, V, LOAD_VARYING, LOAD_RATE, LOAD_CONSTANT, FRICTION, BRANCH0 = 0, 1, 2, 3, 4, 5, 6
 # what an event does: a sticking branch slips (up, down), a slipping one sticks, the mass stops, it is released
@@ -395,10 +395,12 @@ def attempt(model, load, t, h, x, v, u, energy):
     released = False  # a stick just ended with the net force at the threshold: slide now
     failure = TOOK_STEP
     phases = 0
-    budget = np.full(1, WALK_BUDGET)  # the intervals the event searches of this step may take
+    most_phases = phase_budget(h)
+    budget = np.full(1, WALK_BUDGET)  # the intervals the search for the next event may take
     while t < end:  # phases; each ends at an event, a load kink or t + h
         phases += 1
-        if phases > PHASE_BUDGET:
+        budget[0] = WALK_BUDGET
+        if phases > most_phases:
             failure = TOO_MANY_PHASES
             break
         span = min(end, _next_break(load, t)) - t
