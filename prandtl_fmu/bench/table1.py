@@ -57,6 +57,7 @@ class Protocol:
     ns: tuple
     stepper: str = "projected"
     theta: float = 0.0  # a step from t_p sees the load at t_p + theta h (kernels/table1.py)
+    held: bool = True  # also measure against the coarse run held over its step (a candidate; costs a third more)
 
     def steps(self):
         """The h_j (s), j = 0..R."""
@@ -65,7 +66,7 @@ class Protocol:
 
     def manifest(self) -> dict:
         return dict(name=self.name, h_min=self.h_min, h_max=self.h_max, R=self.R, T=self.T, ns=list(self.ns),
-                    stepper=self.stepper, theta=self.theta)
+                    stepper=self.stepper, theta=self.theta, held=self.held)
 
     def work(self, h: float) -> float:
         """Steps of one lockstep run at h: N at h and 2 N at h/2, N = round(T / h)."""
@@ -73,7 +74,7 @@ class Protocol:
 
 
 PROTOCOLS = {
-    "paper": Protocol("paper", 1e-6, 1e-2, 99, 500.0, PAPER_NS),
+    "paper": Protocol("paper", 1e-6, 1e-2, 99, 500.0, PAPER_NS, held=False),
     # the convention search: the full T and the paper's n, 12 values of h down to 1e-4 (fits over two sub-ranges
     # of the same runs show the reduction does not move C)
     "search": Protocol("search", 1e-4, 1e-2, 11, 500.0, PAPER_NS),
@@ -121,7 +122,8 @@ class Table1Error(ValueError):
 
 # ------------------------------------------------ one (n, h): the lockstep run
 
-def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progress=None, theta: float = 0.0) -> dict:
+def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progress=None, theta: float = 0.0,
+                 held: bool = True) -> dict:
     """Run ``scene`` at h and h/2 in lockstep (``kernels/table1.py``) over ``steps`` coarse steps (default
     round(T / h)) and return the maxima of the difference: ``{"maxima": {kind: {measure: value}}, "when":
     ..., "seconds": ..., "steps": ...}``. ValueError if the scene does not fit (the memory stack, no memory
@@ -157,7 +159,8 @@ def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progre
     done = 0
     while done < total:
         count = min(CHUNK_STEPS, total - done)
-        taken = loop(model, load, plain, with_c, states, float(h), float(theta), done, count, maxima, when, state)
+        taken = loop(model, load, plain, with_c, states, float(h), float(theta), held, done, count, maxima, when,
+                     state)
         if taken < count:
             raise RuntimeError(f"lockstep at h = {h!r}: the state stopped being finite (or the stack broke) near "
                                f"t = {(done + taken) * h:.6g} s")
@@ -165,14 +168,17 @@ def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progre
         if progress is not None:
             progress(count)
     seconds = time.perf_counter() - started
-    return dict(maxima={kind: dict(zip(kernels.MEASURES, maxima[i].tolist())) for i, kind in enumerate(kernels.KINDS)},
-                when={kind: dict(zip(kernels.MEASURES, when[i].tolist())) for i, kind in enumerate(kernels.KINDS)},
+    kinds = [kind for kind in kernels.KINDS if held or kind != "held"]
+    return dict(maxima={kind: dict(zip(kernels.MEASURES, maxima[i].tolist())) for i, kind in enumerate(kernels.KINDS)
+                        if kind in kinds},
+                when={kind: dict(zip(kernels.MEASURES, when[i].tolist())) for i, kind in enumerate(kernels.KINDS)
+                      if kind in kinds},
                 seconds=seconds, steps=total)
 
 
-def measure_task(n: int, j: int, h: float, T: float, stepper: str, theta: float = 0.0) -> dict:
+def measure_task(n: int, j: int, h: float, T: float, stepper: str, theta: float = 0.0, held: bool = True) -> dict:
     """One (n, h_j) of a protocol: the record written to DIR/runs/ (a dask task: plain arguments, plain result)."""
-    record = lockstep_run(paper_scene(n, T), h, stepper, theta=theta)
+    record = lockstep_run(paper_scene(n, T), h, stepper, theta=theta, held=held)
     record.update(n=n, j=j, h=h, T=T, stepper=stepper, theta=theta)
     return record
 
@@ -279,8 +285,9 @@ def candidate_rows(records, protocol: Protocol):
     """Every convention of the search: one row per (convention, q, n), with the convention's worst ratio to the
     printed C (over the n it has) repeated on its rows."""
     rows = []
+    measured = set.intersection(*(set(r["maxima"]) for r in records.values())) if records else set()
     for (q, norm) in NORMS:
-        for time_norm in TIMES:
+        for time_norm in [name for name, kinds in TIMES.items() if set(kinds) <= measured]:
             for factor in FACTORS:
                 for range_name, h_range in h_ranges(protocol).items():
                     part = table(records, protocol, q, norm, time_norm, factor, h_range)
@@ -413,7 +420,7 @@ def run(folder: str, protocol_name: str = "paper", resume: bool = False, workers
             _run_dask(folder, protocol, todo, done, scheduler, pool, bar)
         else:
             for n, j, h in todo:
-                record = measure_task(n, j, h, protocol.T, protocol.stepper, protocol.theta)
+                record = measure_task(n, j, h, protocol.T, protocol.stepper, protocol.theta, protocol.held)
                 _write_run(folder, record)
                 done[(n, j)] = record
                 if bar is not None:
@@ -431,8 +438,9 @@ def _run_dask(folder, protocol, todo, done, scheduler, workers, bar):
     owned = []
     try:
         client = _client(scheduler, workers, owned)
-        futures = {client.submit(measure_task, n, j, h, protocol.T, protocol.stepper, protocol.theta, pure=False,
-                                 key=f"prandtl-table1-{protocol.name}-{n}-{j}"): (n, j, h) for n, j, h in todo}
+        futures = {client.submit(measure_task, n, j, h, protocol.T, protocol.stepper, protocol.theta, protocol.held,
+                                 pure=False, key=f"prandtl-table1-{protocol.name}-{n}-{j}"): (n, j, h)
+                   for n, j, h in todo}
         for future in as_completed(futures):
             n, j, h = futures[future]
             try:

@@ -103,10 +103,14 @@ def difference(params, plain, with_c, states, xs, vs, weights, m, k0, out):
     """The measures (``MEASURES``) of the weighted sum of the profiles ``states`` (3, L), at displacements ``xs``
     and velocities ``vs`` (3,), with ``weights`` (3,), into ``out``. The merged cells cost O(depth of the stacks).
     Returns False if the pieces do not tile the branches (then ``out`` holds NaN)."""
+    return _difference(params, plain, with_c, states, xs, vs, weights, m, k0, out, np.empty(3, dtype=np.int64),
+                       np.empty(3), np.zeros((3, 3)))
+
+
+@kernel
+def _difference(params, plain, with_c, states, xs, vs, weights, m, k0, out, cursor, ends, coef):
+    """:func:`difference` with its scratch arrays given (the lockstep allocates them once, not per node)."""
     n = params.shape[1] - 1
-    cursor = np.empty(3, dtype=np.int64)
-    ends = np.empty(3)
-    coef = np.zeros((3, 3))
     for s in range(3):
         cursor[s] = int(states[s, stack.COUNT])
         ends[s] = states[s, stack.TOP] if weights[s] != 0.0 else float(n)
@@ -172,7 +176,7 @@ def lockstep_for(step):
     """The lockstep loop over a stepper's compiled ``step`` (a closure, compiled; wrapped in a cached kernel per
     stepper below, as ``kernels/loop.py`` does for the time loop)."""
 
-    def lockstep(model, load, plain, with_c, states, h, theta, first, steps, maxima, when, state):
+    def lockstep(model, load, plain, with_c, states, h, theta, held_too, first, steps, maxima, when, state):
         """Advance the run at ``h`` (profile ``states[NEW]``) by ``steps`` steps from step number ``first`` and
         the run at h/2 (``states[FINE]``) by twice as many, measuring the difference at every node. A step
         from t_p sees the load at t_p + theta h (theta = 0: scheme 5.1; theta = 1: the g(t_{p+1}) of (1.12)).
@@ -190,6 +194,9 @@ def lockstep_for(step):
         sc = stack.force(params, states[NEW])
         sf = stack.force(params, states[FINE])
         values = np.empty(COUNT)
+        cursor = np.empty(3, dtype=np.int64)
+        ends = np.empty(3)
+        coef = np.zeros((3, 3))
         xs = np.empty(3)
         vs = np.empty(3)
         linear = np.array([0.5, -1.0, 0.5])
@@ -205,13 +212,16 @@ def lockstep_for(step):
             xs[NEW], xs[FINE], xs[OLD] = xc, xf, xo
             vs[NEW], vs[FINE], vs[OLD] = vc, vf, vo
             t_mid = (2 * p + 1) * half
-            ok = difference(params, plain, with_c, states, xs, vs, linear, m, k0_value, values)
+            ok = _difference(params, plain, with_c, states, xs, vs, linear, m, k0_value, values, cursor, ends, coef)
             _keep(maxima, when, LINEAR, values, t_mid)
-            ok = difference(params, plain, with_c, states, xs, vs, held, m, k0_value, values) and ok
-            _keep(maxima, when, HELD, values, t_mid)
+            if held_too:
+                ok = _difference(params, plain, with_c, states, xs, vs, held, m, k0_value, values, cursor, ends,
+                                 coef) and ok
+                _keep(maxima, when, HELD, values, t_mid)
             xf, vf, sf = step(model, load, (2 * p + 1 + theta) * half, half, xf, vf, sf, states[FINE], None)
             xs[FINE], vs[FINE] = xf, vf
-            ok = difference(params, plain, with_c, states, xs, vs, nodes, m, k0_value, values) and ok
+            ok = _difference(params, plain, with_c, states, xs, vs, nodes, m, k0_value, values, cursor, ends,
+                             coef) and ok
             _keep(maxima, when, COARSE, values, (p + 1) * h)
             state[0], state[1], state[2], state[3] = xc, vc, xf, vf
             if not (ok and abs(xc) < np.inf and abs(vc) < np.inf and abs(xf) < np.inf and abs(vf) < np.inf):
@@ -229,15 +239,17 @@ _symplectic_lockstep = lockstep_for(_symplectic.step)
 
 
 @kernel
-def lockstep_projected(model, load, plain, with_c, states, h, theta, first, steps, maxima, when, state):
+def lockstep_projected(model, load, plain, with_c, states, h, theta, held_too, first, steps, maxima, when, state):
     """:func:`lockstep_for` over ``projected``'s step (scheme 5.1), cached."""
-    return _projected_lockstep(model, load, plain, with_c, states, h, theta, first, steps, maxima, when, state)
+    return _projected_lockstep(model, load, plain, with_c, states, h, theta, held_too, first, steps, maxima, when,
+                               state)
 
 
 @kernel
-def lockstep_symplectic(model, load, plain, with_c, states, h, theta, first, steps, maxima, when, state):
+def lockstep_symplectic(model, load, plain, with_c, states, h, theta, held_too, first, steps, maxima, when, state):
     """:func:`lockstep_for` over ``symplectic``'s step (x with the old velocity, v with the new forces), cached."""
-    return _symplectic_lockstep(model, load, plain, with_c, states, h, theta, first, steps, maxima, when, state)
+    return _symplectic_lockstep(model, load, plain, with_c, states, h, theta, held_too, first, steps, maxima, when,
+                                state)
 
 
 LOCKSTEPS = {"projected": lockstep_projected, "symplectic": lockstep_symplectic}
