@@ -341,8 +341,8 @@ def figures(folder: str):
             label = f" ({letter})" if len(ns) > 1 else ""
             ax.set(xlabel="x (m)", ylabel="F - m x'' (N)", title=f"n = {n}{label}")
             ax.grid(alpha=0.3)
-        fig.suptitle(f"{name.replace('figure', 'Figure ')}: {{x(t), F(t) - m x''(t)}}, 400 <= t <= 500, "
-                     f"h = {LOOP_STEP:g} (N = 10^6)")
+        fig.suptitle(f"{name.replace('figure', 'Figure ')} of the paper: {{x(t), F(t) - m x''(t)}}\n"
+                     f"{LOOP_WINDOW[0]:g} <= t <= {LOOP_WINDOW[1]:g}, scheme (5.1), h = {LOOP_STEP:g} (N = 10^6)")
         path = os.path.join(folder, f"{name}.png")
         fig.savefig(path, dpi=110)
         plt.close(fig)
