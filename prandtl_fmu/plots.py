@@ -29,9 +29,15 @@ def plot_result(result, path: str, note: str = "") -> None:
     save_figure(fig, path)
 
 
+# a network's x(t): at most NODES_DRAWN nodes, evenly picked; up to LEGEND_NODES (the colours of matplotlib's
+# default cycle) named in a legend, beyond that coloured by a colour map with its colour bar (no colour twice)
+NODES_DRAWN = 40
+LEGEND_NODES = 10
+
+
 def plot_network(result, path: str) -> None:
-    """Write a figure of a network run: the loop F against the load node's displacement, and every node's
-    x(t) (at most 12 nodes drawn, evenly picked, for a long chain)."""
+    """Write a figure of a network run: the loop F against the load node's displacement, and the nodes' x(t)
+    (:data:`NODES_DRAWN` at most, evenly picked, for a long chain)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -46,14 +52,24 @@ def plot_network(result, path: str) -> None:
     loop.set_ylabel("F (N)")
     loop.set_title(f"load against the displacement of {load}")
     loop.grid(alpha=0.3)
-    picked = np.unique(np.linspace(0, network.n - 1, min(network.n, 12)).round().astype(int))
-    for j in picked:
-        history.plot(result.time, result.x[:, j], lw=0.8, label=network.nodes[j])
+    picked = np.unique(np.linspace(0, network.n - 1, min(network.n, NODES_DRAWN)).round().astype(int))
+    if len(picked) <= LEGEND_NODES:  # few curves: each its colour of the default cycle, named in a legend
+        for j in picked:
+            history.plot(result.time, result.x[:, j], lw=0.8, label=network.nodes[j])
+        history.legend(fontsize=7, ncol=2)
+    else:  # more nodes than the cycle has colours: a colour map by the node's place, and its colour bar
+        colours = plt.get_cmap("viridis")
+        scale = matplotlib.colors.Normalize(0, network.n - 1)
+        for j in picked:
+            history.plot(result.time, result.x[:, j], lw=0.8, color=colours(scale(j)))
+        bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=scale, cmap=colours), ax=history, pad=0.01)
+        ticks = np.unique(np.linspace(0, network.n - 1, min(network.n, 6)).round().astype(int))
+        bar.set_ticks(ticks, labels=[network.nodes[j] for j in ticks])
+        bar.set_label(f"node ({len(picked)} of {network.n} drawn)" if len(picked) < network.n else "node")
     history.set_xlabel("t (s)")
     history.set_ylabel("x (m)")
     history.set_title("displacements")
     history.grid(alpha=0.3)
-    history.legend(fontsize=7, ncol=2)
     fig.suptitle(f"{result.scene.name}: network of {network.n} nodes, stepper {result.stepper}, "
                  f"h = {result.scene.solver.step:g} s")
     save_figure(fig, path)
