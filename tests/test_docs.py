@@ -23,6 +23,7 @@ import re
 import subprocess
 import sys
 import textwrap
+import urllib.parse
 from dataclasses import dataclass
 from typing import Optional
 
@@ -90,6 +91,25 @@ def test_the_readme_is_a_landing_page_of_at_most_10_kb():
     assert README.stat().st_size <= 10_240
     first = blocks(README)[0]
     assert first.language == "bash" and first.text == TWO_COMMANDS
+
+
+def test_the_pages_read_as_a_site():
+    """The site's text speaks to its reader, not to the project's history or its files: no "Back to the
+    README" (the site has its navigation), no "issue N" (a reader has no tracker; say what was done), and a
+    link to a page is named by the page's subject, not its file name ("[scene-format.md](scene-format.md)").
+    Generated reports under docs/bench are left out: their tables say which run made them."""
+    found = []
+    for page in pages():
+        if page.parent.name == "bench":
+            continue
+        text = page.read_text(encoding="utf-8")
+        for pattern, why in ((r"Back to the \[?README", "a way back the navigation gives"),
+                             (r"\b[Ii]ssues? \d+", "a tracker's number"),
+                             (r"\[[^\]`]*\.md(#[^\]]*)?\]\(", "a link named by its file")):
+            for match in re.finditer(pattern, text):
+                line = text.count("\n", 0, match.start()) + 1
+                found.append(f"{page.relative_to(ROOT)}:{line}: {why}: {match.group(0)}")
+    assert found == [], "\n".join(found)
 
 
 def test_every_block_has_a_language_and_the_skipped_ones_a_reason():
@@ -173,12 +193,25 @@ def test_the_site_builds_with_no_warning(tmp_path):
     assert done.returncode == 0, done.stdout[-5000:] + done.stderr[-5000:]
     assert "WARNING" not in done.stderr
     site = tmp_path / "site"
-    for page in ("index.html", "scene-reference/index.html", "fmu-variables/index.html", "api/index.html",
-                 "steppers/index.html"):
+    for page in ("index.html", "scene-reference.html", "fmu-variables.html", "api.html", "steppers.html"):
         assert (site / page).is_file(), page
-    reference = (site / "scene-reference" / "index.html").read_text(encoding="utf-8")
+    reference = (site / "scene-reference.html").read_text(encoding="utf-8")
     assert "stribeck_velocity" in reference and "network.branch" in reference
-    assert "noise_seed" in (site / "fmu-variables" / "index.html").read_text(encoding="utf-8")
+    assert "noise_seed" in (site / "fmu-variables.html").read_text(encoding="utf-8")
+    # opened from disk (file://), every relative link and image of every page opens a file: no folder URL
+    # (a browser shows a folder listing there) and no link to a page that is not built. The 404 page is the
+    # server's, its links absolute by design.
+    broken = {}
+    for page in site.rglob("*.html"):
+        if page.name == "404.html":
+            continue
+        for target in re.findall(r'(?:href|src)="([^"]+)"', page.read_text(encoding="utf-8", errors="replace")):
+            if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:|^#|^//", target):
+                continue  # another site, a mailto:, an anchor of the page itself
+            path = urllib.parse.unquote(target.split("#")[0].split("?")[0])
+            if path and not (page.parent / path).resolve().is_file():
+                broken.setdefault(str(page.relative_to(site)), []).append(target)
+    assert broken == {}, broken
 
 
 # What runs a page's blocks in order, in a child process: Python blocks in one namespace, bash blocks by bash.
