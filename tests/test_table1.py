@@ -23,14 +23,14 @@ def _dense_scheme_measures(m, k0, k, eta, u0, force, h, steps):
         a = (force(t) - k0 * x - k @ u) / m
         return x + dt * v, v + dt * a, np.clip(u + dt * v, -eta, eta)
 
-    def measures(dx, dv, du):
+    def measures(dx, dv, du, lead):
         dw = dx - du
         return dict(x=abs(dx), v=abs(dv), u_max=np.abs(du).max(), w_max=np.abs(dw).max(),
                     l2=math.sqrt(dx * dx + dv * dv + du @ du), l2_u=math.sqrt(du @ du),
                     l2_energy=math.sqrt(k0 * dx * dx + m * dv * dv + k @ (du * du)),
                     l2_mean=math.sqrt(dx * dx + dv * dv + du @ du / len(du)),
                     l2_slider=math.sqrt(dx * dx + dv * dv + dw @ dw), l2_xv=math.sqrt(dx * dx + dv * dv),
-                    l2_vu=math.sqrt(dv * dv + du @ du))
+                    l2_vu=math.sqrt(dv * dv + du @ du), x_new=abs(dx + lead), x_trap=abs(dx + lead / 2))
 
     maxima = {kind: dict.fromkeys(MEASURES, 0.0) for kind in KINDS}
 
@@ -45,10 +45,12 @@ def _dense_scheme_measures(m, k0, k, eta, u0, force, h, steps):
         old = coarse
         coarse = step(p * h, *coarse, h)
         fine = step(2 * p * half, *fine, half)
-        keep("linear", measures(*(0.5 * (o + c) - f for o, c, f in zip(old, coarse, fine))))
-        keep("held", measures(*(o - f for o, f in zip(old, fine))))
+        # x_new, x_trap: x + h v, x + h v / 2 of each run (its own h)
+        keep("linear", measures(*(0.5 * (o + c) - f for o, c, f in zip(old, coarse, fine)),
+                                h * (old[1] + coarse[1]) / 2 - half * fine[1]))
+        keep("held", measures(*(o - f for o, f in zip(old, fine)), h * old[1] - half * fine[1]))
         fine = step((2 * p + 1) * half, *fine, half)
-        keep("coarse", measures(*(c - f for c, f in zip(coarse, fine))))
+        keep("coarse", measures(*(c - f for c, f in zip(coarse, fine)), h * coarse[1] - half * fine[1]))
     return maxima
 
 
@@ -91,7 +93,7 @@ def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):
     params, _ = stack.prepare(k, eta, u0)
     states = np.zeros((3, stack.HEADER + stack.ROW * stack.capacity(params)))
     dense = np.empty((3, n))
-    xs, vs = np.empty(3), rng.normal(size=3)
+    xs, vs, hs = np.empty(3), rng.normal(size=3), rng.uniform(0.1, 1.0, 3)
     for s in range(3):
         states[s] = stack.fresh_state(params, 0.0)
         swings = rng.uniform(0.5, 1.0, 12) * np.linspace(2.5, 0.1, 12) * (-1.0) ** np.arange(12)
@@ -104,7 +106,7 @@ def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):
     for _ in range(5):
         weights = rng.normal(size=3)
         out = np.empty(len(MEASURES))
-        assert difference(params, plain_sums(params), bool(spread), states, xs, vs, weights, m, k0, out)
+        assert difference(params, plain_sums(params), bool(spread), states, xs, vs, hs, weights, m, k0, out)
         dx, dv, du = weights @ xs, weights @ vs, weights @ dense
         dw = dx - du
         expected = dict(x=abs(dx), v=abs(dv), u_max=np.abs(du).max(), w_max=np.abs(dw).max(),
@@ -112,7 +114,8 @@ def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):
                         l2_energy=math.sqrt(k0 * dx * dx + m * dv * dv + k @ (du * du)),
                         l2_mean=math.sqrt(dx * dx + dv * dv + du @ du / n),
                         l2_slider=math.sqrt(dx * dx + dv * dv + dw @ dw), l2_xv=math.sqrt(dx * dx + dv * dv),
-                        l2_vu=math.sqrt(dv * dv + du @ du))
+                        l2_vu=math.sqrt(dv * dv + du @ du), x_new=abs(dx + weights @ (hs * vs)),
+                        x_trap=abs(dx + weights @ (hs * vs) / 2))
         for j, name in enumerate(MEASURES):
             assert out[j] == pytest.approx(expected[name], rel=1e-10, abs=1e-13), name
 

@@ -92,6 +92,8 @@ NORMS = {
     ("inf", "u"): ("u_max",),                       # the elongations only
     ("inf", "vu"): ("v", "u_max"),                  # (y, u): f's first component is 0 in (7.8)-(7.11) as printed
     ("inf", "slider"): ("x", "v", "w_max"),         # (x, y, w) with the sliders' displacements w_i = x - u_i
+    ("inf", "xnew"): ("x_new", "v", "u_max"),     # x^{p+1} = x^p + h y^{p+1} (same y, u: k0 = 0)
+    ("inf", "xtrap"): ("x_trap", "v", "u_max"),   # x^{p+1} = x^p + h (y^p + y^{p+1}) / 2
     ("inf", "x"): ("x",),
     ("inf", "v"): ("v",),
     ("2", "plain"): ("l2",),                        # l^2 over (x, y, u_1..u_n): the paper's definition

@@ -17,7 +17,10 @@ subtract large nearly equal terms) is summed branch by branch; so is any cell wh
 differ (c_i has no structure in i).
 
 Per node, ``MEASURES`` quantities of the difference (dx, dv, du, dw with w_i = x - u_i the slider displacement,
-eq. 7.4): the components the norms of the convention search (``bench/table1.py``) are built from. Their maxima
+eq. 7.4): the components the norms of the convention search (``bench/table1.py``) are built from. Two of them
+are the displacement other schemes would give from the same (y, u) (with k0 = 0, x does not act back on them):
+x^{p+1} = x^p + h y^{p+1} sums to x^p + h y^p (``x_new``, from y^0 = 0), the trapezoid x^{p+1} = x^p + h (y^p +
+y^{p+1}) / 2 to x^p + h y^p / 2 (``x_trap``). Their maxima
 over the nodes are kept for three kinds of node (``KINDS``): the coarse nodes, the fine nodes in between against
 the coarse run's linear interpolant, and the same fine nodes against the coarse run held constant over its step.
 """
@@ -30,8 +33,9 @@ from . import stack
 SHORT = 64  # a cell of at most this many branches is summed branch by branch
 
 # what is measured of the difference at a node (columns of ``maxima``)
-DX, DV, U_MAX, W_MAX, L2, L2_U, L2_ENERGY, L2_MEAN, L2_SLIDER, L2_XV, L2_VU = range(11)
-MEASURES = ("x", "v", "u_max", "w_max", "l2", "l2_u", "l2_energy", "l2_mean", "l2_slider", "l2_xv", "l2_vu")
+DX, DV, U_MAX, W_MAX, L2, L2_U, L2_ENERGY, L2_MEAN, L2_SLIDER, L2_XV, L2_VU, X_NEW, X_TRAP = range(13)
+MEASURES = ("x", "v", "u_max", "w_max", "l2", "l2_u", "l2_energy", "l2_mean", "l2_slider", "l2_xv", "l2_vu",
+            "x_new", "x_trap")
 COUNT = len(MEASURES)
 # the nodes (rows of ``maxima``): coarse nodes; fine nodes against the linear interpolant; against the held value
 COARSE, LINEAR, HELD = range(3)
@@ -99,16 +103,17 @@ def _advance(states, s, cursor, ends, coef, x):
 
 
 @kernel
-def difference(params, plain, with_c, states, xs, vs, weights, m, k0, out):
+def difference(params, plain, with_c, states, xs, vs, hs, weights, m, k0, out):
     """The measures (``MEASURES``) of the weighted sum of the profiles ``states`` (3, L), at displacements ``xs``
-    and velocities ``vs`` (3,), with ``weights`` (3,), into ``out``. The merged cells cost O(depth of the stacks).
+    and velocities ``vs`` (3,) of runs with steps ``hs`` (3,), with ``weights`` (3,), into ``out``. The merged
+    cells cost O(depth of the stacks).
     Returns False if the pieces do not tile the branches (then ``out`` holds NaN)."""
-    return _difference(params, plain, with_c, states, xs, vs, weights, m, k0, out, np.empty(3, dtype=np.int64),
-                       np.empty(3), np.zeros((3, 3)))
+    return _difference(params, plain, with_c, states, xs, vs, hs, weights, m, k0, out,
+                       np.empty(3, dtype=np.int64), np.empty(3), np.zeros((3, 3)))
 
 
 @kernel
-def _difference(params, plain, with_c, states, xs, vs, weights, m, k0, out, cursor, ends, coef):
+def _difference(params, plain, with_c, states, xs, vs, hs, weights, m, k0, out, cursor, ends, coef):
     """:func:`difference` with its scratch arrays given (the lockstep allocates them once, not per node)."""
     n = params.shape[1] - 1
     for s in range(3):
@@ -161,6 +166,9 @@ def _difference(params, plain, with_c, states, xs, vs, weights, m, k0, out, curs
     out[L2_SLIDER] = np.sqrt(dx * dx + dv * dv + w_sq)
     out[L2_XV] = np.sqrt(dx * dx + dv * dv)
     out[L2_VU] = np.sqrt(dv * dv + u_sq)
+    lead = weights[0] * hs[0] * vs[0] + weights[1] * hs[1] * vs[1] + weights[2] * hs[2] * vs[2]
+    out[X_NEW] = abs(dx + lead)
+    out[X_TRAP] = abs(dx + 0.5 * lead)
     return True
 
 
@@ -199,6 +207,7 @@ def lockstep_for(step):
         coef = np.zeros((3, 3))
         xs = np.empty(3)
         vs = np.empty(3)
+        hs = np.array([h, half, h])
         linear = np.array([0.5, -1.0, 0.5])
         held = np.array([0.0, -1.0, 1.0])
         nodes = np.array([1.0, -1.0, 0.0])
@@ -212,15 +221,15 @@ def lockstep_for(step):
             xs[NEW], xs[FINE], xs[OLD] = xc, xf, xo
             vs[NEW], vs[FINE], vs[OLD] = vc, vf, vo
             t_mid = (2 * p + 1) * half
-            ok = _difference(params, plain, with_c, states, xs, vs, linear, m, k0_value, values, cursor, ends, coef)
+            ok = _difference(params, plain, with_c, states, xs, vs, hs, linear, m, k0_value, values, cursor, ends, coef)
             _keep(maxima, when, LINEAR, values, t_mid)
             if held_too:
-                ok = _difference(params, plain, with_c, states, xs, vs, held, m, k0_value, values, cursor, ends,
+                ok = _difference(params, plain, with_c, states, xs, vs, hs, held, m, k0_value, values, cursor, ends,
                                  coef) and ok
                 _keep(maxima, when, HELD, values, t_mid)
             xf, vf, sf = step(model, load, (2 * p + 1 + theta) * half, half, xf, vf, sf, states[FINE], None)
             xs[FINE], vs[FINE] = xf, vf
-            ok = _difference(params, plain, with_c, states, xs, vs, nodes, m, k0_value, values, cursor, ends,
+            ok = _difference(params, plain, with_c, states, xs, vs, hs, nodes, m, k0_value, values, cursor, ends,
                              coef) and ok
             _keep(maxima, when, COARSE, values, (p + 1) * h)
             state[0], state[1], state[2], state[3] = xc, vc, xf, vf
