@@ -83,6 +83,10 @@ PROTOCOLS = {
     "search-theta1": Protocol("search-theta1", 1e-4, 1e-2, 11, 500.0, PAPER_NS, theta=1.0),
     "search-theta05": Protocol("search-theta05", 1e-4, 1e-2, 11, 500.0, PAPER_NS, theta=0.5),
     "search-symplectic": Protocol("search-symplectic", 1e-4, 1e-2, 11, 500.0, PAPER_NS, "symplectic"),
+    # the horizon's candidates: the max over [0, T] with a shorter T (n = 3 and 10 reach their largest error
+    # in the first period, n >= 100 later)
+    "search-T8": Protocol("search-T8", 1e-4, 1e-2, 11, 8.0, PAPER_NS),
+    "search-T50": Protocol("search-T50", 1e-4, 1e-2, 11, 50.0, PAPER_NS),
     "quick": Protocol("quick", 1e-3, 1e-2, 5, 20.0, (3, 10, 100)),
 }
 

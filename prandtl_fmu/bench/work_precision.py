@@ -20,8 +20,10 @@ Methods, each over a range of steps or tolerances:
   (n <= 100 only: a dense LSODA Jacobian of size 1502^2 is out of reach).
 
 Then the paper's Table 1: order alpha and constant C of eps(h) =
-|u_h - u_{h/2}| (max norm and Euclidean norm over (x, v, u_1..u_n), sup over
-the output grid) for n = 3, 10, 100, 700, 1500, fitted over h = 1e-2 / 2^j.
+|u_h - u_{h/2}| (max norm and Euclidean norm over (x, v, u_1..u_n), max over
+every node of the two runs, in lockstep: ``table1.py``) for n = 3, 10, 100,
+700, 1500, fitted over h = 1e-2 / 2^j, j = 0..6 (each run at h and h/2). The
+paper's own protocol: ``bench --table1 --protocol paper``.
 
 Writes DIR/work_precision.csv (stepper,n,h,error,seconds,...), DIR/table1.csv,
 DIR/work_precision.png, DIR/error_vs_h.png and DIR/report.md (the tables).
@@ -196,31 +198,31 @@ def scipy_rows(scene, reference, quick, bar):
 
 
 def table_one(quick, bar):
-    """The paper's Table 1 regenerated: alpha and C for q = inf and 2."""
+    """The paper's Table 1 on a short h grid: alpha and C for q = inf and 2.
+
+    eps(h) = max over every node of |u_h - u_{h/2}|_q over (x, y, u_1..u_n), the run at h and the one at h/2 in
+    lockstep on the memory stack (``table1.lockstep_run``: the paper's C^0 norm of the interpolants), fitted as
+    log eps = alpha log h + log(2 C). The paper's own h grid (100 values down to 1e-6, hours of runs) and the
+    search for the convention of its constants: ``bench --table1`` (``table1.py``, docs/numerics.md)."""
+    from .table1 import PAPER, eps_of, fit, FACTORS, lockstep_run
+
     ns = [3, 10, 100] if quick else [3, 10, 100, 700, 1500]
     stop = 20.0 if quick else 500.0
     levels = 5 if quick else 7
-    hs = [1e-2 / 2**j for j in range(levels + 1)]
+    hs = [1e-2 / 2**j for j in range(levels)]
     rows = []
     for n in ns:
         scene = paper_scene(n, stop)
-        previous = None
         eps = {"inf": [], "2": []}
         for h in hs:
-            result = simulate(scene.with_solver(step=h), "projected", states=True)
-            state = np.column_stack([result.x, result.v, result.u])
-            if previous is not None:
-                difference = previous - state
-                eps["inf"].append(np.abs(difference).max())
-                eps["2"].append(np.linalg.norm(difference, axis=1).max())
-            previous = state
+            record = lockstep_run(scene, h, held=False)
+            for q in eps:
+                eps[q].append(eps_of(record, q, PAPER["norm"], PAPER["time"]))
             bar.update(1)
         for q in ("inf", "2"):
-            # log eps(h) = alpha log h + log(2 C)
-            slope, intercept = np.polyfit(np.log(hs[:-1]), np.log(eps[q]), 1)
-            r = np.corrcoef(np.log(hs[:-1]), np.log(eps[q]))[0, 1]
+            alpha, intercept, r = fit(hs, eps[q])
             paper = PAPER_TABLE_1.get((q, n), (math.nan, math.nan))
-            rows.append(dict(q=q, n=n, alpha=slope, C=math.exp(intercept) / 2, r=r,
+            rows.append(dict(q=q, n=n, alpha=alpha, C=FACTORS[PAPER["factor"]](intercept, alpha), r=r,
                              paper_alpha=paper[0], paper_C=paper[1], T=stop, h_min=hs[-1]))
     return rows
 
@@ -348,7 +350,7 @@ def run(folder: str, quick: bool = False, progress=None) -> str:
     sweeps = sum(len(hs) for hs in _sweeps(quick).values())
     fmu_runs = 4 if quick else 8
     scipy_runs = 2 if quick else 12
-    table_runs = (3 * 6) if quick else (5 * 8)
+    table_runs = (3 * 5) if quick else (5 * 7)
     total = len(cases) * (1 + sweeps + fmu_runs) + sum(scipy_runs for n, _ in cases if n <= 100) + table_runs
     bar = _progress_bar(progress, total=total, label="bench")
     rows = []
