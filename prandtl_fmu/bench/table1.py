@@ -307,6 +307,41 @@ def candidate_rows(records, protocol: Protocol):
     return rows
 
 
+def merge(folders, out: str):
+    """Gather the candidate tables of several protocol folders into ``out``/table1_candidates.csv (one row per
+    convention, q and n, with a ``protocol`` column) and ``out``/table1_conventions.csv (one row per convention
+    and q: its C for each n beside the printed ones, its worst ratio to them), sorted by that ratio. Returns the
+    convention rows."""
+    rows = []
+    for folder in folders:
+        with open(os.path.join(folder, "runs", "protocol.json")) as fh:
+            name = json.load(fh)["name"]
+        with open(os.path.join(folder, f"table1_candidates_{name}.csv"), newline="") as fh:
+            for row in csv.DictReader(fh):
+                row["protocol"] = name
+                rows.append(row)
+    _write_csv(os.path.join(out, "table1_candidates.csv"), rows,
+               ("protocol", "norm", "time", "factor", "h_range", "q", "n", "alpha", "C", "r", "paper_C", "ratio"))
+    groups = {}
+    for row in rows:
+        key = (row["protocol"], row["norm"], row["time"], row["factor"], row["h_range"], row["q"])
+        groups.setdefault(key, {})[int(row["n"])] = row
+    conventions = []
+    for key, by_n in groups.items():
+        convention = dict(zip(("protocol", "norm", "time", "factor", "h_range", "q"), key))
+        for n in PAPER_NS:
+            convention[f"C_{n}"] = float(by_n[n]["C"]) if n in by_n else math.nan
+            convention[f"paper_C_{n}"] = PAPER_TABLE_1[(key[5], n)][1]
+        ratios = [float(row["ratio"]) for row in by_n.values() if math.isfinite(float(row["ratio"]))]
+        convention["worst_ratio"] = math.exp(max((abs(math.log(ratio)) for ratio in ratios), default=math.nan))
+        convention["alpha_max"] = max(float(row["alpha"]) for row in by_n.values())
+        conventions.append(convention)
+    conventions.sort(key=lambda c: (c["q"], c["worst_ratio"]))
+    _write_csv(os.path.join(out, "table1_conventions.csv"), conventions,
+               ("q", "worst_ratio", "protocol", "norm", "time", "factor", "h_range"))
+    return conventions
+
+
 def _write_csv(path, rows, first):
     fields = list(first) + [f for f in (rows[0] if rows else {}) if f not in first]
     partial = path + ".partial"
