@@ -17,8 +17,16 @@ def stock_loader_loaded():
     STOCK_LOADER_LOADED = True
 
 
+def driven_by_f(types: dict, start) -> dict:
+    """The start values of an instance the test drives by F: ``scene_load`` false unless ``start`` sets it (it
+    starts true when the scene names a load, issue 44.3), so that the force is F alone, as the library's element is
+    driven by ``advance(size, force)``."""
+    return {**({"scene_load": False} if "scene_load" in types else {}), **(start or {})}
+
+
 class Slave:
-    """One FMU2Slave instance with name-based access and a list of logged messages."""
+    """One FMU2Slave instance with name-based access and a list of logged messages (the force F alone unless
+    ``start_values`` sets scene_load: :func:`driven_by_f`)."""
 
     def __init__(self, fmu_path, unzipdir=None, name="element", start_values=None, start_time=0.0):
         self.md = read_model_description(fmu_path)
@@ -40,7 +48,7 @@ class Slave:
         self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
         self.fmu.setupExperiment(startTime=start_time)
         self.fmu.enterInitializationMode()
-        for key, value in (start_values or {}).items():
+        for key, value in driven_by_f(self.types, start_values).items():
             self.set(key, value)
         self.fmu.exitInitializationMode()
         self.time = start_time
@@ -75,8 +83,8 @@ OK, DISCARD, ERROR = 0, 2, 3  # FMI's statuses (2.0 and 3.0)
 
 class NativeInstance:
     """One instance of a native FMU (FMI 2.0 or 3.0) through FMPy, its messages kept; ``start``: values set in
-    initialization mode (``refused``: the status of a refused exit of initialization mode, else None);
-    ``start_time``: the experiment's."""
+    initialization mode, scene_load false unless it sets it (:func:`driven_by_f`; ``refused``: the status of a
+    refused exit of initialization mode, else None); ``start_time``: the experiment's."""
 
     def __init__(self, fmu, name="element", start=None, start_time=0.0):
         from fmpy import extract, read_model_description
@@ -114,7 +122,7 @@ class NativeInstance:
             self.fmu.enterInitializationMode()
         else:
             self.fmu.enterInitializationMode(startTime=start_time)
-        for key, value in (start or {}).items():
+        for key, value in driven_by_f(self.types, start).items():
             self.set(key, value)
         from fmpy.fmi1 import FMICallException
 

@@ -70,7 +70,7 @@ def run_host(host: Path, fmu: Extracted, commands, logging: bool = False, env=No
     written = {}  # the command as the host prints it -> as the caller wrote it
     for command in commands:
         parts = command.split(":")
-        if parts[0] in ("setr", "getr") and not parts[1].isdigit():
+        if parts[0] in ("setr", "getr", "setb") and not parts[1].isdigit():
             parts[1] = str(fmu.vr[parts[1]])
         if parts[0] == "timeit":
             parts = parts[:4] + [str(fmu.vr[name]) if not name.isdigit() else name for name in parts[4:]]
@@ -214,13 +214,13 @@ class Run:
 
 def run_trust(host: Path, fmu: Native, commands, logging: bool = False, timeout: float = 120) -> Run:
     """Run the trust host on ``fmu``; commands may name variables (``setr:m:-1``, ``getr:x``, ``sets:stepper:NULL``,
-    ``seti:noise_seed:7``, ``nulla:stepper``). The process must end by itself: a crash or a sanitizer's report is a
+    ``seti:noise_seed:7``, ``setb:scene_load:0``, ``nulla:stepper``). The process must end by itself: a crash or a sanitizer's report is a
     failure the caller asserts (``run.code == 0 and run.ended``)."""
     argv = [str(host), str(fmu.library), fmu.guid, "1" if logging else "0"]
     written = {}  # the command as the host prints it -> as the caller wrote it
     for command in commands:
         parts = command.split(":")
-        named = parts[0] in ("setr", "getr", "geta", "sets", "seti", "geti", "nulla")
+        named = parts[0] in ("setr", "getr", "geta", "sets", "seti", "geti", "setb", "nulla")
         if named and len(parts) > 1 and parts[1] in fmu.vr:
             parts[1] = str(fmu.vr[parts[1]])
         argv.append(":".join(parts))

@@ -163,6 +163,8 @@ class Slave3:
         self.slave.instantiate(loggingOn=False, logMessage=lambda env, status, category, message:
                                self.messages.append(message.decode()))
         self.slave.enterInitializationMode()
+        if "scene_load" in self.vr:  # F alone, as the library's element is driven (it starts true with a load)
+            self.slave.setBoolean([self.vr["scene_load"]], [False])
         for variable, value in (start or {}).items():
             self.slave.setFloat64([self.vr[variable]], [value])
         self.slave.exitInitializationMode()

@@ -240,6 +240,33 @@ def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):
         np.testing.assert_array_equal(result[column], getattr(library, column))
 
 
+@pytest.mark.parametrize("fmi", [2, pytest.param(3, marks=pytest.mark.slow)])
+def test_a_fresh_fmu_in_fmpy_runs_its_scene_and_says_so(fmus, fmus3, fmi):
+    """Issue 44.3: ``fmpy simulate`` of a fresh paper-section-8 FMU (no start value, no input) is the library's
+    ``simulate`` of the scene, bit for bit at the output grid, not a flat line: scene_load starts true when the
+    scene names a load. Leaving initialization with it true logs the scene_load notice as a warning (category
+    logStatusWarning) with logging off, and the call returns OK."""
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu.fmu.description import scene_load_notice
+
+    fmu, scene_path = (fmus if fmi == 2 else fmus3)["paper"]
+    scene = load_scene(scene_path)
+    library = simulate(scene)
+    logged = []
+
+    def logger(*arguments):  # FMI 2.0: env, instance, status, category, message; FMI 3.0: env, status, ...
+        logged.append((arguments[-3], arguments[-2].decode(), arguments[-1].decode()))
+
+    result = simulate_fmu(str(fmu), output_interval=scene.solver.output_interval, output=["x", "v", "reaction"],
+                          logger=logger, debug_logging=False)  # (FMPy's own default grid is 1/500 of the run)
+    assert result["time"][-1] == pytest.approx(scene.solver.stop_time)
+    assert np.abs(result["x"]).max() > 0.01  # not a flat line
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column), err_msg=column)
+    assert logged == [(1, "logStatusWarning", scene_load_notice(scene, "the element"))]
+
+
 def test_the_binary_holds_no_python(fmus, tmp_path):
     fmu, _ = fmus["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
@@ -268,7 +295,7 @@ def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tm
     fmu, scene_path = fmus["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
     rng = np.random.default_rng(3)
-    commands, t = ["setup", "enter", "exit"], 0.0
+    commands, t = ["setup", "enter", "setb:scene_load:0", "exit"], 0.0  # F alone, as the element is driven
     element = Element(load_scene(scene_path))
     reference = []
     for _ in range(25):
@@ -467,6 +494,7 @@ def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
                       modelIdentifier=description.coSimulation.modelIdentifier)
     slave.instantiate(loggingOn=False, logMessage=log)
     slave.enterInitializationMode()
+    slave.setBoolean([vr["scene_load"]], [False])  # F alone, as the element is driven
     slave.exitInitializationMode()
     element = Element(load_scene(scene_path))
     rng = np.random.default_rng(11)

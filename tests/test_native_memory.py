@@ -375,7 +375,7 @@ def test_the_memory_binary_runs_clean_in_a_sanitized_c_host_and_is_the_library(s
     host, fmu, path = sanitized
     element = Element(load_scene(path))
     element.set_coefficients(delay_tau=0.031)
-    commands, expected, t = ["setup:0", "setr:delay_tau:0.031", "enter", "exit"], [], 0.0
+    commands, expected, t = ["setup:0", "setr:delay_tau:0.031", "enter", "setb:scene_load:0", "exit"], [], 0.0
     blob = tmp_path / "state.bin"
     for i, (size, force) in enumerate(uneven_steps(21, 16)):
         if i == 6:

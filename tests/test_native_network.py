@@ -244,8 +244,10 @@ class Slave2:
         self.fmu.instantiate(callbacks=self.callbacks, loggingOn=False)
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
+        from .fmu_tools import driven_by_f
+
         types = {v.name: v.type for v in md.modelVariables}
-        for name, value in (start or {}).items():
+        for name, value in driven_by_f(types, start).items():  # F alone unless start sets scene_load
             setter = {"String": self.fmu.setString, "Boolean": self.fmu.setBoolean}.get(types[name],
                                                                                      self.fmu.setReal)
             setter([self.vr[name]], [value])
@@ -286,6 +288,8 @@ class Slave3:
                              modelIdentifier=md.coSimulation.modelIdentifier)
         self.fmu.instantiate(loggingOn=False, logMessage=log)
         self.fmu.enterInitializationMode()
+        if "scene_load" in self.vr:  # F alone (driven_by_f)
+            self.fmu.setBoolean([self.vr["scene_load"]], [False])
         self.fmu.exitInitializationMode()
 
     def set(self, names, values):

@@ -12,6 +12,7 @@ import dataclasses
 import os
 import shutil
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,7 +134,9 @@ step = 0.005
 stop_time = 3.0
 output_interval = 0.1
 """
-TEXTS = {"element": ELEMENT, "quiet": QUIET, "network": NETWORK, "massless": MASSLESS}
+SCENES = Path(__file__).resolve().parent.parent / "scenes"
+TEXTS = {"element": ELEMENT, "quiet": QUIET, "network": NETWORK, "massless": MASSLESS,
+         "white-noise": (SCENES / "white-noise.toml").read_text()}
 ENERGY = ["work", "dissipated_sliders", "dissipated_damper", "energy_residual"]
 COLUMNS = {"element": ["x", "v", "reaction"] + ENERGY, "quiet": ["x", "v", "reaction"] + ENERGY,
            "massless": ["x", "v", "reaction"] + ENERGY, "network": ["x_a", "v_a", "x_b", "v_b", "reaction"]}
@@ -369,6 +372,37 @@ def test_rollback_and_split_steps_redraw_the_same_path(built, name, fmi):
         instance.close()
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_step_below_rounding_of_h_changes_nothing_but_the_time(built, fmi):
+    """Issue 44.2: OMSimulator's clock (2000 x 0.1 s) ends 7.1e-12 s short and steps that remainder; a doStep of
+    7e-12 s (below 1e-9 h, the rounding docs/fmus.md drops) on the white-noise scene changes x, v and every output
+    not at all (its Brownian increment moved v by 2e-6), and the steps after it are the library's run, bit for
+    bit, and those of an instance that never took it."""
+    from fmpy import read_model_description
+
+    fmu, path = built["white-noise", fmi]
+    scene = load_scene(path).with_solver(stop_time=2.0)
+    short = 7e-12
+    assert short < 1e-9 * scene.solver.step
+    outputs = [v.name for v in read_model_description(fmu).modelVariables if v.causality == "output"]
+    assert {"x", "v", "reaction", "stiffness", "work"} <= set(outputs)
+    library = simulate(scene)
+    one, twin = Instance(fmu, name="short"), Instance(fmu, name="twin")
+    for instance in (one, twin):
+        for _ in range(10):
+            assert instance.step(0.1) == OK
+    before = [one.get(name) for name in outputs]
+    assert one.step(short) == OK
+    assert [one.get(name) for name in outputs] == before  # nothing moved: x, v, every output
+    for j in range(11, 21):
+        assert one.step(0.1) == OK and twin.step(0.1) == OK
+        assert [one.get(name) for name in outputs] == [twin.get(name) for name in outputs]
+        assert (one.get("x"), one.get("v")) == (library.x[j], library.v[j]), j
+    assert not [message for status, message in one.messages if status != OK]
+    for instance in (one, twin):
+        instance.close()
+
+
 def test_a_restored_state_carries_the_noise_settings(built):
     """The state holds noise_intensity, noise_seed and noise_unit (not what was drawn): restored into an instance
     whose settings differ, the next steps are those of the saved settings."""
@@ -580,7 +614,7 @@ def test_the_noisy_binary_runs_clean_in_a_sanitized_c_host_and_is_the_library(sa
     host, fmu, path = sanitized
     element = Element(load_scene(path))
     rng = np.random.default_rng(34)
-    commands, expected, t = ["setup:0", "enter", "exit"], [], 0.0
+    commands, expected, t = ["setup:0", "enter", "setb:scene_load:0", "exit"], [], 0.0  # F alone
     blob = tmp_path / "state.bin"
     for i in range(14):
         size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))

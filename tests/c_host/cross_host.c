@@ -1,7 +1,8 @@
 /* The host of the cross-platform tests (tests/test_platforms.py): built for the FMU's other platforms (mingw-w64 for
    win64 under wine, aarch64-linux-gnu-gcc for aarch64-linux under qemu-user), FMI 2.0 or 3.0 (-DFMI_VERSION=2|3).
 
-   cross_host LIBRARY TOKEN RESOURCE_URI STEPPER_VR STEPPER F_VR OUT_VR,OUT_VR,... [time:COUNT:H:F]
+   cross_host LIBRARY TOKEN RESOURCE_URI STEPPER_VR STEPPER F_VR OUT_VR,OUT_VR,... [noload:VR] [time:COUNT:H:F]
+   (noload:VR: the Boolean VR, scene_load, set false in initialization mode: the force is F alone)
 
    Instantiates, sets the stepper (a String parameter) in initialization mode, then, from standard input, one line
    "H F" per communication step (each double as the 16 hex digits of its IEEE bits, so that no printf or strtod of
@@ -108,7 +109,8 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
 int main(int argc, char** argv)
 {
     if (argc < 8) {
-        fprintf(stderr, "usage: cross_host LIBRARY TOKEN RESOURCE_URI STEPPER_VR STEPPER F_VR OUT_VRS [time:N:H:F]\n");
+        fprintf(stderr, "usage: cross_host LIBRARY TOKEN RESOURCE_URI STEPPER_VR STEPPER F_VR OUT_VRS [noload:VR] "
+                "[time:N:H:F]\n");
         return 2;
     }
     library = open_library(argv[1]);
@@ -125,6 +127,10 @@ int main(int argc, char** argv)
         outputs[count++] = (ValueReference)strtoul(rest, &rest, 10);
     }
     const char* stepper = argv[5];
+    int unloaded = argc > 8 && strncmp(argv[8], "noload:", 7) == 0; /* scene_load set false */
+    ValueReference load_vr = unloaded ? (ValueReference)strtoul(argv[8] + 7, NULL, 10) : 0;
+    char** more = argv + 8 + unloaded; /* the optional time:COUNT:H:F */
+    int n_more = argc - 8 - unloaded;
 #if FMI_VERSION == 3
     fmi3InstanceEnvironment none = NULL;
     fmi3Instance c = ((fmi3InstantiateCoSimulationTYPE*)symbol("fmi3InstantiateCoSimulation"))(
@@ -137,6 +143,9 @@ int main(int argc, char** argv)
                                                                                         fmi3False, 0.0),
           "enter");
     CHECK(((fmi3SetStringTYPE*)symbol("fmi3SetString"))(c, &stepper_vr, 1, &stepper, 1), "stepper");
+    fmi3Boolean no_load = fmi3False;
+    if (unloaded)
+        CHECK(((fmi3SetBooleanTYPE*)symbol("fmi3SetBoolean"))(c, &load_vr, 1, &no_load, 1), "scene_load");
     CHECK(((fmi3ExitInitializationModeTYPE*)symbol("fmi3ExitInitializationMode"))(c), "exit");
     fmi3SetFloat64TYPE* set_real = (fmi3SetFloat64TYPE*)symbol("fmi3SetFloat64");
     fmi3GetFloat64TYPE* get_real = (fmi3GetFloat64TYPE*)symbol("fmi3GetFloat64");
@@ -158,6 +167,9 @@ int main(int argc, char** argv)
           "setup");
     CHECK(((fmi2EnterInitializationModeTYPE*)symbol("fmi2EnterInitializationMode"))(c), "enter");
     CHECK(((fmi2SetStringTYPE*)symbol("fmi2SetString"))(c, &stepper_vr, 1, &stepper), "stepper");
+    fmi2Boolean no_load = fmi2False;
+    if (unloaded)
+        CHECK(((fmi2SetBooleanTYPE*)symbol("fmi2SetBoolean"))(c, &load_vr, 1, &no_load), "scene_load");
     CHECK(((fmi2ExitInitializationModeTYPE*)symbol("fmi2ExitInitializationMode"))(c), "exit");
     fmi2SetRealTYPE* set_real = (fmi2SetRealTYPE*)symbol("fmi2SetReal");
     fmi2GetRealTYPE* get_real = (fmi2GetRealTYPE*)symbol("fmi2GetReal");
@@ -167,8 +179,8 @@ int main(int argc, char** argv)
 #define STEP(t, h) do_step(c, (t), (h), fmi2True)
 #endif
     double t = 0.0;
-    if (argc > 8 && strncmp(argv[8], "time:", 5) == 0) {
-        char* rest = argv[8] + 5;
+    if (n_more > 0 && strncmp(more[0], "time:", 5) == 0) {
+        char* rest = more[0] + 5;
         long steps = strtol(rest, &rest, 10);
         double h = strtod(rest + 1, &rest);
         double force = strtod(rest + 1, &rest);

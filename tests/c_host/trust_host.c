@@ -11,7 +11,7 @@
    Commands: setup:START[:STOP] (FMI 2.0: fmi2SetupExperiment; FMI 3.0: the start and stop of enter)
              enter | exit | term | reset | free | cancel (fmi2CancelStep) | status (the last successful time)
              setr:VR:VALUE | getr:VR | geta:VR:N (FMI 3.0: N values of one variable, u) | sets:VR:TEXT|NULL
-             seti:VR:VALUE | geti:VR (an Integer; FMI 3.0: an Int32)
+             seti:VR:VALUE | geti:VR (an Integer; FMI 3.0: an Int32) | setb:VR:0|1 (a Boolean)
              step:T:H | save | restore | freestate | dump:PATH (the saved state serialized into PATH)
              load:PATH (PATH deserialized into the saved state) | poke:PATH (PATH's bytes over the saved state's
              memory) | debug:0|1
@@ -428,6 +428,18 @@ int main(int argc, char** argv)
             fmi2Integer values[1];
             values[0] = (fmi2Integer)value;
             status = F(SetInteger)(c, &vr, 1, values);
+#endif
+        } else if (strncmp(command, "setb:", 5) == 0) {
+            ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
+            int value = atoi(strchr(rest, ':') + 1) != 0;
+#if FMI_VERSION == 3
+            fmi3Boolean values[1];
+            values[0] = value ? fmi3True : fmi3False;
+            status = F(SetBoolean)(c, &vr, 1, values, 1);
+#else
+            fmi2Boolean values[1];
+            values[0] = value ? fmi2True : fmi2False;
+            status = F(SetBoolean)(c, &vr, 1, values);
 #endif
         } else if (strncmp(command, "geti:", 5) == 0) {
             ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);

@@ -81,6 +81,19 @@ def noise_lines(scene, connector: bool) -> list:
             *[f"static const char {name.upper()}_WORDS[] = {c_string(text)};" for name, text in words.items()]]
 
 
+def scene_load_lines(scene, where: str) -> list:
+    """scene.h's lines of ``scene_load`` (``description._scene_load_variable``): its start value (true when the
+    scene names a load; a connector has no such parameter: 0) and the warning an instance logs when it leaves
+    initialization with it true (``description.scene_load_notice``; ``where``: "the element", "the load's
+    node")."""
+    from .. import description
+
+    present = any(row.name == "scene_load" for row in description.variables(scene))
+    start = present and description.scene_load_start(scene)
+    return [f"#define SCENE_LOAD_START {int(start)} /* description.scene_load_start */",
+            f"static const char SCENE_LOAD_NOTICE[] = {c_string(description.scene_load_notice(scene, where))};"]
+
+
 def pack(out, description_text: str, scene, scene_bytes: bytes, identifier: str, folders, binaries) -> Path:
     """Write the native FMU ``out`` (in one rename: a failed build leaves no half-written FMU): its model
     description, the binary of each folder, its page (``documentation/index.html``, from the description), the

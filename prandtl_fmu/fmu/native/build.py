@@ -34,7 +34,7 @@ from pathlib import Path
 from . import kernels
 from . import platforms as targets
 from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
-                       pack, stubs)
+                       pack, scene_load_lines, stubs)
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
             "dissipated_friction", "energy_residual")
@@ -287,6 +287,7 @@ def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, array
         "double, int64_t, double, int64_t, double, int64_t*);",
         *memory_lines(scene),
         *noise_lines(scene, scene.causality == "displacement"),
+        *scene_load_lines(scene, "the element"),
         # the library's refusal of a white noise by each stepper (steppers' loop_for), NULL: it takes one
         "static const char* NOISE_REFUSAL[] = {" + ", ".join(
             [c_string(reason) if reason else "NULL" for reason in (kernels.noise_refusal(scene, name)

@@ -222,7 +222,9 @@ static int reset(Element* e, double force)
     return 1;
 }
 
-/* driver.split_duration */
+/* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
+ * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
+ * rounding, dropped */
 static void split_duration(double duration, double h, double* whole, double* rest)
 {
     double ratio = duration / h, nearest = nearbyint(ratio);
@@ -233,6 +235,8 @@ static void split_duration(double duration, double h, double* whole, double* res
     }
     *whole = floor(ratio);
     *rest = duration - *whole * h;
+    if (!(*rest >= 1e-9 * h))
+        *rest = 0.0;
 }
 
 static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first, double h, int64_t steps)
@@ -285,6 +289,8 @@ static const char* advance(Element* e, double duration, double force, int scene_
         return buffer;
     }
     split_duration(duration, h, &whole, &rest);
+    if (whole == 0 && rest == 0) /* below rounding of h: no step, the clock stays on its grid (Element.advance) */
+        return NULL;
     if (whole + (rest > 0) > ADVANCE_BUDGET) { /* Element.advance: ElementError, never run for days */
         snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
                  "steps of one advance: advance by shorter durations (communication steps) or with a larger step",
@@ -497,7 +503,7 @@ static void defaults(Instance* c)
     c->stepper_valid = 1;
     c->step = DEFAULT_STEP;
     c->F = 0.0;
-    c->scene_load = 0;
+    c->scene_load = SCENE_LOAD_START; /* true when the scene names a load: a fresh FMU runs the scene */
     c->start_time = 0.0;
     c->initialized = 0;
     c->handed = 0;
@@ -802,6 +808,8 @@ static int core_exit_initialization(Instance* c)
     c->handed = 0;
     c->initialized = 1;
     c->phase = STEPPING;
+    if (c->scene_load) /* a master that connects F is told the scene's load is added, logging on or off */
+        say(c, ST_WARNING, "%s", SCENE_LOAD_NOTICE);
     warn_if_unstable(c);
     return ST_OK;
 }

@@ -343,7 +343,9 @@ static const char* reset(Instance* c, double force, char* buffer, size_t size)
     return NULL;
 }
 
-/* driver.split_duration */
+/* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
+ * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
+ * rounding, dropped */
 static void split_duration(double duration, double h, double* whole, double* rest)
 {
     double ratio = duration / h, nearest = nearbyint(ratio);
@@ -354,6 +356,8 @@ static void split_duration(double duration, double h, double* whole, double* res
     }
     *whole = floor(ratio);
     *rest = duration - *whole * h;
+    if (!(*rest >= 1e-9 * h))
+        *rest = 0.0;
 }
 
 /* NetworkElement._steps_from: ``count`` steps of h from step number ``first`` (t_p = t_base + p h); NULL, or why
@@ -404,6 +408,8 @@ static const char* advance(Instance* c, double duration, double force, int scene
         return buffer;
     }
     split_duration(duration, h, &whole, &rest);
+    if (whole == 0 && rest == 0) /* below rounding of h: no step, the clock on its grid (NetworkElement.advance) */
+        return NULL;
     if (whole + (rest > 0) > ADVANCE_BUDGET) {
         snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
                  "steps of one advance: advance by shorter durations or with a larger step", duration,
@@ -447,10 +453,14 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
         return buffer;
     }
     prandtl_kernel_failed = 0;
+    if (duration > 0) {
+        split_duration(duration, h, &whole, &rest);
+        if (whole == 0 && rest == 0) /* below rounding of h: a sample at the instant it is at (move_to) */
+            duration = 0;
+    }
     if (duration == 0) { /* an instant: the masses and dashpots hold, the massless part follows */
         status = jump_c(NET(e), e->x, e->v, e->u, e->piece, e->account, e->dissipated, x, force);
     } else {
-        split_duration(duration, h, &whole, &rest);
         if (whole + (rest > 0) > ADVANCE_BUDGET) {
             snprintf(buffer, size, "a move over %.17g s takes more than %.0e steps", duration, ADVANCE_BUDGET);
             return buffer;
@@ -556,7 +566,7 @@ static void defaults(Instance* c)
     c->x_in = X0[LOAD_NODE]; /* the inputs' start values */
     c->v_in = V0[LOAD_NODE];
     c->time = 0.0;
-    c->scene_load = 0;
+    c->scene_load = SCENE_LOAD_START; /* true when the scene names a load: a fresh FMU runs the scene */
     c->start_time = 0.0;
     c->initialized = 0;
     c->handed = 0;
@@ -744,6 +754,8 @@ static int core_exit_initialization(Instance* c)
     c->initialized = 1;
     c->preview_state = 0;
     c->phase = STEPPING;
+    if (!CONNECTOR && c->scene_load) /* a master that connects F is told the scene's load is added */
+        say(c, ST_WARNING, "%s", SCENE_LOAD_NOTICE);
     return ST_OK;
 }
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
-                       pack, stubs)
+                       pack, scene_load_lines, stubs)
 from .platforms import KERNEL_MACRO
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
@@ -253,6 +253,7 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         *noise_lines(scene, connector),
+        *scene_load_lines(scene, "the load's node"),
         f"#define LOAD_DAMPED {load_damped} /* a dashpot on the load's node: a white noise needs it or a mass */",
         f"static const char NOISE_MASSLESS_LOAD[] = {c_string(massless_load)}; /* stepper_problem's words */",
     ]
