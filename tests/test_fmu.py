@@ -14,6 +14,7 @@ from fmpy.validation import validate_fmu
 from prandtl_fmu import Element, load_scene, parse_scene, simulate
 from prandtl_fmu.stepping import ENERGY_COLUMNS, energy_columns
 from prandtl_fmu.fmu.build import build_fmu
+from prandtl_fmu.fmu.description import scene_load_notice
 from prandtl_fmu.fmu.documentation import equations
 from prandtl_fmu.steppers import STEPPERS
 
@@ -131,7 +132,7 @@ def test_simulate_fmu_agrees_with_the_library(fmus, name, stepper):
     times = np.round(np.arange(0, stop + dt / 2, dt), 12)
     forces = 0.6 * np.cos(0.7 * times) + 0.2 * np.sin(2.3 * times)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, input=held_input(times, forces),
-                          start_values={"stepper": stepper}, output=["x", "v", "reaction"])
+                          start_values={"stepper": stepper, "scene_load": False}, output=["x", "v", "reaction"])
     expected = element_run(scene_path, stepper, times, forces)
     assert len(result) == len(times)
     got = np.column_stack([result["x"], result["v"], result["reaction"]])
@@ -162,8 +163,48 @@ def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name,
         np.testing.assert_array_equal(result[column], getattr(library, column))
     assert np.abs(library.x).max() > 1e-2
     without = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
-                           start_values={"stepper": stepper}, output=["x"])
+                           start_values={"stepper": stepper, "scene_load": False}, output=["x"])
     assert np.abs(without["x"] - library.x).max() > 1e-6  # the switch matters: F alone is 0 here
+
+
+def logged(messages):
+    """An FMI 2.0 logger for FMPy that keeps (status, category, message)."""
+    def logger(env, instance, status, category, message):
+        messages.append((status, category.decode("utf-8"), message.decode("utf-8")))
+    return logger
+
+
+def test_a_fresh_fmu_of_a_scene_with_a_load_runs_that_load(fmus):
+    """Issue 44.3: ``fmpy simulate`` of a fresh FMU (no start values, logging off) is the library's run of its
+    scene, not a flat line: scene_load starts true when the scene names a load, and the FMU says so once, as a
+    warning that reaches the logger whatever loggingOn says."""
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    variables = {v.name: v for v in read_model_description(fmu).modelVariables}
+    assert variables["scene_load"].start == "true"
+    messages = []
+    result = simulate_fmu(str(fmu), output=["x", "v", "reaction"], logger=logged(messages))
+    interval = result["time"][1]  # FMPy's own output grid (it takes stop_time / 500 here), on the step grid
+    library = simulate(scene.with_solver(output_interval=round(interval, 12)))
+    assert len(result) == len(library.time) and result["time"][-1] == pytest.approx(scene.solver.stop_time)
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column))
+    assert np.abs(library.x).max() > 0.1  # not a flat line
+    notice = scene_load_notice(scene, "the element")
+    assert messages == [(1, "logStatusWarning", notice)]  # fmi2Warning, once, with logging off
+
+
+def test_scene_load_false_drives_the_element_by_f_alone(fmus):
+    fmu, scene_path = fmus["paper"]
+    messages = []
+    times = np.round(np.arange(0, 20.0 + 0.05, 0.1), 12)
+    forces = 0.3 * np.sin(0.9 * times)
+    result = simulate_fmu(str(fmu), stop_time=20.0, output_interval=0.1, start_values={"scene_load": False},
+                          input=held_input(times, forces), output=["x", "v", "reaction"], logger=logged(messages))
+    expected = element_run(scene_path, "projected", times, forces)  # F alone
+    np.testing.assert_allclose(np.column_stack([result["x"], result["v"], result["reaction"]]), expected,
+                               rtol=0, atol=1e-12)  # (the library's steps are cut at the rounded times)
+    assert np.abs(expected[:, 0]).max() > 1e-2 and messages == []  # nothing to say: no load is added
 
 
 def test_the_stiffness_output_is_the_tangent_of_the_sticking_branches(fmus):
@@ -415,7 +456,8 @@ def test_the_continuous_element_as_an_fmu(fmus, name, stepper):
     times = np.round(np.arange(0, stop + dt / 2, dt), 12)
     forces = 0.6 * np.cos(0.7 * times) + 0.2 * np.sin(2.3 * times)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, input=held_input(times, forces),
-                          start_values={"stepper": stepper}, output=["x", "v", "reaction", "dissipated_sliders"])
+                          start_values={"stepper": stepper, "scene_load": False},
+                          output=["x", "v", "reaction", "dissipated_sliders"])
     expected = element_run(scene_path, stepper, times, forces)
     np.testing.assert_allclose(np.column_stack([result["x"], result["v"], result["reaction"]]), expected,
                                rtol=0, atol=1e-12)

@@ -15,6 +15,7 @@ from fmpy.validation import validate_fmu
 from prandtl_fmu import load_scene
 from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.fmu.build import build_fmu
+from prandtl_fmu.fmu.description import scene_load_notice
 from prandtl_fmu.fmu.documentation import network_equations
 from prandtl_fmu.network import NetworkConnector, NetworkElement, simulate
 from prandtl_fmu.scene import SceneError
@@ -212,8 +213,28 @@ def test_with_scene_load_and_no_input_the_fmu_is_the_library_run(fmus, name):
         np.testing.assert_array_equal(result[column], library.column(column), err_msg=column)
     assert np.abs(library.x).max() > 0.1 and library.column("dissipated_sliders")[-1] > 0  # it moved and slid
     without = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
-                           output=names[:1])
+                           start_values={"scene_load": False}, output=names[:1])
     assert np.all(without[names[0]] == 0)  # F alone (0): the switch matters
+
+
+def test_a_fresh_network_fmu_runs_its_scene_load_and_says_so(fmus):
+    """Issue 44.3: with no start values (``fmpy simulate``) the network's FMU runs its scene's load, and logs once
+    (a warning, with logging off) that the load is added to F."""
+    fmu, scene_path = fmus["chain"]
+    scene = load_scene(scene_path)
+    messages = []
+
+    def logger(env, instance, status, category, message):
+        messages.append((status, category.decode("utf-8"), message.decode("utf-8")))
+
+    names = ["x_n3", "v_n3", "reaction"]
+    result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                          output=names, logger=logger)
+    library = simulate(scene)
+    for column in names:
+        np.testing.assert_array_equal(result[column], library.column(column), err_msg=column)
+    assert np.abs(library.column("x_n3")).max() > 0.1
+    assert messages == [(1, "logStatusWarning", scene_load_notice(scene, "the load's node"))]
 
 
 def step_sizes(rng, count):
@@ -354,8 +375,8 @@ def test_a_massless_chain_pulled_beyond_its_friction_is_a_discard_and_nothing_ch
     finally:
         slave.close()
     times = np.round(np.arange(0.0, 10.05, 0.1), 12)
-    run = simulate_fmu(str(fmu), stop_time=10.0, output_interval=0.1, output=["x_n4"], start_values=no_dashpots,
-                       input=held_input(times, 0.2 * times))
+    run = simulate_fmu(str(fmu), stop_time=10.0, output_interval=0.1, output=["x_n4"],
+                       start_values={"scene_load": False, **no_dashpots}, input=held_input(times, 0.2 * times))
     assert 4.0 < run["time"][-1] < 6.0  # F = 0.2 t: ended early, silently, at the first Discard (F > 1 N)
     with pytest.raises(FMICallException):  # the scene's load starts at 2 N: no equilibrium at the start
         simulate_fmu(str(fmu), stop_time=1.0, start_values={"scene_load": True, **no_dashpots})

@@ -30,10 +30,13 @@ The outputs after ``doStep(t, H)`` are those of the network at t + H under the F
 depends directly on F (a master that sets F sees the outputs change at the next step).
 """
 
+from pythonfmu.enums import Fmi2Status
+
 from ...stepping import UNCHANGED, ElementError
 from ...loads import force_at
 from ...network import NetworkElement
 from ...scene import SceneError
+from ..description import scene_load_notice, scene_load_start
 from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
 
@@ -46,7 +49,7 @@ class PrandtlNetwork(NoiseParameters, SlaveBase):
         self.initialized = False
         # what the master set; checked and handed to the library at each step
         self.F = 0.0
-        self.scene_load = False
+        self.scene_load = scene_load_start(self.scene)  # true when the scene names a load
         self.stepper = self.element.stepper
         self.step = self.element.h
         self._handed_over = None
@@ -90,6 +93,9 @@ class PrandtlNetwork(NoiseParameters, SlaveBase):
         self.element.time = self.start_time
         self._handed_over = None
         self.initialized = True
+        if self.scene_load:  # a master that connects F is told that the scene's load is added (whatever loggingOn)
+            self.log(scene_load_notice(self.scene, "the load's node"), Fmi2Status.warning,
+                     category="logStatusWarning")
 
     def _force_at_start(self) -> float:
         if self.scene_load:

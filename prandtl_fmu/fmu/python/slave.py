@@ -42,6 +42,7 @@ from ...element import Element
 from ...stepping import ElementError
 from ...loads import force_at
 from ...steppers import STEPPERS
+from ..description import scene_load_notice, scene_load_start
 from .common import NoiseParameters, SlaveBase, finite_number, register_variables
 
 # the energy account's outputs (those of the effects present are the FMU's: description.element_variables)
@@ -74,7 +75,7 @@ class PrandtlElement(NoiseParameters, SlaveBase):
         self.initialized = False  # after fmi2ExitInitializationMode: fixed parameters are frozen
         # What the master set; checked and handed to the element at each step.
         self.F = 0.0
-        self.scene_load = False
+        self.scene_load = scene_load_start(self.scene)  # true when the scene names a load
         self.stepper = self.element.stepper
         self.step = self.element.h
         self._handed_over = None  # (parameters, stepper, step) as last handed to the element
@@ -126,6 +127,8 @@ class PrandtlElement(NoiseParameters, SlaveBase):
         self._handed_over = None  # the next step compares the settings again
         self.initialized = True
         self._warn_if_unstable()
+        if self.scene_load:  # a master that connects F is told that the scene's load is added (whatever loggingOn)
+            self.log(scene_load_notice(self.scene, "the element"), Fmi2Status.warning, category="logStatusWarning")
 
     def _force_at_start(self) -> float:
         if self.scene_load:
