@@ -434,8 +434,8 @@ def one_node_scenes(case, stepper, h=2e-3, stop=12.0, output=0.02, load=None, pa
         branches["c"] = spec["c"]
     element += table("branches", branches)
     for i in range(3):
-        values = {"between": ["a", "ground"], "k": BRANCHES["k"][i], "eta": BRANCHES["eta"][i],
-                  "u0": BRANCHES["u0"][i]}
+        values = {"between": ["ground", "a"], "k": BRANCHES["k"][i], "eta": BRANCHES["eta"][i],
+                  "u0": BRANCHES["u0"][i]}  # from the ground to a: u follows x_a, as the element's u_i
         if "c" in spec:
             values["c"] = spec["c"][i]
         elements.append(("branch", values))
@@ -907,10 +907,31 @@ def test_columns_with_states_and_energy_and_the_reaction():
                         HARMONIC, solver(0.01, 3.0, 0.01), v0=[0.5, 0.0])
     run = simulate(parse_scene(text), states=True)
     u = run.column("u_branch_1")
-    # between = [ground, b]: u counts from b to the ground, u0 = 0.1 was given ground-first (x_ground - x_b)
-    assert u[0] == pytest.approx(-0.1)
+    # between = [ground, b]: u counts from the ground to b (x_b - x_ground), as written: u0 = 0.1 is u(0)
+    assert u[0] == 0.1
     expected = 3.0 * run.x[:, 0] + 0.4 * run.v[:, 1] + 1.0 * u
     np.testing.assert_allclose(run.reaction, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("between", [("ground", "b"), ("b", "ground"), ("a", "b"), ("b", "a")])
+def test_an_elongation_counts_from_the_first_end_to_the_second(between):
+    """``between = [i, j]`` goes from i to j (issue 44.8: the finite-element convention): a branch's elongation
+    is x_j - x_i, its u0 is u(0) as written, and a stretched branch (u0 > 0) pulls its ends together. An elastic
+    branch (eta large) keeps u - u0 = (x_j - x_i) - (x_j(0) - x_i(0)) at every row, in every orientation."""
+    text = network_text(["a", "b"], [1.0, 0.5],
+                        [("spring", {"between": ["ground", "a"], "k": 3.0}),
+                         ("spring", {"between": ["ground", "b"], "k": 1.0}),
+                         ("branch", {"between": list(between), "k": 2.0, "eta": 10.0, "u0": 0.1})],
+                        {"kind": "constant", "value": 0.0}, solver(0.01, 1.0, 0.01))
+    run = simulate(parse_scene(text), states=True)
+    position = {"ground": np.zeros(len(run.time)), "a": run.x[:, 0], "b": run.x[:, 1]}
+    elongation = position[between[1]] - position[between[0]]
+    u = run.column("u_branch_1")
+    assert u[0] == 0.1
+    np.testing.assert_allclose(u - 0.1, elongation - elongation[0], rtol=0, atol=1e-14)
+    # the tension k u0 > 0 pulls the second end back towards the first: its first move is -x for j to the
+    # right of i, so the elongation shrinks
+    assert elongation[5] < elongation[0]
 
 
 # ------------------------------------------------------------------ 8. output grid, chunks

@@ -197,6 +197,7 @@ def _chunks(scene, name, states, energy, progress):
     n, count = network.n, len(network.elements)
     names = columns_of(scene, states, energy)
     branches = len(network.of_kind("branch"))
+    sense = network.branch_sense()
     keep = _dissipating(scene)
     h, per_row = solver.step, solver.steps_per_output
     grid = OutputGrid(solver.stop_time, solver.output_interval, solver.step)
@@ -218,7 +219,7 @@ def _chunks(scene, name, states, energy, progress):
         rows = out.shape[0]
         parts = [grid.times(first, rows)[:, None], out]
         if states:
-            parts.append(out_u)
+            parts.append(out_u * sense)  # as written (x_j - x_i), not as kept: Element.sense
         if energy:
             residual = out_energy[:, 2] - out_energy[:, 3] - out_energy[:, 4] - (
                 out_energy[:, 0] + out_energy[:, 1] - initial_energy)
@@ -353,6 +354,11 @@ class NetworkElement(OutputMemo):
     @property
     def reaction(self) -> float:
         return float(self._reaction)
+
+    def elongation(self, e: int) -> float:
+        """The elongation of element ``e`` (a branch: its spring's u) as its ``between = [i, j]`` is written, x_j -
+        x_i's sense (the state keeps it as the kernels do: :class:`network.model.Element`'s ``sense``)."""
+        return float(self.scene.network.elements[e].sense * self.u[e])
 
     def _energies(self):
         return (float(kernels.kinetic(self.model[0], self.v)), float(kernels.stored(self.model, self.x, self.u)))

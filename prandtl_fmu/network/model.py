@@ -1,16 +1,23 @@
 """A network of nodes joined by springs, dashpots, sliders, Prandtl branches and cubic springs, and its scene.
 
 Nodes have names and masses (0: a massless node, in equilibrium at every instant); every element joins two
-nodes, or a node and the ground ("ground" is reserved). An element's relative displacement is x_i - x_j
-(x of the ground: 0) for ``between = [i, j]``:
+nodes, or a node and the ground ("ground" is reserved). An element ``between = [i, j]`` goes from i to j, as in
+finite elements: its elongation is e = x_j - x_i (x of the ground: 0), positive when j moves away from i in +x,
+and it pulls i towards j and j towards i with its tension:
 
-* spring ``k`` (N/m): force k (x_i - x_j); cubic ``k3`` (N/m^3): k3 (x_i - x_j)^3;
-* dashpot ``c`` (N s/m): force c (v_i - v_j);
-* slider ``alpha`` (N): a Saint-Venant element, force in alpha sign(v_i - v_j) (any force in [-alpha, alpha]
+* spring ``k`` (N/m): tension k e; cubic ``k3`` (N/m^3): k3 e^3;
+* dashpot ``c`` (N s/m): tension c e', e' = v_j - v_i;
+* slider ``alpha`` (N): a Saint-Venant element, tension in alpha sign(e') (any force in [-alpha, alpha]
   while it sticks);
 * branch ``k``, ``eta`` (m), optional ``u0``, ``c``: a Prandtl branch, exactly the element's: a spring k in
   series with a slider of threshold alpha = k eta (and with a dashpot c, the series model), its elongation u
-  with u' + d psi_[-eta, eta](u) ∋ v_i - v_j - (k / c) u, force k u.
+  with u' + d psi_[-eta, eta](u) ∋ e' - (k / c) u, tension k u. ``between = ["ground", a]`` is the element on
+  node a (u follows x_a).
+
+Inside, an element is kept as (p, q) acting on x_p - x_q with the ground always second (the kernels' form):
+(j, i), or (i, ground) for ``between = [i, "ground"]``, whose u is then -e: ``Element.sense`` (+1 or -1) turns
+the kept u into the elongation as written (initial u0, reported u_<name>); springs, dashpots, sliders and cubic
+springs are odd in e, so their orientation changes no force.
 
 The load F(t) acts on ``load_node``; the reaction is the force of the elements on the ground.
 """
@@ -39,9 +46,9 @@ NETWORK_STEPPERS = ("implicit", "projected")
 
 @dataclass(frozen=True)
 class Element:
-    """One element: ``kind`` (a key of KINDS), ``name`` (unique in the network), ``between`` (i, j): node
-    indices, j = -1 for the ground; ``value`` k, c, alpha or k3; for a branch ``eta``, ``c`` (0: no series
-    dashpot) and ``u0``."""
+    """One element: ``kind`` (a key of KINDS), ``name`` (unique in the network), ``between`` (p, q): node
+    indices as the kernels keep them (acting on x_p - x_q, q = -1 for the ground: see the module docstring);
+    ``value`` k, c, alpha or k3; for a branch ``eta``, ``c`` (0: no series dashpot) and ``u0``; ``sense``."""
 
     kind: str
     name: str
@@ -49,7 +56,8 @@ class Element:
     value: float
     eta: float = 0.0
     c: float = 0.0
-    u0: float = 0.0
+    u0: float = 0.0  # as kept: sense * the u0 written
+    sense: int = 1  # the elongation as written (x_j - x_i) is sense * the kept one (x_p - x_q)
 
     def coefficients(self) -> dict:
         """The element's coefficients by their scene key."""
@@ -89,6 +97,11 @@ class Network:
         coef = np.array([(e.value, e.eta, e.c) for e in self.elements], dtype=float).reshape(count, 3)
         return (np.array(self.mass, dtype=float), kind, ends, coef, int(self.load_node),
                 bool(any(e.kind == "cubic" for e in self.elements)))
+
+    def branch_sense(self) -> np.ndarray:
+        """For each branch, in the scene's order, the sign that turns its kept u into its elongation as written
+        (``between = [i, j]``: x_j - x_i)."""
+        return np.array([e.sense for e in self.elements if e.kind == "branch"], dtype=float)
 
     def parameters(self) -> dict:
         """Every coefficient by its parameter name: m_<node>, <key>_<element> (k_spring_1, alpha_n3, ...)."""
@@ -322,9 +335,10 @@ def _element(source, kind, index, table, nodes) -> Element:
         name = r.string("name")
         if not NAME.match(name) or name == GROUND:
             r.fail("name", f"must be a name of letters, digits and _ (not starting with a digit), got {name!r}")
-    flip = ends[0] == -1  # the ground is always the second end
-    if flip:
-        ends.reverse()
+    # as written, [i, j] acts on x_j - x_i: kept as (j, i), or as (i, ground) with sense -1 when j is the ground
+    kept, sense = (ends[1], ends[0]), 1
+    if kept[0] == -1:
+        kept, sense = (ends[0], -1), -1
     if kind == "branch":
         k = r.number("k")
         eta = r.number("eta")
@@ -332,9 +346,9 @@ def _element(source, kind, index, table, nodes) -> Element:
         u0 = r.number("u0")
         if abs(u0) > eta:
             r.fail("u0", f"must lie in [-eta, eta] = [{-eta!r}, {eta!r}], got {u0!r}")
-        return Element(kind, name, tuple(ends), k, eta, c, -u0 if flip else u0)
+        return Element(kind, name, kept, k, eta, c, sense * u0, sense)
     key = KEYS[kind][0]
-    return Element(kind, name, tuple(ends), r.number(key))
+    return Element(kind, name, kept, r.number(key), sense=sense)
 
 
 def _per_node(r, key, count, required=True):
