@@ -28,8 +28,10 @@ Two methods, chosen from the scene:
   cycle, the force at each from the exact moves between samples (x linear in between), cycles repeated until
   the first harmonic of two successive cycles agrees (to a quarter of the tolerance, with the geometric tail
   of the differences counted), the trapezoid rule in theta for a_1, b_1; N doubled from 64 until two
-  successive N agree to the tolerance (1e-3 relative by default, of |a_1 + i b_1|). Past 2^16 samples per
-  cycle or MAX_CYCLES cycles, the amplitude is refused with what was reached.
+  successive N agree to the tolerance (1e-3 relative by default), a_1 and b_1 each against its own size
+  (:func:`relative_change`: K and D both to the tolerance). Past 2^16 samples per cycle or MAX_CYCLES
+  cycles, the amplitude is refused with what was reached (deep macro-slip, where the stick after a reversal
+  is shorter than a sample, is the usual case).
 """
 from __future__ import annotations
 
@@ -230,7 +232,12 @@ def _events(points, A, rising: bool) -> np.ndarray:
 
 def line_integrals(xs, fs, A) -> tuple:
     """``(int F dx, int F x / sqrt(A^2 - x^2) dx)`` along the polyline through (xs[j], fs[j]) (xs monotone, in
-    [-A, A], either direction: oriented integrals), exactly: F is linear on each segment."""
+    [-A, A], either direction: oriented integrals), exactly: F is linear on each segment.
+
+    The second is A int F sin(t) dt with x = A sin(t), t = asin(x / A) in [-pi/2, pi/2]; on a segment
+    F = F_1 + s (A sin t - x_1) and, with d = t_2 - t_1 and m = (t_1 + t_2) / 2, the integrals
+    int sin t dt = 2 sin(m) sin(d / 2) and int sin^2 t dt = d sin^2(m) + cos(2 m) (d - sin d) / 2 are written
+    without the cancellation of differences of antiderivatives (which lost digits on short segments)."""
     xs = np.asarray(xs, dtype=float)
     fs = np.asarray(fs, dtype=float)
     x1, x2, f1, f2 = xs[:-1], xs[1:], fs[:-1], fs[1:]
@@ -238,18 +245,15 @@ def line_integrals(xs, fs, A) -> tuple:
     x1, x2, f1, f2 = x1[keep], x2[keep], f1[keep], f2[keep]
     work = float(np.sum(0.5 * (f1 + f2) * (x2 - x1)))
     slope = (f2 - f1) / (x2 - x1)
-    offset = f1 - slope * x1
-
-    def root(x):
-        return np.sqrt(np.maximum(A * A - x * x, 0.0))
-
-    def first(x):  # int x / sqrt(A^2 - x^2)
-        return -root(x)
-
-    def second(x):  # int x^2 / sqrt(A^2 - x^2)
-        return 0.5 * A * A * np.arcsin(np.clip(x / A, -1.0, 1.0)) - 0.5 * x * root(x)
-
-    moment = float(np.sum(offset * (first(x2) - first(x1)) + slope * (second(x2) - second(x1))))
+    t1 = np.arcsin(np.clip(x1 / A, -1.0, 1.0))
+    t2 = np.arcsin(np.clip(x2 / A, -1.0, 1.0))
+    d = t2 - t1
+    mid = 0.5 * (t1 + t2)
+    d2 = d * d
+    d_minus_sin = np.where(np.abs(d) < 1e-2, d * d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)), d - np.sin(d))
+    sine = 2.0 * np.sin(mid) * np.sin(0.5 * d)
+    square = d * np.sin(mid) ** 2 + 0.5 * np.cos(2.0 * mid) * d_minus_sin
+    moment = A * float(np.sum((f1 - slope * x1) * sine + slope * A * square))
     return work, moment
 
 
@@ -263,7 +267,7 @@ def quadrature_harmonic(element, amplitude: float, frequency: float, tolerance: 
     while True:
         harmonic = steady_harmonic(element, amplitude, frequency, samples, tolerance)
         if previous is not None:
-            change = abs(harmonic - previous) / abs(harmonic) if harmonic != 0 else abs(harmonic - previous)
+            change = relative_change(harmonic, previous)
             if change <= tolerance:
                 return harmonic.real, harmonic.imag, change
         if samples >= MAX_SAMPLES:
@@ -301,12 +305,31 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
             raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the force is not finite (an overflow)")
         new = complex(float(forces @ sine), float(forces @ cosine))
         if harmonic is not None:
-            last, change = change, abs(new - harmonic)
+            last, change = change, relative_change(new, harmonic)
             ratio = change / last if last > 0 and math.isfinite(last) else 1.0
             tail = change * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
-            if change == 0.0 or (change + tail <= 0.25 * tolerance * abs(new) and cycle >= 2):
+            if abs(new - harmonic) <= ROUNDING * abs(new) or (change + tail <= 0.25 * tolerance and cycle >= 2):
                 return new
         harmonic = new
     raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the cycle did not settle within {MAX_CYCLES} "
-                         f"cycles (f = {frequency!r} Hz): the first harmonic still changed by "
-                         f"{change / abs(harmonic):.3g} relative per cycle")
+                         f"cycles (f = {frequency!r} Hz): the first harmonic still changed by {change:.3g} "
+                         "relative per cycle")
+
+
+# A part of the first harmonic below this fraction of |a_1 + i b_1| is measured against that fraction (its own
+# relative change is rounding noise: D of a cycle that does not slip).
+NEGLIGIBLE = 1e-9
+# A change of a_1 + i b_1 from one cycle to the next this small against |a_1 + i b_1| is rounding: the cycle
+# repeats (the smaller part's own relative change may then still be well above it).
+ROUNDING = 1e-12
+
+
+def relative_change(new: complex, old: complex) -> float:
+    """The larger relative change of a_1 (so K) and of b_1 (so D) from ``old`` to ``new``: each measured against
+    its own size (at least NEGLIGIBLE |new|), so that the small one of the two (K in deep macro-slip, D in
+    micro-slip) is converged too, not only |a_1 + i b_1|."""
+    floor = NEGLIGIBLE * abs(new)
+    if floor == 0.0:
+        return 0.0 if new == old else math.inf
+    return max(abs(new.real - old.real) / max(abs(new.real), floor),
+               abs(new.imag - old.imag) / max(abs(new.imag), floor))

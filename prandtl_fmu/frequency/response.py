@@ -243,7 +243,7 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
             last, change = change, abs(new - harmonic)
             ratio = change / last if last > 0 and math.isfinite(last) else 1.0
             tail = change * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
-            if change == 0.0 or (number >= 2 and change + tail <= 0.25 * tolerance * abs(new)):
+            if change <= 1e-12 * abs(new) or (number >= 2 and change + tail <= 0.25 * tolerance * abs(new)):
                 return new, (x, v, None if u is None else u.copy()), number + 1
         harmonic = new
     raise NotSettled(f"{forced.source}: at f = {frequency!r} Hz the response did not settle within {MAX_PERIODS} "
