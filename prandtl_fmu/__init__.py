@@ -16,7 +16,7 @@ The layers, bottom to top. A module imports from its own layer and those below, 
 import circle exists (``tests/test_layout.py`` checks both from the sources, with a short list of known
 exceptions and their reasons):
 
-1. base: ``__init__``, ``network`` (its lazy __init__), ``_jit``, ``catalog``, ``libm``, ``noise``, ``outputs``,
+1. base: ``__init__``, ``network`` (its lazy __init__), ``_jit``, ``catalog``, ``compiling``, ``libm``, ``noise``, ``outputs``,
    ``resources``, ``saved_state``
 2. loads and effects with memory, compiled: ``loads``, ``memory``, ``memory.dahl``, ``memory.delay``,
    ``memory.history``

@@ -270,6 +270,15 @@ def _main(argv) -> int:
         parser.print_help(sys.stderr)
         return 2
     args = parser.parse_args(argv)
+    if args.command in ("scenes",):
+        return _command(args)
+    from .compiling import compiling_status
+
+    with compiling_status():  # on a terminal, a line while the kernels compile (the first run on a machine)
+        return _command(args)
+
+
+def _command(args) -> int:
     if args.command == "run":
         return _run(args)
     if args.command == "build":

@@ -20,7 +20,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "prandtl_fmu"
 # "network", the network package's __init__.
 LAYERS = [
     ("base: compiled-code helpers and tools every layer may use",
-     ["", "network", "_jit", "catalog", "libm", "noise", "outputs", "resources", "saved_state"]),
+     ["", "network", "_jit", "catalog", "compiling", "libm", "noise", "outputs", "resources", "saved_state"]),
     ("loads and effects with memory, in their compiled form",
      ["loads", "memory", "memory.dahl", "memory.delay", "memory.history"]),
     ("kernels: compiled building blocks of the steps",

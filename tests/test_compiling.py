@@ -1,0 +1,42 @@
+"""Saying so while the kernels compile (compiling.py): a status line on a terminal's stderr, nothing elsewhere."""
+import io
+
+from numba import njit
+
+from prandtl_fmu.compiling import compiling_status
+
+
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def _fresh_kernel():
+    @njit(cache=False)
+    def triple(x):
+        return 3 * x
+    return triple
+
+
+def test_a_terminal_is_told_what_compiled_and_where_the_cache_is():
+    from prandtl_fmu._jit import CACHE, cache_root
+
+    stream = Terminal()
+    with compiling_status(stream):
+        assert _fresh_kernel()(2) == 6
+    text = stream.getvalue()
+    assert "compiled 1 kernels in" in text and text.endswith("\n")
+    assert (str(cache_root()) if CACHE else "memory only") in text
+
+
+def test_nothing_is_written_when_nothing_compiles_or_where_it_is_no_terminal():
+    kernel = _fresh_kernel()
+    kernel(1)  # compiled before: the body only calls it
+    stream = Terminal()
+    with compiling_status(stream):
+        assert kernel(2) == 6
+    assert stream.getvalue() == ""
+    pipe = io.StringIO()  # not a terminal: a log, a pipe, a captured stderr
+    with compiling_status(pipe):
+        assert _fresh_kernel()(2) == 6
+    assert pipe.getvalue() == ""
