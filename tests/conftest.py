@@ -82,6 +82,13 @@ _SESSION = {}
 
 def pytest_sessionfinish(session, exitstatus):
     _SESSION["status"] = int(exitstatus)
+    folder = getattr(session.config, "_prandtl_compile_log", None)
+    if folder:
+        import json
+
+        os.makedirs(folder, exist_ok=True)
+        with open(os.path.join(folder, f"compiles-{os.getpid()}.json"), "w") as fh:
+            json.dump(_COMPILES, fh)
 
 
 @pytest.hookimpl(trylast=True)
@@ -101,3 +108,42 @@ def pytest_unconfigure(config):
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(_SESSION["status"])
+
+
+# ------------------------------------------------------------------ where the suite's time goes: compiling
+# PRANDTL_FMU_COMPILE_LOG=DIR: every test process writes DIR/compiles-<pid>.json, each kernel numba compiled
+# (kernel, signature, inclusive seconds, depth: 0 when not inside another's compilation, the test that compiled
+# it); benchmarks/suite_compiles.py sums them (issue 43).
+_COMPILES = []
+_CURRENT = {"test": "(collection)"}
+
+
+def pytest_configure(config):
+    folder = os.environ.get("PRANDTL_FMU_COMPILE_LOG")
+    if not folder:
+        return
+    import time
+
+    from numba.core import event
+
+    started = []  # the compilations under way, outermost first
+
+    class Compiles(event.Listener):
+        def on_start(self, ev):
+            started.append(time.perf_counter())
+
+        def on_end(self, ev):
+            function = ev.data["dispatcher"].py_func
+            seconds = time.perf_counter() - started.pop()
+            _COMPILES.append((f"{function.__module__}.{function.__qualname__}", str(ev.data.get("args")),
+                              seconds, len(started), _CURRENT["test"]))  # depth 0: not inside another
+
+    event.register("numba:compile", Compiles())
+    config._prandtl_compile_log = folder
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    _CURRENT["test"] = item.nodeid
+    yield
+
