@@ -94,6 +94,22 @@ def check_tolerance(tolerance) -> float:
     return float(tolerance)
 
 
+def settled(changes: list, tolerance: float) -> bool:
+    """The settling test of a run repeated period by period (or cycle by cycle): ``changes`` are the relative
+    changes of the first harmonic from each period to the next. Steady when at least three are known and the
+    last one plus the geometric tail of those still to come, d r / (1 - r) with r the larger of the last two
+    ratios d_p / d_(p-1), is at most tolerance / 4 (a transient decaying like exp(-t / T) leaves what the
+    tail counts; a ratio >= 1, no decay yet, is never steady)."""
+    if len(changes) < 3:
+        return False
+    last = changes[-1]
+    ratios = [b / a if a > 0 else (0.0 if b == 0 else math.inf) for a, b in zip(changes[-3:-1], changes[-2:])]
+    ratio = max(ratios)
+    if not ratio < 1.0:
+        return False
+    return last + last * ratio / (1.0 - ratio) <= 0.25 * tolerance
+
+
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",
          "frequency_response": "response", "NotSettled": "response"}
 

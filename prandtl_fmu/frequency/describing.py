@@ -26,9 +26,10 @@ Two methods, chosen from the scene:
   the mass 4 alpha A to D and nothing to K;
 * ``quadrature`` (the continuum, Dahl, branches with series dashpots, a delay, a history): N samples per
   cycle, the force at each from the exact moves between samples (x linear in between), cycles repeated until
-  the first harmonic of two successive cycles agrees (to a quarter of the tolerance, with the geometric tail
-  of the differences counted), the trapezoid rule in theta for a_1, b_1; N doubled from 64 until two
-  successive N agree to the tolerance (1e-3 relative by default), a_1 and b_1 each against its own size
+  the first harmonic settles (:func:`prandtl_fmu.frequency.settled`: the last change and the geometric tail of
+  those to come within a quarter of the tolerance; or a cycle that repeats to rounding), the trapezoid rule
+  in theta for a_1, b_1; N doubled from 64 until two successive N agree to the tolerance (1e-3 relative by
+  default), a_1 and b_1 each against its own size
   (:func:`relative_change`: K and D both to the tolerance). Past 2^16 samples per cycle or MAX_CYCLES
   cycles, the amplitude is refused with what was reached (deep macro-slip, where the stick after a reversal
   is shorter than a sample, is the usual case).
@@ -49,7 +50,7 @@ from ..kernels.play import write_elongations
 from ..loads import ConstantLoad
 from ..memory import has_memory
 from ..stepping import _progress_bar
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
 
 # The quadrature's first and last number of samples per cycle, and the most cycles run to reach the steady one.
 FIRST_SAMPLES = 64
@@ -188,7 +189,8 @@ def exact_harmonic(element, amplitude: float, frequency: Optional[float]) -> tup
     move(np.array([A, -A]), 0.0)  # the first quarter, the first descent: every branch that will slip has slipped
     at_bottom = _elongations(springs, k, u)
     force_bottom = move(np.array([A, -A]), -A)[-1]
-    if not np.allclose(_elongations(springs, k, u), at_bottom, rtol=0.0, atol=1e-12 * max(A, float(np.max(eta, initial=0.0)))):
+    scale = max(A, float(np.max(eta, initial=0.0)))
+    if not np.allclose(_elongations(springs, k, u), at_bottom, rtol=0.0, atol=1e-12 * scale):
         raise FrequencyError(f"{element.source}: at A = {A!r} m the cycle of the branches does not repeat after "
                              "the second excursion (a rate-independent element must): please report it")
     up = np.concatenate((_events(-A + eta - at_bottom, A, rising=True), [A]))
@@ -294,7 +296,7 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
     sine, cosine = 2.0 / samples * np.sin(theta), 2.0 / samples * np.cos(theta)
     memory = has_memory(model[8])
     x, v, t = 0.0, amplitude * 2.0 * math.pi * frequency, 0.0
-    harmonic, change = None, math.inf
+    harmonic, change, changes = None, math.inf, []
     for cycle in range(MAX_CYCLES):
         if memory:
             drive_with_memory(model, u, x, v, cycle * period, xs, vs, durations, forces, None)
@@ -305,10 +307,9 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
             raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the force is not finite (an overflow)")
         new = complex(float(forces @ sine), float(forces @ cosine))
         if harmonic is not None:
-            last, change = change, relative_change(new, harmonic)
-            ratio = change / last if last > 0 and math.isfinite(last) else 1.0
-            tail = change * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
-            if abs(new - harmonic) <= ROUNDING * abs(new) or (change + tail <= 0.25 * tolerance and cycle >= 2):
+            change = relative_change(new, harmonic)
+            changes.append(change)
+            if abs(new - harmonic) <= ROUNDING * abs(new) or settled(changes, tolerance):
                 return new
         harmonic = new
     raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the cycle did not settle within {MAX_CYCLES} "

@@ -8,12 +8,13 @@ period the first harmonic of x over it,
     X = (2 / M) sum_j x(t_j) exp(-i omega t_j)      (t_j the step ends of the period),
     x_1(t) = Re(X exp(i omega t)) = amplitude cos(omega t + phase),  amplitude = |X| (m), phase = arg X (rad),
 
-is compared with the last one's. **The settling test**: the run is steady when the change d_p of X over the
-last period, plus the geometric tail d_p r / (1 - r) of the changes still to come (r = d_p / d_(p-1)), is at
-most tolerance / 4 of |X|; past MAX_PERIODS periods the frequency is refused with the change reached. Then
-M is doubled (from the settled state) until two successive M agree to the tolerance (1e-3 relative of |X| by
-default); past MAX_STEPS steps per period, refused. The phase is that of x against the force: x lags by
--phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0).
+is compared with the last one's. **The settling test** (:func:`prandtl_fmu.frequency.settled`): the run is
+steady when the relative change d_p of X over the last period, plus the geometric tail d_p r / (1 - r) of the
+changes still to come (r the larger of the last two ratios d_p / d_(p-1)), is at most tolerance / 4, after
+at least four periods (or when X repeats to 1e-12); past MAX_PERIODS periods the frequency is refused with
+the change reached. Then M is doubled (from the settled state) until two successive M agree to the tolerance
+(1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
+the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0).
 
 The stepper: the one given, else the one the scene's ``[solver]`` names, else ``exact`` where it applies
 (exact between events: M only sets the quadrature of X) and the branches are few (EXACT_UP_TO), else
@@ -43,7 +44,7 @@ from ..loads import HarmonicLoad
 from ..stability import stability_problem
 from ..steppers import STEPPERS, get_stepper
 from ..stepping import ElementError, _failure, _progress_bar, integrate
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
 
 MAX_PERIODS = 3000
 MAX_STEPS = 2**17
@@ -224,7 +225,7 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
     out = np.empty((steps, 3))
     theta = 2.0 * math.pi * np.arange(1, steps + 1) / steps
     kernel_cos, kernel_sin = 2.0 / steps * np.cos(theta), 2.0 / steps * np.sin(theta)
-    harmonic, change = None, math.inf
+    harmonic, change, changes = None, math.inf, []
     for number in range(MAX_PERIODS):
         start = (x, v)
         try:
@@ -240,16 +241,14 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
             raise NotSettled(f"{scene.source}: at f = {frequency!r} Hz x is not finite (an overflow)")
         new = complex(float(xs @ kernel_cos), -float(xs @ kernel_sin))
         if harmonic is not None:
-            last, change = change, abs(new - harmonic)
-            ratio = change / last if last > 0 and math.isfinite(last) else 1.0
-            tail = change * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
-            if change <= 1e-12 * abs(new) or (number >= 2 and change + tail <= 0.25 * tolerance * abs(new)):
+            change = abs(new - harmonic) / abs(new) if new != 0 else (0.0 if harmonic == 0 else math.inf)
+            changes.append(change)
+            if change <= 1e-12 or settled(changes, tolerance):
                 return new, (x, v, None if u is None else u.copy()), number + 1
         harmonic = new
     raise NotSettled(f"{forced.source}: at f = {frequency!r} Hz the response did not settle within {MAX_PERIODS} "
-                     f"periods ({stepper!r}, {steps} steps per period): X still changed by "
-                     f"{change / max(abs(harmonic), 1e-300):.3g} relative per period (a drift, a subharmonic or "
-                     "chaotic motion, or a transient slower than that)")
+                     f"periods ({stepper!r}, {steps} steps per period): X still changed by {change:.3g} relative "
+                     "per period (a drift, a subharmonic or chaotic motion, or a transient slower than that)")
 
 
 # ----------------------------------------------------------------- on dask.distributed
