@@ -181,7 +181,7 @@ def test_resume_skips_the_finished_runs_and_gives_the_same_table(tmp_path, monke
     conventions = table1.merge([str(tmp_path / "cut")], str(tmp_path))  # the gathered convention table
     paper = [c for c in conventions if (c["norm"], c["time"], c["factor"], c["h_range"], c["q"])
              == ("plain", "interpolants", "2C", "all", "inf")]
-    assert paper[0]["C_3"] == pytest.approx(float(_table(tmp_path / "cut")[0]["C"]), rel=1e-12)
+    assert paper[0]["C_3"] == pytest.approx(float(_table(tmp_path / "cut")[0]["C"]), rel=5e-6)  # 6 digits
     assert all(c["worst_ratio"] >= 1 for c in conventions)
     with pytest.raises(table1.Table1Error, match="protocol 'tiny'"):
         table1.run(str(tmp_path / "cut"), "quick", workers=1, figures_too=False, resume=True)

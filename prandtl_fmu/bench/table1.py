@@ -307,11 +307,12 @@ def candidate_rows(records, protocol: Protocol):
     return rows
 
 
-def merge(folders, out: str):
-    """Gather the candidate tables of several protocol folders into ``out``/table1_candidates.csv (one row per
-    convention, q and n, with a ``protocol`` column) and ``out``/table1_conventions.csv (one row per convention
-    and q: its C for each n beside the printed ones, its worst ratio to them), sorted by that ratio. Returns the
-    convention rows."""
+def merge(folders, out: str, rows_too: bool = False):
+    """Gather the candidate tables of several protocol folders into ``out``/table1_candidates.csv: one row per
+    convention (protocol, norm, time, factor, h range) and q, its C for each n beside the printed ones, its worst
+    ratio to them (max over n of max(C / C_paper, C_paper / C)), the range of its alpha and its smallest r; sorted
+    by q and that ratio. ``rows_too``: also ``out``/table1_candidate_rows.csv, one row per convention, q and n
+    (several MB). Returns the convention rows."""
     rows = []
     for folder in folders:
         with open(os.path.join(folder, "runs", "protocol.json")) as fh:
@@ -320,8 +321,9 @@ def merge(folders, out: str):
             for row in csv.DictReader(fh):
                 row["protocol"] = name
                 rows.append(row)
-    _write_csv(os.path.join(out, "table1_candidates.csv"), rows,
-               ("protocol", "norm", "time", "factor", "h_range", "q", "n", "alpha", "C", "r", "paper_C", "ratio"))
+    if rows_too:
+        _write_csv(os.path.join(out, "table1_candidate_rows.csv"), rows,
+                   ("protocol", "norm", "time", "factor", "h_range", "q", "n", "alpha", "C", "r", "paper_C", "ratio"))
     groups = {}
     for row in rows:
         key = (row["protocol"], row["norm"], row["time"], row["factor"], row["h_range"], row["q"])
@@ -329,17 +331,25 @@ def merge(folders, out: str):
     conventions = []
     for key, by_n in groups.items():
         convention = dict(zip(("protocol", "norm", "time", "factor", "h_range", "q"), key))
-        for n in PAPER_NS:
-            convention[f"C_{n}"] = float(by_n[n]["C"]) if n in by_n else math.nan
-            convention[f"paper_C_{n}"] = PAPER_TABLE_1[(key[5], n)][1]
         ratios = [float(row["ratio"]) for row in by_n.values() if math.isfinite(float(row["ratio"]))]
-        convention["worst_ratio"] = math.exp(max((abs(math.log(ratio)) for ratio in ratios), default=math.nan))
-        convention["alpha_max"] = max(float(row["alpha"]) for row in by_n.values())
+        convention["worst_ratio"] = _digits(math.exp(max((abs(math.log(r)) for r in ratios), default=math.nan)))
+        for n in PAPER_NS:
+            convention[f"C_{n}"] = _digits(float(by_n[n]["C"])) if n in by_n else math.nan
+        for n in PAPER_NS:
+            convention[f"paper_C_{n}"] = PAPER_TABLE_1[(key[5], n)][1]
+        alphas = [float(row["alpha"]) for row in by_n.values()]
+        convention["alpha_min"], convention["alpha_max"] = _digits(min(alphas)), _digits(max(alphas))
+        convention["r_min"] = _digits(min(float(row["r"]) for row in by_n.values()))
         conventions.append(convention)
-    conventions.sort(key=lambda c: (c["q"], c["worst_ratio"]))
-    _write_csv(os.path.join(out, "table1_conventions.csv"), conventions,
+    conventions.sort(key=lambda c: (c["q"] != "inf", c["worst_ratio"]))
+    _write_csv(os.path.join(out, "table1_candidates.csv"), conventions,
                ("q", "worst_ratio", "protocol", "norm", "time", "factor", "h_range"))
     return conventions
+
+
+def _digits(value, digits=6):
+    """``value`` rounded to ``digits`` significant digits (a table for people)."""
+    return float(f"{value:.{digits}g}") if math.isfinite(value) else value
 
 
 def _write_csv(path, rows, first):
