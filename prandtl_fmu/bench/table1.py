@@ -401,6 +401,35 @@ def figures(folder: str):
     return paths
 
 
+def figure_eps(folder: str, records, protocol: Protocol):
+    """``table1_eps.png``: eps(h) of the paper's definition against h for every n (q = inf and 2), beside the line
+    2 C h^alpha of the paper's Table 1; return its path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
+    for ax, q in zip(axes, ("inf", "2")):
+        for i, n in enumerate(protocol.ns):
+            chosen = sorted((r for r in records.values() if r["n"] == n), key=lambda r: r["h"])
+            if not chosen:
+                continue
+            hs = np.array([r["h"] for r in chosen])
+            ax.loglog(hs, [eps_of(r, q, PAPER["norm"], PAPER["time"]) for r in chosen], "o", ms=3, color=f"C{i}",
+                      label=f"n = {n}")
+            alpha, c = PAPER_TABLE_1[(q, n)] if (q, n) in PAPER_TABLE_1 else (math.nan, math.nan)
+            ax.loglog(hs, 2 * c * hs ** alpha, "--", lw=0.8, color=f"C{i}")
+        ax.set(xlabel="h (s)", ylabel=f"eps(h) = max_t |u_h - u_h/2|_{q}",
+               title=f"q = {q}: measured (dots), the paper's 2 C h^alpha (dashed)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+    path = os.path.join(folder, "table1_eps.png")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 # ------------------------------------------------ the command
 
 def _bar(total, label):
@@ -516,7 +545,7 @@ def finish(folder, protocol, done, elapsed, new_runs, figures_too=True) -> dict:
     candidates = candidate_rows(done, protocol)
     _write_csv(os.path.join(folder, f"table1_candidates_{protocol.name}.csv"), candidates,
                ("norm", "time", "factor", "h_range", "q", "n", "alpha", "C", "r", "paper_C", "ratio"))
-    paths = figures(folder) if figures_too else []
+    paths = ([figure_eps(folder, done, protocol)] if done else []) + (figures(folder) if figures_too else [])
     run_seconds = sum(r["seconds"] for r in done.values())
     steps = sum(3 * r["steps"] for r in done.values())
     left = sum(protocol.work(h) for j, h in enumerate(protocol.steps()) for n in protocol.ns if (n, j) not in done)
