@@ -201,3 +201,13 @@ def test_bad_options_are_one_line_and_exit_2(tmp_path, options, culprit):
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and culprit in lines[0], done.stderr
     assert not (tmp_path / "out").exists()  # nothing half-written
+
+
+@pytest.mark.slow  # a dask cluster starts
+def test_the_runs_on_dask_give_the_serial_table(tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setitem(table1.PROTOCOLS, "tiny", TINY)
+    serial = table1.run(str(tmp_path / "serial"), "tiny", workers=1, figures_too=False)
+    parallel = table1.run(str(tmp_path / "dask"), "tiny", workers=2, figures_too=False)
+    assert parallel["new_runs"] == serial["new_runs"] == 8
+    assert _table(tmp_path / "dask") == _table(tmp_path / "serial")
