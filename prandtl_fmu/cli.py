@@ -164,7 +164,7 @@ def _parser() -> argparse.ArgumentParser:
     table1.add_argument("--table1", action="store_true", help="eps(h) = |u_h - u_{h/2}| in lockstep on the memory "
                         "stack, the fits and the convention search: DIR/table1_paper.csv, candidates, figure3-5.png")
     table1.add_argument("--protocol", help="paper (R = 99, h 1e-6 .. 1e-2, T = 500: hours), search (12 h from "
-                        "1e-4), search-theta1, search-theta05, search-symplectic, quick (default)")
+                        "1e-4) and its variants search-*, quick (default); the list: bench/table1.PROTOCOLS")
     table1.add_argument("--resume", action="store_true", help="continue the runs already in --out")
     table1.add_argument("--workers", type=int, help="dask workers (the sweep extra); 1: in this process")
     table1.add_argument("--scheduler", help="an existing dask scheduler tcp://host:port")
