@@ -12,14 +12,24 @@ reproduces the library's run of the scene. Stop time and communication step defa
 DefaultExperiment (the scene's [solver] stop_time and output_interval).
 """
 import argparse
+import importlib.util
+import sys
 
 import numpy as np
-from fmpy import read_model_description, simulate_fmu
+
+
+def _require(module: str, extra: str, what: str) -> None:
+    """One line naming the extra that brings ``module``, exit status 2, before any work."""
+    if importlib.util.find_spec(module) is None:
+        print(f"error: {what} needs {module}: pip install 'prandtl_fmu[{extra}]'", file=sys.stderr)
+        raise SystemExit(2)
 
 
 def run(fmu, amplitude=0.45, omega=0.5, offset=0.0, stop_time=None, interval=None, stepper=None,
         scene_load=False):
     """Simulate and return FMPy's structured array with time, x, v, reaction."""
+    from fmpy import read_model_description, simulate_fmu
+
     experiment = read_model_description(fmu).defaultExperiment
     stop_time = float(stop_time or experiment.stopTime)
     interval = float(interval or experiment.stepSize)
@@ -28,8 +38,8 @@ def run(fmu, amplitude=0.45, omega=0.5, offset=0.0, stop_time=None, interval=Non
     signal = np.zeros(count + 1, dtype=[("time", float), ("F", float)])
     signal["time"], signal["F"] = times, offset + amplitude * np.cos(omega * times)
     start_values = {"stepper": stepper} if stepper else {}
-    if scene_load:
-        start_values["scene_load"] = True
+    # said either way: a fresh FMU adds its scene's [load] to F (scene_load starts true where the scene names one)
+    start_values["scene_load"] = bool(scene_load)
     return simulate_fmu(fmu, stop_time=stop_time, output_interval=interval, input=None if scene_load else signal,
                         start_values=start_values, output=["x", "v", "reaction"])
 
@@ -48,6 +58,9 @@ def main():
     parser.add_argument("--out", help="CSV file: time,x,v,reaction")
     parser.add_argument("--plot", help="PNG file: the hysteresis loop and x(t)")
     args = parser.parse_args()
+    _require("fmpy", "fmpy", "examples/run_fmu.py")
+    if args.plot:
+        _require("matplotlib", "plot", "--plot")
     result = run(args.fmu, args.amplitude, args.omega, args.offset, args.stop_time, args.interval, args.stepper,
                  args.scene_load)
     print(f"{args.fmu}: {len(result)} communication points, x(T) = {float(result['x'][-1])!r}, "

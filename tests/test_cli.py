@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from prandtl_fmu import load_scene, simulate
 from prandtl_fmu.cli import main
@@ -187,3 +188,36 @@ def test_an_extra_that_is_not_installed_is_one_line_before_any_work(write_scene,
     assert not out.exists()
     assert main(["bench", "--quick", "--out", str(tmp_path / "bench")]) == 2
     assert "matplotlib" in capsys.readouterr().err and not (tmp_path / "bench").exists()
+
+
+def test_fmpy_example_script_runs_the_fmu_as_the_library(tmp_path):
+    """The README's main job: examples/run_fmu.py drives the FMU by F alone (scene_load set false: a fresh FMU
+    would add its scene's load to F) and gives the library's numbers."""
+    import importlib.util
+
+    from prandtl_fmu import Element, load_scene
+    from prandtl_fmu.fmu.build import build_fmu
+
+    spec = importlib.util.spec_from_file_location("run_fmu", ROOT / "examples" / "run_fmu.py")
+    run_fmu = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(run_fmu)
+    scene = ROOT / "scenes" / "paper-section-8.toml"
+    fmu = build_fmu(scene, tmp_path / "element.fmu")
+    result = run_fmu.run(str(fmu), stop_time=30.0)
+    assert len(result) == 301  # the DefaultExperiment's step: the scene's output_interval 0.1
+    element = Element(load_scene(scene))
+    for k in range(300):
+        element.advance(0.1, 0.45 * np.cos(0.5 * k * 0.1))
+    assert result["x"][-1] == pytest.approx(element.x, abs=1e-12)
+
+
+def test_the_example_script_without_fmpy_names_the_extra(tmp_path):
+    """examples/run_fmu.py where FMPy is not installed: one line naming the extra, exit 2."""
+    hide = ("import importlib.util, runpy, sys\n"
+            "found = importlib.util.find_spec\n"
+            "importlib.util.find_spec = lambda name, *rest: None if name == 'fmpy' else found(name, *rest)\n"
+            "sys.argv = ['run_fmu.py', 'element.fmu']\n"
+            "runpy.run_path(%r, run_name='__main__')\n" % str(ROOT / "examples" / "run_fmu.py"))
+    done = subprocess.run([sys.executable, "-c", hide], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 2
+    assert done.stderr == "error: examples/run_fmu.py needs fmpy: pip install 'prandtl_fmu[fmpy]'\n"

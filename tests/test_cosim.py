@@ -49,23 +49,6 @@ def test_libcosim_runs_the_native_element_as_the_pythonfmu_one_bit_for_bit(tmp_p
     assert np.abs(np.array(runs["native"]["x"])).max() > 0.5
 
 
-def test_fmpy_example_script_runs_the_fmu_as_the_library(tmp_path):
-    from prandtl_fmu import Element, load_scene
-    from prandtl_fmu.fmu.build import build_fmu
-
-    spec = importlib.util.spec_from_file_location("run_fmu", ROOT / "examples" / "run_fmu.py")
-    run_fmu = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(run_fmu)
-    scene = ROOT / "scenes" / "paper-section-8.toml"
-    fmu = build_fmu(scene, tmp_path / "element.fmu")
-    result = run_fmu.run(str(fmu), stop_time=30.0)
-    assert len(result) == 301  # the DefaultExperiment's step: the scene's output_interval 0.1
-    element = Element(load_scene(scene))
-    for k in range(300):
-        element.advance(0.1, 0.45 * np.cos(0.5 * k * 0.1))
-    assert result["x"][-1] == pytest.approx(element.x, abs=1e-12)
-
-
 def test_the_example_force_source_gives_f0_of_the_amplitude_set_during_initialization(tmp_path):
     """A master that reads F during initialization (OMSimulator, ecos: to start a massless element from the
     equilibrium with F(0)) must get F(0) of the amplitude it set, not of the default."""

@@ -144,7 +144,7 @@ def main():
     parser.add_argument("--plot", help="a PNG of the arm's torque against its angle (needs the plot extra)")
     args = parser.parse_args()
     if args.plot:
-        require_extras("plot")
+        require_extras({"--plot": (("matplotlib",), "plot")})
     folder = build(args.out)
     rows = convergence(folder, args.stop_time, master=args.master)
     with open(Path(folder) / "convergence.csv", "w", newline="") as fh:
