@@ -1,6 +1,6 @@
 """The benchmark's problem: the paper's section 8 scene (Bastien & Schatzman, M2AN 2002) with n branches, and
-the paper's Table 1 (the order alpha and constant C of eps(h) it printed), which the measured table is set
-beside.
+the paper's Table 1 (the order alpha, the constant C and the correlation r of eps(h) it printed, and the
+protocol that made it), which the measured tables are set beside (``table1.py``, ``work_precision.py``).
 
 m = 1 kg, k0 = 0, the spectrum k(s) = 1, eta(s) = s + 0.1 on s in [0, 1] (k_i = 1/n, eta_i = 0.1 + i/n), F =
 0.45 cos(0.5 t) N; the error of a run is measured on the output grid of :data:`OUTPUT` (s).
@@ -18,6 +18,17 @@ PAPER_TABLE_1 = {  # (q, n): (alpha, C) as printed in Bastien & Schatzman (2002)
     ("2", 3): (1.00165, 0.75175), ("2", 10): (1.00278, 0.85304), ("2", 100): (1.00196, 1.34671),
     ("2", 700): (1.00215, 2.00740), ("2", 1500): (1.00215, 2.36276),
 }
+PAPER_CORRELATION = {  # (q, n): r, the correlation of the points (log h, log eps) printed beside them
+    ("inf", 3): 0.999998, ("inf", 10): 0.999998, ("inf", 100): 0.999998, ("inf", 700): 0.999999,
+    ("inf", 1500): 0.999998,
+    ("2", 3): 0.999998, ("2", 10): 0.999996, ("2", 100): 0.999998, ("2", 700): 0.999998, ("2", 1500): 0.999998,
+}
+# Section 8's protocol: the n of Table 1 and of the figures 3-5, the horizon T (s), the steps of the figures'
+# runs (N = 10^6, h = T / N), and Table 1's grid h_j = h_min^((R - j)/R) h_max^(j/R), j = 0..R
+PAPER_NS = (3, 10, 100, 700, 1500)
+PAPER_T = 500.0
+PAPER_FIGURE_STEPS = 1_000_000
+PAPER_GRID = dict(R=99, h_min=1e-6, h_max=1e-2)
 OUTPUT = 0.1  # s: the output interval, the grid on which a run's error is measured
 
 

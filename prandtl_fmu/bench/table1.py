@@ -36,11 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .paper import PAPER_TABLE_1, paper_scene
+from .paper import PAPER_CORRELATION, PAPER_FIGURE_STEPS, PAPER_GRID, PAPER_NS, PAPER_T, PAPER_TABLE_1, paper_scene
 
-PAPER_NS = (3, 10, 100, 700, 1500)
-LOOP_WINDOW = (400.0, 500.0)  # s: the figures' time window
-LOOP_STEP = 5e-4  # s: N = 10^6 steps over T = 500
+LOOP_WINDOW = (400.0, PAPER_T)  # s: the figures' time window
+LOOP_STEP = PAPER_T / PAPER_FIGURE_STEPS  # s: N = 10^6 steps over T = 500
 FIGURES = {"figure3": (3, 10), "figure4": (100, 700), "figure5": (1500,)}
 CHUNK_STEPS = 4_000_000  # coarse steps per kernel call: the progress bar and Ctrl-C act between calls
 
@@ -74,15 +73,16 @@ class Protocol:
 
 
 PROTOCOLS = {
-    "paper": Protocol("paper", 1e-6, 1e-2, 99, 500.0, PAPER_NS, held=False),
+    "paper": Protocol("paper", PAPER_GRID["h_min"], PAPER_GRID["h_max"], PAPER_GRID["R"], PAPER_T, PAPER_NS,
+                      held=False),
     # the convention search: the full T and the paper's n, 12 values of h down to 1e-4 (fits over two sub-ranges
     # of the same runs show the reduction does not move C)
-    "search": Protocol("search", 1e-4, 1e-2, 11, 500.0, PAPER_NS),
+    "search": Protocol("search", 1e-4, 1e-2, 11, PAPER_T, PAPER_NS),
     # the scheme's candidates: the load at t_{p+1} (the g(t_{p+1}) of (1.12)), at the middle of the step, and
     # the symplectic Euler (x and u with the old velocity, y with the new forces)
-    "search-theta1": Protocol("search-theta1", 1e-4, 1e-2, 11, 500.0, PAPER_NS, theta=1.0),
-    "search-theta05": Protocol("search-theta05", 1e-4, 1e-2, 11, 500.0, PAPER_NS, theta=0.5),
-    "search-symplectic": Protocol("search-symplectic", 1e-4, 1e-2, 11, 500.0, PAPER_NS, "symplectic"),
+    "search-theta1": Protocol("search-theta1", 1e-4, 1e-2, 11, PAPER_T, PAPER_NS, theta=1.0),
+    "search-theta05": Protocol("search-theta05", 1e-4, 1e-2, 11, PAPER_T, PAPER_NS, theta=0.5),
+    "search-symplectic": Protocol("search-symplectic", 1e-4, 1e-2, 11, PAPER_T, PAPER_NS, "symplectic"),
     # the horizon's candidates: the max over [0, T] with a shorter T (n = 3 and 10 reach their largest error
     # in the first period, n >= 100 later)
     "search-T8": Protocol("search-T8", 1e-4, 1e-2, 11, 8.0, PAPER_NS),
@@ -264,7 +264,8 @@ def table(records, protocol: Protocol, q, norm, time_norm, factor, h_range=None)
         alpha, b, r = fit(hs, eps)
         paper_alpha, paper_c = PAPER_TABLE_1.get((q, n), (math.nan, math.nan))
         rows.append(dict(q=q, n=n, alpha=alpha, C=FACTORS[factor](b, alpha), r=r, paper_alpha=paper_alpha,
-                         paper_C=paper_c, h_count=len(chosen), h_min=hs[0], h_max=hs[-1]))
+                         paper_C=paper_c, paper_r=PAPER_CORRELATION.get((q, n), math.nan), h_count=len(chosen),
+                         h_min=hs[0], h_max=hs[-1]))
     return rows
 
 
