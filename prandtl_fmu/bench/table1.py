@@ -12,14 +12,17 @@ of the fine run (``kernels/table1.py``). Each (n, h) is one lockstep run of h an
 (cost per node: the stack's depth, not n), written to DIR/runs/ as it finishes (``--resume`` skips those); the
 runs go to dask.distributed when it is installed (the ``sweep`` extra), else one after the other.
 
-Each run keeps, for three kinds of node (coarse nodes; fine nodes against the linear interpolant; fine nodes
-against the coarse value held over its step), the maxima over [0, T] of the components of the difference
-(``kernels/table1.MEASURES``). From them, without another run:
+Each run keeps, for the kinds of node (coarse nodes; fine nodes against the linear interpolant; fine nodes
+against the coarse value held over its step, except in the paper protocol), the maxima over [0, T] of the
+components of the difference (``kernels/table1.MEASURES``). From them, without another run:
 
-* ``DIR/table1_paper.csv`` (q, n, alpha, C, r, then the paper's values and how many h were done): the paper's
-  definition read literally: plain l^q over the n + 2 components, max over the interpolants, factor 2 C;
-* ``DIR/table1_candidates.csv``: every convention of the search (``NORMS`` x ``TIMES`` x ``FACTORS`` x h
-  ranges), each with its ten (q, n) rows, its largest deviation from the printed C, and the printed values;
+* ``DIR/table1_paper.csv`` (``table1_<protocol>.csv`` for the others; q, n, alpha, C, r, then the paper's
+  values and how many h were done): the paper's definition read literally: plain l^q over the n + 2
+  components, max over the interpolants, factor 2 C;
+* ``DIR/table1_candidates_<protocol>.csv``: every convention of the search (``NORMS`` x ``TIMES`` x
+  ``FACTORS`` x h ranges), each with its (q, n) rows and ratio to the printed C; :func:`merge` gathers those of
+  several protocols into one table, a row per convention (docs/bench/table1_candidates.csv);
+* ``DIR/table1_eps.png``: eps(h) against h beside the paper's 2 C h^alpha;
 * ``DIR/figure3.png`` .. ``figure5.png``: the paper's figures 3-5, the loops {x(t), F(t) - m x''(t)} over
   400 <= t <= 500 with N = 10^6 (h = 5e-4).
 """
@@ -75,8 +78,8 @@ class Protocol:
 PROTOCOLS = {
     "paper": Protocol("paper", PAPER_GRID["h_min"], PAPER_GRID["h_max"], PAPER_GRID["R"], PAPER_T, PAPER_NS,
                       held=False),
-    # the convention search: the full T and the paper's n, 12 values of h down to 1e-4 (fits over two sub-ranges
-    # of the same runs show the reduction does not move C)
+    # the convention search: the full T and the paper's n, 12 values of h down to 1e-4 (fits over its two halves
+    # show how much the range moves C: a few per cent)
     "search": Protocol("search", 1e-4, 1e-2, 11, PAPER_T, PAPER_NS),
     # the scheme's candidates: the load at t_{p+1} (the g(t_{p+1}) of (1.12)), at the middle of the step, and
     # the symplectic Euler (x and u with the old velocity, y with the new forces)
@@ -182,9 +185,11 @@ def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progre
                 seconds=seconds, steps=total)
 
 
-def measure_task(n: int, j: int, h: float, T: float, stepper: str, theta: float = 0.0, held: bool = True) -> dict:
-    """One (n, h_j) of a protocol: the record written to DIR/runs/ (a dask task: plain arguments, plain result)."""
-    record = lockstep_run(paper_scene(n, T), h, stepper, theta=theta, held=held)
+def measure_task(n: int, j: int, h: float, T: float, stepper: str, theta: float = 0.0, held: bool = True,
+                 progress=None) -> dict:
+    """One (n, h_j) of a protocol: the record written to DIR/runs/ (a dask task: plain arguments, plain result).
+    ``progress(coarse_steps)`` is called after each chunk (in-process runs only)."""
+    record = lockstep_run(paper_scene(n, T), h, stepper, progress=progress, theta=theta, held=held)
     record.update(n=n, j=j, h=h, T=T, stepper=stepper, theta=theta)
     return record
 
@@ -212,6 +217,8 @@ def open_folder(folder: str, protocol: Protocol, resume: bool) -> dict:
     elif existing:
         raise Table1Error(f"{folder}/runs: runs without a protocol.json: not a folder of this command")
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
+    for stale in glob.glob(os.path.join(folder, "runs", "*.partial")):  # a run stopped while being written
+        os.remove(stale)
     with open(manifest_path, "w") as fh:
         json.dump(protocol.manifest(), fh)
     done = {}
@@ -500,12 +507,12 @@ def run(folder: str, protocol_name: str = "paper", resume: bool = False, workers
         if use_dask:
             _run_dask(folder, protocol, todo, done, scheduler, pool, bar)
         else:
+            advance = None if bar is None else (lambda coarse: bar.update(3 * coarse))  # h and twice h/2
             for n, j, h in todo:
-                record = measure_task(n, j, h, protocol.T, protocol.stepper, protocol.theta, protocol.held)
+                record = measure_task(n, j, h, protocol.T, protocol.stepper, protocol.theta, protocol.held,
+                                      advance)
                 _write_run(folder, record)
                 done[(n, j)] = record
-                if bar is not None:
-                    bar.update(protocol.work(h))
     finally:
         if bar is not None:
             bar.close()
