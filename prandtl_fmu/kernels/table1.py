@@ -64,6 +64,9 @@ def plain_sums(params):
 def _cell(params, plain, with_c, lo, hi, a, b, g):
     """(max_i |D_i|, sum_i D_i^2, sum_i k_i D_i^2) over the branches [lo, hi) of D_i = a + b eta_i + g c_i."""
     eta, c, k = params[stack.ETA_ROW], params[stack.C_ROW], params[stack.K_ROW]
+    if b == 0.0 and (g == 0.0 or not with_c):  # the same slope on both sides (the usual case): D_i = a
+        k1 = params[stack.K_SUM, hi] - params[stack.K_SUM, lo]
+        return abs(a), (hi - lo) * a * a, k1 * a * a
     if hi - lo <= SHORT or (with_c and g != 0.0):
         largest = square = weighted = 0.0
         for i in range(lo, hi):
