@@ -104,6 +104,25 @@ def test_a_delay_and_a_history_against_their_transfer_functions():
         assert d.error[0] <= 1e-3
 
 
+@pytest.mark.parametrize("A", [0.002, 0.01, 0.05])
+def test_dahl_friction_against_its_steady_loop(A):
+    """Dahl's law with exponent 1 is rate independent; on its steady cycle the reversal force is
+    F_r = F_c tanh(sigma A / F_c), the rising branch F(x) = F_c (1 - (1 + F_r / F_c) exp(-sigma (x + A) / F_c)),
+    so D = 2 int F dx in closed form and a_1 by a Gauss rule here."""
+    sigma, force = 50.0, 0.4
+    d = describe_amplitudes(element(spring={"k0": 1.0}, dahl={"sigma": sigma, "force": force}), [A])
+    a = sigma * A / force
+    ratio = math.tanh(a)
+    D = 2 * force * (2 * A - (1 + ratio) * force / sigma * (1 - math.exp(-2 * a)))
+    nodes, weights = np.polynomial.legendre.leggauss(200)
+    theta = 0.5 * math.pi * nodes
+    rising = force * (1 - (1 + ratio) * np.exp(-sigma * (A * np.sin(theta) + A) / force))
+    a1 = 2 / math.pi * 0.5 * math.pi * np.sum(weights * rising * np.sin(theta))  # the falling half alike
+    assert d.method == ("quadrature",)
+    assert d.stiffness[0] == pytest.approx(1.0 + a1 / A, rel=1e-3)
+    assert d.dissipation[0] == pytest.approx(D, rel=1e-3)
+
+
 def _iwan(chi, beta=0.5):
     return element(branches={"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 1e6, "chi": chi,
                                                               "beta": beta}})
@@ -236,6 +255,20 @@ def test_the_two_sweeps_of_a_duffing_oscillator_find_both_sides_of_the_jump():
         assert down[frequency] == pytest.approx(roots[0], rel=0.03)
     for frequency in (0.14, 0.18, 0.31):  # one branch only: both sweeps agree
         assert up[frequency] == pytest.approx(down[frequency], rel=2e-3)
+
+
+def test_a_mass_with_a_history_against_its_transfer_function():
+    """A linear scene with memory (implicit, order 1, refined until X settles to 1e-3): X = F0 / (k0 + w_1 /
+    (r_1 + i w) - m w^2 + i c w); one sweep (a history is linear)."""
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.2}, history={"weight": [0.3],
+                                                                                      "rate": [2.0]})
+    f = np.array([0.1, 0.2])
+    r = frequency_response(scene, 1.0, f)
+    w = 2 * math.pi * f
+    impedance = 1.0 + 0.3 / (2.0 + 1j * w) - w**2 + 0.2j * w
+    assert r.stepper == "implicit" and r.sweep == ("up", "up")
+    assert np.allclose(r.amplitude, 1 / np.abs(impedance), rtol=1e-3)
+    assert np.allclose(r.phase, -np.angle(impedance), atol=1e-3)
 
 
 def test_a_mass_that_friction_holds_does_not_move():

@@ -89,6 +89,7 @@ def test_scenes_the_command_refuses(tmp_path, capsys):
          ["--amplitudes", "0.1"], "[delay]"),
         (write(tmp_path, {"spring": {"k0": -1.0}}, "broken.toml"), ["--amplitudes", "0.1"], "k0"),
         (str(tmp_path / "missing.toml"), ["--amplitudes", "0.1"], "missing.toml"),
+        ("networks/two-masses-slider", ["--amplitudes", "0.1"], "[network]"),
     ]
     for scene, arguments, culprit in cases:
         status = main(["describe", scene, *arguments, "--out", str(out)])

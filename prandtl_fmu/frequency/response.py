@@ -89,9 +89,9 @@ class Response:
 
 
 def is_nonlinear(scene) -> bool:
-    """Whether the response may depend on the amplitude (branches, a cubic spring, friction, memory)."""
-    return any(getattr(scene, name) is not None for name in ("branches", "cubic", "friction", "delay", "history",
-                                                             "dahl"))
+    """Whether the response may depend on the amplitude (branches, a cubic spring, friction, Dahl; a delay and
+    a history are linear)."""
+    return any(getattr(scene, name) is not None for name in ("branches", "cubic", "friction", "dahl"))
 
 
 def choose_stepper(scene, stepper: Optional[str] = None) -> str:
