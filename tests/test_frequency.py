@@ -70,6 +70,27 @@ def test_springs_alone_and_a_dashpot_at_a_frequency():
     assert d.frequency == f
 
 
+@pytest.mark.parametrize("A", [0.01, 0.1])
+def test_a_masing_backbone_against_masings_rules_on_the_smooth_curve(A):
+    """[masing] hyperbolic: 200 branches interpolating F_b(x) = k x / (1 + k x / f_u) (exact on them); against
+    Masing's D = 8 int_0^A F_b - 4 A F_b(A) and the rising branch -F_b(A) + 2 F_b((A + x)/2) of the smooth curve,
+    to the interpolation's error (below 1e-3 here; docs/masing.md bounds it)."""
+    k, ultimate = 1000.0, 10.0
+    scene = element(masing={"kind": "hyperbolic", "k": k, "f_u": ultimate, "count": 200, "x_max": 0.2})
+    d = describe_amplitudes(scene, [A])
+
+    def backbone(x):
+        return k * x / (1 + k * np.abs(x) / ultimate)
+
+    nodes, weights = np.polynomial.legendre.leggauss(400)
+    D = 8 * 0.5 * A * np.sum(weights * backbone(0.5 * A * (nodes + 1))) - 4 * A * backbone(A)
+    theta = 0.5 * math.pi * nodes
+    a1 = np.sum(weights * (-backbone(A) + 2 * backbone((A + A * np.sin(theta)) / 2)) * np.sin(theta))
+    assert d.method == ("exact",)
+    assert d.stiffness[0] == pytest.approx(a1 / A, rel=1e-3)
+    assert d.dissipation[0] == pytest.approx(D, rel=1e-3)
+
+
 def test_coulomb_friction_on_the_mass_dissipates_4_alpha_A():
     scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 0.3})
     d = describe_amplitudes(scene, [0.2, 2.0])
