@@ -9,7 +9,8 @@ period the first harmonic of x over it,
     x_1(t) = Re(X exp(i omega t)) = amplitude cos(omega t + phase),  amplitude = |X| (m), phase = arg X (rad),
 
 is compared with the last one's. **The settling test** (:func:`prandtl_fmu.frequency.settled`): the run is
-steady when the relative change d_p of X over the last period, plus the geometric tail d_p r / (1 - r) of the
+steady when the relative change d_p of X over the last period (or, if larger, the drift |x(end) - x(start)|
+of the period against |X|: a periodic motion comes back), plus the geometric tail d_p r / (1 - r) of the
 changes still to come (r the larger of the last two ratios d_p / d_(p-1)), is at most tolerance / 4, after
 at least four periods (or when X repeats to 1e-12); past MAX_PERIODS periods the frequency is refused with
 the change reached. Then M is doubled (from the settled state) until two successive M agree to the tolerance
@@ -240,8 +241,10 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
         if not np.all(np.isfinite(xs)):
             raise NotSettled(f"{scene.source}: at f = {frequency!r} Hz x is not finite (an overflow)")
         new = complex(float(xs @ kernel_cos), -float(xs @ kernel_sin))
+        drift = abs(x - start[0])  # a periodic motion comes back: a drift (a ratchet) has no steady harmonic
         if harmonic is not None:
-            change = abs(new - harmonic) / abs(new) if new != 0 else (0.0 if harmonic == 0 else math.inf)
+            moved = max(abs(new - harmonic), drift)
+            change = moved / abs(new) if new != 0 else (0.0 if moved == 0 else math.inf)
             changes.append(change)
             if change <= 1e-12 or settled(changes, tolerance):
                 return new, (x, v, None if u is None else u.copy()), number + 1
