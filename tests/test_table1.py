@@ -211,3 +211,15 @@ def test_the_runs_on_dask_give_the_serial_table(tmp_path, monkeypatch):
     parallel = table1.run(str(tmp_path / "dask"), "tiny", workers=2, figures_too=False)
     assert parallel["new_runs"] == serial["new_runs"] == 8
     assert _table(tmp_path / "dask") == _table(tmp_path / "serial")
+
+
+def test_the_figures_loops_are_the_reaction_of_the_springs_within_the_strength():
+    """Figures 3-5 plot F - m x'' = sum k_i u_i (k0 = 0): on the window, bounded by the strength sum k_i eta_i
+    (|u_i| <= eta_i), reached when every branch slides (n = 100: plateaus)."""
+    for n in (3, 100):
+        x, reaction = table1.loops(n, h=5e-3, window=(60.0, 80.0))
+        assert x.shape == reaction.shape and len(x) == 2001
+        strength = sum((0.1 + i / n) / n for i in range(1, n + 1))
+        assert np.abs(reaction).max() <= strength * (1 + 1e-12)
+        if n == 100:
+            assert np.abs(reaction).max() > strength * (1 - 1e-9)  # the plateau of full slip
