@@ -433,6 +433,7 @@ MORE_ENTRY_POINTS = [
     "prandtl_fmu.connector.Connector", "prandtl_fmu.connector.displacement_response",
     "prandtl_fmu.sweep.sweep", "prandtl_fmu.fmu.build.build_fmu",
     "prandtl_fmu.identify.fit", "prandtl_fmu.identify.fit_continuum",
+    "prandtl_fmu.frequency.describe_amplitudes", "prandtl_fmu.frequency.frequency_response",
 ]
 
 
@@ -454,7 +455,7 @@ def api_reference() -> str:
         qualname = getattr(value, "__qualname__", None)
         if home is None or qualname is None:  # a registry (STEPPERS): say what it holds
             lines += [f"## `{public}`", "", f"`{public}` = `{{{', '.join(repr(k) for k in value)}}}`: "
-                      f"{type(value).__name__}", ""]
+                      "a mapping of names to modules", ""]
             continue
         lines += [f"## `{public}`", "", f"::: {home}.{qualname}", "    options:", "        show_root_heading: false",
                   ""]

@@ -8,8 +8,10 @@
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
     prandtl-fmu sweep SCENE SWEEP.toml [--scheduler ADDRESS] [--workers N] [--out DIR] [--resume]
+    prandtl-fmu describe SCENE (--amplitudes A,... [--frequency F] | --force-amplitude F0 --frequencies f,...)
+                         [--out CSV] [--plot PNG] [--tolerance R] [--stepper S] [--workers N | --scheduler ADDRESS]
     prandtl-fmu scenes
-    prandtl-fmu bench [--quick] [--out DIR] [--from-csv] [--networks]
+    prandtl-fmu bench [--quick] [--out DIR] [--from-csv] [--networks] [--table1 --protocol P [--resume] ...]
     prandtl-fmu bench --table1 [--protocol paper|search|quick|...] [--out DIR] [--resume] [--workers N] [--n N]
     prandtl-fmu --version
 
