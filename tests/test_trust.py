@@ -477,10 +477,15 @@ def test_a_stop_time_shorter_than_a_step_is_one_short_step(stop_time):
                                "output_interval": 1e-3})
     result = simulate(scene)
     assert list(result.time) == [0.0, stop_time]
+    assert result.x[1] > 0.0  # one step of stop_time: it moved (v0 = 1)
     element = Element(scene)
     element.advance(stop_time, 0.0, scene_load=True)
-    assert result.x[1] == element.x  # one step of stop_time
-    assert result.x[1] > 0.0  # it moved (v0 = 1)
+    if stop_time < 1e-9 * 1e-3:
+        # an advance below the rounding threshold (1e-9 h) is a master's clock rounding: it takes no step
+        # (issue 44.2); a whole run that short is still one short step (the run asked for is that run)
+        assert (element.x, element.v) == (0.0, 1.0)
+    else:
+        assert result.x[1] == element.x  # one step of stop_time
     assert np.all(np.isfinite(result.time)) and np.all(np.isfinite(result.x))
 
 
