@@ -254,7 +254,7 @@ def test_the_scalars_in_the_sanitized_c_host(tmp_path_factory):
     scene = parse_scene_of("element")
     n = scene.branches.n
     element = Element(scene)
-    commands, expected, t = ["setup:0", "enter", "exit"], [], 0.0
+    commands, expected, t = ["setup:0", "enter", "setb:scene_load:0", "exit"], [], 0.0  # F alone, as the element
     for force, size in ((0.9, 0.1), (-1.1, 0.05), (0.4, 0.13), (1.3, 0.1)):
         commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}"] + [f"getr:u_{i}" for i in range(1, n + 1)]
         element.time = t

@@ -680,6 +680,7 @@ def ran(run):
 
 
 START = ["setup:0", "enter", "exit"]
+START_BY_F = ["setup:0", "enter", "setb:scene_load:0", "exit"]  # an element driven by F alone, as the library's
 
 
 def test_the_c_host_steps_the_network_as_the_library_and_refuses_nulls_and_bad_references(built, host2,
@@ -693,7 +694,7 @@ def test_the_c_host_steps_the_network_as_the_library_and_refuses_nulls_and_bad_r
     fmu = native(built, "joint", 2, tmp_path_factory.mktemp("joint_native"))
     scene = scene_of("joint")
     element = NetworkElement(scene)
-    commands, t = list(START), 0.0
+    commands, t = list(START_BY_F), 0.0
     expected = []
     for size, force in random_steps(8, 9):
         commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}", "getr:x_a", "getr:v_b", "getr:reaction",
@@ -761,7 +762,7 @@ def test_the_fmi3_binary_in_the_c_host(built, tmp_path_factory):
     scene = scene_of("chain3")
     element = NetworkElement(scene)
     element.advance(0.1, 1.5)
-    run = ran(run_trust(host, fmu, ["nullc", "setup:0", "enter", "exit", "nulla:F", "setr:F:1.5", "step:0:0.1",
+    run = ran(run_trust(host, fmu, ["nullc", *START_BY_F, "nulla:F", "setr:F:1.5", "step:0:0.1",
                                     "getr:x_n3", "geta:x:3", "getr:99999"]))
     assert run.status("step:0:0.1") == OK and run.status("getr:99999") == ERROR
     values = [value for _, value in run.values]

@@ -10,8 +10,8 @@ the C layer's table of variables (scene.h's ``VARS``) is made from the same list
 * ``stubs.c``, generated (``assemble.stubs``): numba's error path, which a kernel reaches only when it raises, sets a
   flag instead of calling Python; the few functions of numba's runtime that ``exact``'s arrays call
   (``assemble.NRT``); ``numba_nextafter`` is C's ``nextafter``;
-* ``fmi2.c`` or ``fmi3.c``, the FMI layer, over ``element.h`` or ``connector.h`` (with ``common.h``,
-  ``state.h``) and the generated ``scene.h``.
+* ``fmi2.c`` or ``fmi3.c``, the FMI front (``front.h``), over the instance layer ``core.h`` (with ``state.h``,
+  ``calls.h``) and the kind ``element.h`` or ``connector.h`` (with ``common.h``) and the generated ``scene.h``.
 
 The element's white noise (``noise_intensity``, ``noise_seed``, ``noise_unit``): the kernels' noisy ``advance``
 beside the deterministic one, the steppers' refusals of a noise as a table (``kernels.noise_refusal``), the
@@ -366,7 +366,10 @@ def _scene_header(scene, variables, guid, steppers, compiled, scene_bytes, array
         what, index = _what(row.name, memory_names)
         lines.append(f'    {{{row.value_reference}, {C_TYPES[row.type]}, {what}, {index}, "{row.name}"}},')
         count += 1
-    lines += ["};", f"#define N_VARS {count}", "#endif", ""]
+    first = variables[0].value_reference  # (in order, without a gap: find() indexes VARS by vr - VR_FIRST)
+    if [row.value_reference for row in variables] != list(range(first, first + count)):
+        raise NativeBuildError("the FMU variables' value references are not in order without a gap")
+    lines += ["};", f"#define N_VARS {count}", f"#define VR_FIRST {first}u", "#endif", ""]
     return "\n".join(lines)
 
 

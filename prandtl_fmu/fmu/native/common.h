@@ -21,6 +21,10 @@
 #include <string.h>
 
 #include "scene.h"
+#ifndef NETWORK /* the element's scene.h (a network's says 1) */
+#define NETWORK 0
+#endif
+#define ELEMENT_CONNECTOR (CONNECTOR && !NETWORK) /* the element as a connector (connector.h) */
 
 /* set by the stubs of numba's error path (stubs.c): a kernel raised */
 extern __thread int prandtl_kernel_failed;
@@ -37,6 +41,18 @@ enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P
 /* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
 enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8 };
 #define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
+/* the first fields of every kind's Instance: the host's (its environment and logger, which the FMI version's
+ * layer calls: emit()), the logging, the phase and whether the last step failed */
+#define INSTANCE_HEAD                                                                                          \
+    char* name;                                                                                                \
+    void* env;                                                                                                 \
+    void* logger;                                                                                              \
+    int logging, phase, last_step_failed
+/* the first fields of every kind's State (state.h): the magic, the version and size, the scene's digest */
+#define STATE_HEAD                                                                                             \
+    char header[24];                                                                                           \
+    uint32_t version, size;                                                                                    \
+    char digest[65]
 /* statuses: the same numbers in FMI 2.0 and 3.0 */
 enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
 
@@ -189,15 +205,6 @@ static const char* parameter_problem(const double* par, const double* cbranch, c
 }
 
 
-static const Var* find(unsigned vr, int type)
-{
-    int i;
-    for (i = 0; i < N_VARS; i++)
-        if (VARS[i].vr == vr && VARS[i].type == type)
-            return &VARS[i];
-    return NULL;
-}
-
 /* the length of the branches' state in use (stack.used): the memory stack's header and pieces, or n elongations */
 static size_t branch_state_used(const double* u)
 {
@@ -210,42 +217,117 @@ static size_t branch_state_used(const double* u)
 
 #endif
 
+/* the variable of value reference ``vr`` and ``type``, or NULL: VARS holds the value references of the FMI version
+ * built, in order from VR_FIRST on, without a gap but the network's holes (vr UINT32_MAX) */
+static const Var* find(unsigned vr, int type)
+{
+    unsigned index = vr - (unsigned)VR_FIRST; /* (below VR_FIRST: wraps beyond N_VARS) */
+    if (index < (unsigned)N_VARS && VARS[index].vr == vr && VARS[index].type == type)
+        return &VARS[index];
+    return NULL;
+}
+
+/* ------------------------------------------------------------------ the clock (the element's, a network's) */
+
+/* time = origin + steps * grid (grid 0: none yet; driver.Element's _origin, _steps, _grid) */
+typedef struct { double origin, grid; int64_t steps; } Clock;
+
+static double clock_time(const Clock* k) { return k->steps ? k->origin + (double)k->steps * k->grid : k->origin; }
+
+/* Element.time = value: within 1e-9 of the grid's step of the time, the same instant (the grid goes on) */
+static void clock_set(Clock* k, double value)
+{
+    if (k->grid != 0.0 && fabs(value - clock_time(k)) <= 1e-9 * k->grid)
+        return;
+    k->origin = value;
+    k->steps = 0;
+}
+
+/* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
+ * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
+ * rounding, dropped */
+static void split_duration(double duration, double h, double* whole, double* rest)
+{
+    double ratio = duration / h, nearest = nearbyint(ratio);
+    if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
+        *whole = nearest;
+        *rest = 0.0;
+        return;
+    }
+    *whole = floor(ratio);
+    *rest = duration - *whole * h;
+    if (!(*rest >= 1e-9 * h))
+        *rest = 0.0;
+}
+
+/* Element.advance's (NetworkElement.advance's) checks of a duration in steps of h, in the library's words: NULL
+ * and its split (whole, rest; (0, 0): no step at all), or why not */
+static const char* plan_advance(double duration, double h, double* whole, double* rest, char* buffer, size_t size)
+{
+    if (duration < SHORTEST_STEP) {
+        snprintf(buffer, size, NETWORK ? "the duration is shorter than %g s" : "the duration is shorter than %g s (a "
+                 "step's square underflows)", SHORTEST_STEP);
+        return buffer;
+    }
+    if (!(duration / h < MAX_STEPS)) {
+        if (NETWORK)
+            snprintf(buffer, size, "the duration is more than 2^53 steps of h = %.17g s", h);
+        else
+            snprintf(buffer, size, "the duration is more than %.17g internal steps (2^53): advance by shorter "
+                     "durations or with a larger step", MAX_STEPS);
+        return buffer;
+    }
+    split_duration(duration, h, whole, rest);
+    if (*whole + (*rest > 0) > ADVANCE_BUDGET) { /* never run for days */
+        snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
+                 "steps of one advance: advance by shorter durations%s or with a larger step", duration,
+                 *whole + (*rest > 0), h, ADVANCE_BUDGET, NETWORK ? "" : " (communication steps)");
+        return buffer;
+    }
+    return NULL;
+}
+
+/* the clock after ``whole`` steps of h and a last one of ``rest`` from where it stands on the grid of h (a new
+ * step: the grid starts again at the time; a short last step: again where it ends) */
+static void clock_regrid(Clock* k, double h)
+{
+    if (k->grid != h) {
+        k->origin = clock_time(k);
+        k->steps = 0;
+        k->grid = h;
+    }
+}
+
+static void clock_advanced(Clock* k, double whole, double rest, double h)
+{
+    if (rest > 0) {
+        k->origin = k->origin + (double)(k->steps + (int64_t)whole) * h + rest;
+        k->steps = 0;
+    } else {
+        k->steps += (int64_t)whole;
+    }
+}
+
+/* whether a clock holds a finite time (origin, steps and grid) */
+static int clock_valid(const Clock* k)
+{
+    return isfinite(k->origin) && isfinite(k->grid) && k->grid >= 0 && k->steps >= 0 &&
+           (double)k->steps <= MAX_STEPS && (k->grid > 0 || k->steps == 0) && isfinite(clock_time(k));
+}
+
 /* whether an output's value may be shown: finite (every stepper books its energy account, as driver.Element) */
 static int showable(const Var* var, double value) { (void)var; return isfinite(value); }
 
-static uint64_t fnv1a(const unsigned char* bytes, size_t size)
+/* FNV-1a over ``size`` bytes, from ``hash`` (FNV_BASIS: from the start) */
+#define FNV_BASIS 1469598103934665603ULL
+static uint64_t fnv1a(uint64_t hash, const unsigned char* bytes, size_t size)
 {
-    uint64_t hash = 1469598103934665603ULL;
     size_t i;
     for (i = 0; i < size; i++) {
         hash ^= bytes[i];
         hash *= 1099511628211ULL;
     }
     return hash;
-}
-
-/* the head of a state blob (the first fields of the element's and the connector's State) */
-#define FILL_HEAD(s)                                                        \
-    do {                                                                    \
-        snprintf((s)->header, sizeof (s)->header, "%s", STATE_MAGIC);       \
-        (s)->version = STATE_VERSION;                                       \
-        (s)->size = (uint32_t)sizeof *(s);                                  \
-        snprintf((s)->digest, sizeof (s)->digest, "%s", DIGEST);            \
-    } while (0)
-
-/* what every state is checked for first: the magic, the version and size, the scene's digest, the checksum */
-static const char* head_problem(const char* header, uint32_t version, uint32_t size, size_t expected,
-                                const char* digest, uint64_t checksum, uint64_t computed)
-{
-    if (memcmp(header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
-        return "not a serialized state of a prandtl_fmu native FMU";
-    if (version != STATE_VERSION || size != expected)
-        return "a state of another version of the native runtime";
-    if (strncmp(digest, DIGEST, 65) != 0)
-        return "a state of another scene (its digest differs)";
-    if (checksum != computed)
-        return "its checksum does not match: the state was altered";
-    return NULL;
 }
 
 #if !NETWORK

@@ -42,28 +42,16 @@ typedef struct {
 } Element;
 
 typedef struct {
-    char header[24];
-    uint32_t version, size;
-    char digest[65];
+    STATE_HEAD;
     Element element;
     double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
     int initialized;
     double mpar[N_MEMP]; /* the memory's parameters the master set */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
-/* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
-#define MEM_MAX ((int64_t)MEM_FIXED + (int64_t)DELAY_BOUND + DELAY_HEAD + 5)
-#define STATE_EXTRA(s) ((s)->element.mem_len >= 0 && (s)->element.mem_len <= MEM_MAX ? \
-                        (size_t)(s)->element.mem_len : (size_t)-1)
-#define INSTANCE_EXTRA(c) ((size_t)(c)->el.mem_len)
-#define RELEASE_INSTANCE(c) release_memory(c)
-#define INSTANCE_FAILED(c) ((c)->memory_failed)
 
 typedef struct {
-    char* name;
-    void* env; /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
-    void* logger;
-    int logging, phase, last_step_failed;
+    INSTANCE_HEAD;
     Element el;
     /* what the master set */
     double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
@@ -77,6 +65,21 @@ typedef struct {
 } Instance;
 
 static double element_time(const Element* e) { return e->time; }
+
+/* the memory's arrays (core.h): the element's, its preview's and its checkpoint's */
+#define MEMORY_ARRAYS(c) {&(c)->el.mem, &(c)->preview.mem, &(c)->saved.mem}
+#define MEMORY_TAU(c) ((c)->mpar[1])
+#define MEMORY_SIZED(c, length) ((c)->el.mem_len = (c)->preview.mem_len = (c)->saved.mem_len = (length))
+/* the outputs that must be numbers after a step (core.h); no Integer to set (connector: the motion comes in) */
+#define STEP_OUTPUT(what) ((what) == W_FORCE || (what) == W_STIFFNESS || (what) == W_ENERGY)
+#define KIND_INTEGERS 1
+/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
+#define SETTINGS(to, from)                                                                                     \
+    COPY_FIELD(to, from, x_in), COPY_FIELD(to, from, v_in), COPY_FIELD(to, from, start_time),                  \
+        COPY_FIELD(to, from, par), COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, mpar)
+#define SETTABLE(what) ((what) == W_X || (what) == W_V || (what) == W_PARAM || (what) == W_CBRANCH || \
+                        (what) == W_MEMORY)
+#include "core.h"
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
@@ -115,60 +118,6 @@ static void hand_over(Instance* c)
 {
     memcpy(c->el.p, c->par, sizeof c->el.p);
     memcpy(c->el.cs, c->cbranch, sizeof c->el.cs);
-}
-
-/* ------------------------------------------------------------------ the memory's arrays */
-
-/* the memory's state of ``length`` values for the element, its preview and its checkpoint: NULL, or why not (out of
- * memory; the instance keeps its arrays) */
-static const char* allocate_memory(Instance* c, int64_t length, char* buffer, size_t size)
-{
-    double* arrays[3];
-    int i;
-    if (c->el.mem != NULL && length == c->el.mem_len)
-        return NULL;
-    for (i = 0; i < 3; i++)
-        arrays[i] = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
-    if (arrays[0] == NULL || arrays[1] == NULL || arrays[2] == NULL) {
-        for (i = 0; i < 3; i++)
-            free(arrays[i]);
-        snprintf(buffer, size, "out of memory for the state of the effects with memory (%.0f values: the delay's "
-                 "buffer at tau = %.17g s)", (double)length, HAS_DELAY ? c->mpar[1] : 0.0);
-        return buffer;
-    }
-    free(c->el.mem);
-    free(c->preview.mem);
-    free(c->saved.mem);
-    c->el.mem = arrays[0];
-    c->preview.mem = arrays[1];
-    c->saved.mem = arrays[2];
-    c->el.mem_len = c->preview.mem_len = c->saved.mem_len = length;
-    return NULL;
-}
-
-/* the memory's state sized for the parameters in use (el.mp: the delay's tau), at instantiation, at the exit of
- * initialization mode and at a reset: NULL, or why not */
-static const char* size_memory(Instance* c, char* buffer, size_t size)
-{
-    int64_t nd = delay_size(c->el.mp);
-    const char* problem;
-    if (!HAS_MEMORY)
-        return NULL;
-    if (nd < 0)
-        return memory_problem(c->el.mp, buffer, size);
-    problem = allocate_memory(c, MEM_FIXED + nd, buffer, size);
-    if (problem == NULL)
-        c->el.nd = nd;
-    return problem;
-}
-
-static void release_memory(Instance* c)
-{
-    free(c->el.mem);
-    free(c->preview.mem);
-    free(c->saved.mem);
-    c->el.mem = c->preview.mem = c->saved.mem = NULL;
-    c->el.mem_len = c->el.nd = 0;
 }
 
 /* a copy of an element (Connector.copy), its branches' state in the part in use only (the memory stack's pieces, as
@@ -236,83 +185,16 @@ static void defaults(Instance* c)
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
     c->x_in = c->v_in = 0.0;
-    c->start_time = 0.0;
-    c->initialized = 0;
-    c->phase = INSTANTIATED;
-    c->last_step_failed = 0;
-    {
-        double* mem = c->el.mem; /* the memory's arrays are kept (size_memory resizes them) */
-        int64_t length = c->el.mem_len;
-        memset(&c->el, 0, sizeof c->el);
-        c->el.mem = mem;
-        c->el.mem_len = length;
-    }
+    instantiated(c);
+    clear_element(&c->el);
     hand_over(c);
     memcpy(c->el.mp, c->mpar, sizeof c->el.mp);
-    {
-        char buffer[256];
-        const char* problem = size_memory(c, buffer, sizeof buffer);
-        c->memory_failed = problem != NULL;
-        if (problem != NULL) {
-            say(c, ST_ERROR, "instantiation refused: %s", problem);
-            return;
-        }
-    }
     prandtl_kernel_failed = 0;
-    reset(&c->el);
+    if (memory_at_instantiation(c))
+        reset(&c->el);
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
-
-/* the checksum of a state: its fixed part up to the checksum, then its memory's state (element.mem_len values,
- * which the caller knows the blob holds) */
-static uint64_t state_checksum(const State* s)
-{
-    uint64_t hash = fnv1a((const unsigned char*)s, offsetof(State, checksum));
-    const unsigned char* tail = (const unsigned char*)(s + 1);
-    size_t i, n = (size_t)s->element.mem_len * sizeof(double);
-    for (i = 0; i < n; i++) {
-        hash ^= tail[i];
-        hash *= 1099511628211ULL;
-    }
-    return hash;
-}
-
-static void capture(const Instance* c, State* s)
-{
-    memset(s, 0, sizeof *s);
-    FILL_HEAD(s);
-    s->element = c->el;
-    s->element.mem = NULL;
-    s->x_in = c->x_in;
-    s->v_in = c->v_in;
-    s->start_time = c->start_time;
-    memcpy(s->par, c->par, sizeof s->par);
-    memcpy(s->cbranch, c->cbranch, sizeof s->cbranch);
-    s->initialized = c->initialized;
-    memcpy(s->mpar, c->mpar, sizeof s->mpar);
-    if (c->el.mem_len > 0)
-        memcpy((double*)(s + 1), c->el.mem, (size_t)c->el.mem_len * sizeof(double));
-    s->checksum = state_checksum(s);
-}
-
-/* why the memory of a state blob (its parameters in use and set, its values after the fixed part) cannot be
- * restored, or NULL (Connector.set_state: memory.check_memory_state) */
-static const char* memory_state_problem(const State* s, char* buffer, size_t size)
-{
-    const Element* e = &s->element;
-    const char* problem;
-    if (!HAS_MEMORY)
-        return memory_values_problem(e->mp, NULL, e->nd, e->mem_len, e->time, buffer, size);
-    problem = memory_problem(e->mp, buffer, size);
-    if (problem == NULL)
-        problem = memory_problem(s->mpar, buffer, size);
-    if (problem != NULL)
-        return problem;
-    if (s->initialized && memcmp(s->mpar, e->mp, sizeof e->mp) != 0) /* fixed: set before initialization */
-        return "its memory's parameters in use are not those set";
-    return memory_values_problem(e->mp, (const double*)(s + 1), e->nd, e->mem_len, e->time, buffer, size);
-}
 
 /* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
  * values (a checksum detects accidents, not edits: a blob with a recomputed one is checked field by field) */
@@ -321,10 +203,6 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const Element* e = &s->element;
     const char* problem;
     int i;
-    const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
-                                    state_checksum(s));
-    if (head != NULL)
-        return head;
     if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
           isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0) &&
           (s->initialized == 0 || s->initialized == 1)))
@@ -343,19 +221,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
         problem = parameter_problem(s->par, s->cbranch, buffer, size);
     if (problem == NULL) /* the memory's parameters and state */
         problem = memory_state_problem(s, buffer, size);
-    if (problem == NULL && STACK) { /* the memory stack: stack.restore's rules, compiled (state_check) */
-        double* scratch = (double*)malloc(STATE_SCRATCH * sizeof(double));
-        int64_t code;
-        if (scratch == NULL)
-            return "out of memory";
-        prandtl_kernel_failed = 0;
-        code = state_check((double*)K, (double*)e->u, scratch);
-        free(scratch);
-        if (prandtl_kernel_failed)
-            return "its memory stack could not be checked";
-        if (code != 0)
-            return STATE_CHECK_REASONS[code - 1];
-    }
+    if (problem == NULL && STACK) /* the memory stack */
+        problem = stack_problem(K, e->u);
     if (problem == NULL) { /* Connector.set_state: its force (the memory's with it) and energy are numbers */
         const double* mem = HAS_MEMORY ? (const double*)(s + 1) : e->mp;
         double force, energy;
@@ -373,111 +240,60 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
 static int restore(Instance* c, const State* s)
 {
     char buffer[256];
-    const char* problem = state_problem(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, buffer, sizeof buffer);
     if (problem == NULL && HAS_MEMORY) /* the memory's arrays sized for the state's */
         problem = allocate_memory(c, s->element.mem_len, buffer, sizeof buffer);
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
     }
-    {
-        double* mem = c->el.mem; /* the instance's arrays, with the state's values */
-        c->el = s->element;
-        c->el.mem = mem;
-        if (HAS_MEMORY) {
-            memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
-            forget_memory_cache(mem);
-        }
-    }
-    c->x_in = s->x_in;
-    c->v_in = s->v_in;
-    c->start_time = s->start_time;
-    memcpy(c->par, s->par, sizeof c->par);
-    memcpy(c->cbranch, s->cbranch, sizeof c->cbranch);
-    memcpy(c->mpar, s->mpar, sizeof c->mpar);
+    restore_checked(c, s);
     return ST_OK;
 }
 
 /* ------------------------------------------------------------------ stepping */
 
-/* fmi2/3ExitInitializationMode: the coefficients checked and handed over, the memory sized for its parameters, the
- * element moved from x = 0 to the first input (connector_slave.exit_initialization_mode) */
-static int core_exit_initialization(Instance* c)
+/* the exit of initialization mode (core.h): the coefficients checked and handed over, the memory sized for its
+ * parameters, the element moved from x = 0 to the first input (connector_slave.exit_initialization_mode) */
+static const char* initialize(Instance* c, char* buffer, size_t size)
 {
-    char buffer[512], shown[40];
-    const char* problem;
-    if (c->phase != INITIALIZING) {
-        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
-        return ST_ERROR;
-    }
-    problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
+    char why[400], shown[40];
+    const char* problem = parameter_problem(c->par, c->cbranch, buffer, size);
     if (problem == NULL)
-        problem = memory_problem(c->mpar, buffer, sizeof buffer);
+        problem = memory_problem(c->mpar, buffer, size);
     if (problem == NULL && !(isfinite(c->x_in) && isfinite(c->v_in))) {
-        snprintf(buffer, sizeof buffer, "input x = %.17g, v = %.17g refused: the motion must be finite", c->x_in,
-                 c->v_in);
-        problem = buffer;
+        snprintf(buffer, size, "input x = %.17g, v = %.17g refused: the motion must be finite", c->x_in, c->v_in);
+        return buffer;
     }
     if (problem == NULL) {
         hand_over(c);
         memcpy(c->el.mp, c->mpar, sizeof c->el.mp); /* fixed: handed over here only */
-        problem = size_memory(c, buffer, sizeof buffer); /* the delay's buffer for the tau set */
+        problem = size_memory(c, buffer, size); /* the delay's buffer for the tau set */
     }
-    if (problem == NULL) {
-        char why[400];
+    if (problem != NULL)
+        return problem;
+    reset(&c->el);
+    c->el.time = c->start_time;
+    if (delay_time_problem(memory_of(&c->el), c->el.time, c->el.time, why, sizeof why) != NULL) {
+        snprintf(buffer, size, "the sample at t = %s s refused: %s", python_repr(c->el.time, shown, sizeof shown), why);
         reset(&c->el);
-        c->el.time = c->start_time;
-        if (delay_time_problem(memory_of(&c->el), c->el.time, c->el.time, why, sizeof why) != NULL) {
-            snprintf(buffer, sizeof buffer, "the sample at t = %s s refused: %s",
-                     python_repr(c->el.time, shown, sizeof shown), why);
-            problem = buffer;
-            reset(&c->el);
-        }
-    }
-    if (problem != NULL) {
-        say(c, ST_ERROR, "initialization refused: %s", problem);
-        return ST_ERROR;
+        return buffer;
     }
     move_to(&c->el, c->x_in, c->v_in, c->el.time); /* from x = 0 to the first input, monotonically */
-    c->initialized = 1;
-    c->phase = STEPPING;
-    return ST_OK;
-}
-
-/* the first output (force, stiffness, an energy) that is not a number to show at the inputs set last, or NULL */
-static const Var* unshowable_output(Instance* c, double* value)
-{
-    int i;
-    for (i = 0; i < N_VARS; i++) {
-        const Var* var = &VARS[i];
-        if (var->what != W_FORCE && var->what != W_STIFFNESS && var->what != W_ENERGY)
-            continue;
-        *value = real_value(c, var);
-        if (!showable(var, *value))
-            return var;
-    }
     return NULL;
 }
 
-/* fmi2/3DoStep; the FMI layer checked the call sequence */
-static int core_do_step(Instance* c, double t, double H)
+static void started(Instance* c) { (void)c; } /* (a connector has no load to tell of, no stepper to check) */
+
+/* a doStep (core.h): the input sample committed at the communication point (the master's clock only moves
+ * forward); a sample whose outputs would not be numbers is rolled back */
+static int step(Instance* c, double t, double H)
 {
     char buffer[512], why[400], shown[40];
-    const char* problem;
+    const char* problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
     const Var* overflowed;
     double value, time;
-    if (c->phase != STEPPING) {
-        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
-            "Terminate");
-        return ST_ERROR;
-    }
-    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
-        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
-            ">= 0 (and their sum finite)", t, H);
-        return ST_ERROR;
-    }
-    c->last_step_failed = 1;
-    problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
+    (void)H;
     if (problem != NULL) {
         say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
         return ST_DISCARD;
@@ -487,7 +303,6 @@ static int core_do_step(Instance* c, double t, double H)
             c->v_in);
         return ST_DISCARD;
     }
-    /* the input sample belongs to the communication point: commit it (the master's clock only moves forward) */
     time = t > c->el.time ? t : c->el.time;
     if (delay_time_problem(memory_of(&c->el), c->el.time, time, why, sizeof why) != NULL) { /* Connector.move_to */
         say(c, ST_DISCARD, "step from t = %.17g refused: the sample at t = %s s refused: %s; the state is unchanged",
@@ -505,26 +320,10 @@ static int core_do_step(Instance* c, double t, double H)
             overflowed != NULL ? overflowed->name : "the state", overflowed != NULL ? value : NAN);
         return ST_DISCARD;
     }
-    c->last_step_failed = 0;
     return ST_OK;
 }
 
-static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
-{
-    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_PARAM || var->what == W_CBRANCH ||
-                         var->what == W_MEMORY)) {
-        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
-        return ST_ERROR;
-    }
-    if (var->what == W_MEMORY && c->initialized && value != c->mpar[var->index]) { /* connector_slave._set_fixed */
-        char shown[40];
-        say(c, ST_ERROR, "parameter %s = %s refused: %s is fixed (an effect with memory) and cannot change after "
-            "initialization; the connector is unchanged", MEM_NAMES[var->index],
-            python_repr(value, shown, sizeof shown), MEM_NAMES[var->index]);
-        return ST_ERROR;
-    }
-    return ST_OK;
-}
+static int fixed_problem(Instance* c, const Var* var, double value) { return memory_fixed(c, var, value); }
 
 static void core_set_float(Instance* c, const Var* var, double value)
 {

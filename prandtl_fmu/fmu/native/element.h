@@ -40,8 +40,7 @@ typedef struct {
     double up[NB_PLAY];
     double kst[K_LEN];    /* FOLDS: the stack's parameters, referring to the elongations of the last fold */
     double account[4], out[3], erow[6], initial_energy;
-    double origin, grid;  /* the clock: time = origin + steps * grid (grid 0: none yet) */
-    int64_t steps;
+    Clock clock;          /* time = origin + steps * grid (grid 0: none yet) */
     double force;         /* the load of the last advance: force, plus the scene's [load] with scene_load */
     int scene_load;
     double mp[N_MEMP];    /* the effects with memory: their parameters in use (kernels.memory_layout) */
@@ -51,9 +50,7 @@ typedef struct {
 } Element;
 
 typedef struct {
-    char header[24];
-    uint32_t version, size;
-    char digest[65];
+    STATE_HEAD;
     Element element;
     double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
     int scene_load, stepper_valid, initialized;
@@ -62,29 +59,38 @@ typedef struct {
     Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
-/* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
-#define MEM_MAX ((int64_t)MEM_FIXED + (int64_t)DELAY_BOUND + DELAY_HEAD + 5)
-#define STATE_EXTRA(s) ((s)->element.mem_len >= 0 && (s)->element.mem_len <= MEM_MAX ? \
-                        (size_t)(s)->element.mem_len : (size_t)-1)
-#define INSTANCE_EXTRA(c) ((size_t)(c)->el.mem_len)
-#define RELEASE_INSTANCE(c) release_memory(c)
-#define INSTANCE_FAILED(c) ((c)->memory_failed)
+/* the memory's arrays (core.h): the element's and the checkpoint's */
+#define MEMORY_ARRAYS(c) {&(c)->el.mem, &(c)->saved_mem}
+#define MEMORY_TAU(c) ((c)->el.mp[1])
+#define MEMORY_SIZED(c, length) ((c)->el.mem_len = (length))
+/* the outputs that must be numbers after a step (core.h) */
+#define STEP_OUTPUT(what) ((what) == W_X || (what) == W_V || (what) == W_REACTION || (what) == W_STIFFNESS || \
+                           (what) == W_ENERGY)
+#define KIND_INTEGERS 0
+/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
+#define SETTINGS(to, from)                                                                                     \
+    COPY_FIELD(to, from, F), COPY_FIELD(to, from, step), COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, par), \
+        COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid),   \
+        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar)
+#define SETTABLE(what) ((what) == W_F || (what) == W_PARAM || (what) == W_CBRANCH || (what) == W_STEP || \
+                        (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT || (what) == W_MEMORY)
 
 /* what an advance changes (driver.Element.checkpoint): a step that fails is rolled back from it; the branches'
  * state is copied in its part in use only (the memory stack's pieces), into the instance's buffer */
 typedef struct {
-    double x, v, account[4], out[3], erow[6], origin, grid, force;
-    int64_t steps;
+    double x, v, account[4], out[3], erow[6], force;
+    Clock clock;
     int scene_load;
     size_t used;
 } Checkpoint;
 #define SAVED_U (NB_ARR > NB_PLAY ? NB_ARR : NB_PLAY)
+#define CHECKPOINTED(to, from)                                                                                 \
+    COPY_FIELD(to, from, x), COPY_FIELD(to, from, v), COPY_FIELD(to, from, account), COPY_FIELD(to, from, out), \
+        COPY_FIELD(to, from, erow), COPY_FIELD(to, from, clock), COPY_FIELD(to, from, force),                  \
+        COPY_FIELD(to, from, scene_load)
 
 typedef struct {
-    char* name;
-    void* env;         /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
-    void* logger;
-    int logging, phase, last_step_failed;
+    INSTANCE_HEAD;
     Element el;
     /* what the master set */
     double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
@@ -104,15 +110,7 @@ typedef struct {
 
 /* ------------------------------------------------------------------ the element */
 
-static double element_time(const Element* e) { return e->steps ? e->origin + (double)e->steps * e->grid : e->origin; }
-
-static void set_time(Element* e, double value)
-{
-    if (e->grid != 0.0 && fabs(value - element_time(e)) <= 1e-9 * e->grid)
-        return;
-    e->origin = value;
-    e->steps = 0;
-}
+static double element_time(const Element* e) { return clock_time(&e->clock); }
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
@@ -124,6 +122,8 @@ static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
 static double* memory_of(Element* e) { return e->mem != NULL ? e->mem : e->mp; } /* (no memory: never read) */
 #define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e), (e)->mp, memory_of(e), (e)->nd
 #define KERNEL(e, name) ((e)->play ? (damped(e) ? name##_cp : name##_np) : (damped(e) ? name##_c : name##_n))
+
+#include "core.h"
 
 static void record(Element* e, double t)
 {
@@ -147,63 +147,13 @@ static const char* memory_step_problem(const double* mp, double step, char* buff
     return buffer;
 }
 
-/* the memory's state (and the checkpoint's) of ``length`` values: NULL, or why not (out of memory; the instance
- * keeps its arrays) */
-static const char* allocate_memory(Instance* c, int64_t length, char* buffer, size_t size)
-{
-    double *mem, *saved;
-    if (c->el.mem != NULL && length == c->el.mem_len)
-        return NULL;
-    mem = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
-    saved = (double*)calloc((size_t)(length > 0 ? length : 1), sizeof(double));
-    if (mem == NULL || saved == NULL) {
-        free(mem);
-        free(saved);
-        snprintf(buffer, size, "out of memory for the state of the effects with memory (%.0f values: the delay's "
-                 "buffer at tau = %.17g s)", (double)length, HAS_DELAY ? c->el.mp[1] : 0.0);
-        return buffer;
-    }
-    free(c->el.mem);
-    free(c->saved_mem);
-    c->el.mem = mem;
-    c->saved_mem = saved;
-    c->el.mem_len = length;
-    return NULL;
-}
-
-/* the memory's state sized for the parameters in use (el.mp: the delay's tau), at the exit of initialization mode
- * and at a reset: NULL, or why not */
-static const char* size_memory(Instance* c, char* buffer, size_t size)
-{
-    int64_t nd = delay_size(c->el.mp);
-    const char* problem;
-    if (!HAS_MEMORY)
-        return NULL;
-    if (nd < 0)
-        return memory_problem(c->el.mp, buffer, size);
-    problem = allocate_memory(c, MEM_FIXED + nd, buffer, size);
-    if (problem == NULL)
-        c->el.nd = nd;
-    return problem;
-}
-
-static void release_memory(Instance* c)
-{
-    free(c->el.mem);
-    free(c->saved_mem);
-    c->el.mem = c->saved_mem = NULL;
-    c->el.mem_len = c->el.nd = 0;
-}
-
 /* Element.reset(force): the initial state under the force held; 0 when a massless element has no equilibrium */
 static int reset(Element* e, double force)
 {
     Load l = load_of(force, 0, NULL, NULL);
     double xv[2];
     int ok;
-    e->origin = 0.0;
-    e->steps = 0;
-    e->grid = 0.0;
+    memset(&e->clock, 0, sizeof e->clock);
     e->force = force;
     e->scene_load = 0;
     e->play = FOLDS && e->stepper >= 0 && !TAKES_STACK[e->stepper]; /* driver.choose_branch_kernel */
@@ -220,23 +170,6 @@ static int reset(Element* e, double force)
     record(e, 0.0);
     e->initial_energy = e->erow[0] + e->erow[1];
     return 1;
-}
-
-/* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
- * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
- * rounding, dropped */
-static void split_duration(double duration, double h, double* whole, double* rest)
-{
-    double ratio = duration / h, nearest = nearbyint(ratio);
-    if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
-        *whole = nearest;
-        *rest = 0.0;
-        return;
-    }
-    *whole = floor(ratio);
-    *rest = duration - *whole * h;
-    if (!(*rest >= 1e-9 * h))
-        *rest = 0.0;
 }
 
 static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first, double h, int64_t steps)
@@ -270,48 +203,28 @@ static const char* advance(Element* e, double duration, double force, int scene_
 {
     double h = e->h, whole, rest, t_base;
     int64_t first, taken;
+    const char* problem;
     Load l;
     *failed_at = NAN;
     if (duration == 0.0)
         return NULL;
     if (STEP_IS_OUTPUT[e->stepper]) { /* one step per advance (exact) ... */
         h = duration;
-        if (e->grid != 0.0 && fabs(duration - e->grid) <= 1e-9 * e->grid)
-            h = e->grid; /* ... of the grid's step when it is that to rounding */
+        if (e->clock.grid != 0.0 && fabs(duration - e->clock.grid) <= 1e-9 * e->clock.grid)
+            h = e->clock.grid; /* ... of the grid's step when it is that to rounding */
     }
-    if (duration < SHORTEST_STEP) {
-        snprintf(buffer, size, "the duration is shorter than %g s (a step's square underflows)", SHORTEST_STEP);
-        return buffer;
-    }
-    if (!(duration / h < MAX_STEPS)) {
-        snprintf(buffer, size, "the duration is more than %.17g internal steps (2^53): advance by shorter durations "
-                 "or with a larger step", MAX_STEPS);
-        return buffer;
-    }
-    split_duration(duration, h, &whole, &rest);
-    if (whole == 0 && rest == 0) /* below rounding of h: no step, the clock stays on its grid (Element.advance) */
-        return NULL;
-    if (whole + (rest > 0) > ADVANCE_BUDGET) { /* Element.advance: ElementError, never run for days */
-        snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
-                 "steps of one advance: advance by shorter durations (communication steps) or with a larger step",
-                 duration, whole + (rest > 0), h, ADVANCE_BUDGET);
-        return buffer;
-    }
-    {
-        const char* problem = delay_time_problem(e->mem, element_time(e), element_time(e) + duration, buffer, size);
-        if (problem != NULL)
-            return problem;
-    }
+    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
+        return problem;
+    problem = delay_time_problem(e->mem, element_time(e), element_time(e) + duration, buffer, size);
+    if (problem != NULL)
+        return problem;
     l = load_of(force, scene_load, noise, cache);
     e->force = force;
     e->scene_load = scene_load;
-    if (e->grid != h) {
-        e->origin = element_time(e);
-        e->steps = 0;
-        e->grid = h;
-    }
-    t_base = e->origin;
-    first = e->steps;
+    clock_regrid(&e->clock, h);
+    t_base = e->clock.origin;
+    first = e->clock.steps;
     if (whole > 0) {
         taken = integrate(e, &l, t_base, first, h, (int64_t)whole);
         if (taken < (int64_t)whole) {
@@ -326,24 +239,12 @@ static const char* advance(Element* e, double duration, double force, int scene_
             *failed_at = start;
             return "a step could not be taken (it would leave a non-finite state)";
         }
-        e->origin = e->origin + (double)(e->steps + (int64_t)whole) * h + rest;
-        e->steps = 0;
-    } else {
-        e->steps += (int64_t)whole;
     }
+    clock_advanced(&e->clock, whole, rest, h);
     return NULL;
 }
 
 /* ------------------------------------------------------------------ parameters */
-
-static int stepper_index(const char* name)
-{
-    int i;
-    for (i = 0; i < N_STEPPERS; i++)
-        if (strcmp(name, STEPPER_NAMES[i]) == 0)
-            return i;
-    return -1;
-}
 
 static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
 {
@@ -499,94 +400,16 @@ static void defaults(Instance* c)
 {
     memcpy(c->par, P_SCENE, sizeof c->par);
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
-    snprintf(c->stepper, sizeof c->stepper, "%s", DEFAULT_STEPPER);
-    c->stepper_valid = 1;
-    c->step = DEFAULT_STEP;
-    c->F = 0.0;
-    c->scene_load = SCENE_LOAD_START; /* true when the scene names a load: a fresh FMU runs the scene */
-    c->start_time = 0.0;
-    c->initialized = 0;
-    c->handed = 0;
-    c->phase = INSTANTIATED;
-    c->last_step_failed = 0;
-    c->noise_set = SCENE_NOISE;
-    memset(c->noise_cache, 0, sizeof c->noise_cache); /* a new cache (noise.new_cache) */
+    instantiated(c);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
-    {
-        double* mem = c->el.mem; /* the memory's arrays are kept (size_memory resizes them) */
-        int64_t length = c->el.mem_len;
-        memset(&c->el, 0, sizeof c->el);
-        c->el.mem = mem;
-        c->el.mem_len = length;
-    }
+    clear_element(&c->el);
     hand_over(c);
     prandtl_kernel_failed = 0;
-    {
-        char buffer[256];
-        const char* problem = size_memory(c, buffer, sizeof buffer);
-        c->memory_failed = problem != NULL;
-        if (problem != NULL) {
-            say(c, ST_ERROR, "instantiation refused: %s", problem);
-            return;
-        }
-    }
-    reset(&c->el, 0.0);
+    if (memory_at_instantiation(c))
+        reset(&c->el, 0.0);
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
-
-/* the checksum of a state: its fixed part up to the checksum, then its memory's state (element.mem_len values,
- * which the caller knows the blob holds) */
-static uint64_t state_checksum(const State* s)
-{
-    uint64_t hash = fnv1a((const unsigned char*)s, offsetof(State, checksum));
-    const unsigned char* tail = (const unsigned char*)(s + 1);
-    size_t i, n = (size_t)s->element.mem_len * sizeof(double);
-    for (i = 0; i < n; i++) {
-        hash ^= tail[i];
-        hash *= 1099511628211ULL;
-    }
-    return hash;
-}
-
-/* why the memory's state of a state blob (its parameters in use, its values after the fixed part) cannot be
- * restored, or NULL: memory.check_memory_state's rules (the buffer's size for its tau, its grid index, the Dahl
- * force within F_c) and numbers only */
-static const char* memory_state_problem(const State* s, char* buffer, size_t size)
-{
-    const Element* e = &s->element;
-    const char* problem;
-    if (!HAS_MEMORY)
-        return memory_values_problem(e->mp, NULL, e->nd, e->mem_len, element_time(e), buffer, size);
-    problem = memory_problem(e->mp, buffer, size);
-    if (problem != NULL)
-        return problem;
-    if (s->initialized && memcmp(s->mpar, e->mp, sizeof e->mp) != 0) /* fixed: set before initialization */
-        return "its memory's parameters in use are not those set";
-    return memory_values_problem(e->mp, (const double*)(s + 1), e->nd, e->mem_len, element_time(e), buffer, size);
-}
-
-static void capture(const Instance* c, State* s)
-{
-    memset(s, 0, sizeof *s);
-    FILL_HEAD(s);
-    s->element = c->el;
-    s->F = c->F;
-    s->step = c->step;
-    s->start_time = c->start_time;
-    memcpy(s->par, c->par, sizeof s->par);
-    memcpy(s->cbranch, c->cbranch, sizeof s->cbranch);
-    s->scene_load = c->scene_load;
-    s->stepper_valid = c->stepper_valid;
-    s->initialized = c->initialized;
-    memcpy(s->stepper, c->stepper, sizeof s->stepper);
-    s->noise_set = c->noise_set;
-    memcpy(s->mpar, c->mpar, sizeof s->mpar);
-    s->element.mem = NULL;
-    if (c->el.mem_len > 0)
-        memcpy((double*)(s + 1), c->el.mem, (size_t)c->el.mem_len * sizeof(double));
-    s->checksum = state_checksum(s);
-}
 
 /* why a state cannot be restored here, or NULL: every field checked as strictly as the setters check the master's
  * values (a checksum detects accidents, not edits: a blob with a recomputed one is checked field by field) */
@@ -595,10 +418,6 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const Element* e = &s->element;
     const char* problem;
     int i;
-    const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
-                                    state_checksum(s));
-    if (head != NULL)
-        return head;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
           isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) &&
           (e->play == 0 || (FOLDS && e->play == 1)) && (e->scene_load == 0 || e->scene_load == 1) &&
@@ -606,8 +425,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
         return "it holds a non-finite or out-of-range value";
     /* the clock: time = origin + steps * grid, grid 0 before the first advance */
-    if (!(isfinite(e->origin) && isfinite(e->grid) && e->grid >= 0 && e->steps >= 0 &&
-          (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
+    if (!clock_valid(&e->clock))
         return "its clock is not a finite time (origin, steps and grid)";
     problem = parameter_problem(e->p, e->cs, buffer, size); /* the coefficients in use, as the setters' */
     if (problem == NULL) /* the noise's settings (NoiseParameters._check_noise_state) */
@@ -640,38 +458,20 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
             if (memcmp(e->kst + fixed[i] * (NB + 1), K + fixed[i] * (NB + 1), (NB + 1) * sizeof(double)) != 0)
                 return "its memory-stack parameters are not this scene's";
     }
-    if (STACK && !e->play) { /* the memory stack: stack.restore's rules, compiled (state_check) */
-        double* scratch = (double*)malloc(STATE_SCRATCH * sizeof(double));
-        int64_t code;
-        if (scratch == NULL)
-            return "out of memory";
-        prandtl_kernel_failed = 0;
-        code = state_check(FOLDS ? (double*)e->kst : (double*)K, (double*)e->u, scratch);
-        free(scratch);
-        if (prandtl_kernel_failed)
-            return "its memory stack could not be checked";
-        if (code != 0)
-            return STATE_CHECK_REASONS[code - 1];
-    }
-    return NULL;
+    return STACK && !e->play ? stack_problem(FOLDS ? e->kst : K, e->u) : NULL; /* the memory stack */
 }
 
 static int restore(Instance* c, const State* s)
 {
     char buffer[256];
     Instance* trial; /* the settings of the state, checked as the master's are (on the heap: an instance is large) */
-    const char* problem = state_problem(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, buffer, sizeof buffer);
     if (problem == NULL && (trial = (Instance*)malloc(sizeof *trial)) == NULL)
         problem = "out of memory";
     else if (problem == NULL) {
         memcpy((void*)trial, c, sizeof *trial);
-        memcpy(trial->par, s->par, sizeof trial->par);
-        memcpy(trial->cbranch, s->cbranch, sizeof trial->cbranch);
-        trial->stepper_valid = s->stepper_valid;
-        memcpy(trial->stepper, s->stepper, sizeof trial->stepper);
+        SETTINGS(trial, s);
         trial->stepper[sizeof trial->stepper - 1] = 0;
-        trial->step = s->step;
-        memcpy(trial->mpar, s->mpar, sizeof trial->mpar);
         problem = settings_problem(trial, buffer, sizeof buffer);
         free(trial);
     }
@@ -681,27 +481,7 @@ static int restore(Instance* c, const State* s)
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
     }
-    {
-        double* mem = c->el.mem; /* the instance's arrays, with the state's values */
-        c->el = s->element;
-        c->el.mem = mem;
-        if (HAS_MEMORY) { /* memory.restore_memory: the cached values are recomputed, never taken from a state */
-            memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
-            forget_memory_cache(mem);
-        }
-    }
-    memcpy(c->mpar, s->mpar, sizeof c->mpar);
-    c->F = s->F;
-    c->step = s->step;
-    c->start_time = s->start_time;
-    memcpy(c->par, s->par, sizeof c->par);
-    memcpy(c->cbranch, s->cbranch, sizeof c->cbranch);
-    c->scene_load = s->scene_load;
-    c->stepper_valid = s->stepper_valid;
-    memcpy(c->stepper, s->stepper, sizeof c->stepper);
-    c->stepper[sizeof c->stepper - 1] = 0;
-    c->noise_set = s->noise_set; /* handed over at the next step, which redraws the same path */
-    c->handed = 0;
+    restore_checked(c, s);
     return ST_OK;
 }
 
@@ -767,67 +547,53 @@ static void warn_if_unstable(Instance* c)
         say(c, ST_WARNING, "%s", problem);
 }
 
-/* fmi2/3ExitInitializationMode: the settings checked and handed over, the element reset */
-static int core_exit_initialization(Instance* c)
+/* the exit of initialization mode (core.h): the settings checked and handed over, the element reset under F (plus
+ * the scene's load at the start time with scene_load) and put at the start time */
+static const char* initialize(Instance* c, char* buffer, size_t size)
 {
-    char buffer[512];
-    const char* problem;
+    const char* problem = hand_over_problem(c, buffer, size);
     double force;
-    if (c->phase != INITIALIZING) {
-        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
-        return ST_ERROR;
-    }
-    problem = hand_over_problem(c, buffer, sizeof buffer);
     if (problem == NULL && !isfinite(c->F)) {
-        snprintf(buffer, sizeof buffer, "F = %.17g refused: the force must be finite", c->F);
-        problem = buffer;
+        snprintf(buffer, size, "F = %.17g refused: the force must be finite", c->F);
+        return buffer;
     }
     if (problem == NULL) {
         hand_over(c);
-        problem = size_memory(c, buffer, sizeof buffer); /* the delay's buffer for the tau set */
+        problem = size_memory(c, buffer, size); /* the delay's buffer for the tau set */
     }
-    if (problem == NULL) {
+    if (problem != NULL)
+        return problem;
+    force = c->F;
+    if (c->scene_load) { /* F plus the scene's load at the start time */
         Load l = load_of(0.0, 1, NULL, NULL);
-        force = c->F;
-        if (c->scene_load) { /* F plus the scene's load at the start time */
-            double xv[2] = {0.0, 0.0};
-            force = c->F + scene_force_at(l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time, xv);
-        }
-        prandtl_kernel_failed = 0;
-        if (!reset(&c->el, force)) {
-            snprintf(buffer, sizeof buffer, "no equilibrium exists at t = 0 under F = %.17g N (a massless element "
-                     "with no hardening spring beyond its strength)", force);
-            problem = buffer;
-        }
+        double xv[2] = {0.0, 0.0};
+        force = c->F + scene_force_at(l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time, xv);
     }
-    if (problem != NULL) {
-        say(c, ST_ERROR, "initialization refused: %s", problem);
-        return ST_ERROR;
+    prandtl_kernel_failed = 0;
+    if (!reset(&c->el, force)) {
+        snprintf(buffer, size, "no equilibrium exists at t = 0 under F = %.17g N (a massless element with no hardening "
+                 "spring beyond its strength)", force);
+        return buffer;
     }
-    set_time(&c->el, c->start_time);
+    clock_set(&c->el.clock, c->start_time);
     c->handed = 0;
-    c->initialized = 1;
-    c->phase = STEPPING;
-    if (c->scene_load) /* a master that connects F is told the scene's load is added, logging on or off */
+    return NULL;
+}
+
+/* once started: a master that connects F is told the scene's load is added (logging on or off); the stepper's
+ * stability */
+static void started(Instance* c)
+{
+    if (c->scene_load)
         say(c, ST_WARNING, "%s", SCENE_LOAD_NOTICE);
     warn_if_unstable(c);
-    return ST_OK;
 }
 
 static void checkpoint(Instance* c)
 {
     const Element* e = &c->el;
     Checkpoint* k = &c->saved;
-    k->x = e->x;
-    k->v = e->v;
-    memcpy(k->account, e->account, sizeof k->account);
-    memcpy(k->out, e->out, sizeof k->out);
-    memcpy(k->erow, e->erow, sizeof k->erow);
-    k->origin = e->origin;
-    k->grid = e->grid;
-    k->force = e->force;
-    k->steps = e->steps;
-    k->scene_load = e->scene_load;
+    CHECKPOINTED(k, e);
     k->used = e->play ? NB : branch_state_used(e->u);
     memcpy(c->saved_u, e->play ? e->up : e->u, k->used * sizeof(double));
     if (HAS_MEMORY) /* the memory's state (memory.copy_memory) */
@@ -838,78 +604,42 @@ static void rollback(Instance* c)
 {
     Element* e = &c->el;
     const Checkpoint* k = &c->saved;
-    e->x = k->x;
-    e->v = k->v;
-    memcpy(e->account, k->account, sizeof k->account);
-    memcpy(e->out, k->out, sizeof k->out);
-    memcpy(e->erow, k->erow, sizeof k->erow);
-    e->origin = k->origin;
-    e->grid = k->grid;
-    e->force = k->force;
-    e->steps = k->steps;
-    e->scene_load = k->scene_load;
+    CHECKPOINTED(e, k);
     memcpy(e->play ? e->up : e->u, c->saved_u, k->used * sizeof(double));
     if (HAS_MEMORY) /* memory.put_back */
         memcpy(e->mem, c->saved_mem, (size_t)e->mem_len * sizeof(double));
 }
 
-/* the first output (x, v, reaction, stiffness, an energy) that is not a number to show after a step, or NULL */
-static const Var* unshowable_output(Instance* c, double* value)
+/* hand_over after a change of the settings: the stability checked anew when the element's changed
+ * (slave._apply_settings: on a change only) */
+static void hand_over_settings(Instance* c)
 {
-    int i;
-    for (i = 0; i < N_VARS; i++) {
-        const Var* var = &VARS[i];
-        if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_STIFFNESS &&
-            var->what != W_ENERGY)
-            continue;
-        *value = real_value(c, var);
-        if (!showable(var, *value))
-            return var;
-    }
-    return NULL;
+    double p[N_PARAMS], cs[NB_CS], h = c->el.h;
+    int stepper = c->el.stepper;
+    memcpy(p, c->el.p, sizeof p);
+    memcpy(cs, c->el.cs, sizeof cs);
+    hand_over(c);
+    if (memcmp(p, c->el.p, sizeof p) != 0 || memcmp(cs, c->el.cs, sizeof cs) != 0 || stepper != c->el.stepper ||
+        h != c->el.h)
+        warn_if_unstable(c);
 }
 
-/* fmi2/3DoStep: one communication step (slave.do_step); the FMI layer checked the call sequence */
-static int core_do_step(Instance* c, double t, double H)
+/* a doStep (core.h; slave.do_step): the settings handed over, the element checkpointed, put at t and advanced by H
+ * under F; a step that fails or would show an output that is not a number is rolled back */
+static int step(Instance* c, double t, double H)
 {
     char buffer[512];
     const char* problem;
     const Var* overflowed;
     double failed_at, value;
-    if (c->phase != STEPPING) {
-        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
-            "Terminate");
-        return ST_ERROR;
-    }
-    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
-        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
-            ">= 0 (and their sum finite)", t, H);
-        return ST_ERROR;
-    }
-    c->last_step_failed = 1;
-    if (!c->handed) {
-        problem = hand_over_problem(c, buffer, sizeof buffer);
-        if (problem != NULL) {
-            say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
-            return ST_DISCARD;
-        }
-        {
-            double p[N_PARAMS], cs[NB_CS], h = c->el.h;
-            int stepper = c->el.stepper;
-            memcpy(p, c->el.p, sizeof p);
-            memcpy(cs, c->el.cs, sizeof cs);
-            hand_over(c);
-            if (memcmp(p, c->el.p, sizeof p) != 0 || memcmp(cs, c->el.cs, sizeof cs) != 0 ||
-                stepper != c->el.stepper || h != c->el.h)
-                warn_if_unstable(c); /* slave._apply_settings: on a change only */
-        }
-    }
+    if (!settings_handed(c))
+        return ST_DISCARD;
     if (!isfinite(c->F)) {
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
         return ST_DISCARD;
     }
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
-    set_time(&c->el, t);
+    clock_set(&c->el.clock, t);
     prandtl_kernel_failed = 0;
     problem = advance(&c->el, H, c->F, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer, sizeof buffer);
     if (problem != NULL && isnan(failed_at)) { /* refused before any step */
@@ -920,8 +650,8 @@ static int core_do_step(Instance* c, double t, double H)
     if (problem == NULL && !(isfinite(c->el.x) && isfinite(c->el.v) && isfinite(c->el.out[2])))
         problem = "it would leave a non-finite state";
     if (problem != NULL) {
-        rollback(c);
         int implicit = strcmp(STEPPER_NAMES[c->el.stepper], "implicit") == 0; /* advise nothing already done */
+        rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g with F = %.17g refused: %s (stepper '%s' with step = %.17g%s)", t,
             c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h, implicit ? "" : "; try 'implicit'");
         return ST_DISCARD;
@@ -934,32 +664,19 @@ static int core_do_step(Instance* c, double t, double H)
             "overflow); the state is unchanged", time, c->F, overflowed->name, value);
         return ST_DISCARD;
     }
-    c->last_step_failed = 0;
     return ST_OK;
 }
 
-/* a Float64/Real the master sets: which variables take one, and the rule of the fixed parameters */
-static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
+/* the fixed parameters (core.h): x0 and v0 (the initial state), an effect with memory's */
+static int fixed_problem(Instance* c, const Var* var, double value)
 {
-    if (var == NULL || !(var->what == W_F || var->what == W_PARAM || var->what == W_CBRANCH || var->what == W_STEP ||
-                         var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT || var->what == W_MEMORY)) {
-        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
-        return ST_ERROR;
-    }
     if (var->what == W_PARAM && c->initialized && (var->index == P_X0 || var->index == P_V0) &&
         value != c->par[var->index]) {
         say(c, ST_ERROR, "parameter %s = %.17g refused: %s is fixed (the initial state) and cannot change after "
             "initialization; the element is unchanged", PARAM_NAMES[var->index], value, PARAM_NAMES[var->index]);
         return ST_ERROR;
     }
-    if (var->what == W_MEMORY && c->initialized && value != c->mpar[var->index]) { /* slave._set_parameter */
-        char shown[40];
-        say(c, ST_ERROR, "parameter %s = %s refused: %s is fixed (the initial state, or an effect with memory) and "
-            "cannot change after initialization; the element is unchanged", MEM_NAMES[var->index],
-            python_repr(value, shown, sizeof shown), MEM_NAMES[var->index]);
-        return ST_ERROR;
-    }
-    return ST_OK;
+    return memory_fixed(c, var, value);
 }
 
 static void core_set_float(Instance* c, const Var* var, double value)
@@ -985,30 +702,6 @@ static void core_set_float(Instance* c, const Var* var, double value)
         c->step = value;
         c->handed = 0;
     }
-}
-
-/* an Integer the master sets: noise_seed alone (its rule is checked when it is handed over) */
-static int core_check_integer(Instance* c, const Var* var, unsigned vr, const char* function)
-{
-    if (var == NULL || var->what != W_NOISE_SEED) {
-        say(c, ST_ERROR, "%s refused: value reference %u is not the Integer parameter noise_seed", function, vr);
-        return ST_ERROR;
-    }
-    return ST_OK;
-}
-
-static void core_set_integer(Instance* c, const Var* var, int32_t value)
-{
-    (void)var;
-    c->noise_set.seed = value;
-    c->handed = 0;
-}
-
-static void core_set_stepper(Instance* c, const char* value)
-{
-    c->stepper_valid = strlen(value) < sizeof c->stepper;
-    snprintf(c->stepper, sizeof c->stepper, "%s", c->stepper_valid ? value : "");
-    c->handed = 0;
 }
 
 #endif

@@ -7,17 +7,16 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
-/* The native FMU's FMI 2.0 co-simulation layer over the element (element.h) or the connector (connector.h).
- *
- * Every function first checks its instance (NULL: fmi2Error, nothing logged: there is no logger), the call
- * sequence (calls.h: the phases it is allowed in, FMI 2.0's state machine for co-simulation) and its pointers
- * (NULL: fmi2Error with the reason logged). A refusal leaves the instance as it was. */
+/* The native FMU's FMI 2.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
+ * connector.h, network.h): FMI 2.0's types and names, and what FMI 2.0 alone has (its statuses); what both versions
+ * do alike is front.h's (the checks of a call: BEGIN, CHECKED). */
 #include "fmi2Functions.h"
 #define FMI "fmi2"
 #define FMU_STATE "FMUstate" /* fmi2GetFMUstate; FMI 3.0 writes fmi3GetFMUState */
 #define FLOAT_SETTER "fmi2SetReal"
 #define STANDARD "FMI 2.0"
 #define STEPPING_NAME "stepComplete"
+#define DESERIALIZE "fmi2DeSerializeFMUstate"
 #include "scene.h"
 #if NETWORK
 #include "network.h"
@@ -26,8 +25,11 @@
 #else
 #include "element.h"
 #endif
-#include "state.h"
-#include "calls.h"
+typedef fmi2Component FmiInstance; /* the version's types of front.h */
+typedef fmi2Status FmiStatus;
+typedef fmi2FMUstate FmiState;
+typedef fmi2Byte FmiByte;
+#include "front.h"
 #ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
 #define FMU_TIME(c) element_time(&(c)->el)
 #endif
@@ -45,87 +47,32 @@ static void emit(void* instance, int status, const char* category, const char* m
 #define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
 #define MASK_STATUS (STEPPING | TERMINATED)
 
-/* the instance of a call, or return fmi2Error: NULL, or a call not allowed in its phase */
-#define BEGIN(function, mask)                                                                                  \
-    Instance* c = (Instance*)comp;                                                                             \
-    if (c == NULL)                                                                                             \
-        return fmi2Error;                                                                                      \
-    if (!allowed(c, (mask), #function))                                                                        \
-        return fmi2Error
-
 const char* fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char* fmi2GetVersion(void) { return fmi2Version; }
 
-fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean on, size_t n, const fmi2String categories[])
-{
-    size_t i;
-    BEGIN(fmi2SetDebugLogging, ANY_PHASE);
-    if (n > 0 && !given(c, categories, "fmi2SetDebugLogging", "categories"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (categories[i] == NULL) {
-            say(c, fmi2Error, "fmi2SetDebugLogging refused: categories[%zu] is NULL", i);
-            return fmi2Error;
-        }
-    }
-    c->logging = on ? 1 : 0;
-    return fmi2OK;
-}
+fmi2Status fmi2SetDebugLogging(fmi2Component instance, fmi2Boolean on, size_t n, const fmi2String categories[])
+    CHECKED(fmi2SetDebugLogging, ANY_PHASE, core_set_debug_logging(c, on, n, categories))
 
 fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String resources,
                               const fmi2CallbackFunctions* functions, fmi2Boolean visible, fmi2Boolean logging)
 {
-    Instance* c;
-    if (functions == NULL)
-        return NULL;
-    c = (Instance*)calloc(1, sizeof(Instance));
+    Instance* c = functions != NULL ? instance_new(name, functions->componentEnvironment,
+                                                   (void*)functions->logger, logging) : NULL;
     if (c == NULL)
         return NULL;
-    c->env = functions->componentEnvironment;
-    c->logger = (void*)functions->logger;
-    c->name = strdup(name ? name : "");
-    c->logging = logging ? 1 : 0;
-    if (c->name == NULL) {
-        free(c);
-        return NULL;
-    }
-    if (type != fmi2CoSimulation) {
+    if (type != fmi2CoSimulation)
         say(c, fmi2Error, "fmi2Instantiate refused: this FMU is for co-simulation only");
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-    if (guid == NULL || strcmp(guid, GUID) != 0) {
+    else if (guid == NULL || strcmp(guid, GUID) != 0)
         say(c, fmi2Error, "fmi2Instantiate refused: GUID %s is not this FMU's (%s)", guid ? guid : "(null)", GUID);
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-    defaults(c);
-#ifdef INSTANCE_FAILED
-    if (INSTANCE_FAILED(c)) { /* logged */
-        RELEASE_INSTANCE(c);
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-#endif
-    return c;
+    else
+        return instance_started(c);
+    instance_free(c);
+    return NULL;
 }
 
-void fmi2FreeInstance(fmi2Component comp)
-{
-    Instance* c = (Instance*)comp;
-    if (c == NULL)
-        return;
-#ifdef RELEASE_INSTANCE
-    RELEASE_INSTANCE(c);
-#endif
-    free(c->name);
-    free(c);
-}
+void fmi2FreeInstance(fmi2Component instance) { instance_free((Instance*)instance); }
 
-fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2Real tol, fmi2Real start,
+fmi2Status fmi2SetupExperiment(fmi2Component instance, fmi2Boolean tol_defined, fmi2Real tol, fmi2Real start,
                                fmi2Boolean stop_defined, fmi2Real stop)
 {
     BEGIN(fmi2SetupExperiment, INSTANTIATED);
@@ -135,50 +82,28 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
-{
-    BEGIN(fmi2EnterInitializationMode, INSTANTIATED);
-    c->phase = INITIALIZING;
-    return fmi2OK;
-}
+fmi2Status fmi2EnterInitializationMode(fmi2Component instance)
+    CHECKED(fmi2EnterInitializationMode, INSTANTIATED, phase_to(c, INITIALIZING))
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
-{
-    BEGIN(fmi2ExitInitializationMode, INITIALIZING);
-    return (fmi2Status)core_exit_initialization(c);
-}
+fmi2Status fmi2ExitInitializationMode(fmi2Component instance)
+    CHECKED(fmi2ExitInitializationMode, INITIALIZING, core_exit_initialization(c))
 
-fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real H, fmi2Boolean no_prior)
-{
-    BEGIN(fmi2DoStep, STEPPING);
-    return (fmi2Status)core_do_step(c, t, H);
-}
+fmi2Status fmi2DoStep(fmi2Component instance, fmi2Real t, fmi2Real H, fmi2Boolean no_prior)
+    CHECKED(fmi2DoStep, STEPPING, core_do_step(c, t, H))
 
-fmi2Status fmi2Terminate(fmi2Component comp)
-{
-    BEGIN(fmi2Terminate, STEPPING);
-    c->phase = TERMINATED;
-    return fmi2OK;
-}
+fmi2Status fmi2Terminate(fmi2Component instance)
+    CHECKED(fmi2Terminate, STEPPING, phase_to(c, TERMINATED))
 
-fmi2Status fmi2Reset(fmi2Component comp)
-{
-    BEGIN(fmi2Reset, ANY_PHASE);
-    defaults(c);
-#ifdef INSTANCE_FAILED
-    if (INSTANCE_FAILED(c))
-        return fmi2Error; /* logged */
-#endif
-    return fmi2OK;
-}
+fmi2Status fmi2Reset(fmi2Component instance)
+    CHECKED(fmi2Reset, ANY_PHASE, core_reset(c))
 
-fmi2Status fmi2CancelStep(fmi2Component comp)
+fmi2Status fmi2CancelStep(fmi2Component instance)
 {
     BEGIN(fmi2CancelStep, 0); /* only while a step is in progress (fmi2Pending): never here */
     return fmi2Error;
 }
 
-fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n, fmi2Real value[])
+fmi2Status fmi2GetReal(fmi2Component instance, const fmi2ValueReference vr[], size_t n, fmi2Real value[])
 {
     size_t i;
     BEGIN(fmi2GetReal, MASK_GET);
@@ -197,124 +122,37 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     return fmi2OK;
 }
 
-fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n, fmi2Integer value[])
-{
-    size_t i;
-    BEGIN(fmi2GetInteger, MASK_GET);
-    if (!arrays_given(c, n, vr, value, "fmi2GetInteger"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        const Var* var = find(vr[i], T_INTEGER);
-        if (var == NULL) {
-            say(c, fmi2Error, "fmi2GetInteger refused: no Integer variable has value reference %u", vr[i]);
-            return fmi2Error;
-        }
-        value[i] = integer_value(c, var);
-    }
-    return fmi2OK;
-}
+fmi2Status fmi2GetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Integer values[])
+    GETTER(fmi2GetInteger, T_INTEGER, "fmi2GetInteger refused: no Integer variable has value reference %u", nvr,
+           integer_value(c, find(vr[i], T_INTEGER)))
 
-fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[])
-{
-    size_t i;
-    BEGIN(fmi2GetBoolean, MASK_GET);
-    if (!arrays_given(c, n, vr, value, "fmi2GetBoolean"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (find(vr[i], T_BOOLEAN) == NULL) {
-            say(c, fmi2Error, "fmi2GetBoolean refused: no Boolean variable has value reference %u", vr[i]);
-            return fmi2Error;
-        }
-        value[i] = c->scene_load ? fmi2True : fmi2False;
-    }
-    return fmi2OK;
-}
+/* the Boolean scene_load */
+fmi2Status fmi2GetBoolean(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean values[])
+    GETTER(fmi2GetBoolean, T_BOOLEAN, "fmi2GetBoolean refused: no Boolean variable has value reference %u", nvr,
+           c->scene_load ? fmi2True : fmi2False)
 
-fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size_t n, fmi2String value[])
-{
-    size_t i;
-    BEGIN(fmi2GetString, MASK_GET);
-    if (!arrays_given(c, n, vr, value, "fmi2GetString"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (find(vr[i], T_STRING) == NULL) {
-            say(c, fmi2Error, "fmi2GetString refused: no String variable has value reference %u", vr[i]);
-            return fmi2Error;
-        }
-        value[i] = c->stepper;
-    }
-    return fmi2OK;
-}
+/* the String stepper */
+fmi2Status fmi2GetString(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2String values[])
+    GETTER(fmi2GetString, T_STRING, "fmi2GetString refused: no String variable has value reference %u", nvr,
+           c->stepper)
 
-fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2Real value[])
-{
-    size_t i;
-    BEGIN(fmi2SetReal, MASK_SET);
-    if (!arrays_given(c, n, vr, value, "fmi2SetReal"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) /* all or nothing */
-        if (core_check_float(c, find(vr[i], T_REAL), vr[i], value[i]) != ST_OK)
-            return fmi2Error;
-    for (i = 0; i < n; i++)
-        core_set_float(c, find(vr[i], T_REAL), value[i]);
-    return fmi2OK;
-}
+fmi2Status fmi2SetReal(fmi2Component instance, const fmi2ValueReference vr[], size_t n, const fmi2Real value[])
+    CHECKED(fmi2SetReal, MASK_SET, core_set_floats(c, vr, n, value))
 
-fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2Integer value[])
-{
-    size_t i;
-    BEGIN(fmi2SetInteger, MASK_SET);
-    if (!arrays_given(c, n, vr, value, "fmi2SetInteger"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) /* all or nothing */
-        if (core_check_integer(c, find(vr[i], T_INTEGER), vr[i], "fmi2SetInteger") != ST_OK)
-            return fmi2Error;
-    for (i = 0; i < n; i++)
-        core_set_integer(c, find(vr[i], T_INTEGER), value[i]);
-    return fmi2OK;
-}
+fmi2Status fmi2SetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t n, const fmi2Integer value[])
+    CHECKED(fmi2SetInteger, MASK_SET, core_set_integers(c, vr, n, value, n, "fmi2SetInteger"))
 
-fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2Boolean value[])
-{
-    size_t i;
-    BEGIN(fmi2SetBoolean, MASK_SET);
-    if (!arrays_given(c, n, vr, value, "fmi2SetBoolean"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (find(vr[i], T_BOOLEAN) == NULL) {
-            say(c, fmi2Error, "fmi2SetBoolean refused: no Boolean variable has value reference %u", vr[i]);
-            return fmi2Error;
-        }
-    }
-    for (i = 0; i < n; i++)
-        c->scene_load = value[i] ? 1 : 0;
-    return fmi2OK;
-}
+fmi2Status fmi2SetBoolean(fmi2Component instance, const fmi2ValueReference vr[], size_t n, const fmi2Boolean value[])
+    CHECKED(fmi2SetBoolean, MASK_SET, core_set_scene_load(c, vr, n, value, n, n > 0 && value != NULL && value[n - 1],
+                                                          "fmi2SetBoolean refused: no Boolean variable has value "
+                                                          "reference %u"))
 
-fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size_t n, const fmi2String value[])
-{
-    size_t i;
-    BEGIN(fmi2SetString, MASK_SET);
-    if (!arrays_given(c, n, vr, value, "fmi2SetString"))
-        return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (find(vr[i], T_STRING) == NULL) {
-            say(c, fmi2Error, "fmi2SetString refused: value reference %u is not the String parameter stepper", vr[i]);
-            return fmi2Error;
-        }
-        if (value[i] == NULL) {
-            say(c, fmi2Error, "fmi2SetString refused: value[%zu] is NULL (a stepper's name is needed)", i);
-            return fmi2Error;
-        }
-    }
-    for (i = 0; i < n; i++)
-        core_set_stepper(c, value[i]);
-    return fmi2OK;
-}
+fmi2Status fmi2SetString(fmi2Component instance, const fmi2ValueReference vr[], size_t n, const fmi2String value[])
+    CHECKED(fmi2SetString, MASK_SET, core_set_strings(c, vr, n, n, value, "value"))
 
 /* ------------------------------------------------------------------ the rest of FMI 2.0 co-simulation */
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[], size_t nu,
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueReference u[], size_t nu,
                                         const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[])
 {
     BEGIN(fmi2GetDirectionalDerivative, MASK_GET);
@@ -322,7 +160,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueRefer
     return fmi2Error;
 }
 
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
     BEGIN(fmi2SetRealInputDerivatives, INSTANTIATED | INITIALIZING | STEPPING);
@@ -330,7 +168,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueRefere
     return fmi2Error;
 }
 
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
                                         const fmi2Integer order[], fmi2Real value[])
 {
     BEGIN(fmi2GetRealOutputDerivatives, MASK_STATUS);
@@ -347,94 +185,41 @@ static fmi2Status no_status(Instance* c, const char* function, const void* value
     return fmi2Discard;
 }
 
-fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status* value)
-{
-    BEGIN(fmi2GetStatus, MASK_STATUS);
-    return no_status(c, "fmi2GetStatus", value);
-}
+fmi2Status fmi2GetStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Status* value)
+    CHECKED(fmi2GetStatus, MASK_STATUS, no_status(c, "fmi2GetStatus", value))
 
-fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real* value)
+/* fmi2GetRealStatus, fmi2GetBooleanStatus: the two statuses this FMU has, fmi2LastSuccessfulTime (its time) into
+ * ``real`` and fmi2Terminated (whether the last step failed) into ``flag`` when ``known`` (``value``: the one
+ * given); any other: no_status */
+static fmi2Status status_of(Instance* c, const char* function, int known, const void* value, fmi2Real* real,
+                            fmi2Boolean* flag)
 {
-    BEGIN(fmi2GetRealStatus, MASK_STATUS);
-    if (s != fmi2LastSuccessfulTime)
-        return no_status(c, "fmi2GetRealStatus", value);
-    if (!given(c, value, "fmi2GetRealStatus", "value"))
+    if (!known)
+        return no_status(c, function, value);
+    if (!given(c, value, function, "value"))
         return fmi2Error;
-    *value = FMU_TIME(c);
+    if (real != NULL)
+        *real = FMU_TIME(c);
+    else
+        *flag = c->last_step_failed ? fmi2True : fmi2False;
     return fmi2OK;
 }
 
-fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer* value)
-{
-    BEGIN(fmi2GetIntegerStatus, MASK_STATUS);
-    return no_status(c, "fmi2GetIntegerStatus", value);
-}
+fmi2Status fmi2GetRealStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Real* value)
+    CHECKED(fmi2GetRealStatus, MASK_STATUS, status_of(c, "fmi2GetRealStatus", s == fmi2LastSuccessfulTime, value, value,
+                                                      NULL))
 
-fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean* value)
-{
-    BEGIN(fmi2GetBooleanStatus, MASK_STATUS);
-    if (s != fmi2Terminated)
-        return no_status(c, "fmi2GetBooleanStatus", value);
-    if (!given(c, value, "fmi2GetBooleanStatus", "value"))
-        return fmi2Error;
-    *value = c->last_step_failed ? fmi2True : fmi2False;
-    return fmi2OK;
-}
+fmi2Status fmi2GetIntegerStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Integer* value)
+    CHECKED(fmi2GetIntegerStatus, MASK_STATUS, no_status(c, "fmi2GetIntegerStatus", value))
 
-fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String* value)
-{
-    BEGIN(fmi2GetStringStatus, MASK_STATUS);
-    return no_status(c, "fmi2GetStringStatus", value);
-}
+fmi2Status fmi2GetBooleanStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Boolean* value)
+    CHECKED(fmi2GetBooleanStatus, MASK_STATUS, status_of(c, "fmi2GetBooleanStatus", s == fmi2Terminated, value, NULL,
+                                                         value))
 
-/* ------------------------------------------------------------------ FMU state: a checked blob */
+fmi2Status fmi2GetStringStatus(fmi2Component instance, const fmi2StatusKind s, fmi2String* value)
+    CHECKED(fmi2GetStringStatus, MASK_STATUS, no_status(c, "fmi2GetStringStatus", value))
 
-fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate* state)
-{
-    BEGIN(fmi2GetFMUstate, ANY_PHASE);
-    if (!given(c, state, "fmi2GetFMUstate", "FMUstate"))
-        return fmi2Error;
-    return (fmi2Status)core_get_state(c, state);
-}
+/* ------------------------------------------------------------------ FMU state: a checked blob (state.h) */
 
-fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
-{
-    BEGIN(fmi2SetFMUstate, ANY_PHASE);
-    return (fmi2Status)core_set_state(c, state);
-}
-
-fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate* state)
-{
-    BEGIN(fmi2FreeFMUstate, ANY_PHASE);
-    if (!given(c, state, "fmi2FreeFMUstate", "FMUstate"))
-        return fmi2Error;
-    core_free_state(state);
-    return fmi2OK;
-}
-
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, size_t* size)
-{
-    BEGIN(fmi2SerializedFMUstateSize, ANY_PHASE);
-    if (!given(c, state, "fmi2SerializedFMUstateSize", "FMUstate") ||
-        !given(c, size, "fmi2SerializedFMUstateSize", "size"))
-        return fmi2Error;
-    *size = core_state_size(state);
-    return fmi2OK;
-}
-
-fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte bytes[], size_t size)
-{
-    BEGIN(fmi2SerializeFMUstate, ANY_PHASE);
-    if (!given(c, state, "fmi2SerializeFMUstate", "FMUstate") || !given(c, bytes, "fmi2SerializeFMUstate", "bytes"))
-        return fmi2Error;
-    return (fmi2Status)core_serialize(c, state, bytes, size);
-}
-
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], size_t size, fmi2FMUstate* state)
-{
-    BEGIN(fmi2DeSerializeFMUstate, ANY_PHASE);
-    if (!given(c, bytes, "fmi2DeSerializeFMUstate", "bytes") || !given(c, state, "fmi2DeSerializeFMUstate",
-                                                                        "FMUstate"))
-        return fmi2Error;
-    return (fmi2Status)core_deserialize(c, bytes, size, state);
-}
+STATE_FUNCTIONS(fmi2GetFMUstate, fmi2SetFMUstate, fmi2FreeFMUstate, fmi2SerializedFMUstateSize, fmi2SerializeFMUstate,
+                fmi2DeSerializeFMUstate)

@@ -7,21 +7,19 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
-/* The native FMU's FMI 3.0 co-simulation layer over the element (element.h) or the connector (connector.h): the
- * scalars of the FMI 2.0 FMU (Float64 for Real, the same value references) and the branch elongations as the
+/* The native FMU's FMI 3.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
+ * connector.h, network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
+ * each under its 1-based position in ModelVariables as its value reference) and the branch elongations as the
  * scalars u_1 .. u_n (VR_U_FIRST + i - 1), which every master reads; built with arrays (ARRAYS), also the array u of
  * n Float64 (VR_U), sized by the structural parameter n (UInt64, fixed). The functions of model exchange, scheduled
- * execution, clocks and event mode are refused with a logged reason.
- *
- * Every function first checks its instance (NULL: fmi3Error, nothing logged: there is no logger), the call
- * sequence (calls.h: the phases it is allowed in, FMI 3.0's state machine for co-simulation without event mode)
- * and its pointers (NULL: fmi3Error with the reason logged). A refusal leaves the instance as it was. */
+ * execution, clocks and event mode are refused with a logged reason. */
 #include "fmi3Functions.h"
 #define FMI "fmi3"
 #define FMU_STATE "FMUState"
 #define FLOAT_SETTER "fmi3SetFloat64"
 #define STANDARD "FMI 3.0"
 #define STEPPING_NAME "step mode"
+#define DESERIALIZE "fmi3DeserializeFMUState"
 #include "scene.h"
 #if NETWORK
 #include "network.h"
@@ -30,8 +28,11 @@
 #else
 #include "element.h"
 #endif
-#include "state.h"
-#include "calls.h"
+typedef fmi3Instance FmiInstance; /* the version's types of front.h */
+typedef fmi3Status FmiStatus;
+typedef fmi3FMUState FmiState;
+typedef fmi3Byte FmiByte;
+#include "front.h"
 #ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
 #define FMU_TIME(c) element_time(&(c)->el)
 #endif
@@ -56,14 +57,6 @@ static void emit(void* instance, int status, const char* category, const char* m
 #define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
 #define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
 
-/* the instance of a call, or return fmi3Error: NULL, or a call not allowed in its phase */
-#define BEGIN(function, mask)                                                                                  \
-    Instance* c = (Instance*)instance;                                                                         \
-    if (c == NULL)                                                                                             \
-        return fmi3Error;                                                                                      \
-    if (!allowed(c, (mask), #function))                                                                        \
-        return fmi3Error
-
 /* a function this co-simulation FMU does not provide: fmi3Error, with the reason */
 static fmi3Status not_provided(fmi3Instance instance, const char* message)
 {
@@ -75,20 +68,7 @@ static fmi3Status not_provided(fmi3Instance instance, const char* message)
 const char* fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n, const fmi3String categories[])
-{
-    size_t i;
-    BEGIN(fmi3SetDebugLogging, ANY_PHASE);
-    if (n > 0 && !given(c, categories, "fmi3SetDebugLogging", "categories"))
-        return fmi3Error;
-    for (i = 0; i < n; i++) {
-        if (categories[i] == NULL) {
-            say(c, ST_ERROR, "fmi3SetDebugLogging refused: categories[%zu] is NULL", i);
-            return fmi3Error;
-        }
-    }
-    c->logging = on ? 1 : 0;
-    return fmi3OK;
-}
+    CHECKED(fmi3SetDebugLogging, ANY_PHASE, core_set_debug_logging(c, on, n, categories))
 
 fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
                                          fmi3Boolean logging, fmi3Boolean event_mode, fmi3Boolean early_return,
@@ -96,53 +76,21 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
                                          fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
                                          fmi3IntermediateUpdateCallback update)
 {
-    Instance* c = (Instance*)calloc(1, sizeof(Instance));
+    Instance* c = instance_new(name, env, (void*)logger, logging);
     if (c == NULL)
         return NULL;
-    c->env = env;
-    c->logger = (void*)logger;
-    c->name = strdup(name ? name : "");
-    c->logging = logging ? 1 : 0;
-    if (c->name == NULL) {
-        free(c);
-        return NULL;
-    }
-    if (token == NULL || strcmp(token, GUID) != 0) {
+    if (token == NULL || strcmp(token, GUID) != 0)
         say(c, ST_ERROR, "fmi3InstantiateCoSimulation refused: instantiation token %s is not this FMU's (%s)",
             token ? token : "(null)", GUID);
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-    if (event_mode) {
+    else if (event_mode)
         say(c, ST_ERROR, "fmi3InstantiateCoSimulation refused: this FMU has no event mode");
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-    defaults(c);
-#ifdef INSTANCE_FAILED
-    if (INSTANCE_FAILED(c)) { /* logged */
-        RELEASE_INSTANCE(c);
-        free(c->name);
-        free(c);
-        return NULL;
-    }
-#endif
-    return c;
+    else
+        return instance_started(c);
+    instance_free(c);
+    return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance)
-{
-    Instance* c = (Instance*)instance;
-    if (c == NULL)
-        return;
-#ifdef RELEASE_INSTANCE
-    RELEASE_INSTANCE(c);
-#endif
-    free(c->name);
-    free(c);
-}
+void fmi3FreeInstance(fmi3Instance instance) { instance_free((Instance*)instance); }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tol_defined, fmi3Float64 tol,
                                        fmi3Float64 start, fmi3Boolean stop_defined, fmi3Float64 stop)
@@ -151,15 +99,11 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tol_de
     if (!experiment_valid(c, start, stop_defined, stop, "fmi3EnterInitializationMode"))
         return fmi3Error;
     c->start_time = start;
-    c->phase = INITIALIZING;
-    return fmi3OK;
+    return (fmi3Status)phase_to(c, INITIALIZING);
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
-{
-    BEGIN(fmi3ExitInitializationMode, INITIALIZING);
-    return (fmi3Status)core_exit_initialization(c);
-}
+    CHECKED(fmi3ExitInitializationMode, INITIALIZING, core_exit_initialization(c))
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
@@ -168,22 +112,10 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance)
-{
-    BEGIN(fmi3Terminate, STEPPING);
-    c->phase = TERMINATED;
-    return fmi3OK;
-}
+    CHECKED(fmi3Terminate, STEPPING, phase_to(c, TERMINATED))
 
 fmi3Status fmi3Reset(fmi3Instance instance)
-{
-    BEGIN(fmi3Reset, ANY_PHASE);
-    defaults(c);
-#ifdef INSTANCE_FAILED
-    if (INSTANCE_FAILED(c))
-        return fmi3Error; /* logged */
-#endif
-    return fmi3OK;
-}
+    CHECKED(fmi3Reset, ANY_PHASE, core_reset(c))
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 H, fmi3Boolean no_prior,
                       fmi3Boolean* event_handling_needed, fmi3Boolean* terminate, fmi3Boolean* early_return,
@@ -251,10 +183,7 @@ static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
                           size_t nvalues)
-{
-    BEGIN(fmi3GetFloat64, MASK_GET);
-    return get_float64(c, vr, nvr, values, nvalues);
-}
+    CHECKED(fmi3GetFloat64, MASK_GET, get_float64(c, vr, nvr, values, nvalues))
 
 /* fmi3GetFloat64 of an instance allowed to answer: the scalars (u_i among them: the n elongations computed once
  * per call) and, with arrays, the arrays, each filling as many values as it has */
@@ -338,20 +267,12 @@ static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nvalues)
 {
-    size_t i;
     BEGIN(fmi3SetFloat64, MASK_SET);
     if (nvalues != nvr) {
         say(c, ST_ERROR, "fmi3SetFloat64 refused: %zu values for %zu scalar variables", nvalues, nvr);
         return fmi3Error;
     }
-    if (!arrays_given(c, nvr, vr, values, "fmi3SetFloat64"))
-        return fmi3Error;
-    for (i = 0; i < nvr; i++) /* all or nothing */
-        if (core_check_float(c, find(vr[i], T_REAL), vr[i], values[i]) != ST_OK)
-            return fmi3Error;
-    for (i = 0; i < nvr; i++)
-        core_set_float(c, find(vr[i], T_REAL), values[i]);
-    return fmi3OK;
+    return (fmi3Status)core_set_floats(c, vr, nvr, values);
 }
 
 fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 values[],
@@ -387,129 +308,33 @@ fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
     return fmi3OK;
 }
 
+/* the Boolean scene_load */
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
                           size_t nvalues)
-{
-    size_t i;
-    BEGIN(fmi3GetBoolean, MASK_GET);
-    if (!arrays_given(c, nvr, vr, values, "fmi3GetBoolean"))
-        return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (find(vr[i], T_BOOLEAN) == NULL || i >= nvalues) {
-            say(c, ST_ERROR, "fmi3GetBoolean refused: no Boolean variable has value reference %u", vr[i]);
-            return fmi3Error;
-        }
-        values[i] = c->scene_load ? fmi3True : fmi3False;
-    }
-    return fmi3OK;
-}
+    GETTER(fmi3GetBoolean, T_BOOLEAN, "fmi3GetBoolean refused: no Boolean variable has value reference %u", nvalues,
+           c->scene_load ? fmi3True : fmi3False)
 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Boolean values[], size_t nvalues)
-{
-    size_t i;
-    BEGIN(fmi3SetBoolean, MASK_SET);
-    if (!arrays_given(c, nvr, vr, values, "fmi3SetBoolean"))
-        return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (find(vr[i], T_BOOLEAN) == NULL || i >= nvalues) {
-            say(c, ST_ERROR, "fmi3SetBoolean refused: no Boolean variable has value reference %u", vr[i]);
-            return fmi3Error;
-        }
-    }
-    for (i = 0; i < nvr; i++)
-        c->scene_load = values[i] ? 1 : 0;
-    return fmi3OK;
-}
+    CHECKED(fmi3SetBoolean, MASK_SET, core_set_scene_load(c, vr, nvr, values, nvalues,
+                                                          nvr > 0 && values != NULL && values[nvr - 1],
+                                                          "fmi3SetBoolean refused: no Boolean variable has value "
+                                                          "reference %u"))
 
+/* the String stepper */
 fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3String values[],
                          size_t nvalues)
-{
-    size_t i;
-    BEGIN(fmi3GetString, MASK_GET);
-    if (!arrays_given(c, nvr, vr, values, "fmi3GetString"))
-        return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (find(vr[i], T_STRING) == NULL || i >= nvalues) {
-            say(c, ST_ERROR, "fmi3GetString refused: no String variable has value reference %u", vr[i]);
-            return fmi3Error;
-        }
-        values[i] = c->stepper;
-    }
-    return fmi3OK;
-}
+    GETTER(fmi3GetString, T_STRING, "fmi3GetString refused: no String variable has value reference %u", nvalues,
+           c->stepper)
 
 fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const fmi3String values[], size_t nvalues)
-{
-    size_t i;
-    BEGIN(fmi3SetString, MASK_SET);
-    if (!arrays_given(c, nvr, vr, values, "fmi3SetString"))
-        return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (find(vr[i], T_STRING) == NULL || i >= nvalues) {
-            say(c, ST_ERROR, "fmi3SetString refused: value reference %u is not the String parameter stepper", vr[i]);
-            return fmi3Error;
-        }
-        if (values[i] == NULL) {
-            say(c, ST_ERROR, "fmi3SetString refused: values[%zu] is NULL (a stepper's name is needed)", i);
-            return fmi3Error;
-        }
-    }
-    for (i = 0; i < nvr; i++)
-        core_set_stepper(c, values[i]);
-    return fmi3OK;
-}
+    CHECKED(fmi3SetString, MASK_SET, core_set_strings(c, vr, nvr, nvalues, values, "values"))
 
-fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* state)
-{
-    BEGIN(fmi3GetFMUState, ANY_PHASE);
-    if (!given(c, state, "fmi3GetFMUState", "FMUState"))
-        return fmi3Error;
-    return (fmi3Status)core_get_state(c, state);
-}
+/* ------------------------------------------------------------------ FMU state: a checked blob (state.h) */
 
-fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state)
-{
-    BEGIN(fmi3SetFMUState, ANY_PHASE);
-    return (fmi3Status)core_set_state(c, state);
-}
-
-fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* state)
-{
-    BEGIN(fmi3FreeFMUState, ANY_PHASE);
-    if (!given(c, state, "fmi3FreeFMUState", "FMUState"))
-        return fmi3Error;
-    core_free_state(state);
-    return fmi3OK;
-}
-
-fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state, size_t* size)
-{
-    BEGIN(fmi3SerializedFMUStateSize, ANY_PHASE);
-    if (!given(c, state, "fmi3SerializedFMUStateSize", "FMUState") ||
-        !given(c, size, "fmi3SerializedFMUStateSize", "size"))
-        return fmi3Error;
-    *size = core_state_size(state);
-    return fmi3OK;
-}
-
-fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState state, fmi3Byte bytes[], size_t size)
-{
-    BEGIN(fmi3SerializeFMUState, ANY_PHASE);
-    if (!given(c, state, "fmi3SerializeFMUState", "FMUState") || !given(c, bytes, "fmi3SerializeFMUState", "bytes"))
-        return fmi3Error;
-    return (fmi3Status)core_serialize(c, state, (char*)bytes, size);
-}
-
-fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte bytes[], size_t size, fmi3FMUState* state)
-{
-    BEGIN(fmi3DeserializeFMUState, ANY_PHASE);
-    if (!given(c, bytes, "fmi3DeserializeFMUState", "bytes") || !given(c, state, "fmi3DeserializeFMUState",
-                                                                        "FMUState"))
-        return fmi3Error;
-    return (fmi3Status)core_deserialize(c, (const char*)bytes, size, state);
-}
+STATE_FUNCTIONS(fmi3GetFMUState, fmi3SetFMUState, fmi3FreeFMUState, fmi3SerializedFMUStateSize, fmi3SerializeFMUState,
+                fmi3DeserializeFMUState)
 
 /* ------------------------------------------------------------------ what a co-simulation FMU does not provide */
 
@@ -553,23 +378,11 @@ fmi3Status fmi3GetUInt16(fmi3Instance instance, const fmi3ValueReference valueRe
     return not_provided(instance, "fmi3GetUInt16: not provided by this co-simulation FMU");
 }
 
-fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3Int32 values[], size_t nValues)
-{
-    size_t i; /* noise_seed, and n where it is a local constant (no array u: -1 for the continuum) */
-    BEGIN(fmi3GetInt32, MASK_GET);
-    if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3GetInt32"))
-        return fmi3Error;
-    for (i = 0; i < nValueReferences; i++) {
-        const Var* var = find(valueReferences[i], T_INTEGER);
-        if (var == NULL || i >= nValues) {
-            say(c, ST_ERROR, "fmi3GetInt32 refused: value reference %u is not an Int32 variable (noise_seed, or n "
-                "where it is no structural parameter)", valueReferences[i]);
-            return fmi3Error;
-        }
-        values[i] = integer_value(c, var);
-    }
-    return fmi3OK;
-}
+/* noise_seed, and n where it is a local constant (no array u: -1 for the continuum) */
+fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
+                        size_t nvalues)
+    GETTER(fmi3GetInt32, T_INTEGER, "fmi3GetInt32 refused: value reference %u is not an Int32 variable (noise_seed, "
+           "or n where it is no structural parameter)", nvalues, integer_value(c, find(vr[i], T_INTEGER)))
 
 fmi3Status fmi3GetUInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, fmi3UInt32 values[], size_t nValues)
 {
@@ -618,20 +431,8 @@ fmi3Status fmi3SetUInt16(fmi3Instance instance, const fmi3ValueReference valueRe
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 values[], size_t nValues)
 {
-    size_t i; /* noise_seed: an FMI 2.0 Integer, 32 bits as there (0 <= seed < 2^31) */
-    BEGIN(fmi3SetInt32, MASK_SET);
-    if (!arrays_given(c, nValueReferences, valueReferences, values, "fmi3SetInt32"))
-        return fmi3Error;
-    if (nValues < nValueReferences) {
-        say(c, ST_ERROR, "fmi3SetInt32 refused: %zu values for %zu value references", nValues, nValueReferences);
-        return fmi3Error;
-    }
-    for (i = 0; i < nValueReferences; i++) /* all or nothing */
-        if (core_check_integer(c, find(valueReferences[i], T_INTEGER), valueReferences[i], "fmi3SetInt32") != ST_OK)
-            return fmi3Error;
-    for (i = 0; i < nValueReferences; i++)
-        core_set_integer(c, find(valueReferences[i], T_INTEGER), values[i]);
-    return fmi3OK;
+    BEGIN(fmi3SetInt32, MASK_SET); /* noise_seed: an FMI 2.0 Integer, 32 bits as there (0 <= seed < 2^31) */
+    return (fmi3Status)core_set_integers(c, valueReferences, nValueReferences, values, nValues, "fmi3SetInt32");
 }
 
 fmi3Status fmi3SetUInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3UInt32 values[], size_t nValues)

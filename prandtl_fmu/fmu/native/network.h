@@ -35,8 +35,7 @@ typedef struct {
     int64_t piece[NE_ARR];
     double account[3];                  /* the work of the load, dissipated by sliders, by dashpots */
     double dissipated[NE_ARR], reaction, initial_energy;
-    double origin, grid;                /* the clock: time = origin + steps * grid (grid 0: none yet) */
-    int64_t steps;
+    Clock clock;                        /* time = origin + steps * grid (grid 0: none yet) */
     double force;        /* the load of the last advance (plus the scene's [load] with scene_load); CONNECTOR: the
                             force of the elements on the load's node (NetworkConnector.force) */
     int scene_load;
@@ -53,9 +52,7 @@ typedef struct {
 #define NET(e) (e)->mass, (e)->coef, (int64_t*)KIND, (int64_t*)ENDS, (int64_t)LOAD_NODE, (int64_t)HAS_CUBIC
 
 typedef struct {
-    char header[24];
-    uint32_t version, size;
-    char digest[65];
+    STATE_HEAD;
     Element element;
     double F, x_in, v_in, step, start_time, time, par[N_PARAMS];
     int scene_load, stepper_valid, initialized;
@@ -65,10 +62,7 @@ typedef struct {
 } State;
 
 typedef struct {
-    char* name;
-    void* env; /* the host's: its environment and logger (the FMI version's layer calls it, emit()) */
-    void* logger;
-    int logging, phase, last_step_failed;
+    INSTANCE_HEAD;
     Element el;
     /* what the master set */
     double F, x_in, v_in, step, start_time, par[N_PARAMS];
@@ -87,38 +81,25 @@ typedef struct {
     Work work;
 } Instance;
 
-/* a value reference is the index of its variable (one table for every type) */
-static const Var* find(unsigned vr, int type)
-{
-    if (vr < (unsigned)N_VARS && VARS[vr].vr == vr && VARS[vr].type == type)
-        return &VARS[vr];
-    return NULL;
-}
-
-static double element_time(const Element* e) { return e->steps ? e->origin + (double)e->steps * e->grid : e->origin; }
+static double element_time(const Element* e) { return clock_time(&e->clock); }
 
 /* the FMU's time: the network's; the connector's communication point (its outputs are the network there) */
 #define FMU_TIME(c) (CONNECTOR ? (c)->time : element_time(&(c)->el))
-
-/* NetworkElement.time = value */
-static void set_time(Element* e, double value)
-{
-    if (e->grid != 0.0 && fabs(value - element_time(e)) <= 1e-9 * e->grid)
-        return;
-    e->origin = value;
-    e->steps = 0;
-}
+/* the outputs that must be numbers after a step (core.h) */
+#define STEP_OUTPUT(what) ((what) == W_X || (what) == W_V || (what) == W_REACTION || (what) == W_ENERGY || \
+                           (what) == W_DISSIPATED || (what) == W_U)
+#define KIND_INTEGERS 0
+/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
+#define SETTINGS(to, from)                                                                                     \
+    COPY_FIELD(to, from, F), COPY_FIELD(to, from, x_in), COPY_FIELD(to, from, v_in), COPY_FIELD(to, from, step), \
+        COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, time), COPY_FIELD(to, from, par),               \
+        COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid), COPY_FIELD(to, from, stepper),  \
+        COPY_FIELD(to, from, noise_set)
+#define SETTABLE(what) ((what) == W_F || (what) == W_XIN || (what) == W_VIN || (what) == W_PARAM || \
+                        (what) == W_STEP || (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT)
+#include "core.h"
 
 /* ------------------------------------------------------------------ the library's rules (network/model.py) */
-
-static int stepper_index(const char* name)
-{
-    int i;
-    for (i = 0; i < N_STEPPERS; i++)
-        if (strcmp(name, STEPPER_NAMES[i]) == 0)
-            return i;
-    return -1;
-}
 
 /* the mass of node j under the parameters par: its parameter's, or the scene's (the connector's load node) */
 #define MASS_OF(par, j) (MASS_PARAM[j] >= 0 ? (par)[MASS_PARAM[j]] : MASS_SCENE[j])
@@ -316,9 +297,7 @@ static const char* reset(Instance* c, double force, char* buffer, size_t size)
     Element* e = &c->el;
     double reaction[1] = {0.0}, kinetic_stored[2];
     int64_t status;
-    e->origin = 0.0;
-    e->steps = 0;
-    e->grid = 0.0;
+    memset(&e->clock, 0, sizeof e->clock);
     e->force = force;
     e->scene_load = 0;
     memcpy(e->x, X0, sizeof e->x);
@@ -341,23 +320,6 @@ static const char* reset(Instance* c, double force, char* buffer, size_t size)
         e->force = force;
     c->preview_state = 0;
     return NULL;
-}
-
-/* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
- * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
- * rounding, dropped */
-static void split_duration(double duration, double h, double* whole, double* rest)
-{
-    double ratio = duration / h, nearest = nearbyint(ratio);
-    if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
-        *whole = nearest;
-        *rest = 0.0;
-        return;
-    }
-    *whole = floor(ratio);
-    *rest = duration - *whole * h;
-    if (!(*rest >= 1e-9 * h))
-        *rest = 0.0;
 }
 
 /* NetworkElement._steps_from: ``count`` steps of h from step number ``first`` (t_p = t_base + p h); NULL, or why
@@ -399,42 +361,20 @@ static const char* advance(Instance* c, double duration, double force, int scene
     Load l;
     if (duration == 0.0)
         return NULL;
-    if (duration < SHORTEST_STEP) {
-        snprintf(buffer, size, "the duration is shorter than %g s", SHORTEST_STEP);
-        return buffer;
-    }
-    if (!(duration / h < MAX_STEPS)) {
-        snprintf(buffer, size, "the duration is more than 2^53 steps of h = %.17g s", h);
-        return buffer;
-    }
-    split_duration(duration, h, &whole, &rest);
-    if (whole == 0 && rest == 0) /* below rounding of h: no step, the clock on its grid (NetworkElement.advance) */
-        return NULL;
-    if (whole + (rest > 0) > ADVANCE_BUDGET) {
-        snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
-                 "steps of one advance: advance by shorter durations or with a larger step", duration,
-                 whole + (rest > 0), h, ADVANCE_BUDGET);
-        return buffer;
-    }
+    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
+        return problem;
     l = load_of(force, scene_load, &c->noise, c->noise_cache);
     e->force = force;
     e->scene_load = scene_load;
-    if (e->grid != h) {
-        e->origin = element_time(e);
-        e->steps = 0;
-        e->grid = h;
-    }
-    problem = steps_from(c, &l, e->origin, e->steps, (int64_t)whole, h, buffer, size);
+    clock_regrid(&e->clock, h);
+    problem = steps_from(c, &l, e->clock.origin, e->clock.steps, (int64_t)whole, h, buffer, size);
     if (problem == NULL && rest > 0)
-        problem = steps_from(c, &l, e->origin + (double)(e->steps + (int64_t)whole) * h, 0, 1, rest, buffer, size);
+        problem = steps_from(c, &l, e->clock.origin + (double)(e->clock.steps + (int64_t)whole) * h, 0, 1, rest,
+                             buffer, size);
     if (problem != NULL)
         return problem;
-    if (rest > 0) {
-        e->origin = e->origin + (double)(e->steps + (int64_t)whole) * h + rest;
-        e->steps = 0;
-    } else {
-        e->steps += (int64_t)whole;
-    }
+    clock_advanced(&e->clock, whole, rest, h);
     return NULL;
 }
 
@@ -477,9 +417,9 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
         return buffer;
     }
     if (duration != 0) {
-        e->origin = time;
-        e->steps = 0;
-        e->grid = h;
+        e->clock.origin = time;
+        e->clock.steps = 0;
+        e->clock.grid = h;
     }
     e->v[LOAD_NODE] = v;
     e->force = force[0];
@@ -559,21 +499,10 @@ static void defaults(Instance* c)
 {
     char buffer[512];
     memcpy(c->par, P_SCENE, sizeof c->par);
-    snprintf(c->stepper, sizeof c->stepper, "%s", DEFAULT_STEPPER);
-    c->stepper_valid = 1;
-    c->step = DEFAULT_STEP;
-    c->F = 0.0;
+    instantiated(c);
     c->x_in = X0[LOAD_NODE]; /* the inputs' start values */
     c->v_in = V0[LOAD_NODE];
     c->time = 0.0;
-    c->scene_load = SCENE_LOAD_START; /* true when the scene names a load: a fresh FMU runs the scene */
-    c->start_time = 0.0;
-    c->initialized = 0;
-    c->handed = 0;
-    c->phase = INSTANTIATED;
-    c->last_step_failed = 0;
-    c->noise_set = SCENE_NOISE;
-    memset(c->noise_cache, 0, sizeof c->noise_cache); /* a new cache (noise.new_cache) */
     memset(&c->el, 0, sizeof c->el);
     hand_over(c);
     if (reset(c, 0.0, buffer, sizeof buffer) != NULL)
@@ -582,26 +511,6 @@ static void defaults(Instance* c)
 }
 
 /* ------------------------------------------------------------------ FMU state: a checked blob */
-
-static void capture(const Instance* c, State* s)
-{
-    memset(s, 0, sizeof *s);
-    FILL_HEAD(s);
-    s->element = c->el;
-    s->F = c->F;
-    s->x_in = c->x_in;
-    s->v_in = c->v_in;
-    s->step = c->step;
-    s->start_time = c->start_time;
-    s->time = c->time;
-    memcpy(s->par, c->par, sizeof s->par);
-    s->scene_load = c->scene_load;
-    s->stepper_valid = c->stepper_valid;
-    s->initialized = c->initialized;
-    memcpy(s->stepper, c->stepper, sizeof s->stepper);
-    s->noise_set = c->noise_set;
-    s->checksum = fnv1a((const unsigned char*)s, offsetof(State, checksum));
-}
 
 /* the coefficients in use: the parameters' values (checked by their rules), the rest the scene's (on the heap: a
  * network may be large, the host's stack small) */
@@ -635,18 +544,13 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const Element* e = &s->element;
     const char* problem;
     int i, j;
-    const char* head = head_problem(s->header, s->version, s->size, sizeof *s, s->digest, s->checksum,
-                                    fnv1a((const unsigned char*)s, offsetof(State, checksum)));
-    if (head != NULL)
-        return head;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->force) &&
           isfinite(e->reaction) && isfinite(e->initial_energy) && isfinite(s->time) &&
           (e->scene_load == 0 || e->scene_load == 1) &&
           (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
           (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
         return "it holds a non-finite or out-of-range value";
-    if (!(isfinite(e->origin) && isfinite(e->grid) && e->grid >= 0 && e->steps >= 0 &&
-          (double)e->steps <= MAX_STEPS && (e->grid > 0 || e->steps == 0) && isfinite(element_time(e))))
+    if (!clock_valid(&e->clock))
         return "its clock is not a finite time (origin, steps and grid)";
     problem = coefficients_problem(e, buffer, size);
     if (problem == NULL) /* the noise's settings (NoiseParameters._check_noise_state) */
@@ -683,130 +587,80 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
 static int restore(Instance* c, const State* s)
 {
     char buffer[512];
-    const char* problem = state_problem(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, buffer, sizeof buffer);
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
     }
-    c->el = s->element;
-    c->F = s->F;
-    c->x_in = s->x_in;
-    c->v_in = s->v_in;
-    c->step = s->step;
-    c->start_time = s->start_time;
-    c->time = s->time;
-    memcpy(c->par, s->par, sizeof c->par);
-    c->scene_load = s->scene_load;
-    c->stepper_valid = s->stepper_valid;
+    restore_checked(c, s);
     c->initialized = s->initialized;
-    memcpy(c->stepper, s->stepper, sizeof c->stepper);
-    c->stepper[sizeof c->stepper - 1] = 0;
-    c->noise_set = s->noise_set; /* handed over at the next step, which redraws the same path */
-    c->handed = 0;
     c->preview_state = 0;
     return ST_OK;
 }
 
 /* ------------------------------------------------------------------ stepping */
 
-/* fmi2/3ExitInitializationMode: the settings checked and handed over, the network reset (the connector: moved to
- * the first input) */
-static int core_exit_initialization(Instance* c)
+/* the exit of initialization mode (core.h): the settings checked and handed over, the network reset (the
+ * connector: moved to the first input) */
+static const char* initialize(Instance* c, char* buffer, size_t size)
 {
-    char buffer[1024], reason[512];
-    const char* problem;
-    if (c->phase != INITIALIZING) {
-        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
-        return ST_ERROR;
-    }
-    problem = hand_over_problem(c, buffer, sizeof buffer);
+    char reason[512];
+    const char* problem = hand_over_problem(c, buffer, size);
+    double force = CONNECTOR ? 0.0 : c->F;
     if (problem == NULL && !(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
-        snprintf(buffer, sizeof buffer, "the inputs must be finite (%s = %.17g, %.17g)", CONNECTOR ? "x, v" : "F",
+        snprintf(buffer, size, "the inputs must be finite (%s = %.17g, %.17g)", CONNECTOR ? "x, v" : "F",
                  CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
-        problem = buffer;
+        return buffer;
     }
-    if (problem == NULL) {
-        double force = CONNECTOR ? 0.0 : c->F;
-        hand_over(c);
-        if (!CONNECTOR && c->scene_load) { /* F plus the scene's load at the start time */
-            Load l = load_of(0.0, 1, NULL, NULL);
-            force = c->F + load_force(l.kind, (double*)l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time);
-        }
-        if (reset(c, force, reason, sizeof reason) != NULL) {
-            snprintf(buffer, sizeof buffer, "no equilibrium at t = 0 under F = %.17g N: %s", force, reason);
-            problem = buffer;
-        }
+    if (problem != NULL)
+        return problem;
+    hand_over(c);
+    if (!CONNECTOR && c->scene_load) { /* F plus the scene's load at the start time */
+        Load l = load_of(0.0, 1, NULL, NULL);
+        force = c->F + load_force(l.kind, (double*)l.lk, (double*)l.t, (double*)l.f, l.n, c->start_time);
     }
-    if (problem == NULL) {
-        set_time(&c->el, c->start_time);
-        c->time = c->start_time;
-        c->preview_state = 0;
-        if (CONNECTOR && previewed(c) == NULL) { /* the first sample, checked now (committed by the first doStep) */
-            snprintf(buffer, sizeof buffer, "%s", c->why);
-            problem = buffer;
-        }
+    if (reset(c, force, reason, sizeof reason) != NULL) {
+        snprintf(buffer, size, "no equilibrium at t = 0 under F = %.17g N: %s", force, reason);
+        return buffer;
     }
-    if (problem != NULL) {
-        say(c, ST_ERROR, "initialization refused: %s", problem);
-        return ST_ERROR;
+    clock_set(&c->el.clock, c->start_time);
+    c->time = c->start_time;
+    c->preview_state = 0;
+    if (CONNECTOR && previewed(c) == NULL) { /* the first sample, checked now (committed by the first doStep) */
+        snprintf(buffer, size, "%s", c->why);
+        return buffer;
     }
     c->handed = 0;
-    c->initialized = 1;
     c->preview_state = 0;
-    c->phase = STEPPING;
-    if (!CONNECTOR && c->scene_load) /* a master that connects F is told the scene's load is added */
-        say(c, ST_WARNING, "%s", SCENE_LOAD_NOTICE);
-    return ST_OK;
-}
-
-/* the first output that is not a number to show after a step, or NULL */
-static const Var* unshowable_output(Instance* c, double* value)
-{
-    int i;
-    for (i = 0; i < N_VARS; i++) {
-        const Var* var = &VARS[i];
-        if (var->what != W_X && var->what != W_V && var->what != W_REACTION && var->what != W_ENERGY &&
-            var->what != W_DISSIPATED && var->what != W_U)
-            continue;
-        *value = real_value(c, var);
-        if (!isfinite(*value))
-            return var;
-    }
     return NULL;
 }
 
-/* fmi2/3DoStep: one communication step; the FMI layer checked the call sequence */
-static int core_do_step(Instance* c, double t, double H)
+/* once started: a master that connects F is told the scene's load is added (logging on or off) */
+static void started(Instance* c)
+{
+    if (!CONNECTOR && c->scene_load)
+        say(c, ST_WARNING, "%s", SCENE_LOAD_NOTICE);
+}
+
+static void hand_over_settings(Instance* c) { hand_over(c); }
+
+/* a doStep (core.h): the settings handed over; the connector's input sample committed at the communication point
+ * (the clock only goes on), the element checkpointed, put at t and advanced by H under F; a step that fails or
+ * would show an output that is not a number is rolled back */
+static int step(Instance* c, double t, double H)
 {
     char buffer[768];
     const char* problem;
     const Var* overflowed;
     double value;
-    if (c->phase != STEPPING) {
-        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
-            "Terminate");
-        return ST_ERROR;
-    }
-    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
-        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
-            ">= 0 (and their sum finite)", t, H);
-        return ST_ERROR;
-    }
-    c->last_step_failed = 1;
-    if (!c->handed) {
-        problem = hand_over_problem(c, buffer, sizeof buffer);
-        if (problem != NULL) {
-            say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
-            return ST_DISCARD;
-        }
-        hand_over(c);
-    }
+    if (!settings_handed(c))
+        return ST_DISCARD;
     if (!(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
         say(c, ST_DISCARD, "the inputs must be finite (%s = %.17g, %.17g); step not taken", CONNECTOR ? "x, v" : "F",
             CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
         return ST_DISCARD;
     }
-    if (CONNECTOR) { /* the input sample belongs to the communication point: commit it (the clock only goes on) */
+    if (CONNECTOR) {
         double now = c->time;
         c->time = t;
         c->preview_state = 0;
@@ -820,11 +674,10 @@ static int core_do_step(Instance* c, double t, double H)
         c->el = c->preview;
         c->time = t + H;
         c->preview_state = 0;
-        c->last_step_failed = 0;
         return ST_OK;
     }
     c->saved = c->el; /* NetworkElement.checkpoint, then the time */
-    set_time(&c->el, t);
+    clock_set(&c->el.clock, t);
     problem = advance(c, H, c->F, c->scene_load, buffer, sizeof buffer);
     if (problem != NULL) {
         c->el = c->saved;
@@ -840,19 +693,14 @@ static int core_do_step(Instance* c, double t, double H)
             "unchanged", time, overflowed->name, value);
         return ST_DISCARD;
     }
-    c->last_step_failed = 0;
     return ST_OK;
 }
 
-/* a Float64/Real the master sets: the inputs, the parameters, the step */
-static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
+static int fixed_problem(Instance* c, const Var* var, double value) /* (no fixed parameter) */
 {
+    (void)c;
+    (void)var;
     (void)value;
-    if (var == NULL || !(var->what == W_F || var->what == W_XIN || var->what == W_VIN || var->what == W_PARAM ||
-                         var->what == W_STEP || var->what == W_NOISE_INTENSITY || var->what == W_NOISE_UNIT)) {
-        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
-        return ST_ERROR;
-    }
     return ST_OK;
 }
 
@@ -882,30 +730,6 @@ static int32_t integer_value(Instance* c, const Var* var)
 {
     (void)var;
     return (int32_t)c->noise_set.seed;
-}
-
-/* an Integer the master sets: noise_seed alone (its rule is checked when it is handed over) */
-static int core_check_integer(Instance* c, const Var* var, unsigned vr, const char* function)
-{
-    if (var == NULL || var->what != W_NOISE_SEED) {
-        say(c, ST_ERROR, "%s refused: value reference %u is not the Integer parameter noise_seed", function, vr);
-        return ST_ERROR;
-    }
-    return ST_OK;
-}
-
-static void core_set_integer(Instance* c, const Var* var, int32_t value)
-{
-    (void)var;
-    c->noise_set.seed = value;
-    c->handed = 0;
-}
-
-static void core_set_stepper(Instance* c, const char* value)
-{
-    c->stepper_valid = strlen(value) < sizeof c->stepper;
-    snprintf(c->stepper, sizeof c->stepper, "%s", c->stepper_valid ? value : "");
-    c->handed = 0;
 }
 
 #endif

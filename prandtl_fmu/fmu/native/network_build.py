@@ -275,7 +275,8 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
         "enum { W_NONE, W_F, W_X, W_V, W_REACTION, W_FORCE, W_ENERGY, W_DISSIPATED, W_U, W_PARAM, W_STEP, "
         "W_SCENE_LOAD, W_STEPPER, W_XIN, W_VIN, W_NOISE_INTENSITY, W_NOISE_SEED, W_NOISE_UNIT };",
         "typedef struct { unsigned vr; int type; int what; int index; const char* name; } Var;",
-        "static const Var VARS[] = { /* VARS[vr]: the variable of value reference vr (a hole: vr = UINT32_MAX) */",
+        "static const Var VARS[] = { /* VARS[vr - VR_FIRST]: the variable of value reference vr (a hole: vr = "
+        "UINT32_MAX) */",
     ]
     known = meanings(scene, connector)
     table_of = {}
@@ -283,13 +284,14 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
         if row.name not in known:
             raise ValueError(f"the native runtime does not know the FMU variable {row.name!r}")
         table_of[row.value_reference] = (C_TYPES[row.type], *known[row.name], row.name)
-    for vr in range(max(table_of) + 1):
+    for vr in range(min(table_of), max(table_of) + 1):
         if vr in table_of:
             type_code, what, index, name = table_of[vr]
             lines.append(f'    {{{vr}, {type_code}, {what}, {index}, "{name}"}},')
         else:
             lines.append('    {4294967295u, T_REAL, W_NONE, 0, ""},')
-    lines += ["};", f"#define N_VARS {max(table_of) + 1}", "#endif", ""]
+    lines += ["};", f"#define N_VARS {max(table_of) - min(table_of) + 1}", f"#define VR_FIRST {min(table_of)}u",
+              "#endif", ""]
     return "\n".join(lines)
 
 

@@ -23,6 +23,54 @@
 #endif
 #define STATE_BYTES(extra) (sizeof(State) + (extra) * sizeof(double))
 
+/* what each kind supplies: each field of a state checked (NULL, or why not), a state restored (core.h: capture) */
+static const char* state_problem(const State* s, char* buffer, size_t size);
+static int restore(Instance* c, const State* s);
+
+/* the checksum of a state: its fixed part up to the checksum, then the STATE_EXTRA doubles after it (which the
+ * caller knows the blob holds: state_whole, or its size checked) */
+static uint64_t state_checksum(const State* s)
+{
+    size_t extra = STATE_EXTRA(s);
+    uint64_t hash = fnv1a(FNV_BASIS, (const unsigned char*)s, offsetof(State, checksum));
+    return fnv1a(hash, (const unsigned char*)(s + 1), (extra == (size_t)-1 ? 0 : extra) * sizeof(double));
+}
+
+/* the instance's state into ``s``: its head, the element (the memory's state after the fixed part), the kind's
+ * fields (capture), the checksum */
+static void state_fill(const Instance* c, State* s)
+{
+    memset(s, 0, sizeof *s);
+    snprintf(s->header, sizeof s->header, "%s", STATE_MAGIC);
+    s->version = STATE_VERSION;
+    s->size = (uint32_t)sizeof *s;
+    snprintf(s->digest, sizeof s->digest, "%s", DIGEST);
+    s->element = c->el;
+#if !NETWORK
+    s->element.mem = NULL;
+    if (c->el.mem_len > 0)
+        memcpy((double*)(s + 1), c->el.mem, (size_t)c->el.mem_len * sizeof(double));
+#endif
+    capture(c, s);
+    s->checksum = state_checksum(s);
+}
+
+/* why a state cannot be restored here, or NULL: the magic, the version and size, the scene's digest and the
+ * checksum first, then every field as strictly as the setters check the master's values (state_problem: a
+ * checksum detects accidents, not edits, and a blob with a recomputed one is checked field by field) */
+static const char* state_refusal(const State* s, char* buffer, size_t size)
+{
+    if (memcmp(s->header, STATE_MAGIC, sizeof STATE_MAGIC) != 0)
+        return "not a serialized state of a prandtl_fmu native FMU";
+    if (s->version != STATE_VERSION || s->size != sizeof *s)
+        return "a state of another version of the native runtime";
+    if (strncmp(s->digest, DIGEST, 65) != 0)
+        return "a state of another scene (its digest differs)";
+    if (s->checksum != state_checksum(s))
+        return "its checksum does not match: the state was altered";
+    return state_problem(s, buffer, size);
+}
+
 typedef union { size_t bytes; double align; } StateHead; /* before each blob: its size */
 
 static State* state_new(size_t bytes)
@@ -49,17 +97,21 @@ static int state_whole(const void* state)
     return extra != (size_t)-1 && STATE_BYTES(extra) == state_bytes(state);
 }
 
+/* fmi2/3GetFMUstate: into *state when the master hands one of this size, else a new one */
 static int core_get_state(Instance* c, void** state)
 {
     size_t bytes = STATE_BYTES(INSTANCE_EXTRA(c));
-    State* s = *state && state_bytes(*state) == bytes ? (State*)*state : state_new(bytes);
+    State* s;
+    if (!given(c, state, FMI "Get" FMU_STATE, FMU_STATE))
+        return ST_ERROR;
+    s = *state && state_bytes(*state) == bytes ? (State*)*state : state_new(bytes);
     if (s == NULL) {
         say(c, ST_ERROR, FMI "Get" FMU_STATE " failed: out of memory");
         return ST_ERROR;
     }
     if (*state != NULL && *state != s) /* a state of another size (the memory's): replaced */
         state_delete(*state);
-    capture(c, s);
+    state_fill(c, s);
     *state = s;
     return ST_OK;
 }
@@ -78,20 +130,31 @@ static int core_set_state(Instance* c, const void* state)
     return restore(c, (const State*)state);
 }
 
-static void core_free_state(void** state)
+static int core_free_state(Instance* c, void** state)
 {
-    if (state != NULL) {
-        state_delete(*state);
-        *state = NULL;
-    }
+    if (!given(c, state, FMI "Free" FMU_STATE, FMU_STATE))
+        return ST_ERROR;
+    state_delete(*state);
+    *state = NULL;
+    return ST_OK;
 }
 
 /* the bytes of a serialized state: the blob as it was allocated */
-static size_t core_state_size(const void* state) { return state_bytes(state); }
+static int core_state_size(Instance* c, const void* state, size_t* size)
+{
+    if (!given(c, state, FMI "Serialized" FMU_STATE "Size", FMU_STATE) ||
+        !given(c, size, FMI "Serialized" FMU_STATE "Size", "size"))
+        return ST_ERROR;
+    *size = state_bytes(state);
+    return ST_OK;
+}
 
 static int core_serialize(Instance* c, const void* state, char* bytes, size_t size)
 {
-    size_t needed = state_bytes(state);
+    size_t needed;
+    if (!given(c, state, FMI "Serialize" FMU_STATE, FMU_STATE) || !given(c, bytes, FMI "Serialize" FMU_STATE, "bytes"))
+        return ST_ERROR;
+    needed = state_bytes(state);
     if (size < needed) {
         say(c, ST_ERROR, FMI "SerializeFMUstate refused: %zu bytes given, %zu needed", size, needed);
         return ST_ERROR;
@@ -108,6 +171,8 @@ static int core_deserialize(Instance* c, const char* bytes, size_t size, void** 
     const char* problem;
     State* s;
     size_t extra = 0;
+    if (!given(c, bytes, DESERIALIZE, "bytes") || !given(c, state, DESERIALIZE, FMU_STATE))
+        return ST_ERROR;
     if (size >= sizeof(State)) { /* the fixed part says how many values follow it */
         s = state_new(sizeof(State));
         if (s == NULL) {
@@ -129,7 +194,7 @@ static int core_deserialize(Instance* c, const char* bytes, size_t size, void** 
         return ST_ERROR;
     }
     memcpy(s, bytes, size);
-    problem = state_problem(s, buffer, sizeof buffer);
+    problem = state_refusal(s, buffer, sizeof buffer);
     if (problem != NULL) {
         state_delete(s);
         say(c, ST_ERROR, "FMU state refused (%s)", problem);
