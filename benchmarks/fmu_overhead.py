@@ -84,9 +84,10 @@ def c_host_run(host, extracted, stepper, h, count, repeat):
     bare, reading, first = [], [], []
     for _ in range(repeat):
         started = time.perf_counter()
-        code, _, _, _, out = run_host(host, extracted, ["setup", "enter", "exit", f"step:0:{h!r}", "free"], env=env)
+        code, _, _, _, out = run_host(host, extracted, ["setup", "enter", "setb:scene_load:0", "exit", f"step:0:{h!r}",
+                                                        "free"], env=env)
         first.append((time.perf_counter() - started) * 1e3)
-        commands = ["setup", "enter", "exit", f"timeit:0:{h!r}:{count * 10}",
+        commands = ["setup", "enter", "setb:scene_load:0", "exit", f"timeit:0:{h!r}:{count * 10}",
                     f"timeit:0:{h!r}:{count * 10}:" + ":".join(outputs_vr), "free"]
         code, _, _, _, out = run_host(host, extracted, commands, env=env)
         times = [float(line.split()[1]) for line in out.splitlines() if line.startswith("TIME ")]

@@ -62,7 +62,8 @@ def library_step(scene, force: float, count: int) -> float:
 def host_step(host, extracted, force: float, count: int) -> tuple:
     env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin")}
     outputs = [str(extracted.vr[name]) for name in extracted.outputs]
-    commands = ["setup", "enter", "exit", f"setr:{extracted.vr['F']}:{force!r}", f"steps:0:{H!r}:1000",
+    commands = ["setup", "enter", f"setb:{extracted.vr['scene_load']}:0", "exit", f"setr:{extracted.vr['F']}:{force!r}",
+                f"steps:0:{H!r}:1000",
                 f"timeit:{1000 * H!r}:{H!r}:{count}", f"timeit:{1000 * H + count * H!r}:{H!r}:{count}:"
                 + ":".join(outputs), "free"]
     code, _, _, _, out = run_host(host, extracted, commands, env=env)
