@@ -396,9 +396,8 @@ def _what(name: str, memory_names=()) -> tuple:
 def fmi3_description(root, scene, vr_u=None, arrays: bool = False) -> str:
     """The native FMU's FMI 3.0 description of the element or connector ``scene``
     (``description.model_description(scene, 3)``), with the GUID of its FMI 2.0 description ``root``, for a
-    caller that holds that one (docs/gen_pages.py); ``vr_u``, if given, must be the array u's value reference."""
+    caller that holds that one (docs/gen_pages.py); ``vr_u``: not read (FMI 3.0's value references are the
+    variables' positions, ``description.fmi3_references``)."""
     from .. import description
 
-    if vr_u is not None and vr_u != description.fmi3_references(scene)["u"]:
-        raise NativeBuildError(f"vr_u = {vr_u}: the FMI 3.0 description's is {description.fmi3_references(scene)['u']}")
     return description.model_description(scene, 3, root.get("guid", ""), arrays=arrays)

@@ -339,12 +339,10 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
 def fmi3_network_description(root, scene, extra_vr=None, arrays: bool = False, connector=None) -> str:
     """The native FMU's FMI 3.0 description of the network ``scene`` (``description.model_description(scene,
     3)``), with the GUID of its FMI 2.0 description ``root``, for a caller that holds that one
-    (docs/gen_pages.py); ``extra_vr`` and ``connector``, if given, must be the scene's."""
+    (docs/gen_pages.py); ``connector``, if given, must be the scene's; ``extra_vr``: not read (FMI 3.0's value
+    references are the variables' positions, ``description.fmi3_references``)."""
     from .. import description
 
-    if extra_vr is not None and dict(extra_vr) != description.fmi3_references(scene):
-        raise NativeBuildError(f"{extra_vr}: the FMI 3.0 description's value references are "
-                               f"{description.fmi3_references(scene)}")
     if connector is not None and connector != (scene.causality == "displacement"):
         raise NativeBuildError(f"connector = {connector}: the scene's causality is {scene.causality!r}")
     return description.model_description(scene, 3, root.get("guid", ""), arrays=arrays)
