@@ -187,6 +187,13 @@ def test_resume_skips_the_finished_runs_and_gives_the_same_table(tmp_path, monke
         table1.run(str(tmp_path / "cut"), "quick", workers=1, figures_too=False, resume=True)
 
 
+def test_without_matplotlib_it_says_so_before_any_run(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # a core install: no [bench] extra
+    with pytest.raises(table1.Table1Error, match=r"prandtl_fmu\[bench\]"):
+        table1.run(str(tmp_path / "out"), "quick", workers=1)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("options, culprit", [
     (["--table1", "--protocol", "nope"], "--protocol nope"),
     (["--table1", "--workers", "0"], "--workers 0"),

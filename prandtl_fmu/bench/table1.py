@@ -490,6 +490,11 @@ def run(folder: str, protocol_name: str = "paper", resume: bool = False, workers
         raise Table1Error(f"--workers {workers}: needs at least 1")
     if limit is not None and limit < 0:
         raise Table1Error(f"--limit {limit}: needs at least 0")
+    try:
+        import matplotlib  # noqa: F401  (the figures and table1_eps.png, at the end of hours of runs)
+    except ImportError:
+        raise Table1Error("bench --table1 draws its figures with matplotlib: pip install \"prandtl_fmu[bench]\"") \
+            from None
     dask = _has_dask()
     if (scheduler is not None or (workers or 1) > 1) and not dask:
         raise Table1Error("--workers/--scheduler need dask.distributed: pip install \"prandtl_fmu[sweep]\"")
