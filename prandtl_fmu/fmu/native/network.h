@@ -473,7 +473,7 @@ static double real_value(Instance* c, const Var* var)
     case W_FORCE: return e->force;
     case W_ENERGY: return energy(e, var->index);
     case W_DISSIPATED: return e->dissipated[var->index];
-    case W_U: return e->u[var->index];
+    case W_U: return SENSE[var->index] * e->u[var->index];  /* as written: x_j - x_i (network/model.py) */
     }
     return NAN;
 }

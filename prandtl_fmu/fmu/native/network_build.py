@@ -225,6 +225,8 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
         f"static const double X0[NN] = {_doubles(network.x0)};",
         f"static const double V0[NN] = {_doubles(network.v0)};",
         f"static const double U0[NE_ARR] = {_doubles([e.u0 for e in network.elements])};",
+        # the sign from a branch's u as the kernels keep it to its elongation as written (network/model.py)
+        f"static const double SENSE[NE_ARR] = {_doubles([e.sense for e in network.elements] or [1])};",
         f"static const char* NODE_NAMES[NN] = {_strings(network.nodes)};",
         f"static const char* ELEMENT_NAMES[NE_ARR] = {_strings([e.name for e in network.elements] or [''])};",
         f"static const int SLIDER_ONLY[NN] = {_ints(slider_only)};",
