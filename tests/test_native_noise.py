@@ -424,12 +424,12 @@ def test_a_restored_state_carries_the_noise_settings(built):
 
 
 def pythonfmu_words(settings) -> str:
-    """What the PythonFMU FMU says of these noise settings (NoiseParameters: the seed an FMU takes, then
-    loads.white_noise's rules), after "parameter "."""
-    from prandtl_fmu.fmu.python.common import NoiseParameters
+    """What the PythonFMU FMU says of these noise settings (description.check_noise_settings, which its slave
+    calls: the seed an FMU takes, then loads.white_noise's rules), after "parameter "."""
+    from prandtl_fmu.fmu.description import check_noise_settings
 
     with pytest.raises(ValueError) as refused:
-        NoiseParameters._check_noise_state(settings)
+        check_noise_settings(settings["noise_intensity"], settings["noise_seed"], settings["noise_unit"])
     return str(refused.value)
 
 
@@ -440,8 +440,7 @@ def pythonfmu_words(settings) -> str:
     ("noise_unit", float("nan")),
 ])
 def test_a_bad_noise_parameter_is_a_logged_discard_with_the_pythonfmu_words(built, name, parameter, value):
-    """The PythonFMU FMU's message (NoiseParameters._hand_over_noise), the state unchanged; set right, steps go
-    on."""
+    """The PythonFMU FMU's message (its slave's noise hand-over), the state unchanged; set right, steps go on."""
     fmu, _ = built[name, 2]
     out = "x" if name == "element" else "x_b"
     slave = Instance(fmu, {"scene_load": True})
