@@ -1,8 +1,9 @@
 """The PythonFMU runtime's build: ``build_python_fmu``, what ``build_fmu`` runs for ``runtime="python"``.
 
-A network scene ([network] or [chain]) gets the network's slaves (``network_slave.py``,
-``network_connector_slave.py``; model identifiers ``PrandtlNetwork``, ``PrandtlNetworkConnector``), the
-others the element's. The FMU holds, in ``resources/``: the slave script under a unique module name
+Every FMU has the one slave class (``slave.py``), which takes its kind from the scene it carries (the element or a
+network, driven by a force or as a connector: ``kinds.py``); its model identifier is the kind's
+(``description.model_identifier``: PrandtlElement, PrandtlConnector, PrandtlNetwork, PrandtlNetworkConnector),
+which names its binaries. The FMU holds, in ``resources/``: the slave script under a unique module name
 (``prandtl_slave_<digest>``, the digest of the scene and the library's sources: ``entry.py``), a copy of the
 library (``prandtl_fmu/``, the code the tests run), the scene (``scene.toml``) and the OSP interface description
 (``<modelIdentifier>_OspModelDescription.xml``, see ``fmu/osp.py``); ``documentation/index.html`` with the
@@ -20,11 +21,10 @@ from pathlib import Path
 
 from ...outputs import write_atomically
 from ..archive import add_entry, built_scene, check_osp_name, file_stem
-from ..description import is_network, model_identifier
+from ..description import model_identifier
 
 LIBRARY = Path(__file__).resolve().parent.parent.parent  # the prandtl_fmu package
 ENTRY = Path(__file__).resolve().parent / "entry.py"
-MODEL_IDENTIFIER = "PrandtlElement"
 
 
 def _library_files():
@@ -71,16 +71,7 @@ def build_python_fmu(scene_path, out=None, causality=None, osp: bool = False, lo
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
         script = staging / f"{module}.py"
-        entry = ENTRY.read_text(encoding="utf-8")
-        marker = '\n_CAUSALITY = "force"\n'
-        if entry.count(marker) != 1:
-            raise RuntimeError("entry.py has lost its _CAUSALITY line")
-        entry = entry.replace(marker, f'\n_CAUSALITY = "{scene.causality}"\n')
-        network_marker = "\n_NETWORK = False\n"
-        if entry.count(network_marker) != 1:
-            raise RuntimeError("entry.py has lost its _NETWORK line")
-        entry = entry.replace(network_marker, f"\n_NETWORK = {is_network(scene)}\n")
-        script.write_text(entry, encoding="utf-8")
+        script.write_text(ENTRY.read_text(encoding="utf-8"), encoding="utf-8")
         (staging / "scene.toml").write_bytes(scene_bytes)
         (staging / file_name(identifier)).write_text(osp_text, encoding="utf-8")
         package = staging / "prandtl_fmu"
@@ -88,7 +79,7 @@ def build_python_fmu(scene_path, out=None, causality=None, osp: bool = False, lo
             target = package / path.relative_to(LIBRARY)
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(path, target)
-        built = staging / "out" / f"{MODEL_IDENTIFIER}.fmu"
+        built = staging / "out" / f"{identifier}.fmu"
         built.parent.mkdir()
         try:
             FmuBuilder.build_FMU(script, dest=built, project_files=[package, staging / "scene.toml",

@@ -1,4 +1,4 @@
-"""What both slaves (the element with its force input, the connector) share: refusals and FMU states.
+"""The FMI plumbing of the slave (``slave.py``): the scene, refusals, the checked getters and setters, FMU states.
 
 A refused call logs its reason and raises :class:`Refused`. Under the FMU's own loader (``loader/``,
 PythonFMU 0.7.0 patched; Linux x86-64) the call then fails with fmi2Error and the instance stays as it was.
@@ -19,7 +19,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from ...scene import load_scene
-from ..description import NOISE_SEED_LIMIT, check_noise_settings, fmi2_root, variables
+from ..description import fmi2_root, variables
 
 
 class Refused(Exception):
@@ -52,14 +52,14 @@ class SlaveBase(Fmi2Slave):
     """The scene of the FMU, logging refusals, failing a call without freeing the instance, reading a
     serialized state."""
 
-    # whether the scene's own stepper must apply (a connector takes the library's constrained steps instead)
-    check_stepper = True
-
     def __init__(self, **kwargs):
         # absent under PythonFMU's stock loader (and when PythonFMU's builder instantiates the class)
         self.loader = kwargs.pop("pythonfmu_loader", None)
         super().__init__(**kwargs)
-        self.scene = load_scene(os.path.join(self.resources, "scene.toml"), check_stepper=self.check_stepper)
+        path = os.path.join(self.resources, "scene.toml")
+        self.scene = load_scene(path, check_stepper=False)
+        if self.scene.causality == "force":  # its own stepper must apply (a connector takes the library's steps)
+            self.scene = load_scene(path)
         solver = self.scene.solver
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=solver.stop_time,
                                                     step_size=solver.output_interval)
@@ -196,62 +196,3 @@ class SlaveBase(Fmi2Slave):
             return json.loads(bytes(state).decode("utf-8"))
         except Exception as exc:  # any garbage: refused later, with its reason
             return {"invalid": f"not a serialized state of this FMU ({exc.__class__.__name__})"}
-
-
-# ------------------------------------------------------------ the white noise an FMU generates (issue 34)
-
-
-class NoiseParameters:
-    """The parameters ``noise_intensity`` (sigma, N sqrt(s)), ``noise_seed`` and ``noise_unit`` (s) of a slave
-    whose force may carry a white noise: the FMU generates it (a master cannot pass a white noise through an
-    input), on the force whether or not the scene's [load] is added; start values the scene's noise (none:
-    intensity 0). The path is a function of (seed, time) alone (``loads.WhiteNoise``): a rolled-back or restored
-    state redraws the same increments, and the state holds nothing drawn."""
-
-    def _init_noise(self):
-        noise = self.scene.load.noise
-        self.noise_intensity = noise.intensity if noise else 0.0
-        self.noise_seed = noise.seed if noise else 0
-        self.noise_unit = noise.unit if noise else 1.0
-        if self.noise_seed >= NOISE_SEED_LIMIT:
-            from ...scene import SceneError
-
-            raise SceneError(f"{self.scene.source}: [load] seed {self.noise_seed}: an FMU's noise_seed is an FMI "
-                             f"Integer (32 bits): it must be < 2^31")
-
-    def _noise_accessors(self) -> dict:
-        """The getters and setters of noise_intensity, noise_seed, noise_unit (``register_variables``)."""
-        return {name: (lambda name=name: getattr(self, name), lambda value, name=name: setattr(self, name, value))
-                for name in ("noise_intensity", "noise_seed", "noise_unit")}
-
-    def _noise_settings(self) -> tuple:
-        return (self.noise_intensity, self.noise_seed, self.noise_unit)
-
-    def _hand_over_noise(self, element) -> bool:
-        """Hand the noise the master set to the library's ``element``; False (logged: fmi2Discard) if refused."""
-        from ...loads import white_noise
-
-        try:
-            if not (isinstance(self.noise_seed, int) and 0 <= self.noise_seed < NOISE_SEED_LIMIT):
-                raise ValueError(f"noise_seed = {self.noise_seed!r}: must be an integer, 0 <= seed < 2^31")
-            noise = white_noise(*self._noise_settings())
-            if noise != element.noise:
-                element.set_noise(noise)
-        except ValueError as exc:
-            return self._refuse(f"parameter {exc}; steps are refused until it is set right")
-        return True
-
-    def _noise_state(self) -> dict:
-        return {"noise_intensity": self.noise_intensity, "noise_seed": self.noise_seed,
-                "noise_unit": self.noise_unit}
-
-    @staticmethod
-    def _check_noise_state(settings: dict):
-        """The white noise of a saved state's settings (None: none), against which the library checks the
-        state's stepper and coefficients; ValueError if a setting breaks a rule."""
-        return check_noise_settings(settings["noise_intensity"], settings["noise_seed"], settings["noise_unit"])
-
-    def _set_noise_values(self, settings: dict) -> None:
-        self.noise_intensity = settings["noise_intensity"]
-        self.noise_seed = settings["noise_seed"]
-        self.noise_unit = settings["noise_unit"]

@@ -58,35 +58,18 @@ def _import_library(here):
     return package
 
 
-# Which slave this FMU is: its scene's [fmu] causality, written here by build_fmu (the scene cannot be read
-# from here at a later instantiation: ``__file__`` keeps the folder of the first one, which a master may have
-# deleted since).
-_CAUSALITY = "force"
-# Whether the scene is a network ([network] or [chain]), also written here by build_fmu.
-_NETWORK = False
-
 _drop_duplicate_path_entries(_HERE)
 try:
     _import_library(_HERE)
-    _slave_module = importlib.import_module(_LIBRARY + {
-        (False, "force"): ".fmu.python.slave", (False, "displacement"): ".fmu.python.connector_slave",
-        (True, "force"): ".fmu.python.network_slave", (True, "displacement"): ".fmu.python.network_connector_slave",
-    }[_NETWORK, _CAUSALITY])
+    _slave_module = importlib.import_module(_LIBRARY + ".fmu.python.slave")
 except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
     raise ImportError(
         f"prandtl_fmu FMU: {_exc} in the host's Python ({sys.version.split()[0]}, prefix {sys.prefix}): the FMU "
         "runs in the host's embedded Python, which needs numpy and numba; a host that is not itself Python needs "
         "LD_PRELOAD=<libpython3.X.so> and PYTHONPATH=<the site-packages that hold them> (README, 'Other masters')"
     ) from None
-# The slave class, defined in the library. PythonFMU 0.7.0 finds it as the
-# class of this module's namespace whose MRO is deepest in Fmi2Slave: exactly
-# one is bound here, by a plain assignment (PythonFMU reads the names the
-# file's execution defines).
-if _NETWORK and _CAUSALITY == "displacement":
-    PrandtlNetworkConnector = _slave_module.PrandtlNetworkConnector
-elif _NETWORK:
-    PrandtlNetwork = _slave_module.PrandtlNetwork
-elif _CAUSALITY == "displacement":
-    PrandtlConnector = _slave_module.PrandtlConnector
-else:
-    PrandtlElement = _slave_module.PrandtlElement
+# The slave class, defined in the library: one for every kind of FMU (the scene in the resources says which kind
+# this one is, at each instantiation). PythonFMU 0.7.0 finds it as the class of this module's namespace whose MRO
+# is deepest in Fmi2Slave: exactly one is bound here, by a plain assignment (PythonFMU reads the names the file's
+# execution defines).
+PrandtlSlave = _slave_module.PrandtlSlave
