@@ -430,7 +430,7 @@ def output_getters(network, stepped) -> dict:
         if element.kind in ("slider", "branch", "dashpot"):
             getters[f"dissipated_{element.kind}_{element.name}"] = lambda e=e: stepped().dissipated[e]
         if element.kind == "branch":
-            getters[f"u_{element.name}"] = lambda e=e: stepped().u[e]
+            getters[f"u_{element.name}"] = lambda e=e: stepped().elongation(e)  # as written: x_j - x_i
     return getters
 
 
