@@ -527,9 +527,9 @@ def test_a_native_host_runs_the_network_fmu_with_the_recipe(fmus, tmp_path):
     extracted = Extracted(fmu, tmp_path / "chain")
     env = dict(python_recipe(), PYTHONHOME=sys.base_prefix)
     code, calls, logs, values, out = run_host(
-        compile_host(tmp_path), extracted, ["setup", "enter", "exit", "setr:F:1.0", "steps:0:0.1:10", "getr:x_n3",
-                                            "getr:reaction", "setr:alpha_n2:-1", "step:1:0.1", "getr:x_n3", "term",
-                                            "free"], logging=True, env=env)
+        compile_host(tmp_path), extracted, ["setup", "enter", "setb:scene_load:0", "exit", "setr:F:1.0",
+                                            "steps:0:0.1:10", "getr:x_n3", "getr:reaction", "setr:alpha_n2:-1",
+                                            "step:1:0.1", "getr:x_n3", "term", "free"], logging=True, env=env)
     assert code == 0, out
     element = NetworkElement(load_scene(scene_path))
     for _ in range(10):
