@@ -30,7 +30,7 @@ def test_libcosim_run_of_the_shipped_example_agrees_with_fmpy(tmp_path):
     times = np.round(np.arange(0, stop + dt / 2, dt), 12)
     forces = np.concatenate([[0.45], cosim["F"]])  # F(0) = 0.45: the source's initial output
     result = simulate_fmu(str(tmp_path / "PrandtlElement.fmu"), stop_time=stop, output_interval=dt,
-                          input=held_input(times, forces), start_values={"stepper": "implicit"},
+                          input=held_input(times, forces), start_values={"stepper": "implicit", "scene_load": False},
                           output=["x", "v", "reaction"])
     for name in ("x", "v", "reaction"):
         np.testing.assert_allclose(cosim[name], result[name][1:], rtol=0, atol=1e-12)

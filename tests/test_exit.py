@@ -43,7 +43,7 @@ RUN = textwrap.dedent('''\
         import numba
         import prandtl_fmu
     from fmpy import simulate_fmu
-    result = simulate_fmu(sys.argv[1], stop_time=2.0, output_interval=0.5, start_values={"F": 0.3})
+    result = simulate_fmu(sys.argv[1], stop_time=2.0, output_interval=0.5, start_values={"F": 0.3, "scene_load": False})
     print(repr(float(result["x"][-1])), flush=True)
 ''')
 

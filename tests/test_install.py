@@ -17,7 +17,7 @@ CHECK = textwrap.dedent("""\
     assert "site-packages" in prandtl_fmu.__file__, prandtl_fmu.__file__  # the installed wheel, not the checkout
     from fmpy import simulate_fmu
     from prandtl_fmu import Element, load_scene
-    result = simulate_fmu(sys.argv[1], stop_time=3.0, output_interval=0.5, start_values={"F": 0.3})
+    result = simulate_fmu(sys.argv[1], stop_time=3.0, output_interval=0.5, start_values={"F": 0.3, "scene_load": False})
     element = Element(load_scene("paper-section-8"))
     for _ in range(6):
         element.advance(0.5, 0.3)
