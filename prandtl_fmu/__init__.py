@@ -21,7 +21,7 @@ exceptions and their reasons):
 2. loads and effects with memory, compiled: ``loads``, ``memory``, ``memory.dahl``, ``memory.delay``,
    ``memory.history``
 3. kernels: ``kernels``, ``memory.solve``, ``network.kernels``, ``network.chain``
-4. steppers: ``steppers``
+4. steppers: ``steppers``, and the loops built over their steps (``kernels.table1``: Table 1's lockstep)
 5. scenes: ``schema``, ``effects``, ``masing``, ``scene_tables``, ``scene``, ``stability``, ``network.model``
 6. a run's parts: ``compiled``, ``stepping``
 7. the stepped objects and the network's driver: ``element``, ``connector``, ``network.driver``

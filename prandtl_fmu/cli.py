@@ -550,7 +550,7 @@ def _check_step_option(scene, args) -> None:
         return
     how = "is longer than" if args.step > interval else "does not divide"
     suggestion = math.ceil(ratio * (1 - 1e-9)) * args.step
-    raise SceneError(f"--step {args.step!r} {how} the scene's output interval of {interval!r} s: give "
+    raise SceneError(f"{scene.source}: --step {args.step!r} {how} the scene's output interval of {interval!r} s: give "
                      f"--output-interval too, a whole multiple of the step (e.g. --output-interval {suggestion:.6g})")
 
 

@@ -121,7 +121,7 @@ def test_extreme_coefficients_end_the_step_within_its_budget_with_a_line_that_sa
     assert len(spinners["extremes"]) == 4
     for reason, finite, u, energy in spinners["extremes"]:
         assert not finite and u == [0.0] and energy == [0.0] * 4
-        assert reason.startswith(("the event searches of one step took more than", "more than",
+        assert reason.startswith(("the search for one event took more than", "more than",
                                   "the state became non-finite")), reason
 
 

@@ -25,7 +25,7 @@ LAYERS = [
      ["loads", "memory", "memory.dahl", "memory.delay", "memory.history"]),
     ("kernels: compiled building blocks of the steps",
      ["kernels", "memory.solve", "network.kernels", "network.chain"]),
-    ("steppers: one module per scheme", ["steppers"]),
+    ("steppers: one module per scheme, and the loops built over their steps", ["steppers", "kernels.table1"]),
     ("scenes: what is simulated, read and checked",
      ["schema", "effects", "masing", "scene_tables", "scene", "stability", "network.model"]),
     ("a run's parts: a scene compiled for the kernels, a stretch of steps and its bookkeeping",

@@ -170,7 +170,7 @@ def test_cli_exit_status_and_no_traceback(write_scene):
 
 
 @pytest.mark.parametrize("option, value, key", [
-    ("--step", "0.0015", "output_interval"),
+    ("--step", "0.0015", "--output-interval"),
     ("--step", "-1", "step"),
     ("--stop-time", "0", "stop_time"),
     ("--output-interval", "nan", "output_interval"),
