@@ -234,8 +234,7 @@ def test_a_fresh_network_fmu_runs_its_scene_load_and_says_so(fmus):
     for column in names:
         np.testing.assert_array_equal(result[column], library.column(column), err_msg=column)
     assert np.abs(library.column("x_n3")).max() > 0.1
-    # the native network FMU logs scene_load_notice (tests/test_native_network.py); this runtime does not yet
-    assert scene_load_notice(scene, "the load's node") not in [text for _, _, text in messages]
+    assert messages == [(1, "logStatusWarning", scene_load_notice(scene, "the load's node"))]
 
 
 def step_sizes(rng, count):

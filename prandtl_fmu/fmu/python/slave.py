@@ -45,7 +45,8 @@ finite.
 from pythonfmu.enums import Fmi2Status
 
 from ...stepping import ElementError
-from ..description import NOISE_SEED_LIMIT, check_noise_settings, is_network, model_identifier, variables
+from ..description import (NOISE_SEED_LIMIT, check_noise_settings, is_network, model_identifier, scene_load_notice,
+                           variables)
 from .common import SlaveBase, finite_number, register_variables
 from .kinds import KINDS
 
@@ -113,10 +114,9 @@ class PrandtlSlave(SlaveBase):
             self.kind.stepped.time = self.start_time
             self._handed_over = None  # the next step compares the settings again
         self.initialized = True
-        # The native FMU logs scene_load_notice here as a warning. This runtime does not: a PythonFMU FMU logging
-        # it from here made a test process crash (a segfault in fmi2ExitInitializationMode or a later doStep,
-        # in a process that had run other FMUs; never with the call removed, tests/test_network_fmu.py -k "fresh
-        # or packaged"), cause not found yet. The start value and the description of scene_load say it.
+        if self.values.get("scene_load"):  # a master that connects F is told the scene's load is added
+            self.log(scene_load_notice(self.scene, self.kind.where), Fmi2Status.warning,
+                     category="logStatusWarning")
         self._warn_if_unstable()
 
     def _start_under_force(self):
