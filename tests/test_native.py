@@ -442,6 +442,57 @@ def test_what_a_runtime_does_not_build_is_refused_in_one_line(tmp_path, argument
     assert culprit in done.stderr and not out.exists()
 
 
+class CompiledAnyway(Exception):
+    """Raised by a compile_kernels that a build must not call."""
+
+
+def refuse_to_compile(*arguments):
+    raise CompiledAnyway()
+
+
+def test_a_second_build_of_the_same_kernels_only_links(fmus, tmp_path, monkeypatch):
+    """The native build's objects are kept (fmu/native/object_cache.py): building the paper scene again compiles
+    nothing, and the FMU runs as the first, bit for bit; the FMI 3.0 build of the scene takes the same objects."""
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.fmu.native import kernels
+
+    first, scene_path = fmus["paper"]
+    monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
+    again = build_fmu(scene_path, tmp_path / "again.fmu", runtime="native")
+    build_fmu(scene_path, tmp_path / "again3.fmu", runtime="native", fmi=3)
+    runs = [simulate_fmu(str(fmu), stop_time=20.0, output_interval=0.1, output=["x", "v", "reaction"])
+            for fmu in (first, again)]
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(runs[0][column], runs[1][column], err_msg=column)
+
+
+def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypatch):
+    """A scene with another coefficient is another entry; an entry with an object missing is not used."""
+    from prandtl_fmu import _jit
+    from prandtl_fmu.fmu.archive import built_scene
+    from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.fmu.native import kernels, platforms
+    from prandtl_fmu.fmu.native.build import element_objects
+
+    scene_path = fmus["paper"][1]
+    scene, scene_bytes = built_scene(scene_path, None)
+    objects = element_objects(scene, scene_bytes, kernels.applicable(scene), platforms.resolve(None, 2))
+    assert objects.cached, "the fixture's build kept no entry"
+    entry = _jit.cache_root() / "native-objects" / objects.digest
+    monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
+    other = tmp_path / "other.toml"
+    text = scene_path.read_text()
+    assert "count = 100" in text
+    other.write_text(text.replace("count = 100", "count = 99"))
+    with pytest.raises(CompiledAnyway):
+        build_fmu(other, tmp_path / "other.fmu", runtime="native")
+    next(entry.rglob("*.o")).unlink()
+    with pytest.raises(CompiledAnyway):
+        build_fmu(scene_path, tmp_path / "damaged.fmu", runtime="native")
+
+
 def test_the_cli_builds_a_native_fmu(tmp_path):
     """With --osp, beside it the OSP description the PythonFMU build writes (libcosim reads it there)."""
     path = tmp_path / "scene.toml"

@@ -24,6 +24,7 @@ import numpy as np
 
 from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
                        pack, scene_load_lines, stubs)
+from .object_cache import KernelObjects, digest_of
 from .platforms import KERNEL_MACRO
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper", "energy_residual")
@@ -326,8 +327,10 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
     digest = hashlib.sha256(scene_bytes + guid.encode()).hexdigest()
     with tempfile.TemporaryDirectory(prefix="prandtl_native_network_") as scratch:
         scratch = Path(scratch)
-        compiled = network_kernels.compile_network(scene, steppers, connector)
-        symbols = {name: function.native_name for name, function in compiled}
+        compiled = KernelObjects(digest_of("network", scene_bytes, scene.causality, connector, *steppers),
+                                 lambda: network_kernels.compile_network(scene, steppers, connector),
+                                 [target for folder in folders for target in folder.targets])
+        symbols = compiled.symbols()
         try:
             header = scene_header(scene, variables, guid, steppers, symbols, digest, connector, arrays, extra_vr)
         except ValueError as exc:

@@ -314,24 +314,26 @@ def universal(slices) -> bytes:
     return (header + table).ljust(offset, b"\0") + body
 
 
-def build_binaries(folders, chains, compiled, scratch, stubs, sources, includes, defines, fmi: int,
+def build_binaries(folders, chains, kernels, scratch, stubs, sources, includes, defines, fmi: int,
                    identifier: str) -> tuple:
-    """Every folder's binary: ``{folder name: bytes}`` and the seconds each took (emitting its objects and
-    linking). ``stubs(external)``: the C text of what the kernels' modules declare (``build._stubs``);
-    ``identifier``: the model identifier, the binary's own name (a DLL's export name, a dylib's install name)."""
+    """Every folder's binary: ``{folder name: bytes}`` and the seconds each took (its objects, from the cache or
+    emitted, and linking). ``kernels``: the build's ``object_cache.KernelObjects``; ``stubs(external)``: the C
+    text of what the kernels' modules declare (``build._stubs``); ``identifier``: the model identifier, the
+    binary's own name (a DLL's export name, a dylib's install name)."""
     import time
 
-    binaries, seconds = {}, {}
+    binaries, seconds, emitted = {}, {}, {}
     for folder in folders:
         started = time.perf_counter()
         slices = []
         for target in folder.targets:
             where = Path(scratch) / target.name
-            objects, external = emit_objects(compiled, where, target)
+            objects, external = emitted[target] = kernels.objects(where, target)
             (where / "stubs.c").write_text(stubs(external))
             out = link(target, chains[target.name], [*sources, where / "stubs.c"], objects, includes, defines,
                        where / f"{identifier}.{target.suffix}", fmi)
             slices.append((target.arch, out.read_bytes()))
         binaries[folder.name] = slices[0][1] if len(slices) == 1 else universal(slices)
         seconds[folder.name] = time.perf_counter() - started
+    kernels.keep(emitted)
     return binaries, seconds
