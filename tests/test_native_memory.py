@@ -543,7 +543,7 @@ def connector_fmu(tmp_path_factory):
 
 
 class DrivenConnector:
-    """connector.Connector driven as fmu/python/connector_slave.py drives it: memory coefficients ``start`` set before
+    """connector.Connector driven as fmu/python/kinds.py ConnectorKind drives it: memory coefficients ``start`` set before
     the first move, reset at the start time and moved to the first input; the outputs at the inputs set last are a
     copy's moved there (the preview), the dashpots' account the committed one's; a doStep commits the inputs at the
     communication point."""

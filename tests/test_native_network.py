@@ -10,7 +10,7 @@ in the library's order. So every output is compared with ``==``, NaN never.
 Scenes: a chain of three masses on a support with a wall spring (sliders and dashpots on the support), a massless
 chain with dashpots, and a network with a Prandtl branch (series dashpot, u0) and a slider between two masses, a
 cubic spring and a third mass held by a slider alone; the element against NetworkElement and simulate, the
-connector against NetworkConnector (as fmu/python/network_connector_slave.py drives it), FMI 2.0 and 3.0 (arrays x and
+connector against NetworkConnector (as fmu/python/kinds.py NetworkConnectorKind drives it), FMI 2.0 and 3.0 (arrays x and
 v), FMU states (a short, altered or forged blob refused), parameters refused in the library's words, and the
 binary in the small C host (tests/c_host/trust_host.c) with the sanitizers: NULL pointers and bad value
 references refused, no crash."""
@@ -313,7 +313,7 @@ class Slave3:
 
 
 def library_outputs(stepped, scene, names, force_name="force"):
-    """The library's value of each FMU output (the slaves' contract: network_slave.network_outputs)."""
+    """The library's value of each FMU output (the PythonFMU kinds' contract, fmu/python/kinds.py)."""
     network = scene.network
     energy = stepped.energy()
     values = []
@@ -516,7 +516,7 @@ def test_a_step_with_no_equilibrium_is_discarded_with_the_library_s_reason(built
 # ------------------------------------------------------------------ the connector
 
 def connector_against_library(slave, scene, samples, h_fmu=0.05):
-    """The connector slave's semantics (fmu/python/network_connector_slave.py) on NetworkConnector: the outputs show the
+    """The connector slave's semantics (fmu/python/kinds.py NetworkConnectorKind) on NetworkConnector: the outputs show the
     committed connector moved to the inputs at the FMU's time (a copy); doStep(t, H) commits the sample at t."""
     committed = NetworkConnector(scene)
     time = 0.0

@@ -314,7 +314,7 @@ def element_variables(scene) -> list:
 
 
 def connector_variables(scene) -> list:
-    """The element as a connector: x, v in, force out (``fmu/python/connector_slave.py``)."""
+    """The element as a connector: x, v in, force out (``fmu/python/kinds.py`` ConnectorKind)."""
     from ..scene import coefficients_of
     from .documentation import reaction_formula, stiffness_formula, stored_energy_formula
 
@@ -434,7 +434,7 @@ def stepper_choices(scene) -> str:
 
 
 def network_variables(scene) -> list:
-    """A network under a force F at its load's node (``fmu/python/network_slave.py``): no output depends directly on F
+    """A network under a force F at its load's node (``fmu/python/kinds.py`` NetworkKind): no output depends directly on F
     (they are those of the state at the end of the last step)."""
     network = scene.network
     load_node = network.nodes[network.load_node]
@@ -453,7 +453,7 @@ def network_variables(scene) -> list:
 
 def network_connector_variables(scene) -> list:
     """A network as a connector: the motion x, v of its load's node in, the force out
-    (``fmu/python/network_connector_slave.py``): every output shows the network moved to the inputs set now, so all
+    (``fmu/python/kinds.py`` NetworkConnectorKind): every output shows the network moved to the inputs set now, so all
     depend directly on x and v."""
     network = scene.network
     j = network.load_node

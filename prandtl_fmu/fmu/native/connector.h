@@ -10,7 +10,7 @@
 /* The native FMU's connector (a massless scene between two bodies: x, v in, force out), shared by its FMI 2.0
  * (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
- * What fmu/python/connector_slave.py and connector.Connector do around the library's kernels (compiled for this scene,
+ * What fmu/python/kinds.py's ConnectorKind and connector.Connector do around the library's kernels (compiled for this scene,
  * declared in "scene.h"), in the same order of floating-point operations: the outputs show the element moved to
  * the inputs set last without committing (a preview: a copy of the state moved there); fmi2DoStep commits the
  * input sample at the communication point (the branches follow the exact play update along the line from the
@@ -148,7 +148,7 @@ static Element* previewed(Instance* c)
     return p;
 }
 
-/* the outputs: the element at the inputs set last, not committed (connector_slave._current) */
+/* the outputs: the element at the inputs set last, not committed (the PythonFMU ConnectorKind's preview) */
 static double real_value(Instance* c, const Var* var)
 {
     Element* preview;
@@ -254,7 +254,7 @@ static int restore(Instance* c, const State* s)
 /* ------------------------------------------------------------------ stepping */
 
 /* the exit of initialization mode (core.h): the coefficients checked and handed over, the memory sized for its
- * parameters, the element moved from x = 0 to the first input (connector_slave.exit_initialization_mode) */
+ * parameters, the element moved from x = 0 to the first input (the PythonFMU ConnectorKind.start) */
 static const char* initialize(Instance* c, char* buffer, size_t size)
 {
     char why[400], shown[40];

@@ -235,7 +235,7 @@ static void release_memory(Instance* c)
 #define INSTANCE_FAILED(c) ((c)->memory_failed)
 
 /* a parameter of an effect with memory set after initialization (fixed: slave._set_parameter,
- * connector_slave._set_fixed): ST_ERROR with the refusal, or ST_OK */
+ * the PythonFMU slave's _set_parameter): ST_ERROR with the refusal, or ST_OK */
 static int memory_fixed(Instance* c, const Var* var, double value)
 {
     char shown[40];

@@ -435,7 +435,7 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
 }
 
 /* CONNECTOR: the outputs' state, the committed network moved to the inputs set now at the FMU's time, not
- * committed (network_connector_slave._current); NULL when that motion is refused (the reason in ``why``) */
+ * committed (the PythonFMU NetworkConnectorKind's preview); NULL when that motion is refused (the reason in ``why``) */
 static Element* previewed(Instance* c)
 {
     if (c->preview_state == 0) {

@@ -2,8 +2,8 @@
 (FMI 2.0 or 3.0), the generated ``scene.h`` and the link. :func:`prandtl_fmu.fmu.native.build.build_native_network_fmu`
 is the entry.
 
-The variables are ``fmu/description.py``'s, those of the PythonFMU FMU of the scene (``fmu/python/network_slave.py``,
-``fmu/python/network_connector_slave.py``: the same names, value references, units, causalities and semantics), written
+The variables are ``fmu/description.py``'s, those of the PythonFMU FMU of the scene (``fmu/python/kinds.py``,
+NetworkKind and NetworkConnectorKind: the same names, value references, units, causalities and semantics), written
 with ``needsExecutionTool="false"``; FMI 3.0 adds ``time`` and, with ``arrays``, the structural parameter
 ``n_nodes`` and the nodes' x and v as arrays (``x`` and ``v``; the connector's ``x_nodes`` and ``v_nodes``) besides
 the scalars x_<node>, v_<node> (OMSimulator and ecos read an FMI 3.0 array as a scalar: the arrays are an option).
@@ -47,8 +47,8 @@ def parameter_table(network, exclude=()) -> list:
 
 
 def meanings(scene, connector: bool) -> dict:
-    """What the C layer reads for each variable name of the FMU (network_slave.py's and
-    network_connector_slave.py's contract): name -> (W_ code, index)."""
+    """What the C layer reads for each variable name of the FMU (the PythonFMU kinds'
+    contract, ``fmu/python/kinds.py``): name -> (W_ code, index)."""
     network = scene.network
     names = {"F": ("W_F", 0), "reaction": ("W_REACTION", 0), "step": ("W_STEP", 0),
              "scene_load": ("W_SCENE_LOAD", 0), "stepper": ("W_STEPPER", 0)}
