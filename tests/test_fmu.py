@@ -478,3 +478,44 @@ def test_the_continuous_element_as_an_fmu(fmus, name, stepper):
         assert any("continuum" in message for _, message in slave.messages)
     finally:
         slave.close()
+
+
+SHARED_LIBRARY_RUN = """
+import json, shutil, sys
+sys.path.insert(0, sys.argv[1])
+from fmpy import extract
+from tests.conftest import restore_fmpy_logger
+import fmpy
+runs = []
+for fmu, column in zip(sys.argv[2::2], sys.argv[3::2]):
+    folder = extract(fmu)
+    result = fmpy.simulate_fmu(folder, stop_time=2.0, output_interval=0.1, output=[column])
+    restore_fmpy_logger()
+    shutil.rmtree(folder)  # as FMPy does with its own extraction: the library must not need it any more
+    runs.append([float(value) for value in result[column]])
+print(json.dumps({"runs": runs, "libraries": sorted(name for name in sys.modules
+                                                     if name.startswith("_prandtl_slave_") and "." not in name)}))
+"""
+
+
+def test_fmus_of_one_library_share_it_whatever_their_scenes(fmus, tmp_path):
+    """The FMUs built from the same sources import one library under one name (fmu/python/entry.py), so their
+    kernels compile once; an FMU whose scene needs modules the first one's did not (a network) still imports them
+    after the first one's extraction folder is gone (the library is imported from a lasting copy)."""
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    element, element_scene = fmus["paper"]
+    network_scene = SCENES / "networks" / "two-masses-slider.toml"
+    network = build_fmu(network_scene, tmp_path / "network.fmu")
+    done = subprocess.run([sys.executable, "-c", SHARED_LIBRARY_RUN, str(ROOT), str(element), "x", str(network),
+                           "x_b"], capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    found = json.loads(done.stdout.strip().splitlines()[-1])
+    assert len(found["libraries"]) == 1, found["libraries"]
+    expected = [simulate(load_scene(element_scene).with_solver(stop_time=2.0, output_interval=0.1)).x,
+                simulate(load_scene(network_scene).with_solver(stop_time=2.0, output_interval=0.1)).column("x_b")]
+    for run, library in zip(found["runs"], expected):
+        np.testing.assert_array_equal(run, library)

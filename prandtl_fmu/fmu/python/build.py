@@ -4,7 +4,7 @@ Every FMU has the one slave class (``slave.py``), which takes its kind from the 
 network, driven by a force or as a connector: ``kinds.py``); its model identifier is the kind's
 (``description.model_identifier``: PrandtlElement, PrandtlConnector, PrandtlNetwork, PrandtlNetworkConnector),
 which names its binaries. The FMU holds, in ``resources/``: the slave script under a unique module name
-(``prandtl_slave_<digest>``, the digest of the scene and the library's sources: ``entry.py``), a copy of the
+(``prandtl_slave_<digest>``, the digest of the library's sources: ``entry.py``), a copy of the
 library (``prandtl_fmu/``, the code the tests run), the scene (``scene.toml``) and the OSP interface description
 (``<modelIdentifier>_OspModelDescription.xml``, see ``fmu/osp.py``); ``documentation/index.html`` with the
 equations and the variables; its model description is ``fmu/description.py``'s (the slaves hand it to PythonFMU's
@@ -12,7 +12,6 @@ builder). The host needs Python with numpy and numba (and nothing else): PythonF
 """
 from __future__ import annotations
 
-import hashlib
 import shutil
 import sys
 import tempfile
@@ -33,12 +32,14 @@ def _library_files():
             yield path
 
 
-def _digest(scene_bytes: bytes, loader: str) -> str:
-    """The scene, the native loader and the library's sources (the digest that also names the kernel cache,
-    ``_jit.py``): FMUs that differ in any of them never share their script's module in a host."""
+def _digest() -> str:
+    """The library's sources (the digest that also names the kernel cache, ``_jit.py``): FMUs built from other
+    sources never share their script's module nor their library in a host, and FMUs of the same sources share
+    both, whatever their scenes and loaders (the scene is read by each instance from its own resources, the loader
+    marks each execution of the script: ``entry.py``), so their kernels compile once for all of them."""
     from ..._jit import source_digest
 
-    return hashlib.sha256(scene_bytes + loader.encode() + source_digest().encode()).hexdigest()[:12]
+    return source_digest()[:12]
 
 
 def build_python_fmu(scene_path, out=None, causality=None, osp: bool = False, loader=None) -> Path:
@@ -67,7 +68,7 @@ def build_python_fmu(scene_path, out=None, causality=None, osp: bool = False, lo
         check_osp_name(scene.name)
     identifier = model_identifier(scene)
     osp_text = osp_model_description(scene.causality, port_variables(scene))
-    module = f"prandtl_slave_{_digest(scene_bytes, loader)}"
+    module = f"prandtl_slave_{_digest()}"
     with tempfile.TemporaryDirectory(prefix="prandtl_fmu_build_") as staging:
         staging = Path(staging)
         script = staging / f"{module}.py"

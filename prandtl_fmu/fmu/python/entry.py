@@ -1,13 +1,24 @@
 """PythonFMU entry point of a prandtl_fmu FMU.
 
 ``build_fmu.py`` copies this file into the FMU as
-``resources/prandtl_slave_<digest>.py``, a module name nothing else uses. It
-imports the library bundled beside it (``resources/prandtl_fmu``) under a
-private package name, so that the FMU runs the code it was built and tested
-with whatever ``prandtl_fmu`` the host may have imported, and hands PythonFMU
-the slave class defined there. The library is imported once per process;
-its compiled kernels come from the user's numba cache folder, never from the
-extracted resources (see ``_jit.py``).
+``resources/prandtl_slave_<digest>.py``, where the digest is that of the
+library's sources (``fmu/python/build.py``). It imports the library bundled
+beside it (``resources/prandtl_fmu``) under a private package name made from
+that digest, so that the FMU runs the code it was built and tested with
+whatever ``prandtl_fmu`` the host may have imported, and hands PythonFMU the
+slave class defined there. The library is imported once per process: FMUs
+built from the same sources share it (each instance reads its scene from its
+own resources), and their kernels compile once for all of them; its compiled
+kernels come from the user's numba cache folder, never from the extracted
+resources (see ``_jit.py``).
+
+The library is imported from a copy in the user's cache folder
+(``<numba cache folder>/prandtl_slave_<digest>_source/prandtl_fmu``, made once
+and checked against the digest at every import), not from the resources: an
+importer deletes its extraction folder when it unloads the FMU, and the
+library imports some modules only when a scene needs them (a network, an
+effect with memory), which a later FMU of the same sources may. Where that
+folder cannot be written, the library is imported from the resources.
 
 At every instantiation the loader executes this file again (globals: this
 module's dict) and inserts the resources folder into ``sys.path`` once more:
@@ -42,10 +53,60 @@ def _drop_duplicate_path_entries(here):
             seen = True
 
 
+def _sources_digest(folder):
+    """``_jit.source_digest`` of the library at ``folder`` (its .py files' names and contents), 12 digits."""
+    import hashlib
+
+    sha = hashlib.sha256()
+    paths = []
+    for where, directories, files in os.walk(folder):
+        directories[:] = [d for d in directories if d != "__pycache__"]
+        paths += [os.path.join(where, f) for f in files if f.endswith(".py")]
+    for path in sorted(paths, key=lambda p: tuple(os.path.relpath(p, folder).split(os.sep))):  # as pathlib sorts
+        sha.update(os.path.relpath(path, folder).replace(os.sep, "/").encode())
+        with open(path, "rb") as fh:
+            sha.update(fh.read())
+    return sha.hexdigest()[:12]
+
+
+def _lasting_copy(folder):
+    """The library at ``folder`` copied into the user's cache folder (once; a copy that does not match the
+    digest in this module's name is replaced), or None where that cannot be done."""
+    import shutil
+    import tempfile
+
+    digest = __name__.rpartition("_")[2]
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "numba")
+    home = os.path.join(base, __name__ + "_source")
+    copy = os.path.join(home, "prandtl_fmu")
+    try:
+        if os.path.isdir(copy) and _sources_digest(copy) == digest:
+            return copy
+        if _sources_digest(folder) != digest:
+            return None  # resources that are not what the name says: import them as they are
+        os.makedirs(base, exist_ok=True)
+        partial = tempfile.mkdtemp(prefix=".prandtl_slave_source-", dir=base)
+        try:
+            shutil.copytree(folder, os.path.join(partial, "prandtl_fmu"),
+                            ignore=shutil.ignore_patterns("__pycache__"))
+            if os.path.isdir(home):
+                shutil.rmtree(home, ignore_errors=True)  # a damaged copy
+            try:
+                os.rename(partial, home)
+            except OSError:  # another process put its copy there first
+                pass
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)
+        return copy if os.path.isdir(copy) and _sources_digest(copy) == digest else None
+    except OSError:
+        return None
+
+
 def _import_library(here):
     if _LIBRARY in sys.modules:
         return sys.modules[_LIBRARY]
-    folder = os.path.join(here, "prandtl_fmu")
+    folder = _lasting_copy(os.path.join(here, "prandtl_fmu")) or os.path.join(here, "prandtl_fmu")
     spec = importlib.util.spec_from_file_location(
         _LIBRARY, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder])
     package = importlib.util.module_from_spec(spec)
