@@ -283,6 +283,7 @@ def test_the_element_s_account_continues_through_exact_without_nan(series):
     assert abs(alone.energy_of("energy_residual")) <= 1e-14 * abs(alone.energy_of("work"))
 
 
+@pytest.mark.slow  # two runs to the event budget (1.1e5 events, about a minute); test_trust3.py runs one, quick
 def test_a_failed_step_leaves_the_element_as_it_was():
     """A step over its budget fails (ElementError) and the element's state and account are unchanged."""
     scene = _energy_scene("dashpot-branches")
