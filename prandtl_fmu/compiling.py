@@ -8,7 +8,9 @@ with stderr not a terminal (CI logs, a script capturing it) it says nothing at a
         ...  # whatever may compile
 
 It listens to numba's own compile events (``numba:compile``), fired only when a kernel is really compiled, never
-when it is loaded from the cache.
+when it is loaded from the cache. A long command says its stages on the same line with :func:`stage` (a native
+build: its kernels, the objects of each platform, the link, the archive), each with its seconds so far; off a
+terminal, ``stage`` does nothing.
 """
 from __future__ import annotations
 
@@ -27,6 +29,7 @@ class _Status:
         self.stream, self.where = stream, where
         self.depth, self.count, self.current = 0, 0, ""
         self.compiling_since, self.total = None, 0.0
+        self.stage, self.stage_since = "", None
         self.lock = threading.Lock()
         self.stop = threading.Event()
         self.thread = None
@@ -39,9 +42,17 @@ class _Status:
             if self.depth == 1:
                 self.current = name
                 self.compiling_since = time.perf_counter()
-                if self.thread is None:
-                    self.thread = threading.Thread(target=self._draw, name="compiling-status", daemon=True)
-                    self.thread.start()
+                self._start_drawing()
+
+    def staged(self, text: str) -> None:
+        with self.lock:
+            self.stage, self.stage_since = text, time.perf_counter()
+            self._start_drawing()
+
+    def _start_drawing(self) -> None:  # (under the lock)
+        if self.thread is None:
+            self.thread = threading.Thread(target=self._draw, name="compiling-status", daemon=True)
+            self.thread.start()
 
     def ended(self) -> None:
         with self.lock:
@@ -52,9 +63,12 @@ class _Status:
 
     def _line(self) -> str:
         with self.lock:
-            elapsed = self.total + (time.perf_counter() - self.compiling_since if self.compiling_since else 0.0)
-            current = self.current
-        return f"compiling for this machine, once ({current}): {elapsed:.0f} s"
+            now = time.perf_counter()
+            elapsed = self.total + (now - self.compiling_since if self.compiling_since else 0.0)
+            current, busy = self.current, self.compiling_since is not None
+            stage = f"{self.stage}: {now - self.stage_since:.0f} s" if self.stage else ""
+        compiling = f"compiling for this machine, once ({current}): {elapsed:.0f} s" if busy else ""
+        return "; ".join(part for part in (stage, compiling) if part)
 
     def _write(self, text: str) -> None:
         import shutil
@@ -71,7 +85,7 @@ class _Status:
     def _draw(self) -> None:
         while not self.stop.wait(REFRESH):
             with self.lock:
-                busy = self.compiling_since is not None
+                busy = self.compiling_since is not None or bool(self.stage)
             if busy:
                 self._write(self._line())
 
@@ -81,6 +95,10 @@ class _Status:
             self.thread.join()
             self._write("")
             try:  # the last line whole, wrapped as it may: it is not redrawn
+                self.stream.write("\r")
+                if not self.count:  # only stages were said: the line is left empty
+                    self.stream.flush()
+                    return
                 self.stream.write(f"\rcompiled {self.count} kernels in {self.total:.0f} s, once for this machine: "
                                   f"later runs load them from {self.where}\n")
                 self.stream.flush()
@@ -94,6 +112,16 @@ def _short(dispatcher) -> str:
         return "a kernel"
     module = function.__module__.split(".", 1)[-1]
     return f"{module}.{function.__qualname__.split('.<locals>')[0]}"
+
+
+_ACTIVE = []  # the status line of the command under way (on a terminal only)
+
+
+def stage(text: str) -> None:
+    """Say on the status line what a long command does now (e.g. "native build: linking x86_64-linux"); nothing
+    off a terminal or outside :func:`compiling_status`."""
+    if _ACTIVE:
+        _ACTIVE[-1].staged(text)
 
 
 @contextlib.contextmanager
@@ -122,8 +150,10 @@ def compiling_status(stream=None):
 
     listener = Listener()
     event.register("numba:compile", listener)
+    _ACTIVE.append(status)
     try:
         yield
     finally:
+        _ACTIVE.remove(status)
         event.unregister("numba:compile", listener)
         status.finish()

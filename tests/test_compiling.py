@@ -40,3 +40,23 @@ def test_nothing_is_written_when_nothing_compiles_or_where_it_is_no_terminal():
     with compiling_status(pipe):
         assert _fresh_kernel()(2) == 6
     assert pipe.getvalue() == ""
+
+
+def test_a_long_command_says_its_stages_on_the_line_then_leaves_it_empty():
+    import time
+
+    from prandtl_fmu.compiling import REFRESH, stage
+
+    stream = Terminal()
+    with compiling_status(stream):
+        stage("native build: linking x86_64-linux")
+        time.sleep(4 * REFRESH)
+    text = stream.getvalue()
+    assert "native build: linking x86_64-linux: 0 s" in text
+    assert "compiled" not in text and text.endswith("\r")  # nothing compiled: no closing line
+    pipe = io.StringIO()
+    with compiling_status(pipe):
+        stage("native build: linking x86_64-linux")
+        time.sleep(2 * REFRESH)
+    assert pipe.getvalue() == ""
+    stage("outside any command")  # nothing to say it on: nothing happens

@@ -455,12 +455,22 @@ def test_a_second_build_of_the_same_kernels_only_links(fmus, tmp_path, monkeypat
     nothing, and the FMU runs as the first, bit for bit; the FMI 3.0 build of the scene takes the same objects."""
     from fmpy import simulate_fmu
 
+    from prandtl_fmu import compiling
     from prandtl_fmu.fmu.build import build_fmu
-    from prandtl_fmu.fmu.native import kernels
+    from prandtl_fmu.fmu.native import kernels, platforms
 
     first, scene_path = fmus["paper"]
     monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
+    said = []
+
+    class Line:  # what a terminal's status line is told (compiling.stage)
+        staged = said.append
+
+    monkeypatch.setattr(compiling, "_ACTIVE", [Line()])
     again = build_fmu(scene_path, tmp_path / "again.fmu", runtime="native")
+    host = platforms.host_target().name
+    assert said == [f"native build: the objects for {host} (from the cache)", f"native build: linking {host}",
+                    "native build: the FMU archive"], said
     build_fmu(scene_path, tmp_path / "again3.fmu", runtime="native", fmi=3)
     runs = [simulate_fmu(str(fmu), stop_time=20.0, output_interval=0.1, output=["x", "v", "reaction"])
             for fmu in (first, again)]

@@ -31,6 +31,7 @@ import re
 import tempfile
 from pathlib import Path
 
+from ...compiling import stage
 from . import kernels
 from . import platforms as targets
 from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
@@ -100,6 +101,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
                                              [f"VR_U={references['u'] or 4294967295}u", f"VR_N={n_vr}",
                                               f"VR_TIME={references['time']}"], fmi, identifier)
         text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
+        stage("native build: the FMU archive")
         return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...compiling import stage
 from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
                        pack, scene_load_lines, stubs)
 from .object_cache import KernelObjects, digest_of
@@ -338,6 +339,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
         (scratch / "scene.h").write_text(header)
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
                                              [scratch, FMI_HEADERS[fmi]], [], fmi, identifier)
+        stage("native build: the FMU archive")
         return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
 
 

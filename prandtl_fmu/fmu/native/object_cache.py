@@ -80,6 +80,9 @@ class KernelObjects:
 
     def compiled(self) -> list:
         if self._compiled is None:
+            from ...compiling import stage
+
+            stage("native build: compiling the kernels")
             self._compiled = self._compile()
         return self._compiled
 

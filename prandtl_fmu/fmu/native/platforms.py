@@ -322,14 +322,18 @@ def build_binaries(folders, chains, kernels, scratch, stubs, sources, includes, 
     binary's own name (a DLL's export name, a dylib's install name)."""
     import time
 
+    from ...compiling import stage
+
     binaries, seconds, emitted = {}, {}, {}
     for folder in folders:
         started = time.perf_counter()
         slices = []
         for target in folder.targets:
             where = Path(scratch) / target.name
+            stage(f"native build: the objects for {target.name}" + (" (from the cache)" if kernels.cached else ""))
             objects, external = emitted[target] = kernels.objects(where, target)
             (where / "stubs.c").write_text(stubs(external))
+            stage(f"native build: linking {target.name}")
             out = link(target, chains[target.name], [*sources, where / "stubs.c"], objects, includes, defines,
                        where / f"{identifier}.{target.suffix}", fmi)
             slices.append((target.arch, out.read_bytes()))
