@@ -82,7 +82,7 @@ step = 0.01
 stop_time = 5.0
 output_interval = 0.1
 """,
-    # a Prandtl branch (series dashpot, u0) and a slider between two masses; c held by a slider alone
+    # a Prandtl branch (series dashpot, u0) and a slider between two masses; c held by a slider and a branch
     "joint": """
 name = "joint"
 
@@ -141,6 +141,34 @@ stop_time = 2.0
 output_interval = 0.01
 """,
     # every node massive, all plasticity in branches: projected applies too
+    # b held by a slider alone: massless, it is refused
+    "slider_held": """
+name = "slider_held"
+
+[network]
+nodes = ["a", "b"]
+mass = [1.0, 0.5]
+load_node = "a"
+
+[[network.spring]]
+between = ["a", "ground"]
+k = 10.0
+
+[[network.slider]]
+between = ["a", "b"]
+alpha = 0.4
+
+[load]
+kind = "harmonic"
+amplitude = 1.0
+omega = 2.0
+
+[solver]
+stepper = "implicit"
+step = 0.001
+stop_time = 1.0
+output_interval = 0.1
+""",
     "branches": """
 name = "branches"
 
@@ -409,16 +437,18 @@ def test_with_the_scene_load_the_fmu_reproduces_simulate(built):
         slave.close()
 
 
-def test_a_parameter_is_refused_in_the_library_s_words_and_steps_go_on_when_set_right(built):
+@pytest.mark.parametrize("name, cases", [
+    ("joint", [("k_spring_1", -1.0, "must be >= 0"), ("k_branch_1", 0.0, "must be > 0"),
+               ("eta_branch_1", 0.001, "outside [-eta, eta]"), ("alpha_slider_1", 1e60, "is outside"),
+               ("m_c", -1.0, "must be >= 0")]),
+    ("slider_held", [("m_b", 0.0, "massless and held by sliders alone")])])
+def test_a_parameter_is_refused_in_the_library_s_words_and_steps_go_on_when_set_right(built, name, cases):
     """Each rule of Network.with_parameters and check_topology a parameter can break: a negative coefficient, a
-    branch's k of 0, an eta below |u0|, a magnitude out of range, node c (held by a slider alone) made massless;
+    branch's k of 0, an eta below |u0|, a magnitude out of range, a node held by a slider alone made massless;
     the library refuses the same value (SceneError); the FMU discards the step with the reason logged, the state
     unchanged, and steps on once the value is set right."""
-    fmu, _ = built["joint", 2, None, False, False]
-    network = scene_of("joint").network
-    cases = [("k_spring_1", -1.0, "must be >= 0"), ("k_branch_1", 0.0, "must be > 0"),
-             ("eta_branch_1", 0.001, "outside [-eta, eta]"), ("alpha_slider_1", 1e60, "is outside"),
-             ("m_c", 0.0, "massless and held by sliders alone")]
+    fmu, _ = built[name, 2, None, False, False]
+    network = scene_of(name).network
     slave = Slave2(fmu)
     try:
         slave.set(["F"], [1.0])

@@ -98,6 +98,7 @@ def fmu_rows(scene, reference, quick, folder, bar):
         slave.enterInitializationMode()
         slave.setString([vr["stepper"]], [stepper])
         slave.setReal([vr["step"]], [h])
+        slave.setBoolean([vr["scene_load"]], [False])  # driven by F alone: the force sampled below is the load
         slave.exitInitializationMode()
         return slave
 
