@@ -57,7 +57,10 @@ def test_every_scene_of_the_catalog_has_its_own_test():
 
 # ------------------------------------------------------------------ everywhere
 
-@pytest.mark.parametrize("stepper", list(STEPPERS))
+# exact's column in the slow suite: a loop of exact costs 8 to 16 s to compile for each hard scene's effects (52 s
+# of the quick suite's compiling); its own tests (test_exact*.py, test_trust*.py) stay quick
+@pytest.mark.parametrize("stepper", [pytest.param(name, marks=pytest.mark.slow) if name == "exact" else name
+                                     for name in STEPPERS])
 @pytest.mark.parametrize("name", [n for n in CATALOG if n not in ("massless-collapse", "long-horizon",
                                                                    "many-branches")])
 def test_properties_checked_everywhere(name, stepper):
