@@ -138,16 +138,9 @@ def _hardening(scene: Scene) -> bool:
 
 def integrate(loop, model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
     """Run a stepper's compiled ``loop`` (``kernels/loop.py``): ``out.shape[0] * steps_per_row`` steps of
-    size ``h`` from step number ``first_step`` (t_p = t_base + p h). Returns ``(x, v, steps taken)``.
-
-    No elongations asked for (``out_u`` None) is an array with no column, of the type the loop takes when they
-    are: one compiled loop serves both (issue 43: in a cold run of the quick test suite, 210 compilations of the
-    steppers' loops would have been 176, 60 s of its 1,025 s of compiling)."""
-    return loop(model, load, x, v, u, float(t_base), int(first_step), float(h), int(steps_per_row), out,
-                NO_ELONGATIONS if out_u is None else out_u, energy, out_energy)
-
-
-NO_ELONGATIONS = np.empty((0, 0))  # (never written: the loop writes a row of elongations when it has columns)
+    size ``h`` from step number ``first_step`` (t_p = t_base + p h). Returns ``(x, v, steps taken)``."""
+    return loop(model, load, x, v, u, float(t_base), int(first_step), float(h), int(steps_per_row), out, out_u,
+                energy, out_energy)
 
 
 def split_duration(duration: float, h: float) -> tuple:

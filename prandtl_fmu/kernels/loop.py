@@ -43,8 +43,8 @@ def time_loop(step):
         rows, chunks of rows, communication steps).
 
         After every ``steps_per_row`` steps, row j of ``out`` (shape (rows, 3))
-        receives x, v and the reaction, row j of ``out_u`` (shape (rows, n); none
-        read with no column, or ``None``) the elongations and row j of ``out_energy`` (shape (rows, 6),
+        receives x, v and the reaction, row j of ``out_u`` (shape (rows, n), or
+        ``None``) the elongations and row j of ``out_energy`` (shape (rows, 6),
         or ``None``) the kinetic and stored energy and the account ``energy``
         (work, dissipated by the sliders, by the dashpots, by the friction on the mass). ``u`` and ``energy``
         are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
@@ -65,7 +65,7 @@ def time_loop(step):
             out[j, 0] = x
             out[j, 1] = v
             out[j, 2] = reaction(model, load, t_base + (first_step + p) * h, x, v, s)
-            if out_u is not None and out_u.shape[1] > 0:
+            if out_u is not None:
                 write_elongations(k, u, out_u[j])
             if out_energy is not None:
                 out_energy[j, 0] = kinetic(m, v)
