@@ -227,6 +227,8 @@ EXACT = base_tables(cubic=None, load={"kind": "harmonic", "amplitude": 2.0e14, "
                     solver={"stepper": "exact", "step": 0.1, "stop_time": 0.2, "output_interval": 0.1})
 
 
+@pytest.mark.slow  # a search to the event budget, 1.1e5 events (about a minute); the command line's refusal of the
+# same run below stays quick
 def test_an_exact_advance_beyond_its_event_budget_is_refused_naming_the_bound_and_changes_nothing():
     element = Element(parse_scene(scene_text(EXACT), "exact.toml"))
     element.advance(0.5, 0.0)
