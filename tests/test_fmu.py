@@ -501,9 +501,9 @@ print(json.dumps({"runs": runs, "libraries": sorted(name for name in sys.modules
 @pytest.mark.parametrize("second", ["iwan", pytest.param("network", marks=pytest.mark.slow)])
 def test_fmus_of_one_library_share_it_whatever_their_scenes(fmus, tmp_path, second):
     """The FMUs built from the same sources import one library under one name (fmu/python/entry.py), so their
-    kernels compile once; an FMU whose scene needs modules the first one's did not (an Iwan spectrum; a network,
-    in the slow suite: its kernels compile for the FMU's library) still imports them after the first one's
-    extraction folder is gone (the library is imported from a lasting copy)."""
+    kernels compile once, and a second FMU runs after the first one's extraction folder is gone (an Iwan
+    spectrum, whose kernels the tests above compiled). The network (slow: its kernels compile for the FMU's
+    library) needs modules an element's FMU never imports: they come from the library's lasting copy."""
     import subprocess
     import sys
 
