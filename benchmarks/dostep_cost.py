@@ -2,22 +2,30 @@
 
 Problem: the paper's section 8 scene (n = 100 branches on the memory stack, h = 1e-3 s, 'projected'), force held at
 0.3 N (scene_load false), in the plain C host of tests/c_host/fmi2_host.c, which never loads Python; x is read after
-every doStep (one fmi2GetReal). Three runs, interleaved, ``--repeat`` times each, the median reported:
+every doStep (one fmi2GetReal). Five runs, interleaved, ``--repeat`` times each, the median reported:
 
-* ``one_step_us``: a doStep of one internal step (H = h), x read: what a master that steps at h pays;
+* ``one_step_us``: a doStep of one internal step (H = h), x read, with the FMU as built for users (linked by zig
+  where it is installed): what a master that steps at h pays;
 * ``library_step_us``: a doStep of 1000 internal steps (H = 1000 h), x read, divided by 1000: the library's own
-  step (the kernel's), the C layer's work spread over 1000 steps;
+  step (the kernel's loop), every per-call cost spread over 1000 steps;
+* ``cc_one_step_us``: ``one_step_us`` with the FMU's C compiled by this machine's C compiler (-O2), as Dahlquist;
+* ``kernel_step_us``: the same build with ``-DPRANDTL_BENCH_KERNEL_ONLY``: a doStep that is the kernel's advance of
+  one step and nothing else (element.h), what the library's ``Element.advance`` pays for its compiled part
+  (the call into the kernels, the loop's entry, the step);
 * ``dahlquist_us``: a doStep of Reference-FMUs' Dahlquist FMU (x' = -k x: one forward Euler step of its fixed
   solver step, H = 0.1 s; a shorter H takes no step at all), x read, in the same host: the FMI plumbing of a
   model whose step costs nothing.
 
-``core_us = one_step_us - library_step_us`` is what the C layer adds to a step (the call's checks, the clock, the
-checkpoint that a refused step rolls back to, the outputs' checks, the getReal); ``core_over_dahlquist`` its ratio
-to Dahlquist's whole doStep (the target of issue 46: at most 1.2).
+``core_us = cc_one_step_us - kernel_step_us`` is what the C layer adds to a step (the call's checks, the clock,
+the checkpoint that a refused step rolls back to, the check that no output is shown NaN or inf, the getReal);
+``core_over_dahlquist`` its ratio to Dahlquist's whole doStep (the target of issue 46: at most 1.2).
+``added_over_dahlquist = (one_step_us - library_step_us) / dahlquist_us`` also counts the kernel's per-call cost,
+which the library's own advance pays too.
 
 Dahlquist is built here from a checkout of https://github.com/modelica/Reference-FMUs (``--reference-fmus DIR``;
-its sources are not part of this project): ``DIR/Dahlquist``, ``DIR/include``, ``DIR/src``. The native FMU is built
-from the working tree (``--fmu`` takes one already built, e.g. an older build for a before/after comparison).
+its sources are not part of this project): ``DIR/Dahlquist``, ``DIR/include``, ``DIR/src``. The native FMUs are
+built from the working tree (``--fmu`` takes the users' build already made, e.g. an older one for a before/after
+comparison; the two C-compiler builds are always made now).
 
     python benchmarks/dostep_cost.py --reference-fmus /tmp/Reference-FMUs [--fmu p.fmu] [--repeat 9]
         [--count 200000] [--out out/dostep_cost.csv]
@@ -59,6 +67,22 @@ def build_dahlquist(reference: Path, folder: Path) -> Path:
     return out
 
 
+def build(out: Path, cflags: str = "") -> Path:
+    """The paper scene's native FMU at ``out``: as users get it, or with ``cflags`` compiled by this machine's C
+    compiler ($PRANDTL_NATIVE_CFLAGS, platforms.toolchain)."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    saved = os.environ.pop("PRANDTL_NATIVE_CFLAGS", None)
+    if cflags:
+        os.environ["PRANDTL_NATIVE_CFLAGS"] = cflags
+    try:
+        return build_fmu(SCENE, out, runtime="native")
+    finally:
+        os.environ.pop("PRANDTL_NATIVE_CFLAGS", None)
+        if saved is not None:
+            os.environ["PRANDTL_NATIVE_CFLAGS"] = saved
+
+
 class Dahlquist:
     """The host's view of the Dahlquist binary (run_host's Extracted)."""
 
@@ -86,27 +110,29 @@ def main():
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
         scratch = Path(scratch)
-        fmu = args.fmu
-        if fmu is None:
-            from prandtl_fmu.fmu.build import build_fmu
-
-            fmu = build_fmu(SCENE, scratch / "paper.fmu", runtime="native")
-        native = Extracted(fmu, scratch / "paper")
+        fmus = {"one_step_us": args.fmu or build(scratch / "paper.fmu"),
+                "cc_one_step_us": build(scratch / "cc.fmu", "-O2"),
+                "kernel_step_us": build(scratch / "kernel.fmu", "-O2 -DPRANDTL_BENCH_KERNEL_ONLY")}
+        extracted = {name: Extracted(fmu, scratch / name) for name, fmu in fmus.items()}
         dahlquist = Dahlquist(build_dahlquist(args.reference_fmus, scratch))
         host = compile_host(scratch)
         start = ["setb:scene_load:0", "setr:F:0.3"]  # F alone, the scene's stepper
         h, coarse = 1e-3, args.count // 1000
-        samples = {"one_step_us": [], "library_step_us": [], "dahlquist_us": []}
-        for _ in range(args.repeat):  # interleaved: the machine's load falls on all three alike
-            samples["one_step_us"].append(seconds(host, native, start, h, args.count) / args.count * 1e6)
-            samples["library_step_us"].append(seconds(host, native, start, 1000 * h, coarse) / (coarse * 1000) * 1e6)
+        samples = {name: [] for name in ("one_step_us", "library_step_us", "cc_one_step_us", "kernel_step_us",
+                                         "dahlquist_us")}
+        for _ in range(args.repeat):  # interleaved: the machine's load falls on all of them alike
+            for name, fmu in extracted.items():
+                samples[name].append(seconds(host, fmu, start, h, args.count) / args.count * 1e6)
+            samples["library_step_us"].append(seconds(host, extracted["one_step_us"], start, 1000 * h, coarse)
+                                              / (coarse * 1000) * 1e6)
             samples["dahlquist_us"].append(seconds(host, dahlquist, [], DAHLQUIST_STEP, args.count) / args.count
                                            * 1e6)
     row = {name: float(np.median(values)) for name, values in samples.items()}
-    row["core_us"] = row["one_step_us"] - row["library_step_us"]
+    row["core_us"] = row["cc_one_step_us"] - row["kernel_step_us"]
     row["core_over_dahlquist"] = row["core_us"] / row["dahlquist_us"]
+    row["added_over_dahlquist"] = (row["one_step_us"] - row["library_step_us"]) / row["dahlquist_us"]
     row.update(fmu=str(args.fmu or "built now"), repeat=args.repeat, count=args.count, machine=platform.machine(),
-               spread_one_step_us=float(np.ptp(samples["one_step_us"])),
+               spread_core_us=float(np.ptp(np.subtract(samples["cc_one_step_us"], samples["kernel_step_us"]))),
                spread_dahlquist_us=float(np.ptp(samples["dahlquist_us"])))
     for name, value in row.items():
         print(f"{name}: {value:.4g}" if isinstance(value, float) else f"{name}: {value}")

@@ -53,6 +53,34 @@ def _branch_force_overload(k, u):
 
 
 @kernel
+def branch_bounds(k, eta):
+    """(sum |k_i|, max eta_i) over every branch, whatever the kernel (``kernels/showable.py``)."""
+    return _branch_bounds(k, eta)
+
+
+def _branch_bounds(k, eta):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_branch_bounds)
+def _branch_bounds_overload(k, eta):
+    if isinstance(k, types.NoneType):
+        return lambda k, eta: (0.0, 0.0)
+    if _is_stack(k):
+        return lambda k, eta: stack.bounds(k)
+
+    def impl(k, eta):
+        total = 0.0
+        largest = 0.0
+        for i in range(k.shape[0]):
+            total += abs(k[i])
+            largest = max(largest, abs(eta[i]))
+        return total, largest
+
+    return impl
+
+
+@kernel
 def write_elongations(k, u, out):
     """Write the elongations u_i (m) into ``out`` (length n, the scene's order)."""
     _write_elongations(k, u, out)

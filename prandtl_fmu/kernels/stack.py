@@ -579,6 +579,35 @@ def resync(params, state):
 
 
 @kernel
+def bounds(params):
+    """(sum |k|, max eta) over every branch (the continuum: the integral of k, eta(1)), for the bounds of
+    ``kernels/showable.py``. O(n), or O(1) for the continuum."""
+    return _bounds(params)
+
+
+def _bounds(params):
+    raise NotImplementedError
+
+
+@overload(_bounds)
+def _bounds_overload(params):
+    if _is_discrete(params):
+        def discrete(params):
+            total = 0.0
+            largest = 0.0
+            for i in range(params.shape[1] - 1):
+                total += abs(params[K_ROW, i])
+                largest = max(largest, abs(params[ETA_ROW, i]))
+            return total, largest
+        return discrete
+
+    def continuous(params):
+        table = params[0]
+        return abs(table[K_AT, table.shape[1] - 1]), abs(table[ETA_AT, table.shape[1] - 1])
+    return continuous
+
+
+@kernel
 def force(params, state):
     """sum_i k_i u_i (N) at the current displacement."""
     return state[S0] + state[X] * state[SK] + state[DIRECTION] * _moment(params, state[TOP])

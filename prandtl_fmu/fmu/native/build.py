@@ -291,9 +291,9 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         "#define HAS_STRUCTURAL ARRAYS",
         '#define STRUCTURAL_TEXT "n is the scene\'s number of branches"',
         "typedef double* P;",
-        f"typedef int64_t (*advance_fn)({ELEMENT_ARGS}, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        f"typedef int64_t (*advance_fn)({ELEMENT_ARGS}, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t);",
-        f"typedef int64_t (*noisy_fn)({ELEMENT_ARGS}, P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
+        f"typedef int64_t (*noisy_fn)({ELEMENT_ARGS}, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, "
         "double, int64_t, double, int64_t, double, int64_t*);",
         *memory_lines(scene),
         *noise_lines(scene, scene.causality == "displacement"),
@@ -306,12 +306,14 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
     variants = [suffix for suffix, _ in kernels.variants(scene)]
     e = ELEMENT_ARGS  # the element's arrays and its memory (kernels.py)
     declarations = {
-        "advance": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+        "advance": "int64_t {name}(" + e + ", P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
                    "int64_t)",
-        "noisy": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
+        "noisy": "int64_t {name}(" + e + ", P, P, P, int64_t, P, P, P, int64_t, double, int64_t, double, "
                  "int64_t, double, int64_t, double, int64_t*)",
         "record": "int64_t {name}(" + e + ", P, P, P, P, int64_t, P, P, P, int64_t, double)",
         "stiffness": "double {name}(" + e + ", P)",
+        "limits": "int64_t {name}(" + e + ", P)",
+        "row": "int64_t {name}(" + e + ", P, P, P)",
         "initial": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t)",
         # the connector's own (kernels._CONNECTOR_SIGNATURES: the element's arrays and memory; its elongations
         # the branches' arrays alone)
@@ -342,7 +344,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"
     functions = (("move", "cforce", "ctangent", "cstored", "cinitial", "elongations") if connector
-                 else ("record", "stiffness", "initial", "elongations"))
+                 else ("record", "row", "stiffness", "limits", "initial", "elongations"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]
         unfolded = chosen + "p" if folds else chosen  # the O(n) kernel's functions: what exact runs on

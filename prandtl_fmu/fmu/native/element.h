@@ -43,6 +43,7 @@ typedef struct {
     Clock clock;          /* time = origin + steps * grid (grid 0: none yet) */
     double force;         /* the load of the last advance: force, plus the scene's [load] with scene_load */
     int scene_load;
+    int row_stale;        /* erow is not the state's: an advance moved it (the row is computed when read: fresh_row) */
     double mp[N_MEMP];    /* the effects with memory: their parameters in use (kernels.memory_layout) */
     int64_t nd;           /* the delay's buffer: its values (memory.delay.size at the tau in use; 0: no delay) */
     int64_t mem_len;      /* the memory's state: MEM_FIXED + nd values */
@@ -80,14 +81,14 @@ typedef struct {
 typedef struct {
     double x, v, account[4], out[3], erow[6], force;
     Clock clock;
-    int scene_load;
+    int scene_load, row_stale;
     size_t used;
 } Checkpoint;
 #define SAVED_U (NB_ARR > NB_PLAY ? NB_ARR : NB_PLAY)
 #define CHECKPOINTED(to, from)                                                                                 \
     COPY_FIELD(to, from, x), COPY_FIELD(to, from, v), COPY_FIELD(to, from, account), COPY_FIELD(to, from, out), \
         COPY_FIELD(to, from, erow), COPY_FIELD(to, from, clock), COPY_FIELD(to, from, force),                  \
-        COPY_FIELD(to, from, scene_load)
+        COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, row_stale)
 
 typedef struct {
     INSTANCE_HEAD;
@@ -106,6 +107,8 @@ typedef struct {
     double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
     double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
     int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
+    double limits[3];    /* |x|, |v|, |an account's entry| below which every output is surely a number ... */
+    int limit_play;      /* ... on the branches' kernel they were given for (el.play): note_limits */
 } Instance;
 
 /* ------------------------------------------------------------------ the element */
@@ -131,6 +134,32 @@ static void record(Element* e, double t)
     double xv[2] = {e->x, e->v};
     KERNEL(e, record)(BRANCHES(e), xv, e->account, e->out, e->erow, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n,
                       t);
+    e->row_stale = 0;
+}
+
+/* the energy row of the state, computed when an output reads it (an advance leaves it stale: the library's
+ * Element.advance records it, the FMU only when asked) */
+static void fresh_row(Element* e)
+{
+    double xv[2] = {e->x, e->v};
+    if (!e->row_stale)
+        return;
+    KERNEL(e, row)(BRANCHES(e), xv, e->account, e->erow);
+    e->row_stale = 0;
+}
+
+/* the magnitudes of x, v and the account's entries below which every output is surely a number, for the
+ * coefficients handed over and the branches' kernel in use (showable.limits); 0 (every output is then computed
+ * after every step) if the kernel fails. After every hand-over: surely_showable reads them. */
+static void note_limits(Instance* c)
+{
+    int failed = prandtl_kernel_failed;
+    prandtl_kernel_failed = 0;
+    KERNEL(&c->el, limits)(BRANCHES(&c->el), c->limits);
+    if (prandtl_kernel_failed)
+        memset(c->limits, 0, sizeof c->limits);
+    c->limit_play = c->el.play;
+    prandtl_kernel_failed = failed;
 }
 
 /* ------------------------------------------------------------------ the effects with memory */
@@ -180,14 +209,15 @@ static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first
         noisy_fn noisy = (e->play ? (damped(e) ? NOISY_CP : NOISY_NP) : (damped(e) ? NOISY_C : NOISY_N))[e->stepper];
         if (noisy == NULL) /* a stepper that takes no noise: refused when the settings are handed over */
             return -1;
-        taken = noisy(BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t,
+        taken = noisy(BRANCHES(e), xv, e->account, e->out, l->kind, (double*)l->lk, (double*)l->t,
                       (double*)l->f, l->n, t_base, first, h, steps, l->noise.sigma, l->noise.seed, l->noise.unit,
                       l->cache);
     } else {
         taken = (e->play ? (damped(e) ? ADVANCE_CP : ADVANCE_NP) : (damped(e) ? ADVANCE_C : ADVANCE_N))[e->stepper](
-            BRANCHES(e), xv, e->account, e->out, e->erow, l->kind, (double*)l->lk, (double*)l->t, (double*)l->f,
+            BRANCHES(e), xv, e->account, e->out, l->kind, (double*)l->lk, (double*)l->t, (double*)l->f,
             l->n, t_base, first, h, steps);
     }
+    e->row_stale = 1; /* the branches and the account moved (a failed advance is rolled back whole) */
     if (prandtl_kernel_failed)
         return -1;
     e->x = xv[0];
@@ -302,6 +332,7 @@ static void hand_over(Instance* c)
     e->h = c->step;
     c->noise = c->noise_set; /* Element.set_noise (sigma 0: none) */
     c->handed = 1;
+    note_limits(c);
 }
 
 /* the coefficients, the stepper's name and the step: what a saved state's settings are checked for too */
@@ -360,9 +391,10 @@ static double reaction_now(Instance* c)
     return out[2];
 }
 
-static double energy(const Element* e, int which)
+static double energy(Element* e, int which)
 {
     const double* r = e->erow;
+    fresh_row(e);
     if (which < 6)
         return r[which];
     return r[2] - r[3] - r[4] - r[5] - (r[0] + r[1] - e->initial_energy);
@@ -388,6 +420,25 @@ static double real_value(Instance* c, const Var* var)
     case W_NOISE_UNIT: return c->noise_set.unit;
     }
     return NAN;
+}
+
+/* 1 when every output a step must leave a number (STEP_OUTPUT) surely is one, computing none but the reaction
+ * (O(1)): x, v, the account's entries and the initial energy within the magnitudes of showable.limits (note_limits),
+ * below which the stiffness and the energies are numbers. 0: unshowable_output must compute them all (it then names
+ * the culprit, or finds none). Never 1 where unshowable_output would name one (tests/test_showable.py), in a
+ * fraction of its time (benchmarks/dostep_cost.py). */
+static int surely_showable(Instance* c)
+{
+    const Element* e = &c->el;
+    const double* limit = c->limits;
+    int i;
+    if (!(c->limit_play == e->play && isfinite(e->x) && fabs(e->x) <= limit[0] && isfinite(e->v) &&
+          fabs(e->v) <= limit[1] && fabs(e->initial_energy) <= limit[2]))
+        return 0;
+    for (i = 0; i < 4; i++) /* the account's entries, whichever are outputs */
+        if (!(fabs(e->account[i]) <= limit[2]))
+            return 0;
+    return isfinite(reaction_now(c));
 }
 
 /* an Integer: n (the scene's), or noise_seed */
@@ -421,6 +472,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
           isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) &&
           (e->play == 0 || (FOLDS && e->play == 1)) && (e->scene_load == 0 || e->scene_load == 1) &&
+          (e->row_stale == 0 || e->row_stale == 1) &&
           (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
           (s->initialized == 0 || s->initialized == 1) && memchr(s->stepper, 0, sizeof s->stepper) != NULL))
         return "it holds a non-finite or out-of-range value";
@@ -589,13 +641,21 @@ static void started(Instance* c)
     warn_if_unstable(c);
 }
 
+/* ``count`` doubles by the C library's memcpy, called: a compiler that inlines a memcpy of a run it cannot size
+ * (tens of doubles, every doStep) may emit a rep movs that costs more than the copy (benchmarks/dostep_cost.py) */
+static void* (*volatile const library_memcpy)(void*, const void*, size_t) = memcpy;
+static void copy_doubles(double* to, const double* from, size_t count)
+{
+    library_memcpy(to, from, count * sizeof(double));
+}
+
 static void checkpoint(Instance* c)
 {
     const Element* e = &c->el;
     Checkpoint* k = &c->saved;
     CHECKPOINTED(k, e);
     k->used = e->play ? NB : branch_state_used(e->u);
-    memcpy(c->saved_u, e->play ? e->up : e->u, k->used * sizeof(double));
+    copy_doubles(c->saved_u, e->play ? e->up : e->u, k->used);
     if (HAS_MEMORY) /* the memory's state (memory.copy_memory) */
         memcpy(c->saved_mem, e->mem, (size_t)e->mem_len * sizeof(double));
 }
@@ -624,6 +684,19 @@ static void hand_over_settings(Instance* c)
         warn_if_unstable(c);
 }
 
+#ifdef PRANDTL_BENCH_KERNEL_ONLY
+/* benchmarks/dostep_cost.py only, never in a build of the package: a doStep that is the kernel's advance of one
+ * step of H from t and nothing else (no check, no checkpoint, no clock), what the library's Element.advance pays
+ * for its compiled part; the rest of a doStep's time is what this layer adds */
+static int step(Instance* c, double t, double H)
+{
+    Load l;
+    if (!settings_handed(c))
+        return ST_DISCARD;
+    l = load_of(c->F, c->scene_load, &c->noise, c->noise_cache);
+    return integrate(&c->el, &l, t, 0, H, 1) == 1 ? ST_OK : ST_DISCARD;
+}
+#else
 /* a doStep (core.h; slave.do_step): the settings handed over, the element checkpointed, put at t and advanced by H
  * under F; a step that fails or would show an output that is not a number is rolled back */
 static int step(Instance* c, double t, double H)
@@ -656,7 +729,8 @@ static int step(Instance* c, double t, double H)
             c->F, problem, STEPPER_NAMES[c->el.stepper], c->el.h, implicit ? "" : "; try 'implicit'");
         return ST_DISCARD;
     }
-    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    /* no output is ever shown NaN or inf after an OK step */
+    overflowed = surely_showable(c) ? NULL : unshowable_output(c, &value);
     if (overflowed != NULL) {
         double time = element_time(&c->el);
         rollback(c);
@@ -666,6 +740,7 @@ static int step(Instance* c, double t, double H)
     }
     return ST_OK;
 }
+#endif
 
 /* the fixed parameters (core.h): x0 and v0 (the initial state), an effect with memory's */
 static int fixed_problem(Instance* c, const Var* var, double value)

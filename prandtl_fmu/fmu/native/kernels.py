@@ -16,15 +16,21 @@ and ``numba_nextafter``: ``stubs.c`` provides them; the error path sets a flag t
 The C signatures (every pointer to doubles; ``kind`` the load's kind, ``lk`` = offset, amplitude, omega of
 the load, ``lt``/``lf``/``nl`` its table):
 
-* ``advance(p, k, eta, cs, u, mp, ms, nd, xv, account, out, erow, kind, lk, lt, lf, nl, t_base, first, h, steps)``
-  -> steps taken (``kernels/loop.py``: out = x, v, reaction; erow = the energy row);
+* ``advance(p, k, eta, cs, u, mp, ms, nd, xv, account, out, kind, lk, lt, lf, nl, t_base, first, h, steps)``
+  -> steps taken (``kernels/loop.py``: out = x, v, reaction; the energy row is not recorded: ``row`` computes it
+  when an output reads it);
 * ``advance_noisy(..., steps, sigma, seed, unit, cache)``: the same under the load plus a white noise, the load
   tuple's seventh entry ``(sigma, seed, unit, cache)`` (``loads.WhiteNoise``; ``cache``: the Brownian tree's
   int64 cache of :data:`NOISE_CACHE_SIZE`, any content valid), for the steppers that take a noise
   (:func:`noise_refusal`);
 * ``record(p, k, eta, cs, u, mp, ms, nd, xv, account, out, erow, kind, lk, lt, lf, nl, t)``: the outputs of the
   state;
+* ``row(p, k, eta, cs, u, mp, ms, nd, xv, account, erow)``: the energy row of the state (kinetic, stored, the
+  account), what ``record`` writes into erow;
 * ``stiffness(p, k, eta, cs, u, mp, ms, nd, xv)`` -> the tangent stiffness;
+* ``limits(p, k, eta, cs, u, mp, ms, nd, out)``: the magnitudes of x, v and the account's entries below which
+  every output is surely a number (``kernels/showable.limits``): a doStep then computes none of them to show
+  only numbers;
 * ``initial(p, k, eta, cs, u, mp, ms, nd, xv, kind, lk, lt, lf, nl)`` -> 1, or 0 when a massless element has no
   equilibrium (``driver.initial_state``); it also makes the memory fresh (``driver._memory_model``, and
   ``driver._initial_with_memory`` for a massless element without a dashpot);
@@ -63,13 +69,15 @@ _NOISE = "types.float64, types.int64, types.float64, types.CPointer(types.int64)
 # the element's arrays: p, k, eta, cs, u, then the memory's parameters, state and delay buffer length (mp, ms, nd)
 _ELEMENT = f"{', '.join([_PTR] * 7)}, types.int64"
 _SIGNATURES = {
-    "advance": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
+    "advance": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 3)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
                "types.float64, types.int64, types.float64, types.int64)",
-    "advance_noisy": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, "
+    "advance_noisy": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 3)}, types.int64, {_PTR}, {_PTR}, {_PTR}, "
                      f"types.int64, types.float64, types.int64, types.float64, types.int64, {_NOISE})",
     "record": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 4)}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, "
               "types.float64)",
     "stiffness": f"types.float64({_ELEMENT}, {_PTR})",
+    "limits": f"types.int64({_ELEMENT}, {_PTR})",
+    "row": f"types.int64({_ELEMENT}, {', '.join([_PTR] * 3)})",
     "initial": f"types.int64({_ELEMENT}, {_PTR}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
     "force_at": f"types.float64(types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, {_PTR})",
     "elongations": f"types.int64({_ELEMENT}, {_PTR})",
@@ -89,20 +97,19 @@ def _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep):
             (sigma, seed, unit, carray(cachep, ({noise_cache},))))
 
 
-def advance(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h,
-            steps):
+def advance(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, kind, lk, lt, lf, nl, t_base, first, h, steps):
     x, v, taken = run(_model(p, kp, etap, csp, mp, msp, nd), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base,
-                      first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
+                      first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), None)
     xv[0] = x
     xv[1] = v
     return taken
 
 
-def advance_noisy(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, lk, lt, lf, nl, t_base, first, h,
+def advance_noisy(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, kind, lk, lt, lf, nl, t_base, first, h,
                   steps, sigma, seed, unit, cachep):
     load = _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep)
     x, v, taken = run_noisy(_model(p, kp, etap, csp, mp, msp, nd), load, xv[0], xv[1], {u}, t_base, first, h, steps,
-                            carray(outp, (1, 3)), None, carray(accountp, (4,)), carray(erowp, (1, 6)))
+                            carray(outp, (1, 3)), None, carray(accountp, (4,)), None)
     xv[0] = x
     xv[1] = v
     return taken
@@ -124,9 +131,23 @@ def record(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, erowp, kind, l
     return 0
 
 
+def row(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, erowp):
+    m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
+    erowp[0] = kinetic(m, xv[1])
+    erowp[1] = stored(xv[0], k0, k3, k, {u})
+    for j in range(4):
+        erowp[2 + j] = accountp[j]
+    return 0
+
+
 def stiffness(p, kp, etap, csp, up, mp, msp, nd, xv):
     direction = -1.0 if xv[1] < 0 else 1.0
     return tangent(_model(p, kp, etap, csp, mp, msp, nd), xv[0], {u}, direction)
+
+
+def limits(p, kp, etap, csp, up, mp, msp, nd, outp):
+    showable_limits(_model(p, kp, etap, csp, mp, msp, nd), carray(outp, (3,)))
+    return 0
 
 
 def elongations(p, kp, etap, csp, up, mp, msp, nd, outp):
@@ -480,7 +501,7 @@ def noise_refusal(scene, stepper) -> "str | None":
 def compile_kernels(scene, steppers) -> list:
     """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``:
     ``advance_<stepper>_<variant>``, ``noisy_<stepper>_<variant>`` (``advance_noisy``, for the steppers that take
-    a white noise), ``record_<variant>``, ``stiffness_<variant>``, ``initial_<variant>``,
+    a white noise), ``record_<variant>``, ``row_<variant>``, ``stiffness_<variant>``, ``limits_<variant>``, ``initial_<variant>``,
     ``elongations_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
     (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
@@ -490,6 +511,7 @@ def compile_kernels(scene, steppers) -> list:
     from ...kernels.friction import reaction
     from ...kernels.increment import solve_increment
     from ...kernels.play import branch_force, move, write_elongations
+    from ...kernels.showable import limits as showable_limits
     from ...kernels.smooth import elastic_force
     from ...kernels.stack import start
     from ...loads import force_at
@@ -515,7 +537,8 @@ def compile_kernels(scene, steppers) -> list:
                     continue  # on the O(n) kernel only (the element unfolds the stack for it)
                 takes_noise = stepper is not None and noise_refusal(scene, stepper) is None
                 namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
-                                 tangent=tangent, branch_force=branch_force, move=move,
+                                 tangent=tangent, showable_limits=showable_limits,
+                                 branch_force=branch_force, move=move,
                                  solve_increment=solve_increment, write_elongations=write_elongations,
                                  elastic_force=elastic_force, force_at=force_at, start=start,
                                  force_now=force_now, solve_dahl_increment=solve_dahl_increment,
@@ -526,7 +549,7 @@ def compile_kernels(scene, steppers) -> list:
                 for helper in ("_model", "_load", "_noisy_load"):  # inlined into each C function
                     namespace[helper] = njit(inline="always")(namespace[helper])
                 names = (["advance"] + (["advance_noisy"] if takes_noise else []) if stepper
-                         else ["record", "stiffness", "initial", "elongations"])
+                         else ["record", "row", "stiffness", "limits", "initial", "elongations"])
                 if stepper is None and not compiled_force:
                     names.append("force_at")  # the scene's load alone: once
                     compiled_force = True
