@@ -6,7 +6,7 @@ use-after-free at exit caused the abort), then starts ``--processes`` Python pro
 ``fmpy.simulate_fmu`` on it for 5 s of model time and exiting normally (no os._exit), and counts their exit
 statuses. 134 is SIGABRT ("corrupted double-linked list" on stderr). The stock loader's abort is timing
 dependent and rare (measured before the fix: 1 of 8 on a quiet machine, 5 of 14 beside the test suite; 0 of
-280 in a later series): valgrind shows its cause deterministically (tests/test_exit.py).
+280 in a later series): valgrind shows its cause deterministically (tests/fmu/python/test_clean_exit.py).
 
     python benchmarks/exit_abort.py [--processes 14] [--loader prandtl|pythonfmu] [--out out/exit_abort.csv]
 """

@@ -6,7 +6,7 @@ meets: cos and sin of omega t over [0, 1e3] (Cody-Waite) and [1e6, 1e9] (Payne-H
 exp and the other ones over the ranges in ``CASES``. Each loop is compiled before it is timed; the figure is
 the median of ``--repeat`` runs divided by the count, loop and load included, ours and numba's run in turn
 in every repeat so that both see the same load of a shared machine (an empty loop over the same array is
-timed too, for scale). No reference solution: ``tests/test_libm.py`` checks the values; the two sums
+timed too, for scale). No reference solution: ``tests/steppers/test_libm.py`` checks the values; the two sums
 are printed side by side as a sanity check (they agree to the functions' last bits).
 
     python benchmarks/libm_cost.py [--count 200000] [--repeat 21] [--out out/libm_cost.csv]

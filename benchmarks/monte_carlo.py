@@ -5,7 +5,7 @@ Problem: the linear oscillator under white noise of ``examples/monte_carlo_oscil
 tree's unit ``noise_unit`` = 1.28 s = 128 h: one normal a step), run for
 T = 10 s and T = 100 s (1000 and 10,000 steps a path), keeping ``final_x, final_v, late_mean_square_x,
 late_mean_square_v`` (the summaries of a Monte Carlo of stationary laws). The reference solution is not the
-point here: the laws' checks are tests/test_monte_carlo.py and docs/sweep/monte_carlo_laws.md.
+point here: the laws' checks are tests/analysis/test_monte_carlo.py and docs/sweep/monte_carlo_laws.md.
 
 Measured in one run of this script, warm (every kernel compiled, in this process and in every worker):
 

@@ -6,7 +6,7 @@ t = 1e6 units: with dyadic steps (h = 2^-10, 2^-20 units: the step times are poi
 draw per step) and with h = 1e-3 (every step time has all its fraction bits: the levels below the step's
 are drawn at each step). Random access: increments over [t, t + 1e-3] at uniform times in [0, 1e6], one
 cache. For scale, the cost of one standard normal of the generator (a ziggurat on Philox4x32-10 blocks) and
-of one Philox block alone. No reference solution: the tests (tests/test_noise_path.py) check the values;
+of one Philox block alone. No reference solution: the tests (tests/noise/test_brownian_path.py) check the values;
 this script counts the normals drawn (``cache[DRAWS]``) and times the loops (the median of ``--repeat``
 runs, after a warm-up that compiles them). For the issue's goal (noise under 2x the deterministic step), the
 same run times the deterministic step it is to be added to: the paper's section 8 scene with 7 branches,

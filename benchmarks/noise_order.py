@@ -1,6 +1,6 @@
 """The strong order of the noisy steppers, measured on one path refined (the numbers of docs/white-noise.md).
 
-Problem: the element of tests/test_white_noise.py (7 branches, m = 0.8, x0 = 0.01, v0 = -0.2, harmonic load
+Problem: the element of tests/noise/test_schemes.py (7 branches, m = 0.8, x0 = 0.01, v0 = -0.2, harmonic load
 0.6 cos(1.3 t) + 0.05 plus a white noise of sigma = 0.7 N sqrt(s), noise_unit = 2^-3 s) with the effects
 named on the command line, run to 4 s with h = 2^-3 .. 2^-9 s and a reference at 2^-12 s, all on the same
 path per seed (the tree's points are shared by every h). The strong error is the mean over ``--seeds`` seeds
@@ -18,7 +18,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from common import write_rows  # noqa: E402
 from prandtl_fmu import simulate  # noqa: E402
-from test_white_noise import scene_of, tables_with_branches  # noqa: E402
+from tests.noise.test_schemes import scene_of, tables_with_branches  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 CASES = (("implicit", ("spring", "damper")), ("projected", ("spring", "damper")),

@@ -7,7 +7,7 @@ for two Brownian tree units: ``noise_unit = 1e-3`` s (= h: every step time is a 
 per step) and the default ``noise_unit = 1`` s (h = 1e-3 units: each step time carries about 40 fraction
 bits, and the levels below the step's are drawn at every step). Also ``noise_intensity = 0`` written out
 (no noise at all: the scene has no noise, the deterministic code runs). No reference solution (the tests
-check the values: tests/test_white_noise.py); ns per step from the wall time of ``--repeat`` runs of ``--steps``
+check the values: tests/noise/test_schemes.py); ns per step from the wall time of ``--repeat`` runs of ``--steps``
 steps (one output row per 1000 steps) after a warm-up that compiles every loop: the fastest run (the least
 disturbed by the other processes of a shared machine; the ratios are taken on it) and the median.
 

@@ -19,7 +19,7 @@ names (``--platforms all``). Reported:
     python benchmarks/platforms_cost.py [--repeat 5] [--out out/platforms_cost.csv]
 
 The Debian packages it needs (gcc-mingw-w64-x86-64, gcc-aarch64-linux-gnu, qemu-user, wine64) and zig (ziglang)
-are those of tests/test_platforms.py; a platform whose runner is missing is left out and said so.
+are those of tests/fmu/native/test_platforms.py; a platform whose runner is missing is left out and said so.
 """
 import argparse
 import os

@@ -37,7 +37,7 @@ def scene(table):
 
 
 def masing_rules(backbone, xs):
-    """Forces and stack depths of the extended Masing rules along xs (see tests/test_masing.py)."""
+    """Forces and stack depths of the extended Masing rules along xs (see tests/models/test_masing.py)."""
     stack, x, force, direction = [], 0.0, 0.0, 0.0
     forces, depths = np.empty(len(xs)), np.empty(len(xs), dtype=int)
     for j, target in enumerate(xs):

@@ -13,7 +13,7 @@ advances it with compiled building blocks (``kernels/``), and two drivers run it
 ``bench/``, ``sweep/`` and ``cli.py`` are tools on top.
 
 The layers, bottom to top. A module imports from its own layer and those below, never from one above, and no
-import circle exists (``tests/test_layout.py`` checks both from the sources, with a short list of known
+import circle exists (``tests/docs/test_layout.py`` checks both from the sources, with a short list of known
 exceptions and their reasons):
 
 1. base: ``__init__``, ``network`` (its lazy __init__), ``_jit``, ``catalog``, ``compiling``, ``libm``, ``noise``, ``outputs``,

@@ -19,7 +19,7 @@ ranges becomes one branch at their weighted mean, and
 weights given by NNLS at every evaluation; branches that lose their weight
 are dropped. The refined fit replaces the grid's only when its residual is
 smaller. On a noise-free loop of n branches it finds the n ranges (the force
-to ~1e-10 of its range; tests/test_fit.py).
+to ~1e-10 of its range; tests/analysis/test_fit.py).
 
 The default grid mixes a geometric grid from the resolution of the data to
 the largest excursion of x with points placed where the virgin curve bends
@@ -407,7 +407,7 @@ def _result(fs, columns, weights, smooth_count, dashpot, cubic, **fields) -> Fit
 
 
 # Copies of the basis a least-squares solve holds at once: the basis, the columns stacked with the smooth terms,
-# the same scaled to unit norm, and scipy's nnls's own copy (measured: tests/test_hostile.py)
+# the same scaled to unit norm, and scipy's nnls's own copy (measured: tests/cli/test_hostile_inputs.py)
 _BASIS_COPIES = 4
 
 

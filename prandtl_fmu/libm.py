@@ -9,7 +9,7 @@ The library in process, the pure-Python execution of the same source (CPython's 
 therefore compute the same bits, which the tests check against the pure-Python run.
 
 Algorithms (FreeBSD msun, i.e. Sun's fdlibm 5.3 with FreeBSD's fixes, whose sources bound exp, expm1, log,
-log1p and hypot below 1 ulp and cbrt below 0.667; log2 and pow are written here; ``tests/test_libm.py``
+log1p and hypot below 1 ulp and cbrt below 0.667; log2 and pow are written here; ``tests/steppers/test_libm.py``
 measures every one against mpmath, ``docs/libm.md`` has the figures: at most 0.89 ulp):
 
 * cos, sin, sincos: ``k_cos.c``, ``k_sin.c`` (degree 14 and 13 minimax polynomials on [-pi/4, pi/4], the

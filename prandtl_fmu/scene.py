@@ -39,7 +39,7 @@ from .scene_tables import LARGEST_MAGNITUDE, MAX_STEPS, SHORTEST_STEP, SMALLEST_
 
 # Memory per branch at the peak of a run: the scene's arrays, the kernel's sorted copies, the memory stack's ten
 # rows and their temporaries, an Element's saved state. Measured 197 bytes (n = 10^6, projected; the issue's
-# measure of the old figure, 96, was 145): tests/test_hostile.py checks the peak against this.
+# measure of the old figure, 96, was 145): tests/cli/test_hostile_inputs.py checks the peak against this.
 BYTES_PER_BRANCH = 256
 # The most internal steps one advance of an element (an FMU's doStep) takes: a communication step that needs
 # more is refused (fmi2Discard, ElementError) with the count, never run for hours. About 10 s of the paper's

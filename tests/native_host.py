@@ -163,7 +163,7 @@ def built_native(name: str, tables: dict, fmi: int, folder: Path) -> Native:
     they run: $PRANDTL_NATIVE_CFLAGS) and shared by the test modules."""
     from prandtl_fmu.fmu.build import build_fmu
 
-    from .conftest import scene_text
+    from tests.conftest import scene_text
 
     key = ("native", name, fmi)
     if key not in _BUILT:

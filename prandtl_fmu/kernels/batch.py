@@ -34,7 +34,7 @@ damping_data, table_data, state_data, history_data, accounts, marks, out)``; the
 branch state (or None) and an energy account (or None: no account kept): it
 carries the types only, so that every run of the batch compiles to the same
 code as a run of its own (``kernels/loop.py``), and gives the same numbers,
-bit for bit (tests/test_sweep.py, tests/test_summary.py).
+bit for bit (tests/analysis/test_sweep.py, tests/analysis/test_summary.py).
 """
 import numpy as np
 from numba.core import types

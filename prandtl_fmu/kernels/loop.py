@@ -19,7 +19,7 @@ compiled first in two different processes (a test's subprocess, a dask
 worker) both got the name ``time_loop.<locals>.loop$6``. Once, in CI, a
 process whose cache had been filled that way saw ``projected`` return exactly
 the numbers of ``implicit``; that clash is the explanation we have (not
-reproduced on demand since). tests/test_steppers.py checks the names and runs
+reproduced on demand since). tests/steppers/test_physics.py checks the names and runs
 every stepper from a cache filled one stepper per process.
 """
 import numpy as np

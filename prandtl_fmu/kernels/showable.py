@@ -21,8 +21,8 @@ The bounds, with cap = SHOWABLE / 8 (DBL_MAX is 1.8e308; a sum of seven terms be
   that. Every term of the expansion is then at most sum |k_i| (A + 2 max eta)^2, A that bound of |a + x|;
 * kinetic energy m v^2 / 2; the account's entries and the initial energy are compared with cap as they are.
 
-Each limit is halved once more for the rounding of these formulas. tests/test_showable.py checks the bounds
-against the outputs computed at states pushed to them."""
+Each limit is halved once more for the rounding of these formulas. tests/fmu/native/test_showable_bounds.py checks
+the bounds against the outputs computed at states pushed to them."""
 import numpy as np
 
 from .._jit import kernel

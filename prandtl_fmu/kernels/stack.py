@@ -2,8 +2,8 @@
 
 Used by every stepper but ``exact`` for scenes with many branches and an
 admissible initial state, and for the continuous element (infinitely many
-branches); see ``driver.choose_branch_kernel``. tests/test_stack.py shows it
-equals the O(n) play kernel, tests/test_continuum.py that the continuum is
+branches); see ``driver.choose_branch_kernel``. tests/steppers/test_memory_stack.py shows it
+equals the O(n) play kernel, tests/models/test_continuum.py that the continuum is
 the limit of the sampled branches.
 
 Sort the branches by elastic range, eta_1 <= ... <= eta_n. From an admissible

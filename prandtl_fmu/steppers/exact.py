@@ -98,7 +98,7 @@ exponential by scaling and squaring (:func:`_expm_gramian`); the balance
 work = kinetic + stored + dissipated then holds to rounding.
 
 ``ORDER`` is infinite: the error is rounding (checked against scipy's DOP853
-at rtol 1e-13 on event-free stretches, tests/test_exact.py). The cost grows
+at rtol 1e-13 on event-free stretches, tests/steppers/test_exact.py). The cost grows
 with the number of events, about n per half cycle of the load for n branches
 (every branch starts to slip once per half cycle), each costing a few dozen
 6x6 matrix exponentials (under a harmonic load, also with the number of

@@ -12,7 +12,7 @@ and clip(u_i + dx) is the exact elongation of every branch at the end of
 the step: the branch force there is exact for that path. Cost: one pass over
 the branches per step, like ``projected``.
 
-Order 2 (measured against ``exact``: tests/test_exact.py). Why this escapes Remark 1.2 of
+Order 2 (measured against ``exact``: tests/steppers/test_exact.py). Why this escapes Remark 1.2 of
 Bastien & Schatzman (no classical order-2 scheme does better than order 1
 for the general inclusion): there the solution's derivative jumps (u' is
 discontinuous when a constraint becomes active), so any scheme sees an O(h)

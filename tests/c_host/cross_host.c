@@ -1,4 +1,4 @@
-/* The host of the cross-platform tests (tests/test_platforms.py): built for the FMU's other platforms (mingw-w64 for
+/* The host of the cross-platform tests (tests/fmu/native/test_platforms.py): built for the FMU's other platforms (mingw-w64 for
    win64 under wine, aarch64-linux-gnu-gcc for aarch64-linux under qemu-user), FMI 2.0 or 3.0 (-DFMI_VERSION=2|3).
 
    cross_host LIBRARY TOKEN RESOURCE_URI STEPPER_VR STEPPER F_VR OUT_VR,OUT_VR,... [noload:VR] [time:COUNT:H:F]

@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* What both FMI layers (fmi2.c, fmi3.c) check of a call before anything runs: the instance, the call sequence (a
  * mask of the phases a function is allowed in, as modelica/Reference-FMUs' fmi2Functions.c and fmi3Functions.c do,
  * after the state machines of the FMI 2.0 and 3.0 standards for co-simulation) and the pointers it is handed. A

@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* What the native FMU's element (element.h) and connector (connector.h) share: logging, the parameters'
  * rules (the library's magnitudes included, from scene.h), the variables' table, which values may be shown, the
  * checksum of a state. Glue only, no numerics. */

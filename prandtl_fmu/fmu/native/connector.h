@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The native FMU's connector (a massless scene between two bodies: x, v in, force out), shared by its FMI 2.0
  * (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *

@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The instance layer of the native FMU, written once for every kind (the element, element.h; its connector,
  * connector.h; a network and its connector, network.h): the state machine of initialization and stepping, the
  * refusals every kind makes in the same words, the outputs checked after a step, the memory's arrays of the

@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The native FMU's element, shared by its FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers: glue only, no numerics.
  *
  * Every number comes from the library's kernels, compiled by numba for this scene (fmu/native/kernels.py)
@@ -425,7 +425,7 @@ static double real_value(Instance* c, const Var* var)
 /* 1 when every output a step must leave a number (STEP_OUTPUT) surely is one, computing none but the reaction
  * (O(1)): x, v, the account's entries and the initial energy within the magnitudes of showable.limits (note_limits),
  * below which the stiffness and the energies are numbers. 0: unshowable_output must compute them all (it then names
- * the culprit, or finds none). Never 1 where unshowable_output would name one (tests/test_showable.py), in a
+ * the culprit, or finds none). Never 1 where unshowable_output would name one (tests/fmu/native/test_showable_bounds.py), in a
  * fraction of its time (benchmarks/dostep_cost.py). */
 static int surely_showable(Instance* c)
 {

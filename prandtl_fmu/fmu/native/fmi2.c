@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The native FMU's FMI 2.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
  * connector.h, network.h): FMI 2.0's types and names, and what FMI 2.0 alone has (its statuses); what both versions
  * do alike is front.h's (the checks of a call: BEGIN, CHECKED). */

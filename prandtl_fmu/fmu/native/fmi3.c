@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The native FMU's FMI 3.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
  * connector.h, network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
  * each under its 1-based position in ModelVariables as its value reference) and the branch elongations as the

@@ -6,7 +6,7 @@
  * equilibrium or a stability check comes from a kernel. The only arithmetic here is the bookkeeping the library's
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
- * and stored energy). tests/test_native_refusals.py checks the refusals against the library's. */
+ * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* What the FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) layers do alike, written once: an instance made, started with its
  * defaults, reset and freed; the debug logging; the setters of the Real/Float64, Integer/Int32, Boolean and String
  * variables (all or nothing) and the checks of a getter's value references; each function's words name the

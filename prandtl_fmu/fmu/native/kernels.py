@@ -7,7 +7,7 @@ unpack C pointers into arrays (``numba.carray``) and the model tuple of the libr
 ``run``, ``reaction``, ``kinetic``, ``stored``, ``tangent``, the massless equilibrium. numba compiles each
 into a ``cfunc``; their LLVM modules are emitted as object files by llvmlite, for each target
 (``platforms.py``). The numerics in the native FMU are therefore the library's, not a copy: the same source
-compiled by the same compiler for the same types, bit for bit (tests/test_native.py).
+compiled by the same compiler for the same types, bit for bit (tests/fmu/native/test_against_library.py).
 
 What the objects need besides libm is numba's error path (a kernel that raises: Python's C API with the GIL)
 and ``numba_nextafter``: ``stubs.c`` provides them; the error path sets a flag that the FMI layer reads
@@ -501,7 +501,8 @@ def noise_refusal(scene, stepper) -> "str | None":
 def compile_kernels(scene, steppers) -> list:
     """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``:
     ``advance_<stepper>_<variant>``, ``noisy_<stepper>_<variant>`` (``advance_noisy``, for the steppers that take
-    a white noise), ``record_<variant>``, ``row_<variant>``, ``stiffness_<variant>``, ``limits_<variant>``, ``initial_<variant>``,
+    a white noise), ``record_<variant>``, ``row_<variant>``, ``stiffness_<variant>``, ``limits_<variant>``,
+    ``initial_<variant>``,
     ``elongations_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
     (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)

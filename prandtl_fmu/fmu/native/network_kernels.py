@@ -7,7 +7,7 @@ scene's sizes written into them, unpack C pointers (``numba.carray``) into the l
 compiled kernels (:mod:`prandtl_fmu.network.kernels`): the time loops ``run_implicit`` and ``run_projected``,
 ``move_node``, ``jump_node`` and ``node_force`` (the connector), ``initial_state`` and ``initial_reaction`` (the
 equilibrium at t = 0), ``kinetic``, ``stored``, and ``loads.force_at``. numba compiles each into a ``cfunc``, llvmlite emits it as an object; the numbers are the
-library's, bit for bit (tests/test_native_network.py).
+library's, bit for bit (tests/networks/test_native.py).
 
 The C signatures (``P`` a pointer to doubles, ``I`` a pointer to int64; ``net`` = mass, coef, kind, ends,
 load_node, has_cubic; ``work`` = the workspace's 11 arrays, kernels.workspace's order; ``load`` = kind, lk, lt,

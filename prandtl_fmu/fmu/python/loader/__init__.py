@@ -36,7 +36,7 @@ loader; under the stock one (the Windows binary PythonFMU ships, or an FMU built
 fmi2Fatal there. Even so, once in CI a process that had made 400 refused calls through the stock
 loader died at exit with a heap corruption (glibc: "corrupted double-linked list"), after the
 instance had stepped on correctly: that loader calls the host's logger while a Python exception is
-pending, which no slave can prevent. tests/test_loader.py records it as an expected failure.
+pending, which no slave can prevent. tests/fmu/python/test_loader.py records it as an expected failure.
 
 The library is prebuilt (``linux64/``, committed, with the digest of the sources it was built from
 in ``linux64/SOURCE_SHA256``; a test checks that they match) because a user's machine need not have

@@ -1,0 +1,140 @@
+"""``prandtl-fmu describe`` (issue 47): its CSVs, its figures, and one line with exit status 2 and nothing
+written for every kind of bad input."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.conftest import scene_text
+
+JOINT = {"spring": {"k0": 1.0}, "branches": {"k": [1.0, 2.0], "eta": [0.1, 0.3]}}
+DAMPER = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.1}, "branches": {"k": [1.0], "eta": [0.1]}}
+
+
+def write(tmp_path, tables, name="scene.toml"):
+    path = tmp_path / name
+    path.write_text(scene_text(tables))
+    return str(path)
+
+
+def read_csv(path):
+    lines = open(path).read().splitlines()
+    header = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    return {name: [row[j] for row in rows] for j, name in enumerate(header)}
+
+
+def test_amplitudes_write_the_describing_function(tmp_path, capsys):
+    """A scene with no [load] and no [solver]: the contract columns first, one row per amplitude."""
+    out = tmp_path / "d.csv"
+    assert main(["describe", write(tmp_path, JOINT), "--amplitudes", "0.05, 0.2,1", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert list(table)[:4] == ["amplitude", "stiffness", "dissipation", "loss_factor"]
+    assert [float(a) for a in table["amplitude"]] == [0.05, 0.2, 1.0]
+    K = np.array(table["stiffness"], dtype=float)
+    D = np.array(table["dissipation"], dtype=float)
+    assert K[0] == pytest.approx(4.0, rel=1e-13)  # nothing slips at 0.05: k0 + k1 + k2
+    assert D[2] == pytest.approx(4 * 1.0 * 0.1 * 0.9 + 4 * 2.0 * 0.3 * 0.7, rel=1e-12)
+    assert np.allclose(np.array(table["loss_factor"], dtype=float), D / (math.pi * K * np.array([0.05, 0.2, 1.0]) ** 2))
+    assert table["method"] == ["exact"] * 3
+    assert capsys.readouterr().err == ""
+
+
+def test_a_frequency_response_to_standard_output(tmp_path, capsys):
+    status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "1e-4", "--frequencies", "0.1,0.3",
+                   "--sweep", "up"])
+    assert status == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("frequency,amplitude,phase,sweep")
+    frequency, amplitude, phase = (float(v) for v in lines[1].split(",")[:3])
+    w = 2 * math.pi * frequency
+    assert amplitude == pytest.approx(1e-4 / abs(2.0 - w * w + 0.1j * w), rel=1e-3)
+    assert phase == pytest.approx(-np.angle(2.0 - w * w + 0.1j * w), abs=1e-3)
+    assert len(lines) == 3 and lines[2].split(",")[3] == "up"
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--amplitudes", "0.1,-2"], "--amplitudes"),
+    (["--amplitudes", "0.1,abc"], "--amplitudes"),
+    (["--amplitudes", "0"], "--amplitudes"),
+    (["--amplitudes", "nan"], "--amplitudes"),
+    ([], "either --amplitudes"),
+    (["--amplitudes", "0.1", "--force-amplitude", "1"], "not both"),
+    (["--force-amplitude", "1"], "--frequencies"),
+    (["--force-amplitude", "1", "--frequencies", "0.1,-0.2"], "--frequencies"),
+    (["--force-amplitude", "-1", "--frequencies", "0.1"], "--force-amplitude"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--workers", "0"], "--workers"),
+    (["--amplitudes", "0.1", "--frequencies", "0.1"], "--frequencies"),
+    (["--amplitudes", "0.1", "--tolerance", "2"], "--tolerance"),
+    (["--amplitudes", "0.1", "--plot", "figure.nope"], "--plot"),
+])
+def test_bad_options_are_one_line_and_exit_2_with_nothing_written(tmp_path, capsys, arguments, culprit):
+    out = tmp_path / "out.csv"
+    status = main(["describe", write(tmp_path, DAMPER), *arguments, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_scenes_the_command_refuses(tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    cases = [
+        (write(tmp_path, JOINT, "massless.toml"), ["--force-amplitude", "1", "--frequencies", "0.1"], "[mass]"),
+        (write(tmp_path, {"spring": {"k0": 1.0}, "damper": {"c": 0.2}}, "dashpot.toml"), ["--amplitudes", "0.1"],
+         "--frequency"),
+        (write(tmp_path, {"spring": {"k0": 1.0}, "delay": {"gain": 0.1, "tau": 0.5}}, "delay.toml"),
+         ["--amplitudes", "0.1"], "[delay]"),
+        (write(tmp_path, {"spring": {"k0": -1.0}}, "broken.toml"), ["--amplitudes", "0.1"], "k0"),
+        (str(tmp_path / "missing.toml"), ["--amplitudes", "0.1"], "missing.toml"),
+        ("networks/two-masses-slider", ["--amplitudes", "0.1"], "[network]"),
+    ]
+    for scene, arguments, culprit in cases:
+        status = main(["describe", scene, *arguments, "--out", str(out)])
+        err = capsys.readouterr().err
+        assert status == 2, err
+        assert culprit in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+
+
+def test_a_rate_dependent_scene_with_its_frequency(tmp_path):
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"spring": {"k0": 1.0}, "damper": {"c": 0.2}})
+    assert main(["describe", scene, "--amplitudes", "0.5", "--frequency", "2", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert float(table["dissipation"][0]) == pytest.approx(math.pi * 0.2 * 2 * math.pi * 2 * 0.25, rel=1e-13)
+
+
+def test_a_result_that_cannot_reach_its_accuracy_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
+    from prandtl_fmu.frequency import response
+
+    monkeypatch.setattr(response, "MAX_PERIODS", 3)
+    out = tmp_path / "r.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.001}})
+    assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "did not settle" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_plot_without_matplotlib_names_the_extra(tmp_path, capsys, monkeypatch):
+    from prandtl_fmu.frequency import cli
+
+    monkeypatch.setattr(cli, "_missing", lambda *names: [name for name in names if name == "matplotlib"])
+    status = main(["describe", write(tmp_path, JOINT), "--amplitudes", "0.1", "--plot", str(tmp_path / "k.png")])
+    err = capsys.readouterr().err
+    assert status == 2 and "prandtl_fmu[plot]" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "k.png").exists()
+
+
+def test_the_figures_are_written(tmp_path):
+    pytest.importorskip("matplotlib")
+    for arguments in (["--amplitudes", "0.05,0.1,0.3,1"],
+                      ["--force-amplitude", "0.05", "--frequencies", "0.1,0.2,0.3"]):
+        plot = tmp_path / "figure.png"
+        scene = write(tmp_path, DAMPER if "--force-amplitude" in arguments else JOINT)
+        assert main(["describe", scene, *arguments, "--plot", str(plot), "--out", str(tmp_path / "o.csv")]) == 0
+        assert plot.read_bytes()[:4] == b"\x89PNG"
+        plot.unlink()

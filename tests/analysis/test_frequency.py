@@ -1,0 +1,335 @@
+"""The frequency domain (prandtl_fmu/frequency/, issue 47): K(A), D(A) and the loss factor against closed forms
+written here (one elastic-perfectly-plastic branch, their sums over random parallel branches, the cubic spring,
+the Maxwell element, a delay, a history, Segalman's micro-slip power law, the continuum's Masing form), and the
+frequency response against the linear responses (nothing slips, everything slips) and the two branches of a
+Duffing oscillator's jump."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.frequency import FrequencyError, describe_amplitudes, frequency_response, parse_scene
+
+from tests.conftest import scene_text
+
+
+def element(**tables):
+    """A scene of ``tables`` (no [load], no [solver]: describe needs neither)."""
+    return parse_scene(scene_text(tables))[0]
+
+
+def epp(k, eta, A):
+    """(K, D) of one elastic-perfectly-plastic branch on its steady cycle x = A sin(theta): the issue's forms."""
+    if A <= eta:
+        return k, 0.0
+    beta = math.acos(1.0 - 2.0 * eta / A)
+    return k / math.pi * (beta - math.sin(2.0 * beta) / 2.0), 4.0 * k * eta * (A - eta)
+
+
+# ----------------------------------------------------------------- K(A), D(A): exact on piecewise-linear cycles
+
+@pytest.mark.parametrize("A", [0.05, 0.1, 0.1000001, 0.13, 0.2, 1.0, 50.0])
+def test_one_branch_gives_the_elastic_perfectly_plastic_closed_form(A):
+    k, eta = 2.5, 0.1
+    d = describe_amplitudes(element(branches={"k": [k], "eta": [eta]}), [A])
+    K, D = epp(k, eta, A)
+    assert d.method == ("exact",) and d.error[0] == 0.0
+    assert d.stiffness[0] == pytest.approx(K, rel=1e-12)
+    assert d.dissipation[0] == pytest.approx(D, rel=1e-11, abs=1e-15 * k * A * A)
+    assert d.loss_factor[0] == pytest.approx(D / (math.pi * K * A * A), rel=1e-11, abs=1e-15)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_parallel_branches_add_their_closed_forms(seed):
+    """K and D add over parallel effects: random branches (some with u0 != 0, on the O(n) kernel and, with 80,
+    on the memory stack), a spring and a cubic spring against the sum of the closed forms."""
+    rng = np.random.default_rng(seed)
+    n = [1, 3, 7, 12, 80, 80][seed]
+    k = rng.uniform(0.1, 2.0, n)
+    eta = rng.uniform(0.01, 1.0, n)
+    u0 = rng.uniform(-1, 1, n) * eta if seed % 2 else np.zeros(n)
+    k0, k3 = rng.uniform(0, 1), rng.uniform(0, 3)
+    scene = element(spring={"k0": k0}, cubic={"k3": k3}, branches={"k": k, "eta": eta, "u0": u0})
+    amplitudes = np.sort(rng.uniform(0.005, 1.5, 5))
+    d = describe_amplitudes(scene, amplitudes)
+    for A, K, D in zip(amplitudes, d.stiffness, d.dissipation):
+        forms = np.array([epp(ki, ei, A) for ki, ei in zip(k, eta)])
+        assert K == pytest.approx(k0 + 0.75 * k3 * A * A + forms[:, 0].sum(), rel=1e-13)
+        assert D == pytest.approx(forms[:, 1].sum(), rel=1e-11, abs=1e-15)
+
+
+def test_springs_alone_and_a_dashpot_at_a_frequency():
+    scene = element(spring={"k0": 3.0}, cubic={"k3": 2.0}, damper={"c": 0.4})
+    with pytest.raises(FrequencyError, match="rate"):
+        describe_amplitudes(scene, [0.1])
+    f = 2.0
+    d = describe_amplitudes(scene, [0.1, 1.0], frequency=f)
+    A = d.amplitude
+    assert np.allclose(d.stiffness, 3.0 + 0.75 * 2.0 * A**2, rtol=1e-13)
+    assert np.allclose(d.dissipation, math.pi * 0.4 * 2 * math.pi * f * A**2, rtol=1e-13)
+    assert d.frequency == f
+
+
+@pytest.mark.parametrize("A", [0.01, 0.1])
+def test_a_masing_backbone_against_masings_rules_on_the_smooth_curve(A):
+    """[masing] hyperbolic: 200 branches interpolating F_b(x) = k x / (1 + k x / f_u) (exact on them); against
+    Masing's D = 8 int_0^A F_b - 4 A F_b(A) and the rising branch -F_b(A) + 2 F_b((A + x)/2) of the smooth curve,
+    to the interpolation's error (below 1e-3 here; docs/masing.md bounds it)."""
+    k, ultimate = 1000.0, 10.0
+    scene = element(masing={"kind": "hyperbolic", "k": k, "f_u": ultimate, "count": 200, "x_max": 0.2})
+    d = describe_amplitudes(scene, [A])
+
+    def backbone(x):
+        return k * x / (1 + k * np.abs(x) / ultimate)
+
+    nodes, weights = np.polynomial.legendre.leggauss(400)
+    D = 8 * 0.5 * A * np.sum(weights * backbone(0.5 * A * (nodes + 1))) - 4 * A * backbone(A)
+    theta = 0.5 * math.pi * nodes
+    a1 = np.sum(weights * (-backbone(A) + 2 * backbone((A + A * np.sin(theta)) / 2)) * np.sin(theta))
+    assert d.method == ("exact",)
+    assert d.stiffness[0] == pytest.approx(a1 / A, rel=1e-3)
+    assert d.dissipation[0] == pytest.approx(D, rel=1e-3)
+
+
+def test_coulomb_friction_on_the_mass_dissipates_4_alpha_A():
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 0.3})
+    d = describe_amplitudes(scene, [0.2, 2.0])
+    assert np.allclose(d.stiffness, 1.0, rtol=1e-13)
+    assert np.allclose(d.dissipation, 4 * 0.3 * d.amplitude, rtol=1e-13)
+
+
+# ----------------------------------------------------------------- the quadrature, with its stated accuracy
+
+def test_the_maxwell_element_of_a_series_dashpot_that_never_slips():
+    """A branch k, c in series whose slider never slips is the Maxwell element: K + i D / (pi A^2) = k i w c /
+    (k + i w c), to the stated accuracy."""
+    k, c, f, A = 2.0, 0.5, 0.7, 0.1
+    w = 2 * math.pi * f
+    d = describe_amplitudes(element(branches={"k": [k], "eta": [1000.0], "c": [c]}), [A], frequency=f)
+    exact = k * 1j * w * c / (k + 1j * w * c)
+    assert d.method == ("quadrature",)
+    assert abs(complex(d.stiffness[0], d.dissipation[0] / (math.pi * A * A)) - exact) <= 1e-3 * abs(exact)
+
+
+def test_a_delay_and_a_history_against_their_transfer_functions():
+    """The reaction's delay term gain x(t - tau) and history term int w exp(-r (t - s)) x(s) ds: complex
+    stiffnesses gain exp(-i w tau) and w / (r + i w)."""
+    f, A = 0.7, 0.1
+    w = 2 * math.pi * f
+    cases = [({"delay": {"gain": 0.5, "tau": 0.4}}, 0.5 * np.exp(-1j * w * 0.4)),
+             ({"history": {"weight": [0.3], "rate": [2.0]}}, 0.3 / (2.0 + 1j * w))]
+    for tables, transfer in cases:
+        d = describe_amplitudes(element(spring={"k0": 1.0}, **tables), [A], frequency=f)
+        exact = 1.0 + transfer
+        assert abs(complex(d.stiffness[0], d.dissipation[0] / (math.pi * A * A)) - exact) <= 1e-3 * abs(exact)
+        assert d.error[0] <= 1e-3
+
+
+@pytest.mark.parametrize("A", [0.002, 0.01, 0.05])
+def test_dahl_friction_against_its_steady_loop(A):
+    """Dahl's law with exponent 1 is rate independent; on its steady cycle the reversal force is
+    F_r = F_c tanh(sigma A / F_c), the rising branch F(x) = F_c (1 - (1 + F_r / F_c) exp(-sigma (x + A) / F_c)),
+    so D = 2 int F dx in closed form and a_1 by a Gauss rule here."""
+    sigma, force = 50.0, 0.4
+    d = describe_amplitudes(element(spring={"k0": 1.0}, dahl={"sigma": sigma, "force": force}), [A])
+    a = sigma * A / force
+    ratio = math.tanh(a)
+    D = 2 * force * (2 * A - (1 + ratio) * force / sigma * (1 - math.exp(-2 * a)))
+    nodes, weights = np.polynomial.legendre.leggauss(200)
+    theta = 0.5 * math.pi * nodes
+    rising = force * (1 - (1 + ratio) * np.exp(-sigma * (A * np.sin(theta) + A) / force))
+    a1 = 2 / math.pi * 0.5 * math.pi * np.sum(weights * rising * np.sin(theta))  # the falling half alike
+    assert d.method == ("quadrature",)
+    assert d.stiffness[0] == pytest.approx(1.0 + a1 / A, rel=1e-3)
+    assert d.dissipation[0] == pytest.approx(D, rel=1e-3)
+
+
+def _iwan(chi, beta=0.5):
+    return element(branches={"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 1e6, "chi": chi,
+                                                              "beta": beta}})
+
+
+@pytest.mark.parametrize("chi", [-0.5, -0.2])
+def test_segalman_micro_slip_dissipation_grows_like_A_to_the_3_plus_chi(chi):
+    from prandtl_fmu.effects import iwan_parameters
+
+    params = iwan_parameters(1.0, 1e6, chi, 0.5)
+    A = params["phi_max"] * np.array([0.01, 0.03, 0.1, 0.3])
+    d = describe_amplitudes(_iwan(chi), A)
+    slope = np.polyfit(np.log(A), np.log(d.dissipation), 1)[0]
+    assert slope == pytest.approx(3 + chi, abs=1e-3)
+    segalman = 4 * params["R"] * A ** (chi + 3) / ((chi + 2) * (chi + 3))
+    assert np.allclose(d.dissipation, segalman, rtol=1e-3)
+    assert np.all(d.error <= 1e-3)
+
+
+def _masing_linear_continuum(A, k, a, b):
+    """K, D of the paper's continuum k(s) = k, eta(s) = a + (b - a) s from its backbone alone (Masing's rules):
+    F_b(x) = int_0^1 k min(x, eta(s)) ds in closed form, D = 8 int_0^A F_b - 4 A F_b(A) and the rising branch
+    F(x) = -F_b(A) + 2 F_b((A + x)/2), integrated by Gauss-Legendre on the pieces between the kinks (where the
+    argument of F_b crosses a or b: F_b is a polynomial of degree <= 2 on each)."""
+    def backbone(x):
+        x = np.asarray(x, dtype=float)
+        s = np.clip((x - a) / (b - a), 0.0, 1.0)
+        return k * (a * s + (b - a) * s * s / 2 + x * (1 - s))
+
+    nodes, weights = np.polynomial.legendre.leggauss(60)
+
+    def integral(function, ends):
+        total = 0.0
+        for lo, hi in zip(ends[:-1], ends[1:]):
+            total += 0.5 * (hi - lo) * np.sum(weights * function(lo + 0.5 * (hi - lo) * (nodes + 1)))
+        return total
+
+    D = 8 * integral(backbone, sorted({0.0, A, *(e for e in (a, b) if e < A)})) - 4 * A * backbone(A)
+    kinks = [math.asin(2 * e / A - 1) for e in (a, b) if e < A]  # (A + A sin(theta)) / 2 = a or b
+    theta_ends = sorted({-math.pi / 2, math.pi / 2, *kinks})
+    a1 = 2 / math.pi * integral(lambda t: (-backbone(A) + 2 * backbone((A + A * np.sin(t)) / 2)) * np.sin(t),
+                                theta_ends)  # the falling half gives the same (odd): twice the rising one
+    return a1 / A, D
+
+
+def test_the_continuum_against_its_masing_closed_form():
+    scene = element(branches={"continuum": True, "k_total": 1.0, "eta_range": [0.1, 1.1]})
+    A = np.array([0.05, 0.3, 0.8, 1.5, 4.0])
+    d = describe_amplitudes(scene, A)
+    for amplitude, K, D, error in zip(A, d.stiffness, d.dissipation, d.error):
+        K_masing, D_masing = _masing_linear_continuum(amplitude, 1.0, 0.1, 1.1)
+        assert K == pytest.approx(K_masing, rel=1e-3)
+        assert D == pytest.approx(D_masing, rel=1e-3, abs=1e-12)
+        assert error <= 1e-3
+    assert d.method == ("quadrature",) * 5
+
+
+def test_the_library_closed_forms_for_the_plots_agree():
+    """The closed forms drawn over the plots (closed_forms.py) against the computed K and D."""
+    from prandtl_fmu.frequency.closed_forms import closed_form
+
+    scenes = [element(spring={"k0": 0.3}, branches={"k": [1.0, 2.0], "eta": [0.1, 0.4]}),
+              element(branches={"continuum": True, "k_total": 1.0, "eta_range": [0.1, 1.1]}), _iwan(-0.5)]
+    for scene in scenes:
+        A = np.geomspace(1e-7, 1e-4, 4) if scene.branches.continuum and scene.branches.power[0] else \
+            np.array([0.05, 0.3, 1.0])
+        d = describe_amplitudes(scene, A)
+        K, D = closed_form(scene, A)
+        assert np.allclose(K, d.stiffness, rtol=2e-3)
+        assert np.allclose(D, d.dissipation, rtol=2e-3, atol=1e-12 * np.max(D))
+
+
+# ----------------------------------------------------------------- the frequency response
+
+def damper_scene(**changes):
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.1},
+              "branches": {"k": [1.0, 0.5], "eta": [0.1, 0.3]}}
+    tables.update(changes)
+    return element(**tables)
+
+
+def linear(F0, f, k, m=1.0, c=0.1):
+    w = 2 * math.pi * np.asarray(f)
+    return F0 / np.abs(k - m * w**2 + 1j * c * w), -np.angle(k - m * w**2 + 1j * c * w)
+
+
+def test_a_tiny_force_gives_the_linear_response_with_every_branch_sticking():
+    f = np.array([0.1, 0.22, 0.25, 0.4])
+    r = frequency_response(damper_scene(), 1e-4, f, sweep="up")
+    amplitude, phase = linear(1e-4, r.frequency, 1.0 + 1.5)
+    assert r.stepper == "exact"
+    assert np.allclose(r.amplitude, amplitude, rtol=1e-3)
+    assert np.allclose(r.phase, phase, atol=1e-3)
+    assert r.sweep == ("up",) * 4 and np.all(r.error <= 1e-3)
+
+
+def test_a_large_force_gives_the_response_of_k0_and_c_alone():
+    """Every branch slips: the branches add a Coulomb force sum alpha_i sgn(v) (0.25 N), of relative size
+    2.5e-5 against F0 = 1e4 N: the response is k0's and c's to the stated accuracy."""
+    f = np.array([0.1, 0.16, 0.3])
+    r = frequency_response(damper_scene(), 1e4, f, sweep="down")
+    amplitude, phase = linear(1e4, r.frequency, 1.0)
+    assert np.allclose(r.amplitude, amplitude, rtol=1e-3)
+    assert np.allclose(r.phase, phase, atol=1e-3)
+    assert r.sweep == ("down",) * 3 and list(r.frequency) == [0.3, 0.16, 0.1]
+
+
+def test_the_two_sweeps_of_a_duffing_oscillator_find_both_sides_of_the_jump():
+    """m x'' + c x' + k x + k3 x^3 = F0 cos(w t): sweeping up stays on the upper branch past the linear
+    resonance, sweeping down on the lower one; the harmonic balance X^2 ((k + 3/4 k3 X^2 - m w^2)^2 + (c w)^2)
+    = F0^2 gives both (to its own error, a few per cent at these amplitudes)."""
+    m, k, k3, c, F0 = 1.0, 1.0, 1.0, 0.1, 0.3
+    scene = element(mass={"m": m}, spring={"k0": k}, cubic={"k3": k3}, damper={"c": c})
+    f = np.array([0.14, 0.18, 0.22, 0.25, 0.28, 0.31])
+    r = frequency_response(scene, F0, f)
+    assert r.stepper == "verlet" and sorted(set(r.sweep)) == ["down", "up"]
+
+    def balance(frequency):
+        w = 2 * math.pi * frequency
+        a, b = 0.75 * k3, k - m * w * w
+        roots = np.roots([a * a, 2 * a * b, b * b + (c * w) ** 2, -F0**2])
+        return np.sort(np.sqrt(roots[(abs(roots.imag) < 1e-9) & (roots.real > 0)].real))
+
+    up = dict(zip(r.frequency[np.array(r.sweep) == "up"], r.amplitude[np.array(r.sweep) == "up"]))
+    down = dict(zip(r.frequency[np.array(r.sweep) == "down"], r.amplitude[np.array(r.sweep) == "down"]))
+    for frequency in (0.22, 0.25):
+        roots = balance(frequency)
+        assert len(roots) == 3
+        assert up[frequency] == pytest.approx(roots[-1], rel=0.03)
+        assert down[frequency] == pytest.approx(roots[0], rel=0.03)
+    for frequency in (0.14, 0.18, 0.31):  # one branch only: both sweeps agree
+        assert up[frequency] == pytest.approx(down[frequency], rel=2e-3)
+
+
+def test_a_mass_with_a_history_against_its_transfer_function():
+    """A linear scene with memory (implicit, order 1, refined until X settles to 1e-3): X = F0 / (k0 + w_1 /
+    (r_1 + i w) - m w^2 + i c w); one sweep (a history is linear)."""
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.2}, history={"weight": [0.3],
+                                                                                      "rate": [2.0]})
+    f = np.array([0.1, 0.2])
+    r = frequency_response(scene, 1.0, f)
+    w = 2 * math.pi * f
+    impedance = 1.0 + 0.3 / (2.0 + 1j * w) - w**2 + 0.2j * w
+    assert r.stepper == "implicit" and r.sweep == ("up", "up")
+    assert np.allclose(r.amplitude, 1 / np.abs(impedance), rtol=1e-3)
+    assert np.allclose(r.phase, -np.angle(impedance), atol=1e-3)
+
+
+def test_a_mass_that_friction_holds_does_not_move():
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 1.0})
+    r = frequency_response(scene, 0.5, [0.2], sweep="up")
+    assert r.amplitude[0] == 0.0 and r.phase[0] == 0.0
+
+
+def test_a_response_that_cannot_settle_says_so(monkeypatch):
+    from prandtl_fmu.frequency import response
+
+    monkeypatch.setattr(response, "MAX_PERIODS", 3)
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.001})
+    with pytest.raises(response.NotSettled, match="did not settle within 3 periods"):
+        frequency_response(scene, 1.0, [0.1], sweep="up")
+
+
+def test_bad_input_to_the_python_functions():
+    scene = damper_scene()
+    for call, culprit in [(lambda: describe_amplitudes(scene, [0.1, -1]), "amplitudes"),
+                          (lambda: describe_amplitudes(scene, ["a"]), "amplitudes"),
+                          (lambda: describe_amplitudes(scene, []), "amplitudes"),
+                          (lambda: describe_amplitudes(scene, [0.1], frequency=0), "frequency"),
+                          (lambda: describe_amplitudes(scene, [0.1], tolerance=2), "tolerance"),
+                          (lambda: frequency_response(scene, 1.0, [0.1, 0.0]), "frequencies"),
+                          (lambda: frequency_response(scene, -1.0, [0.1]), "force amplitude"),
+                          (lambda: frequency_response(scene, 1.0, [0.1], sweep="sideways"), "sweep"),
+                          (lambda: frequency_response(element(spring={"k0": 1.0}), 1.0, [0.1]), r"\[mass\]")]:
+        with pytest.raises(FrequencyError, match=culprit):
+            call()
+
+
+@pytest.mark.slow
+def test_the_frequencies_on_dask_give_the_serial_rows():
+    pytest.importorskip("distributed")
+    scene = damper_scene()
+    f = [0.1, 0.2, 0.25, 0.3]
+    serial = frequency_response(scene, 0.05, f)
+    parallel = frequency_response(scene, 0.05, f, workers=2)
+    rows = sorted(zip(parallel.sweep, parallel.frequency, parallel.amplitude))
+    expected = sorted(zip(serial.sweep, serial.frequency, serial.amplitude))
+    assert [row[:2] for row in rows] == [row[:2] for row in expected]
+    assert np.allclose([row[2] for row in rows], [row[2] for row in expected], rtol=2e-3)

@@ -1,0 +1,232 @@
+"""The paper's Table 1 machinery (prandtl_fmu/bench/table1.py, prandtl_fmu/kernels/table1.py): the lockstep
+distance computed on the memory stack against a dense computation written here, the fit against synthetic
+data, the resumable folder, and the command's refusals."""
+import csv
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.bench import table1
+from prandtl_fmu.kernels.table1 import KINDS, MEASURES, SHORT
+
+from tests.conftest import make_scene
+
+
+def _dense_scheme_measures(m, k0, k, eta, u0, force, h, steps):
+    """Scheme (5.1) on (x, v, u_1..u_n) with every branch stored (no stack), run at h and h/2 side by side, and
+    the maxima of the differences at the coarse nodes, at the fine nodes against the coarse run's linear
+    interpolant and against its held value: a straightforward version of kernels/table1.py."""
+    def step(t, x, v, u, dt):
+        a = (force(t) - k0 * x - k @ u) / m
+        return x + dt * v, v + dt * a, np.clip(u + dt * v, -eta, eta)
+
+    def measures(dx, dv, du, lead):
+        dw = dx - du
+        return dict(x=abs(dx), v=abs(dv), u_max=np.abs(du).max(), w_max=np.abs(dw).max(),
+                    l2=math.sqrt(dx * dx + dv * dv + du @ du), l2_u=math.sqrt(du @ du),
+                    l2_energy=math.sqrt(k0 * dx * dx + m * dv * dv + k @ (du * du)),
+                    l2_mean=math.sqrt(dx * dx + dv * dv + du @ du / len(du)),
+                    l2_slider=math.sqrt(dx * dx + dv * dv + dw @ dw), l2_xv=math.sqrt(dx * dx + dv * dv),
+                    l2_vu=math.sqrt(dv * dv + du @ du), x_new=abs(dx + lead), x_trap=abs(dx + lead / 2))
+
+    maxima = {kind: dict.fromkeys(MEASURES, 0.0) for kind in KINDS}
+
+    def keep(kind, values):
+        for name, value in values.items():
+            maxima[kind][name] = max(maxima[kind][name], value)
+
+    coarse = (0.0, 0.0, np.array(u0, dtype=float))
+    fine = coarse
+    half = h / 2
+    for p in range(steps):
+        old = coarse
+        coarse = step(p * h, *coarse, h)
+        fine = step(2 * p * half, *fine, half)
+        # x_new, x_trap: x + h v, x + h v / 2 of each run (its own h)
+        keep("linear", measures(*(0.5 * (o + c) - f for o, c, f in zip(old, coarse, fine)),
+                                h * (old[1] + coarse[1]) / 2 - half * fine[1]))
+        keep("held", measures(*(o - f for o, f in zip(old, fine)), h * old[1] - half * fine[1]))
+        fine = step((2 * p + 1) * half, *fine, half)
+        keep("coarse", measures(*(c - f for c, f in zip(coarse, fine)), h * coarse[1] - half * fine[1]))
+    return maxima
+
+
+@pytest.mark.parametrize("n, seed, spread", [(4, 1, 0.0), (9, 2, 0.0), (9, 3, 0.6), (3 * SHORT, 4, 0.0),
+                                             (3 * SHORT, 5, -0.5)])
+def test_the_lockstep_distance_on_the_stack_is_the_dense_one(n, seed, spread):
+    """Random scenes (stiffnesses, yield ranges in any order, a hardening spring, a load that makes branches slide
+    and come back; u0 = spread * eta, admissible): every measure of every kind of node, computed by merging the
+    stacks' pieces (cells longer than SHORT branches by prefix sums), equals the dense computation."""
+    rng = np.random.default_rng(seed)
+    k = rng.uniform(0.1, 1.0, n) / n * 3
+    eta = rng.uniform(0.05, 0.6, n)
+    u0 = spread * eta
+    m, k0, amplitude, omega, offset = 0.7, 0.15, 1.3, 1.7, 0.2
+    h, steps = 0.02, 600
+    scene = make_scene(mass={"m": m, "x0": 0.0, "v0": 0.0}, spring={"k0": k0}, cubic=None, damper=None,
+                       branches={"k": list(k), "eta": list(eta), "u0": list(u0)},
+                       load={"kind": "harmonic", "amplitude": amplitude, "omega": omega, "offset": offset})
+    measured = table1.lockstep_run(scene, h, steps=steps)["maxima"]
+    dense = _dense_scheme_measures(m, k0, k, eta, u0, lambda t: offset + amplitude * math.cos(omega * t), h, steps)
+    for kind in KINDS:
+        for name in MEASURES:
+            assert measured[kind][name] == pytest.approx(dense[kind][name], rel=1e-8, abs=1e-13), (kind, name)
+    assert dense["coarse"]["u_max"] > 1e-3  # the runs differ: the comparison is not of zeros
+    assert dense["held"]["x"] > dense["linear"]["x"]  # and the kinds of node measure different things
+
+
+@pytest.mark.parametrize("n, seed, spread", [(7, 11, 0.0), (300, 12, 0.0), (3000, 13, 0.7), (3000, 15, 0.0),
+                                             (2, 14, -0.3)])
+def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):
+    """Three memory stacks moved along different random paths (pieces that overlap anywhere, long cells whose
+    slopes differ), summed with random weights: the merged cells give the norms of the dense profiles."""
+    from prandtl_fmu.kernels import stack
+    from prandtl_fmu.kernels.table1 import difference, plain_sums
+
+    rng = np.random.default_rng(seed)
+    k = rng.uniform(0.1, 1.0, n)
+    eta = rng.uniform(0.05, 1.0, n)
+    u0 = spread * eta
+    params, _ = stack.prepare(k, eta, u0)
+    states = np.zeros((3, stack.HEADER + stack.ROW * stack.capacity(params)))
+    dense = np.empty((3, n))
+    xs, vs, hs = np.empty(3), rng.normal(size=3), rng.uniform(0.1, 1.0, 3)
+    for s in range(3):
+        states[s] = stack.fresh_state(params, 0.0)
+        swings = rng.uniform(0.5, 1.0, 12) * np.linspace(2.5, 0.1, 12) * (-1.0) ** np.arange(12)
+        for dx in swings * rng.choice([-1.0, 1.0]):  # back and forth, narrower each time: nested pieces
+            stack.move(params, states[s], dx, None)
+        xs[s] = states[s, stack.X]
+        stack.elongations(params, states[s], dense[s])
+    assert min(int(state[stack.COUNT]) for state in states) >= (3 if n > 10 else 1)
+    m, k0 = 1.3, 0.4
+    for _ in range(5):
+        weights = rng.normal(size=3)
+        out = np.empty(len(MEASURES))
+        assert difference(params, plain_sums(params), bool(spread), states, xs, vs, hs, weights, m, k0, out)
+        dx, dv, du = weights @ xs, weights @ vs, weights @ dense
+        dw = dx - du
+        expected = dict(x=abs(dx), v=abs(dv), u_max=np.abs(du).max(), w_max=np.abs(dw).max(),
+                        l2=math.sqrt(dx * dx + dv * dv + du @ du), l2_u=math.sqrt(du @ du),
+                        l2_energy=math.sqrt(k0 * dx * dx + m * dv * dv + k @ (du * du)),
+                        l2_mean=math.sqrt(dx * dx + dv * dv + du @ du / n),
+                        l2_slider=math.sqrt(dx * dx + dv * dv + dw @ dw), l2_xv=math.sqrt(dx * dx + dv * dv),
+                        l2_vu=math.sqrt(dv * dv + du @ du), x_new=abs(dx + weights @ (hs * vs)),
+                        x_trap=abs(dx + weights @ (hs * vs) / 2))
+        for j, name in enumerate(MEASURES):
+            assert out[j] == pytest.approx(expected[name], rel=1e-10, abs=1e-13), name
+
+
+def _synthetic(protocol, c_of_n, alpha):
+    """Records of ``protocol`` whose every measure is eps(h) = 2 C h^alpha exactly."""
+    records = {}
+    for n in protocol.ns:
+        for j, h in enumerate(protocol.steps()):
+            eps = 2.0 * c_of_n[n] * h ** alpha
+            records[(n, j)] = dict(n=n, j=j, h=float(h), seconds=0.0, steps=1,
+                                   maxima={kind: dict.fromkeys(MEASURES, eps) for kind in KINDS})
+    return records
+
+
+def test_the_fit_recovers_alpha_and_c_from_exact_power_laws():
+    protocol = table1.Protocol("synthetic", 1e-6, 1e-2, 99, 500.0, (3, 10, 100))
+    c_of_n = {3: 0.71734, 10: 1.75, 100: 12.5}
+    rows = table1.paper_rows(_synthetic(protocol, c_of_n, 1.00177), protocol)
+    assert [(row["q"], row["n"]) for row in rows] == [(q, n) for q in ("inf", "2") for n in (3, 10, 100)]
+    for row in rows:
+        assert row["alpha"] == pytest.approx(1.00177, rel=1e-12)
+        assert row["C"] == pytest.approx(c_of_n[row["n"]], rel=1e-10)
+        assert row["r"] == pytest.approx(1.0, abs=1e-12)
+        assert row["complete"] and row["h_count"] == 100
+    # the other factors of the search: C, C/2, and 2C in terms of the fine step h/2
+    candidates = table1.table(_synthetic(protocol, c_of_n, 1.0), protocol, "inf", "plain", "coarse", "C/2")
+    assert [row["C"] for row in candidates] == pytest.approx([4 * c_of_n[n] for n in (3, 10, 100)], rel=1e-10)
+    fine = table1.table(_synthetic(protocol, c_of_n, 1.0), protocol, "inf", "plain", "coarse", "2C-fine")
+    assert [row["C"] for row in fine] == pytest.approx([2 * c_of_n[n] for n in (3, 10, 100)], rel=1e-10)
+
+
+def test_the_h_grid_is_the_papers():
+    hs = table1.PROTOCOLS["paper"].steps()
+    assert len(hs) == 100 and hs[0] == pytest.approx(1e-6, rel=1e-14) and hs[-1] == pytest.approx(1e-2, rel=1e-14)
+    assert np.allclose(np.diff(np.log(hs)), math.log(1e4) / 99, rtol=1e-12, atol=0)
+
+
+TINY = table1.Protocol("tiny", 5e-3, 2e-2, 3, 3.0, (3, 5))
+
+
+def _table(folder):
+    with open(folder / "table1_tiny.csv", newline="") as fh:
+        return [{k: row[k] for k in ("q", "n", "alpha", "C", "r")} for row in csv.DictReader(fh)]
+
+
+def test_resume_skips_the_finished_runs_and_gives_the_same_table(tmp_path, monkeypatch):
+    monkeypatch.setitem(table1.PROTOCOLS, "tiny", TINY)
+    whole = table1.run(str(tmp_path / "whole"), "tiny", workers=1, figures_too=False)
+    assert whole["new_runs"] == whole["runs"] == 8
+    first = table1.run(str(tmp_path / "cut"), "tiny", workers=1, figures_too=False, limit=3)
+    assert first["new_runs"] == 3 and first["runs"] == 3
+    # the largest h first, every n at each: n = 3 has two h (a fit), n = 5 one (no row yet)
+    assert [(row["q"], row["n"], row["h_count"], row["complete"]) for row in first["rows"]] == [
+        ("inf", 3, 2, False), ("2", 3, 2, False)]
+    with pytest.raises(table1.Table1Error, match="--resume"):
+        table1.run(str(tmp_path / "cut"), "tiny", workers=1, figures_too=False)
+    rest = table1.run(str(tmp_path / "cut"), "tiny", workers=1, figures_too=False, resume=True)
+    assert rest["new_runs"] == 5 and rest["runs"] == 8
+    again = table1.run(str(tmp_path / "cut"), "tiny", workers=1, figures_too=False, resume=True)
+    assert again["new_runs"] == 0
+    assert _table(tmp_path / "cut") == _table(tmp_path / "whole")
+    conventions = table1.merge([str(tmp_path / "cut")], str(tmp_path))  # the gathered convention table
+    paper = [c for c in conventions if (c["norm"], c["time"], c["factor"], c["h_range"], c["q"])
+             == ("plain", "interpolants", "2C", "all", "inf")]
+    assert paper[0]["C_3"] == pytest.approx(float(_table(tmp_path / "cut")[0]["C"]), rel=5e-6)  # 6 digits
+    assert all(c["worst_ratio"] >= 1 for c in conventions)
+    with pytest.raises(table1.Table1Error, match="protocol 'tiny'"):
+        table1.run(str(tmp_path / "cut"), "quick", workers=1, figures_too=False, resume=True)
+
+
+def test_without_matplotlib_it_says_so_before_any_run(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # a core install: no [bench] extra
+    with pytest.raises(table1.Table1Error, match=r"prandtl_fmu\[bench\]"):
+        table1.run(str(tmp_path / "out"), "quick", workers=1)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("options, culprit", [
+    (["--table1", "--protocol", "nope"], "--protocol nope"),
+    (["--table1", "--workers", "0"], "--workers 0"),
+    (["--table1", "--protocol", "quick", "--n", "7"], "--n 7"),
+    (["--resume"], "--table1"),
+    (["--table1", "--quick"], "--table1"),
+])
+def test_bad_options_are_one_line_and_exit_2(tmp_path, options, culprit):
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "bench", "--out", str(tmp_path / "out"), *options],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and culprit in lines[0], done.stderr
+    assert not (tmp_path / "out").exists()  # nothing half-written
+
+
+@pytest.mark.slow  # a dask cluster starts
+def test_the_runs_on_dask_give_the_serial_table(tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setitem(table1.PROTOCOLS, "tiny", TINY)
+    serial = table1.run(str(tmp_path / "serial"), "tiny", workers=1, figures_too=False)
+    parallel = table1.run(str(tmp_path / "dask"), "tiny", workers=2, figures_too=False)
+    assert parallel["new_runs"] == serial["new_runs"] == 8
+    assert _table(tmp_path / "dask") == _table(tmp_path / "serial")
+
+
+def test_the_figures_loops_are_the_reaction_of_the_springs_within_the_strength():
+    """Figures 3-5 plot F - m x'' = sum k_i u_i (k0 = 0): on the window, bounded by the strength sum k_i eta_i
+    (|u_i| <= eta_i), reached when every branch slides (n = 100: plateaus)."""
+    for n in (3, 100):
+        x, reaction = table1.loops(n, h=5e-3, window=(60.0, 80.0))
+        assert x.shape == reaction.shape and len(x) == 2001
+        strength = sum((0.1 + i / n) / n for i in range(1, n + 1))
+        assert np.abs(reaction).max() <= strength * (1 + 1e-12)
+        if n == 100:
+            assert np.abs(reaction).max() > strength * (1 - 1e-9)  # the plateau of full slip

@@ -1,0 +1,1 @@
+"""The command line: the run's contract, hostile inputs, interrupted outputs, start-up, install."""

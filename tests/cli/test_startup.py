@@ -1,0 +1,228 @@
+"""Time to first result: every kernel a run needs is cached across processes, in the user's cache folder,
+for the library and for the FMU (never in the FMU's extracted resources). Timings themselves are measured by
+``benchmarks/startup.py``, not here."""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from prandtl_fmu.fmu.build import build_fmu
+
+from tests.conftest import base_tables, scene_text
+
+# Runs the library on scenes that need every kind of kernel (each stepper, the massless element, the memory
+# stack, states and the energy account, the stateful Element), then prints what numba compiled in this
+# process and a fingerprint of the results.
+LIBRARY_RUN = textwrap.dedent("""\
+    import hashlib, json, sys
+    import numpy as np
+    from numba.core.registry import CPUDispatcher
+    from prandtl_fmu import Element, parse_scene, simulate
+    runs = json.loads(sys.argv[1])
+    sha = hashlib.sha256()
+    for text, stepper in runs:
+        scene = parse_scene(text)
+        result = simulate(scene, stepper, states=scene.branches is not None and not scene.branches.continuum,
+                          energy=stepper != "exact", progress=False)
+        for values in result.columns().values():
+            sha.update(np.ascontiguousarray(values).tobytes())
+        element = Element(scene, stepper=stepper)
+        element.advance(0.37, 0.2)
+        element.advance(1.0, -0.1)
+        sha.update(np.array([element.x, element.v, element.reaction]).tobytes())
+    compiled = []
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("prandtl_fmu"):
+            continue
+        for attr, value in vars(module).items():
+            if isinstance(value, CPUDispatcher) and value.__module__ == name:
+                misses = sum(value.stats.cache_misses.values()) if value._cache.__class__.__name__ != "NullCache" \\
+                    else len(value.overloads)
+                if misses:
+                    compiled.append(f"{name}.{attr}: {misses}")
+    print(json.dumps({"compiled": sorted(compiled), "results": sha.hexdigest()}))
+""")
+
+
+def _run_library(runs, cache):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    done = subprocess.run([sys.executable, "-c", LIBRARY_RUN, json.dumps(runs)], capture_output=True, text=True,
+                          env=env, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _scenes():
+    linear = base_tables(cubic=None)
+    many = base_tables(cubic=None, branches={"count": 80, "k_total": 1.0, "eta_range": [0.1, 1.1]})
+    massless = base_tables(mass=None, damper=None, spring={"k0": 0.5})
+    continuum = base_tables(cubic=None, branches={"continuum": True, "k_total": 1.0, "eta_range": [0.0, 1.0]})
+    short = {"stepper": "projected", "step": 1e-2, "stop_time": 2.0, "output_interval": 0.1}
+    runs = [(scene_text(dict(base_tables(), solver=short)), stepper) for stepper in ("projected", "implicit",
+                                                                                     "symplectic", "verlet")]
+    runs.append((scene_text(dict(linear, solver=short)), "exact"))
+    runs.append((scene_text(dict(many, solver=short)), "projected"))  # the memory stack
+    runs.append((scene_text(dict(massless, solver=dict(short, stepper="implicit"))), "implicit"))
+    runs.append((scene_text(dict(continuum, solver=short)), "verlet"))
+    return runs
+
+
+@pytest.mark.slow
+def test_a_second_process_compiles_nothing_and_gets_the_same_numbers(tmp_path):
+    runs = _scenes()
+    first = _run_library(runs, tmp_path / "cache")
+    assert first["compiled"], "the first process should have compiled (and cached) the kernels"
+    second = _run_library(runs, tmp_path / "cache")
+    assert second["compiled"] == [], f"compiled again in a warm process: {second['compiled']}"
+    assert second["results"] == first["results"]
+    # the cache is the user's folder, one per package digest
+    folders = [p.name for p in (tmp_path / "cache").iterdir()]
+    assert len(folders) == 1 and folders[0].startswith("prandtl_fmu-"), folders
+
+
+def test_the_cache_folder_follows_the_sources(tmp_path):
+    """An edit of a source file that compiled code can reach gives another cache folder (numba alone would miss
+    an edit of a callee in another file): a kernel's module, and a module a kernel module imports (libm.py, whose
+    functions the kernels call); an edit of a module no kernel reaches (the command line, the FMU glue) keeps the
+    folder, so the compiled code stays. The same sources at another place give the same one (an FMU extracted
+    anew)."""
+    import shutil
+
+    import prandtl_fmu
+
+    package = pathlib.Path(prandtl_fmu.__file__).parent
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import prandtl_fmu._jit as j; "
+            "print(j.cache_root().name, j.CACHE)")
+
+    def folder_of(copy):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+        done = subprocess.run([sys.executable, "-c", code, str(copy)], capture_output=True, text=True, env=env,
+                              cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        name, enabled = done.stdout.split()
+        assert enabled == "True"
+        return name
+
+    copies = []
+    for where in ("a", "b"):
+        target = tmp_path / where / "prandtl_fmu"
+        shutil.copytree(package, target, ignore=shutil.ignore_patterns("__pycache__"))
+        copies.append(target.parent)
+    assert folder_of(copies[0]) == folder_of(copies[1])
+    for outside in ("cli.py", "fmu/python/slave.py", "sweep/spec.py"):
+        glue = copies[1] / "prandtl_fmu" / outside
+        glue.write_text(glue.read_text() + "\n# an edit\n")
+        assert folder_of(copies[0]) == folder_of(copies[1]), f"an edit of {outside} changed the cache folder"
+    seen = {folder_of(copies[1])}
+    for reached in ("kernels/smooth.py", "libm.py", "kernels/loop.py", "steppers/projected.py"):
+        source = copies[1] / "prandtl_fmu" / reached
+        source.write_text(source.read_text() + "\n# an edit\n")
+        folder = folder_of(copies[1])
+        assert folder not in seen, f"an edit of {reached} kept the cache folder"
+        seen.add(folder)
+
+
+def test_no_usable_cache_folder_means_no_cache_not_a_cache_beside_the_sources(tmp_path):
+    """With a cache folder that cannot be created, the kernels compile in memory: nothing is written beside
+    the sources (the FMU's extracted resources, which the importer deletes)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    code = ("import prandtl_fmu._jit as j, prandtl_fmu.kernels.smooth as s; print(j.CACHE); "
+            "print(s.elastic_force(1.0, 2.0, None))")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(blocker / "cache"))
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["False", "2.0"]
+
+
+FMU_RUN = textwrap.dedent("""\
+    import json, os, shutil, sys
+    from fmpy import extract, simulate_fmu
+    fmu, work = sys.argv[1], sys.argv[2]
+    results = []
+    first = extract(fmu, unzipdir=os.path.join(work, "first"))
+    results.append(simulate_fmu(first, stop_time=1.0, output_interval=0.1)["x"][-1])
+    beside = [p for p, _, files in os.walk(first) for f in files if f.endswith((".nbi", ".nbc"))]
+    # the importer deletes its extraction folder; the library it loaded stays in the process
+    shutil.rmtree(first)
+    second = extract(fmu, unzipdir=os.path.join(work, "second"))
+    results.append(simulate_fmu(second, stop_time=1.0, output_interval=0.1,
+                                start_values={"stepper": "verlet"})["x"][-1])
+    compiled = []
+    from numba.core.registry import CPUDispatcher
+    for name, module in list(sys.modules.items()):
+        if name.startswith("_prandtl_slave_"):
+            for attr, value in vars(module).items():
+                if isinstance(value, CPUDispatcher) and value.__module__ == name:
+                    compiled += [f"{name}.{attr}"] * sum(value.stats.cache_misses.values())
+    print(json.dumps({"results": [float(r) for r in results], "beside": beside, "compiled": compiled}),
+          flush=True)
+""")
+
+
+@pytest.mark.slow
+def test_the_fmu_uses_the_user_cache_and_survives_its_deleted_resources(tmp_path):
+    scene = tmp_path / "cached.toml"
+    scene.write_text(scene_text(dict(base_tables(), solver={"stepper": "projected", "step": 1e-2,
+                                                            "stop_time": 1.0, "output_interval": 0.1})))
+    fmu = build_fmu(scene, tmp_path / "cached.fmu")
+    cache = tmp_path / "cache"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    outcomes = []
+    for run in ("cold", "warm"):
+        work = tmp_path / run
+        work.mkdir()
+        done = subprocess.run([sys.executable, "-c", FMU_RUN, str(fmu), str(work)], capture_output=True,
+                              text=True, env=env, timeout=900)
+        assert done.returncode == 0, done.stderr[-3000:]
+        outcomes.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    cold, warm = outcomes
+    assert cold["beside"] == [] and warm["beside"] == [], "compiled code was written into the FMU's resources"
+    assert cold["compiled"], "the cold process should have compiled the FMU's kernels"
+    assert warm["compiled"] == [], f"the FMU compiled again with a warm cache: {warm['compiled']}"
+    assert warm["results"] == cold["results"]
+    folders = sorted(p.name for p in cache.iterdir())  # the kernels', and the library's lasting copy (entry.py)
+    assert len(folders) == 2 and folders[0].startswith("prandtl_slave_") and folders[1].endswith("_source"), \
+        folders
+
+
+BLAS_PROBE = textwrap.dedent("""\
+    import importlib.util, sys
+    if sys.argv[1] == "numba-first":  # numba's numpy implementations loaded, and BLAS probed, before us
+        import numba.np.arraymath
+    from prandtl_fmu import load_scene, simulate
+    result = simulate(load_scene("paper-section-8"), "projected", progress=False)
+    scipy_linalg_before = "scipy.linalg" in sys.modules
+    from numba.np import arraymath
+    import numpy as np
+    from numba import njit
+    @njit
+    def dot(a, b):  # a host's own code that needs BLAS, compiled after our kernels
+        return np.dot(a, b)
+    print(repr(float(result.x[-1])), scipy_linalg_before, arraymath._HAVE_BLAS,
+          importlib.util.find_spec("scipy") is not None, dot(np.arange(3.0), np.ones(3)), flush=True)
+""")
+
+
+@pytest.mark.slow
+def test_numba_does_not_import_scipy_linalg_for_our_kernels_and_nothing_else_changes(tmp_path):
+    """_jit.skip_blas_probe: numba probes BLAS by importing scipy.linalg (0.2-0.4 s) when it loads its numpy
+    implementations; our kernels need none. With the probe skipped, scipy.linalg is not imported by a run,
+    numba's flag is what the probe finds, np.dot still compiles in the same process, and the results are
+    bit for bit those of a process where numba probed first."""
+    script = tmp_path / "probe.py"
+    script.write_text(BLAS_PROBE)
+    outputs = {}
+    for order in ("ours-first", "numba-first"):
+        done = subprocess.run([sys.executable, str(script), order], capture_output=True, text=True, timeout=900)
+        assert done.returncode == 0, done.stderr[-2000:]
+        outputs[order] = done.stdout.split()
+    x, scipy_linalg_before, have_blas, scipy_present, dot = outputs["ours-first"]
+    assert scipy_linalg_before == "False"  # not imported for our kernels
+    assert have_blas == scipy_present  # what the probe would have found
+    assert dot == "3.0"
+    assert outputs["numba-first"][0] == x and outputs["numba-first"][2] == have_blas

@@ -1,0 +1,1 @@
+"""The documentation stays true and the layout shows the architecture."""

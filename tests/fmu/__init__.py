@@ -1,0 +1,1 @@
+"""The FMUs: the PythonFMU runtime (python/) and the native one (native/)."""

@@ -1,0 +1,1 @@
+"""The native FMU: against the library, its instance layer, hostile hosts, platforms, bounds."""

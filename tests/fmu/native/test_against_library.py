@@ -1,0 +1,789 @@
+"""The native FMU (``--runtime native``, issue 24): the library's kernels and a C FMI layer, no Python in the binary.
+
+Bit for bit the library (every native stepper, random communication steps, every output), in FMPy and in the
+small C host of tests/c_host run with no Python at all; a binary that names no Python symbol; refusals as the
+PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import zipfile
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import load_scene, parse_scene, simulate
+from prandtl_fmu.element import Element
+from prandtl_fmu.fmu.native.kernels import NATIVE_STEPPERS
+
+from tests.conftest import ROOT, SCENES as SCENE_FOLDER, base_tables, scene_text
+from tests.native_host import Extracted, compile_host, run_host
+
+pytest.importorskip("fmpy")
+if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+    pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
+
+PAPER = SCENE_FOLDER / "paper-section-8.toml"
+ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
+            "dissipated_friction", "energy_residual")
+SOLVER = {"stepper": "implicit", "step": 0.01, "stop_time": 10.0, "output_interval": 0.1}
+SCENES = {
+    # mass, spring, dashpot, branches, a harmonic load (cubic: the default tables have one)
+    "smooth": base_tables(mass={"m": 1.0, "x0": 0.05, "v0": 0.0}, solver=SOLVER,
+                          load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3}),
+    # friction on the mass (Stribeck, a belt) and series dashpots, a table load
+    "friction": base_tables(cubic=None, solver=SOLVER,
+                            friction={"alpha": 0.3, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1,
+                                      "belt_velocity": 0.05},
+                            branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]},
+                            load={"kind": "table", "time": [0.0, 3.0, 6.0, 10.0], "force": [0.0, 0.6, -0.5, 0.2]}),
+    # what exact takes: Coulomb friction, series dashpots (exact in the native FMU allocates: numba's runtime in C)
+    "coulomb": base_tables(cubic=None, solver=dict(SOLVER, stepper="exact"), friction={"alpha": 0.1},
+                           branches={"k": [0.5, 2.0, 0.3], "eta": [0.1, 0.3, 0.05], "c": [0.4, 2.0, 9.0]},
+                           load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3}),
+    # massless: the dashpot sets the rate
+    "massless": base_tables(mass=None, cubic=None, solver=dict(SOLVER, stepper="implicit"),
+                            load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
+    # massless and no dashpot: x is the equilibrium of F at every step (implicit only)
+    "rigid": base_tables(mass=None, damper=None, solver=dict(SOLVER, stepper="implicit"),
+                         load={"kind": "harmonic", "amplitude": 0.6, "omega": 0.9}),
+    # the paper's section 8: 100 branches on the memory stack (unfolded to 100 elongations for exact)
+    "paper": None,
+    # the continuum (a spectrum on the memory stack)
+    "continuum": base_tables(cubic=None, damper=None, mass={"m": 1.0, "x0": 0.05, "v0": 0.0},
+                             branches={"continuum": True, "k_total": 1.0, "eta_range": [0.0, 1.0]},
+                             solver=dict(SOLVER, stepper="verlet"),
+                             load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3}),
+}
+
+
+class Built(dict):
+    """FMUs built on first use (``build(name)``): a run of the quick suite builds only the scenes it tests."""
+
+    def __init__(self, build):
+        super().__init__()
+        self.build = build
+
+    def __missing__(self, name):
+        self[name] = self.build(name)
+        return self[name]
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("native")
+
+    def build(name):
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(SCENES[name]) if SCENES[name] else PAPER.read_text())
+        return build_fmu(path, folder / f"{name}.fmu", runtime="native"), path
+
+    return Built(build)
+
+
+# the scenes whose FMU comparisons run in the quick suite; the others (also covered by the random native scenes)
+# under the slow marker ("coulomb", exact with friction, 47 s cold; "friction", a native build and its runs, 52 s
+# on a loaded machine: the quick suite's budget)
+QUICK = ("paper",)
+
+
+def quick_or_slow(names):
+    return [name if name in QUICK else pytest.param(name, marks=pytest.mark.slow) for name in names]
+
+
+def steppers_of(scene):
+    from prandtl_fmu.fmu.native.kernels import applicable
+
+    return applicable(scene)
+
+
+def outputs(slave, names):
+    return slave.fmu.getReal([slave.vr[name] for name in names])
+
+
+def expected(element, names):
+    values = {"x": element.x, "v": element.v, "reaction": element.reaction, "stiffness": element.stiffness()}
+    return [values[name] if name in values else element.energy_of(name) for name in names]
+
+
+def same(got, want):
+    """To the bit, NaN as NaN (a NaN output would itself be a refusal the test reports elsewhere)."""
+    return len(got) == len(want) and all(a == b or (a != a and b != b) for a, b in zip(got, want))
+
+
+def step_both(slave, element, rng, names, label):
+    """One random communication step (not always a multiple of the step) under a random force, in the FMU and
+    in the library's Element; every output in ``names`` to the bit."""
+    size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-1, 1))
+    time = slave.time
+    slave.step(size, force)
+    element.time = time
+    element.advance(size, force)
+    assert same(outputs(slave, names), expected(element, names)), (label, time)
+
+
+@pytest.mark.parametrize("name", quick_or_slow(SCENES))
+def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
+    """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
+    reaction, the stiffness and the energy account equal Element.advance's to the bit."""
+    from tests.fmu_tools import Slave
+
+    fmu, scene_path = fmus[name]
+    scene = load_scene(scene_path)
+    tried = steppers_of(scene)
+    assert tried and ("exact" in tried) == (name in ("coulomb", "paper"))
+    for stepper in tried:
+        slave = Slave(fmu, start_values={"stepper": stepper})
+        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
+        element = Element(scene, stepper=stepper)
+        rng = np.random.default_rng(7)
+        try:
+            for _ in range(40):
+                step_both(slave, element, rng, names, stepper)
+        finally:
+            slave.close()
+        assert abs(element.x) > 1e-3  # it moved
+
+
+def test_on_the_memory_stack_exact_unfolds_and_folds_back_as_the_library(fmus):
+    """The paper's 100 branches run on the memory stack, which exact does not take: switching to exact unfolds
+    them to 100 elongations and switching back folds them into a stack that refers to the elongations of then
+    (driver.Element._use_branch_kernel); every output stays the library's to the bit, through every switch and
+    an FMU state saved while unfolded."""
+    from tests.fmu_tools import Slave
+
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    plan = ["projected", "exact", "implicit", "exact", "exact", "verlet", "symplectic", "exact", "projected"]
+    slave = Slave(fmu, start_values={"stepper": plan[0], "step": 0.01})
+    element = Element(scene, stepper=plan[0], step=0.01)
+    names = ["x", "v", "reaction", "stiffness", "stored_energy", "dissipated_sliders", "energy_residual"]
+    rng = np.random.default_rng(3)
+    kernels, saved = [], None
+    try:
+        for k, stepper in enumerate(plan):
+            if k:
+                slave.fmu.setString([slave.vr["stepper"]], [stepper])
+                element.set_stepper(stepper)
+            kernels.append(element.branch_kernel)
+            for _ in range(12):
+                step_both(slave, element, rng, names, stepper)
+            if k == 3:  # unfolded: the state holds the elongations and the stack's parameters as folded last
+                saved, checkpoint, at = slave.fmu.getFMUstate(), element.get_state(), slave.time
+        assert kernels == ["stack", "play", "stack", "play", "play", "stack", "stack", "play", "stack"]
+        slave.fmu.setFMUstate(saved)
+        element.set_state(checkpoint)
+        slave.time = at
+        for stepper in ("exact", "projected"):  # the saved stepper runs on, then a fold from the restored state
+            slave.fmu.setString([slave.vr["stepper"]], [stepper])
+            element.set_stepper(stepper)
+            for size, force in ((0.05, 0.3), (0.1, -0.7)):
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert same(outputs(slave, names), expected(element, names)), stepper
+    finally:
+        slave.close()
+
+
+def test_a_state_whose_memory_stack_parameters_are_not_the_scene_s_is_refused(fmus):
+    """The element's state holds the stack's parameters as folded last (their rows of the elongations change at a
+    fold, the others are the scene's): a blob whose eta row was changed, its checksum made right, is refused
+    with fmi2Error and its reason; the instance steps on."""
+    import struct
+
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    from prandtl_fmu.kernels import stack
+
+    fmu, scene_path = fmus["paper"]
+    branches = load_scene(scene_path).branches
+    params, _ = stack.prepare(branches.stiffness, branches.yield_displacement, branches.u0)
+    slave = Slave(fmu)
+    try:
+        slave.step(0.3, 0.4)
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        row = params[stack.ETA_ROW].tobytes()
+        at = bytes(blob).find(row)
+        assert at > 0 and bytes(blob).find(row, at + 1) < 0
+        blob[at + 8 * 5:at + 8 * 6] = struct.pack("<d", params[stack.ETA_ROW, 5] * 1.5)
+        digest = 1469598103934665603
+        for byte in blob[:-8]:  # common.h's fnv1a: the checksum is the blob's last field
+            digest = ((digest ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+        blob[-8:] = struct.pack("<Q", digest)
+        slave.messages.clear()
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.deSerializeFMUstate(bytes(blob))
+        assert refused.value.status == 3
+        assert any("memory-stack parameters are not this scene's" in message for _, message in slave.messages), \
+            slave.messages
+        slave.step(0.1, 0.2)
+    finally:
+        slave.close()
+
+
+def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):
+    from fmpy import simulate_fmu
+
+    fmu, scene_path = fmus["friction"]
+    scene = load_scene(scene_path)
+    library = simulate(scene)
+    result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True}, output=["x", "v", "reaction"])
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column))
+
+
+@pytest.mark.parametrize("fmi", [2, pytest.param(3, marks=pytest.mark.slow)])
+def test_a_fresh_fmu_in_fmpy_runs_its_scene_and_says_so(fmus, fmus3, fmi):
+    """Issue 44.3: ``fmpy simulate`` of a fresh paper-section-8 FMU (no start value, no input) is the library's
+    ``simulate`` of the scene, bit for bit at the output grid, not a flat line: scene_load starts true when the
+    scene names a load. Leaving initialization with it true logs the scene_load notice as a warning (category
+    logStatusWarning) with logging off, and the call returns OK."""
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu.fmu.description import scene_load_notice
+
+    fmu, scene_path = (fmus if fmi == 2 else fmus3)["paper"]
+    scene = load_scene(scene_path)
+    library = simulate(scene)
+    logged = []
+
+    def logger(*arguments):  # FMI 2.0: env, instance, status, category, message; FMI 3.0: env, status, ...
+        logged.append((arguments[-3], arguments[-2].decode(), arguments[-1].decode()))
+
+    result = simulate_fmu(str(fmu), output_interval=scene.solver.output_interval, output=["x", "v", "reaction"],
+                          logger=logger, debug_logging=False)  # (FMPy's own default grid is 1/500 of the run)
+    assert result["time"][-1] == pytest.approx(scene.solver.stop_time)
+    assert np.abs(result["x"]).max() > 0.01  # not a flat line
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column), err_msg=column)
+    assert logged == [(1, "logStatusWarning", scene_load_notice(scene, "the element"))]
+
+
+FMPY_AFTER_A_LOGGER = """
+import gc, sys
+sys.path.insert(0, sys.argv[2])
+import fmpy
+from tests.conftest import restore_fmpy_logger
+fmpy.simulation.simulate_fmu.__wrapped__(sys.argv[1], stop_time=1.0, logger=lambda *arguments: None)
+gc.collect()  # the first call's logger callback is freed
+if sys.argv[3] == "restore":
+    restore_fmpy_logger()
+fmpy.simulation.simulate_fmu.__wrapped__(sys.argv[1], stop_time=1.0)  # FMPy's default logger: it prints
+print("second run ended")
+"""
+
+
+@pytest.mark.parametrize("restore", ["restore", pytest.param("no", marks=pytest.mark.slow)])
+def test_fmpy_after_a_run_with_its_own_logger(fmus, restore):
+    """FMPy 0.3.x's logger proxy keeps the last logger given to simulate_fmu(logger=...) in a C global: a later
+    run without a logger, whose FMU logs (ours warn at the end of initialization when the scene's load runs),
+    calls that freed callback. tests/conftest.py points the proxy back at a living logger after every
+    simulate_fmu of the tests; without it (the slow case) the process dies, as it did in CI."""
+    fmu, _ = fmus["paper"]
+    done = subprocess.run([sys.executable, "-c", FMPY_AFTER_A_LOGGER, str(fmu), str(ROOT), restore],
+                          capture_output=True, text=True, timeout=300)
+    if restore == "restore":
+        assert done.returncode == 0, done.stderr
+        assert "[WARNING]" in done.stdout and "second run ended" in done.stdout, done.stdout
+    else:  # FMPy's defect: should a later FMPy fix it, this says so
+        assert done.returncode != 0, "FMPy no longer calls a freed logger: drop restore_fmpy_logger (conftest)"
+
+
+def test_the_binary_holds_no_python(fmus, tmp_path):
+    fmu, _ = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    assert not (tmp_path / "x" / "resources" / "prandtl_fmu").exists()  # no library copy, no Python source
+    needed = subprocess.run(["ldd", str(extracted.library)], capture_output=True, text=True).stdout
+    assert "python" not in needed.lower(), needed
+    undefined = subprocess.run(["nm", "-D", "--undefined-only", str(extracted.library)], capture_output=True,
+                               text=True).stdout.split()
+    assert not [s for s in undefined if s.startswith(("Py", "_Py", "numba", "NRT"))], undefined
+    defined = subprocess.run(["nm", "-D", "--defined-only", str(extracted.library)], capture_output=True,
+                             text=True).stdout.split()[2::3]
+    assert defined and all(symbol.startswith("fmi2") for symbol in defined), defined
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'needsExecutionTool="false"' in description
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    return compile_host(tmp_path_factory.mktemp("c_host"))
+
+
+NO_PYTHON = {"PATH": os.environ.get("PATH", "/usr/bin:/bin")}  # no LD_PRELOAD, no PYTHONPATH
+
+
+def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tmp_path):
+    fmu, scene_path = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    rng = np.random.default_rng(3)
+    commands, t = ["setup", "enter", "setb:scene_load:0", "exit"], 0.0  # F alone, as the element is driven
+    element = Element(load_scene(scene_path))
+    reference = []
+    for _ in range(25):
+        size, force = float(rng.choice([0.013, 0.05, 0.1])), float(rng.uniform(-1, 1))
+        commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}", "getr:x", "getr:v", "getr:reaction"]
+        element.time = t
+        element.advance(size, force)
+        reference += [element.x, element.v, element.reaction]
+        t += size
+    code, calls, logs, values, out = run_host(host, extracted, commands + ["term", "free"], env=NO_PYTHON)
+    assert code == 0, out
+    assert [value for _, value in values] == reference
+
+
+@pytest.mark.parametrize("logging", [False, True])
+def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, logging):
+    """A bad start value: fmi2Error at fmi2ExitInitializationMode, its reason logged (logging off too) under a
+    declared category; set right, the instance initializes; a non-finite F: fmi2Discard, then a good step."""
+    fmu, _ = fmus["friction"]
+    extracted = Extracted(fmu, tmp_path / "x")
+    code, calls, logs, values, out = run_host(host, extracted, [
+        "setup", "enter", "setr:alpha_kinetic:0.5", "exit", "setr:alpha_kinetic:0.25", "exit",
+        "setr:F:inf", "step:0:0.1", "setr:F:0.5", "step:0:0.1", "getr:x", "term", "free"],
+        logging=logging, env=NO_PYTHON)
+    assert code == 0, out
+    assert calls["exit"] == ["3", "0"], out
+    assert calls["step:0:0.1"] == ["2", "0"], out
+    errors = [entry for entry in logs if entry[0] == 3]
+    assert errors and "alpha_kinetic" in errors[0][2] and errors[0][1] == "logStatusError", logs
+    assert [entry for entry in logs if entry[0] == 2 and "F = inf" in entry[2]], logs
+    assert all(category.startswith("log") for _, category, _ in logs), logs
+    assert len(values) == 1 and np.isfinite(values[0][1])
+
+
+def test_the_fmu_state_is_a_checked_blob(fmus):
+    """Get, step, set back, step again: the same numbers. A serialized state with one byte changed, one of another
+    scene and garbage are refused with fmi2Error and their reason; the instance is unchanged."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    slave = Slave(fmus["friction"][0])
+    other = Slave(fmus["smooth"][0])
+    try:
+        slave.step(0.3, 0.4)
+        state = slave.fmu.getFMUstate()
+        slave.step(0.2, -0.3)
+        after = slave.get("x", "v", "reaction")
+        slave.fmu.setFMUstate(state)
+        slave.time -= 0.2
+        slave.step(0.2, -0.3)
+        assert slave.get("x", "v", "reaction") == after
+        blob = bytearray(slave.fmu.serializeFMUstate(state))
+        restored = slave.fmu.deSerializeFMUstate(bytes(blob))
+        slave.fmu.setFMUstate(restored)
+        blob[len(blob) // 2] ^= 0x01
+        foreign = other.fmu.serializeFMUstate(other.fmu.getFMUstate())
+        for bad, reason in ((bytes(blob), "checksum"), (foreign, "another scene"), (b"garbage", "not a serialized")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException) as refused:
+                slave.fmu.deSerializeFMUstate(bad)
+            assert refused.value.status == 3
+            assert any(reason in message for _, message in slave.messages), (reason, slave.messages)
+        slave.step(0.1, 0.2)  # still usable
+    finally:
+        slave.close()
+        other.close()
+
+
+def test_two_instances_on_two_threads_give_the_library_numbers(fmus):
+    """ctypes lets go of the GIL in a foreign call: both instances step at once, each its own numbers."""
+    from tests.fmu_tools import Slave
+
+    fmu, scene_path = fmus["smooth"]
+    scene = load_scene(scene_path)
+    results, errors = {}, []
+
+    def drive(seed):
+        try:
+            slave = Slave(fmu, name=f"element{seed}")
+            element = Element(scene)
+            rng = np.random.default_rng(seed)
+            for _ in range(300):
+                size, force = float(rng.choice([0.01, 0.05])), float(rng.uniform(-1, 1))
+                time = slave.time
+                slave.step(size, force)
+                element.time = time
+                element.advance(size, force)
+                assert slave.get("x", "v") == [element.x, element.v]
+            slave.close()
+            results[seed] = element.x
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=drive, args=(seed,)) for seed in (1, 2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not errors, errors
+    assert len(results) == 2 and results[1] != results[2]
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--runtime", "python", "--fmi", "3"], "FMI 2.0"),
+])
+def test_what_a_runtime_does_not_build_is_refused_in_one_line(tmp_path, arguments, culprit):
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(SCENES["smooth"]))
+    out = tmp_path / "out.fmu"
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(out), *arguments],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert culprit in done.stderr and not out.exists()
+
+
+class CompiledAnyway(Exception):
+    """Raised by a compile_kernels that a build must not call."""
+
+
+def refuse_to_compile(*arguments):
+    raise CompiledAnyway()
+
+
+def test_a_second_build_of_the_same_kernels_only_links(fmus, tmp_path, monkeypatch):
+    """The native build's objects are kept (fmu/native/object_cache.py): building the paper scene again compiles
+    nothing, and the FMU runs as the first, bit for bit; the FMI 3.0 build of the scene takes the same objects."""
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu import compiling
+    from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.fmu.native import kernels, platforms
+
+    first, scene_path = fmus["paper"]
+    monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
+    said = []
+
+    class Line:  # what a terminal's status line is told (compiling.stage)
+        staged = said.append
+
+    monkeypatch.setattr(compiling, "_ACTIVE", [Line()])
+    again = build_fmu(scene_path, tmp_path / "again.fmu", runtime="native")
+    host = platforms.host_target().name
+    assert said == [f"native build: the objects for {host} (from the cache)", f"native build: linking {host}",
+                    "native build: the FMU archive"], said
+    build_fmu(scene_path, tmp_path / "again3.fmu", runtime="native", fmi=3)
+    runs = [simulate_fmu(str(fmu), stop_time=20.0, output_interval=0.1, output=["x", "v", "reaction"])
+            for fmu in (first, again)]
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(runs[0][column], runs[1][column], err_msg=column)
+
+
+def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypatch):
+    """A scene with another coefficient is another entry; an entry with an object missing is not used."""
+    from prandtl_fmu import _jit
+    from prandtl_fmu.fmu.archive import built_scene
+    from prandtl_fmu.fmu.build import build_fmu
+    from prandtl_fmu.fmu.native import kernels, platforms
+    from prandtl_fmu.fmu.native.build import element_objects
+
+    scene_path = fmus["paper"][1]
+    scene, scene_bytes = built_scene(scene_path, None)
+    objects = element_objects(scene, scene_bytes, kernels.applicable(scene), platforms.resolve(None, 2))
+    assert objects.cached, "the fixture's build kept no entry"
+    entry = _jit.cache_root() / "native-objects" / objects.digest
+    monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
+    other = tmp_path / "other.toml"
+    text = scene_path.read_text()
+    assert "count = 100" in text
+    other.write_text(text.replace("count = 100", "count = 99"))
+    with pytest.raises(CompiledAnyway):
+        build_fmu(other, tmp_path / "other.fmu", runtime="native")
+    next(entry.rglob("*.o")).unlink()
+    with pytest.raises(CompiledAnyway):
+        build_fmu(scene_path, tmp_path / "damaged.fmu", runtime="native")
+
+
+def test_the_cli_builds_a_native_fmu(tmp_path):
+    """With --osp, beside it the OSP description the PythonFMU build writes (libcosim reads it there)."""
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(SCENES["smooth"]))
+    sidecars = {}
+    for runtime in ("native", "python"):
+        folder = tmp_path / runtime
+        folder.mkdir()
+        done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "--runtime", runtime,
+                               "--osp", "-o", str(folder / "element.fmu")], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        sidecars[runtime] = [(p.name, p.read_bytes()) for p in folder.glob("*_OspModelDescription.xml")]
+        assert done.stdout.strip().splitlines()[0] == str(folder / "element.fmu")
+    assert sidecars["native"] == sidecars["python"] and len(sidecars["native"]) == 1
+    assert parse_scene(scene_text(SCENES["smooth"]), "s.toml").solver.stepper in NATIVE_STEPPERS
+
+
+# ---------------------------------------------------------------- FMI 3.0
+
+
+@pytest.fixture(scope="module")
+def fmus3(fmus, tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("native3")
+    return Built(lambda name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3),
+                               fmus[name][1]))
+
+
+@pytest.mark.parametrize("name", quick_or_slow(["friction", "paper", "continuum"]))
+def test_the_fmi3_fmu_validates_and_reproduces_simulate_with_its_elongations(fmus3, name):
+    """FMPy's validator finds nothing; simulate_fmu with the scene's load gives the library's x, v, reaction and the
+    elongations, the scalars u_1 .. u_n (n, a local constant as in FMI 2.0; the arrays' option:
+    tests/masters/test_host_compatibility.py), bit for bit."""
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    fmu, scene_path = fmus3[name]
+    assert validate_fmu(str(fmu)) == []
+    description = read_model_description(str(fmu))
+    assert description.fmiVersion == "3.0"
+    by_name = {v.name: v for v in description.modelVariables}
+    scene = load_scene(scene_path)
+    continuum = scene.branches.continuum
+    n = -1 if continuum else scene.branches.n
+    elongations = [f"u_{i}" for i in range(1, n + 1)]  # none for the continuum: no elongation per branch
+    assert by_name["n"].causality == "local" and by_name["n"].type == "Int32" and int(by_name["n"].start) == n
+    assert "u" not in by_name and [name for name in by_name if name.startswith("u_")] == elongations
+    assert not [v.name for v in description.modelVariables if v.dimensions]
+    stop = min(scene.solver.stop_time, 20.0)
+    library = simulate(scene.with_solver(stop_time=stop), states=not continuum)
+    result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True}, output=["x", "v", "reaction"] + elongations)
+    for column in ("x", "v", "reaction"):
+        np.testing.assert_array_equal(result[column], getattr(library, column))
+    if not continuum:
+        np.testing.assert_array_equal(np.column_stack([result[u] for u in elongations]), library.u)
+    if name == "paper":  # exact: the stack unfolded, u read from the n elongations
+        library = simulate(scene.with_solver(stop_time=stop), "exact", states=True)
+        result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
+                              start_values={"scene_load": True, "stepper": "exact"}, output=["x"] + elongations)
+        np.testing.assert_array_equal(result["x"], library.x)
+        np.testing.assert_array_equal(np.column_stack([result[u] for u in elongations]), library.u)
+
+
+def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu, scene_path = fmus3["friction"]
+    description = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
+    messages = []
+
+    def log(env, status, category, message):
+        messages.append(message.decode())
+
+    slave = FMU3Slave(guid=description.instantiationToken, unzipDirectory=extract(str(fmu)),
+                      modelIdentifier=description.coSimulation.modelIdentifier)
+    slave.instantiate(loggingOn=False, logMessage=log)
+    slave.enterInitializationMode()
+    slave.setBoolean([vr["scene_load"]], [False])  # F alone, as the element is driven
+    slave.exitInitializationMode()
+    element = Element(load_scene(scene_path))
+    rng = np.random.default_rng(11)
+    t = 0.0
+    try:
+        for _ in range(30):
+            size, force = float(rng.choice([0.013, 0.05, 0.1])), float(rng.uniform(-1, 1))
+            slave.setFloat64([vr["F"]], [force])
+            slave.doStep(t, size)
+            element.time = t
+            element.advance(size, force)
+            t += size
+            assert slave.getFloat64([vr["x"], vr["v"], vr["reaction"]]) == [element.x, element.v, element.reaction]
+            assert slave.getFloat64([vr["u_1"], vr["u_2"], vr["u_3"]]) == element.elongations().tolist()
+        state = slave.getFMUState()
+        blob = bytearray(slave.serializeFMUState(state))
+        blob[-12] ^= 0x40
+        with pytest.raises(FMICallException):
+            slave.deserializeFMUState(bytes(blob))
+        assert any("checksum" in message or "altered" in message for message in messages), messages
+        slave.setFMUState(state)
+        assert slave.getFloat64([vr["x"]]) == [element.x]
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+
+
+def test_the_toolbox_checker_finds_nothing_in_the_native_fmus(fmus, fmus3, connectors):
+    """The FMU Manipulation Toolbox's checker (fmutool -check: the FMI schemas and the semantic rules of causality,
+    variability, initial, start and the model structure) on the element and the connector, FMI 2.0 and 3.0."""
+    pytest.importorskip("fmu_manipulation_toolbox", reason="pip install 'prandtl_fmu[test]'")
+    checked = {"element FMI 2.0": fmus["paper"][0], "element FMI 3.0": fmus3["friction"][0],
+               "connector FMI 2.0": connectors["series"]["native"], "connector FMI 3.0": connectors["stack"]["fmi3"]}
+    for what, fmu in checked.items():
+        done = subprocess.run([sys.executable, "-m", "fmu_manipulation_toolbox", "-input", str(fmu), "-check"],
+                              capture_output=True, text=True, timeout=300)
+        report = done.stdout + done.stderr
+        version = what[-3:]
+        assert done.returncode == 0, report
+        assert f"This FMU seems to be compliant with FMI-{version}." in report, (what, report)
+        assert f"No semantic error against the FMI-{version[0]} standard." in report, (what, report)
+        assert not [line for line in report.splitlines() if "ERROR" in line or "WARNING" in line], (what, report)
+
+
+# ---------------------------------------------------------------- the connector
+
+
+CONNECTORS = {
+    # spring, dashpot, branches with series dashpots: the O(n) kernel
+    "series": base_tables(mass=None, cubic=None, solver=SOLVER, fmu={"causality": "displacement"},
+                          branches={"k": [1.0, 0.6, 2.0], "eta": [0.1, 0.3, 0.05], "c": [0.5, 2.0, 8.0]}),
+    # 80 branches on the memory stack, a cubic spring
+    "stack": base_tables(mass=None, damper=None, solver=SOLVER, fmu={"causality": "displacement"},
+                         branches={"k": [0.02] * 80, "eta": np.linspace(0.01, 0.8, 80).tolist()}),
+}
+
+
+@pytest.fixture(scope="module")
+def connectors(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("connectors")
+    built = {}
+    for name, tables in CONNECTORS.items():
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(tables))
+        built[name] = {runtime: build_fmu(path, folder / f"{name}-{runtime}.fmu", runtime=runtime)
+                       for runtime in ("python", "native")}
+        built[name]["fmi3"] = build_fmu(path, folder / f"{name}-3.fmu", runtime="native", fmi=3)
+    return built
+
+
+@pytest.mark.parametrize("name", list(CONNECTORS))
+def test_the_native_connector_is_the_pythonfmu_connector_bit_for_bit(connectors, name):
+    """Random inputs, read before and after each step (the preview of an input set but not stepped, then the
+    committed sample), steps of random sizes, c set to 0 and back where there is a dashpot: every output to
+    the bit (the PythonFMU connector is the library's Connector, tests/models/test_connector.py)."""
+    from tests.fmu_tools import Slave
+
+    python, native = (Slave(connectors[name][runtime], start_values={"x": 0.02}) for runtime in ("python", "native"))
+    names = [v.name for v in python.md.modelVariables if v.causality == "output"]
+    assert names == [v.name for v in native.md.modelVariables if v.causality == "output"]
+    rng = np.random.default_rng(4)
+    try:
+        for j in range(150):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            for slave in (python, native):
+                slave.set("x", x)
+                slave.set("v", v)
+                if j == 50 and "c" in slave.vr:
+                    slave.set("c", 0.0)
+                if j == 100 and "c" in slave.vr:
+                    slave.set("c", 0.3)
+            assert native.get(*names) == python.get(*names), j
+            size = float(rng.choice([0.01, 0.05, 0.1]))
+            python.step(size)
+            native.step(size)
+            assert native.get(*names) == python.get(*names), j
+    finally:
+        python.close()
+        native.close()
+
+
+def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(connectors):
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    fmus = connectors["series"]
+    assert validate_fmu(str(fmus["fmi3"])) == []
+    t = np.arange(0, 5.0 + 1e-9, 0.05)
+    signal = np.zeros(len(t), dtype=[("time", float), ("x", float), ("v", float)])
+    signal["time"], signal["x"], signal["v"] = t, 0.3 * np.sin(t), 0.3 * np.cos(t)
+    three = simulate_fmu(str(fmus["fmi3"]), stop_time=5.0, output_interval=0.05, input=signal,
+                         output=["force", "u_1", "u_2", "u_3"])
+    two = simulate_fmu(str(fmus["python"]), stop_time=5.0, output_interval=0.05, input=signal, output=["force"])
+    np.testing.assert_array_equal(three["force"], two["force"])
+    assert np.ptp(three["force"]) > 0.1 and min(np.ptp(three[f"u_{i}"]) for i in (1, 2, 3)) > 0
+
+
+@pytest.mark.parametrize("name, settings", [
+    ("smooth", {"stepper": "projected", "step": 0.5}),
+    ("smooth", {"stepper": "verlet", "step": 3.0}),
+    ("friction", {"stepper": "projected", "step": 0.9}),
+    ("friction", {"stepper": "implicit", "step": 2.0}),
+    pytest.param("massless", {"stepper": "projected", "step": 1.0}, marks=pytest.mark.slow),
+    ("smooth", {"stepper": "implicit", "step": 0.5}),
+])
+def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, settings):
+    """The same one-line warning (or none) as the PythonFMU FMU of the scene, at initialization and when a
+    setting changes during the run."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from tests.fmu_tools import Slave
+
+    native_fmu, scene_path = fmus[name]
+    python_fmu = build_fmu(scene_path, tmp_path / "python.fmu")
+    warnings = {}
+    for runtime, fmu in (("python", python_fmu), ("native", native_fmu)):
+        slave = Slave(fmu, start_values=settings)
+        try:
+            slave.step(0.01, 0.1)
+            slave.set("step", settings["step"] * 1.5)  # a change during the run: warned again
+            slave.step(0.01, 0.1)
+            warnings[runtime] = [message for status, message in slave.messages if status == 1]
+        finally:
+            slave.close()
+    assert warnings["native"] == warnings["python"]
+    assert bool(warnings["native"]) == (settings["stepper"] != "implicit" or name == "friction")
+
+
+# ------------------------------------------------------------------ the package (issue 33, items 2-4)
+
+def _entries(path):
+    import zipfile
+
+    with zipfile.ZipFile(path) as archive:
+        return {info.filename: ((info.external_attr >> 16) & 0o777, archive.read(info)) for info in archive.infolist()}
+
+
+def test_every_entry_of_every_fmu_is_readable_by_all(fmus, fmus3, connectors, tmp_path):
+    """Entries were written 0600 (ZipFile.writestr's default): unpacked, a master running as another user could
+    not read them. 0644 as every FMU has, the binary 0755."""
+    from prandtl_fmu.fmu.build import build_fmu
+
+    python_fmu = build_fmu(fmus["smooth"][1], tmp_path / "python.fmu")
+    paths = [fmus["smooth"][0], fmus3["paper"][0], connectors["series"]["fmi3"], python_fmu]
+    for path in paths:
+        for name, (mode, _) in _entries(path).items():
+            if not name.endswith("/"):
+                assert mode & 0o644 == 0o644 and not mode & 0o022, (path.name, name, oct(mode))
+
+
+def test_the_native_fmu_s_page_describes_the_native_fmu_and_its_own_variables(fmus, fmus3):
+    for path in (fmus["paper"][0], fmus3["paper"][0]):
+        entries = _entries(path)
+        page = entries["documentation/index.html"][1].decode("utf-8")
+        assert "native" in page and "no Python" in page and "LD_PRELOAD=&lt;" not in page, path.name
+        assert "PythonFMU's own binary" not in page
+        description = entries["modelDescription.xml"][1].decode("utf-8")
+        version = "fmi3" if 'fmiVersion="3.0"' in description else "fmi2"
+        assert f"{version}Discard" in page
+        if version == "fmi3":
+            assert "fmi2" not in page
+        if version == "fmi3":
+            assert "<td>u_1</td>" in page and "<td>Float64</td>" in page
+
+
+def test_the_fmi3_description_speaks_fmi3_and_gives_every_output_its_dependencies(fmus3):
+    import xml.etree.ElementTree as ET
+
+    from prandtl_fmu import load_scene
+
+    for name in ("paper", "friction"):
+        root = ET.fromstring(_entries(fmus3[name][0])["modelDescription.xml"][1])
+        categories = [category.get("description", "") for category in root.find("LogCategories")]
+        assert categories and not any("fmi2" in text for text in categories), categories
+        for unknown in root.find("ModelStructure"):
+            assert unknown.get("dependencies") is not None, ET.tostring(unknown)
+        n = root.find("ModelVariables/Int32[@name='n']")  # FMI 2.0's local constant (arrays: UInt64, structural)
+        scene = load_scene(fmus3[name][1])
+        assert n is not None and int(n.get("start")) == scene.branches.n >= 0

@@ -1,0 +1,1 @@
+"""The FMUs in real co-simulation masters and what each host needs."""

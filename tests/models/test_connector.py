@@ -1,0 +1,369 @@
+"""The element as a connector (displacement in, force out): library, FMU, OSP description.
+
+Against independent straightforward code: the play operator u_i <- clip(u_i + dx, -eta_i, eta_i) written
+out in numpy.
+"""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import parse_scene
+from prandtl_fmu.connector import Connector, displacement_response
+
+from tests.conftest import ROOT, scene_text
+from tests.fmu_tools import Slave
+
+SOLVER = {"step": 0.01, "stop_time": 10.0, "output_interval": 0.01}
+
+
+def connector_tables(k, eta, u0=None, k0=0.7, k3=0.3, c=0.05, name="bushing"):
+    branches = {"k": list(k), "eta": list(eta)}
+    if u0 is not None:
+        branches["u0"] = list(u0)
+    tables = {"name": name, "spring": {"k0": k0} if k0 is not None else None,
+              "cubic": {"k3": k3} if k3 is not None else None, "damper": {"c": c} if c is not None else None,
+              "branches": branches, "fmu": {"causality": "displacement"}, "solver": SOLVER}
+    return {key: value for key, value in tables.items() if value is not None}
+
+
+def connector_scene(*args, **kwargs):
+    return parse_scene(scene_text(connector_tables(*args, **kwargs)), "connector.toml")
+
+
+def reference_forces(k, eta, u0, k0, k3, c, x, v):
+    """The force along the samples, written out: one clip per branch and sample."""
+    k, eta = np.asarray(k, float), np.asarray(eta, float)
+    u = np.zeros_like(k) if u0 is None else np.array(u0, float)
+    previous, forces = 0.0, []
+    for xj, vj in zip(x, v):
+        u = np.clip(u + (xj - previous), -eta, eta)
+        previous = xj
+        forces.append((k0 or 0.0) * xj + (k3 or 0.0) * xj ** 3 + (c or 0.0) * vj + k @ u)
+    return np.array(forces)
+
+
+def random_history(rng, count=600, scale=1.0):
+    """A displacement history with reversals of every size, and its velocity."""
+    t = np.linspace(0.0, 20.0, count)
+    x = scale * (np.sin(0.9 * t) * np.exp(-0.05 * t) + 0.3 * np.sin(3.1 * t + rng.uniform(0, 6))
+                 + 0.05 * rng.standard_normal(count).cumsum() / np.sqrt(count))
+    return t, x, np.gradient(x, t)
+
+
+@pytest.mark.parametrize("n", [1, 5, 80])  # 80 branches: the memory stack
+def test_the_force_along_a_history_is_the_play_operator_written_out(n):
+    rng = np.random.default_rng(n)
+    for trial in range(8):
+        k = rng.uniform(0.1, 3.0, n)
+        eta = rng.uniform(0.01, 1.0, n)
+        u0 = rng.uniform(-1, 1, n) * eta * (0.0 if n >= 64 else 1.0)  # the stack needs an admissible start
+        k0, k3, c = (None if rng.random() < 0.3 else rng.uniform(0, 2) for _ in range(3))
+        scene = connector_scene(k, eta, u0, k0, k3, c)
+        t, x, v = random_history(rng, scale=rng.uniform(0.1, 2.0))
+        forces = displacement_response(scene, x, v)
+        expected = reference_forces(k, eta, u0, k0, k3, c, x, v)
+        scale = np.abs(expected).max()
+        np.testing.assert_allclose(forces, expected, rtol=0, atol=1e-12 * scale)
+
+
+def test_the_stateful_connector_equals_the_whole_history_and_preview_changes_nothing():
+    rng = np.random.default_rng(7)
+    scene = connector_scene([1.0, 2.0, 0.5], [0.1, 0.25, 0.6], [0.05, -0.1, 0.0])
+    t, x, v = random_history(rng)
+    expected = displacement_response(scene, x, v)
+    connector = Connector(scene)
+    for j in range(len(x)):
+        state = connector.get_state()
+        for trial in rng.uniform(-2, 2, 3):  # a master iterating on the input: no trace left
+            connector.preview(trial, 0.3)
+        assert connector.get_state() == state
+        previewed = connector.preview(x[j], v[j])
+        connector.move_to(x[j], v[j], t[j])
+        assert previewed == connector.force == expected[j]
+
+
+def test_the_force_does_not_depend_on_how_a_linear_path_is_sampled():
+    """Rate independence: refining a piecewise-linear path (points on its segments) changes nothing."""
+    rng = np.random.default_rng(3)
+    scene = connector_scene(rng.uniform(0.1, 2, 6), rng.uniform(0.05, 0.8, 6), c=None)
+    coarse = np.concatenate([[0.0], rng.uniform(-1.5, 1.5, 60)])
+    fine, keep = [], []
+    for a, b in zip(coarse[:-1], coarse[1:]):
+        for s in np.sort(rng.uniform(0, 1, rng.integers(0, 5))):
+            fine.append(a + s * (b - a))
+        fine.append(b)
+        keep.append(len(fine) - 1)
+    forces_coarse = displacement_response(scene, coarse[1:])
+    forces_fine = displacement_response(scene, np.array(fine))
+    np.testing.assert_allclose(forces_fine[keep], forces_coarse, rtol=0, atol=1e-13)
+
+
+def test_stiffness_is_the_slope_of_the_force_on_a_sticking_state_and_of_each_side_on_a_slipping_one():
+    scene = connector_scene([1.0, 2.0, 0.5], [0.1, 0.25, 0.6], k0=0.7, k3=0.3, c=None)
+    connector = Connector(scene)
+    for x in (0.0, 0.4, 0.32):  # loading to 0.4 (two branches slide), then back to 0.32: all stick
+        connector.move_to(x, 0.0)
+    delta = 1e-7
+    for direction in (1.0, -1.0):
+        slope = (connector.preview(0.32 + direction * delta, 0.0) - connector.force) / (direction * delta)
+        assert connector.stiffness(direction) == pytest.approx(slope, rel=1e-6)
+    assert connector.stiffness(1.0) == pytest.approx(0.7 + 0.9 * 0.32 ** 2 + 3.5, rel=1e-12)
+    connector.move_to(0.5, 0.0)  # now the two small branches sit on +eta: they slide further up, stick down
+    up = (connector.preview(0.5 + delta, 0.0) - connector.force) / delta
+    down = (connector.force - connector.preview(0.5 - delta, 0.0)) / delta
+    assert connector.stiffness(1.0) == pytest.approx(up, rel=1e-6)
+    assert connector.stiffness(-1.0) == pytest.approx(down, rel=1e-6)
+    assert connector.stiffness(0.0) == connector.stiffness(1.0)  # v = 0: the direction of the last motion
+    assert up < down
+
+
+def test_the_energy_account_closes_along_the_path():
+    """Stored energy change + sliders' dissipation = the work of the elastic force along the path."""
+    rng = np.random.default_rng(11)
+    k, eta = rng.uniform(0.2, 2, 5), rng.uniform(0.05, 0.5, 5)
+    scene = connector_scene(k, eta, k0=0.4, k3=0.2, c=None)
+    t, x, v = random_history(rng, count=200)
+    samples = np.concatenate([[0.0], x])
+    fine = np.concatenate([np.linspace(a, b, 400, endpoint=False) for a, b in zip(samples[:-1], samples[1:])]
+                          + [[samples[-1]]])
+    forces = displacement_response(scene, fine)
+    work = np.sum(0.5 * (forces[1:] + forces[:-1]) * np.diff(fine)) + 0.5 * forces[0] * fine[0]
+    connector = Connector(scene)
+    for xj in x:
+        connector.move_to(xj, 0.0)
+    energy = connector.energy()
+    assert energy["dissipated_sliders"] > 0.1 * abs(work)
+    assert energy["stored_energy"] + energy["dissipated_sliders"] == pytest.approx(work, rel=1e-5)
+
+
+def test_the_continuous_connector_is_the_limit_of_sampled_branches():
+    tables = {"name": "continuum", "spring": {"k0": 0.5},
+              "branches": {"continuum": True, "k_total": 2.0, "eta_range": [0.05, 0.6]},
+              "fmu": {"causality": "displacement"}, "solver": SOLVER}
+    rng = np.random.default_rng(5)
+    t, x, v = random_history(rng)
+    exact = displacement_response(parse_scene(scene_text(tables)), x)
+    errors = []
+    for n in (16, 64, 256):
+        tables["branches"] = {"count": n, "k_total": 2.0, "eta_range": [0.05, 0.6], "sampling": "midpoint"}
+        errors.append(np.abs(displacement_response(parse_scene(scene_text(tables)), x) - exact).max())
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:])) / 2
+    assert errors[-1] < errors[0] and np.all(orders > 1.5), (errors, orders)
+
+
+def test_a_connector_scene_with_a_mass_is_refused_in_one_line(tmp_path):
+    tables = connector_tables([1.0], [0.1])
+    tables["mass"] = {"m": 1.0}
+    path = tmp_path / "bad.toml"
+    path.write_text(scene_text(tables))
+    run = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(tmp_path / "a.fmu")],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1
+    assert "[fmu] causality" in run.stderr and "remove [mass]" in run.stderr
+    assert not list(tmp_path.glob("*.fmu"))
+
+
+def test_build_causality_option_makes_the_connector_and_refuses_a_contradiction(tmp_path):
+    tables = connector_tables([1.0], [0.1])
+    del tables["fmu"]
+    path = tmp_path / "plain.toml"
+    path.write_text(scene_text(tables))
+    run = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(tmp_path / "c.fmu"),
+                          "--causality", "displacement", "--osp"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == [str(tmp_path / "c.fmu"), str(tmp_path / "bushing_OspModelDescription.xml")]
+    from fmpy import read_model_description
+
+    md = read_model_description(str(tmp_path / "c.fmu"))
+    assert md.coSimulation.modelIdentifier == "PrandtlConnector"
+    assert [v.name for v in md.modelVariables if v.causality == "input"] == ["x", "v"]
+    contradicting = tmp_path / "contra.toml"
+    contradicting.write_text(scene_text(connector_tables([1.0], [0.1])))
+    run = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(contradicting), "-o",
+                          str(tmp_path / "d.fmu"), "--causality", "force"], capture_output=True, text=True)
+    assert run.returncode == 2 and "contradicts --causality" in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and not (tmp_path / "d.fmu").exists()
+
+
+# ------------------------------------------------------------------ the FMU
+
+
+@pytest.fixture(scope="module")
+def connector_fmu(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("connector")
+    path = folder / "connector.toml"
+    path.write_text(scene_text(connector_tables([1.0, 2.0, 0.5, 3.0], [0.1, 0.25, 0.6, 0.05],
+                                                [0.05, -0.1, 0.0, 0.0])))
+    return build_fmu(path, folder / "connector.fmu"), path
+
+
+def _input_signal(t, x, v):
+    signal = np.zeros(len(t), dtype=[("time", float), ("x", float), ("v", float)])
+    signal["time"], signal["x"], signal["v"] = t, x, v
+    return signal
+
+
+def test_fmpy_drives_the_connector_fmu_to_the_play_operator(connector_fmu):
+    from fmpy import simulate_fmu
+
+    from prandtl_fmu import load_scene
+
+    fmu, scene_path = connector_fmu
+    rng = np.random.default_rng(2)
+    t = np.linspace(0.0, 10.0, 1001)
+    _, x, v = random_history(rng, count=1001)
+    for repeat in range(2):  # a second run in this process: a new extraction folder, the first one deleted
+        result = simulate_fmu(str(fmu), stop_time=10.0, output_interval=0.01, input=_input_signal(t, x, v),
+                              output=["force", "stiffness", "stored_energy", "dissipated_sliders"])
+        expected, dissipated = displacement_response(load_scene(scene_path), x, v, energy=True)
+        # FMPy records after doStep(t_k), before it sets the input of t_k+1: row k + 1 shows the sample k
+        np.testing.assert_allclose(result["force"][1:], expected[:-1], rtol=0, atol=1e-12)
+        assert result["force"][0] == expected[0]
+        assert result["dissipated_sliders"][-1] <= dissipated
+
+
+def test_the_fmu_stiffness_is_the_finite_difference_of_its_force_on_a_sticking_state(connector_fmu):
+    fmu, _ = connector_fmu
+    slave = Slave(fmu)
+    try:
+        for x in (0.2, 0.5, 0.45):  # load, then unload a little: every branch sticks
+            slave.set("x", x)
+            slave.step(0.1)
+        slave.set("v", -0.1)
+        force, stiffness = slave.get("force", "stiffness")
+        delta = 1e-7
+        slave.set("x", 0.45 - delta)  # set without stepping: the output previews the input
+        slope = (force - slave.get("force")) / delta
+        assert stiffness == pytest.approx(slope, rel=1e-6)
+        slave.set("x", 0.45)
+        assert slave.get("force") == force  # the preview left no trace
+        slave.set("v", 0.1)
+        slave.set("x", 0.9)  # far beyond every threshold: the stiffness going on up is k0 + 3 k3 x^2 only
+        assert slave.get("stiffness") == pytest.approx(0.7 + 0.9 * 0.81, rel=1e-12)
+    finally:
+        slave.close()
+
+
+def test_the_connector_fmu_state_round_trips_and_a_bad_input_is_discarded(connector_fmu):
+    from fmpy.fmi1 import FMICallException
+
+    fmu, _ = connector_fmu
+    slave = Slave(fmu)
+    try:
+        for x in np.linspace(0, 0.7, 8):
+            slave.set("x", x)
+            slave.step(0.05)
+        blob = slave.fmu.serializeFMUstate(slave.fmu.getFMUstate())
+        tail = []
+        for x in (0.3, -0.2, 0.1):
+            slave.set("x", x)
+            slave.step(0.05)
+            tail.append(slave.get("force"))
+        slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(blob))
+        slave.time = 0.4
+        again = []
+        for x in (0.3, -0.2, 0.1):
+            slave.set("x", x)
+            slave.step(0.05)
+            again.append(slave.get("force"))
+        assert again == tail
+        before = slave.get("force")
+        slave.set("x", float("nan"))
+        with pytest.raises(FMICallException) as refused:
+            slave.fmu.doStep(slave.time, 0.05)
+        assert refused.value.status == 2  # fmi2Discard
+        assert any("x = nan" in message for _, message in slave.messages)
+        slave.set("x", 0.1)
+        assert slave.get("force") == before  # nothing moved
+    finally:
+        slave.close()
+
+
+def test_a_master_refining_its_steps_gets_the_same_force_on_a_linear_input(connector_fmu):
+    """FMPy interpolates the input linearly: halving the communication step on a piecewise-linear x changes
+    nothing at the common points (rate independence), whatever the velocity does to the dashpot term."""
+    from fmpy import simulate_fmu
+
+    fmu, _ = connector_fmu
+    t = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    x = np.array([0.0, 0.8, -0.3, 0.2, 0.5])
+    signal = _input_signal(t, x, np.zeros_like(x))
+    coarse = simulate_fmu(str(fmu), stop_time=4.0, output_interval=0.1, input=signal, output=["force"])
+    fine = simulate_fmu(str(fmu), stop_time=4.0, output_interval=0.025, input=signal, output=["force"])
+    # the row at t shows the sample taken one step earlier: compare at the segment ends, sampled by both
+    for end in (1.0, 2.0, 3.0):
+        row_coarse = np.argmin(np.abs(coarse["time"] - (end + 0.1)))
+        row_fine = np.argmin(np.abs(fine["time"] - (end + 0.025)))
+        assert coarse["force"][row_coarse] == pytest.approx(fine["force"][row_fine], abs=1e-13)
+
+
+# ------------------------------------------------------------------ OSP
+
+
+def _validate_osp(xml_bytes):
+    from lxml import etree
+
+    schema = etree.XMLSchema(etree.parse(str(ROOT / "tests" / "data" / "osp" / "OspModelDescription-1.0.1.xsd")))
+    document = etree.fromstring(xml_bytes)
+    schema.assertValid(document)
+    return document
+
+
+@pytest.mark.parametrize("causality", ["force", "displacement"])
+def test_each_fmu_ships_an_osp_description_valid_against_the_schema_with_opposite_causalities(tmp_path, causality):
+    import zipfile
+
+    from fmpy import read_model_description
+
+    from prandtl_fmu.fmu.build import build_fmu
+
+    tables = connector_tables([1.0, 2.0], [0.1, 0.3], name="port")
+    tables["fmu"] = {"causality": causality}
+    if causality == "force":
+        tables["mass"] = {"m": 1.0}
+    path = tmp_path / "port.toml"
+    path.write_text(scene_text(tables))
+    fmu = build_fmu(path, tmp_path / "port.fmu", osp=True)
+    md = read_model_description(str(fmu))
+    identifier = md.coSimulation.modelIdentifier
+    with zipfile.ZipFile(fmu) as archive:
+        inside = archive.read(f"resources/{identifier}_OspModelDescription.xml")
+    beside = (tmp_path / f"{md.modelName}_OspModelDescription.xml").read_bytes()
+    assert inside == beside
+    document = _validate_osp(inside)
+    causalities = {v.name: v.causality for v in md.modelVariables}
+    units = {v.name: v.declaredType.unit if v.declaredType else v.unit for v in md.modelVariables}
+    namespace = {"osp": "https://open-simulation-platform.com/OspModelDescription/1.0.1"}
+    for port, motion in (("LinearMechanicalPort", "LinearVelocity"), ("LinearMechanicalQuasiPort",
+                                                                       "LinearDisplacement")):
+        (group,) = document.findall(f"osp:VariableGroups/osp:{port}", namespace)
+        (force,) = group.findall("osp:Force/osp:Variable", namespace)
+        (moving,) = group.findall(f"osp:{motion}/osp:Variable", namespace)
+        pair = {causalities[force.get("ref")], causalities[moving.get("ref")]}
+        assert pair == {"input", "output"}
+        assert units[force.get("ref")] == force.get("unit") == "N"
+        assert units[moving.get("ref")] == moving.get("unit")
+
+
+def test_a_host_python_without_numba_gets_a_logged_reason_naming_it_and_the_recipe(tmp_path, connector_fmu):
+    """What a non-Python host without PYTHONPATH meets: the FMU's import fails with one logged reason."""
+    script = tmp_path / "host.py"
+    script.write_text(
+        "import os, sys\n"
+        "sys.modules['numba'] = None  # a host Python without numba\n"
+        "from fmpy import simulate_fmu\n"
+        "messages = []\n"
+        "try:\n"
+        "    simulate_fmu(sys.argv[1], stop_time=0.1, debug_logging=True,\n"
+        "                 logger=lambda c, i, s, cat, m: messages.append(m.decode()))\n"
+        "except Exception as exc:\n"
+        "    messages.append('raised ' + type(exc).__name__)\n"
+        "print('\\n'.join(messages))\n")
+    run = subprocess.run([sys.executable, str(script), str(connector_fmu[0])], capture_output=True, text=True,
+                         timeout=300)
+    assert "raised" in run.stdout
+    assert "numba" in run.stdout and "in the host's Python" in run.stdout and "PYTHONPATH" in run.stdout

@@ -1,0 +1,1 @@
+"""Networks of nodes: their mechanics, the massless chain, their FMUs in both runtimes."""

@@ -1,0 +1,1 @@
+"""The scene format: its contract, its schema, the shipped scenes and the catalog of hard ones."""
