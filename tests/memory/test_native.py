@@ -29,51 +29,13 @@ from prandtl_fmu.fmu.native.kernels import memory_layout
 
 pytest.importorskip("fmpy")
 from tests.fmu_tools import NativeInstance as Instance  # noqa: E402  (after the skip: it imports FMPy)
+from tests.memory.scenes import EVERY_EFFECT  # noqa: E402
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
     pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
 
 pytestmark = pytest.mark.slow  # native builds (10-60 s each): the element's four, the connector's ten
 
 OK, DISCARD, ERROR = 0, 2, 3
-
-# the scene of tests/memory/test_pythonfmu.py (the PythonFMU FMU's): every effect with memory, the history on v
-SCENE = """name = "memory-native"
-
-[mass]
-m = 0.8
-x0 = 0.1
-
-[spring]
-k0 = 5.0
-
-[branches]
-k = [2.0, 1.0]
-alpha = [0.1, 0.3]
-
-[delay]
-gain = 0.7
-tau = 0.023
-
-[history]
-weight = [0.4, -0.1]
-rate = [1.3, 0.0]
-acts_on = "v"
-
-[dahl]
-sigma = 30.0
-force = 0.2
-
-[load]
-kind = "harmonic"
-amplitude = 1.0
-omega = 3.0
-
-[solver]
-stepper = "implicit"
-step = 0.001
-stop_time = 1.0
-output_interval = 0.01
-"""
 
 # massless without a dashpot: x is the equilibrium at every step; at t = 0 the delay's history is that equilibrium
 MASSLESS = """name = "massless-delay"
@@ -128,7 +90,7 @@ def _build(folder, text, name, fmi, sanitized=False):
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     folder = tmp_path_factory.mktemp("native_memory")
-    return {fmi: _build(folder, SCENE, "memory", fmi) for fmi in (2, 3)}
+    return {fmi: _build(folder, EVERY_EFFECT, "memory", fmi) for fmi in (2, 3)}
 
 
 @pytest.fixture(scope="module")
@@ -360,7 +322,7 @@ def sanitized(tmp_path_factory):
     from tests.native_host import Native, compile_trust_host
 
     folder = tmp_path_factory.mktemp("native_memory_host")
-    fmu, path = _build(folder, SCENE, "memory-sanitized", 2, sanitized=True)
+    fmu, path = _build(folder, EVERY_EFFECT, "memory-sanitized", 2, sanitized=True)
     return compile_trust_host(folder, 2), Native(fmu, folder / "element", 2), path
 
 

@@ -11,54 +11,18 @@ from prandtl_fmu.element import Element
 from prandtl_fmu.fmu.build import build_fmu
 
 from tests.fmu_tools import Slave
+from tests.memory.scenes import EVERY_EFFECT
 from tests.paths import ROOT
 
 pytestmark = pytest.mark.slow  # each FMU compiles the memory kernels in its own process
 
-SCENE = """name = "memory-element"
-
-[mass]
-m = 0.8
-x0 = 0.1
-
-[spring]
-k0 = 5.0
-
-[branches]
-k = [2.0, 1.0]
-alpha = [0.1, 0.3]
-
-[delay]
-gain = 0.7
-tau = 0.023
-
-[history]
-weight = [0.4, -0.1]
-rate = [1.3, 0.0]
-acts_on = "v"
-
-[dahl]
-sigma = 30.0
-force = 0.2
-
-[load]
-kind = "harmonic"
-amplitude = 1.0
-omega = 3.0
-
-[solver]
-stepper = "implicit"
-step = 0.001
-stop_time = 1.0
-output_interval = 0.01
-"""
 
 
 @pytest.fixture(scope="module")
 def fmu(tmp_path_factory):
     folder = tmp_path_factory.mktemp("memory_fmu")
     scene_path = folder / "memory.toml"
-    scene_path.write_text(SCENE)
+    scene_path.write_text(EVERY_EFFECT)
     return str(build_fmu(scene_path, folder / "memory.fmu")), scene_path
 
 

@@ -23,6 +23,7 @@ from prandtl_fmu.fmu.native.kernels import applicable, noise_refusal
 from prandtl_fmu.network import NetworkElement
 from prandtl_fmu.network import simulate as simulate_network
 
+from tests.noise.scenes import noisy_element
 from tests.paths import ROOT
 
 pytest.importorskip("fmpy")
@@ -35,35 +36,7 @@ pytestmark = pytest.mark.slow
 OK, DISCARD, ERROR = 0, 2, 3
 REFUSED_UNTIL = "; steps are refused until it is set right"
 
-ELEMENT = """name = "noisy-element"
-
-[mass]
-m = 1.0
-
-[spring]
-k0 = 1.0
-
-[damper]
-c = 0.2
-
-[branches]
-k = [0.5, 0.3]
-eta = [0.1, 0.4]
-
-[load]
-kind = "harmonic"
-amplitude = 0.5
-omega = 1.1
-noise_intensity = 0.4
-noise_seed = 7
-noise_unit = 0.01
-
-[solver]
-stepper = "implicit"
-step = 0.005
-stop_time = 3.0
-output_interval = 0.1
-"""
+ELEMENT = noisy_element(3.0)
 # the same element without its noise: the FMU's parameters bring it back
 QUIET = "\n".join(line for line in ELEMENT.splitlines() if not line.startswith("noise_")).replace(
     "noisy-element", "quiet-element") + "\n"

@@ -16,39 +16,12 @@ from prandtl_fmu.network import simulate as simulate_network
 
 from tests.conftest import SCENES
 from tests.fmu_tools import Slave
+from tests.noise.scenes import noisy_element
 
 # every FMU here compiles the noisy kernels in its own process: under -m slow, which CI runs
 pytestmark = pytest.mark.slow
 
-ELEMENT = """name = "noisy-element"
-
-[mass]
-m = 1.0
-
-[spring]
-k0 = 1.0
-
-[damper]
-c = 0.2
-
-[branches]
-k = [0.5, 0.3]
-eta = [0.1, 0.4]
-
-[load]
-kind = "harmonic"
-amplitude = 0.5
-omega = 1.1
-noise_intensity = 0.4
-noise_seed = 7
-noise_unit = 0.01
-
-[solver]
-stepper = "implicit"
-step = 0.005
-stop_time = 4.0
-output_interval = 0.1
-"""
+ELEMENT = noisy_element(4.0)
 
 NETWORK = """name = "noisy-network"
 
