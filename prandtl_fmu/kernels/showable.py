@@ -44,14 +44,14 @@ def limits(model, out):
     x = np.inf
     if not spring + 2.0 * total <= 0.5 * cap:
         x = 0.0
-    x = min(x, _below(0.5 * cap, 3.0 * cubic, 2.0))  # the stiffness: 3 |k3| x^2
-    x = min(x, _below(0.25 * cap, 0.5 * spring, 2.0))  # the stored energy: |k0| x^2 / 2 ...
-    x = min(x, _below(0.25 * cap, 0.25 * cubic, 4.0))  # ... |k3| x^4 / 4 ...
+    x = min(x, _square_below(0.5 * cap, 3.0 * cubic))  # the stiffness: 3 |k3| x^2
+    x = min(x, _square_below(0.25 * cap, 0.5 * spring))  # the stored energy: |k0| x^2 / 2 ...
+    x = min(x, np.sqrt(_square_below(0.25 * cap, 0.25 * cubic)))  # ... |k3| x^4 / 4 ...
     if total > 0.0:  # ... and the branches': 2 sum|k| (A + 2 max eta)^2 <= cap / 2, A = 3 max eta + SLACK (...)
-        room = np.sqrt(cap / (4.0 * total)) - 5.0 * largest
+        room = _square_below(cap, 4.0 * total) - 5.0 * largest
         x = min(x, max((room / SLACK - 2.0 * largest - 2.0) / 4.0, 0.0))
     out[0] = 0.5 * x
-    out[1] = 0.5 * _below(cap, 0.5 * mass, 2.0)
+    out[1] = 0.5 * _square_below(cap, 0.5 * mass)
     out[2] = cap
     if not (out[0] >= 0.0 and out[1] >= 0.0):  # a NaN coefficient: nothing is sure
         out[0] = 0.0
@@ -67,9 +67,9 @@ def _magnitude(value):
 
 
 @kernel
-def _below(budget, coefficient, power):
-    """The largest z >= 0 with coefficient z^power <= budget (inf for a zero coefficient), in logarithms: the
-    quotient budget / coefficient overflows for a small coefficient."""
+def _square_below(budget, coefficient):
+    """The largest z >= 0 with coefficient z^2 <= budget (inf for a zero coefficient), as a quotient of square
+    roots: budget / coefficient overflows for a small coefficient, and a kernel calls no libm (sqrt is IEEE's)."""
     if coefficient == 0.0:
         return np.inf
-    return np.exp((np.log(budget) - np.log(coefficient)) / power)
+    return np.sqrt(budget) / np.sqrt(coefficient)
