@@ -246,6 +246,9 @@ def used(state) -> int:
     return HEADER + ROW * int(state[COUNT])
 
 
+GAMMA_REFUSAL = "memory-stack state: a piece's weight of the initial elongations is not one the stack makes"
+
+
 def restore(params, saved):
     """A full state from the used part of one (as saved by :func:`used`); ValueError if it is not one."""
     saved = np.asarray(saved, dtype=float).reshape(-1)
@@ -267,6 +270,10 @@ def restore(params, saved):
         raise ValueError("memory-stack state: the pieces do not tile the branches")
     if saved[DIRECTION] == 0.0 and saved[TOP] != 0.0:
         raise ValueError("memory-stack state: branches slid in no direction")
+    # gamma, a piece's weight of the initial elongations: 1 on the piece that still refers to them, else 0 (the
+    # continuum's are virgin: 0); the bounds of kernels/showable.py rely on it
+    if np.any((rows[:, 4] != 0.0) & (rows[:, 4] != (0.0 if isinstance(params, tuple) else 1.0))):
+        raise ValueError(GAMMA_REFUSAL)
     _check_admissible(params, saved, rows)
     state[:saved.shape[0]] = saved
     resync(params, state)  # the totals must be those of the pieces (to rounding) ...

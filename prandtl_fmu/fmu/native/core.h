@@ -335,6 +335,9 @@ static void restore_checked(Instance* c, const State* s)
     }
 #endif
     SETTINGS(c, s);
+#ifdef FORGET_DERIVED
+    FORGET_DERIVED(c);
+#endif
 #if !KIND_INTEGERS
     c->stepper[sizeof c->stepper - 1] = 0;
     c->handed = 0;

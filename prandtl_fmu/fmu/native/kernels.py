@@ -662,6 +662,7 @@ STATE_CHECK_REASONS = (
     "memory-stack state: the elongations are not admissible (|u_i - u_j| > |eta_i - eta_j|)",
     "memory-stack state: the running totals do not match the pieces",
     "its memory-stack parameters are not this scene's",
+    "memory-stack state: a piece's weight of the initial elongations is not one the stack makes",  # stack.restore's
 )
 
 
@@ -783,6 +784,10 @@ def compile_state_check(scene):
             return 3
         if state[DIRECTION] == 0.0 and state[TOP] != 0.0:
             return 4
+        for j in range(count):  # gamma: 1 on the piece referring to the initial elongations, else 0
+            gamma = state[header + row_len * j + 4]
+            if not (gamma == 0.0 or (gamma == 1.0 and not continuum)):
+                return 9
         problem = admissible(params, state, count, scratch)
         if problem:
             return problem

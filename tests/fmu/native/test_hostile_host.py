@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu import scene as rules
+from prandtl_fmu.kernels import stack
 
 from tests.conftest import base_tables
 from tests.native_host import built_native, compile_trust_host, run_trust
@@ -299,6 +300,9 @@ STACK_FORGERIES = {  # the memory stack's state: count, top, d, SK, S0, moves, x
     "a NaN total": ({3: math.nan}, "not a memory-stack state"),
     "a wrong total": ({4: 123.0}, "memory-stack state: the running totals do not match the pieces"),
     "half a piece": ({0: 0.5}, "memory-stack state: wrong count of pieces"),
+    # a weight of u0 the stack never makes: with u0 = 0 every elongation stays admissible, and the stored energy's
+    # closed form was inf - inf after an OK step (the adversarial review of issue 46's bounds)
+    "a gamma of 2^520": ({7 + 4: 2.0 ** 520}, stack.GAMMA_REFUSAL),
 }
 
 

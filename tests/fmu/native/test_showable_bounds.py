@@ -155,3 +155,34 @@ def test_a_native_step_whose_stored_energy_overflows_is_refused_naming_it(tmp_pa
     assert instance.get("x", "stored_energy", "stiffness") == before
     assert instance.step(0.01, 1000.0) == OK
     instance.close()
+
+
+@pytest.mark.slow
+def test_a_state_taken_while_the_energy_row_waits_is_restored(tmp_path):
+    """The energy row is computed when read: a state taken after a step that no one read holds the row of an earlier
+    moment, which may not be a number (here: recorded when k0 changed, at x = 1e160 with k0 = 1e50). The state is
+    restored all the same (its row is computed again, never taken from the blob), and its outputs are the
+    instance's (the adversarial review of issue 46's change found the blob refused)."""
+    pytest.importorskip("fmpy")
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from tests.conftest import scene_text
+    from tests.fmu_tools import OK, NativeInstance
+
+    tables = base_tables(mass=None, cubic=None, damper=None, load=None, spring={"k0": 1e-50},
+                         branches={"k": [1.0], "eta": [1.0]},
+                         solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
+    (tmp_path / "massless.toml").write_text(scene_text(tables))
+    fmu = build_fmu(tmp_path / "massless.toml", tmp_path / "massless.fmu", runtime="native")
+    instance = NativeInstance(str(fmu))
+    assert instance.step(1e-3, 1e110) == OK
+    instance.set("k0", 1e50)
+    assert instance.step(1e-3, 1e110) == OK
+    blob = instance.serialize()
+    instance.restore(blob)  # FMPy raises on a refusal
+    names = ("x", "stored_energy", "work", "energy_residual")
+    shown = instance.get(*names)
+    assert all(math.isfinite(value) for value in shown), shown
+    instance.restore(blob)
+    assert instance.get(*names) == shown
+    instance.close()
