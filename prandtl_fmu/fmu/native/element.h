@@ -427,8 +427,8 @@ static double real_value(Instance* c, const Var* var)
 /* 1 when every output a step must leave a number (STEP_OUTPUT) surely is one, computing none but the reaction
  * (O(1)): x, v, the account's entries and the initial energy within the magnitudes of showable.limits (note_limits),
  * below which the stiffness and the energies are numbers. 0: unshowable_output must compute them all (it then names
- * the culprit, or finds none). Never 1 where unshowable_output would name one (tests/fmu/native/test_showable_bounds.py), in a
- * fraction of its time (benchmarks/dostep_cost.py). */
+ * the culprit, or finds none). Never 1 where unshowable_output would name one
+ * (tests/fmu/native/test_showable_bounds.py), in a fraction of its time (benchmarks/dostep_cost.py). */
 static int surely_showable(Instance* c)
 {
     const Element* e = &c->el;
