@@ -54,6 +54,10 @@ def _cubic_change(x, a, b, k3):
     return k3 * (b - a) * (xb * xb + xb * xa + xa * xa)
 
 
+NEWTON_STEPS = 200  # of _piece_root before it bisects
+BISECTIONS = 2200  # halvings that exhaust the doubles between any two finite bounds
+
+
 @kernel
 def residual(w, x, linear, offset, k0, k3, k, eta, cs, u, h, direction):
     """G(w); the stiffness of the branches sticking beyond w in ``direction``; the room to the next kink.
@@ -179,14 +183,17 @@ def _bisect(x, linear, offset, k0, k3, k, eta, cs, u, h, direction, lo, hi):
 def _piece_root(x, lo, hi, g_lo, slope_linear, k3):
     """Root of q(w) = g_lo + slope_linear (w - lo) + k3((x+w)^3 - (x+lo)^3) on [lo, hi].
 
-    q is strictly increasing; q(lo) and q(hi) bracket zero. Newton, falling
-    back on bisection whenever Newton would leave the bracket, until the
-    bracket cannot shrink any more in floating point.
+    q is strictly increasing; q(lo) and q(hi) bracket zero. Newton, falling back on bisection whenever
+    Newton would leave the bracket, until the bracket cannot shrink any more in floating point. Newton from
+    a bracket of many decades creeps (a cubic's Newton steps shrink the distance by 2/3 each): past
+    NEWTON_STEPS the bracket is first cut to the cubic's own bound, |w - lo| <= (4 |g_lo| / k3)^(1/3)
+    (since a^3 - b^3 >= (a - b)^3 / 4 for a >= b), then halved to the rounding: at most BISECTIONS halvings
+    (the doubles' range), never a silent unconverged w.
     """
     a, b = lo, hi  # q(a) has the sign of q(lo), q(b) the other
     w = lo
     q = g_lo
-    for _ in range(200):
+    for _ in range(NEWTON_STEPS):
         dq = slope_linear + 3.0 * k3 * (x + w) * (x + w)
         trial = w - q / dq
         if not ((trial - a) * (trial - b) < 0.0):
@@ -201,7 +208,21 @@ def _piece_root(x, lo, hi, g_lo, slope_linear, k3):
             a = w
         else:
             b = w
-    return w
+    reach = libm.cbrt(4.0 * abs(g_lo) / abs(k3))
+    if abs(b - lo) > reach:  # the cubic alone balances g_lo within reach of lo: b may come nearer
+        b = lo + math.copysign(reach, b - lo)
+    for _ in range(BISECTIONS):
+        middle = a + 0.5 * (b - a)
+        if middle == a or middle == b:
+            return middle
+        q = g_lo + slope_linear * (middle - lo) + _cubic_change(x, lo, middle, k3)
+        if q == 0.0:
+            return middle
+        if (q > 0.0) == (g_lo > 0.0):
+            a = middle
+        else:
+            b = middle
+    return a + 0.5 * (b - a)  # (never reached: the doubles between a and b run out first)
 
 
 @kernel
@@ -215,6 +236,95 @@ def _cubic_only_root(x, lo, g, k3):
 
 
 _EPS = 2.220446049250313e-16
+SETTLED = 2.0 ** -26  # a new position within this fraction of itself from the root is kept as it is
+SETTLING = 4400  # evaluations of the settling's search: 2100 doublings, then halvings (see settle)
+
+
+@kernel
+def _residual_at(y, x1, w, linear, offset, k0, k3, k, eta, cs, u, h):
+    """G at the position ``y`` near x1 = x + w: the smooth springs at y itself, the branches and the inertia at
+    w + (y - x1) (x + that increment, rounded, may not hold y)."""
+    moved = w + (y - x1)
+    direction = 1.0 if moved >= 0.0 else -1.0  # (the branches' force does not depend on it)
+    branches = branch_piece(k, eta, cs, u, moved, h, direction)[0]
+    return linear * moved + offset + elastic_force(y, k0, k3) + branches
+
+
+@kernel
+def _between(lo, hi):
+    """A point strictly between lo < hi that halves the doubles' span: the midpoint, or the geometric mean
+    where they are of one sign and decades apart, or 0 across it; lo or hi when none is left."""
+    if lo < 0.0 < hi:
+        return 0.0
+    a, b = abs(lo), abs(hi)
+    small, large = min(a, b), max(a, b)
+    if small == 0.0:
+        middle = large * 2.0 ** -64 if large * 2.0 ** -64 > 0.0 else large * 0.5
+    elif large > 4.0 * small:
+        middle = math.sqrt(small) * math.sqrt(large)
+    else:
+        middle = small + 0.5 * (large - small)
+    return middle if hi > 0.0 else -middle
+
+
+@kernel
+def settle(w, x, linear, offset, k0, k3, k, eta, cs, u, h):
+    """The new position x1 = x + w of a solved increment w, settled where w cannot carry it.
+
+    The solvers work on w = x1 - x and are exact to w's rounding, ulp(x): that is x1's error, nothing while
+    |x1| is of the order of |x|. When x1 falls far below x in one step (the force dropped by 1e15 on a cubic
+    spring; a coefficient changed by 1e100 mid-run) it may be: ulp(x) can exceed x1 itself (1e160 + w gave
+    0 where x1 = 1e60), and the cubic's residual, taken relative to x, keeps only eps k3 x^3 of accuracy (a
+    3e-3 error on x1 = 1 from x = 1e5). So when |x1| < |x| / 2 the step's equation is evaluated at x1
+    itself (:func:`_residual_at`; ``offset`` holds every constant, the friction's and Dahl's forces too), and
+    if x1 misses its root by more than SETTLED x1, the root is searched in x1 itself: G is non-decreasing
+    there, so a bracket from x1 (steps doubling from G's own estimate, at most 2100) and halvings of the
+    doubles between its ends (:func:`_between`: about 64) find it to rounding, within SETTLING evaluations;
+    past them x1 is kept (never expected: the doubles run out first). Bit for bit x + w in every other step.
+    """
+    x1 = x + w
+    if not abs(x1) < 0.5 * abs(x):
+        return x1
+    g = _residual_at(x1, x1, w, linear, offset, k0, k3, k, eta, cs, u, h)
+    if g == 0.0 or g != g:
+        return x1
+    forward = 1.0 if w >= 0.0 else -1.0  # the branches' stiffness is known in the direction of the step
+    sticking = branch_piece(k, eta, cs, u, w, h, forward)[1]
+    slope = _plus_spring(linear + sticking, k0) + _cubic_stiffness(x1, k3)
+    if abs(g) <= SETTLED * abs(x1) * slope:
+        return x1  # a root to SETTLED of itself: kept, bit for bit
+    d = -1.0 if g > 0.0 else 1.0  # the root lies beyond x1 in this direction
+    reach = abs(g) / slope if slope > 0.0 else max(abs(x1), 1e-300)
+    lo, hi, g_lo, g_hi = x1, x1, g, g  # d G(lo) < 0 <= d G(hi) once bracketed
+    bracketed = False
+    for _ in range(SETTLING):
+        if not bracketed:
+            trial = x1 + d * reach
+            if not abs(trial) < np.inf:
+                return x1  # no root below the largest double (never expected: the solver found one)
+            g_trial = _residual_at(trial, x1, w, linear, offset, k0, k3, k, eta, cs, u, h)
+            if g_trial != g_trial:
+                return x1
+            if d * g_trial < 0.0:
+                lo, g_lo, reach = trial, g_trial, 2.0 * reach
+                continue
+            hi, g_hi, bracketed = trial, g_trial, True
+            if g_trial == 0.0:
+                return trial
+            continue
+        middle = _between(min(lo, hi), max(lo, hi))
+        if middle == lo or middle == hi:  # adjacent doubles: the nearer to the root
+            return lo if abs(g_lo) < abs(g_hi) else hi
+        g_middle = _residual_at(middle, x1, w, linear, offset, k0, k3, k, eta, cs, u, h)
+        if g_middle == 0.0:
+            return middle
+        if g_middle != g_middle:
+            return x1
+        if d * g_middle < 0.0:
+            lo, g_lo = middle, g_middle
+        else:
+            hi, g_hi = middle, g_middle
+    return x1
 
 
 @kernel

@@ -19,6 +19,10 @@ With many branches the branch force and its pieces come from the memory
 stack (``kernels/stack.py``, :func:`~prandtl_fmu.kernels.stack.peek`): the
 solve then costs O(log n) per kink it crosses instead of O(n).
 
+The new position is x + w, except where w's rounding would swamp it (x1 decades below x in one step: a
+force that dropped by 1e15 on a cubic spring, a coefficient changed by 1e100):
+:func:`~prandtl_fmu.kernels.increment.settle` then finds the root in x1 itself.
+
 Order 1. Unconditionally stable: with no load the discrete energy
 m v^2/2 + k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 never increases, for any h,
 and with a load the energy balance residual (work - dissipated - change of
@@ -63,7 +67,7 @@ import numpy as np
 from .._jit import kernel
 from ..kernels.energy import book
 from ..kernels.friction import book_friction
-from ..kernels.increment import solve_held_increment, solve_increment
+from ..kernels.increment import settle, solve_held_increment, solve_increment
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.series import BACKWARD, move_branches
@@ -99,15 +103,19 @@ def step(model, load, t, h, x, v, s, u, energy):
     dahl = memory[2]
     if linear + stiffer < 0.0:  # a negative memory stiffness beyond the inertia's: no unique step (refused)
         return np.nan, np.nan, s
-    w, v1, f = _increment(friction, dahl, x, linear + stiffer, _momentum(m, v, h) - force + kept, k0, k3, k, eta,
-                          cs, u, h)
+    offset = _momentum(m, v, h) - force + kept
+    w, v1, f = _increment(friction, dahl, x, linear + stiffer, offset, k0, k3, k, eta, cs, u, h)
     if not abs(w) < np.inf:  # no equilibrium: plastic collapse
         return np.nan, np.nan, s
-    book(energy, force - kept - stiffer * w - _dahl_after(dahl, w), w, c, v1)  # the load's and the memory's work
+    dahl_force = _dahl_after(dahl, w)
+    # the new position, settled where w's rounding swamps it; the friction's and Dahl's forces at w are
+    # constants of the equation below w's rounding
+    x1 = settle(w, x, linear + stiffer, offset - f + dahl_force, k0, k3, k, eta, cs, u, h)
+    book(energy, force - kept - stiffer * w - dahl_force, w, c, v1)  # the load's and the memory's work
     book_friction(energy, friction, f, h, v1)
     s = move_branches(k, eta, cs, u, w, h, BACKWARD, energy)
-    record(memory, t, h, x, v, x + w, v1, w)
-    return x + w, v1, s
+    record(memory, t, h, x, v, x1, v1, w)
+    return x1, v1, s
 
 
 @kernel

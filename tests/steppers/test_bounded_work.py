@@ -264,3 +264,65 @@ def test_a_tiny_value_is_as_good_as_zero_and_accepted(table, key, value):
     assert math.isfinite(element.x)
     with pytest.raises(ValueError, match=r"^x0: \|1e\+60\| is above 1e\+50"):
         with_coefficients(scene, x0=1e60)
+
+
+# ------------------------------------------------------------------ no silent wrong number: the increment's rounding
+
+SWAMPING = {  # a step whose equilibrium lies orders of magnitude below where the element stands
+    "linear spring": dict(spring={"k0": 1e-50}, cubic=None, mass=None, change={"k0": 1e50}),
+    "cubic spring": dict(spring=None, cubic={"k3": 1e-50}, mass=None, change={"k3": 1e50}),
+    "both springs": dict(spring={"k0": 1e-50}, cubic={"k3": 1e-50}, mass=None, change={"k0": 1e50, "k3": 1e30}),
+    "mass": dict(spring={"k0": 1e-50}, cubic=None, mass={"m": 1.0}, change={"k0": 1e50}),
+    "mass with friction": dict(spring={"k0": 1e-50}, cubic=None, mass={"m": 1.0}, friction={"alpha": 3.0},
+                               change={"k0": 1e50}),
+    "mass with Dahl": dict(spring={"k0": 1e-50}, cubic=None, mass={"m": 1.0},
+                           dahl={"sigma": 30.0, "force": 2.0}, change={"k0": 1e50}),
+}
+
+
+@pytest.mark.parametrize("case", SWAMPING)
+def test_a_step_whose_equilibrium_falls_by_orders_of_magnitude_lands_on_it(case):
+    """x = 1e160 (one step under F = 1e110 on a spring of 1e-50), then the spring is made 1e100 times stiffer: the
+    step's new position (about 1e60) is 1e-100 of where it starts, below the rounding of its increment. It used
+    to land on x = 0 with a reaction of -1 N and an OK status (the next step then gave 1e60). The step's own
+    balance, reaction = F - m (v1 - v) / h, written here without the element's solver, must hold."""
+    tables = dict(SWAMPING[case])
+    change = tables.pop("change")
+    scene = make_scene(**tables, damper=None, load=None, solver=IMPLICIT,
+                       branches={"k": [1.0, 0.5], "eta": [1.0, 0.1], "u0": [0.0, 0.0]})
+    element = Element(scene)
+    force, h = 1e110, 1e-3
+    element.advance(h, force)
+    before_x, before_v = element.x, element.v
+    assert abs(before_x) > 1e50
+    element.set_coefficients(**change)
+    element.advance(h, force)
+    x1, v1 = element.x, element.v
+    m = scene.mass.m if scene.mass is not None else 0.0
+    balance = force - m * (v1 - before_v) / h
+    assert 0.0 < abs(x1) < 1e-20 * abs(before_x)
+    assert element.reaction == pytest.approx(balance, rel=1e-12)
+    if scene.friction is None and scene.dahl is None:  # the reaction is the springs' and the branches' alone
+        k0, k3 = change.get("k0", 0.0), change.get("k3", 0.0)
+        branches = 1.0 * -1.0 + 0.5 * -0.1  # both branches slid down to their lower thresholds
+        assert k0 * x1 + k3 * x1 ** 3 + branches == pytest.approx(balance, rel=1e-12)
+
+
+@pytest.mark.parametrize("drop", [1e9, 1e12, 1e15, 1e18])
+def test_a_cubic_spring_whose_force_drops_by_many_decades_lands_on_its_equilibrium(drop):
+    """A massless element on a cubic spring and one branch, pushed to k3 x^3 + alpha = drop, then under F = 1 N: the
+    quasi-static step must land on k3 x^3 - alpha = 1 (the branch slid back to -eta). The solver's residual,
+    taken relative to where the element stood, kept eps k3 x^3 of accuracy: x was 3e-3 wrong after a drop of
+    1e15 and 0 after 1e18. Now within SETTLED (2^-26) of the root always, to rounding past 1e12."""
+    from prandtl_fmu.kernels.increment import SETTLED
+
+    scene = make_scene(mass=None, spring=None, damper=None, load=None, cubic={"k3": 1.0}, solver=IMPLICIT,
+                       branches={"k": [1.0], "eta": [0.01], "u0": [0.0]})
+    element = Element(scene)
+    element.advance(1e-3, drop)
+    assert element.x == pytest.approx((drop - 0.01) ** (1 / 3), rel=1e-12)
+    element.advance(1e-3, 1.0)
+    root = 1.01 ** (1 / 3)
+    assert element.elongations()[0] == -0.01
+    assert element.x == pytest.approx(root, rel=SETTLED if drop < 1e12 else 4e-16)
+    assert element.reaction == pytest.approx(1.0, rel=3 * SETTLED if drop < 1e12 else 1e-15)

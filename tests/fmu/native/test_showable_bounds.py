@@ -186,3 +186,31 @@ def test_a_state_taken_while_the_energy_row_waits_is_restored(tmp_path):
     instance.restore(blob)
     assert instance.get(*names) == shown
     instance.close()
+
+
+@pytest.mark.slow
+def test_the_native_step_settles_a_fall_by_decades_as_the_library_does(tmp_path):
+    """The native FMU runs the library's implicit step, settle included (kernels/increment.settle; the library's
+    cases in tests/steppers/test_bounded_work.py): a massless cubic element pushed to x = 1e5 (F = 1e15 N), then
+    under F = 1 N, lands on k3 x^3 - sum alpha_i = 1 (it landed 3e-3 off), bit for bit the library's."""
+    pytest.importorskip("fmpy")
+    from prandtl_fmu import parse_scene
+    from prandtl_fmu.element import Element
+    from prandtl_fmu.fmu.build import build_fmu
+
+    from tests.conftest import scene_text
+    from tests.fmu_tools import OK, NativeInstance
+
+    tables = base_tables(mass=None, spring=None, cubic={"k3": 1.0}, damper=None, load=None,
+                         branches={"k": [0.5, 0.3], "eta": [0.1, 0.3]},
+                         solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
+    (tmp_path / "massless_cubic.toml").write_text(scene_text(tables))
+    fmu = build_fmu(tmp_path / "massless_cubic.toml", tmp_path / "massless_cubic.fmu", runtime="native")
+    instance = NativeInstance(str(fmu))
+    element = Element(parse_scene(scene_text(tables)))
+    for force in (1e15, 1.0):
+        assert instance.step(1e-3, force) == OK
+        element.advance(1e-3, force)
+        assert instance.get("x", "reaction") == [element.x, element.reaction]
+    assert element.x == pytest.approx((1.0 + 0.5 * 0.1 + 0.3 * 0.3) ** (1 / 3), rel=4e-16)
+    instance.close()
