@@ -2,9 +2,13 @@
 
 ``compile_model(scene)`` is ``(m, k0, k3, c, k, eta, cs, friction, memory)``,
 ``None`` where an effect is absent (a scene that leaves an effect out has no
-such entry: no flags tested in the hot loop):
+such entry: no flags tested in the hot loop), but for the two springs:
 
-* ``m`` (kg), ``k0`` (N/m), ``k3`` (N/m^3), ``c`` (N s/m): the smooth part;
+* ``m`` (kg), ``k0`` (N/m), ``k3`` (N/m^3), ``c`` (N s/m): the smooth part. ``k0`` and ``k3`` are always
+  numbers, 0 where the scene has no such spring: an absent spring is then a multiply-add by zero (exact: the
+  same numbers, bit for bit) and no loop of its own. Each None doubles the loops numba compiles for the
+  combinations of effects a process meets (the quick suite compiled 215 loops, 86 s of them for the springs'
+  four combinations: docs/benchmarks.md). The native FMU keeps them None (one scene, one binary);
 * ``k``, ``eta``, ``cs``: the branches, as the O(n) play kernel's arrays
   (stiffness, yield displacement, series dashpots: shape (n,)) or as the
   memory stack's parameters (``kernels/stack.py``; :func:`choose_branch_kernel`);
@@ -61,16 +65,27 @@ def _branch_model(scene: Scene, branch_kernel: str) -> tuple:
         return (None, None, None)
     if branches.continuum:
         return (branches.params, None, None)
-    k = np.ascontiguousarray(branches.stiffness, dtype=float)
-    eta = np.ascontiguousarray(branches.yield_displacement, dtype=float)
+    k = _read_only(branches.stiffness)
+    eta = _read_only(branches.yield_displacement)
     if branches.damping is not None:
         if branch_kernel == "stack":
             raise ValueError("series dashpots run on the O(n) kernel only: a relaxing branch has no memory stack")
-        return (k, eta, np.ascontiguousarray(branches.damping, dtype=float))
+        return (k, eta, _read_only(branches.damping))
     if branch_kernel == "stack":
         params, _ = stack.prepare(k, eta, branches.u0)
         return (params, None, None)
     return (k, eta, None)
+
+
+def _read_only(values) -> np.ndarray:
+    """``values`` as a contiguous read-only float array: the branches' coefficients, never written by a kernel.
+    One layout for all (a scene's arrays are read-only, one built otherwise may not be): numba compiles a loop
+    for each."""
+    array = np.ascontiguousarray(values, dtype=float)
+    if array.flags.writeable:
+        array = array.copy()
+        array.setflags(write=False)
+    return array
 
 
 def friction_model(scene: Scene):
@@ -88,15 +103,15 @@ def with_scene_coefficients(scene: Scene, model: tuple) -> tuple:
     dashpots and its friction; the branch kernel's parameters and state stay."""
     cs = model[6]
     if cs is not None:
-        cs = np.ascontiguousarray(scene.branches.damping, dtype=float)
+        cs = _read_only(scene.branches.damping)
     return _smooth_model(scene) + model[4:6] + (cs, friction_model(scene), model[8])
 
 
 def _smooth_model(scene: Scene):
     """``(m, k0, k3, c)``: the part of :func:`compile_model` that does not depend on the branches."""
     m = float(scene.mass.m) if scene.mass is not None else None
-    k0 = scene.spring.k0 if scene.spring is not None else None
-    k3 = scene.cubic.k3 if scene.cubic is not None else None
+    k0 = float(scene.spring.k0) if scene.spring is not None else 0.0  # (0: no loop of its own, see above)
+    k3 = float(scene.cubic.k3) if scene.cubic is not None else 0.0
     c = scene.damper.c if scene.has_dashpot else None  # c = 0: no dashpot at all
     return (m, k0, k3, c)
 
