@@ -4,11 +4,12 @@
 ``None`` where an effect is absent (a scene that leaves an effect out has no
 such entry: no flags tested in the hot loop), but for the two springs:
 
-* ``m`` (kg), ``k0`` (N/m), ``k3`` (N/m^3), ``c`` (N s/m): the smooth part. ``k0`` and ``k3`` are always
-  numbers, 0 where the scene has no such spring: an absent spring is then a multiply-add by zero (exact: the
-  same numbers, bit for bit) and no loop of its own. Each None doubles the loops numba compiles for the
-  combinations of effects a process meets (the quick suite compiled 215 loops, 86 s of them for the springs'
-  four combinations: docs/benchmarks.md). The native FMU keeps them None (one scene, one binary);
+* ``m`` (kg), ``k0`` (N/m), ``k3`` (N/m^3), ``c`` (N s/m): the smooth part. ``k0``, ``k3`` and ``c`` are
+  always numbers, 0 where the scene has no such spring or dashpot: an absent one is then a multiply-add by
+  zero (exact: the same numbers, bit for bit) and no loop of its own. Each None doubles the loops numba
+  compiles for the combinations of effects a process meets (the quick suite compiled 215 loops, 167 s of
+  them for these three's eight combinations: docs/benchmarks.md). ``m`` stays None for the massless element
+  (another equation, not a zero mass). The native FMU keeps every None (one scene, one binary);
 * ``k``, ``eta``, ``cs``: the branches, as the O(n) play kernel's arrays
   (stiffness, yield displacement, series dashpots: shape (n,)) or as the
   memory stack's parameters (``kernels/stack.py``; :func:`choose_branch_kernel`);
@@ -112,7 +113,7 @@ def _smooth_model(scene: Scene):
     m = float(scene.mass.m) if scene.mass is not None else None
     k0 = float(scene.spring.k0) if scene.spring is not None else 0.0  # (0: no loop of its own, see above)
     k3 = float(scene.cubic.k3) if scene.cubic is not None else 0.0
-    c = scene.damper.c if scene.has_dashpot else None  # c = 0: no dashpot at all
+    c = float(scene.damper.c) if scene.has_dashpot else 0.0  # c = 0: no dashpot at all
     return (m, k0, k3, c)
 
 

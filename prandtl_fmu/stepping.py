@@ -78,7 +78,7 @@ def initial_state(scene: Scene, model, load):
     operator moves the branches) and v = 0. ElementError if none exists.
     """
     m, k0, k3, c, k, eta, cs, friction, memory = model
-    if has_memory(memory) and scene.mass is None and c is None:
+    if has_memory(memory) and scene.mass is None and not scene.has_dashpot:
         return _initial_with_memory(scene, model, load)
     if stack.is_stack(k):  # the memory stack: its state stands for the elongations
         u = stack.fresh_state(k, _initial_x(scene))
@@ -87,7 +87,7 @@ def initial_state(scene: Scene, model, load):
     if scene.mass is not None:
         return scene.mass.x0, scene.mass.v0, u
     force = force_at(load, 0.0)
-    if c is not None:
+    if scene.has_dashpot:
         return 0.0, (force - elastic_force(0.0, k0, k3) - branch_force(k, u) - force_now(memory, 0.0, 0.0, 0.0)) / c, u
     w = solve_increment(0.0, 0.0, -force, k0, k3, k, eta, None, u, 0.0)  # an instant: no dashpot relaxes
     if not math.isfinite(w):
