@@ -2,14 +2,15 @@
 
 ``compile_model(scene)`` is ``(m, k0, k3, c, k, eta, cs, friction, memory)``,
 ``None`` where an effect is absent (a scene that leaves an effect out has no
-such entry: no flags tested in the hot loop), but for the two springs:
+such entry: no flags tested in the hot loop), but for the springs and the dashpot:
 
 * ``m`` (kg), ``k0`` (N/m), ``k3`` (N/m^3), ``c`` (N s/m): the smooth part. ``k0``, ``k3`` and ``c`` are
   always numbers, 0 where the scene has no such spring or dashpot: an absent one is then a multiply-add by
   zero (exact: the same numbers, bit for bit) and no loop of its own. Each None doubles the loops numba
-  compiles for the combinations of effects a process meets (the quick suite compiled 215 loops, 167 s of
-  them for these three's eight combinations: docs/benchmarks.md). ``m`` stays None for the massless element
-  (another equation, not a zero mass). The native FMU keeps every None (one scene, one binary);
+  compiles for the combinations of effects a process meets (the quick suite compiled 215 loops, 472 s,
+  before; 125, 290 s, after: docs/benchmarks.md). ``m`` stays None for the massless element
+  (another equation, not a zero mass). The native FMU's kernels build the same tuple, so they share the
+  library's compiled loops;
 * ``k``, ``eta``, ``cs``: the branches, as the O(n) play kernel's arrays
   (stiffness, yield displacement, series dashpots: shape (n,)) or as the
   memory stack's parameters (``kernels/stack.py``; :func:`choose_branch_kernel`);

@@ -13,7 +13,10 @@ and the *reaction* is the force the effects exert on the point,
 
 A scene holds one object per effect that is present and ``None`` for an effect
 that is absent; the kernels receive ``None`` for an absent effect and numba
-compiles it away, so an absent effect costs nothing in the time loop.
+compiles it away, so an absent effect costs nothing in the time loop. The
+springs and the dashpot are the exception in the library (``compiled.py``): an
+absent one is a zero coefficient, a multiply-add measured within 1 % of none,
+so that their combinations share one compiled loop.
 """
 from __future__ import annotations
 

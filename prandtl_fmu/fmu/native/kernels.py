@@ -51,7 +51,9 @@ t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cs
 (``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
 cache, the Dahl force, then the delay's buffer of ``nd`` values, sized by the FMU at its initialization from the
 delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A scene with ``[damper]`` gets every function
-twice, with c and without (c = 0 is no dashpot at all in the library's model: ``driver._smooth_model``).
+twice, with c and without (c = 0 is no dashpot at all: the massless element's equation changes); the model tuple
+is the library's (``compiled.compile_model``), an absent spring or dashpot a zero, so both variants and the
+library's own runs share each stepper's compiled loop.
 """
 from __future__ import annotations
 
@@ -265,8 +267,8 @@ def structure(scene, unfolded=False) -> dict:
     return {
         "n": n,
         "m": "p[0]" if scene.mass is not None else "None",
-        "k0": "p[3]" if scene.spring is not None else "None",
-        "k3": "p[4]" if scene.cubic is not None else "None",
+        "k0": "p[3]" if scene.spring is not None else "0.0",  # the library's model: compiled.compile_model
+        "k3": "p[4]" if scene.cubic is not None else "0.0",
         "k": (f"(carray(kp, {branches.params[0].shape}),)" if continuum else f"carray(kp, (10, {n + 1}))"
               if on_stack else f"carray(kp, ({n},))" if n else "None"),
         "eta": "None" if on_stack else f"carray(etap, ({n},))" if n else "None",
@@ -531,7 +533,7 @@ def compile_kernels(scene, steppers) -> list:
     kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
     for suffix, damped in variants(scene):
         for unfolded, shape in kernels:
-            source = _TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False",
+            source = _TEMPLATE.format(c="p[5]" if damped else "0.0", damped="True" if damped else "False",
                                       noise_cache=NOISE_CACHE_SIZE, **shape)
             for stepper in list(steppers) + [None]:
                 if stepper and shape["stack"] == "True" and not takes_stack(stepper):
@@ -638,7 +640,7 @@ def _compile_connector(scene, shape) -> list:
     compiled = []
     has_memory = "True" if memory_layout(scene)["names"] else "False"
     for suffix, damped in variants(scene):
-        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "None", damped="True" if damped else "False",
+        source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "0.0", damped="True" if damped else "False",
                                             has_memory=has_memory, **shape)
         namespace = dict(carray=carray, np=np, drive=drive, drive_with_memory=drive_with_memory, tangent=tangent,
                          stored=stored, branch_force=branch_force, write_elongations=write_elongations,
