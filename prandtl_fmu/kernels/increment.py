@@ -281,6 +281,10 @@ def settle(w, x, linear, offset, k0, k3, k, eta, cs, u, h):
     there, so a bracket from x1 (steps doubling from G's own estimate, at most 2100) and halvings of the
     doubles between its ends (:func:`_between`: about 64) find it to rounding, within SETTLING evaluations;
     past them x1 is kept (never expected: the doubles run out first). Bit for bit x + w in every other step.
+    x1 is kept only if its residual is small against a slope the root surely sees: the springs' and the
+    inertia's, and the sticking branches' only if the root lies before their next kink in the step's own
+    direction (the pieces are known in that direction only). The branches' elongations still move by w
+    (an elongation as large as x keeps w's rounding: a limit, docs/stability.md).
     """
     x1 = x + w
     if not abs(x1) < 0.5 * abs(x):
@@ -288,12 +292,14 @@ def settle(w, x, linear, offset, k0, k3, k, eta, cs, u, h):
     g = _residual_at(x1, x1, w, linear, offset, k0, k3, k, eta, cs, u, h)
     if g == 0.0 or g != g:
         return x1
-    forward = 1.0 if w >= 0.0 else -1.0  # the branches' stiffness is known in the direction of the step
-    sticking = branch_piece(k, eta, cs, u, w, h, forward)[1]
-    slope = _plus_spring(linear + sticking, k0) + _cubic_stiffness(x1, k3)
+    d = -1.0 if g > 0.0 else 1.0  # the root lies beyond x1 in this direction
+    forward = 1.0 if w >= 0.0 else -1.0  # the branches' piece is known in the direction of the step only
+    _, sticking, room = branch_piece(k, eta, cs, u, w, h, forward)
+    slope = _plus_spring(linear, k0) + _cubic_stiffness(x1, k3)  # the slope of G near x1, at least
+    if d == forward and abs(g) <= room * (slope + sticking):
+        slope += sticking  # the root lies before the next kink: the sticking branches hold there
     if abs(g) <= SETTLED * abs(x1) * slope:
         return x1  # a root to SETTLED of itself: kept, bit for bit
-    d = -1.0 if g > 0.0 else 1.0  # the root lies beyond x1 in this direction
     reach = abs(g) / slope if slope > 0.0 else max(abs(x1), 1e-300)
     lo, hi, g_lo, g_hi = x1, x1, g, g  # d G(lo) < 0 <= d G(hi) once bracketed
     bracketed = False

@@ -326,3 +326,24 @@ def test_a_cubic_spring_whose_force_drops_by_many_decades_lands_on_its_equilibri
     assert element.elongations()[0] == -0.01
     assert element.x == pytest.approx(root, rel=SETTLED if drop < 1e12 else 4e-16)
     assert element.reaction == pytest.approx(1.0, rel=3 * SETTLED if drop < 1e12 else 1e-15)
+
+
+def test_a_fall_by_decades_that_crosses_a_branch_s_kink_near_its_root_lands_on_it():
+    """The review's case: a stiff branch (k = 1e8) whose kink lies between the solver's x1 and the root, after a
+    fall from x = 1e5 to about 1. The settling's test kept x1 when its residual was small against the sticking
+    branch's stiffness, which the branch loses beyond the kink: x1 stayed 4e-2 off. The root here is the cube
+    root of F + k eta (the branch slid to -eta), computed exactly; the equation's own terms (k eta = 5e12) leave
+    it a rounding of about eps 5e12 / 3 k3 = 4e-4."""
+    from fractions import Fraction
+
+    x, k, h = 1e5, 1e8, 1e-3
+    eta = (x - 1.04) / 2
+    force = 1.0 - k * eta
+    scene = make_scene(mass={"m": 1e-50, "x0": x, "v0": 0.0}, spring=None, damper=None, load=None,
+                       cubic={"k3": 1.0}, branches={"k": [k], "eta": [eta], "u0": [eta]},
+                       solver=dict(IMPLICIT, step=h))
+    element = Element(scene)
+    element.advance(h, force)
+    root = float(Fraction(force) + Fraction(k) * Fraction(eta)) ** (1 / 3)  # the mass's m (x1 - x) / h^2: 1e-39
+    assert element.elongations()[0] == pytest.approx(-eta, rel=1e-15)
+    assert element.x == pytest.approx(root, rel=1e-3)
