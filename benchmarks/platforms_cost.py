@@ -8,7 +8,8 @@ names (``--platforms all``). Reported:
   linked: ``platforms.build_binaries``), and the whole build's (the PythonFMU build whose model description it
   takes and numba's compile of the kernels, done once for all platforms, included); warm numba and zig caches;
 * ``size``: each binary's bytes and the FMU's;
-* ``step``: one doStep of one internal step under F = 0.3 N and one getReal of every output, in the C host of
+* ``step``: one doStep of one internal step under F = 0.3 N (scene_load false: F alone, as the library's step is
+  timed) and one getReal of every output, in the C host of
   tests/c_host/cross_host.c (built for each platform: gcc, mingw-w64, aarch64-linux-gnu-gcc), against the library's
   compiled step alone (``Element.advance`` of 1000 steps, per step), timed just before each run of the host: the
   ratio is the median of the runs' ratios (the machine is shared: its load drifts between runs). The win64 binary runs
@@ -121,7 +122,8 @@ def host_step(fmu, fmi, platform_name, folder, stepper, h, count, repeat):
     for _ in range(repeat):
         reference = library_step(stepper, h)
         done = subprocess.run([*prefix, str(host), str(library), token, "file:///unused", vr["stepper"], stepper,
-                               vr["F"], ",".join(outputs), f"time:{count}:{h!r}:0.3"], capture_output=True,
+                               vr["F"], ",".join(outputs), f"noload:{vr['scene_load']}", f"time:{count}:{h!r}:0.3"],
+                              capture_output=True,
                               text=True, check=True)
         runs.append(float(done.stdout.split()[-1]) / count)
         ratios.append(runs[-1] / reference)
