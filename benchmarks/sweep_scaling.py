@@ -118,7 +118,7 @@ def main():
                  "seconds": one_full, "runs_per_second": 1 / one_full, "overhead_fraction": "",
                  "scheduler_share": ""})
     write_rows(os.path.join(args.out, "sweep_scaling.csv"), rows)
-    lines = [f"# 10^6 runs of the paper's scene (T = 500 s), from this machine's measurements",
+    lines = ["# 10^6 runs of the paper's scene (T = 500 s), from this machine's measurements",
              "", f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores. One run: "
              f"{one_full:.3f} s. Overhead fraction measured with 2 workers: {efficiency:.3f}.", "",
              "| machines x cores | hours |", "|---|---|"]

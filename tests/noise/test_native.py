@@ -20,7 +20,6 @@ from prandtl_fmu import load_scene, parse_scene, simulate
 from prandtl_fmu.element import Element
 from prandtl_fmu.loads import WhiteNoise
 from prandtl_fmu.fmu.native.kernels import applicable, noise_refusal
-from prandtl_fmu.network import NetworkElement
 from prandtl_fmu.network import simulate as simulate_network
 
 from tests.noise.scenes import noisy_element

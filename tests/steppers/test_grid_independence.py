@@ -4,18 +4,15 @@
 Each test here failed before the fix it guards (issue: "Trust every number and every exit").
 """
 import math
-import warnings
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from prandtl_fmu import Element, parse_scene, simulate
+from prandtl_fmu import Element, simulate
 from prandtl_fmu import driver
-from prandtl_fmu.stepping import ElementError
 from prandtl_fmu.effects import Damper, Mass, Spring
 from prandtl_fmu.kernels.increment import solve_increment
-from prandtl_fmu.kernels import stack
 from prandtl_fmu.stability import growth_per_period, stability_problem, step_limit
 
 from tests.conftest import base_tables, make_scene, scene_text

@@ -1,8 +1,6 @@
 """Property-based checks on random scenes (hypothesis, derandomized and bounded for CI): a result does not
 depend on the output grid, the chunking or how a master cuts its communication steps, and `exact` agrees with
 an independent extrapolated `verlet` run (issue: "Trust every number and every exit")."""
-import math
-
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st

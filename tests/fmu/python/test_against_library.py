@@ -11,7 +11,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from prandtl_fmu import Element, load_scene, parse_scene, simulate
-from prandtl_fmu.stepping import ENERGY_COLUMNS, energy_columns
+from prandtl_fmu.stepping import energy_columns
 from prandtl_fmu.fmu.build import build_fmu
 from prandtl_fmu.fmu.description import scene_load_notice
 from prandtl_fmu.fmu.documentation import equations
