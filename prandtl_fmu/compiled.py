@@ -8,7 +8,7 @@ such entry: no flags tested in the hot loop), but for the springs and the dashpo
   always numbers, 0 where the scene has no such spring or dashpot: an absent one is then a multiply-add by
   zero (exact: the same numbers, bit for bit) and no loop of its own. Each None doubles the loops numba
   compiles for the combinations of effects a process meets (the quick suite compiled 215 loops, 472 s,
-  before; 125, 290 s, after: docs/benchmarks.md). ``m`` stays None for the massless element
+  before; 107, 276 s, after: docs/benchmarks.md). ``m`` stays None for the massless element
   (another equation, not a zero mass). The native FMU's kernels build the same tuple, so they share the
   library's compiled loops;
 * ``k``, ``eta``, ``cs``: the branches, as the O(n) play kernel's arrays
