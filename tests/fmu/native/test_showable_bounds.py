@@ -129,23 +129,30 @@ def test_the_limits_are_no_obstacle_at_physical_magnitudes():
     assert out[0] == 0.0
 
 
-@pytest.mark.slow
-def test_a_native_step_whose_stored_energy_overflows_is_refused_naming_it(tmp_path):
-    """A massless element with a cubic spring under F = 1e300: x = (F / k3)^(1/3) = 1e100 is beyond the limit of
-    |x|, the reaction (F) and the stiffness (3e200) are numbers but the stored energy k3 x^4 / 4 is not: the step
-    is refused naming it, the state unchanged, and a step under a force of a thousand newtons is taken as
-    before."""
+def massless_cubic_fmu(tmp_path):
+    """(tables, the native FMU) of a massless element on a cubic spring and two branches, stepped by implicit."""
     pytest.importorskip("fmpy")
     from prandtl_fmu.fmu.build import build_fmu
 
     from tests.conftest import scene_text
-    from tests.fmu_tools import DISCARD, OK, NativeInstance
 
     tables = base_tables(mass=None, spring=None, cubic={"k3": 1.0}, damper=None, load=None,
                          branches={"k": [0.5, 0.3], "eta": [0.1, 0.3]},
                          solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
     (tmp_path / "massless_cubic.toml").write_text(scene_text(tables))
     fmu = build_fmu(tmp_path / "massless_cubic.toml", tmp_path / "massless_cubic.fmu", runtime="native")
+    return tables, fmu
+
+
+@pytest.mark.slow
+def test_a_native_step_whose_stored_energy_overflows_is_refused_naming_it(tmp_path):
+    """A massless element with a cubic spring under F = 1e300: x = (F / k3)^(1/3) = 1e100 is beyond the limit of
+    |x|, the reaction (F) and the stiffness (3e200) are numbers but the stored energy k3 x^4 / 4 is not: the step
+    is refused naming it, the state unchanged, and a step under a force of a thousand newtons is taken as
+    before."""
+    from tests.fmu_tools import DISCARD, OK, NativeInstance
+
+    _, fmu = massless_cubic_fmu(tmp_path)
     instance = NativeInstance(str(fmu))
     assert instance.step(0.01, 1000.0) == OK
     before = instance.get("x", "stored_energy", "stiffness")
@@ -193,19 +200,13 @@ def test_the_native_step_settles_a_fall_by_decades_as_the_library_does(tmp_path)
     """The native FMU runs the library's implicit step, settle included (kernels/increment.settle; the library's
     cases in tests/steppers/test_bounded_work.py): a massless cubic element pushed to x = 1e5 (F = 1e15 N), then
     under F = 1 N, lands on k3 x^3 - sum alpha_i = 1 (it landed 3e-3 off), bit for bit the library's."""
-    pytest.importorskip("fmpy")
     from prandtl_fmu import parse_scene
     from prandtl_fmu.element import Element
-    from prandtl_fmu.fmu.build import build_fmu
 
     from tests.conftest import scene_text
     from tests.fmu_tools import OK, NativeInstance
 
-    tables = base_tables(mass=None, spring=None, cubic={"k3": 1.0}, damper=None, load=None,
-                         branches={"k": [0.5, 0.3], "eta": [0.1, 0.3]},
-                         solver={"stepper": "implicit", "step": 1e-3, "stop_time": 1.0, "output_interval": 0.1})
-    (tmp_path / "massless_cubic.toml").write_text(scene_text(tables))
-    fmu = build_fmu(tmp_path / "massless_cubic.toml", tmp_path / "massless_cubic.fmu", runtime="native")
+    tables, fmu = massless_cubic_fmu(tmp_path)
     instance = NativeInstance(str(fmu))
     element = Element(parse_scene(scene_text(tables)))
     for force in (1e15, 1.0):
