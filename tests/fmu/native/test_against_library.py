@@ -479,7 +479,10 @@ def test_a_second_build_of_the_same_kernels_only_links(fmus, tmp_path, monkeypat
 
 
 def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypatch):
-    """A scene with another coefficient is another entry; an entry with an object missing is not used."""
+    """A scene with another coefficient is another entry; an entry with an object missing is not used. The entry
+    damaged is a copy in a cache folder of the test's own: the run's other builds of the paper scene keep theirs."""
+    import shutil
+
     from prandtl_fmu import _jit
     from prandtl_fmu.fmu.archive import built_scene
     from prandtl_fmu.fmu.build import build_fmu
@@ -490,7 +493,12 @@ def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypa
     scene, scene_bytes = built_scene(scene_path, None)
     objects = element_objects(scene, scene_bytes, kernels.applicable(scene), platforms.resolve(None, 2))
     assert objects.cached, "the fixture's build kept no entry"
-    entry = _jit.cache_root() / "native-objects" / objects.digest
+    kept = _jit.cache_root() / "native-objects" / objects.digest
+    own_root = tmp_path / "cache"
+    entry = own_root / "native-objects" / objects.digest
+    kept_objects = sorted(kept.rglob("*.o"))
+    shutil.copytree(kept, entry)
+    monkeypatch.setattr(_jit, "cache_root", lambda: own_root)
     monkeypatch.setattr(kernels, "compile_kernels", refuse_to_compile)
     other = tmp_path / "other.toml"
     text = scene_path.read_text()
@@ -501,6 +509,7 @@ def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypa
     next(entry.rglob("*.o")).unlink()
     with pytest.raises(CompiledAnyway):
         build_fmu(scene_path, tmp_path / "damaged.fmu", runtime="native")
+    assert sorted(kept.rglob("*.o")) == kept_objects
 
 
 def test_the_cli_builds_a_native_fmu(tmp_path):
