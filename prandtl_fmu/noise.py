@@ -317,7 +317,8 @@ def _bridge(left, right, z, sd):
 @kernel
 def _root(seed):
     """W(2^52) in coarse quanta."""
-    return np.int64(math.floor(_ROOT_SD * normal(seed, _ROOT_STREAM, 0) + 0.5))
+    # the stream and index as int64, not constants: a constant argument would compile normal() again for it
+    return np.int64(math.floor(_ROOT_SD * normal(seed, np.int64(_ROOT_STREAM), np.int64(0)) + 0.5))
 
 
 @inline_kernel

@@ -37,8 +37,9 @@ DX, DV, U_MAX, W_MAX, L2, L2_U, L2_ENERGY, L2_MEAN, L2_SLIDER, L2_XV, L2_VU, X_N
 MEASURES = ("x", "v", "u_max", "w_max", "l2", "l2_u", "l2_energy", "l2_mean", "l2_slider", "l2_xv", "l2_vu",
             "x_new", "x_trap")
 COUNT = len(MEASURES)
-# the nodes (rows of ``maxima``): coarse nodes; fine nodes against the linear interpolant; against the held value
-COARSE, LINEAR, HELD = range(3)
+# the nodes (rows of ``maxima``): coarse nodes; fine nodes against the linear interpolant; against the held value.
+# int64, not the constants 0, 1, 2, for each of which numba would compile _keep once more (tests/compiled_copies.py)
+COARSE, LINEAR, HELD = np.int64(0), np.int64(1), np.int64(2)
 KINDS = ("coarse", "linear", "held")
 # the three profiles a difference is made of (rows of ``states``): the coarse run, the fine run, the coarse run's
 # previous node

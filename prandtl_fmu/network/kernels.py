@@ -55,6 +55,10 @@ from .chain import scratch as chain_scratch
 
 SPRING, DASHPOT, SLIDER, BRANCH, CUBIC = 0, 1, 2, 3, 4
 GROUND = -1
+# ``fixed_node`` of a step that imposes no node's increment. An int64, not the constant -1: numba compiles a
+# kernel called with a constant argument again for that constant (a literal is a signature of its own), so the
+# counters and flags handed to kernels below start as np.int64 / np.bool_ too (tests/networks/test_mechanics.py)
+NO_NODE = np.int64(-1)
 # pieces: a slider 0 (stuck: a constraint), +1 / -1 (slipping forwards / backwards); a branch 0 (elastic),
 # +1 / -1 (clipped at +eta / -eta), +2 / -2 (at its kink +eta / -eta: a constraint)
 STUCK, ELASTIC = 0, 0
@@ -571,10 +575,10 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
         d[fixed_node] = fixed_increment
     _start_pieces(model, x, u, piece, d, h)
     budget = search_budget(n, elements)
-    width = 1  # the half bandwidth of the clusters' matrix allocated (grown when a working set needs more)
+    width = np.int64(1)  # the half bandwidth of the clusters' matrix allocated (grown when a working set needs more)
     room = np.empty(elements)  # how far each element may move along the direction (np.inf: unbounded)
     moving = np.empty(elements, np.int64)  # the elements the direction moves (their force changes)
-    single = False  # release one constraint at a time (after a release of several met a kink at once)
+    single = np.bool_(False)  # release one constraint at a time (after a release of several met a kink at once)
     released_many = False
     for iteration in range(budget):
         count = _clusters(n, kind, ends, piece, parent, cluster, fixed_node)
@@ -603,7 +607,7 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
                 if abs(rhs[c]) > ROUNDING * size[c]:
                     balanced = False
         top = 1.0
-        row = 0
+        row = np.int64(0)
         while True:
             singular = _factor(a, band, row, anchor)
             if singular <= -2:
@@ -651,7 +655,7 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
         # of a triple root), as far as no kink stops it
         tau = 0.0 if converged else (np.inf if has_cubic else top)
         blocker = -1
-        count_moving = 0
+        count_moving = np.int64(0)
         for e in range(elements if not converged else 0):
             kd = kind[e]
             room[e] = np.inf
@@ -840,7 +844,7 @@ def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated, c
     unchanged but for the pieces)."""
     force = force_at(load, t + h)
     force = with_noise(load, force, force + impulse(load, t, h) / h)  # a white noise: the step's mean force
-    status = solve_step(model, x, v, u, piece, h, force, -1, 0.0, work, chain_work)
+    status = solve_step(model, x, v, u, piece, h, force, NO_NODE, 0.0, work, chain_work)
     if status < 0:
         return status, np.nan
     return status, commit(model, x, v, u, piece, h, force, work, energy, dissipated)
@@ -1122,7 +1126,7 @@ def initial_state(model, x, v, u, piece, force):
     u2 = np.zeros(count)
     for e in range(u.shape[0]):  # not u2[extra:] = u, whose shape check formats its message with libm's log10
         u2[extra + e] = u[e]
-    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, -1, 0.0, work)
+    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, NO_NODE, 0.0, work)
     if status < 0:
         return status
     commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
@@ -1156,7 +1160,7 @@ def initial_reaction(model, x, v, u, force):
         u2 = np.zeros(instant[1].shape[0])
         for e in range(u.shape[0]):  # not u2[extra:] = u (libm's log10 in numba's shape check)
             u2[extra + e] = u[e]
-        status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, -1, 0.0, work)
+        status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, NO_NODE, 0.0, work)
         if status >= 0:
             held = work[5]
             for e in range(count):

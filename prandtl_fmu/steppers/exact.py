@@ -261,6 +261,9 @@ def _leaving_direction(a, y0):
 
 
 NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL, EXHAUSTED = -1, 0, 1, 2, 3
+# the components of y a search reads (x, v): int64, not the constants 0 and 1, for which numba would compile
+# _refine and _row_times once more each (a constant argument is a signature of its own)
+POSITION, VELOCITY = np.int64(0), np.int64(1)
 
 
 @kernel
@@ -456,7 +459,7 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
     if y0[1] != 0.0:
         sign = math.copysign(1.0, y0[1])
     if sign == 0.0:
-        sign = math.copysign(1.0, _row_times(a, y0, 1))  # at rest: v leaves zero with the acceleration
+        sign = math.copysign(1.0, _row_times(a, y0, VELOCITY))  # at rest: v leaves zero with the acceleration
     while True:  # from one zero of v to the next
         budget[0] -= 1
         if budget[0] < 0:
@@ -477,7 +480,7 @@ def _first_event(a, y0, load, t, m, c, stiffness, span, direction, up, down, sli
         final = zero < 0.0
         z = span if final else zero
         if sign * (_expm_times(a, z, y0)[0] - level) >= 0.0:  # x is monotone on [lo, z]
-            return _refine(a, y0, lo, z, 0, level, -sign), reached
+            return _refine(a, y0, lo, z, POSITION, level, -sign), reached
         if final:
             return span, NO_EVENT
         if sliding:
@@ -533,29 +536,29 @@ def _next_zero_free(a, y0, m, c, stiffness, lo, hi, sign, at_zero):
                 return -1.0
             b = min(hi, lo + 1.5 * half)  # the next zero is lo + half: alone in (lo, lo + 2 half)
             if _leaves(a, y0, b, sign):
-                return _refine(a, y0, lo + 0.5 * half, b, 1, 0.0, sign)
+                return _refine(a, y0, lo + 0.5 * half, b, VELOCITY, 0.0, sign)
             return b  # only rounding can leave v on its side past lo + half, and only when b = hi
         # exactly one zero in (lo, lo + half]. First the sign at lo + half/2, where v is far from 0 unless the zero
         # is there: a zero within rounding of lo (v(lo) = 5e-93 under a large force) puts the next one within
         # rounding of lo + half, where the sign test alone said "no zero", and a level crossing was missed.
         middle = min(hi, lo + 0.5 * half)
         if _leaves(a, y0, middle, sign):
-            return _refine(a, y0, lo, middle, 1, 0.0, sign)
+            return _refine(a, y0, lo, middle, VELOCITY, 0.0, sign)
         if middle == hi:
             return -1.0
         b = min(hi, lo + half)
         if _leaves(a, y0, b, sign):
-            return _refine(a, y0, middle, b, 1, 0.0, sign)
+            return _refine(a, y0, middle, b, VELOCITY, 0.0, sign)
         if b == hi:
             return -1.0
         b2 = min(hi, lo + 1.5 * half)  # the zero is at lo + half within rounding
         if _leaves(a, y0, b2, sign):
-            return _refine(a, y0, b, b2, 1, 0.0, sign)
+            return _refine(a, y0, b, b2, VELOCITY, 0.0, sign)
         return -1.0 if b2 == hi else b2
     if at_zero:
         return -1.0  # a sum of two real exponentials has at most one zero: it was lo
     if _leaves(a, y0, hi, sign):
-        return _refine(a, y0, lo, hi, 1, 0.0, sign)
+        return _refine(a, y0, lo, hi, VELOCITY, 0.0, sign)
     return -1.0
 
 
@@ -585,7 +588,7 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm, budget):
             return np.nan, False  # the step's budget ran out: the step fails (see attempt)
         y = _expm_times(a, lo, y0)
         if lo > start and sign * (y[0] - level) >= 0.0:
-            return _refine(a, y0, previous, lo, 0, level, -sign), True
+            return _refine(a, y0, previous, lo, POSITION, level, -sign), True
         b = min(hi, lo + length)
         length = b - lo
         # v^(p)(lo + s) = row 1 of A^p e^(A s) y = row 1 of A^(p-1) e^(A s) (A y): bounded through |y| or through
@@ -612,13 +615,13 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm, budget):
             if _leaves(a, y0, b, sign):
                 if sign * v <= 0.0 and lo > start:
                     return lo, False
-                return _refine(a, y0, lo, b, 1, 0.0, sign), False
+                return _refine(a, y0, lo, b, VELOCITY, 0.0, sign), False
             previous, lo = lo, b
             length = min(2.0 * length, longest)
             continue
         length *= 0.5
     if lo > start and sign * (_expm_times(a, lo, y0)[0] - level) >= 0.0:
-        return _refine(a, y0, previous, lo, 0, level, -sign), True
+        return _refine(a, y0, previous, lo, POSITION, level, -sign), True
     return -1.0, False
 
 

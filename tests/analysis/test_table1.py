@@ -78,6 +78,18 @@ def test_the_lockstep_distance_on_the_stack_is_the_dense_one(n, seed, spread):
     assert dense["held"]["x"] > dense["linear"]["x"]  # and the kinds of node measure different things
 
 
+def test_the_lockstep_keeps_its_maxima_with_one_compiled_kernel():
+    """The lockstep hands _keep the kind of node as an int64, not the constants 0, 1, 2 numba compiled it once
+    more for each: after a run, the cache of this run holds no kernel signature with a literal
+    (tests/compiled_copies.py)."""
+    from tests.compiled_copies import literal_signatures
+
+    scene = make_scene(cubic=None, damper=None)
+    maxima = table1.lockstep_run(scene, 0.02, steps=50)["maxima"]
+    assert all(maxima[kind]["x"] > 0.0 for kind in KINDS)
+    assert literal_signatures() == []
+
+
 @pytest.mark.parametrize("n, seed, spread", [(7, 11, 0.0), (300, 12, 0.0), (3000, 13, 0.7), (3000, 15, 0.0),
                                              (2, 14, -0.3)])
 def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):

@@ -1063,3 +1063,16 @@ def test_cli_runs_a_network_and_refuses_with_one_line(tmp_path):
         assert done.returncode == 2, done.stderr
         assert len(done.stderr.strip().splitlines()) == 1, done.stderr
         assert "Traceback" not in done.stderr and culprit in done.stderr
+
+
+def test_the_network_s_kernels_are_compiled_once_not_once_more_per_constant_argument():
+    """The implicit step of a network is handed "no node imposed" and its counters and flags as int64 and bool,
+    not as constants, for each of which numba compiled the step again (a literal is a signature of its own: the
+    active-set step twice, 38 s of a cold suite). The cache of this run holds no kernel signature with a
+    literal (tests/compiled_copies.py), after the kernels ran: a network's steps, its initial state (two masses
+    and a slider, which the active-set method solves) and a massless chain (its own programme)."""
+    from tests.compiled_copies import literal_signatures
+
+    assert np.isfinite(simulate(two_masses(0.01, stop=0.5)[0]).x).all()
+    assert np.isfinite(simulate(massless_chain(3, 1.0, 0.5, 1.0, 1.0, steps_per_second=64)).x).all()
+    assert literal_signatures() == []

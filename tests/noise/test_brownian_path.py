@@ -310,3 +310,13 @@ def test_the_increment_compiles_as_a_cfunc_without_python_nor_libm():
     declared = set(re.findall(r"declare [^@]*@([\w.]+)", str(c_increment._library._final_module)))
     assert not {name for name in declared if re.match(r"(llvm\.)?(log|exp|pow|sin|cos|tan|atan|erf)", name)}
     assert "llvm.floor.f64" in declared  # the pattern sees the module's declarations
+
+
+def test_the_path_s_kernels_are_compiled_once_not_once_more_per_constant_argument():
+    """The root of the path draws its normal with the stream and index as int64, not as the constants numba
+    compiled normal() and its block once more for (a literal is a signature of its own): the cache of this run
+    holds no kernel signature with a literal (tests/compiled_copies.py) once a path has been drawn."""
+    from tests.compiled_copies import literal_signatures
+
+    assert math.isfinite(brownian(3, 0.5, new_cache()))
+    assert literal_signatures() == []

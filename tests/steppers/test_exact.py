@@ -119,6 +119,17 @@ def test_exact_handles_every_branch_event_of_the_paper_scene(paper_exact):
     np.testing.assert_allclose(exact.reaction, exact.u @ scene.branches.stiffness, atol=1e-15)
 
 
+def test_exact_s_event_search_is_compiled_once_not_once_more_per_constant_argument(paper_exact):
+    """The search reads x and v of y as int64 components, not as the constants 0 and 1 numba compiled _refine
+    once more for each (a literal is a signature of its own): the cache of this run holds no kernel signature
+    with a literal (tests/compiled_copies.py) once the paper scene's events were found (levels up and down, and
+    reversals: every branch's threshold is reached, above)."""
+    from tests.compiled_copies import literal_signatures
+
+    assert np.any(np.diff(np.sign(paper_exact[1].v)) != 0)
+    assert literal_signatures() == []
+
+
 def test_exact_refuses_what_it_cannot_do():
     with pytest.raises(ValueError, match="no \\[cubic\\]"):
         get_stepper("exact").loop_for(make_scene())

@@ -579,7 +579,8 @@ def compile_stability(scene):
 
     from ...stability import check
 
-    massive = scene.mass is not None
+    # a np.bool_, not True or False: check() is then the library's own compiled one, not a copy for a constant
+    massive = np.bool_(scene.mass is not None)
     has_spring, has_cubic, has_damper = (scene.spring is not None, scene.cubic is not None,
                                          scene.damper is not None)
     stribeck = scene.friction is not None and scene.friction.stribeck_velocity is not None

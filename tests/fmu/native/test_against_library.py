@@ -745,6 +745,16 @@ def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, setting
     assert bool(warnings["native"]) == (settings["stepper"] != "implicit" or name == "friction")
 
 
+def test_the_native_stability_kernel_calls_the_library_s_compiled_check(fmus):
+    """The native build's stability kernel hands check() the element's having a mass as a bool, not the constant
+    True numba compiled check() once more for: after the module's builds, the cache of this run holds no kernel
+    signature with a literal (tests/compiled_copies.py)."""
+    from tests.compiled_copies import literal_signatures
+
+    assert fmus["smooth"][0].is_file()
+    assert literal_signatures() == []
+
+
 # ------------------------------------------------------------------ the package (issue 33, items 2-4)
 
 def _entries(path):
