@@ -26,7 +26,11 @@ folder, never beside the sources:
   sources (``__pycache__``) and would write there, into a folder that can
   vanish under a running process (the crash the FMU used to meet). When the
   user's cache folder cannot be created, caching is off altogether
-  (``CACHE``): never beside the sources.
+  (``CACHE``): never beside the sources;
+* each edit of the kernels, or upgrade, starts a new folder; a process marks
+  its own as used when it starts and removes the folders of the library and of
+  the FMUs' bundled copies that no process started on for a month
+  (:func:`prune_stale`).
 
 ``PRANDTL_FMU_JIT_CACHE=0`` turns the cache off (everything compiles in every
 process).
@@ -109,16 +113,69 @@ def cache_root() -> pathlib.Path:
 
 
 def _usable_root():
-    """:func:`cache_root`, created; None if it cannot be (no home, read-only disk, ...)."""
+    """:func:`cache_root`, created and marked as used now (:func:`prune_stale`); None if it cannot be (no home,
+    read-only disk, ...)."""
     try:
         root = cache_root()
         root.mkdir(parents=True, exist_ok=True)
         probe = root / f".probe-{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()
-        return root
     except (OSError, RuntimeError, ValueError):
         return None
+    prune_stale(root)
+    return root
+
+
+# The folders of compiled code this package makes beside one another: the library's and, for the PythonFMU
+# FMUs, the bundled copy's (fmu/python/entry.py), each named after the digest of its sources. An upgrade or an
+# edit of the kernels starts a new one (15 to 85 MB); nothing else would ever remove the old ones.
+_OURS = re.compile(r"(prandtl_fmu|prandtl_slave_[0-9a-f]+_lib)-[0-9a-f]{16}")
+USED = "last-used"  # a file in each folder whose time is when a process last started on it
+STALE_AFTER = 30 * 24 * 3600.0  # seconds: a folder no process started on for this long is removed
+
+
+def prune_stale(root: pathlib.Path, now=None) -> list:
+    """Mark ``root`` as used now; remove the folders of :data:`_OURS` beside it that no process has started on
+    for :data:`STALE_AFTER` (by their mark, else their own time), and the remains of a removal that was cut
+    short. A folder is renamed away first, so that no process sees half of it. Returns the names removed.
+    Bounded: one listing of the cache folder; never raises (a folder it cannot remove stays)."""
+    import shutil
+    import time
+
+    now = time.time() if now is None else now
+    removed = []
+    try:
+        (root / USED).touch()
+        names = os.listdir(root.parent)
+    except OSError:
+        return removed
+    for name in names:
+        folder = root.parent / name
+        if name.startswith(".") and ".removing-" in name and _OURS.fullmatch(name[1:].partition(".removing-")[0]):
+            shutil.rmtree(folder, ignore_errors=True)  # a removal cut short (the process was killed)
+            continue
+        if name == root.name or not _OURS.fullmatch(name):
+            continue
+        try:
+            used = _used_time(folder)
+            if now - used < STALE_AFTER:
+                continue
+            doomed = root.parent / f".{name}.removing-{os.getpid()}"
+            os.rename(folder, doomed)
+        except OSError:
+            continue
+        shutil.rmtree(doomed, ignore_errors=True)
+        removed.append(name)
+    return removed
+
+
+def _used_time(folder: pathlib.Path) -> float:
+    """When a process last started on ``folder``: its mark's time, else (a folder made before the marks) its own."""
+    try:
+        return (folder / USED).stat().st_mtime
+    except FileNotFoundError:
+        return folder.stat().st_mtime
 
 
 def _install_locator(root: pathlib.Path, digest: str) -> bool:

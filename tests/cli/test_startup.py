@@ -7,6 +7,7 @@ import pathlib
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 
@@ -137,6 +138,37 @@ def test_no_usable_cache_folder_means_no_cache_not_a_cache_beside_the_sources(tm
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["False", "2.0"]
+
+
+def test_a_process_marks_its_cache_folder_and_removes_ours_unused_for_a_month(tmp_path):
+    """Each edit of the kernels or upgrade starts a cache folder of its own (15 to 85 MB): a process marks its
+    folder as used and removes the folders of the library and of the FMUs' bundled copies that no process
+    started on for 30 days (by their mark, else their own time), and what a removal cut short left. Folders
+    that are not ours, or ours but used within the month, stay."""
+    day = 24 * 3600.0
+    now = time.time()
+    ages = {"prandtl_fmu-0123456789abcdef": 40, "prandtl_fmu-fedcba9876543210": 29,
+            "prandtl_slave_a9b740f31440_lib-0123456789abcdef": 31, "prandtl_slave_a9b740f31440_source": 400,
+            "other-0123456789abcdef": 400, "prandtl_fmu-0123": 400, ".prandtl_fmu-00112233aabbccdd.removing-7": 0}
+    for name, age in ages.items():
+        folder = tmp_path / name
+        (folder / "sub").mkdir(parents=True)
+        (folder / "sub" / "kernel.nbi").write_bytes(b"x")
+        if name.startswith("prandtl_fmu-f"):
+            (folder / "last-used").write_bytes(b"")  # marked 29 days ago, the folder itself older
+            os.utime(folder / "last-used", (now - age * day,) * 2)
+            age = 400
+        os.utime(folder, (now - age * day,) * 2)
+    code = "import prandtl_fmu._jit as j; print(j.CACHE, j.cache_root().name)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
+    assert done.returncode == 0, done.stderr
+    cache, own = done.stdout.split()
+    assert cache == "True"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([
+        own, "prandtl_fmu-fedcba9876543210", "prandtl_slave_a9b740f31440_source", "other-0123456789abcdef",
+        "prandtl_fmu-0123"])
+    assert now - (tmp_path / own / "last-used").stat().st_mtime < day
 
 
 FMU_RUN = textwrap.dedent("""\
