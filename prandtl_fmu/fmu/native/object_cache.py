@@ -8,15 +8,18 @@ causality), the steppers, the kind, the sources of the kernels (the package's co
 folder, ``_jit.cache_root``) and of this folder's Python, numba's and llvmlite's versions, and the target. Their
 digest names an entry under ``<cache root>/native-objects``:
 
-    <digest>/symbols.json        {C name: the function's symbol in its object}
+    <digest>/symbols.json        {"token": ..., "symbols": {C name: the function's symbol in its object}}
     <digest>/<triple>/*.o        one object per C function
-    <digest>/<triple>/external.json  the symbols its modules declare without defining (what the stubs provide)
+    <digest>/<triple>/external.json  {"token": ..., "external": the symbols its modules declare without
+                                 defining (what the stubs provide)}
 
-An entry is written whole into a folder of its own, then renamed into place: a reader sees a whole entry or
-none, and two builds of the same kernels at once both finish. An entry that lacks a target the build needs is
-replaced whole (the symbols of a new compilation need not be those of the old one). At most :data:`KEEP`
-entries are kept, the least recently used removed first. With no usable cache folder (``_jit.CACHE`` false),
-every build compiles.
+An entry is written whole into a folder of its own, then renamed into place, and two builds of the same kernels
+at once both finish. An entry that lacks a target the build needs is replaced whole (the symbols of a new
+compilation need not be those of the old one): removed, then the new one renamed into place. A reader that
+raced such a replacement could read the old symbols and the new objects; each entry carries a random token in
+its symbols and in each target's externals, read after that target's objects, and a reader that finds them
+differ compiles (an entry that vanished under it too). At most :data:`KEEP` entries are kept, the least
+recently used removed first. With no usable cache folder (``_jit.CACHE`` false), every build compiles.
 """
 from __future__ import annotations
 
@@ -25,6 +28,7 @@ import json
 import os
 import shutil
 import tempfile
+import uuid
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -68,13 +72,17 @@ class KernelObjects:
         if entry is None or not entry.is_dir():
             return None
         try:
-            read = {"symbols": json.loads((entry / "symbols.json").read_text())}
+            symbols = json.loads((entry / "symbols.json").read_text())
+            read = {"symbols": symbols["symbols"]}
             for target in targets:
                 where = entry / target.triple
-                read[target.triple] = ({name: (where / f"{name}.o").read_bytes() for name in read["symbols"]},
-                                       set(json.loads((where / "external.json").read_text())))
+                objects = {name: (where / f"{name}.o").read_bytes() for name in read["symbols"]}
+                external = json.loads((where / "external.json").read_text())  # after the objects: the token
+                if external["token"] != symbols["token"]:  # says they are of the symbols' entry
+                    return None  # replaced while this build read it: compile
+                read[target.triple] = (objects, set(external["external"]))
             os.utime(entry)  # recently used
-        except (OSError, ValueError):  # a target missing, or removed meanwhile: compile
+        except (OSError, ValueError, KeyError, TypeError):  # a target missing, removed meanwhile, or damaged
             return None
         return read
 
@@ -117,14 +125,15 @@ class KernelObjects:
         try:
             root.mkdir(parents=True, exist_ok=True)
             partial = Path(tempfile.mkdtemp(prefix=f".{self.digest[:16]}-", dir=root))
+            token = uuid.uuid4().hex
             try:
                 for target, (paths, external) in emitted.items():
                     where = partial / target.triple
                     where.mkdir()
                     for path in paths:
                         shutil.copyfile(path, where / path.name)
-                    (where / "external.json").write_text(json.dumps(sorted(external)))
-                (partial / "symbols.json").write_text(json.dumps(self.symbols()))
+                    (where / "external.json").write_text(json.dumps({"token": token, "external": sorted(external)}))
+                (partial / "symbols.json").write_text(json.dumps({"token": token, "symbols": self.symbols()}))
                 entry = root / self.digest
                 if entry.exists():
                     shutil.rmtree(entry, ignore_errors=True)  # it lacked a target: replaced whole

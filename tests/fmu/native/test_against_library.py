@@ -3,6 +3,7 @@
 Bit for bit the library (every native stepper, random communication steps, every output), in FMPy and in the
 small C host of tests/c_host run with no Python at all; a binary that names no Python symbol; refusals as the
 PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
+import json
 import os
 import shutil
 import subprocess
@@ -479,10 +480,10 @@ def test_a_second_build_of_the_same_kernels_only_links(fmus, tmp_path, monkeypat
 
 
 def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypatch):
-    """A scene with another coefficient is another entry; an entry with an object missing is not used. The entry
-    damaged is a copy in a cache folder of the test's own: the run's other builds of the paper scene keep theirs."""
-    import shutil
-
+    """A scene with another coefficient is another entry; an entry with an object missing is not used, nor one
+    whose objects are of another entry than its symbols (a build that read it while another build replaced it:
+    their tokens differ). The entries damaged are copies in a cache folder of the test's own: the run's other
+    builds of the paper scene keep theirs."""
     from prandtl_fmu import _jit
     from prandtl_fmu.fmu.archive import built_scene
     from prandtl_fmu.fmu.build import build_fmu
@@ -509,6 +510,13 @@ def test_other_kernels_or_a_damaged_entry_compile_again(fmus, tmp_path, monkeypa
     next(entry.rglob("*.o")).unlink()
     with pytest.raises(CompiledAnyway):
         build_fmu(scene_path, tmp_path / "damaged.fmu", runtime="native")
+    shutil.rmtree(entry)
+    shutil.copytree(kept, entry)
+    build_fmu(scene_path, tmp_path / "intact.fmu", runtime="native")  # the copy whole: used, nothing compiled
+    externals = next(entry.rglob("external.json"))
+    externals.write_text(json.dumps(dict(json.loads(externals.read_text()), token="another entry's")))
+    with pytest.raises(CompiledAnyway):
+        build_fmu(scene_path, tmp_path / "mixed.fmu", runtime="native")
     assert sorted(kept.rglob("*.o")) == kept_objects
 
 
