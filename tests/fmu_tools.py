@@ -84,9 +84,10 @@ OK, DISCARD, ERROR = 0, 2, 3  # FMI's statuses (2.0 and 3.0)
 class NativeInstance:
     """One instance of a native FMU (FMI 2.0 or 3.0) through FMPy, its messages kept; ``start``: values set in
     initialization mode, scene_load false unless it sets it (:func:`driven_by_f`; ``refused``: the status of a
-    refused exit of initialization mode, else None); ``start_time``: the experiment's."""
+    refused exit of initialization mode, else None); ``start_time``: the experiment's; ``driven`` false: the
+    scene's own load stays as the FMU starts it (``start`` may still set scene_load)."""
 
-    def __init__(self, fmu, name="element", start=None, start_time=0.0):
+    def __init__(self, fmu, name="element", start=None, start_time=0.0, driven=True):
         from fmpy import extract, read_model_description
 
         md = read_model_description(fmu)
@@ -122,7 +123,7 @@ class NativeInstance:
             self.fmu.enterInitializationMode()
         else:
             self.fmu.enterInitializationMode(startTime=start_time)
-        for key, value in driven_by_f(self.types, start).items():
+        for key, value in (driven_by_f(self.types, start) if driven else start or {}).items():
             self.set(key, value)
         from fmpy.fmi1 import FMICallException
 
@@ -172,6 +173,12 @@ class NativeInstance:
             return exc.status
         self.time += size
         return OK
+
+    def get_state(self):
+        return self.fmu.getFMUstate() if self.fmi == 2 else self.fmu.getFMUState()
+
+    def set_state(self, state):
+        (self.fmu.setFMUstate if self.fmi == 2 else self.fmu.setFMUState)(state)
 
     def serialize(self) -> bytes:
         if self.fmi == 2:

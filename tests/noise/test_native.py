@@ -22,6 +22,7 @@ from prandtl_fmu.loads import WhiteNoise
 from prandtl_fmu.fmu.native.kernels import applicable, noise_refusal
 from prandtl_fmu.network import simulate as simulate_network
 
+from tests.fmu_tools import DISCARD, OK, NativeInstance
 from tests.noise.scenes import noisy_element
 from tests.paths import ROOT
 
@@ -32,7 +33,6 @@ if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is N
 # every test builds native FMUs (30-60 s each): under -m slow
 pytestmark = pytest.mark.slow
 
-OK, DISCARD, ERROR = 0, 2, 3
 REFUSED_UNTIL = "; steps are refused until it is set right"
 
 ELEMENT = noisy_element(3.0)
@@ -161,97 +161,23 @@ def fmu_columns(fmu, name, **start):
     return result["time"], [result[column] for column in COLUMNS[name]]
 
 
-class Instance:
-    """One FMI 2.0 or 3.0 instance of a native FMU through FMPy, by variable names, with its log."""
+class Instance(NativeInstance):
+    """A native FMU's instance as these tests drive it: under the scene's own load unless ``start`` turns it off,
+    one output at a time (an Integer one too), a refused initialization raised."""
 
     def __init__(self, fmu, start=None, name="noisy"):
-        from fmpy import extract, read_model_description
-
-        md = read_model_description(fmu)
-        self.fmi = 3 if md.fmiVersion.startswith("3") else 2
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.types = {v.name: v.type for v in md.modelVariables}
-        self.messages = []
-        self.time = 0.0
-        folder = extract(fmu)
-        if self.fmi == 2:
-            from fmpy import calloc, free
-            from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                                   fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-
-            self._logger = fmi2CallbackLoggerTYPE(self._log2)  # kept alive with the instance
-            callbacks = fmi2CallbackFunctions()
-            callbacks.logger = self._logger
-            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            self._callbacks = callbacks
-            self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder,
-                                 modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-            self.fmu.instantiate(callbacks=callbacks, loggingOn=False)
-            self.fmu.setupExperiment(startTime=0.0)
-        else:
-            from fmpy.fmi3 import FMU3Slave
-
-            self.fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=folder,
-                                 modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-            self.fmu.instantiate(loggingOn=False, logMessage=self._log3)
-        self.fmu.enterInitializationMode()
-        for key, value in (start or {}).items():
-            self.set(key, value)
-        self.fmu.exitInitializationMode()
-
-    def _log2(self, env, instance, status, category, message):
-        self.messages.append((status, message.decode("utf-8", "replace")))
-
-    def _log3(self, env, status, category, message):
-        self.messages.append((status, message.decode("utf-8", "replace")))
-
-    def set(self, name, value):
-        kind, vr = self.types[name], [self.vr[name]]
-        if kind == "String":
-            self.fmu.setString(vr, [value])
-        elif kind == "Boolean":
-            self.fmu.setBoolean(vr, [value])
-        elif kind in ("Integer", "Int32"):
-            (self.fmu.setInteger if self.fmi == 2 else self.fmu.setInt32)(vr, [value])
-        else:
-            (self.fmu.setReal if self.fmi == 2 else self.fmu.setFloat64)(vr, [value])
+        super().__init__(fmu, name=name, start=start, driven=False)
+        if self.refused is not None:
+            raise RuntimeError(f"exitInitializationMode refused ({self.refused}): {self.messages}")
 
     def get(self, name):
-        vr = [self.vr[name]]
         if self.types[name] in ("Integer", "Int32"):
-            return (self.fmu.getInteger if self.fmi == 2 else self.fmu.getInt32)(vr)[0]
-        return (self.fmu.getReal if self.fmi == 2 else self.fmu.getFloat64)(vr)[0]
+            return (self.fmu.getInteger if self.fmi == 2 else self.fmu.getInt32)([self.vr[name]])[0]
+        return super().get(name)[0]
 
     def step(self, size):
-        """One doStep from the instance's time; its status (FMPy raises beyond a warning)."""
-        from fmpy.fmi1 import FMICallException
-
-        try:
-            self.fmu.doStep(self.time, size)
-        except FMICallException as exc:
-            return exc.status
-        self.time += size
-        return OK
-
-    def get_state(self):
-        return self.fmu.getFMUstate() if self.fmi == 2 else self.fmu.getFMUState()
-
-    def set_state(self, state):
-        (self.fmu.setFMUstate if self.fmi == 2 else self.fmu.setFMUState)(state)
-
-    def serialize(self, state) -> bytes:
-        return bytes(self.fmu.serializeFMUstate(state) if self.fmi == 2 else self.fmu.serializeFMUState(state))
-
-    def deserialize(self, blob):
-        return self.fmu.deSerializeFMUstate(blob) if self.fmi == 2 else self.fmu.deserializeFMUState(blob)
-
-    def said(self, words):
-        return [message for _, message in self.messages if words in message]
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+        """One doStep under the scene's load; its status."""
+        return self.do_step(size)
 
 
 # ------------------------------------------------------------------ the library's path, bit for bit
@@ -335,9 +261,9 @@ def test_rollback_and_split_steps_redraw_the_same_path(built, name, fmi):
     for _ in range(6):  # 0.125 s each: whole numbers of internal steps of 0.005 s
         assert two.step(0.125) == OK
     assert two.get(out) == first
-    blob = two.serialize(two.get_state())
+    blob = two.serialize()
     three = Instance(fmu, {"scene_load": True}, name="restored")
-    three.set_state(three.deserialize(blob))
+    three.restore(blob)
     three.time = two.time
     assert two.step(0.3) == OK and three.step(0.3) == OK
     assert three.get(out) == two.get(out)
@@ -382,10 +308,10 @@ def test_a_restored_state_carries_the_noise_settings(built):
     fmu, _ = built["element", 2]
     saved = Instance(fmu, {"scene_load": True, "noise_seed": 99, "noise_intensity": 0.9})
     assert saved.step(0.2) == OK
-    blob = saved.serialize(saved.get_state())
+    blob = saved.serialize()
     assert saved.step(0.2) == OK
     other = Instance(fmu, {"scene_load": True}, name="other")
-    other.set_state(other.deserialize(blob))
+    other.restore(blob)
     other.time = 0.2
     assert (other.get("noise_seed"), other.get("noise_intensity")) == (99, 0.9)
     assert other.step(0.2) == OK and other.get("x") == saved.get("x")
