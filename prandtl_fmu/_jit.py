@@ -123,7 +123,10 @@ def _usable_root():
         probe.unlink()
     except (OSError, RuntimeError, ValueError):
         return None
-    prune_stale(root)
+    try:
+        prune_stale(root)
+    except Exception:  # never let the cache's housekeeping stop the library from importing
+        pass
     return root
 
 
@@ -139,7 +142,9 @@ def prune_stale(root: pathlib.Path, now=None) -> list:
     """Mark ``root`` as used now; remove the folders of :data:`_OURS` beside it that no process has started on
     for :data:`STALE_AFTER` (by their mark, else their own time), and the remains of a removal that was cut
     short. A folder is renamed away first, so that no process sees half of it. Returns the names removed.
-    Bounded: one listing of the cache folder; never raises (a folder it cannot remove stays)."""
+    Bounded: one listing of the cache folder; never raises (a folder it cannot remove stays). A process that
+    runs for longer than :data:`STALE_AFTER` without another starting on its folder may see it removed: it
+    then compiles again what it had not loaded yet."""
     import shutil
     import time
 
@@ -166,16 +171,19 @@ def prune_stale(root: pathlib.Path, now=None) -> list:
         except OSError:
             continue
         shutil.rmtree(doomed, ignore_errors=True)
-        removed.append(name)
+        if not doomed.exists():
+            removed.append(name)
     return removed
 
 
 def _used_time(folder: pathlib.Path) -> float:
-    """When a process last started on ``folder``: its mark's time, else (a folder made before the marks) its own."""
+    """When a process last started on ``folder``: the later of its mark's time and its own (which the start's
+    probe file also moves: a process that could not move the mark, another user's, still counts)."""
     try:
-        return (folder / USED).stat().st_mtime
+        marked = (folder / USED).stat().st_mtime
     except FileNotFoundError:
-        return folder.stat().st_mtime
+        marked = 0.0
+    return max(marked, folder.stat().st_mtime)
 
 
 def _install_locator(root: pathlib.Path, digest: str) -> bool:

@@ -4,28 +4,42 @@ numba compiles a kernel called with a constant (``solve_step(..., -1, ...)``, ``
 for that constant: a literal is a signature of its own. The network's implicit step was compiled twice that way,
 38 s of a cold run of the suite; the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
 
-The check reads the cache's index files (every signature any process compiled from these sources), not the
-dispatchers of this process, which hold only what this process compiled or loaded: a kernel loaded whole from
-the cache never types its callees.
+The check reads the cache's index files (every signature any process compiled from these sources, with this
+numba), not the dispatchers of this process, which hold only what this process compiled or loaded: a kernel
+loaded whole from the cache never types its callees. Two processes compiling the same kernel at once may each
+write the index without the other's entry (numba rewrites it whole), so a copy can escape one run; the checks
+name the kernels they need to find, so that an empty or disabled cache fails instead of passing.
 """
 import pickle
 
-from numba.core import types
+import numba
 
 from prandtl_fmu import _jit
 
 
-def literal_signatures() -> list:
-    """``name(signature)`` of every cached kernel signature with a literal argument."""
-    found = []
+def cached_signatures() -> dict:
+    """``{index name: [signature, ...]}`` of the cache of these sources for this numba (``kernels.solve_step``:
+    the module's file name and the function's)."""
+    assert _jit.CACHE, "no cache folder: nothing to check"
+    found = {}
     for path in sorted(_jit.cache_root().rglob("*.nbi")):
         try:
             with open(path, "rb") as index:
-                pickle.load(index)  # numba's version
+                if pickle.load(index) != numba.__version__:
+                    continue  # another numba's entries, which this one ignores too
                 _, overloads = pickle.loads(index.read())
-        except (OSError, EOFError, pickle.UnpicklingError):  # another process is replacing it
+        except Exception:  # being replaced by another process, or unreadable here: not this run's to judge
             continue
-        for key in overloads:
-            if any(isinstance(argument, types.Literal) for argument in key[0]):
-                found.append(f"{path.stem}{key[0]}")
+        name = path.name.split("-")[0]
+        found.setdefault(name, []).extend(str(key[0]) for key in overloads)
     return found
+
+
+def literal_signatures(*needed) -> list:
+    """``name(signature)`` of every cached signature with a literal argument, at any depth (a tuple of
+    constants too); ``needed``: index names that must be in the cache (else AssertionError)."""
+    signatures = cached_signatures()
+    missing = [name for name in needed if name not in signatures]
+    assert not missing, f"not in the cache: {missing}"
+    return [f"{name}{signature}" for name, listed in signatures.items() for signature in listed
+            if "Literal[" in signature]

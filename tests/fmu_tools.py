@@ -185,11 +185,12 @@ class NativeInstance:
             return bytes(self.fmu.serializeFMUstate(self.fmu.getFMUstate()))
         return bytes(self.fmu.serializeFMUState(self.fmu.getFMUState()))
 
+    def deserialize(self, blob):
+        """The FMU state ``blob`` holds (FMPy raises on a refusal)."""
+        return self.fmu.deSerializeFMUstate(blob) if self.fmi == 2 else self.fmu.deserializeFMUState(blob)
+
     def restore(self, blob):
-        if self.fmi == 2:
-            self.fmu.setFMUstate(self.fmu.deSerializeFMUstate(blob))
-        else:
-            self.fmu.setFMUState(self.fmu.deserializeFMUState(blob))
+        self.set_state(self.deserialize(blob))
 
     def said(self, words):
         return [message for _, message in self.messages if words in message]

@@ -579,7 +579,8 @@ def compile_stability(scene):
 
     from ...stability import check
 
-    # a np.bool_, not True or False: check() is then the library's own compiled one, not a copy for a constant
+    # a np.bool_, not True or False: one compiled check() for every element, not a copy for each constant (it is
+    # not the library's: this closure's k_branch is a read-only constant, the library's a writable array)
     massive = np.bool_(scene.mass is not None)
     has_spring, has_cubic, has_damper = (scene.spring is not None, scene.cubic is not None,
                                          scene.damper is not None)
