@@ -1,8 +1,8 @@
 """The kernels this run's numba cache holds a copy of for a constant argument.
 
 numba compiles a kernel called with a constant (``solve_step(..., -1, ...)``, ``_refine(..., 1, ...)``) once more
-for that constant: a literal is a signature of its own. The network's implicit step was compiled twice that way,
-38 s of a cold run of the suite; the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
+for that constant: a literal is a signature of its own. The network's implicit step was compiled twice that way;
+the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
 
 The check reads the cache's index files (every signature any process compiled from these sources, with this
 numba), not the dispatchers of this process, which hold only what this process compiled or loaded: a kernel

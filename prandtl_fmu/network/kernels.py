@@ -555,7 +555,7 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     linear system is too ill-conditioned to be solved in double precision. A massless chain takes its O(n)
     programme (``chain.py``), every other network (or a chain past that programme's budget) the active-set
     method. ``chain_work``: the arrays the chain's programme works in (``chain.scratch``; None: allocated by
-    it)."""
+    it). The kernels here always hand it: one compiled solve_step, not a second for an omitted argument."""
     status = chain_step(model, x, piece, force, fixed_node, work[0], work[5], chain_work)
     if status != -1:
         return status
@@ -1035,11 +1035,12 @@ def move_node(model, x, v, u, piece, work, energy, dissipated, node, target, who
     total = whole * h + rest
     done = 0.0
     count = whole + (1 if rest > 0.0 else 0)
+    chain_work = chain_scratch(x.shape[0])
     for p in range(count):
         size = h if p < whole else rest
         done += size
         there = target if p == count - 1 else start + (target - start) * (done / total)
-        status = solve_step(model, x, v, u, piece, size, 0.0, node, there - x[node], work)
+        status = solve_step(model, x, v, u, piece, size, 0.0, node, there - x[node], work, chain_work)
         if status < 0:
             return status, p
         commit(model, x, v, u, piece, size, 0.0, work, energy, dissipated)
@@ -1126,7 +1127,7 @@ def initial_state(model, x, v, u, piece, force):
     u2 = np.zeros(count)
     for e in range(u.shape[0]):  # not u2[extra:] = u, whose shape check formats its message with libm's log10
         u2[extra + e] = u[e]
-    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, NO_NODE, 0.0, work)
+    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, NO_NODE, 0.0, work, chain_scratch(n))
     if status < 0:
         return status
     commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
@@ -1160,7 +1161,8 @@ def initial_reaction(model, x, v, u, force):
         u2 = np.zeros(instant[1].shape[0])
         for e in range(u.shape[0]):  # not u2[extra:] = u (libm's log10 in numba's shape check)
             u2[extra + e] = u[e]
-        status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, NO_NODE, 0.0, work)
+        status = solve_step(instant, x.copy(), np.zeros(n), u2, piece, 1.0, force, NO_NODE, 0.0, work,
+                            chain_scratch(n))
         if status >= 0:
             held = work[5]
             for e in range(count):
@@ -1208,7 +1210,7 @@ def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
         u2[extra + e] = u[e]
     for e in range(kind.shape[0]):
         piece2[extra + e] = piece[e]
-    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, node, target - x[node], work)
+    status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, node, target - x[node], work, chain_scratch(n))
     if status < 0:
         return status, np.nan
     d = work[0]
