@@ -138,7 +138,15 @@ def _hardening(scene: Scene) -> bool:
 
 def integrate(loop, model, load, x, v, u, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy):
     """Run a stepper's compiled ``loop`` (``kernels/loop.py``): ``out.shape[0] * steps_per_row`` steps of
-    size ``h`` from step number ``first_step`` (t_p = t_base + p h). Returns ``(x, v, steps taken)``."""
+    size ``h`` from step number ``first_step`` (t_p = t_base + p h). Returns ``(x, v, steps taken)``.
+
+    ``out_u`` and ``out_energy`` not asked for (None) are handed as arrays with no column: the loop then writes
+    nothing there, and a run with them and one without share one compiled loop (numba compiles one for each
+    combination of types: docs/benchmarks.md)."""
+    if out_u is None:
+        out_u = np.empty((out.shape[0], 0))
+    if out_energy is None:
+        out_energy = np.empty((out.shape[0], 0))
     return loop(model, load, x, v, u, float(t_base), int(first_step), float(h), int(steps_per_row), out, out_u,
                 energy, out_energy)
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from .._jit import generic_kernel
 from .energy import kinetic, stored
-from .play import branch_force, write_elongations
+from .play import branch_force, record_elongations
 from .friction import reaction
 from ..memory import prepare
 
@@ -43,9 +43,9 @@ def time_loop(step):
         rows, chunks of rows, communication steps).
 
         After every ``steps_per_row`` steps, row j of ``out`` (shape (rows, 3))
-        receives x, v and the reaction, row j of ``out_u`` (shape (rows, n), or
-        ``None``) the elongations and row j of ``out_energy`` (shape (rows, 6),
-        or ``None``) the kinetic and stored energy and the account ``energy``
+        receives x, v and the reaction, row j of ``out_u`` (shape (rows, n); (rows, 0) or
+        ``None``: not asked for) the elongations and row j of ``out_energy`` (shape (rows, 6);
+        (rows, 0) or ``None``) the kinetic and stored energy and the account ``energy``
         (work, dissipated by the sliders, by the dashpots, by the friction on the mass). ``u`` and ``energy``
         are updated in place. Returns ``(x, v, steps)``: ``steps`` is the number
         of steps taken, fewer than asked if a step failed (non-finite result; the
@@ -66,14 +66,16 @@ def time_loop(step):
             out[j, 1] = v
             out[j, 2] = reaction(model, load, t_base + (first_step + p) * h, x, v, s)
             if out_u is not None:
-                write_elongations(k, u, out_u[j])
+                record_elongations(k, u, out_u[j])
             if out_energy is not None:
-                out_energy[j, 0] = kinetic(m, v)
-                out_energy[j, 1] = stored(x, k0, k3, k, u)
-                out_energy[j, 2] = energy[0]
-                out_energy[j, 3] = energy[1]
-                out_energy[j, 4] = energy[2]
-                out_energy[j, 5] = energy[3]
+                if energy is not None:  # (rows, 6) with the account; (rows, 0) when not asked for
+                    if out_energy.shape[1] > 0:
+                        out_energy[j, 0] = kinetic(m, v)
+                        out_energy[j, 1] = stored(x, k0, k3, k, u)
+                        out_energy[j, 2] = energy[0]
+                        out_energy[j, 3] = energy[1]
+                        out_energy[j, 4] = energy[2]
+                        out_energy[j, 5] = energy[3]
         return x, v, p
 
     loop.__qualname__ = f"time_loop.<locals>.loop_{step.__module__.rpartition('.')[2]}_{step.__name__}"

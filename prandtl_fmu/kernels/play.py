@@ -105,6 +105,30 @@ def _write_elongations_overload(k, u, out):
 
 
 @kernel
+def record_elongations(k, u, out):
+    """:func:`write_elongations` where ``out`` has room for them; nothing where it has none (they were not asked
+    for), nor for a scene without branches or for the continuum, which have no list of elongations. The time loop
+    calls it for every scene (``kernels/loop.py``)."""
+    _record_elongations(k, u, out)
+
+
+def _record_elongations(k, u, out):
+    raise NotImplementedError  # compiled only: see the overload below
+
+
+@overload(_record_elongations)
+def _record_elongations_overload(k, u, out):
+    if k is None or isinstance(k, (types.NoneType, types.BaseTuple)):
+        return lambda k, u, out: None
+
+    def impl(k, u, out):
+        if out.shape[0] > 0:
+            _write_elongations(k, u, out)
+
+    return impl
+
+
+@kernel
 def shift(k, eta, u, dx):
     """Apply the play operator for the increment ``dx`` in place; return the new sum k_i u_i."""
     if k is None:

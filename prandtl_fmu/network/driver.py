@@ -37,6 +37,18 @@ def loop_for(stepper: str):
     return {"implicit": kernels.run_implicit, "projected": kernels.run_projected}[stepper]
 
 
+def run_loop(loop, model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy,
+             out_energy, dissipated, out_dissipated, work):
+    """``loop`` (:func:`loop_for`) with the rows not asked for (None: the elongations, the energy, the dissipation)
+    handed as arrays with no column: the loop writes nothing there, and runs with and without them share one
+    compiled loop (numba compiles one for each combination of types; the native FMU hands the same)."""
+    rows = out.shape[0]
+    empty = np.empty((rows, 0))
+    return loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out,
+                empty if out_u is None else out_u, energy, empty if out_energy is None else out_energy,
+                dissipated, empty if out_dissipated is None else out_dissipated, work)
+
+
 def step_for(stepper: str):
     return {"implicit": kernels.implicit_step, "projected": kernels.projected_step}[stepper]
 
@@ -252,8 +264,8 @@ def _chunks(scene, name, states, energy, progress):
             rows_now = min(chunk, full_rows - j)
             started = perf_counter()
             out, out_u, out_energy, out_dissipated = piece_arrays(rows_now)
-            taken, status = loop(model, load, x, v, u, piece, 0.0, j * per_row, h, per_row, out, out_u, account,
-                                 out_energy, dissipated, out_dissipated, work)
+            taken, status = run_loop(loop, model, load, x, v, u, piece, 0.0, j * per_row, h, per_row, out, out_u,
+                                     account, out_energy, dissipated, out_dissipated, work)
             if taken < per_row * rows_now:
                 time = (j * per_row + taken) * h
                 raise ElementError(failure_message(scene, name, status, time, force_at(load, time + h)))
@@ -267,15 +279,15 @@ def _chunks(scene, name, states, energy, progress):
             out, out_u, out_energy, out_dissipated = piece_arrays(1)
             first = full_rows * per_row
             if whole:
-                taken, status = loop(model, load, x, v, u, piece, 0.0, first, h, whole, out, out_u, account,
-                                     out_energy, dissipated, out_dissipated, work)
+                taken, status = run_loop(loop, model, load, x, v, u, piece, 0.0, first, h, whole, out, out_u,
+                                         account, out_energy, dissipated, out_dissipated, work)
                 if taken < whole:
                     time = (first + taken) * h
                     raise ElementError(failure_message(scene, name, status, time, force_at(load, time + h)))
             if rest:
                 start = (first + whole) * h
-                taken, status = loop(model, load, x, v, u, piece, start, 0, rest, 1, out, out_u, account,
-                                     out_energy, dissipated, out_dissipated, work)
+                taken, status = run_loop(loop, model, load, x, v, u, piece, start, 0, rest, 1, out, out_u,
+                                         account, out_energy, dissipated, out_dissipated, work)
                 if taken < 1:
                     raise ElementError(failure_message(scene, name, status, start, force_at(load, start + rest)))
             yield result(rows - 1, out, out_u, out_energy, out_dissipated)
@@ -440,9 +452,9 @@ class NetworkElement(OutputMemo):
         if count == 0:
             return
         out = np.empty((1, 2 * self.scene.network.n + 2))
-        taken, status = loop_for(self.stepper)(self.model, load, self.x, self.v, self.u, self.piece, t_base, first,
-                                               h, count, out, None, self.account, None, self.dissipated, None,
-                                               self.work)
+        taken, status = run_loop(loop_for(self.stepper), self.model, load, self.x, self.v, self.u, self.piece,
+                                 t_base, first, h, count, out, None, self.account, None, self.dissipated, None,
+                                 self.work)
         if taken < count:
             time = t_base + (first + taken) * h
             raise ElementError(failure_message(self.scene, self.stepper, status, time, force_at(load, time + h)))

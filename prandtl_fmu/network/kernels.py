@@ -955,7 +955,7 @@ def stored(model, x, u):
 @kernel
 def write_row(model, load, time, x, v, u, reaction, row, energy, energy_row, u_row):
     """One output row: x and v of every node, F, the reaction; the energy columns (kinetic, stored, work,
-    sliders, dashpots) and the elongations where asked (not None)."""
+    sliders, dashpots) and the elongations where asked (not None, and not an array with no entry)."""
     n = x.shape[0]
     for j in range(n):
         row[2 * j] = x[j]
@@ -963,28 +963,32 @@ def write_row(model, load, time, x, v, u, reaction, row, energy, energy_row, u_r
     row[2 * n] = force_at(load, time)
     row[2 * n + 1] = reaction
     if energy_row is not None:
-        mass = model[0]
-        energy_row[0] = kinetic(mass, v)
-        energy_row[1] = stored(model, x, u)
-        energy_row[2] = energy[0]
-        energy_row[3] = energy[1]
-        energy_row[4] = energy[2]
+        if energy is not None:
+            if energy_row.shape[0] > 0:  # none: not asked for (network.driver.run_loop)
+                mass = model[0]
+                energy_row[0] = kinetic(mass, v)
+                energy_row[1] = stored(model, x, u)
+                energy_row[2] = energy[0]
+                energy_row[3] = energy[1]
+                energy_row[4] = energy[2]
     if u_row is not None:
-        kind = model[1]
-        m = 0
-        for e in range(kind.shape[0]):
-            if kind[e] == BRANCH:
-                u_row[m] = u[e]
-                m += 1
+        if u_row.shape[0] > 0:
+            kind = model[1]
+            m = 0
+            for e in range(kind.shape[0]):
+                if kind[e] == BRANCH:
+                    u_row[m] = u[e]
+                    m += 1
 
 
 def _time_loop(step):
     def loop(model, load, x, v, u, piece, t_base, first_step, h, steps_per_row, out, out_u, energy, out_energy,
              dissipated, out_dissipated, work):
         """``out.shape[0] * steps_per_row`` steps of ``step`` from step number first_step (t_p = t_base + p h,
-        from p alone); row j of ``out`` (and of out_u, out_energy, out_dissipated where not None) after every
-        ``steps_per_row`` steps. Returns (steps taken, status of the last step): fewer steps than asked when a
-        step failed (status < 0; the state is the one before that step)."""
+        from p alone); row j of ``out`` (and of out_u, out_energy, out_dissipated where not None nor without
+        columns: ``network.driver.run_loop``) after every ``steps_per_row`` steps. Returns (steps taken, status of
+        the last step): fewer steps than asked when a step failed (status < 0; the state is the one before that
+        step)."""
         p = 0
         status = 0
         chain_work = chain_scratch(x.shape[0])  # once per run of steps (chain.py: a massless chain's own step)
@@ -999,7 +1003,9 @@ def _time_loop(step):
             write_row(model, load, t_base + (first_step + p) * h, x, v, u, reaction, out[j], energy,
                       None if out_energy is None else out_energy[j], None if out_u is None else out_u[j])
             if out_dissipated is not None:
-                out_dissipated[j, :] = dissipated
+                if dissipated is not None:
+                    if out_dissipated.shape[1] > 0:
+                        out_dissipated[j, :] = dissipated
         return p, status
 
     loop.__qualname__ = f"network_loop_{step.__name__}"  # unique: see kernels/loop.py

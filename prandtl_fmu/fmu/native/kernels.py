@@ -17,8 +17,9 @@ The C signatures (every pointer to doubles; ``kind`` the load's kind, ``lk`` = o
 the load, ``lt``/``lf``/``nl`` its table):
 
 * ``advance(p, k, eta, cs, u, mp, ms, nd, xv, account, out, kind, lk, lt, lf, nl, t_base, first, h, steps)``
-  -> steps taken (``kernels/loop.py``: out = x, v, reaction; the energy row is not recorded: ``row`` computes it
-  when an output reads it);
+  -> steps taken (``kernels/loop.py``: out = x, v, reaction; the elongations and the energy row are not recorded,
+  handed as arrays with no column, as ``stepping.integrate`` hands them: the same types, so the library's compiled
+  loop; ``row`` computes the energy row when an output reads it);
 * ``advance_noisy(..., steps, sigma, seed, unit, cache)``: the same under the load plus a white noise, the load
   tuple's seventh entry ``(sigma, seed, unit, cache)`` (``loads.WhiteNoise``; ``cache``: the Brownian tree's
   int64 cache of :data:`NOISE_CACHE_SIZE`, any content valid), for the steppers that take a noise
@@ -101,7 +102,8 @@ def _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep):
 
 def advance(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, kind, lk, lt, lf, nl, t_base, first, h, steps):
     x, v, taken = run(_model(p, kp, etap, csp, mp, msp, nd), _load(kind, lk, lt, lf, nl), xv[0], xv[1], {u}, t_base,
-                      first, h, steps, carray(outp, (1, 3)), None, carray(accountp, (4,)), None)
+                      first, h, steps, carray(outp, (1, 3)), carray(outp, (1, 0)), carray(accountp, (4,)),
+                      carray(outp, (1, 0)))
     xv[0] = x
     xv[1] = v
     return taken
@@ -111,7 +113,7 @@ def advance_noisy(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, outp, kind, l
                   steps, sigma, seed, unit, cachep):
     load = _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep)
     x, v, taken = run_noisy(_model(p, kp, etap, csp, mp, msp, nd), load, xv[0], xv[1], {u}, t_base, first, h, steps,
-                            carray(outp, (1, 3)), None, carray(accountp, (4,)), None)
+                            carray(outp, (1, 3)), carray(outp, (1, 0)), carray(accountp, (4,)), carray(outp, (1, 0)))
     xv[0] = x
     xv[1] = v
     return taken
@@ -269,10 +271,12 @@ def structure(scene, unfolded=False) -> dict:
         "m": "p[0]" if scene.mass is not None else "None",
         "k0": "p[3]" if scene.spring is not None else "0.0",  # the library's model: compiled.compile_model
         "k3": "p[4]" if scene.cubic is not None else "0.0",
+        # the branches' coefficients read-only, as the library's model holds them (compiled._read_only): the
+        # same types, so the FMU's kernels are the library's compiled loops, not copies compiled for writable ones
         "k": (f"(carray(kp, {branches.params[0].shape}),)" if continuum else f"carray(kp, (10, {n + 1}))"
-              if on_stack else f"carray(kp, ({n},))" if n else "None"),
-        "eta": "None" if on_stack else f"carray(etap, ({n},))" if n else "None",
-        "cs": f"carray(csp, ({n},))" if scene.has_series_dashpots else "None",
+              if on_stack else f"read_only(carray(kp, ({n},)))" if n else "None"),
+        "eta": "None" if on_stack else f"read_only(carray(etap, ({n},)))" if n else "None",
+        "cs": f"read_only(carray(csp, ({n},)))" if scene.has_series_dashpots else "None",
         "u": f"carray(up, ({state_size(scene)},))" if on_stack else f"carray(up, ({n},))" if n else "None",
         "stack": "True" if on_stack else "False",
         "has_branches": "True" if n else "False",
@@ -500,6 +504,33 @@ def noise_refusal(scene, stepper) -> "str | None":
     return None
 
 
+_READ_ONLY = []
+
+
+def read_only():
+    """The compiled function ``read_only(array)``: the same array (data, shape, owner), typed read-only. A
+    ``carray`` is writable; the library's model holds the branches' coefficients read-only, and numba compiles a
+    loop for each. Only the type changes (numba lays both out alike), so nothing is copied."""
+    if not _READ_ONLY:
+        from numba.core import types
+        from numba.core.imputils import impl_ret_borrowed
+        from numba.extending import intrinsic
+
+        @intrinsic
+        def read_only(typingctx, array):
+            if not isinstance(array, types.Array):
+                return None
+            result = array.copy(readonly=True)
+
+            def codegen(context, builder, signature, args):
+                return impl_ret_borrowed(context, builder, result, args[0])
+
+            return result(array), codegen
+
+        _READ_ONLY.append(read_only)
+    return _READ_ONLY[0]
+
+
 def compile_kernels(scene, steppers) -> list:
     """Compile the scene's C functions for ``steppers`` (:func:`applicable`); returns ``[(c_name, cfunc), ...]``:
     ``advance_<stepper>_<variant>``, ``noisy_<stepper>_<variant>`` (``advance_noisy``, for the steppers that take
@@ -539,7 +570,8 @@ def compile_kernels(scene, steppers) -> list:
                 if stepper and shape["stack"] == "True" and not takes_stack(stepper):
                     continue  # on the O(n) kernel only (the element unfolds the stack for it)
                 takes_noise = stepper is not None and noise_refusal(scene, stepper) is None
-                namespace = dict(carray=carray, np=np, reaction=reaction, kinetic=kinetic, stored=stored,
+                namespace = dict(carray=carray, read_only=read_only(), np=np, reaction=reaction, kinetic=kinetic,
+                                 stored=stored,
                                  tangent=tangent, showable_limits=showable_limits,
                                  branch_force=branch_force, move=move,
                                  solve_increment=solve_increment, write_elongations=write_elongations,
@@ -644,7 +676,8 @@ def _compile_connector(scene, shape) -> list:
     for suffix, damped in variants(scene):
         source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "0.0", damped="True" if damped else "False",
                                             has_memory=has_memory, **shape)
-        namespace = dict(carray=carray, np=np, drive=drive, drive_with_memory=drive_with_memory, tangent=tangent,
+        namespace = dict(carray=carray, read_only=read_only(), np=np, drive=drive, drive_with_memory=drive_with_memory,
+                         tangent=tangent,
                          stored=stored, branch_force=branch_force, write_elongations=write_elongations,
                          smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now)
         exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)

@@ -77,8 +77,9 @@ def advance(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep
             statusp):
     taken, status = run(_net(massp, coefp, kindp, endsp, load_node, has_cubic), _load(kind, lk, lt, lf, nl),
                         carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)),
-                        t_base, first, h, steps, carray(outp, (1, {row})), None, carray(accountp, (3,)), None,
-                        carray(dissipatedp, ({e},)), None, _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
+                        t_base, first, h, steps, carray(outp, (1, {row})), carray(outp, (1, 0)), carray(accountp, (3,)),
+                        carray(outp, (1, 0)), carray(dissipatedp, ({e},)), carray(outp, (1, 0)),
+                        _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
     statusp[0] = status
     return taken
 
@@ -89,8 +90,9 @@ def advance_noisy(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, 
     taken, status = run(_net(massp, coefp, kindp, endsp, load_node, has_cubic),
                         _noisy_load(kind, lk, lt, lf, nl, sigma, seed, unit, cachep),
                         carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},)),
-                        t_base, first, h, steps, carray(outp, (1, {row})), None, carray(accountp, (3,)), None,
-                        carray(dissipatedp, ({e},)), None, _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
+                        t_base, first, h, steps, carray(outp, (1, {row})), carray(outp, (1, 0)), carray(accountp, (3,)),
+                        carray(outp, (1, 0)), carray(dissipatedp, ({e},)), carray(outp, (1, 0)),
+                        _work(dp, gp, pp, parp, clp, tp, sp, qp, degp, lp, scp))
     statusp[0] = status
     return taken
 

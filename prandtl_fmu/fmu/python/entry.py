@@ -12,6 +12,14 @@ own resources), and their kernels compile once for all of them; its compiled
 kernels come from the user's numba cache folder, never from the extracted
 resources (see ``_jit.py``).
 
+Where the host's Python has a ``prandtl_fmu`` with the same sources, file for
+file (the same digest: the same version, unedited), the FMU runs that one
+instead of its copy: the same code, whose kernels the host has often compiled
+already (a script that runs the library and its FMUs), where the copy would
+compile every one of them again under its private name. Any other
+``prandtl_fmu``, or ``PRANDTL_FMU_BUNDLED_LIBRARY=1``, and the FMU imports its
+own copy.
+
 The library is imported from a copy in the user's cache folder
 (``<numba cache folder>/prandtl_slave_<digest>_source/prandtl_fmu``, made once
 and checked against the digest at every import), not from the resources: an
@@ -103,9 +111,33 @@ def _lasting_copy(folder):
         return None
 
 
+def _host_library():
+    """The host's own ``prandtl_fmu`` where its sources are this FMU's, file for file (the digest in this module's
+    name), else None. The same code then runs, and its kernels are the ones the host has compiled already (a
+    script that runs the library and its FMUs, the tests): the FMU's own copy would compile them all again under
+    its private name (a minute or more for a new user, once). ``PRANDTL_FMU_BUNDLED_LIBRARY=1`` makes the FMU import
+    its own copy whatever the host has."""
+    if os.environ.get("PRANDTL_FMU_BUNDLED_LIBRARY", "0") not in ("", "0"):
+        return None
+    try:
+        spec = importlib.util.find_spec("prandtl_fmu")
+        folders = list(spec.submodule_search_locations or []) if spec is not None else []
+        if len(folders) != 1 or _sources_digest(folders[0]) != __name__.rpartition("_")[2]:
+            return None
+        return importlib.import_module("prandtl_fmu")
+    except Exception:  # a host whose prandtl_fmu cannot be found or imported: the FMU's own copy
+        return None
+
+
 def _import_library(here):
+    """The library the FMU runs: the host's when it is the same (:func:`_host_library`), else the copy in the
+    resources, imported under the private name; once per process (``sys.modules[_LIBRARY]`` holds it)."""
     if _LIBRARY in sys.modules:
         return sys.modules[_LIBRARY]
+    host = _host_library()
+    if host is not None:
+        sys.modules[_LIBRARY] = host
+        return host
     folder = _lasting_copy(os.path.join(here, "prandtl_fmu")) or os.path.join(here, "prandtl_fmu")
     spec = importlib.util.spec_from_file_location(
         _LIBRARY, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder])
@@ -121,8 +153,7 @@ def _import_library(here):
 
 _drop_duplicate_path_entries(_HERE)
 try:
-    _import_library(_HERE)
-    _slave_module = importlib.import_module(_LIBRARY + ".fmu.python.slave")
+    _slave_module = importlib.import_module(_import_library(_HERE).__name__ + ".fmu.python.slave")
 except ImportError as _exc:  # a host whose Python lacks numpy/numba: say which Python, and what to do
     raise ImportError(
         f"prandtl_fmu FMU: {_exc} in the host's Python ({sys.version.split()[0]}, prefix {sys.prefix}): the FMU "

@@ -482,7 +482,7 @@ def test_the_continuous_element_as_an_fmu(fmus, name, stepper):
 
 SHARED_LIBRARY_RUN = """
 import json, shutil, sys
-sys.path.insert(0, sys.argv[1])
+sys.path[:0] = sys.argv[1].split("|")
 from fmpy import extract
 from tests.conftest import restore_fmpy_logger
 import fmpy
@@ -493,34 +493,79 @@ for fmu, column in zip(sys.argv[2::2], sys.argv[3::2]):
     restore_fmpy_logger()
     shutil.rmtree(folder)  # as FMPy does with its own extraction: the library must not need it any more
     runs.append([float(value) for value in result[column]])
-print(json.dumps({"runs": runs, "libraries": sorted(name for name in sys.modules
-                                                     if name.startswith("_prandtl_slave_") and "." not in name)}))
+libraries = {name: module.__name__ for name, module in sys.modules.items()
+             if name.startswith("_prandtl_slave_") and "." not in name}
+private = sorted(name for name in sys.modules if name.startswith("_prandtl_slave_") and "." in name)
+print(json.dumps({"runs": runs, "libraries": libraries, "private_modules": len(private),
+                  "host": getattr(sys.modules.get("prandtl_fmu"), "__file__", None)}))
 """
 
 
-@pytest.mark.parametrize("second", ["iwan", pytest.param("network", marks=pytest.mark.slow)])
-def test_fmus_of_one_library_share_it_whatever_their_scenes(fmus, tmp_path, second):
-    """The FMUs built from the same sources import one library under one name (fmu/python/entry.py), so their
-    kernels compile once, and a second FMU runs after the first one's extraction folder is gone (an Iwan
-    spectrum, whose kernels the tests above compiled). The network (slow: its kernels compile for the FMU's
-    library) needs modules an element's FMU never imports: they come from the library's lasting copy."""
+def run_in_a_host(fmus_and_columns, path=(), bundled=False):
+    """Run the FMUs in a fresh Python (``path`` first on its sys.path, then the project), in one process; what
+    it reports (SHARED_LIBRARY_RUN)."""
+    import os
     import subprocess
     import sys
 
     from tests.conftest import ROOT
 
+    env = {**os.environ, "PRANDTL_FMU_BUNDLED_LIBRARY": "1" if bundled else "0"}
+    arguments = [str(part) for fmu, column in fmus_and_columns for part in (fmu, column)]
+    done = subprocess.run([sys.executable, "-c", SHARED_LIBRARY_RUN, "|".join([*map(str, path), str(ROOT)]),
+                           *arguments], capture_output=True, text=True, timeout=900, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def library_runs(scene_paths_and_columns):
+    return [simulate(load_scene(path).with_solver(stop_time=2.0, output_interval=0.1)).columns()[column]
+            for path, column in scene_paths_and_columns]
+
+
+@pytest.mark.parametrize("second", ["damper-only", pytest.param("network", marks=pytest.mark.slow)])
+def test_fmus_of_one_library_share_it_whatever_their_scenes(fmus, tmp_path, second):
+    """The FMUs built from the same sources import one library under one name (fmu/python/entry.py), so their
+    kernels compile once, and a second FMU runs after the first one's extraction folder is gone (a mass on a
+    dashpot: other kernels). The FMU's own copy is forced (PRANDTL_FMU_BUNDLED_LIBRARY=1): the host's prandtl_fmu has the same
+    sources. The network (slow: its kernels compile for the FMU's library) needs modules an element's FMU never
+    imports: they come from the library's lasting copy."""
     element, element_scene = fmus["paper"]
     if second == "network":
         other_scene, column = SCENES / "networks" / "two-masses-slider.toml", "x_b"
         other = build_fmu(other_scene, tmp_path / "network.fmu")
-    else:  # its kernels are those the tests above compiled for the FMU's library
-        (other, other_scene), column = fmus["iwan"], "x"
-    done = subprocess.run([sys.executable, "-c", SHARED_LIBRARY_RUN, str(ROOT), str(element), "x", str(other),
-                           column], capture_output=True, text=True, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    found = json.loads(done.stdout.strip().splitlines()[-1])
+    else:
+        (other, other_scene), column = fmus[second], "x"
+    found = run_in_a_host([(element, "x"), (other, column)], bundled=True)
     assert len(found["libraries"]) == 1, found["libraries"]
-    expected = [simulate(load_scene(element_scene).with_solver(stop_time=2.0, output_interval=0.1)).x,
-                simulate(load_scene(other_scene).with_solver(stop_time=2.0, output_interval=0.1)).columns()[column]]
-    for run, library in zip(found["runs"], expected):
+    (name, package), = found["libraries"].items()
+    assert package == name and found["private_modules"] > 0  # the copy, under its private name
+    for run, library in zip(found["runs"], library_runs([(element_scene, "x"), (other_scene, column)])):
         np.testing.assert_array_equal(run, library)
+
+
+def test_the_host_s_prandtl_fmu_runs_the_fmu_only_if_its_sources_are_the_fmu_s(fmus, tmp_path):
+    """An FMU whose host has a prandtl_fmu with its sources, file for file, runs that one (its kernels are those
+    the host compiled: no copy compiles them again); a host whose prandtl_fmu differs by one file gets the FMU's
+    own copy under its private name. Both are the library's numbers, bit for bit."""
+    import shutil
+
+    from tests.conftest import ROOT
+
+    element, element_scene = fmus["paper"]
+    expected = library_runs([(element_scene, "x")])
+
+    same = run_in_a_host([(element, "x")])
+    (name, package), = same["libraries"].items()
+    assert package == "prandtl_fmu" and same["private_modules"] == 0
+    assert same["host"] == str(ROOT / "prandtl_fmu" / "__init__.py")
+    np.testing.assert_array_equal(same["runs"][0], expected[0])
+
+    other_host = tmp_path / "other"
+    shutil.copytree(ROOT / "prandtl_fmu", other_host / "prandtl_fmu", ignore=shutil.ignore_patterns("__pycache__"))
+    (other_host / "prandtl_fmu" / "edited.py").write_text('"""One more module: other sources."""\n')
+    other = run_in_a_host([(element, "x")], path=[other_host])
+    assert other["host"] is None or other["host"].startswith(str(other_host))
+    (name, package), = other["libraries"].items()
+    assert package == name and other["private_modules"] > 0
+    np.testing.assert_array_equal(other["runs"][0], expected[0])
