@@ -209,8 +209,11 @@ def test_exact_follows_a_mass_on_a_maxwell_branch_to_rounding():
     tables = {"mass": {"m": 1.5}, "spring": {"k0": 0.5},
               "branches": {"k": [2.0], "eta": [1e6], "c": [0.8]}, "load": {"kind": "constant", "value": 1.0},
               "solver": {"stepper": "exact", "step": 1e-3, "stop_time": 8.0, "output_interval": 0.1}}
-    result = run(make(tables), "exact")
+    result = run(make(tables), "exact", energy=True)  # (with the account: the loop the element's tests compile)
     assert np.abs(result.x - maxwell_closed_form(1.5, 0.5, 2.0, 0.8, 1.0, result.time)).max() < 1e-12
+    energy = result.energy
+    assert energy["dissipated_damper"][-1] > 0.1  # the branch's dashpot dissipates: its account balances
+    assert np.abs(energy["energy_residual"]).max() < 1e-12 * energy["work"].max()
 
 
 @pytest.mark.parametrize("stepper", STEPPING + ["exact"])
@@ -218,7 +221,7 @@ def test_a_series_branch_that_slips_follows_an_event_driven_reference(stepper):
     tables = {"mass": {"m": 1.0}, "spring": {"k0": 0.3}, "branches": {"k": [1.5], "eta": [0.2], "c": [1.2]},
               "load": {"kind": "harmonic", "amplitude": 0.8, "omega": 1.1},
               "solver": {"stepper": stepper, "step": 2e-4, "stop_time": 15.0, "output_interval": 0.05}}
-    result = run(make(tables), stepper)
+    result = run(make(tables), stepper, energy=stepper == "exact")  # (exact: the loop test_exact.py compiles)
     times, reference = series_reference(1.0, 0.3, 1.5, 0.2, 1.2, 0.8, 1.1, result.time)
     assert times[-1] > 14.9  # the reference went all the way
     got = np.interp(times, result.time, result.x)

@@ -179,7 +179,7 @@ def test_a_dirac_slides_whole_and_its_memory_survives_many_reversals():
                                independent_play(np.array([3.0]), np.array([0.2]), xs), atol=1e-13)
     params = ContinuousBranches.iwan(**{key: IWAN[key] for key in ("F_S", "K_T", "chi", "beta")}).params
     state = stack.fresh_state(params, 0.0)
-    turns = 3 * stack.CONTINUUM_PIECES
+    turns = stack.CONTINUUM_PIECES + 512  # past the bound on the pieces: 512 reversals merge pieces
     xs = np.concatenate([[0.0], 0.05 * (-1.0) ** np.arange(turns) / (1 + 0.01 * np.arange(turns))])
     from tests.models.test_continuum import drive
 

@@ -29,21 +29,24 @@ def free_decay_scene(n=30, seed=3, **solver):
 
 
 # ------------------------------------------------------------------ exact: no cap, no missed event
+# (every run keeps the energy account: the exact loop the element's tests compile, one loop for the file)
 
 
 @pytest.mark.parametrize("interval", [0.01, 1.0, 20.0, 200.0])
 def test_exact_free_decay_does_not_depend_on_the_output_interval(interval):
     """Events located, not sampled: a reversal and a threshold between two samples used to be missed
     (errors up to 3.6e-4 at an output interval of 20 s)."""
-    fine = simulate(free_decay_scene(step=0.01, output_interval=0.01))
-    coarse = simulate(free_decay_scene(step=interval, output_interval=interval))
+    fine = simulate(free_decay_scene(step=0.01, output_interval=0.01), energy=True)
+    coarse = simulate(free_decay_scene(step=interval, output_interval=interval), energy=True)
     assert abs(coarse.x[-1] - fine.x[-1]) < 1e-10
     assert abs(coarse.v[-1] - fine.v[-1]) < 1e-10
+    for column in ("dissipated_sliders", "dissipated_damper", "energy_residual"):  # nor does its account
+        assert abs(coarse.energy[column][-1] - fine.energy[column][-1]) < 1e-10, column
 
 
 def test_exact_free_decay_agrees_with_extrapolated_verlet():
     """An independent check of the events: verlet (order 2) at h and h/2, Richardson-extrapolated."""
-    exact = simulate(free_decay_scene(step=200.0, output_interval=200.0)).x[-1]
+    exact = simulate(free_decay_scene(step=200.0, output_interval=200.0), energy=True).x[-1]
     coarse = simulate(free_decay_scene(stepper="verlet", step=1e-3, output_interval=1.0)).x[-1]
     fine = simulate(free_decay_scene(stepper="verlet", step=5e-4, output_interval=1.0)).x[-1]
     extrapolated = fine + (fine - coarse) / 3.0
@@ -58,9 +61,9 @@ def test_exact_many_phases_in_one_interval_are_all_taken():
                   branches={"count": 300, "k_total": 1.0, "eta_range": [0.1, 1.1]},
                   load={"kind": "harmonic", "amplitude": 0.45, "omega": 0.5})
     one = simulate(make_scene(**tables, solver={"stepper": "exact", "step": 120.0, "stop_time": 120.0,
-                                                "output_interval": 120.0}))
+                                                "output_interval": 120.0}), energy=True)
     many = simulate(make_scene(**tables, solver={"stepper": "exact", "step": 1.0, "stop_time": 120.0,
-                                                 "output_interval": 1.0}))
+                                                 "output_interval": 1.0}), energy=True)
     assert abs(one.x[-1] - many.x[-1]) < 1e-10
     assert abs(one.v[-1] - many.v[-1]) < 1e-10
 
@@ -74,9 +77,9 @@ def test_exact_long_event_free_interval_is_one_phase(load, end):
     tables = dict(mass={"m": 1.0, "v0": 0.01}, spring={"k0": 0.5}, cubic=None, damper={"c": 0.02},
                   branches={"k": [1.0, 2.0], "eta": [0.5, 0.8]}, load=load)
     long = simulate(make_scene(**tables, solver={"stepper": "exact", "step": end, "stop_time": end,
-                                                 "output_interval": end}))
+                                                 "output_interval": end}), energy=True)
     halves = simulate(make_scene(**tables, solver={"stepper": "exact", "step": end / 2, "stop_time": end,
-                                                   "output_interval": end / 2}))
+                                                   "output_interval": end / 2}), energy=True)
     assert np.isfinite(long.x[-1])
     assert abs(long.x[-1] - halves.x[-1]) < 1e-9
     if load["kind"] == "constant":  # at rest at the equilibrium with the sticking branches
