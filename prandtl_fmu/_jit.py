@@ -291,22 +291,31 @@ def skip_blas_probe() -> None:
     arraymath._HAVE_BLAS = importlib.util.find_spec("scipy") is not None
 
 
+# What numba compiles around each kernel besides its code. A kernel is called from Python or from other kernels,
+# never through a C function pointer (the native FMU's C functions are cfuncs of their own: fmu/native/kernels.py),
+# so none gets numba's C wrapper (``no_cfunc_wrapper``). A closure of :func:`generic_kernel` is only ever called by
+# the cached kernel that wraps it, so it gets no Python wrapper either: boxing and unboxing its model tuple, and
+# the machine code of that, were a sixth of the compile time of a loop (benchmarks: docs/benchmarks.md).
+_NO_C_WRAPPER = dict(no_cfunc_wrapper=True)
+
+
 def kernel(fn):
     """Compile ``fn`` in nopython mode (IEEE arithmetic: no fastmath), cached on disk (see above)."""
-    return njit(cache=CACHE)(fn)
+    return njit(cache=CACHE, **_NO_C_WRAPPER)(fn)
 
 
 def inline_kernel(fn):
     """:func:`kernel`, inlined into its callers by numba itself (for a hot helper whose callers fix some of
     its arguments, such as a flag: each caller then compiles only its own branch)."""
-    return njit(cache=CACHE, inline="always")(fn)
+    return njit(cache=CACHE, inline="always", **_NO_C_WRAPPER)(fn)
 
 
 def generic_kernel(fn):
     """:func:`kernel` for a closure over compiled functions (the time loop around a step): never cached on its
     own, since numba keys a closure's cache entry on a pickle of what it closes over. A cached kernel that
-    calls it holds its machine code, and is cached (``kernels/loop.py``)."""
-    return njit(cache=False)(fn)
+    calls it holds its machine code, and is cached (``kernels/loop.py``). Only that kernel calls it: it cannot
+    be called from Python (no Python wrapper, above)."""
+    return njit(cache=False, no_cpython_wrapper=True, **_NO_C_WRAPPER)(fn)
 
 
 skip_blas_probe()  # before any kernel is defined (they load numba's registries)

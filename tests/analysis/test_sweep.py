@@ -100,7 +100,9 @@ def _fine_scene(stepper="verlet", **changes):
     return tables
 
 
-@pytest.mark.parametrize("stepper", ["projected", "implicit", "symplectic", "verlet"])
+# symplectic and verlet slow: a summary loop each to compile (6 to 8 s cold), the same reduction as the others'
+@pytest.mark.parametrize("stepper", ["projected", "implicit", pytest.param("symplectic", marks=pytest.mark.slow),
+                                     pytest.param("verlet", marks=pytest.mark.slow)])
 def test_the_summaries_are_simulates_rows_reduced_bit_for_bit(stepper):
     scene = parse_scene(scene_text(_fine_scene(stepper)))
     result = simulate(scene, energy=True)

@@ -174,7 +174,8 @@ def test_sigterm_stops_a_run_of_costly_steps_at_once(tmp_path):
 
 # ------------------------------------------------------------------ item 13: advice names something to do
 
-@pytest.mark.parametrize("stepper", ["implicit", "exact", "projected", "verlet"])
+# exact's case is slow: a loop of exact compiled for this refusal alone (17 s cold)
+@pytest.mark.parametrize("stepper", ["implicit", pytest.param("exact", marks=pytest.mark.slow), "projected", "verlet"])
 def test_a_refused_step_never_advises_the_stepper_already_in_use(stepper):
     """A force that overflows the state: the refusal advised "try 'implicit'" to a user of 'implicit'."""
     scene = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, cubic=None, damper={"c": 0.5}, spring={"k0": 1.0},
@@ -227,8 +228,7 @@ EXACT = base_tables(cubic=None, load={"kind": "harmonic", "amplitude": 2.0e14, "
                     solver={"stepper": "exact", "step": 0.1, "stop_time": 0.2, "output_interval": 0.1})
 
 
-@pytest.mark.slow  # a search to the event budget, 1.1e5 events (about a minute); the command line's refusal of the
-# same run below stays quick
+@pytest.mark.slow  # a search to the event budget, 1.1e5 events (about a minute), as the command line's below
 def test_an_exact_advance_beyond_its_event_budget_is_refused_naming_the_bound_and_changes_nothing():
     element = Element(parse_scene(scene_text(EXACT), "exact.toml"))
     element.advance(0.5, 0.0)
@@ -240,6 +240,8 @@ def test_an_exact_advance_beyond_its_event_budget_is_refused_naming_the_bound_an
     assert element.get_state() == before
 
 
+@pytest.mark.slow  # the same search to the event budget as above, 20 to 35 s: the command line's one line, exit 2
+# and no file for a refused run stay quick in tests/cli
 def test_the_cli_names_the_bound_an_exact_run_reached(tmp_path):
     scene = tmp_path / "exact.toml"
     scene.write_text(scene_text(EXACT))

@@ -134,6 +134,7 @@ def test_small_chunks_give_the_same_run(monkeypatch):
 # ------------------------------------------------------------------ degenerate elements
 
 
+@pytest.mark.slow  # the massless element's loops on the memory stack, compiled for this test alone (18 s cold)
 def test_massless_quasi_static_element_runs_on_the_memory_stack():
     """n >= 64: the initial equilibrium used a play-only kernel (numba TypingError)."""
     tables = dict(mass=None, spring={"k0": 0.5}, cubic=None, damper=None,
