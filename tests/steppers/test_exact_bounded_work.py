@@ -23,7 +23,7 @@ from tests.conftest import ROOT, make_scene
 
 # The reproductions that used to spin for ever in compiled code (SIGINT does not reach it): run once, in a child
 # process with a time limit, so that a regression fails instead of hanging the suite. Prints one JSON line.
-_SPINNERS = r'''
+_HEADER = r'''
 import json, sys
 import numpy as np
 from prandtl_fmu import simulate
@@ -31,18 +31,22 @@ from prandtl_fmu.driver import compile_model
 from prandtl_fmu.steppers import exact, exact_series
 from tests.conftest import make_scene
 
+'''
+_SPINNERS = _HEADER + r'''
 out = {}
+# (the runs keep the energy account: the loops of exact_series the energy tests below compile, compiled once)
 # item 1: a series branch of elastic range 0 (it slips from the start and carries nothing)
 free = dict(mass={"m": 1.0, "x0": 0.0, "v0": 0.1}, spring=None, cubic=None, damper=None,
             load={"kind": "constant", "value": 0.0},
             solver={"stepper": "exact", "step": 1e-3, "stop_time": 1.0, "output_interval": 1e-3})
-run = simulate(make_scene(**free, branches={"k": [1.0], "eta": [0.0], "c": [1.0]}), states=True)
+run = simulate(make_scene(**free, branches={"k": [1.0], "eta": [0.0], "c": [1.0]}), states=True, energy=True)
 out["free"] = [run.time.tolist(), run.x.tolist(), run.v.tolist(), np.abs(run.u).max()]
 loaded = dict(mass={"m": 1.3, "x0": 0.2, "v0": -0.1}, spring={"k0": 0.7}, cubic=None, damper={"c": 0.2},
               load={"kind": "harmonic", "amplitude": 0.9, "omega": 1.7, "offset": 0.1},
               solver={"stepper": "exact", "step": 0.05, "stop_time": 6.0, "output_interval": 0.05})
-with_zero = simulate(make_scene(**loaded, branches={"k": [0.8, 2.0], "eta": [0.3, 0.0], "c": [0.5, 1.0]}))
-without = simulate(make_scene(**loaded, branches={"k": [0.8], "eta": [0.3], "c": [0.5]}))
+with_zero = simulate(make_scene(**loaded, branches={"k": [0.8, 2.0], "eta": [0.3, 0.0], "c": [0.5, 1.0]}),
+                     energy=True)
+without = simulate(make_scene(**loaded, branches={"k": [0.8], "eta": [0.3], "c": [0.5]}), energy=True)
 out["zero_range"] = float(max(np.abs(with_zero.x - without.x).max(), np.abs(with_zero.v - without.v).max()))
 # item 2: series dashpots and friction, a constant force at alpha or one ulp off it; and a net force that tends
 # to alpha as the branch relaxes (the mass stays stuck: F - k u(t) <= alpha for ever)
@@ -51,13 +55,18 @@ for force in (0.5, 0.49999999999999994, 0.5000000000000001):
                        branches={"k": [1.0], "eta": [1.0], "c": [1.0]}, friction={"alpha": 0.5},
                        load={"kind": "constant", "value": force},
                        solver={"stepper": "exact", "step": 1e-3, "stop_time": 2.0, "output_interval": 0.1})
-    out[repr(force)] = [simulate(scene).x.tolist(), simulate(scene.with_solver(step=1e-4), "implicit").x.tolist()]
+    out[repr(force)] = [simulate(scene, energy=True).x.tolist(),
+                        simulate(scene.with_solver(step=1e-4), "implicit").x.tolist()]
 relaxing = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, spring=None, cubic=None, damper=None,
                       branches={"k": [1.0], "eta": [1.0], "c": [2.0], "u0": [0.5]}, friction={"alpha": 0.5},
                       load={"kind": "constant", "value": 0.5},
                       solver={"stepper": "exact", "step": 0.1, "stop_time": 5.0, "output_interval": 0.1})
-run = simulate(relaxing, states=True)
+run = simulate(relaxing, states=True, energy=True)
 out["relaxing"] = [float(np.abs(run.x).max()), float(np.abs(run.u[:, 0] - 0.5 * np.exp(-0.5 * run.time)).max())]
+print(json.dumps(out))
+'''
+_EXTREMES = _HEADER + r'''
+out = {}
 # item 3: extreme coefficients, given to the kernels directly (the scene reader refuses them)
 base = make_scene(mass={"m": 1.0, "x0": 0.1, "v0": 0.1}, spring={"k0": 1.0}, cubic=None, damper={"c": 0.1},
                   branches={"k": [1.0], "eta": [0.5], "c": [1.0]},
@@ -80,8 +89,16 @@ print(json.dumps(out))
 
 @pytest.fixture(scope="module")
 def spinners():
-    done = subprocess.run([sys.executable, "-c", _SPINNERS], cwd=ROOT, capture_output=True, text=True,
-                          timeout=900)
+    return _in_a_child(_SPINNERS)
+
+
+@pytest.fixture(scope="module")
+def extremes():
+    return _in_a_child(_EXTREMES)
+
+
+def _in_a_child(script):
+    done = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -114,18 +131,19 @@ def test_a_net_force_tending_to_the_threshold_as_a_branch_relaxes_keeps_the_mass
     assert x_max == 0.0 and u_error <= 1e-15
 
 
-def test_extreme_coefficients_end_the_step_within_its_budget_with_a_line_that_says_why(spinners):
+@pytest.mark.slow  # the searches to their budget take 20 s, compiled for these coefficients alone 20 s more
+def test_extreme_coefficients_end_the_step_within_its_budget_with_a_line_that_says_why(extremes):
     """Item 3: m = 1e-320, k0 = 1e308, a branch's c = 1e-320 (and the edge of the allowed range, 1e-50 / 1e50)
     spun for ever. Every step ends (the child's time limit), and a failed one says which bound ran out and
     leaves u and the energy account as they were."""
-    assert len(spinners["extremes"]) == 4
-    for reason, finite, u, energy in spinners["extremes"]:
+    assert len(extremes["extremes"]) == 4
+    for reason, finite, u, energy in extremes["extremes"]:
         assert not finite and u == [0.0] and energy == [0.0] * 4
         assert reason.startswith(("the search for one event took more than", "more than",
                                   "the state became non-finite")), reason
 
 
-@pytest.mark.parametrize("n", [100, 1500])
+@pytest.mark.parametrize("n", [100, pytest.param(1500, marks=pytest.mark.slow)])  # (1500: 15 s of runs)
 def test_one_output_interval_of_the_whole_run_is_the_run_cut_finely(n):
     """The bounds are per event and per simulated second, not per step (issue 44.4: the paper's scene with
     n = 1500 and one output interval of 500 s was refused at t = 100.4 s, its searches over a budget per
