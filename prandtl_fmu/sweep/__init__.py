@@ -185,14 +185,21 @@ def _run(client, the_plan: Plan, runs_per_task: int, store: Optional[Store], pro
     spec = the_plan.spec
     tag = uuid.uuid4().hex[:8]
     futures = {}
-    for first, stop in todo:
+
+    def submit(first, stop):
         future = client.submit(run_batch, the_plan.document, the_plan.source, spec.keys, spec.values(first, stop),
                                the_plan.summary, spec.history, key=f"prandtl-sweep-{tag}-{first}", pure=False)
         futures[future] = (first, stop)
+        return future
+
+    # Workers on this machine share its numba cache: the first task alone compiles the kernels, once, and the
+    # others load them (each worker compiled them at the same time before: the CPU of one compile per worker).
+    later = todo[1:] if len(todo) > 1 and _workers_share_this_machine(client) else []
+    pending = as_completed([submit(first, stop) for first, stop in todo[:len(todo) - len(later)]])
     bar = _progress_bar(progress, total=sum(stop - first for first, stop in todo), label="sweep runs")
     tables = []
     try:
-        for future in as_completed(futures):
+        for future in pending:
             first, stop = futures[future]
             try:
                 rows = future.result()
@@ -200,6 +207,9 @@ def _run(client, the_plan: Plan, runs_per_task: int, store: Optional[Store], pro
                 kept = f"; the finished runs are in {store.out} (--resume continues)" if store is not None else ""
                 raise RuntimeError(f"sweep: the task of runs {first}..{stop - 1} failed: "
                                    f"{type(exc).__name__}: {exc}{kept}") from exc
+            for task in later:  # the first task is done: its kernels are in the cache
+                pending.add(submit(*task))
+            later = []
             table = pa.Table.from_pydict(rows, schema=the_plan.schema)
             if store is not None:
                 store.write(first, stop, table)
@@ -210,6 +220,19 @@ def _run(client, the_plan: Plan, runs_per_task: int, store: Optional[Store], pro
         bar.close()
         client.cancel(list(futures))
     return tables
+
+
+def _workers_share_this_machine(client) -> bool:
+    """Whether every worker of ``client`` runs on this machine's loopback address (a LocalCluster: they share this
+    machine's numba cache), and there are several."""
+    from urllib.parse import urlsplit
+
+    try:
+        workers = list(client.scheduler_info().get("workers", {}))
+    except Exception:  # a scheduler that does not say: submit as before
+        return False
+    hosts = {urlsplit(address).hostname for address in workers}
+    return len(workers) > 1 and hosts <= {"127.0.0.1", "localhost", "::1"}
 
 
 def _schema(spec: SweepSpec, run0: dict, summary: list):

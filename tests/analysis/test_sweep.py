@@ -313,6 +313,41 @@ def test_a_50_run_sweep_on_2_workers_equals_the_runs_one_by_one_bit_for_bit(clus
                                   frame)
 
 
+def test_local_workers_take_the_first_task_alone_then_the_others(cluster, sweep_files):
+    """Workers on this machine share its numba cache: the first task runs alone (its worker compiles the
+    kernels), the others start once it is done and load them, instead of both workers compiling the same kernels
+    at once. Workers elsewhere get every task at once."""
+    from distributed import get_task_stream
+
+    from prandtl_fmu.sweep import _workers_share_this_machine
+
+    scene, spec, _ = sweep_files
+    with get_task_stream(client=cluster[1]) as stream:
+        frame = sweep(scene, spec, cluster[1])
+    assert len(frame) == 50
+    computed = {}
+    for record in stream.data:
+        key = str(record["key"])
+        if "prandtl-sweep-" in key:
+            for part in record["startstops"]:
+                if part["action"] == "compute":
+                    computed[int(key.rpartition("-")[2])] = (part["start"], part["stop"])
+    assert len(computed) > 2 and 0 in computed, computed
+    assert all(start >= computed[0][1] for first, (start, _) in computed.items() if first != 0), computed
+
+    class Scheduler:
+        def __init__(self, *addresses):
+            self.addresses = addresses
+
+        def scheduler_info(self):
+            return {"workers": {address: {} for address in self.addresses}}
+
+    assert _workers_share_this_machine(cluster[1])
+    assert _workers_share_this_machine(Scheduler("tcp://127.0.0.1:4001", "tcp://localhost:4002"))
+    assert not _workers_share_this_machine(Scheduler("tcp://127.0.0.1:4001"))  # one worker: nothing to share
+    assert not _workers_share_this_machine(Scheduler("tcp://127.0.0.1:4001", "tcp://10.0.0.7:4002"))
+
+
 def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
