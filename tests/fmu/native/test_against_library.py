@@ -447,6 +447,26 @@ class CompiledAnyway(Exception):
     """Raised by a compile_kernels that a build must not call."""
 
 
+def test_the_native_kernels_call_the_library_s_loops_not_copies_for_writable_arrays():
+    """The C functions hand the branches' coefficients typed read-only and the rows they do not record as arrays
+    with no column, as the library does (fmu/native/kernels.py): numba then compiles no second loop for them."""
+    from prandtl_fmu.fmu.native import kernels
+    from prandtl_fmu.steppers import get_stepper
+
+    scene = load_scene("paper-section-8")
+    kernels.compile_kernels(scene, ["projected"])
+    signatures = get_stepper("projected").loop_for(scene).signatures
+    plain = 0
+    for signature in signatures:
+        model, out_u, out_energy = signature[0], signature[10], signature[12]
+        for array in model[4:7]:  # k, eta, cs: the O(n) kernel's read-only arrays (the stack's table is its own)
+            if getattr(array, "ndim", 0) == 1:
+                assert not array.mutable, signature
+                plain += 1
+        assert out_u.ndim == 2 and out_energy.ndim == 2, signature  # never None
+    assert plain  # the scene's O(n) kernel (the element unfolds the stack for some steppers) was among them
+
+
 def refuse_to_compile(*arguments):
     raise CompiledAnyway()
 
