@@ -58,6 +58,8 @@ library's own runs share each stepper's compiled loop.
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ...noise import CACHE_SIZE
@@ -504,31 +506,27 @@ def noise_refusal(scene, stepper) -> "str | None":
     return None
 
 
-_READ_ONLY = []
-
-
+@functools.lru_cache(maxsize=None)
 def read_only():
     """The compiled function ``read_only(array)``: the same array (data, shape, owner), typed read-only. A
     ``carray`` is writable; the library's model holds the branches' coefficients read-only, and numba compiles a
-    loop for each. Only the type changes (numba lays both out alike), so nothing is copied."""
-    if not _READ_ONLY:
-        from numba.core import types
-        from numba.core.imputils import impl_ret_borrowed
-        from numba.extending import intrinsic
+    loop for each. Only the type changes (numba lays both out alike), so nothing is copied. Made once."""
+    from numba.core import types
+    from numba.core.imputils import impl_ret_borrowed
+    from numba.extending import intrinsic
 
-        @intrinsic
-        def read_only(typingctx, array):
-            if not isinstance(array, types.Array):
-                return None
-            result = array.copy(readonly=True)
+    @intrinsic
+    def read_only(typingctx, array):
+        if not isinstance(array, types.Array):
+            return None
+        result = array.copy(readonly=True)
 
-            def codegen(context, builder, signature, args):
-                return impl_ret_borrowed(context, builder, result, args[0])
+        def codegen(context, builder, signature, args):
+            return impl_ret_borrowed(context, builder, result, args[0])
 
-            return result(array), codegen
+        return result(array), codegen
 
-        _READ_ONLY.append(read_only)
-    return _READ_ONLY[0]
+    return read_only
 
 
 def compile_kernels(scene, steppers) -> list:
