@@ -1004,8 +1004,8 @@ def _time_loop(step):
                       None if out_energy is None else out_energy[j], None if out_u is None else out_u[j])
             if out_dissipated is not None:
                 if dissipated is not None:
-                    if out_dissipated.shape[1] > 0:
-                        out_dissipated[j, :] = dissipated
+                    for e in range(out_dissipated.shape[1]):  # not [j, :] = (libm's log10 in the shape check)
+                        out_dissipated[j, e] = dissipated[e]
         return p, status
 
     loop.__qualname__ = f"network_loop_{step.__name__}"  # unique: see kernels/loop.py

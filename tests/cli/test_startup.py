@@ -203,7 +203,9 @@ def test_the_fmu_uses_the_user_cache_and_survives_its_deleted_resources(tmp_path
                                                             "stop_time": 1.0, "output_interval": 0.1})))
     fmu = build_fmu(scene, tmp_path / "cached.fmu")
     cache = tmp_path / "cache"
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    # the FMU's own copy of the library (entry.py), the one that lives in its resources: this host's prandtl_fmu
+    # has the FMU's sources, and would run it otherwise
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PRANDTL_FMU_BUNDLED_LIBRARY="1")
     outcomes = []
     for run in ("cold", "warm"):
         work = tmp_path / run
