@@ -304,7 +304,8 @@ def test_a_response_that_cannot_settle_says_so(monkeypatch):
     monkeypatch.setattr(response, "MAX_PERIODS", 3)
     scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.001})
     with pytest.raises(response.NotSettled, match="did not settle within 3 periods"):
-        frequency_response(scene, 1.0, [0.1], sweep="up")
+        # verlet: the refusal is the driver's, whatever the stepper; verlet's loop for this model is the Duffing test's
+        frequency_response(scene, 1.0, [0.1], sweep="up", stepper="verlet")
 
 
 def test_bad_input_to_the_python_functions():

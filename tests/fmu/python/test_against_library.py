@@ -153,7 +153,9 @@ def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name,
     if stepper == "exact" and (scene.cubic is not None or stribeck):
         pytest.skip("exact does not apply to a cubic spring nor to Stribeck friction (refused: tests/models/test_friction.py)")
     stop = min(scene.solver.stop_time, 60.0)
-    library = simulate(scene.with_solver(stop_time=stop), stepper=stepper)
+    # with the energy account, as the FMU's element keeps it: one compiled loop for both (the account never changes
+    # the motion: test_the_energy_account_never_changes_the_motion)
+    library = simulate(scene.with_solver(stop_time=stop), stepper=stepper, energy=True)
     result = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
                           start_values={"scene_load": True, "stepper": stepper}, output=["x", "v", "reaction"])
     assert len(result) == len(library.time)
@@ -165,6 +167,24 @@ def test_with_scene_load_and_no_input_the_fmu_reproduces_the_library(fmus, name,
     without = simulate_fmu(str(fmu), stop_time=stop, output_interval=scene.solver.output_interval,
                            start_values={"stepper": stepper, "scene_load": False}, output=["x"])
     assert np.abs(without["x"] - library.x).max() > 1e-6  # the switch matters: F alone is 0 here
+
+
+@pytest.mark.parametrize("stepper", ["projected", "implicit", "verlet", pytest.param("symplectic", marks=pytest.mark.slow),
+                                     pytest.param("exact", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("name", ["paper", "stribeck-series", "coulomb-series"])
+def test_the_energy_account_never_changes_the_motion(fmus, name, stepper):
+    """A run that keeps the energy account (the FMU's element always does) moves as one that does not, bit for
+    bit: the booking reads the step's forces and never writes the state (exact: the same matrix exponential)."""
+    scene = load_scene(fmus[name][1])
+    try:
+        scene.with_solver(stepper=stepper)
+    except ValueError:
+        pytest.skip(f"{stepper} does not apply to this scene")
+    scene = scene.with_solver(stepper=stepper, stop_time=min(scene.solver.stop_time, 20.0))
+    plain, booked = simulate(scene, states=True), simulate(scene, states=True, energy=True)
+    for column in ("x", "v", "reaction", "u"):
+        np.testing.assert_array_equal(getattr(booked, column), getattr(plain, column))
+    assert booked.energy is not None and np.abs(plain.x).max() > 1e-3
 
 
 def logged(messages):
