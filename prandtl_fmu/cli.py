@@ -4,6 +4,7 @@
                           [--states] [--energy] [--plot PNG]
     prandtl-fmu build SCENE [-o OUT.fmu] [--causality force|displacement] [--osp] [--loader prandtl|pythonfmu]
                       [--runtime python|native] [--fmi 2|3] [--arrays] [--platforms P,P,...|all]
+                      [--steppers S,S,...]
     prandtl-fmu fit DATA.csv [--time COL] [--x COL] [--force COL] [--v COL]
                     [--branches N | --continuum piecewise|iwan|linear] [--dashpot]
                     [--cubic] [--out SCENE.toml] [--fmu OUT.fmu] [--plot FIT.png]
@@ -119,6 +120,10 @@ def _parser() -> argparse.ArgumentParser:
                             "aarch64-linux, x86_64-windows, x86_64-darwin, aarch64-darwin (either version's name for "
                             "the same target), or all; default: this machine's. Linked by zig (Linux: glibc 2.17; "
                             "macOS) and mingw-w64 (Windows): docs/platforms.md")
+    build.add_argument("--steppers", metavar="S,S,...",
+                       help="native runtime only: the steppers the binary holds, comma-separated, the scene's own "
+                            "among them (default: every one that applies): fewer steppers compile sooner (one "
+                            "about half the time of all five on the paper scene); the FMU refuses the others")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
@@ -346,7 +351,8 @@ def _build(args) -> int:
         return _error("build needs pythonfmu: pip install prandtl_fmu (a core dependency) or pip install pythonfmu")
     try:
         path = build_fmu(args.scene, args.out, causality=args.causality, osp=args.osp, loader=args.loader,
-                         runtime=args.runtime, fmi=args.fmi, arrays=args.arrays, platforms=args.platforms)
+                         runtime=args.runtime, fmi=args.fmi, arrays=args.arrays, platforms=args.platforms,
+                         steppers=args.steppers)
     except (SceneError, ValueError, RuntimeError) as exc:
         return _error(exc)
     except OSError as exc:

@@ -21,7 +21,7 @@ from .description import is_network
 
 def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.PathLike]] = None,
               causality: Optional[str] = None, osp: bool = False, loader: Optional[str] = None,
-              runtime: str = "python", fmi: int = 2, arrays: bool = False, platforms=None) -> Path:
+              runtime: str = "python", fmi: int = 2, arrays: bool = False, platforms=None, steppers=None) -> Path:
     """Build the FMU of the scene at ``scene_path`` (or a packaged scene's name) into ``out`` (default
     ``./<scene name>.fmu``).
 
@@ -40,6 +40,8 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     v_<node>: every master reads them); ``arrays`` (native, FMI 3.0) adds them as arrays (u; x and v) for the
     masters that handle arrays. ``platforms`` (native): the binaries the FMU holds, names of either FMI version
     (comma-separated or a list) or "all"; None: this machine's (``prandtl_fmu/fmu/native/platforms.py``).
+    ``steppers`` (native): only these steppers in the binary (comma-separated or a list; None: every one that
+    applies to the scene), the scene's own among them: fewer loops to compile, and the FMU refuses the others.
     """
     if runtime not in ("python", "native"):
         raise ValueError(f"--runtime: must be python or native, got {runtime!r}")
@@ -49,6 +51,9 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if platforms is not None and runtime != "native":
         raise ValueError("--platforms: the PythonFMU runtime's binaries are PythonFMU's own: build with --runtime "
                          "native, or drop --platforms")
+    if steppers is not None and runtime != "native":
+        raise ValueError("--steppers: the PythonFMU runtime compiles a stepper when a run first uses it: build with "
+                         "--runtime native, or drop --steppers")
     if runtime == "native" and loader is not None:
         raise ValueError(f"--loader {loader}: the native runtime has no PythonFMU loader (its binary is the FMU's "
                          "own C layer): drop --loader, or build with --runtime python")
@@ -75,7 +80,7 @@ def build_fmu(scene_path: Union[str, os.PathLike], out: Optional[Union[str, os.P
     if osp:
         check_osp_name(native_scene.name)
     built = build_native(resolve_scene(scene_path), target, fmi=fmi, causality=causality, arrays=arrays,
-                         platforms=platforms)
+                         platforms=platforms, steppers=steppers)
     if osp:
         kind = causality or native_scene.causality
         write_atomically(target.parent / file_name(native_scene.name),

@@ -706,17 +706,31 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
 
 
 def model_description(scene, fmi: int = 2, guid: str = "", runtime: str = "native", arrays: bool = False,
-                      generation_tool: Optional[str] = None, generated: Optional[str] = None) -> str:
+                      generation_tool: Optional[str] = None, generated: Optional[str] = None,
+                      steppers: Optional[list] = None) -> str:
     """``modelDescription.xml`` of ``scene``'s FMU: FMI 2.0 (``fmi=2``) of either runtime (``runtime``
     "python": needsExecutionTool; ``generation_tool`` the builder's name) or FMI 3.0 (the native runtime's,
-    ``arrays``: with its arrays); ``guid`` its GUID or instantiation token."""
+    ``arrays``: with its arrays); ``guid`` its GUID or instantiation token. ``steppers``: the only steppers a
+    native FMU holds (a build with ``--steppers``), which the ``stepper`` parameter's description then names."""
     if fmi == 3:
-        return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(
-            fmi3_root(scene, guid, arrays), encoding="unicode") + "\n"
+        root = fmi3_root(scene, guid, arrays)
+        _held_steppers(root, steppers)
+        return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     if fmi != 2 or arrays:
         raise ValueError(f"fmi={fmi}, arrays={arrays}: FMI 2.0 (no arrays) or 3.0")
     root = fmi2_root(scene, guid, generation_tool or NATIVE_TOOL, generated, needs_execution_tool=runtime == "python")
+    _held_steppers(root, steppers)
     return fmi2_text(root)
+
+
+def _held_steppers(root: ET.Element, steppers: Optional[list]) -> None:
+    """The ``stepper`` parameter's description of an FMU built with only ``steppers`` (None: every one)."""
+    if steppers is None:
+        return
+    for variable in root.find("ModelVariables"):
+        if variable.get("name") == "stepper":
+            variable.set("description", "time stepper: " + ", ".join(steppers) + " (the steppers this FMU holds: "
+                         "built with --steppers)")
 
 
 def fmi2_text(root: ET.Element) -> str:

@@ -115,7 +115,8 @@ def _effect_text(scene) -> str:
     return "; ".join(parts)
 
 
-def _stepper_rows(scene) -> str:
+def _stepper_rows(scene, steppers=None) -> str:
+    """The steppers' table: whether each applies to ``scene`` (``steppers``: the only ones the FMU holds)."""
     rows = []
     for name, module in STEPPERS.items():
         summary = module.__doc__.strip().split("\n\n")[0].replace("\n", " ").replace(f"``{name}``: ", "", 1)
@@ -124,6 +125,8 @@ def _stepper_rows(scene) -> str:
             applies = "default" if name == scene.solver.stepper else "yes"
         except ValueError as exc:
             applies = f"no: {exc}"
+        if steppers is not None and name not in steppers and not applies.startswith("no"):
+            applies = "no: not in this FMU (built with --steppers " + ",".join(steppers) + ")"
         order = "exact (events located to rounding)" if module.ORDER == float("inf") else str(module.ORDER)
         rows.append("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in (name, applies, order, summary))
                     + "</tr>")
@@ -139,9 +142,10 @@ def _bound(text: str) -> str:
         return text
 
 
-def index_html(model_description: bytes, scene, runtime: str = "python") -> str:
+def index_html(model_description: bytes, scene, runtime: str = "python", steppers=None) -> str:
     """The page, from the FMU's own modelDescription.xml (FMI 2.0 or 3.0) and its scene; ``runtime``: "python"
-    (PythonFMU) or "native" (no Python in the host)."""
+    (PythonFMU) or "native" (no Python in the host); ``steppers``: the only steppers a native FMU holds (None:
+    every one that applies)."""
     root = ET.fromstring(model_description)
     fmi3 = root.get("fmiVersion", "").startswith("3")
     rows = []
@@ -163,10 +167,11 @@ def index_html(model_description: bytes, scene, runtime: str = "python") -> str:
         refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
         requirements = _PYTHON_REQUIREMENTS
     if hasattr(scene, "network"):
-        body = network_body(scene, refusal)
+        body = network_body(scene, refusal, steppers)
         title = "Network of springs, dashpots, sliders and Prandtl branches"
     else:
-        body = _connector_body(scene, refusal) if scene.causality == "displacement" else _element_body(scene, refusal)
+        body = (_connector_body(scene, refusal) if scene.causality == "displacement"
+                else _element_body(scene, refusal, steppers))
         title = "Generalized Prandtl element"
     return _page(name, rows, body.replace("fmi2Discard", f"{version}Discard"), requirements, title)
 
@@ -205,7 +210,7 @@ whole state can be saved, restored and serialized. OSP: <code>resources/PrandtlC
 declares a LinearMechanicalPort (force out, v in) and a LinearMechanicalQuasiPort (force out, x in).</p>"""
 
 
-def _element_body(scene, refusal: str) -> str:
+def _element_body(scene, refusal: str, steppers=None) -> str:
     return f"""<p>This FMU holds {html.escape(_effect_text(scene))}, under the input force F. Effects the scene leaves out are
 absent: they have no parameter and no term below. Model of Bastien &amp; Schatzman, M2AN 36 (2002), eq. (7.7),
 with the dashpot and cubic spring of the related models; the scene is <code>resources/scene.toml</code>.</p>
@@ -217,7 +222,7 @@ the scene's [load] F_scene(t) is added and evaluated at every internal step as i
 steps of the parameter <code>step</code> (default {scene.solver.step:g} s) and, when H is not a multiple of it, one
 last shorter step for the remainder. The parameter <code>stepper</code> chooses the scheme:</p>
 <table><tr><th>stepper</th><th>applies to this FMU</th><th>order</th><th>scheme</th></tr>
-{_stepper_rows(scene)}
+{_stepper_rows(scene, steppers)}
 </table>
 <p><code>projected</code> is the scheme (5.1) of the paper, which the paper calls "the implicit Euler scheme"
 because it is implicit in the friction term only; our <code>implicit</code> is implicit in every term.</p>
@@ -306,7 +311,7 @@ library's rules (a refused value: fmi2Discard at the next step with the reason l
 </table>"""
 
 
-def _network_stepper_rows(scene) -> str:
+def _network_stepper_rows(scene, steppers=None) -> str:
     from ..network.model import NETWORK_STEPPERS, stepper_problem
 
     rows = []
@@ -317,12 +322,14 @@ def _network_stepper_rows(scene) -> str:
     for name in NETWORK_STEPPERS:
         problem = stepper_problem(scene, name)
         applies = f"no: {problem}" if problem else "default" if name == scene.solver.stepper else "yes"
+        if steppers is not None and name not in steppers and not problem:
+            applies = "no: not in this FMU (built with --steppers " + ",".join(steppers) + ")"
         rows.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in (name, applies, "1", texts[name]))
                     + "</tr>")
     return "\n".join(rows)
 
 
-def network_body(scene, refusal: str) -> str:
+def network_body(scene, refusal: str, steppers=None) -> str:
     """The page's body for a network's FMU (the element with the force F, or the connector)."""
     network = scene.network
     load = html.escape(network.nodes[network.load_node])
@@ -357,7 +364,7 @@ internal steps of the parameter <code>step</code> (default {scene.solver.step:g}
 of it, one last shorter step for the remainder. The outputs are those at the end of the last step (none depends
 directly on F). The parameter <code>stepper</code> chooses the scheme:</p>
 <table><tr><th>stepper</th><th>applies to this FMU</th><th>order</th><th>scheme</th></tr>
-{_network_stepper_rows(scene)}
+{_network_stepper_rows(scene, steppers)}
 </table>
 <p>A step the library cannot take (no equilibrium of a massless part, e.g. a massless chain pulled beyond the
 total friction of its nodes; the step budget; an overflow) and a non-finite F are refused: fmi2Discard, the

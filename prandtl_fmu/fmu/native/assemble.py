@@ -23,6 +23,26 @@ class NativeBuildError(ValueError):
     """A native FMU cannot be built (one line: the scene or the machine, and what to do)."""
 
 
+def chosen_steppers(scene, available: list, wanted) -> list:
+    """The steppers a native FMU of ``scene`` holds: ``available`` (those that apply), or only those of ``wanted``
+    (``--steppers``: a comma-separated string or a list; None: all), in ``available``'s order. Each wanted one
+    must apply, and the scene's own ``[solver] stepper`` (the FMU's default) must be among them: NativeBuildError
+    names the culprit. Fewer steppers: fewer loops to compile, a smaller binary; the FMU refuses the others."""
+    if wanted is None:
+        return list(available)
+    names = [name.strip() for name in (wanted.split(",") if isinstance(wanted, str) else wanted)]
+    if not names or any(not name for name in names):
+        raise NativeBuildError(f"--steppers {','.join(names)}: an empty name")
+    for name in names:
+        if name not in available:
+            raise NativeBuildError(f"--steppers: {name!r} is not a stepper this scene's native FMU can hold (those "
+                                   f"that apply: {', '.join(available) or 'none'})")
+    if scene.solver.stepper not in names:
+        raise NativeBuildError(f"--steppers {','.join(names)}: must hold the scene's own stepper "
+                               f"{scene.solver.stepper!r} ([solver] stepper: the FMU's default)")
+    return [name for name in available if name in names]
+
+
 def c_variables(scene, fmi: int, arrays: bool = False) -> list:
     """The rows of the C layer's table of variables (scene.h's ``VARS``): the FMI 2.0 variables of
     ``fmu/description.py`` (their types as the C layer knows them), each under its value reference in the FMI version
@@ -94,10 +114,11 @@ def scene_load_lines(scene, where: str) -> list:
             f"static const char SCENE_LOAD_NOTICE[] = {c_string(description.scene_load_notice(scene, where))};"]
 
 
-def pack(out, description_text: str, scene, scene_bytes: bytes, identifier: str, folders, binaries) -> Path:
+def pack(out, description_text: str, scene, scene_bytes: bytes, identifier: str, folders, binaries,
+         steppers=None) -> Path:
     """Write the native FMU ``out`` (in one rename: a failed build leaves no half-written FMU): its model
-    description, the binary of each folder, its page (``documentation/index.html``, from the description), the
-    scene's text and its OSP interface description."""
+    description, the binary of each folder, its page (``documentation/index.html``, from the description; the
+    steppers it holds when built with ``--steppers``), the scene's text and its OSP interface description."""
     from ..archive import add_entry
     from ..documentation import index_html
     from ..osp import file_name, osp_model_description, port_variables
@@ -111,7 +132,7 @@ def pack(out, description_text: str, scene, scene_bytes: bytes, identifier: str,
             add_entry(archive, f"binaries/{folder.name}/{identifier}.{folder.suffix}", binaries[folder.name],
                       mode=0o755)
         add_entry(archive, "documentation/index.html",
-                  index_html(description_text.encode("utf-8"), scene, runtime="native"))
+                  index_html(description_text.encode("utf-8"), scene, runtime="native", steppers=steppers))
         add_entry(archive, f"resources/{file_name(identifier)}",
                   osp_model_description(scene.causality, port_variables(scene)))
         add_entry(archive, "resources/scene.toml", scene_bytes)

@@ -34,8 +34,8 @@ from pathlib import Path
 from ...compiling import stage
 from . import kernels
 from . import platforms as targets
-from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
-                       pack, scene_load_lines, stubs)
+from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, chosen_steppers, new_guid,
+                       noise_lines, pack, scene_load_lines, stubs)
 from .object_cache import KernelObjects, digest_of
 
 ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "dissipated_damper",
@@ -43,20 +43,21 @@ ENERGIES = ("kinetic_energy", "stored_energy", "work", "dissipated_sliders", "di
 
 
 def build_native_network_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False,
-                             platforms=None) -> Path:
+                             platforms=None, steppers=None) -> Path:
     """Build the native FMU of the network scene (``[network]`` or ``[chain]``) at ``scene_path`` into ``out``: the
     element (force in at the load's node) or, with causality "displacement", the connector (its motion in, force
     out); ``arrays`` (FMI 3.0): also the nodes' x and v as arrays (scalars x_<node>, v_<node> in any case: masters
-    such as OMSimulator and ecos read an FMI 3.0 array as a scalar). See ``network_build.py``; NativeBuildError
-    names what stops it."""
+    such as OMSimulator and ecos read an FMI 3.0 array as a scalar); ``steppers``: only these
+    (``assemble.chosen_steppers``). See ``network_build.py``; NativeBuildError names what stops it."""
     from . import network_build
 
     if fmi not in (2, 3):
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
-    return network_build.build(scene_path, out, fmi, causality, arrays, platforms)
+    return network_build.build(scene_path, out, fmi, causality, arrays, platforms, steppers)
 
 
-def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False, platforms=None) -> Path:
+def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool = False, platforms=None,
+                     steppers=None) -> Path:
     """Build the native FMU of the scene at ``scene_path`` into ``out``; NativeBuildError names what stops it.
 
     FMI 3.0 offers the branch elongations as the scalars u_1 .. u_n (every master reads them: OMSimulator and ecos
@@ -64,7 +65,10 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
     parameter n. A network scene goes to :func:`build_native_network_fmu` (its nodes' x and v).
 
     ``platforms``: the binaries the FMU holds (names of either FMI version, comma-separated, or "all"; None: this
-    machine's platform), each linked as ``platforms.py`` says; the names and the toolchains are checked first."""
+    machine's platform), each linked as ``platforms.py`` says; the names and the toolchains are checked first.
+
+    ``steppers``: only these of the steppers that apply (``assemble.chosen_steppers``; None: all of them); the
+    scene's own stepper must be among them, the FMU refuses the others."""
     from .. import description
     from ..archive import built_scene
     from ...scene import load_scene
@@ -73,7 +77,7 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
         raise NativeBuildError(f"--fmi {fmi}: must be 2 or 3")
     scene = load_scene(scene_path, check_stepper=False)
     if description.is_network(scene):  # a [network] or [chain] scene
-        return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms)
+        return build_native_network_fmu(scene_path, out, fmi, causality, arrays, platforms, steppers)
     folders = targets.resolve(platforms, fmi)
     chains = targets.toolchains(folders, default=platforms is None)
     if arrays and fmi != 3:
@@ -83,26 +87,31 @@ def build_native_fmu(scene_path, out, fmi: int = 2, causality=None, arrays: bool
                                "or a continuum): build it without arrays")
     scene, scene_bytes = built_scene(scene_path, causality)  # checked as the PythonFMU build checks it
     connector = scene.causality == "displacement"
+    if connector and steppers is not None:
+        raise NativeBuildError("--steppers: the connector has no stepper (its motion is given): drop --steppers")
+    built = [] if connector else kernels.applicable(scene)
+    if not built and not connector:
+        raise NativeBuildError("no stepper of the native runtime applies to this scene")
+    if not connector:
+        built = chosen_steppers(scene, built, steppers)
+    held = None if steppers is None else built  # what the description and the page name
     identifier = description.model_identifier(scene)
     guid = new_guid()
     variables = c_variables(scene, fmi, arrays)  # the C layer's table; FMI 3.0's extras by the macros
     references = description.fmi3_references(scene)
     with tempfile.TemporaryDirectory(prefix="prandtl_native_") as scratch:
         scratch = Path(scratch)
-        steppers = [] if connector else kernels.applicable(scene)
-        if not steppers and not connector:
-            raise NativeBuildError("no stepper of the native runtime applies to this scene")
-        compiled = element_objects(scene, scene_bytes, steppers, folders)
-        (scratch / "scene.h").write_text(_scene_header(scene, variables, guid, steppers, compiled.symbols(),
+        compiled = element_objects(scene, scene_bytes, built, folders)
+        (scratch / "scene.h").write_text(_scene_header(scene, variables, guid, built, compiled.symbols(),
                                                        scene_bytes, arrays))
         n_vr = next((row.value_reference for row in variables if row.name == "n"), 0)
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
                                              [scratch, FMI_HEADERS[fmi]],
                                              [f"VR_U={references['u'] or 4294967295}u", f"VR_N={n_vr}",
                                               f"VR_TIME={references['time']}"], fmi, identifier)
-        text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
+        text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays, steppers=held)
         stage("native build: the FMU archive")
-        return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
+        return pack(out, text, scene, scene_bytes, identifier, folders, binaries, held)
 
 
 def element_objects(scene, scene_bytes: bytes, steppers, folders) -> KernelObjects:

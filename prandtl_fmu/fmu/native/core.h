@@ -120,7 +120,7 @@ static const Var* unshowable_output(Instance* c, double* value)
 }
 
 #if !KIND_INTEGERS /* the element and the network: a stepper to choose and a noise's seed */
-/* the index of the stepper ``name`` in STEPPER_NAMES (the steppers that apply to this scene), or -1 */
+/* the index of the stepper ``name`` in STEPPER_NAMES (the steppers this FMU holds), or -1 */
 static int stepper_index(const char* name)
 {
     int i;

@@ -281,8 +281,8 @@ static const char* advance(Element* e, double duration, double force, int scene_
 static const char* stepper_problem(const Instance* c, char* buffer, size_t size)
 {
     if (!c->stepper_valid || stepper_index(c->stepper) < 0) {
-        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers that apply to this "
-                 "scene)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
+        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers this FMU "
+                 "holds)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
         return buffer;
     }
     if (!(isfinite(c->step) && c->step > 0)) {

@@ -168,8 +168,8 @@ static const char* settings_problem(Instance* c, char* buffer, size_t size)
     int i, stepper = c->stepper_valid ? stepper_index(c->stepper) : -1;
     const char* problem;
     if (stepper < 0) {
-        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers that apply to this "
-                 "network)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
+        snprintf(buffer, size, "parameter stepper = '%s': must be one of %s (the steppers this FMU "
+                 "holds)", c->stepper_valid ? c->stepper : "?", STEPPER_LIST);
         return buffer;
     }
     if (!(isfinite(c->step) && c->step > 0)) {

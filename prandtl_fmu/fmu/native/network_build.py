@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from ...compiling import stage
-from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, new_guid, noise_lines,
-                       pack, scene_load_lines, stubs)
+from .assemble import (C_TYPES, FMI_HEADERS, HERE, NativeBuildError, c_string, c_variables, chosen_steppers, new_guid,
+                       noise_lines, pack, scene_load_lines, stubs)
 from .object_cache import KernelObjects, digest_of
 from .platforms import KERNEL_MACRO
 
@@ -299,9 +299,10 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
     return "\n".join(lines)
 
 
-def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) -> Path:
+def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None, wanted=None) -> Path:
     """Build the native FMU of the network scene at ``scene_path`` into ``out`` (see the module docstring), with
-    the binaries of ``platforms`` (``platforms.resolve``: None is this machine's); NativeBuildError names what stops
+    the binaries of ``platforms`` (``platforms.resolve``: None is this machine's) and the steppers ``wanted``
+    (``--steppers``, ``assemble.chosen_steppers``; None: every one that applies); NativeBuildError names what stops
     it."""
     from .. import description
     from ..archive import built_scene
@@ -318,11 +319,17 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
     steppers = steppers_of(scene, connector)
     if not connector and scene.solver.stepper not in steppers:
         raise NativeBuildError(f"{scene.source}: [solver] stepper: {stepper_problem(scene, scene.solver.stepper)}")
+    if connector and wanted is not None:
+        raise NativeBuildError("--steppers: the connector has no stepper to choose (its motion is given; it steps "
+                               "with implicit): drop --steppers")
+    if not connector:
+        steppers = chosen_steppers(scene, steppers, wanted)
+    held = None if wanted is None else steppers  # what the description and the page name
     identifier = description.model_identifier(scene)
     guid = new_guid()
     variables = c_variables(scene, fmi, arrays)  # the C layer's table; FMI 3.0's extras by the macros
     extra_vr = description.fmi3_references(scene)
-    text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays)
+    text = description.model_description(scene, fmi, guid, runtime="native", arrays=arrays, steppers=held)
     if connector:
         scene = scene.with_solver(stepper="implicit")
     digest = hashlib.sha256(scene_bytes + guid.encode()).hexdigest()
@@ -340,7 +347,7 @@ def build(scene_path, out, fmi: int, causality, arrays: bool, platforms=None) ->
         binaries, _ = targets.build_binaries(folders, chains, compiled, scratch, stubs, [HERE / f"fmi{fmi}.c"],
                                              [scratch, FMI_HEADERS[fmi]], [], fmi, identifier)
         stage("native build: the FMU archive")
-        return pack(out, text, scene, scene_bytes, identifier, folders, binaries)
+        return pack(out, text, scene, scene_bytes, identifier, folders, binaries, held)
 
 
 def fmi3_network_description(root, scene, extra_vr=None, arrays: bool = False, connector=None) -> str:

@@ -1,0 +1,193 @@
+"""A native FMU built with only some steppers (``--steppers``): it compiles those alone, holds them bit for bit as
+the library runs them, names them in its model description and its page, and refuses the others with a logged
+reason; a bad choice stops the build in one line (exit 2, no FMU)."""
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+
+from prandtl_fmu import load_scene, simulate
+
+from tests.conftest import SCENES, base_tables, scene_text
+
+pytest.importorskip("fmpy")
+if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
+    pytest.skip("no C compiler: a native FMU cannot be built here", allow_module_level=True)
+
+SOLVER = {"stepper": "implicit", "step": 0.01, "stop_time": 10.0, "output_interval": 0.1}
+# friction on the mass and series dashpots: exact applies too, so leaving it out is the option's doing
+SCENE = base_tables(cubic=None, solver=SOLVER, friction={"alpha": 0.3},
+                    branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]},
+                    load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3})
+NETWORKS = SCENES / "networks"
+# every node massive, all plasticity in branches: both network steppers apply
+TWO_NODES = """name = "two_nodes"
+
+[network]
+nodes = ["a", "b"]
+mass = [1.0, 0.5]
+load_node = "a"
+
+[[network.spring]]
+between = ["a", "ground"]
+k = 10.0
+
+[[network.branch]]
+between = ["a", "b"]
+k = 50.0
+eta = 0.02
+
+[[network.spring]]
+between = ["b", "ground"]
+k = 20.0
+
+[load]
+kind = "harmonic"
+amplitude = 3.0
+omega = 6.0
+
+[solver]
+stepper = "implicit"
+step = 0.001
+stop_time = 2.0
+output_interval = 0.01
+"""
+HELD = ["projected", "implicit"]  # the order of kernels.NATIVE_STEPPERS, whatever the order asked
+
+
+@pytest.fixture(scope="module")
+def held(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("held")
+    path = folder / "held.toml"
+    path.write_text(scene_text(SCENE))
+    return build_fmu(path, folder / "held.fmu", runtime="native", steppers="implicit,projected"), path
+
+
+def test_only_the_steppers_asked_for_are_compiled(tmp_path, monkeypatch):
+    from prandtl_fmu.fmu.native import build
+
+    monkeypatch.setattr(build, "element_objects", lambda scene, scene_bytes, steppers, folders:
+                        (_ for _ in ()).throw(RuntimeError(f"compiles {','.join(steppers)}")))
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(SCENE))
+    with pytest.raises(RuntimeError, match="compiles projected,implicit$"):
+        build.build_native_fmu(path, tmp_path / "out.fmu", steppers=["implicit", "projected"])
+    with pytest.raises(RuntimeError, match="compiles projected,implicit,symplectic,verlet,exact$"):
+        build.build_native_fmu(path, tmp_path / "out.fmu")
+    assert not (tmp_path / "out.fmu").exists()
+
+
+def test_each_held_stepper_is_the_library_bit_for_bit(held):
+    from fmpy import simulate_fmu
+
+    fmu, path = held
+    scene = load_scene(path)
+    for stepper in HELD:
+        library = simulate(scene, stepper=stepper, energy=True)  # the element's account: its loop
+        result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                              start_values={"scene_load": True, "stepper": stepper}, output=["x", "v", "reaction"])
+        for column in ("x", "v", "reaction"):
+            np.testing.assert_array_equal(result[column], getattr(library, column))
+        assert np.abs(library.x).max() > 1e-2
+
+
+def test_the_description_and_the_page_name_the_held_steppers(held):
+    from fmpy import read_model_description
+
+    fmu, _ = held
+    stepper = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "stepper")
+    assert stepper.description.startswith("time stepper: projected, implicit (the steppers this FMU holds")
+    with zipfile.ZipFile(fmu) as archive:
+        page = archive.read("documentation/index.html").decode("utf-8")
+    for name in ("symplectic", "verlet", "exact"):
+        assert f"<td>{name}</td><td>no: not in this FMU (built with --steppers projected,implicit)</td>" in page
+    assert "<td>implicit</td><td>default</td>" in page and "<td>projected</td><td>yes</td>" in page
+
+
+def test_a_stepper_left_out_is_refused_with_a_logged_reason_and_the_instance_stays_usable(held):
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    slave = Slave(held[0])
+    try:
+        slave.step(0.1, 0.5)
+        slave.set("stepper", "verlet")
+        slave.messages.clear()
+        with pytest.raises(FMICallException):
+            slave.fmu.doStep(slave.time, 0.1)
+        assert any("must be one of projected, implicit (the steppers this FMU holds)" in message
+                   for _, message in slave.messages), slave.messages
+        slave.set("stepper", "projected")
+        slave.step(0.1, 0.5)
+        assert np.isfinite(slave.get("x"))
+    finally:
+        slave.close()
+
+
+CONNECTOR = base_tables(mass=None, cubic=None, load=None, solver=SOLVER)  # the massless element between two bodies
+
+
+@pytest.mark.parametrize("tables, arguments, culprit", [
+    (SCENE, ["--steppers", "projected"], "PythonFMU runtime compiles a stepper"),
+    (SCENE, ["--runtime", "native", "--steppers", "projected"], "must hold the scene's own stepper 'implicit'"),
+    (SCENE, ["--runtime", "native", "--steppers", "implicit,rk4"], "'rk4' is not a stepper"),
+    (SCENE, ["--runtime", "native", "--steppers", "implicit,"], "an empty name"),
+    (CONNECTOR, ["--runtime", "native", "--steppers", "implicit", "--causality", "displacement"],
+     "the connector has no stepper"),
+    (TWO_NODES, ["--runtime", "native", "--steppers", "projected"], "must hold the scene's own stepper 'implicit'"),
+    (TWO_NODES, ["--runtime", "native", "--steppers", "implicit,exact"],
+     "'exact' is not a stepper this scene's native FMU can hold (those that apply: implicit, projected)"),
+    ("chain-dynamic", ["--runtime", "native", "--steppers", "implicit,projected"],
+     "'projected' is not a stepper this scene's native FMU can hold (those that apply: implicit)"),
+])
+def test_a_bad_choice_of_steppers_is_refused_in_one_line(tmp_path, tables, arguments, culprit):
+    path = tmp_path / "scene.toml"
+    if tables == "chain-dynamic":  # a network shipped in the package
+        path = NETWORKS / f"{tables}.toml"
+    else:
+        path.write_text(tables if isinstance(tables, str) else scene_text(tables))
+    out = tmp_path / "out.fmu"
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(out), *arguments],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert culprit in done.stderr and not out.exists()
+
+
+def test_a_stepper_that_does_not_apply_cannot_be_held(tmp_path):
+    """A cubic spring: exact does not apply, so no FMU can hold it."""
+    path = tmp_path / "scene.toml"
+    path.write_text(scene_text(base_tables(solver=SOLVER)))
+    out = tmp_path / "out.fmu"
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "build", str(path), "-o", str(out), "--runtime",
+                           "native", "--steppers", "implicit,exact"], capture_output=True, text=True)
+    assert done.returncode == 2 and "'exact' is not a stepper this scene's native FMU can hold (those that apply: " \
+        "projected, implicit, symplectic, verlet)" in done.stderr, done.stderr
+    assert not out.exists()
+
+
+@pytest.mark.slow  # a network's native build, for this test alone
+def test_a_network_fmu_holds_the_stepper_asked_for_and_refuses_the_other(tmp_path):
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.fmi1 import FMICallException
+
+    from prandtl_fmu.fmu.build import build_fmu
+
+    scene_path = tmp_path / "two_nodes.toml"
+    scene_path.write_text(TWO_NODES)
+    fmu = build_fmu(scene_path, tmp_path / "two_nodes.fmu", runtime="native", steppers=["implicit"])
+    stepper = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "stepper")
+    assert stepper.description.startswith("time stepper: implicit (the steppers this FMU holds")
+    scene = load_scene(scene_path)
+    library = simulate(scene, energy=True)
+    result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                          start_values={"scene_load": True}, output=["reaction"])
+    np.testing.assert_array_equal(result["reaction"], library.columns()["reaction"])
+    with pytest.raises(FMICallException):  # projected applies to this network, but the FMU does not hold it
+        simulate_fmu(str(fmu), stop_time=1.0, start_values={"stepper": "projected"})
