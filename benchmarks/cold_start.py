@@ -9,7 +9,8 @@ Cases (``prandtl-fmu`` through ``python -m prandtl_fmu``, so that the process is
 * ``run-paper``: ``run paper-section-8`` to a CSV (100 branches, T = 500 s, ``projected``);
 * ``run-network``: ``run networks/two-masses-slider`` (``implicit``, the active-set step);
 * ``run-noise``: ``run white-noise``; ``run-memory``: ``run delay-oscillator``;
-* ``build-native-2``, ``build-native-3``: ``build paper-section-8 --runtime native --fmi 2|3``.
+* ``build-native-2``, ``build-native-3``: ``build paper-section-8 --runtime native --fmi 2|3``;
+  ``build-native-one``: the same, FMI 2.0, with only the scene's stepper (``--steppers projected``).
 
 Each row: the case, cold or warm, the wall and CPU seconds of the whole process (user + system of the process
 and its children: the native build's compiler and linker), and, for the cold runs, the kernels numba compiled
@@ -44,6 +45,8 @@ CASES = {
     "run-memory": ["run", "delay-oscillator", "--out", "{out}/memory.csv"],
     "build-native-2": ["build", "paper-section-8", "--runtime", "native", "--fmi", "2", "-o", "{out}/p2.fmu"],
     "build-native-3": ["build", "paper-section-8", "--runtime", "native", "--fmi", "3", "-o", "{out}/p3.fmu"],
+    "build-native-one": ["build", "paper-section-8", "--runtime", "native", "--steppers", "projected", "-o",
+                         "{out}/p1.fmu"],
 }
 
 # Run in the child: record every numba compilation (dispatcher, seconds), then the command line as the program.

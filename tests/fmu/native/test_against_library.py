@@ -85,6 +85,26 @@ def fmus(tmp_path_factory):
     return Built(build)
 
 
+# The scenes whose FMUs the tests of the C layer use (states, refusals, hosts, warnings, threads, FMI 3.0) hold only
+# the steppers those tests set (build --steppers): fewer loops to compile. The comparisons of every stepper build them
+# whole (``fmus``).
+HELD = {"friction": "projected,implicit", "smooth": "projected,implicit,verlet"}
+
+
+@pytest.fixture(scope="module")
+def held(tmp_path_factory):
+    from prandtl_fmu.fmu.build import build_fmu
+
+    folder = tmp_path_factory.mktemp("held")
+
+    def build(name):
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(SCENES[name]))
+        return build_fmu(path, folder / f"{name}.fmu", runtime="native", steppers=HELD[name]), path
+
+    return Built(build)
+
+
 # the scenes whose FMU comparisons run in the quick suite; the others (also covered by the random native scenes)
 # under the slow marker ("coulomb", exact with friction, 47 s cold; "friction", a native build and its runs, 52 s
 # on a loaded machine: the quick suite's budget)
@@ -229,10 +249,10 @@ def test_a_state_whose_memory_stack_parameters_are_not_the_scene_s_is_refused(fm
         slave.close()
 
 
-def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus):
+def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus, held):
     from fmpy import simulate_fmu
 
-    fmu, scene_path = fmus["friction"]
+    fmu, scene_path = held["friction"]
     scene = load_scene(scene_path)
     library = simulate(scene)
     result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
@@ -298,8 +318,8 @@ def test_fmpy_after_a_run_with_its_own_logger(fmus, restore):
         assert done.returncode != 0, "FMPy no longer calls a freed logger: drop restore_fmpy_logger (conftest)"
 
 
-def test_the_binary_holds_no_python(fmus, tmp_path):
-    fmu, _ = fmus["friction"]
+def test_the_binary_holds_no_python(fmus, tmp_path, held):
+    fmu, _ = held["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
     assert not (tmp_path / "x" / "resources" / "prandtl_fmu").exists()  # no library copy, no Python source
     needed = subprocess.run(["ldd", str(extracted.library)], capture_output=True, text=True).stdout
@@ -322,8 +342,8 @@ def host(tmp_path_factory):
 NO_PYTHON = {"PATH": os.environ.get("PATH", "/usr/bin:/bin")}  # no LD_PRELOAD, no PYTHONPATH
 
 
-def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tmp_path):
-    fmu, scene_path = fmus["friction"]
+def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tmp_path, held):
+    fmu, scene_path = held["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
     rng = np.random.default_rng(3)
     commands, t = ["setup", "enter", "setb:scene_load:0", "exit"], 0.0  # F alone, as the element is driven
@@ -342,10 +362,10 @@ def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tm
 
 
 @pytest.mark.parametrize("logging", [False, True])
-def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, logging):
+def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, logging, held):
     """A bad start value: fmi2Error at fmi2ExitInitializationMode, its reason logged (logging off too) under a
     declared category; set right, the instance initializes; a non-finite F: fmi2Discard, then a good step."""
-    fmu, _ = fmus["friction"]
+    fmu, _ = held["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
     code, calls, logs, values, out = run_host(host, extracted, [
         "setup", "enter", "setr:alpha_kinetic:0.5", "exit", "setr:alpha_kinetic:0.25", "exit",
@@ -361,15 +381,15 @@ def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, l
     assert len(values) == 1 and np.isfinite(values[0][1])
 
 
-def test_the_fmu_state_is_a_checked_blob(fmus):
+def test_the_fmu_state_is_a_checked_blob(fmus, held):
     """Get, step, set back, step again: the same numbers. A serialized state with one byte changed, one of another
     scene and garbage are refused with fmi2Error and their reason; the instance is unchanged."""
     from fmpy.fmi1 import FMICallException
 
     from tests.fmu_tools import Slave
 
-    slave = Slave(fmus["friction"][0])
-    other = Slave(fmus["smooth"][0])
+    slave = Slave(held["friction"][0])
+    other = Slave(held["smooth"][0])
     try:
         slave.step(0.3, 0.4)
         state = slave.fmu.getFMUstate()
@@ -396,11 +416,11 @@ def test_the_fmu_state_is_a_checked_blob(fmus):
         other.close()
 
 
-def test_two_instances_on_two_threads_give_the_library_numbers(fmus):
+def test_two_instances_on_two_threads_give_the_library_numbers(fmus, held):
     """ctypes lets go of the GIL in a foreign call: both instances step at once, each its own numbers."""
     from tests.fmu_tools import Slave
 
-    fmu, scene_path = fmus["smooth"]
+    fmu, scene_path = held["smooth"]
     scene = load_scene(scene_path)
     results, errors = {}, []
 
@@ -562,12 +582,17 @@ def test_the_cli_builds_a_native_fmu(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def fmus3(fmus, tmp_path_factory):
+def fmus3(tmp_path_factory):
     from prandtl_fmu.fmu.build import build_fmu
 
     folder = tmp_path_factory.mktemp("native3")
-    return Built(lambda name: (build_fmu(fmus[name][1], folder / f"{name}.fmu", runtime="native", fmi=3),
-                               fmus[name][1]))
+
+    def build(name):
+        path = folder / f"{name}.toml"
+        path.write_text(scene_text(SCENES[name]) if SCENES[name] else PAPER.read_text())
+        return build_fmu(path, folder / f"{name}.fmu", runtime="native", fmi=3, steppers=HELD.get(name)), path
+
+    return Built(build)
 
 
 @pytest.mark.parametrize("name", quick_or_slow(["friction", "paper", "continuum"]))
@@ -751,14 +776,14 @@ def test_the_fmi3_connector_validates_and_gives_the_force_and_the_elongations(co
     pytest.param("massless", {"stepper": "projected", "step": 1.0}, marks=pytest.mark.slow),
     ("smooth", {"stepper": "implicit", "step": 0.5}),
 ])
-def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, settings):
+def test_stability_warnings_are_the_pythonfmu_fmus(fmus, held, tmp_path, name, settings):
     """The same one-line warning (or none) as the PythonFMU FMU of the scene, at initialization and when a
     setting changes during the run."""
     from prandtl_fmu.fmu.build import build_fmu
 
     from tests.fmu_tools import Slave
 
-    native_fmu, scene_path = fmus[name]
+    native_fmu, scene_path = (held if name in HELD else fmus)[name]
     python_fmu = build_fmu(scene_path, tmp_path / "python.fmu")
     warnings = {}
     for runtime, fmu in (("python", python_fmu), ("native", native_fmu)):
@@ -774,13 +799,13 @@ def test_stability_warnings_are_the_pythonfmu_fmus(fmus, tmp_path, name, setting
     assert bool(warnings["native"]) == (settings["stepper"] != "implicit" or name == "friction")
 
 
-def test_the_native_stability_kernel_calls_the_library_s_compiled_check(fmus):
+def test_the_native_stability_kernel_calls_the_library_s_compiled_check(fmus, held):
     """The native build's stability kernel hands check() the element's having a mass as a bool, not the constant
     True numba compiled check() once more for: after the module's builds, the cache of this run holds no kernel
     signature with a literal (tests/compiled_copies.py)."""
     from tests.compiled_copies import literal_signatures
 
-    assert fmus["smooth"][0].is_file()
+    assert held["smooth"][0].is_file()
     assert literal_signatures("stability.check") == []
 
 
@@ -793,13 +818,13 @@ def _entries(path):
         return {info.filename: ((info.external_attr >> 16) & 0o777, archive.read(info)) for info in archive.infolist()}
 
 
-def test_every_entry_of_every_fmu_is_readable_by_all(fmus, fmus3, connectors, tmp_path):
+def test_every_entry_of_every_fmu_is_readable_by_all(fmus, fmus3, connectors, tmp_path, held):
     """Entries were written 0600 (ZipFile.writestr's default): unpacked, a master running as another user could
     not read them. 0644 as every FMU has, the binary 0755."""
     from prandtl_fmu.fmu.build import build_fmu
 
-    python_fmu = build_fmu(fmus["smooth"][1], tmp_path / "python.fmu")
-    paths = [fmus["smooth"][0], fmus3["paper"][0], connectors["series"]["fmi3"], python_fmu]
+    python_fmu = build_fmu(held["smooth"][1], tmp_path / "python.fmu")
+    paths = [held["smooth"][0], fmus3["paper"][0], connectors["series"]["fmi3"], python_fmu]
     for path in paths:
         for name, (mode, _) in _entries(path).items():
             if not name.endswith("/"):

@@ -146,7 +146,8 @@ CONNECTOR = base_tables(mass=None, cubic=None, load=None, solver=SOLVER)  # the 
      "'exact' is not a stepper this scene's native FMU can hold (those that apply: implicit, projected)"),
     ("chain-dynamic", ["--runtime", "native", "--steppers", "implicit,projected"],
      "'projected' is not a stepper this scene's native FMU can hold (those that apply: implicit)"),
-])
+], ids=["python-runtime", "without-the-scene-s", "unknown", "empty-name", "connector", "network-without-the-scene-s",
+        "network-exact", "network-not-applying"])
 def test_a_bad_choice_of_steppers_is_refused_in_one_line(tmp_path, tables, arguments, culprit):
     path = tmp_path / "scene.toml"
     if tables == "chain-dynamic":  # a network shipped in the package
