@@ -83,7 +83,7 @@ def test_model_description_is_valid_and_complete(fmus, name):
     if scene.has_series_dashpots:
         expected |= {f"c_branch[{i + 1}]" for i in range(scene.branches.n)}
     assert {v.name for v in md.modelVariables if v.causality == "parameter"} == expected
-    n = -1 if scene.branches.continuum else scene.branches.n
+    n = 0 if scene.branches is None else -1 if scene.branches.continuum else scene.branches.n
     assert variables["n"].variability == "constant" and int(variables["n"].start) == n
     energy_outputs = {v.name for v in md.modelVariables if v.causality == "output" and v.unit == "J"}
     assert {"kinetic_energy", "stored_energy", "work"} <= energy_outputs <= set(energy_columns(scene))  # as the CSV
