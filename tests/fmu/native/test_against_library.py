@@ -249,16 +249,52 @@ def test_a_state_whose_memory_stack_parameters_are_not_the_scene_s_is_refused(fm
         slave.close()
 
 
-def test_with_scene_load_the_native_fmu_reproduces_simulate(fmus, held):
+def test_with_scene_load_the_native_fmu_reproduces_simulate_with_each_stepper_it_holds(held):
+    """The friction FMU holds projected and implicit (build --steppers): each is the library's run, bit for bit
+    (the library keeps the energy account, as the FMU's element does: one compiled loop for both)."""
     from fmpy import simulate_fmu
 
     fmu, scene_path = held["friction"]
     scene = load_scene(scene_path)
-    library = simulate(scene)
-    result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
-                          start_values={"scene_load": True}, output=["x", "v", "reaction"])
-    for column in ("x", "v", "reaction"):
-        np.testing.assert_array_equal(result[column], getattr(library, column))
+    for stepper in HELD["friction"].split(","):
+        library = simulate(scene, stepper=stepper, energy=True)
+        result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
+                              start_values={"scene_load": True, "stepper": stepper}, output=["x", "v", "reaction"])
+        for column in ("x", "v", "reaction"):
+            np.testing.assert_array_equal(result[column], getattr(library, column))
+        assert np.abs(library.x).max() > 1e-2
+
+
+def test_an_fmu_built_with_some_steppers_names_them_and_refuses_the_others(held):
+    """The model description's stepper parameter and the page name the steppers held; another one that applies to
+    the scene is refused at doStep with a logged reason that lists them, and the instance stays usable."""
+    from fmpy import read_model_description
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    fmu, _ = held["friction"]
+    stepper = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "stepper")
+    assert stepper.description.startswith("time stepper: projected, implicit (the steppers this FMU holds")
+    page = zipfile.ZipFile(fmu).read("documentation/index.html").decode("utf-8")
+    for name in ("symplectic", "verlet"):
+        assert f"<td>{name}</td><td>no: not in this FMU (built with --steppers projected,implicit)</td>" in page
+    assert "<td>implicit</td><td>default</td>" in page and "<td>projected</td><td>yes</td>" in page
+    assert "<td>exact</td><td>no: " in page and "not in this FMU" not in page.split("<td>exact</td>")[1][:80]
+    slave = Slave(fmu)
+    try:
+        slave.step(0.1, 0.5)
+        slave.set("stepper", "verlet")
+        slave.messages.clear()
+        with pytest.raises(FMICallException):
+            slave.fmu.doStep(slave.time, 0.1)
+        assert any("must be one of projected, implicit (the steppers this FMU holds)" in message
+                   for _, message in slave.messages), slave.messages
+        slave.set("stepper", "projected")
+        slave.step(0.1, 0.5)
+        assert np.isfinite(slave.get("x"))
+    finally:
+        slave.close()
 
 
 @pytest.mark.parametrize("fmi", [2, pytest.param(3, marks=pytest.mark.slow)])

@@ -1,11 +1,11 @@
-"""A native FMU built with only some steppers (``--steppers``): it compiles those alone, holds them bit for bit as
-the library runs them, names them in its model description and its page, and refuses the others with a logged
-reason; a bad choice stops the build in one line (exit 2, no FMU)."""
+"""A native FMU built with only some steppers (``--steppers``): it compiles those alone; a bad choice stops the build
+in one line (exit 2, no FMU); a network's FMU refuses the stepper it does not hold. The element's FMUs built so
+(tests/fmu/native/test_against_library.py's ``held``) are the library bit for bit with each stepper they hold, name
+them in their model description and page, and refuse the others with a logged reason (the tests there)."""
 import os
 import shutil
 import subprocess
 import sys
-import zipfile
 
 import numpy as np
 import pytest
@@ -56,17 +56,6 @@ step = 0.001
 stop_time = 2.0
 output_interval = 0.01
 """
-HELD = ["projected", "implicit"]  # the order of kernels.NATIVE_STEPPERS, whatever the order asked
-
-
-@pytest.fixture(scope="module")
-def held(tmp_path_factory):
-    from prandtl_fmu.fmu.build import build_fmu
-
-    folder = tmp_path_factory.mktemp("held")
-    path = folder / "held.toml"
-    path.write_text(scene_text(SCENE))
-    return build_fmu(path, folder / "held.fmu", runtime="native", steppers="implicit,projected"), path
 
 
 def test_only_the_steppers_asked_for_are_compiled(tmp_path, monkeypatch):
@@ -81,54 +70,6 @@ def test_only_the_steppers_asked_for_are_compiled(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="compiles projected,implicit,symplectic,verlet,exact$"):
         build.build_native_fmu(path, tmp_path / "out.fmu")
     assert not (tmp_path / "out.fmu").exists()
-
-
-def test_each_held_stepper_is_the_library_bit_for_bit(held):
-    from fmpy import simulate_fmu
-
-    fmu, path = held
-    scene = load_scene(path)
-    for stepper in HELD:
-        library = simulate(scene, stepper=stepper, energy=True)  # the element's account: its loop
-        result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
-                              start_values={"scene_load": True, "stepper": stepper}, output=["x", "v", "reaction"])
-        for column in ("x", "v", "reaction"):
-            np.testing.assert_array_equal(result[column], getattr(library, column))
-        assert np.abs(library.x).max() > 1e-2
-
-
-def test_the_description_and_the_page_name_the_held_steppers(held):
-    from fmpy import read_model_description
-
-    fmu, _ = held
-    stepper = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "stepper")
-    assert stepper.description.startswith("time stepper: projected, implicit (the steppers this FMU holds")
-    with zipfile.ZipFile(fmu) as archive:
-        page = archive.read("documentation/index.html").decode("utf-8")
-    for name in ("symplectic", "verlet", "exact"):
-        assert f"<td>{name}</td><td>no: not in this FMU (built with --steppers projected,implicit)</td>" in page
-    assert "<td>implicit</td><td>default</td>" in page and "<td>projected</td><td>yes</td>" in page
-
-
-def test_a_stepper_left_out_is_refused_with_a_logged_reason_and_the_instance_stays_usable(held):
-    from fmpy.fmi1 import FMICallException
-
-    from tests.fmu_tools import Slave
-
-    slave = Slave(held[0])
-    try:
-        slave.step(0.1, 0.5)
-        slave.set("stepper", "verlet")
-        slave.messages.clear()
-        with pytest.raises(FMICallException):
-            slave.fmu.doStep(slave.time, 0.1)
-        assert any("must be one of projected, implicit (the steppers this FMU holds)" in message
-                   for _, message in slave.messages), slave.messages
-        slave.set("stepper", "projected")
-        slave.step(0.1, 0.5)
-        assert np.isfinite(slave.get("x"))
-    finally:
-        slave.close()
 
 
 CONNECTOR = base_tables(mass=None, cubic=None, load=None, solver=SOLVER)  # the massless element between two bodies
