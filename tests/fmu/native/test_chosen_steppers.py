@@ -13,6 +13,7 @@ import pytest
 from prandtl_fmu import load_scene, simulate
 
 from tests.conftest import SCENES, base_tables, scene_text
+from tests.networks.test_native import SCENES as NETWORK_SCENES
 
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:
@@ -24,38 +25,8 @@ SCENE = base_tables(cubic=None, solver=SOLVER, friction={"alpha": 0.3},
                     branches={"k": [0.5, 0.3, 0.2], "eta": [0.1, 0.3, 0.6], "c": [0.4, 2.0, 9.0]},
                     load={"kind": "harmonic", "amplitude": 0.8, "omega": 1.3})
 NETWORKS = SCENES / "networks"
-# every node massive, all plasticity in branches: both network steppers apply
-TWO_NODES = """name = "two_nodes"
-
-[network]
-nodes = ["a", "b"]
-mass = [1.0, 0.5]
-load_node = "a"
-
-[[network.spring]]
-between = ["a", "ground"]
-k = 10.0
-
-[[network.branch]]
-between = ["a", "b"]
-k = 50.0
-eta = 0.02
-
-[[network.spring]]
-between = ["b", "ground"]
-k = 20.0
-
-[load]
-kind = "harmonic"
-amplitude = 3.0
-omega = 6.0
-
-[solver]
-stepper = "implicit"
-step = 0.001
-stop_time = 2.0
-output_interval = 0.01
-"""
+# every node massive, all plasticity in branches: both network steppers apply; its own is projected
+TWO_NODES = NETWORK_SCENES["branches"]
 
 
 def test_only_the_steppers_asked_for_are_compiled(tmp_path, monkeypatch):
@@ -82,8 +53,8 @@ CONNECTOR = base_tables(mass=None, cubic=None, load=None, solver=SOLVER)  # the 
     (SCENE, ["--runtime", "native", "--steppers", "implicit,"], "an empty name"),
     (CONNECTOR, ["--runtime", "native", "--steppers", "implicit", "--causality", "displacement"],
      "the connector has no stepper"),
-    (TWO_NODES, ["--runtime", "native", "--steppers", "projected"], "must hold the scene's own stepper 'implicit'"),
-    (TWO_NODES, ["--runtime", "native", "--steppers", "implicit,exact"],
+    (TWO_NODES, ["--runtime", "native", "--steppers", "implicit"], "must hold the scene's own stepper 'projected'"),
+    (TWO_NODES, ["--runtime", "native", "--steppers", "projected,exact"],
      "'exact' is not a stepper this scene's native FMU can hold (those that apply: implicit, projected)"),
     ("chain-dynamic", ["--runtime", "native", "--steppers", "implicit,projected"],
      "'projected' is not a stepper this scene's native FMU can hold (those that apply: implicit)"),
@@ -123,13 +94,13 @@ def test_a_network_fmu_holds_the_stepper_asked_for_and_refuses_the_other(tmp_pat
 
     scene_path = tmp_path / "two_nodes.toml"
     scene_path.write_text(TWO_NODES)
-    fmu = build_fmu(scene_path, tmp_path / "two_nodes.fmu", runtime="native", steppers=["implicit"])
+    fmu = build_fmu(scene_path, tmp_path / "two_nodes.fmu", runtime="native", steppers=["projected"])
     stepper = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "stepper")
-    assert stepper.description.startswith("time stepper: implicit (the steppers this FMU holds")
+    assert stepper.description.startswith("time stepper: projected (the steppers this FMU holds")
     scene = load_scene(scene_path)
     library = simulate(scene, energy=True)
     result = simulate_fmu(str(fmu), stop_time=scene.solver.stop_time, output_interval=scene.solver.output_interval,
                           start_values={"scene_load": True}, output=["reaction"])
     np.testing.assert_array_equal(result["reaction"], library.columns()["reaction"])
-    with pytest.raises(FMICallException):  # projected applies to this network, but the FMU does not hold it
-        simulate_fmu(str(fmu), stop_time=1.0, start_values={"stepper": "projected"})
+    with pytest.raises(FMICallException):  # implicit applies to this network, but the FMU does not hold it
+        simulate_fmu(str(fmu), stop_time=1.0, start_values={"stepper": "implicit"})
