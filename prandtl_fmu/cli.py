@@ -123,7 +123,7 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--steppers", metavar="S,S,...",
                        help="native runtime only: the steppers the binary holds, comma-separated, the scene's own "
                             "among them (default: every one that applies): fewer steppers compile sooner (one "
-                            "about half the time of all five on the paper scene); the FMU refuses the others")
+                            "about a third of the CPU of all five, cold, on the paper scene); the FMU refuses the others")
     fit = commands.add_parser("fit", help="identify a scene (the connector) from a measured force-displacement "
                                           "history: non-negative least squares on the play-operator basis")
     fit.add_argument("data", help="CSV file with a header line")
