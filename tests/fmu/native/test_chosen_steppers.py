@@ -13,7 +13,7 @@ import pytest
 from prandtl_fmu import load_scene, simulate
 
 from tests.conftest import SCENES, base_tables, scene_text
-from tests.networks.test_native import SCENES as NETWORK_SCENES
+from tests.networks.scenes import SCENES as NETWORK_SCENES
 
 pytest.importorskip("fmpy")
 if shutil.which(os.environ.get("CC", "cc")) is None and shutil.which("gcc") is None:

@@ -517,7 +517,7 @@ def network_fmus(tmp_path_factory):
     slider), FMI 2.0 for win64 and FMI 3.0 for aarch64-linux."""
     from prandtl_fmu.fmu.build import build_fmu
 
-    from tests.networks.test_native import SCENES as NETWORKS
+    from tests.networks.scenes import SCENES as NETWORKS
 
     _need_zig()
     _need_mingw()
