@@ -43,6 +43,7 @@ from numba.extending import overload
 from .play import branch_force
 from .friction import reaction as reaction_of
 from ..memory import prepare
+from .._jit import kernel
 
 # columns of ``real``
 M, K0, K3, C, X0, V0, H, REST, OFFSET, AMPLITUDE, OMEGA, ALPHA, ALPHA_KINETIC, STRIBECK, BELT = range(15)
@@ -86,6 +87,14 @@ def _branch_part_overload(template, branch_data, eta_data, a, b, rows, cols):
         return lambda template, branch_data, eta_data, a, b, rows, cols: (
             branch_data[a:b].reshape((rows, cols)), None)
     return lambda template, branch_data, eta_data, a, b, rows, cols: (branch_data[a:b], eta_data[a:b])
+
+
+@kernel
+def _copy_row(source, target, i):
+    """target[i, :] = source[i, :], element by element: a slice assignment compiles numba's check of the shapes,
+    whose message formatting was 2.2-2.9 s of a cold compile of the summary loop."""
+    for q in range(source.shape[1]):
+        target[i, q] = source[i, q]
 
 
 def summary_loop(step):
@@ -139,7 +148,7 @@ def summary_loop(step):
                 history[0, 0], history[0, 1], history[0, 2] = x, v, reaction
                 rows = 1
             if mark == 0:
-                marks[i, :] = accounts[i, :]
+                _copy_row(accounts, marks, i)
             failed_at, failed_step = np.nan, np.nan
             steps = full_steps + index[i, TAIL_STEPS]
             p = 0
@@ -162,7 +171,7 @@ def summary_loop(step):
                 peak_v = max(peak_v, abs(v))
                 peak_reaction = max(peak_reaction, abs(reaction))
                 if p == mark:
-                    marks[i, :] = accounts[i, :]
+                    _copy_row(accounts, marks, i)
                 if rows > 0 and p <= full_steps and p % per_row == 0:
                     history[rows, 0], history[rows, 1], history[rows, 2] = x, v, reaction
                     rows += 1

@@ -218,7 +218,8 @@ def lockstep_for(step):
         k0_value = 0.0 if k0 is None else k0
         for p in range(first, first + steps):
             used = stack.HEADER + stack.ROW * int(states[NEW, stack.COUNT])
-            states[OLD, :used] = states[NEW, :used]
+            for q in range(used):  # (element by element: a slice assignment compiles numba's shape check)
+                states[OLD, q] = states[NEW, q]
             xo, vo = xc, vc
             xc, vc, sc = step(model, load, (p + theta) * h, h, xc, vc, sc, states[NEW], None)
             xf, vf, sf = step(model, load, (2 * p + theta) * half, half, xf, vf, sf, states[FINE], None)
