@@ -70,7 +70,7 @@ def run_host(host: Path, fmu: Extracted, commands, logging: bool = False, env=No
     written = {}  # the command as the host prints it -> as the caller wrote it
     for command in commands:
         parts = command.split(":")
-        if parts[0] in ("setr", "getr", "setb") and not parts[1].isdigit():
+        if parts[0] in ("setr", "getr", "setb", "sets") and not parts[1].isdigit():
             parts[1] = str(fmu.vr[parts[1]])
         if parts[0] == "timeit":
             parts = parts[:4] + [str(fmu.vr[name]) if not name.isdigit() else name for name in parts[4:]]

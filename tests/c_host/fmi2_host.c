@@ -7,7 +7,8 @@
    (exit 134, like OMSimulator's, which builds a std::string from the category) when the category is NULL.
 
    Commands: setup | enter | exit | term | reset | free
-             setr:VR:VALUE | getr:VR (prints "VALUE VR %.17g") | setb:VR:0|1 (a Boolean) | step:T:H
+             setr:VR:VALUE | getr:VR (prints "VALUE VR %.17g") | setb:VR:0|1 (a Boolean) | sets:VR:TEXT (a String)
+             | step:T:H
              | steps:T:H:COUNT (COUNT steps of H)
              save (fmi2GetFMUstate) | restore (fmi2SetFMUstate) | timeit:T:H:COUNT:VR... (COUNT steps, reading
              the VRs after each; prints "TIME seconds") */
@@ -68,6 +69,7 @@ int main(int argc, char** argv)
     LOAD(fmi2Reset)
     LOAD(fmi2SetReal)
     LOAD(fmi2SetBoolean)
+    LOAD(fmi2SetString)
     LOAD(fmi2GetReal)
     LOAD(fmi2DoStep)
     LOAD(fmi2GetFMUstate)
@@ -114,6 +116,10 @@ int main(int argc, char** argv)
             fmi2ValueReference vr = (fmi2ValueReference)strtoul(command + 5, NULL, 10);
             fmi2Boolean value = atoi(strchr(command + 5, ':') + 1) ? fmi2True : fmi2False;
             status = fmi2SetBoolean(c, &vr, 1, &value);
+        } else if (strncmp(command, "sets:", 5) == 0) {
+            fmi2ValueReference vr = (fmi2ValueReference)strtoul(command + 5, NULL, 10);
+            fmi2String value = strchr(command + 5, ':') + 1;
+            status = fmi2SetString(c, &vr, 1, &value);
         } else if (strncmp(command, "getr:", 5) == 0) {
             fmi2ValueReference vr = (fmi2ValueReference)strtoul(command + 5, NULL, 10);
             fmi2Real value = 0.0;

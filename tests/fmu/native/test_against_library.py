@@ -400,21 +400,27 @@ def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tm
 @pytest.mark.parametrize("logging", [False, True])
 def test_refusals_in_a_c_host_are_logged_with_a_category(fmus, host, tmp_path, logging, held):
     """A bad start value: fmi2Error at fmi2ExitInitializationMode, its reason logged (logging off too) under a
-    declared category; set right, the instance initializes; a non-finite F: fmi2Discard, then a good step."""
+    declared category; set right, the instance initializes; a non-finite F: fmi2Discard, then a good step; a
+    stepper the FMU does not hold (built with ``--steppers projected,implicit``): fmi2Discard at the next step, the
+    steppers it holds logged, then a good step with one of them."""
     fmu, _ = held["friction"]
     extracted = Extracted(fmu, tmp_path / "x")
     code, calls, logs, values, out = run_host(host, extracted, [
         "setup", "enter", "setr:alpha_kinetic:0.5", "exit", "setr:alpha_kinetic:0.25", "exit",
-        "setr:F:inf", "step:0:0.1", "setr:F:0.5", "step:0:0.1", "getr:x", "term", "free"],
+        "setr:F:inf", "step:0:0.1", "setr:F:0.5", "step:0:0.1", "getr:x",
+        "sets:stepper:verlet", "step:0.1:0.1", "sets:stepper:projected", "step:0.1:0.1", "getr:x", "term", "free"],
         logging=logging, env=NO_PYTHON)
     assert code == 0, out
     assert calls["exit"] == ["3", "0"], out
     assert calls["step:0:0.1"] == ["2", "0"], out
+    assert calls["sets:stepper:verlet"] == ["0"] and calls["step:0.1:0.1"] == ["2", "0"], out
     errors = [entry for entry in logs if entry[0] == 3]
     assert errors and "alpha_kinetic" in errors[0][2] and errors[0][1] == "logStatusError", logs
     assert [entry for entry in logs if entry[0] == 2 and "F = inf" in entry[2]], logs
+    assert [entry for entry in logs if entry[0] == 2 and "'verlet'" in entry[2]
+            and "must be one of projected, implicit (the steppers this FMU holds)" in entry[2]], logs
     assert all(category.startswith("log") for _, category, _ in logs), logs
-    assert len(values) == 1 and np.isfinite(values[0][1])
+    assert len(values) == 2 and np.isfinite(values[0][1]) and values[1][1] != values[0][1]
 
 
 def test_the_fmu_state_is_a_checked_blob(fmus, held):
