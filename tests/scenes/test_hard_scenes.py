@@ -33,6 +33,11 @@ def applies(scene, stepper):
         return False
 
 
+# The runs keep the energy account even where a test reads none of it: test_properties_checked_everywhere keeps it on
+# the same scenes, and a loop with and one without the account are two compilations (the account never changes the
+# motion: tests/fmu/python/test_against_library.py's test_the_energy_account_never_changes_the_motion).
+
+
 def run(scene, stepper, **kwargs):
     """simulate(), asserting it warns exactly when the step is beyond the stepper's stability limit."""
     with warnings.catch_warnings(record=True) as caught:
@@ -119,7 +124,7 @@ def test_stiff_branches(omega_h):
                                      for name in STEPPERS])
 def test_tiny_thresholds(stepper):
     scene = hard("tiny-thresholds")
-    result = simulate(scene, stepper, states=True)
+    result = simulate(scene, stepper, states=True, energy=True)
     assert np.all(result.u[:, 0] == 0.0)  # eta = 0: the slider takes all the motion
     assert np.all(np.abs(result.u[:, 1]) <= 1e-12)
     assert np.abs(result.u[:, 3]).max() > 0.1
@@ -130,7 +135,7 @@ def test_single_branch_steppers_converge_to_the_same_motion():
     gaps = []
     for h in (4e-3, 1e-3, 2.5e-4):
         s = scene.with_solver(step=h, output_interval=0.02)
-        gaps.append(np.abs(simulate(s, "projected").x - simulate(s, "implicit").x).max())
+        gaps.append(np.abs(simulate(s, "projected", energy=True).x - simulate(s, "implicit", energy=True).x).max())
     assert 3.0 < gaps[0] / gaps[1] < 5.5 and 3.0 < gaps[1] / gaps[2] < 5.5, gaps  # both order 1, one limit
 
 
@@ -154,7 +159,7 @@ def test_many_branches():
 def test_overload_closed_form(stepper):
     scene = hard("overload")
     strength, m, force = scene.branches.strength, scene.mass.m, scene.load.value
-    result = simulate(scene, stepper, states=True)
+    result = simulate(scene, stepper, states=True, energy=True)
     full = np.all(np.abs(result.u) == scene.branches.yield_displacement, axis=1)
     assert full[-1] and full.sum() > 500  # every slider slips for most of the run
     first = int(np.argmax(full)) + 1
@@ -166,7 +171,7 @@ def test_overload_closed_form(stepper):
 def test_step_load():
     scene = hard("step-load")
     for stepper in STEPPERS:
-        result = simulate(scene, stepper)
+        result = simulate(scene, stepper, energy=True)
         # after the 40 N step the load far exceeds the strength: the mass runs away, as it should
         assert result.x[-1] > 10 and np.all(np.isfinite(result.x))
         before = result.time < 5.0
@@ -202,7 +207,7 @@ def test_extreme_scales_keep_relative_accuracy(name, force_scale, length_scale):
         load=HarmonicLoad(scene.load.amplitude / force_scale, scene.load.omega))
     assert unit.branches.strength == pytest.approx(0.625, rel=1e-12)  # the paper's spectrum, n = 20
     for stepper in STEPPERS:
-        scaled, reference = simulate(scene, stepper), simulate(unit, stepper)
+        scaled, reference = simulate(scene, stepper, energy=True), simulate(unit, stepper, energy=True)
         x_error = np.abs(scaled.x / length_scale - reference.x).max() / np.abs(reference.x).max()
         r_error = np.abs(scaled.reaction / force_scale - reference.reaction).max() / np.abs(reference.reaction).max()
         assert x_error < 1e-11 and r_error < 1e-11, (stepper, x_error, r_error)
@@ -213,7 +218,8 @@ def test_extreme_scales_keep_relative_accuracy(name, force_scale, length_scale):
 def test_stick_slip_has_no_chattering_beyond_the_order(name, stepper):
     """Near the threshold the reaction converges at order 1: no O(1) chattering between stick and slip."""
     scene = hard(name)
-    runs = [simulate(scene.with_solver(step=h, output_interval=0.04), stepper).reaction for h in (4e-3, 2e-3, 1e-3)]
+    runs = [simulate(scene.with_solver(step=h, output_interval=0.04), stepper, energy=True).reaction
+            for h in (4e-3, 2e-3, 1e-3)]
     first, second = np.abs(runs[0] - runs[1]).max(), np.abs(runs[1] - runs[2]).max()
     order = get_stepper(stepper).ORDER
     if math.isinf(order):  # `exact`: h only sets the grid
@@ -269,7 +275,7 @@ def test_massless_dashpot_closed_form_and_order(stepper):
     stiffness, c, force = 0.5 + 1.5, scene.damper.c, scene.load.value
     errors = []
     for h in (4e-3, 2e-3, 1e-3):
-        result = simulate(scene.with_solver(step=h, output_interval=0.04), stepper)
+        result = simulate(scene.with_solver(step=h, output_interval=0.04), stepper, energy=True)
         exact = force / stiffness * (1 - np.exp(-stiffness * result.time / c))
         errors.append(np.abs(result.x - exact).max())
         np.testing.assert_allclose(result.reaction, force, rtol=0, atol=1e-12)  # massless: reaction = F
@@ -280,7 +286,7 @@ def test_massless_dashpot_closed_form_and_order(stepper):
 def test_loads_that_start_inconsistent_jump_at_time_zero():
     text = (HARD / "massless-quasi-static.toml").read_text().replace("amplitude = 0.6", "amplitude = 1.2")
     scene = parse_scene(text, "jump.toml")
-    result = simulate(scene.with_solver(stop_time=0.1), "implicit")
+    result = simulate(scene.with_solver(stop_time=0.1), "implicit", energy=True)
     assert result.reaction[0] == pytest.approx(1.2, rel=1e-15)
     # 0.1 x + min(x, 0.2) + min(x, 0.5) + min(x, 1.0) = 1.2: x = 1 / 2.1 (in the piece 0.2 < x < 0.5)
     assert result.x[0] == pytest.approx(1 / 2.1, rel=1e-14)
@@ -291,7 +297,7 @@ def test_loads_that_start_inconsistent_jump_at_time_zero():
 @pytest.mark.parametrize("stepper", [name for name in STEPPERS if name != "exact"])
 def test_breakaway_ramp_holds_the_mass_exactly_until_the_threshold(stepper):
     scene = hard("breakaway-ramp")
-    result, flagged = run(scene, stepper)
+    result, flagged = run(scene, stepper, energy=True)
     assert not flagged
     held = result.time < 0.6 / 0.5 - 2 * scene.solver.step
     assert np.all(result.x[held] == 0.0) and np.all(result.v[held] == 0.0)
@@ -313,7 +319,7 @@ def cycle_peaks(result):
 @pytest.mark.parametrize("stepper", ["implicit", "symplectic", "verlet", "projected"])
 def test_belt_stick_slip_settles_on_a_limit_cycle_and_sticks_to_the_bit(stepper):
     scene = hard("belt-stick-slip")
-    result, flagged = run(scene, stepper)
+    result, flagged = run(scene, stepper, energy=True)
     assert not flagged
     stuck = result.v == 0.1  # moving with the belt, exactly
     assert 0.6 < stuck.mean() < 0.8  # most of a cycle sticks, the rest slips back
@@ -323,5 +329,5 @@ def test_belt_stick_slip_settles_on_a_limit_cycle_and_sticks_to_the_bit(stepper)
     assert np.ptp(peaks[-3:]) < 2e-3 and np.ptp(np.diff(times[-4:])) < 0.05
     # while stuck the spring and the branch pull on the mass with at most alpha
     assert np.all(np.abs(result.reaction[stuck]) <= 1.0 + 1e-12)
-    reference = simulate(scene.with_solver(step=1e-4), "verlet")
+    reference = simulate(scene.with_solver(step=1e-4), "verlet", energy=True)
     assert abs(peaks[-1] - cycle_peaks(reference)[1][-1]) < 5e-3  # every stepper on the same cycle, O(h)
