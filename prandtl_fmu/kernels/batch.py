@@ -92,7 +92,7 @@ def _branch_part_overload(template, branch_data, eta_data, a, b, rows, cols):
 @kernel
 def _copy_row(source, target, i):
     """target[i, :] = source[i, :], element by element: a slice assignment compiles numba's check of the shapes,
-    whose message formatting was 2.2-2.9 s of a cold compile of the summary loop."""
+    whose message formatting was 2.2 to 4.9 s of a cold compile of the summary loop (per process, cold suites)."""
     for q in range(source.shape[1]):
         target[i, q] = source[i, q]
 
