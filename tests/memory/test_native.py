@@ -834,3 +834,14 @@ def test_a_connector_scene_cannot_put_its_delay_or_history_on_v():
         text = CONNECTOR_SCENES["dahl"].replace("[dahl]", f"{table}\nacts_on = \"v\"\n\n[dahl]")
         with pytest.raises(SceneError, match='"v" needs \\[mass\\]'):
             parse_scene(text)
+
+
+def test_the_memory_builds_compile_no_copy_of_a_library_kernel_for_a_constant(fmus, connector_fmu):
+    """The generated memory source handed the history's term count as a constant (``2``): numba typed it as a literal
+    and compiled the library's loop, its step and every memory kernel under them once more for it, in every native
+    build with a history (tests/compiled_copies.py). After the element's and a connector's builds with a history,
+    the cache of this run holds no kernel signature with a literal."""
+    from tests.compiled_copies import literal_signatures
+
+    assert fmus[2][0].is_file() and connector_fmu("all", 2)[0].is_file()
+    assert literal_signatures("history.prepare", "__init__.force_now") == []

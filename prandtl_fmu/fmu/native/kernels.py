@@ -340,7 +340,9 @@ def memory_layout(scene) -> dict:
             return f"carray(mp, ({len(names)},))[{start}:{start + len(value)}]"
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"the native runtime cannot pass a memory parameter {value!r}")
-        return repr(int(value)) if isinstance(value, (int, np.integer)) else repr(float(value))
+        # an integer as np.int64, not a constant: numba types a constant as a literal of its own, and would compile
+        # the library's loop and every kernel under it once more for it (tests/compiled_copies.py)
+        return f"np.int64({int(value)})" if isinstance(value, (int, np.integer)) else repr(float(value))
 
     offset = 0
     arrays_of = {}
