@@ -1,4 +1,8 @@
-"""The physics of every stepper: invariants, closed forms, measured orders, energy."""
+"""The physics of every stepper: invariants, closed forms, measured orders, energy.
+
+The tests run over every stepper keep the energy account (``energy=True``): the same compiled loop as the
+element's and the FMUs' tests of those effects, where a run without it compiles one of its own (the account never
+changes the motion: tests/fmu/python/test_against_library.py)."""
 import math
 
 import numpy as np
@@ -51,7 +55,7 @@ def test_elongations_stay_in_their_elastic_range_at_every_step(stepper):
     scene = fits(stepper, branches=branches,
                  load={"kind": "harmonic", "amplitude": 30.0, "omega": 3.0, "offset": 1.0},
                  solver={"stepper": stepper, "step": 2e-3, "stop_time": 10.0, "output_interval": 2e-3})
-    result = simulate(scene, states=True)
+    result = simulate(scene, states=True, energy=True)
     assert result.u.shape == (5001, n)
     assert np.all(np.isfinite(result.u))
     assert np.all(np.abs(result.u) <= eta)  # exactly: no tolerance
@@ -68,8 +72,8 @@ def test_an_effect_with_zero_coefficient_is_the_absent_effect(stepper, table, ze
             get_stepper(stepper).loop_for(make_scene(solver=solver, cubic=zero))
         return
     others = {} if stepper != "exact" else {"cubic": None}
-    present = simulate(make_scene(solver=solver, **{**others, table: zero}), states=True)
-    absent = simulate(make_scene(solver=solver, **{**others, table: None}), states=True)
+    present = simulate(make_scene(solver=solver, **{**others, table: zero}), states=True, energy=True)
+    absent = simulate(make_scene(solver=solver, **{**others, table: None}), states=True, energy=True)
     for name in ("x", "v", "reaction", "u"):
         if (stepper == "implicit" and table == "cubic") or stepper == "exact":
             # another solve path (Newton with a cubic term; the phase matrix of `exact`): equal to rounding
@@ -109,7 +113,7 @@ def test_linear_oscillator_converges_to_closed_form_at_declared_order(stepper, d
     hs = np.array([0.02, 0.01, 0.005, 0.0025, 0.00125])
     errors = []
     for h in hs:
-        result = simulate(oscillator_scene(stepper, h, damped))
+        result = simulate(oscillator_scene(stepper, h, damped), energy=True)
         errors.append(np.max(np.abs(result.x - oscillator_exact(result.time, damped))))
     declared = get_stepper(stepper).ORDER
     if math.isinf(declared):
@@ -154,7 +158,7 @@ def paper_reference():
 def test_order_with_friction_active_on_the_paper_scene(stepper, paper_reference):
     if stepper == "exact":
         reference, reference_error = paper_reference
-        result = simulate(paper_scene(100, stepper, 0.04, 12.0), states=True)
+        result = simulate(paper_scene(100, stepper, 0.04, 12.0), states=True, energy=True)
         assert np.abs(all_components(result) - reference).max() < 10 * reference_error
         return
     reference, reference_error = paper_reference
@@ -162,7 +166,7 @@ def test_order_with_friction_active_on_the_paper_scene(stepper, paper_reference)
     hs = np.array([0.01, 0.005, 0.0025, 0.00125, 0.000625])
     errors = []
     for h in hs:
-        result = simulate(paper_scene(100, stepper, h, 12.0), states=True)
+        result = simulate(paper_scene(100, stepper, h, 12.0), states=True, energy=True)
         errors.append(np.max(np.abs(all_components(result) - reference)))
     assert min(errors) > 100 * reference_error
     order, _ = fitted_order(hs, errors)
@@ -255,9 +259,9 @@ def test_projected_multiplies_elastic_energy_by_one_plus_omega_h_squared():
 @pytest.mark.parametrize("stepper", ALL)
 def test_output_grid_ends_at_stop_time_with_a_partial_last_interval(stepper):
     solver = {"stepper": stepper, "step": 0.01, "stop_time": 1.057, "output_interval": 0.1}
-    coarse = simulate(fits(stepper, solver=solver))
+    coarse = simulate(fits(stepper, solver=solver), energy=True)
     assert coarse.time[-1] == 1.057 and coarse.time[-2] == 1.0 and len(coarse.time) == 12
-    fine = simulate(fits(stepper, solver=dict(solver, output_interval=0.01, stop_time=1.0)))
+    fine = simulate(fits(stepper, solver=dict(solver, output_interval=0.01, stop_time=1.0)), energy=True)
     if stepper == "exact":  # one exact step per output interval: other steps, same motion
         np.testing.assert_allclose(coarse.x[:-1], fine.x[::10], rtol=0, atol=1e-13)
     else:
