@@ -51,10 +51,10 @@ t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cs
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
 (``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
 cache, the Dahl force, then the delay's buffer of ``nd`` values, sized by the FMU at its initialization from the
-delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A scene with ``[damper]`` gets every function
-twice, with c and without (c = 0 is no dashpot at all: the massless element's equation changes); the model tuple
-is the library's (``compiled.compile_model``), an absent spring or dashpot a zero, so both variants and the
-library's own runs share each stepper's compiled loop.
+delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A connector with ``[damper]``
+gets every function twice, with c and without (its dashpot's dissipation is booked only with one); an element
+once (:func:`variants`). The model tuple is the library's (``compiled.compile_model``), an absent spring or
+dashpot a zero, so the variants and the library's own runs share each stepper's compiled loop.
 """
 from __future__ import annotations
 
@@ -455,11 +455,15 @@ def state_size(scene) -> int:
 
 
 def variants(scene) -> list:
-    """("c" | "n", with_dashpot): the dashpot variants of the scene's functions (see the module docstring)."""
+    """("c" | "n", with_dashpot): the dashpot variants of the scene's functions (see the module docstring).
+
+    An element's functions are compiled once: the dashpot of a massless element sets its rate (c stays > 0:
+    common.h), and a mass's dashpot of c = 0 is no dashpot, the same library loop with c = 0.0 (the C layer's
+    ``_n`` names are then the ``_c`` functions: build.py). The connector's take c = 0 apart (its own template)."""
     if scene.damper is None:
         return [("n", False)]
-    if scene.mass is None and scene.causality != "displacement":  # the dashpot of a massless element sets its
-        return [("c", True)]                                           # rate: c stays > 0 (common.h)
+    if scene.causality != "displacement":
+        return [("c", True)]
     return [("c", True), ("n", False)]
 
 

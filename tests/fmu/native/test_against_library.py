@@ -265,6 +265,32 @@ def test_with_scene_load_the_native_fmu_reproduces_simulate_with_each_stepper_it
         assert np.abs(library.x).max() > 1e-2
 
 
+def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held):
+    """A massive element's dashpot set to c = 0 by the master and back, mid-run, under every stepper the FMU holds:
+    x, v, the reaction, the stiffness and the energy account equal Element.advance's with the same coefficients
+    to the bit (c = 0 runs the same compiled functions as c > 0: for a mass, no dashpot is the dashpot of c = 0)."""
+    from tests.fmu_tools import Slave
+
+    fmu, scene_path = held["smooth"]
+    scene = load_scene(scene_path)
+    assert scene.mass is not None and scene.damper is not None
+    for stepper in HELD["smooth"].split(","):
+        slave = Slave(fmu, start_values={"stepper": stepper})
+        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
+        element = Element(scene, stepper=stepper)
+        rng = np.random.default_rng(11)
+        try:
+            for j in range(45):
+                if j in (15, 30):
+                    c = 0.0 if j == 15 else 0.35
+                    slave.set("c", c)
+                    element.set_coefficients(c=c)
+                step_both(slave, element, rng, names, (stepper, j))
+        finally:
+            slave.close()
+        assert abs(element.x) > 1e-3 and element.scene.damper.c == 0.35
+
+
 def test_an_fmu_built_with_some_steppers_names_them_and_refuses_the_others(held):
     """The model description's stepper parameter and the page name the steppers held; another one that applies to
     the scene is refused at doStep with a logged reason that lists them, and the instance stays usable."""
