@@ -410,8 +410,13 @@ def test_in_a_c_host_with_no_python_the_native_fmu_is_the_library(fmus, host, tm
     rng = np.random.default_rng(3)
     commands, t = ["setup", "enter", "setb:scene_load:0", "exit"], 0.0  # F alone, as the element is driven
     element = Element(load_scene(scene_path))
+    assert element.scene.damper is not None
     reference = []
-    for _ in range(25):
+    for j in range(25):
+        if j in (10, 18):  # the dashpot off and on again: c = 0 runs the functions of c > 0 (kernels.variants)
+            c = 0.0 if j == 10 else 0.3
+            commands.append(f"setr:c:{c!r}")
+            element.set_coefficients(c=c)
         size, force = float(rng.choice([0.013, 0.05, 0.1])), float(rng.uniform(-1, 1))
         commands += [f"setr:F:{force!r}", f"step:{t!r}:{size!r}", "getr:x", "getr:v", "getr:reaction"]
         element.time = t
