@@ -568,7 +568,9 @@ def compile_kernels(scene, steppers) -> list:
     kernels = [("", structure(scene))] + ([("p", structure(scene, unfolded=True))] if folds(scene) else [])
     for suffix, damped in variants(scene):
         for unfolded, shape in kernels:
-            source = _TEMPLATE.format(c="p[5]" if damped else "0.0", damped="True" if damped else "False",
+            # c as compiled.compile_model hands it: c > 0, else 0.0 (a master's -0.0 too, as the library's)
+            source = _TEMPLATE.format(c="(p[5] if p[5] > 0.0 else 0.0)" if damped else "0.0",
+                                      damped="True" if damped else "False",
                                       noise_cache=NOISE_CACHE_SIZE, **shape)
             for stepper in list(steppers) + [None]:
                 if stepper and shape["stack"] == "True" and not takes_stack(stepper):

@@ -266,9 +266,10 @@ def test_with_scene_load_the_native_fmu_reproduces_simulate_with_each_stepper_it
 
 
 def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held):
-    """A massive element's dashpot set to c = 0 by the master and back, mid-run, under every stepper the FMU holds:
-    x, v, the reaction, the stiffness and the energy account equal Element.advance's with the same coefficients
-    to the bit (c = 0 runs the same compiled functions as c > 0: for a mass, no dashpot is the dashpot of c = 0)."""
+    """A massive element's dashpot set to c = 0 (and -0.0) by the master and back, mid-run, under every stepper
+    the FMU holds: x, v, the reaction, the stiffness and the energy account equal Element.advance's with the same
+    coefficients to the bit, the sign of a zero too (c = 0 runs the same compiled functions as c > 0: for a mass,
+    no dashpot is the dashpot of c = 0; -0.0 is handed on as 0.0, as the library's model has it)."""
     from tests.fmu_tools import Slave
 
     fmu, scene_path = held["smooth"]
@@ -280,12 +281,14 @@ def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held)
         element = Element(scene, stepper=stepper)
         rng = np.random.default_rng(11)
         try:
-            for j in range(45):
-                if j in (15, 30):
-                    c = 0.0 if j == 15 else 0.35
+            for j in range(60):
+                if j in (15, 30, 40, 50):
+                    c = {15: 0.0, 30: 0.35, 40: -0.0, 50: 0.35}[j]
                     slave.set("c", c)
                     element.set_coefficients(c=c)
                 step_both(slave, element, rng, names, (stepper, j))
+                got = np.array(outputs(slave, names)).tobytes()
+                assert got == np.array(expected(element, names)).tobytes(), (stepper, j)  # -0.0 apart too
         finally:
             slave.close()
         assert abs(element.x) > 1e-3 and element.scene.damper.c == 0.35
