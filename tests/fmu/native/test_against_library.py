@@ -3,6 +3,7 @@
 Bit for bit the library (every native stepper, random communication steps, every output), in FMPy and in the
 small C host of tests/c_host run with no Python at all; a binary that names no Python symbol; refusals as the
 PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
+import contextlib
 import json
 import os
 import shutil
@@ -146,26 +147,34 @@ def step_both(slave, element, rng, names, label):
     assert same(outputs(slave, names), expected(element, names)), (label, time)
 
 
+@contextlib.contextmanager
+def fmu_and_element(fmu, scene, stepper):
+    """``(slave, element, names)``: the FMU in FMPy and the library's Element of its scene, both on ``stepper``,
+    and the outputs to compare (the motion, the stiffness and the energy account the FMU has); the slave closed
+    after."""
+    from tests.fmu_tools import Slave
+
+    slave = Slave(fmu, start_values={"stepper": stepper})
+    try:
+        yield slave, Element(scene, stepper=stepper), ["x", "v", "reaction", "stiffness"] + [
+            name for name in ENERGIES if name in slave.vr]
+    finally:
+        slave.close()
+
+
 @pytest.mark.parametrize("name", quick_or_slow(SCENES))
 def test_the_native_fmu_in_fmpy_is_the_library_bit_for_bit(fmus, name):
     """Every native stepper, random communication steps (some not multiples of the step) and forces: x, v, the
     reaction, the stiffness and the energy account equal Element.advance's to the bit."""
-    from tests.fmu_tools import Slave
-
     fmu, scene_path = fmus[name]
     scene = load_scene(scene_path)
     tried = steppers_of(scene)
     assert tried and ("exact" in tried) == (name in ("coulomb", "paper"))
     for stepper in tried:
-        slave = Slave(fmu, start_values={"stepper": stepper})
-        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
-        element = Element(scene, stepper=stepper)
         rng = np.random.default_rng(7)
-        try:
+        with fmu_and_element(fmu, scene, stepper) as (slave, element, names):
             for _ in range(40):
                 step_both(slave, element, rng, names, stepper)
-        finally:
-            slave.close()
         assert abs(element.x) > 1e-3  # it moved
 
 
@@ -270,17 +279,12 @@ def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held)
     the FMU holds: x, v, the reaction, the stiffness and the energy account equal Element.advance's with the same
     coefficients to the bit, the sign of a zero too (c = 0 runs the same compiled functions as c > 0: for a mass,
     no dashpot is the dashpot of c = 0; -0.0 is handed on as 0.0, as the library's model has it)."""
-    from tests.fmu_tools import Slave
-
     fmu, scene_path = held["smooth"]
     scene = load_scene(scene_path)
     assert scene.mass is not None and scene.damper is not None
     for stepper in HELD["smooth"].split(","):
-        slave = Slave(fmu, start_values={"stepper": stepper})
-        names = ["x", "v", "reaction", "stiffness"] + [n for n in ENERGIES if n in slave.vr]
-        element = Element(scene, stepper=stepper)
         rng = np.random.default_rng(11)
-        try:
+        with fmu_and_element(fmu, scene, stepper) as (slave, element, names):
             for j in range(60):
                 if j in (15, 30, 40, 50):
                     c = {15: 0.0, 30: 0.35, 40: -0.0, 50: 0.35}[j]
@@ -289,8 +293,6 @@ def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held)
                 step_both(slave, element, rng, names, (stepper, j))
                 got = np.array(outputs(slave, names)).tobytes()
                 assert got == np.array(expected(element, names)).tobytes(), (stepper, j)  # -0.0 apart too
-        finally:
-            slave.close()
         assert abs(element.x) > 1e-3 and element.scene.damper.c == 0.35
 
 
