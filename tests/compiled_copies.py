@@ -43,3 +43,16 @@ def literal_signatures(*needed) -> list:
     assert not missing, f"not in the cache: {missing}"
     return [f"{name}{signature}" for name, listed in signatures.items() for signature in listed
             if "Literal[" in signature]
+
+
+if __name__ == "__main__":  # .ci/run, after both suites: the slow tests' kernels too, which no quick check sees
+    import sys
+
+    try:
+        copies = literal_signatures("stability.check")
+    except AssertionError as exc:  # no cache, or not this run's: nothing to judge, and that is a failure
+        sys.exit(f"compiled_copies: {exc}")
+    for copy in copies:
+        print(f"compiled once more for a constant argument: {copy}", file=sys.stderr)
+    print(f"{len(copies)} kernel signatures with a literal in the cache of this run ({_jit.cache_root()})")
+    sys.exit(1 if copies else 0)
