@@ -51,10 +51,11 @@ t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cs
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
 (``memory/``), laid out by :func:`memory_layout`: their parameters, their state (the history's variables and
 cache, the Dahl force, then the delay's buffer of ``nd`` values, sized by the FMU at its initialization from the
-delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A connector with ``[damper]``
-gets every function twice, with c and without (its dashpot's dissipation is booked only with one); an element
-once (:func:`variants`). The model tuple is the library's (``compiled.compile_model``), an absent spring or
-dashpot a zero, so the variants and the library's own runs share each stepper's compiled loop.
+delay's tau in use), rebuilt into the library's tuple ``(delay, history, dahl)`` (``compile_memory``). A
+connector with ``[damper]`` gets every function twice, with c and without (its dashpot's dissipation is booked
+only with one); an element once (:func:`variants`). The model tuple is the library's
+(``compiled.compile_model``), an absent spring or dashpot a zero, so the variants and the library's own runs
+share each stepper's compiled loop.
 """
 from __future__ import annotations
 
