@@ -184,10 +184,11 @@ def test_states_of_the_continuum_are_refused_clearly():
 
 @pytest.mark.parametrize("stepper", ["projected", "symplectic", "verlet"])
 def test_every_stepper_that_takes_the_continuum_agrees_with_fine_sampling(stepper):
+    # (both with the energy account, as the FMUs' tests run these loops: one compiled loop each)
     continuum = simulate(continuum_scene({"continuum": True, "k_total": KAPPA, "eta_range": [A, B]},
-                                         stop_time=30.0, stepper=stepper))
+                                         stop_time=30.0, stepper=stepper), energy=True)
     sampled = simulate(continuum_scene({"count": 2000, "k_total": KAPPA, "eta_range": [A, B],
-                                        "sampling": "midpoint"}, stop_time=30.0, stepper=stepper))
+                                        "sampling": "midpoint"}, stop_time=30.0, stepper=stepper), energy=True)
     assert np.abs(continuum.x - sampled.x).max() < 1e-6
     assert np.abs(continuum.reaction - sampled.reaction).max() < 1e-6
 

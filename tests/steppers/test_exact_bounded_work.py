@@ -56,7 +56,7 @@ for force in (0.5, 0.49999999999999994, 0.5000000000000001):
                        load={"kind": "constant", "value": force},
                        solver={"stepper": "exact", "step": 1e-3, "stop_time": 2.0, "output_interval": 0.1})
     out[repr(force)] = [simulate(scene, energy=True).x.tolist(),
-                        simulate(scene.with_solver(step=1e-4), "implicit").x.tolist()]
+                        simulate(scene.with_solver(step=1e-4), "implicit", energy=True).x.tolist()]
 relaxing = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, spring=None, cubic=None, damper=None,
                       branches={"k": [1.0], "eta": [1.0], "c": [2.0], "u0": [0.5]}, friction={"alpha": 0.5},
                       load={"kind": "constant", "value": 0.5},
