@@ -2,18 +2,19 @@
 
 Each stepper builds it around its own step (``time_loop(step)``, a closure:
 the step is a compile-time constant, not a run-time value) and wraps it in
-``run``, a one-line cached kernel. The machine code of ``run`` holds the
-loop, so a later process loads it from the cache and compiles nothing. The
-closure itself is not cached (numba keys a closure's cache entry on a pickle
-of the functions it closes over, which is not stable across processes); a
-loop taking the step as an argument could not be cached either (the
+``run``, a one-line cached kernel into which numba inlines it. The machine
+code of ``run`` holds the loop, so a later process loads it from the cache and
+compiles nothing. The closure itself is not cached (numba keys a closure's
+cache entry on a pickle of the functions it closes over, which is not stable
+across processes); a loop taking the step as an argument could not be cached either (the
 dispatcher would be a run-time Python object: "dynamic globals").
 
 Each closure gets a name of its own, made from its step's module and name.
 numba names a compiled function by module, qualified name, argument types and
 a counter of compilations *in the process* ("loop$6"; its own source says the
 name "*must* be unique, else the wrong function can be chosen at link time"),
-and the machine code of a closure is linked into every ``run`` that calls it.
+and the machine code of a closure was linked into every ``run`` that called it
+(it is inlined now, so it has no machine code of its own; the names stay unique).
 With one qualified name for all the closures, the loops of two steppers
 compiled first in two different processes (a test's subprocess, a dask
 worker) both got the name ``time_loop.<locals>.loop$6``. Once, in CI, a

@@ -112,7 +112,7 @@ import numpy as np
 
 from .. import libm
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 
 from ..kernels.batch import summary_loop
 
@@ -266,7 +266,7 @@ NO_EVENT, LEVEL_UP, LEVEL_DOWN, REVERSAL, EXHAUSTED = -1, 0, 1, 2, 3
 POSITION, VELOCITY = np.int64(0), np.int64(1)
 
 
-@kernel
+@inline_kernel  # a thin wrapper of attempt (_jit.inline_kernel: a kernel of its own would optimise attempt again)
 def step(model, load, t, h, x, v, s, u, energy):
     """One exact step from t to t + h (:func:`attempt`); a failed step returns a non-finite x with u and the
     energy account as they were."""

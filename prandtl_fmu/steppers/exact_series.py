@@ -54,7 +54,7 @@ import math
 import numpy as np
 
 from .. import libm
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..kernels.batch import summary_loop
 from ..kernels.loop import time_loop
 from ..kernels.play import branch_force
@@ -369,7 +369,7 @@ def _slipping(k, eta, rate, m, c, k0, load, t, x, v, u, direction, alpha, stuck)
     return out
 
 
-@kernel
+@inline_kernel  # a thin wrapper of attempt (_jit.inline_kernel: a kernel of its own would optimise attempt again)
 def step(model, load, t, h, x, v, s, u, energy):
     """One exact step from t to t + h (:func:`attempt`); a failed step returns a non-finite x with u and the
     energy account as they were."""
