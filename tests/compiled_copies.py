@@ -1,6 +1,6 @@
 """The kernels this run's numba cache holds a copy of for a constant argument.
 
-numba compiles a kernel called with a constant (``solve_step(..., -1, ...)``, ``_refine(..., 1, ...)``) once more
+numba compiles a kernel called with a constant (``active_set_step(..., -1, ...)``, ``_refine(..., 1, ...)``) once more
 for that constant: a literal is a signature of its own. The network's implicit step was compiled twice that way;
 the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
 
@@ -18,7 +18,7 @@ from prandtl_fmu import _jit
 
 
 def cached_signatures() -> dict:
-    """``{index name: [signature, ...]}`` of the cache of these sources for this numba (``kernels.solve_step``:
+    """``{index name: [signature, ...]}`` of the cache of these sources for this numba (``kernels.run_implicit``:
     the module's file name and the function's)."""
     assert _jit.CACHE, "no cache folder: nothing to check"
     found = {}

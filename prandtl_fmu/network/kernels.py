@@ -546,7 +546,7 @@ def _directional(model, x, u, piece, d, p, h, force, v, tau):
     return slope, curvature, size
 
 
-@kernel
+@inline_kernel  # thin: a kernel of its own would optimise the active-set method again (_jit.inline_kernel)
 def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, work, chain_work=None):
     """The increment d (work[0]) of one implicit step and the force each element carries (work[5]); the
     pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
@@ -837,7 +837,7 @@ def commit(model, x, v, u, piece, h, force, work, energy, dissipated):
     return reaction
 
 
-@kernel
+@inline_kernel  # thin: a kernel of its own would optimise the active-set method again (_jit.inline_kernel)
 def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated, chain_work=None):
     """One implicit step from t to t + h (the load at t + h). Returns (status, reaction): status the
     iterations taken, or < 0 when the step could not be taken (see :func:`solve_step`; the state is then
