@@ -6,8 +6,8 @@ the step is a compile-time constant, not a run-time value) and wraps it in
 code of ``run`` holds the loop, so a later process loads it from the cache and
 compiles nothing. The closure itself is not cached (numba keys a closure's
 cache entry on a pickle of the functions it closes over, which is not stable
-across processes); a loop taking the step as an argument could not be cached either (the
-dispatcher would be a run-time Python object: "dynamic globals").
+across processes); a loop taking the step as an argument could not be cached
+either (the dispatcher would be a run-time Python object: "dynamic globals").
 
 Each closure gets a name of its own, made from its step's module and name.
 numba names a compiled function by module, qualified name, argument types and
