@@ -228,20 +228,8 @@ EXACT = base_tables(cubic=None, load={"kind": "harmonic", "amplitude": 2.0e14, "
                     solver={"stepper": "exact", "step": 0.1, "stop_time": 0.2, "output_interval": 0.1})
 
 
-@pytest.mark.slow  # a search to the event budget, 1.1e5 events (about a minute), as the command line's below
-def test_an_exact_advance_beyond_its_event_budget_is_refused_naming_the_bound_and_changes_nothing():
-    element = Element(parse_scene(scene_text(EXACT), "exact.toml"))
-    element.advance(0.5, 0.0)
-    before = element.get_state()
-    started = time.monotonic()
-    with pytest.raises(ElementError, match=r"more than \d+ \+ \d+ events per simulated second|took more than \d+ interv"):
-        element.advance(0.1, 0.0, scene_load=True)
-    assert time.monotonic() - started < 120
-    assert element.get_state() == before
-
-
-@pytest.mark.slow  # the same search to the event budget as above, 20 to 35 s: the command line's one line, exit 2
-# and no file for a refused run stay quick in tests/cli
+@pytest.mark.slow  # a search to the event budget, 20 to 35 s (the element's: steppers/test_exact_bounded_work.py);
+# the command line's one line, exit 2 and no file for a refused run stay quick in tests/cli
 def test_the_cli_names_the_bound_an_exact_run_reached(tmp_path):
     scene = tmp_path / "exact.toml"
     scene.write_text(scene_text(EXACT))
