@@ -27,6 +27,10 @@ folder, never beside the sources:
   vanish under a running process (the crash the FMU used to meet). When the
   user's cache folder cannot be created, caching is off altogether
   (``CACHE``): never beside the sources;
+* processes that fill one folder at once (the workers of a test run or of a
+  sweep, the FMUs of one co-simulation) save their entries under a lock of the
+  folder (:func:`_save_entries_under_a_lock`): numba's own save loses one of
+  two entries saved at the same moment;
 * each edit of the kernels, or upgrade, starts a new folder; a process marks
   its own as used when it starts and removes the folders of the library and of
   the FMUs' bundled copies that no process started on for a month
@@ -39,6 +43,7 @@ import hashlib
 import os
 import pathlib
 import re
+import time
 
 from numba import njit
 from numba.core import caching
@@ -226,6 +231,7 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
     DigestLocator.prandtl_fmu = True
     impl._locator_classes.insert(0, DigestLocator)
     _refuse_unimportable_entries()
+    _save_entries_under_a_lock(root)
     return True
 
 
@@ -249,6 +255,112 @@ def _refuse_unimportable_entries() -> None:
 
     check_cachable.prandtl_fmu = True
     results.check_cachable = check_cachable
+
+
+# How long a process waits for another one's save to the same cache folder (a save writes two small files) before
+# it leaves its own entry unsaved: the code it compiled runs all the same, a later process compiles it again.
+SAVE_LOCK_SECONDS = 30.0
+
+
+def _save_entries_under_a_lock(root: pathlib.Path) -> None:
+    """Make numba's save of a cache entry safe against other processes filling the same cache folder (the
+    workers of a test run, of a sweep, the FMUs of one co-simulation). numba reads a function's index, adds the
+    entry and writes the index back with no lock: of two processes saving at once, the last one's index wins
+    and the other's entry is lost (data files no index names were found in a cache here; every later process
+    compiled those functions again), and both may pick the same data file for different signatures, so that
+    the index names one signature's file for another. Here the read, the choice of the file and both writes
+    happen under an exclusive lock of the folder's ``.save.lock`` (released by the system if the process dies),
+    and the data is written before the index names it. Another package's caches keep numba's own save."""
+    cache_file = getattr(caching, "IndexDataCacheFile", None)
+    needed = ("save", "_load_index", "_save_index", "_save_data", "_data_name")
+    if cache_file is None or not all(hasattr(cache_file, name) for name in needed):
+        return
+    if getattr(cache_file.save, "prandtl_fmu", False):
+        cache_file.save.roots.add(str(root))
+        return
+    original = cache_file.save
+    roots = {str(root)}
+
+    def save(self, key, data):
+        path = str(getattr(self, "_cache_path", ""))
+        root = next((mine for mine in roots if path == mine or path.startswith(mine + os.sep)), None)
+        if root is None:
+            return original(self, key, data)
+        with _locked(os.path.join(root, ".save.lock")) as held:
+            if not held:
+                return None  # another process holds the folder past SAVE_LOCK_SECONDS: this entry stays unsaved
+            overloads = self._load_index()
+            name = overloads.get(key)
+            if name is None:
+                taken = set(overloads.values())
+                name = next(self._data_name(i) for i in range(1, len(taken) + 2) if self._data_name(i) not in taken)
+                self._save_data(name, data)
+                overloads[key] = name
+                self._save_index(overloads)
+            else:
+                self._save_data(name, data)
+        return None
+
+    save.prandtl_fmu = True
+    save.roots = roots
+    cache_file.save = save
+
+
+class _locked:
+    """An exclusive lock of the file ``path`` (created if missing) for a ``with`` block, which gets True once it
+    holds it, False after SAVE_LOCK_SECONDS of trying (polls every 10 ms: bounded). The system releases it when the
+    process ends, however it ends: no stale lock. POSIX flock, or msvcrt's byte lock on Windows."""
+
+    def __init__(self, path: str):
+        self.path = path
+        self.handle = None
+        self.held = False
+
+    def __enter__(self) -> bool:
+        try:
+            self.handle = open(self.path, "a+b")
+        except OSError:
+            return False
+        deadline = time.monotonic() + SAVE_LOCK_SECONDS
+        while True:
+            try:
+                _try_lock(self.handle)
+                self.held = True
+                return True
+            except OSError:
+                if time.monotonic() >= deadline:
+                    return False
+                time.sleep(0.01)
+
+    def __exit__(self, *exc):
+        if self.handle is not None:
+            if self.held:
+                try:
+                    _unlock(self.handle)
+                except OSError:
+                    pass
+            self.handle.close()
+        return False
+
+
+try:
+    import fcntl
+
+    def _try_lock(handle):
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+    def _unlock(handle):
+        fcntl.flock(handle.fileno(), fcntl.LOCK_UN)
+except ImportError:  # Windows
+    import msvcrt
+
+    def _try_lock(handle):
+        handle.seek(0)
+        msvcrt.locking(handle.fileno(), msvcrt.LK_NBLCK, 1)
+
+    def _unlock(handle):
+        handle.seek(0)
+        msvcrt.locking(handle.fileno(), msvcrt.LK_UNLCK, 1)
 
 
 def _cache_enabled() -> bool:

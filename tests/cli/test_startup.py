@@ -146,6 +146,58 @@ def test_no_usable_cache_folder_means_no_cache_not_a_cache_beside_the_sources(tm
     assert done.stdout.split() == ["False", "2.0"]
 
 
+# Saves entries into one index of the package's cache folder (NUMBA_CACHE_DIR) as numba saves a compiled function:
+# worker w saves keys (w, 0) .. (w, count - 1), each with data naming its key, starting when the file "go" appears.
+SAVER = textwrap.dedent("""\
+    import os, pathlib, sys, time
+    from numba.core import caching
+    import prandtl_fmu._jit as jit
+    worker, count, folder = int(sys.argv[1]), int(sys.argv[2]), pathlib.Path(sys.argv[3])
+    assert jit.CACHE
+    index = caching.IndexDataCacheFile(cache_path=str(jit.cache_root() / "race"), filename_base="f",
+                                       source_stamp="s")
+    os.makedirs(jit.cache_root() / "race", exist_ok=True)
+    (folder / f"ready-{worker}").write_bytes(b"")
+    deadline = time.monotonic() + 120
+    while not (folder / "go").exists() and time.monotonic() < deadline:
+        time.sleep(0.001)
+    for i in range(count):
+        index.save((worker, i), ("data of", worker, i))
+""")
+
+
+def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(tmp_path):
+    """numba reads a function's index, adds an entry and writes the index back with no lock: of processes
+    saving at once (the workers of a test run or a sweep, the FMUs of a co-simulation) the last index written
+    wins, the others' entries are lost (every later process compiles them again), and two may take the same
+    data file for different signatures. The package saves under a lock of its cache folder (``_jit``): six
+    processes saving 40 entries each into one index, all at once, leave 240 entries, each naming its own data."""
+    from numba.core import caching
+
+    workers, count = 6, 40
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    running = [subprocess.Popen([sys.executable, "-c", SAVER, str(w), str(count), str(tmp_path)], env=env,
+                                stderr=subprocess.PIPE, text=True) for w in range(workers)]
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(tmp_path.glob("ready-*"))) < workers and time.monotonic() < deadline:
+            assert all(worker.poll() in (None, 0) for worker in running), [w.stderr.read() for w in running]
+            time.sleep(0.01)
+        (tmp_path / "go").write_bytes(b"")
+        for worker in running:
+            assert worker.wait(timeout=300) == 0, worker.stderr.read()
+    finally:
+        for worker in running:
+            if worker.poll() is None:
+                worker.kill()
+    [folder] = list((tmp_path / "cache").glob("prandtl_fmu-*/race"))
+    index = caching.IndexDataCacheFile(cache_path=str(folder), filename_base="f", source_stamp="s")
+    entries = index._load_index()
+    assert sorted(entries) == [(w, i) for w in range(workers) for i in range(count)]
+    assert all(index._load_data(name) == ("data of", *key) for key, name in entries.items())
+    assert len(set(entries.values())) == workers * count
+
+
 def test_a_process_marks_its_cache_folder_and_removes_ours_unused_for_a_month(tmp_path):
     """Each edit of the kernels or upgrade starts a cache folder of its own (15 to 85 MB): a process marks its
     folder as used and removes the folders of the library and of the FMUs' bundled copies that no process
