@@ -396,7 +396,8 @@ def random_scene(rng, stepper):
     return make(tables)
 
 
-@pytest.mark.parametrize("stepper", STEPPING)  # quick since the implicit reference scans its bracket as one array
+@pytest.mark.slow  # each stepper's loop for 9 or 10 sets of effects the quick suite does not all compile: 25 s cold
+@pytest.mark.parametrize("stepper", STEPPING)
 def test_random_scenes_with_friction_and_series_dashpots_against_straightforward_code(stepper):
     rng = np.random.default_rng(25 + STEPPING.index(stepper))
     for _ in range(12):
