@@ -175,7 +175,7 @@ def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(t
     from numba.core import caching
 
     workers, count = 6, 40
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PRANDTL_FMU_JIT_CACHE="1")
     running = [subprocess.Popen([sys.executable, "-c", SAVER, str(w), str(count), str(tmp_path)], env=env,
                                 stderr=subprocess.PIPE, text=True) for w in range(workers)]
     try:
