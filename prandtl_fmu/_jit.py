@@ -29,8 +29,8 @@ folder, never beside the sources:
   (``CACHE``): never beside the sources;
 * processes that fill one folder at once (the workers of a test run or of a
   sweep, the FMUs of one co-simulation) save their entries under a lock of the
-  folder (:func:`_save_entries_under_a_lock`): numba's own save loses one of
-  two entries saved at the same moment;
+  folder (:func:`_save_entries_under_a_lock`): numba's own save can lose one
+  of two entries saved at the same moment;
 * each edit of the kernels, or upgrade, starts a new folder; a process marks
   its own as used when it starts and removes the folders of the library and of
   the FMUs' bundled copies that no process started on for a month
@@ -257,8 +257,8 @@ def _refuse_unimportable_entries() -> None:
     results.check_cachable = check_cachable
 
 
-# How long a process waits for another one's save to the same cache folder (a save writes two small files) before
-# it leaves its own entry unsaved: the code it compiled runs all the same, a later process compiles it again.
+# How long a process waits for another one's save to the same cache folder (a save writes two small files). Past
+# it (a holder stopped in a debugger, say), this process saves as numba does, without the lock, from then on.
 SAVE_LOCK_SECONDS = 30.0
 
 
@@ -270,97 +270,137 @@ def _save_entries_under_a_lock(root: pathlib.Path) -> None:
     compiled those functions again), and both may pick the same data file for different signatures, so that
     the index names one signature's file for another. Here the read, the choice of the file and both writes
     happen under an exclusive lock of the folder's ``.save.lock`` (released by the system if the process dies),
-    and the data is written before the index names it. Another package's caches keep numba's own save."""
+    and the data is written before the index names it. Where the folder cannot be locked (a file system
+    without locks, a lock file this user cannot open) or the wait runs out, the entry is saved as numba saves
+    it: never worse than without the lock. Another package's caches keep numba's own save."""
     cache_file = getattr(caching, "IndexDataCacheFile", None)
     needed = ("save", "_load_index", "_save_index", "_save_data", "_data_name")
     if cache_file is None or not all(hasattr(cache_file, name) for name in needed):
         return
-    if getattr(cache_file.save, "prandtl_fmu", False):
-        cache_file.save.roots.add(str(root))
+    roots = getattr(cache_file.save, "prandtl_fmu_roots", None)
+    if roots is not None:  # another copy of the package (an FMU's) patched it: one lock per folder for both
+        roots.add(str(root))
         return
     original = cache_file.save
     roots = {str(root)}
+    unlockable = set()  # folders this process gave up locking (no locks there, or the wait ran out)
+
+    def locked_save(self, key, data):
+        overloads = self._load_index()
+        name = overloads.get(key)
+        if name is None:
+            taken = set(overloads.values())
+            name = next(self._data_name(i) for i in range(1, len(taken) + 2) if self._data_name(i) not in taken)
+            self._save_data(name, data)
+            overloads[key] = name
+            self._save_index(overloads)
+        else:
+            self._save_data(name, data)
 
     def save(self, key, data):
         path = str(getattr(self, "_cache_path", ""))
         root = next((mine for mine in roots if path == mine or path.startswith(mine + os.sep)), None)
-        if root is None:
+        if root is None or root in unlockable:
             return original(self, key, data)
-        with _locked(os.path.join(root, ".save.lock")) as held:
-            if not held:
-                return None  # another process holds the folder past SAVE_LOCK_SECONDS: this entry stays unsaved
-            overloads = self._load_index()
-            name = overloads.get(key)
-            if name is None:
-                taken = set(overloads.values())
-                name = next(self._data_name(i) for i in range(1, len(taken) + 2) if self._data_name(i) not in taken)
-                self._save_data(name, data)
-                overloads[key] = name
-                self._save_index(overloads)
-            else:
-                self._save_data(name, data)
-        return None
+        with _Locked(os.path.join(root, ".save.lock")) as held:
+            if held:
+                locked_save(self, key, data)
+                return None
+        unlockable.add(root)
+        return original(self, key, data)
 
-    save.prandtl_fmu = True
-    save.roots = roots
+    save.prandtl_fmu_roots = roots
     cache_file.save = save
 
 
-class _locked:
-    """An exclusive lock of the file ``path`` (created if missing) for a ``with`` block, which gets True once it
-    holds it, False after SAVE_LOCK_SECONDS of trying (polls every 10 ms: bounded). The system releases it when the
-    process ends, however it ends: no stale lock. POSIX flock, or msvcrt's byte lock on Windows."""
+class _Locked:
+    """An exclusive lock of the file ``path`` (created if missing, readable by every user of a shared folder) for
+    a ``with`` block, which gets True once it holds it; False at once if the file cannot be opened or locked
+    (a file system without locks), or after SAVE_LOCK_SECONDS of another process holding it (polls every 10 ms:
+    bounded). The system releases it when the process ends, however it ends: no stale lock. POSIX flock (on a
+    read-only descriptor if need be), or msvcrt's byte lock on Windows. A process that holds it already (a save
+    inside a save) gets True at once."""
+
+    held_here = set()  # the lock files this process holds
 
     def __init__(self, path: str):
         self.path = path
-        self.handle = None
+        self.descriptor = None
         self.held = False
 
     def __enter__(self) -> bool:
+        if self.path in _Locked.held_here:
+            return True
         try:
-            self.handle = open(self.path, "a+b")
-        except OSError:
-            return False
-        deadline = time.monotonic() + SAVE_LOCK_SECONDS
-        while True:
-            try:
-                _try_lock(self.handle)
-                self.held = True
-                return True
-            except OSError:
-                if time.monotonic() >= deadline:
-                    return False
-                time.sleep(0.01)
+            self.descriptor = _open_lock_file(self.path)
+            if self.descriptor is None:
+                return False
+            deadline = time.monotonic() + SAVE_LOCK_SECONDS
+            while True:
+                try:
+                    _try_lock(self.descriptor)
+                    break
+                except OSError as error:
+                    if not _held_elsewhere(error) or time.monotonic() >= deadline:
+                        return False
+                    time.sleep(0.01)
+            self.held = True
+            _Locked.held_here.add(self.path)
+            return True
+        except BaseException:  # an interrupt while locking: never leave the lock held by a forgotten descriptor
+            self.__exit__()
+            raise
 
     def __exit__(self, *exc):
-        if self.handle is not None:
-            if self.held:
-                try:
-                    _unlock(self.handle)
-                except OSError:
-                    pass
-            self.handle.close()
+        if self.held:
+            _Locked.held_here.discard(self.path)
+            self.held = False
+            try:
+                _unlock(self.descriptor)
+            except OSError:
+                pass
+        if self.descriptor is not None:
+            os.close(self.descriptor)
+            self.descriptor = None
         return False
+
+
+def _open_lock_file(path: str):
+    """A descriptor of the lock file, created with every user's read and write rights (less the umask); read-only
+    if this user may only read it (another user's, in a shared folder); None if it cannot be opened."""
+    for flags in (os.O_RDWR | os.O_CREAT, os.O_RDONLY):
+        try:
+            return os.open(path, flags | getattr(os, "O_BINARY", 0), 0o666)
+        except OSError:
+            continue
+    return None
 
 
 try:
     import fcntl
 
-    def _try_lock(handle):
-        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    def _try_lock(descriptor):
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
 
-    def _unlock(handle):
-        fcntl.flock(handle.fileno(), fcntl.LOCK_UN)
+    def _unlock(descriptor):
+        fcntl.flock(descriptor, fcntl.LOCK_UN)
+
+    def _held_elsewhere(error: OSError) -> bool:
+        return isinstance(error, BlockingIOError)  # EWOULDBLOCK; ENOLCK (no locks on this file system) is not
 except ImportError:  # Windows
+    import errno
     import msvcrt
 
-    def _try_lock(handle):
-        handle.seek(0)
-        msvcrt.locking(handle.fileno(), msvcrt.LK_NBLCK, 1)
+    def _try_lock(descriptor):
+        os.lseek(descriptor, 0, os.SEEK_SET)
+        msvcrt.locking(descriptor, msvcrt.LK_NBLCK, 1)
 
-    def _unlock(handle):
-        handle.seek(0)
-        msvcrt.locking(handle.fileno(), msvcrt.LK_UNLCK, 1)
+    def _unlock(descriptor):
+        os.lseek(descriptor, 0, os.SEEK_SET)
+        msvcrt.locking(descriptor, msvcrt.LK_UNLCK, 1)
+
+    def _held_elsewhere(error: OSError) -> bool:
+        return error.errno in (errno.EACCES, errno.EDEADLOCK)
 
 
 def _cache_enabled() -> bool:

@@ -6,9 +6,9 @@ the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
 
 The check reads the cache's index files (every signature any process compiled from these sources, with this
 numba), not the dispatchers of this process, which hold only what this process compiled or loaded: a kernel
-loaded whole from the cache never types its callees. Two processes compiling the same kernel at once may each
-write the index without the other's entry (numba rewrites it whole), so a copy can escape one run; the checks
-name the kernels they need to find, so that an empty or disabled cache fails instead of passing.
+loaded whole from the cache never types its callees (the package saves each entry under a lock of the cache
+folder, so no process's entry is lost from the index: ``_jit._save_entries_under_a_lock``); the checks name the
+kernels they need to find, so that an empty or disabled cache fails instead of passing.
 """
 import pickle
 

@@ -83,7 +83,8 @@ def test_a_second_process_compiles_nothing_and_gets_the_same_numbers(tmp_path):
     runs = _scenes()
     shared, cache = _jit.cache_root(), tmp_path / "cache"
     if shared.is_dir():  # the cold compile of every kernel is benchmarks/cold_start.py's; a copy saves it here
-        shutil.copytree(shared, cache / shared.name, ignore=shutil.ignore_patterns("*.tmp.*", ".probe-*"))
+        shutil.copytree(shared, cache / shared.name,
+                        ignore=shutil.ignore_patterns("*.tmp.*", ".probe-*", ".save.lock"))
     first = _run_library(runs, cache)
     second = _run_library(runs, cache)
     assert second["compiled"] == [], f"compiled again in a warm process: {second['compiled']}"
@@ -181,11 +182,13 @@ def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(t
     try:
         deadline = time.monotonic() + 120
         while len(list(tmp_path.glob("ready-*"))) < workers and time.monotonic() < deadline:
-            assert all(worker.poll() in (None, 0) for worker in running), [w.stderr.read() for w in running]
+            failed = [worker for worker in running if worker.poll() not in (None, 0)]
+            assert not failed, failed[0].communicate()[1]
             time.sleep(0.01)
         (tmp_path / "go").write_bytes(b"")
         for worker in running:
-            assert worker.wait(timeout=300) == 0, worker.stderr.read()
+            _, errors = worker.communicate(timeout=300)
+            assert worker.returncode == 0, errors
     finally:
         for worker in running:
             if worker.poll() is None:
@@ -196,6 +199,46 @@ def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(t
     assert sorted(entries) == [(w, i) for w in range(workers) for i in range(count)]
     assert all(index._load_data(name) == ("data of", *key) for key, name in entries.items())
     assert len(set(entries.values())) == workers * count
+
+
+@pytest.mark.parametrize("lock_error", ["no locks here", "held past the wait"])
+def test_a_folder_that_cannot_be_locked_gets_numba_s_own_save_never_none(tmp_path, monkeypatch, lock_error):
+    """Where the lock cannot be had, the entry is saved as numba saves it: at once on a file system without
+    locks (ENOLCK: no wait), after SAVE_LOCK_SECONDS when another process holds the lock, and that folder is then
+    saved without the lock for the rest of the process (no wait at every save)."""
+    import errno
+
+    from numba.core import caching
+
+    from prandtl_fmu import _jit
+
+    roots = caching.IndexDataCacheFile.save.prandtl_fmu_roots
+    calls = []
+
+    def refuse(descriptor):
+        calls.append(descriptor)
+        if lock_error == "no locks here":
+            raise OSError(errno.ENOLCK, "No locks available")
+        raise BlockingIOError(errno.EWOULDBLOCK, "held by another process")
+
+    monkeypatch.setattr(_jit, "_try_lock", refuse)
+    monkeypatch.setattr(_jit, "SAVE_LOCK_SECONDS", 0.05)
+    if lock_error == "no locks here":
+        monkeypatch.setattr(_jit.time, "sleep", lambda seconds: pytest.fail("waited for a lock that cannot be had"))
+    roots.add(str(tmp_path))
+    try:
+        index = caching.IndexDataCacheFile(cache_path=str(tmp_path / "kernels"), filename_base="f", source_stamp="s")
+        (tmp_path / "kernels").mkdir()
+        index.save(("a",), "data of a")
+        tries = len(calls)
+        index.save(("b",), "data of b")
+    finally:
+        roots.discard(str(tmp_path))
+    entries = index._load_index()
+    assert {key: index._load_data(name) for key, name in entries.items()} == {("a",): "data of a",
+                                                                               ("b",): "data of b"}
+    assert tries == 1 if lock_error == "no locks here" else tries >= 2  # one try, or tries until the wait ran out
+    assert len(calls) == tries  # the second save did not try again
 
 
 def test_a_process_marks_its_cache_folder_and_removes_ours_unused_for_a_month(tmp_path):
