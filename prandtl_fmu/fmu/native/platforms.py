@@ -24,7 +24,9 @@ target machine, NRT_decref's x86-only ``llvm.x86.atomic.sub.cc`` as a portable `
 NumbaEnv globals internal (nothing outside reads them), every other definition hidden (a binary exports the FMI
 functions only, on Windows too). The C layer names the kernels through ``KERNEL("symbol")``
 (:data:`KERNEL_MACRO`), which adds Mach-O's '_' (``__USER_LABEL_PREFIX__``), and is compiled with
-``-ffp-contract=off``: no fused multiply-add on aarch64, the same number on every platform.
+``-ffp-contract=off``: no fused multiply-add on aarch64, the same number on every platform. For the same reason a
+module that declares a libm function (or an intrinsic that becomes one) is refused before its object is emitted
+(:func:`platform_dependent_calls`): the kernels call ``prandtl_fmu.libm``, whose bits are the same everywhere.
 """
 from __future__ import annotations
 
@@ -247,11 +249,42 @@ def prepare(module, machine, exported=("fmi2", "fmi3")):
     return module
 
 
+# "One number everywhere": glibc's, Windows' and musl's cos, exp, pow, ... differ in their last bits, so the kernels
+# call prandtl_fmu.libm and what a module may leave to the link is exact in every conforming C library (IEEE 754
+# fixes these results) or no arithmetic at all, numba's runtime and helpers, and the CPython API of numba's error
+# path (assemble.stubs provides both)
+EXACT_C = frozenset({"sqrt", "fabs", "copysign", "floor", "ceil", "trunc", "round", "rint", "nearbyint", "fmod",
+                     "fmin", "fmax", "nextafter", "frexp", "ldexp", "scalbn", "memcpy", "memmove", "memset", "memcmp"})
+NUMBA_HELPERS = frozenset({"numba_nextafter", "numba_frexp", "numba_ldexp", "numba_do_raise", "numba_gil_ensure",
+                           "numba_gil_release", "numba_unpickle", "numba_runtime_build_excinfo_struct"})
+RUNTIME_PREFIXES = ("NRT_", "Py", "_Py")
+# LLVM intrinsics that the code generator lowers into a libm call (sin and cos of one argument into sincos), or
+# that fuse a product into a sum
+LIBM_INTRINSIC = re.compile(r"llvm\.(sin|cos|tan|sincos|asin|acos|atan|atan2|sinh|cosh|tanh|exp|exp2|exp10|log|log2"
+                            r"|log10|pow|powi|fma|fmuladd)\.")
+
+
+def may_link(symbol: str) -> bool:
+    """Whether a kernel's object may need ``symbol`` from the link (see :data:`EXACT_C`)."""
+    return symbol in EXACT_C or symbol in NUMBA_HELPERS or symbol.startswith(RUNTIME_PREFIXES)
+
+
+def platform_dependent_calls(module) -> list:
+    """The functions ``module`` (llvmlite's) declares whose result may differ between platforms: a libm function,
+    or an intrinsic that becomes one (or a fused multiply-add) in the object."""
+    return sorted(f.name for f in module.functions
+                  if f.is_declaration and (LIBM_INTRINSIC.match(f.name)
+                                           or not (f.name.startswith("llvm.") or may_link(f.name))))
+
+
 def emit_objects(compiled, folder, target: Target) -> tuple:
     """One object file per C function for ``target`` (position-independent, for a shared library) into
     ``folder``. Returns their paths and the symbols the modules declare without defining (what the link must
-    provide: libm's, numba's error path)."""
+    provide: numba's error path, the exact functions of :data:`EXACT_C`). A module that calls a function whose
+    result differs between platforms (:func:`platform_dependent_calls`) is refused: NativeBuildError names it."""
     import llvmlite.binding as llvm
+
+    from .assemble import NativeBuildError
 
     machine = target_machine(target)
     folder = Path(folder)
@@ -260,6 +293,11 @@ def emit_objects(compiled, folder, target: Target) -> tuple:
     for c_name, function in compiled:
         module = prepare(llvm.parse_assembly(portable_ir(str(function._library._final_module))), machine)
         module.verify()
+        calls = platform_dependent_calls(module)
+        if calls:
+            raise NativeBuildError(f"the native kernel {c_name} calls {', '.join(calls)}, whose results differ "
+                                   "between platforms' C libraries: a defect of prandtl_fmu (its kernels call "
+                                   "prandtl_fmu.libm), please report it")
         external.update(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
         external.update(g.name for g in module.global_variables if g.is_declaration)
         path = folder / f"{c_name}.o"
