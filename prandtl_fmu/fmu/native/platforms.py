@@ -251,17 +251,18 @@ def prepare(module, machine, exported=("fmi2", "fmi3")):
 
 # "One number everywhere": glibc's, Windows' and musl's cos, exp, pow, ... differ in their last bits, so the kernels
 # call prandtl_fmu.libm and what a module may leave to the link is exact in every conforming C library (IEEE 754
-# fixes these results) or no arithmetic at all, numba's runtime and helpers, and the CPython API of numba's error
-# path (assemble.stubs provides both)
+# fixes these results) or no arithmetic at all (bcmp, bzero and memset_pattern16: LLVM's forms of memcmp and
+# memset), numba's runtime and helpers, and the CPython API of numba's error path (assemble.stubs provides both)
 EXACT_C = frozenset({"sqrt", "fabs", "copysign", "floor", "ceil", "trunc", "round", "rint", "nearbyint", "fmod",
-                     "fmin", "fmax", "nextafter", "frexp", "ldexp", "scalbn", "memcpy", "memmove", "memset", "memcmp"})
+                     "fmin", "fmax", "nextafter", "frexp", "ldexp", "scalbn", "memcpy", "memmove", "memset", "memcmp",
+                     "bcmp", "bzero", "memset_pattern16"})
 NUMBA_HELPERS = frozenset({"numba_nextafter", "numba_frexp", "numba_ldexp", "numba_do_raise", "numba_gil_ensure",
                            "numba_gil_release", "numba_unpickle", "numba_runtime_build_excinfo_struct"})
 RUNTIME_PREFIXES = ("NRT_", "Py", "_Py")
 # LLVM intrinsics that the code generator lowers into a libm call (sin and cos of one argument into sincos), or
-# that fuse a product into a sum
-LIBM_INTRINSIC = re.compile(r"llvm\.(sin|cos|tan|sincos|asin|acos|atan|atan2|sinh|cosh|tanh|exp|exp2|exp10|log|log2"
-                            r"|log10|pow|powi|fma|fmuladd)\.")
+# that fuse a product into a sum; their constrained (strict floating-point) forms too
+LIBM_INTRINSIC = re.compile(r"llvm\.(experimental\.constrained\.)?(sin|cos|tan|sincos|sincospi|asin|acos|atan|atan2"
+                            r"|sinh|cosh|tanh|exp|exp2|exp10|log|log2|log10|pow|powi|fma|fmuladd)\.")
 
 
 def may_link(symbol: str) -> bool:
@@ -270,11 +271,16 @@ def may_link(symbol: str) -> bool:
 
 
 def platform_dependent_calls(module) -> list:
-    """The functions ``module`` (llvmlite's) declares whose result may differ between platforms: a libm function,
-    or an intrinsic that becomes one (or a fused multiply-add) in the object."""
-    return sorted(f.name for f in module.functions
-                  if f.is_declaration and (LIBM_INTRINSIC.match(f.name)
-                                           or not (f.name.startswith("llvm.") or may_link(f.name))))
+    """The functions ``module`` (llvmlite's) declares and uses that may not give the same bits on every platform
+    (a libm function, an intrinsic that becomes one or a fused multiply-add in the object) or that the native
+    binaries do not provide: anything :func:`may_link` does not allow. A declaration nothing uses emits no symbol
+    and is left alone."""
+    text = str(module)
+    declared = [f.name for f in module.functions
+                if f.is_declaration and (LIBM_INTRINSIC.match(f.name)
+                                         or not (f.name.startswith("llvm.") or may_link(f.name)))]
+    return sorted(name for name in declared
+                  if len(re.findall(rf"@\"?{re.escape(name)}(?![\w.$])", text)) > 1)  # its declaration and a use
 
 
 def emit_objects(compiled, folder, target: Target) -> tuple:
@@ -295,9 +301,9 @@ def emit_objects(compiled, folder, target: Target) -> tuple:
         module.verify()
         calls = platform_dependent_calls(module)
         if calls:
-            raise NativeBuildError(f"the native kernel {c_name} calls {', '.join(calls)}, whose results differ "
-                                   "between platforms' C libraries: a defect of prandtl_fmu (its kernels call "
-                                   "prandtl_fmu.libm), please report it")
+            raise NativeBuildError(f"the native kernel {c_name} calls {', '.join(calls)}: not the same bits on "
+                                   "every platform, or not in the native binary (a defect of prandtl_fmu, whose "
+                                   "kernels call prandtl_fmu.libm: please report it)")
         external.update(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
         external.update(g.name for g in module.global_variables if g.is_declaration)
         path = folder / f"{c_name}.o"

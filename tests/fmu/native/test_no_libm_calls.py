@@ -13,18 +13,16 @@ random scenes (every effect, branch kernel, load and stepper), the memory stack,
 connector and the networks. This file tests that check (a kernel calling libm is refused, for every target), and
 that the IR is what matters: the objects the code generator emits from a checked IR (``nm -u``, the ground truth:
 an intrinsic such as ``llvm.cos`` becomes a libm call there, sin and cos of one argument ``sincos``) need no symbol
-outside the allow-list, for every object the run's native builds kept in the object cache.
+outside the allow-list, for the builds of the scenes the native FMU's tests build (from the object cache when those
+tests ran first).
 """
 import shutil
 import subprocess
+import time
 
 import pytest
 
-from tests.conftest import SCENES
-
-# one native build of the paper's scene (every stepper; from the object cache when the quick suite built it) and the
-# objects of every native build of the run
-pytestmark = pytest.mark.slow
+from tests.conftest import scene_text
 
 
 def calls_libm():
@@ -40,16 +38,46 @@ def calls_libm():
     return calls_libm
 
 
-def undefined_symbols(path) -> list:
-    """``nm -u`` of the object at ``path``: the symbols it needs from the link."""
-    listing = subprocess.run([shutil.which("nm"), "-u", str(path)], capture_output=True, text=True, check=True).stdout
-    return [line.split()[-1] for line in listing.splitlines() if line.strip()]
+def test_the_check_counts_what_a_module_declares_and_uses():
+    """On hand-written IR: a used libm function, intrinsic (plain or constrained) or unknown symbol is named; the
+    exact C functions, numba's runtime, harmless intrinsics and declarations nothing uses are not."""
+    import llvmlite.binding as llvm
+
+    from prandtl_fmu.fmu.native.platforms import platform_dependent_calls
+
+    module = llvm.parse_assembly("""
+declare double @llvm.cos.f64(double)
+declare double @llvm.experimental.constrained.exp.f64(double, metadata, metadata)
+declare double @llvm.fmuladd.f64(double, double, double)
+declare double @llvm.floor.f64(double)
+declare void @llvm.memcpy.p0.p0.i64(ptr, ptr, i64, i1)
+declare double @cbrt(double)
+declare double @"odd.name"(double)
+declare double @log10(double)
+declare double @sqrt(double)
+declare ptr @NRT_MemInfo_alloc(i64)
+define double @f(double %x, ptr %p, ptr %q) {
+  %a = call double @llvm.cos.f64(double %x)
+  %b = call double @llvm.experimental.constrained.exp.f64(double %a, metadata !"round.dynamic", metadata !"fpexcept.strict")
+  %c = call double @llvm.fmuladd.f64(double %a, double %b, double %x)
+  %d = call double @llvm.floor.f64(double %c)
+  call void @llvm.memcpy.p0.p0.i64(ptr %p, ptr %q, i64 8, i1 false)
+  %e = call double @cbrt(double %d)
+  %f = call double @"odd.name"(double %e)
+  %g = call double @sqrt(double %f)
+  %m = call ptr @NRT_MemInfo_alloc(i64 8)
+  ret double %g
+}
+""")
+    assert platform_dependent_calls(module) == ["cbrt", "llvm.cos.f64", "llvm.experimental.constrained.exp.f64",
+                                                "llvm.fmuladd.f64", "odd.name"]
 
 
-@pytest.mark.parametrize("target", ["x86_64-linux", "aarch64-linux", "x86_64-windows", "aarch64-darwin"])
+@pytest.mark.parametrize("target", ["x86_64-linux", "aarch64-linux", "x86_64-windows", "x86_64-darwin",
+                                    "aarch64-darwin"])
 def test_a_native_build_refuses_a_kernel_that_calls_libm(tmp_path, target):
     """The IR of a cfunc calling cos, pow and a complex's abs declares ``llvm.cos``, ``llvm.pow`` and ``hypot``:
-    the build names the C function and the three, for every target, and emits no object."""
+    the build names the C function and the three in one line, for every target, and emits no object."""
     from prandtl_fmu.fmu.native.assemble import NativeBuildError
     from prandtl_fmu.fmu.native.platforms import TARGETS, emit_objects
 
@@ -61,44 +89,68 @@ def test_a_native_build_refuses_a_kernel_that_calls_libm(tmp_path, target):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_the_objects_of_every_native_build_need_no_libm(tmp_path):
-    """The paper's scene built natively (every stepper that applies), then every object in the object cache: the
-    run's native builds, each checked on its IR when emitted (those of the quick suite too, when it ran first on
-    this cache), for every target ``nm`` reads (ELF: both Linux targets; COFF: Windows; not Mach-O). No undefined
-    symbol is outside the allow-list but numba's mangled names of compiled functions (``_ZN...``: resolved among
-    the build's objects; COFF lists their COMDAT copies as undefined). ``nm`` itself sees libm in the object of a
-    cfunc that calls it (emitted here as the build emits, unchecked)."""
+def needed_symbols(path) -> set:
+    """What the object at ``path`` needs from the link (``nm -u``): its undefined symbols, and its weak undefined
+    ones but numba's mangled names of compiled functions (``_ZN...``: a COFF object refers to the copies other
+    objects of the build define as weak externals)."""
+    listing = subprocess.run([shutil.which("nm"), "-u", str(path)], capture_output=True, text=True, check=True).stdout
+    needed = set()
+    for kind, symbol in (line.split()[-2:] for line in listing.splitlines() if line.strip()):
+        if kind == "U" or not symbol.startswith("_ZN"):
+            needed.add(symbol)
+    return needed
+
+
+@pytest.mark.slow  # builds: the scenes of the native FMU's tests, from the object cache when those tests ran first
+def test_the_objects_of_native_builds_need_no_libm(tmp_path):
+    """The native FMUs of the element's scenes that tests/fmu/native/test_against_library.py builds (every effect on
+    the mass and in the branches, the memory stack, the continuum, exact and exact_series, massless and rigid; every
+    stepper that applies) and a network and a network connector of tests/networks/test_native.py, built as those
+    tests build them (their objects are shared through the object cache), then every object of every entry the
+    builds used, for every target ``nm`` reads (ELF: both Linux targets; COFF: Windows; Mach-O folders are skipped):
+    each needs only what :func:`may_link` allows. ``nm`` itself sees libm in an object of a cfunc that calls it
+    (emitted here as the build emits it, unchecked)."""
     if shutil.which("nm") is None:
         pytest.skip("no nm (Debian: apt-get install binutils): the objects cannot be read")
     import llvmlite.binding as llvm
 
     from prandtl_fmu.fmu.build import build_fmu
     from prandtl_fmu.fmu.native import object_cache
+    from prandtl_fmu.fmu.native.build import build_native_network_fmu
     from prandtl_fmu.fmu.native.platforms import host_target, may_link, portable_ir, prepare, target_machine
 
-    def outside(symbols):
-        return {symbol for symbol in symbols if not (may_link(symbol) or symbol.startswith("_ZN"))}
+    from tests.fmu.native.test_against_library import PAPER, SCENES
+    from tests.networks.scenes import SCENES as NETWORKS
 
     machine = target_machine(host_target())
     module = prepare(llvm.parse_assembly(portable_ir(str(calls_libm()._library._final_module))), machine)
     unchecked = tmp_path / "calls_libm.o"
     unchecked.write_bytes(machine.emit_object(module))
-    assert {"cos", "pow", "hypot"} <= outside(undefined_symbols(unchecked))
+    assert {"cos", "pow", "hypot"} <= {symbol for symbol in needed_symbols(unchecked) if not may_link(symbol)}
 
-    scene = tmp_path / "paper.toml"
-    scene.write_text((SCENES / "paper-section-8.toml").read_text())
-    build_fmu(scene, tmp_path / "paper.fmu", runtime="native")
+    started = time.time() - 2.0  # an entry read or written by these builds has its folder's time set after this
+    for name, tables in SCENES.items():
+        path = tmp_path / f"{name}.toml"
+        path.write_text(scene_text(tables) if tables else PAPER.read_text())
+        build_fmu(path, tmp_path / f"{name}.fmu", runtime="native")
+    for name, causality in (("joint", None), ("massless", "displacement")):
+        path = tmp_path / f"network-{name}.toml"
+        path.write_text(NETWORKS[name])
+        build_native_network_fmu(path, tmp_path / f"network-{name}.fmu", fmi=2, causality=causality)
     root = object_cache._root()
-    assert root is not None, "the suite runs with a cache folder: the build kept its objects"
-    found, read = {}, {}
-    for objects in sorted(root.glob("[!.]*/*/")):  # <digest>/<triple>/
-        try:
-            needed = {path.name: undefined_symbols(path) for path in objects.glob("*.o")}
-        except subprocess.CalledProcessError:  # a format this nm does not read (Mach-O)
-            continue
-        read[objects.name] = read.get(objects.name, 0) + 1
-        for name, symbols in needed.items():
-            for symbol in outside(symbols):
-                found.setdefault(symbol, []).append(f"{objects.parent.name[:12]}/{objects.name}/{name}")
-    assert read.get(host_target().triple), f"no object of this machine's kept in {root}"
+    assert root is not None, "the suite runs with a cache folder: the builds kept their objects"
+    entries = [entry for entry in root.iterdir()
+               if entry.is_dir() and not entry.name.startswith(".") and entry.stat().st_mtime >= started]
+    assert len(entries) >= len(SCENES) + 2, f"{len(entries)} entries used in {root}"
+    found, read = {}, 0
+    for entry in entries:
+        for objects in entry.iterdir():
+            if not objects.is_dir() or "-apple-" in objects.name:  # this nm reads no Mach-O
+                continue
+            for path in objects.glob("*.o"):
+                read += 1
+                for symbol in needed_symbols(path):
+                    if not may_link(symbol):
+                        found.setdefault(symbol, []).append(f"{entry.name[:12]}/{objects.name}/{path.name}")
+    assert read >= 2 * (len(SCENES) + 2), f"{read} objects read"
     assert found == {}
