@@ -9,7 +9,6 @@ dissipated_damper, energy_residual) and the dissipation of every slider, branch 
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from time import perf_counter
@@ -605,7 +604,6 @@ class NetworkConnector(NetworkElement):
         saved = self.checkpoint()
         saved_force = self._force
         node = self.scene.network.load_node
-        x_start = float(self.x[node])
         duration = time - start
         if split_duration(duration, self.h) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
             duration = 0.0
