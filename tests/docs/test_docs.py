@@ -113,6 +113,119 @@ def test_the_pages_read_as_a_site():
     assert found == [], "\n".join(found)
 
 
+# What a user's page does not carry: the history of how it was made belongs in CHANGELOG.md and the commits.
+MONTHS = ("January|February|March|April|May|June|July|August|September|October|November|December")
+NOT_FOR_USERS = (
+    (r"(?<![\w/.-])/tmp(?:/|\b)", "a path of a temporary folder"),
+    (r"\bthis machine\b", "\"this machine\" (which? say its kind)"),
+    (r"\b(?:19|20)\d\d-[01]\d-[0-3]\d\b", "a calendar date (CHANGELOG.md holds them)"),
+    (rf"\b(?:{MONTHS}) [0-3]?\d(?:st|nd|rd|th)?\b|\b[0-3]?\d (?:{MONTHS})\b", "a calendar date (CHANGELOG.md holds them)"),
+)
+
+
+def lines_not_for_users(page: pathlib.Path, text: str) -> list:
+    """``page:line: why: what`` for every match of :data:`NOT_FOR_USERS` in ``text``."""
+    found = []
+    for pattern, why in NOT_FOR_USERS:
+        for match in re.finditer(pattern, text, flags=re.IGNORECASE if "machine" in pattern else 0):
+            line = text.count("\n", 0, match.start()) + 1
+            found.append(f"{page.relative_to(ROOT) if page.is_absolute() else page}:{line}: {why}: {match.group(0)}")
+    return found
+
+
+def test_the_pages_carry_no_history_of_their_making():
+    """No temporary folder's path, no "this machine", no calendar date in the README or the site's pages: a
+    user reads what is true now and on which kind of machine; when a thing changed is CHANGELOG.md's."""
+    found = []
+    for page in pages():
+        found += lines_not_for_users(page, page.read_text(encoding="utf-8"))
+    assert found == [], "\n".join(found)
+
+
+def test_the_history_rule_finds_what_it_refuses():
+    """The rule above, on text written here: it must find each kind (a rule that finds nothing passes all)."""
+    refused = ("a /tmp script", "written to /tmp/run.csv", "on this machine", "(2026-11-29, evening)",
+               "since November 25", "on 3 December")
+    kept = ("a temporary folder (mktemp -d)", "x_tmp = 1", "a 2-core x86-64 machine", "version 2.0.1",
+            "the 1e-3 tolerance", "/usr/tmpfile")
+    for text in refused:
+        assert lines_not_for_users(pathlib.Path("page.md"), text), text
+    for text in kept:
+        assert not lines_not_for_users(pathlib.Path("page.md"), text), text
+
+
+def slug(heading: str) -> str:
+    """The anchor Python-Markdown's table of contents gives a heading (its default ``slugify``)."""
+    import unicodedata
+    text = re.sub(r"`|\*\*|\*", "", heading)
+    text = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", text)
+    text = unicodedata.normalize("NFKD", text).encode("ascii", "ignore").decode("ascii")
+    text = re.sub(r"[^\w\s-]", "", text).strip().lower()
+    return re.sub(r"[-\s]+", "-", text)
+
+
+def anchors(page: pathlib.Path) -> set:
+    """The anchors of a page's headings (outside code blocks; a repeated heading gets _1, _2 ...)."""
+    seen, found, fenced = {}, set(), False
+    for line in page.read_text(encoding="utf-8").split("\n"):
+        if FENCE.match(line) or line.strip() == "```":
+            fenced = not fenced
+            continue
+        heading = re.match(r"^#{1,6} (.+?)\s*#*\s*$", line)
+        if heading and not fenced:
+            base = slug(heading.group(1))
+            name = base if base not in seen else f"{base}_{seen[base]}"
+            seen[base] = seen.get(base, 0) + 1
+            found.add(name)
+    found.update(re.findall(r'\{ *#([\w-]+) *\}|<a (?:name|id)="([\w-]+)"', page.read_text(encoding="utf-8")) and
+                 [a or b for a, b in re.findall(r'\{ *#([\w-]+) *\}|<a (?:name|id)="([\w-]+)"',
+                                                 page.read_text(encoding="utf-8"))])
+    return found
+
+
+def broken_links(page: pathlib.Path) -> list:
+    """``page:line: target`` for every relative link of the page (outside code) to a file that does not exist,
+    or to an anchor that no heading of the target page makes (a page docs/gen_pages.py completes at build
+    time is checked by the site's build)."""
+    text = page.read_text(encoding="utf-8")
+    text = re.sub(r"```.*?```", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    lines, code = text.split("\n"), False
+    for index, line in enumerate(lines):  # indented code: 4 spaces after a blank line or more code
+        code = line.startswith("    ") and (code or index == 0 or not lines[index - 1].strip())
+        lines[index] = "" if code else line
+    text = re.sub(r"`[^`\n]*`", "``", "\n".join(lines))
+    found = []
+    for match in re.finditer(r"\]\(([^)\s]+)(?: \"[^\"]*\")?\)", text):
+        target = match.group(1)
+        if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", target):
+            continue  # another site, a mailto:
+        path, _, anchor = target.partition("#")
+        where = (page.parent / urllib.parse.unquote(path)).resolve() if path else page
+        line = text.count("\n", 0, match.start()) + 1
+        if not where.exists():
+            found.append(f"{page.relative_to(ROOT)}:{line}: no such file: {target}")
+        elif (anchor and where.suffix == ".md" and anchor not in anchors(where)
+              and "<!-- generated:" not in where.read_text(encoding="utf-8")):  # its headings come at build time
+            found.append(f"{page.relative_to(ROOT)}:{line}: no such anchor: {target}")
+    return found
+
+
+def test_every_link_of_the_pages_opens_a_file_and_its_anchor():
+    """Relative links of the README and the site's pages, anchors included (mkdocs checks the built site too,
+    in the slow suite and CI: this is the check a writer meets in seconds)."""
+    found = [problem for page in pages() for problem in broken_links(page)]
+    assert found == [], "\n".join(found)
+
+
+def test_the_link_check_finds_a_broken_file_and_anchor(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (tmp_path / "a.md").write_text("# A title `with code`\n\n## Second: part (two)\n\ntext\n")
+    (tmp_path / "b.md").write_text("[ok](a.md#a-title-with-code) [ok](a.md#second-part-two) [bad](a.md#nope) "
+                                   "[gone](c.md) [web](https://example.org/x.md#y)\n```text\n[not](d.md)\n```\n")
+    found = broken_links(tmp_path / "b.md")
+    assert len(found) == 2 and "a.md#nope" in found[0] and "c.md" in found[1], found
+
+
 def test_every_block_has_a_language_and_the_skipped_ones_a_reason():
     found = every_block()
     assert len(found) >= 30
