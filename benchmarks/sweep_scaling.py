@@ -4,7 +4,7 @@ Problem: the paper's section 8 scene (n = 100 branches, h = 1e-3, stepper
 ``projected``), shortened to ``--stop-time`` seconds, swept over
 ``--runs`` forcing amplitudes (summaries only).
 
-Measured in one run of this script, on this machine:
+Measured in one run of this script, on the machine it runs on:
 
 * ``single``: the sum of the runs' times done one by one in this process with
   :func:`summary.summarize` (compiled, warm): the work itself;
@@ -118,7 +118,7 @@ def main():
                  "seconds": one_full, "runs_per_second": 1 / one_full, "overhead_fraction": "",
                  "scheduler_share": ""})
     write_rows(os.path.join(args.out, "sweep_scaling.csv"), rows)
-    lines = ["# 10^6 runs of the paper's scene (T = 500 s), from this machine's measurements",
+    lines = ["# 10^6 runs of the paper's scene (T = 500 s), extrapolated from one run of benchmarks/sweep_scaling.py",
              "", f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores. One run: "
              f"{one_full:.3f} s. Overhead fraction measured with 2 workers: {efficiency:.3f}.", "",
              "| machines x cores | hours |", "|---|---|"]
