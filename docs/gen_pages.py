@@ -568,6 +568,8 @@ def readme_as_index() -> str:
         text, target = match.group(1), match.group(2)
         if target.startswith("docs/"):
             return f"{text}({target[len('docs/'):]})"
+        if target == "CHANGELOG.md":
+            return f"{text}(changelog.md)"
         if re.match(r"^[a-z]+:|^#|^/", target):
             return match.group(0)
         return f"{text}(../{target})"  # a file of the repository: on_page_markdown links it there
@@ -580,6 +582,9 @@ def on_files(files, config):
 
     if files.get_file_from_path("index.md") is None:
         files.append(File.generated(config, "index.md", content=readme_as_index()))
+    if files.get_file_from_path("changelog.md") is None:  # CHANGELOG.md, the one file that holds dates
+        files.append(File.generated(config, "changelog.md",
+                                    content=(ROOT / "CHANGELOG.md").read_text(encoding="utf-8")))
     return files
 
 
