@@ -261,6 +261,13 @@ def eps_of(record, q, norm, time_norm):
     return max(maxima[kind][measure] for kind in TIMES[time_norm] for measure in measures)
 
 
+def when_of(record, q, norm, time_norm):
+    """The time (s) at which eps(h) of one run (``eps_of``) reaches its max over [0, T]."""
+    places = [(kind, measure) for kind in TIMES[time_norm] for measure in NORMS[(q, norm)]]
+    kind, measure = max(places, key=lambda place: record["maxima"][place[0]][place[1]])
+    return record["when"][kind][measure]
+
+
 def table(records, protocol: Protocol, q, norm, time_norm, factor, h_range=None):
     """Rows {q, n, alpha, C, r, ...} of one convention over the finished runs (``h_range``: (lo, hi) to fit over
     the runs with lo <= h <= hi only)."""
@@ -379,13 +386,30 @@ def alpha_checks(records, protocol: Protocol, shortest: int = 20):
                 windows=int(good.sum()),
                 window_h_min=math.exp(x[lo[widest]]) if widest is not None else math.nan,
                 window_h_max=math.exp(x[hi[widest] - 1]) if widest is not None else math.nan,
-                latest_max_t=max(r["when"][kind][measure] for r in chosen for kind in TIMES[PAPER["time"]]
-                                 for measure in NORMS[(q, PAPER["norm"])])))
+                latest_max_t=max(when_of(r, q, PAPER["norm"], PAPER["time"]) for r in chosen)))
     hs = sorted({r["h"] for r in records.values()})
     common = sorted(({"h_min": hs[a], "h_max": hs[b - 1], "h_count": b - a, "rows": len(which),
                       "which": " ".join(f"{q}/{n}" for q, n in which)} for (a, b), which in matched.items()),
                     key=lambda c: (-c["rows"], -c["h_count"]))
     return rows, common
+
+
+def horizon_ratios(records, protocol: Protocol, ns, js, horizons):
+    """eps(h_j) over [0, T'] divided by eps(h_j) over [0, T] (the stored run), for q = inf and 2, each n in ``ns``,
+    j in ``js`` and T' in ``horizons``: how much a shorter horizon could lower eps (new lockstep runs of T' / h_j
+    steps). Returns rows {n, j, h, horizon, ratio_inf, ratio_2}."""
+    rows = []
+    for n in ns:
+        for j in js:
+            stored = records[(n, j)]
+            for horizon in horizons:
+                run = lockstep_run(paper_scene(n, protocol.T), stored["h"], protocol.stepper,
+                                   steps=round(horizon / stored["h"]), theta=protocol.theta, held=False)
+                run.update(h=stored["h"])
+                rows.append(dict(n=n, j=j, h=stored["h"], horizon=horizon,
+                                 **{f"ratio_{q}": eps_of(run, q, PAPER["norm"], PAPER["time"])
+                                    / eps_of(stored, q, PAPER["norm"], PAPER["time"]) for q in ("inf", "2")}))
+    return rows
 
 
 def load_runs(folder: str) -> dict:

@@ -331,3 +331,45 @@ def test_the_range_scan_fits_each_range_like_polyfit_and_finds_the_whole_grid():
     by_row = {(row["q"], row["n"]): row for row in checks}
     assert by_row[("inf", 1500)]["windows"] == 0
     assert all(by_row[key]["windows"] >= 1 for key in PRINTED_DIGIT_ROWS)
+
+
+def _crank_nicolson_on_the_half_line(u0, h, steps):
+    """(U^{p+1} - U^p)/h + d psi_{R+}((U^{p+1} + U^p)/2) contains -1: the midpoint is the projection of
+    U^p - h/2 on R+, U^{p+1} = 2 midpoint - U^p."""
+    values = [u0]
+    for _ in range(steps):
+        values.append(2 * max(values[-1] - h / 2, 0.0) - values[-1])
+    return np.array(values)
+
+
+@pytest.mark.parametrize("h", [0.1, 0.07, 0.013])
+def test_remark_1_2_crank_nicolson_starts_from_plus_one(h):
+    """The paper's (1.26), U^p = 1 - p h up to m (the largest integer < 1/h + 1/2), then (-1)^(p-m) (1 - m h),
+    is Crank-Nicolson's solution from U^0 = +1, the u(0) of u(t) = (1 - t)^+; from the printed u0 = -1 the first
+    step jumps to +1 and the sequence is one step late (docs/numerics.md, the paper's misprints)."""
+    steps = round(2 / h)
+    m = math.ceil(1 / h + 0.5) - 1
+    p = np.arange(steps + 1)
+    printed = np.where(p <= m, 1 - p * h, (-1.0) ** (p - m) * (1 - m * h))
+    assert np.allclose(_crank_nicolson_on_the_half_line(1.0, h, steps), printed, rtol=0, atol=1e-12)
+    from_minus_one = _crank_nicolson_on_the_half_line(-1.0, h, steps)
+    assert from_minus_one[1] == pytest.approx(1.0, abs=1e-15)
+    assert not np.allclose(from_minus_one, printed, rtol=0, atol=1e-3)
+    assert np.allclose(from_minus_one[1:], printed[:-1], rtol=0, atol=1e-12)
+
+
+def test_horizon_ratios_rerun_the_stored_run_over_a_shorter_horizon(tmp_path, monkeypatch):
+    """Over the whole horizon the new run is the stored one (ratio 1 to rounding); over a shorter one the max
+    over [0, T'] is at most the max over [0, T], and it is the stored max when that was reached before T'."""
+    monkeypatch.setitem(table1.PROTOCOLS, "tiny", TINY)
+    table1.run(str(tmp_path / "t"), "tiny", workers=1, figures_too=False, ns=[3], limit=1)
+    records = table1.load_runs(str(tmp_path / "t" / "runs"))
+    (n, j), stored = next(iter(records.items()))
+    rows = table1.horizon_ratios(records, TINY, [n], [j], [TINY.T, 1.0])
+    assert rows[0]["ratio_inf"] == pytest.approx(1.0, abs=1e-14) and rows[0]["ratio_2"] == pytest.approx(1.0,
+                                                                                                          abs=1e-14)
+    places = [(kind, m) for kind in ("coarse", "linear") for m in ("x", "v", "u_max")]
+    kind, m = max(places, key=lambda place: stored["maxima"][place[0]][place[1]])
+    when = stored["when"][kind][m]  # the time of the largest difference
+    assert rows[1]["ratio_inf"] <= 1.0 + 1e-14
+    assert (rows[1]["ratio_inf"] == pytest.approx(1.0, abs=1e-14)) == (when <= 1.0)
