@@ -6,6 +6,9 @@ scheme (5.1) (the ``projected`` stepper) from U^0 = u_0 (5.2);
 
     eps(h) = || u_h - u_{h/2} ||_{C^0([0, T], l^q_{n+2})},    log eps = alpha log h + log(2 C)      (fit, r)
 
+The paper fitted in base 10, log10 eps = alpha log10 h + b10, and printed C = exp(b10) / 2 (``printed_c``:
+(2 C)^(1 / ln 10) / 2 of the true C); alpha and r do not depend on the base.
+
 over h_j = h_min^((R - j) / R) h_max^(j / R), j = 0..R, with R = 99, h_min = 1e-6, h_max = 1e-2 (``PROTOCOLS``).
 u = (x, y, u_1..u_n), u_h the piecewise-linear interpolant of the nodes, so the C^0 norm is the max over every node
 of the fine run (``kernels/table1.py``). Each (n, h) is one lockstep run of h and h/2 on the memory stack
@@ -16,13 +19,17 @@ Each run keeps, for the kinds of node (coarse nodes; fine nodes against the line
 against the coarse value held over its step, except in the paper protocol), the maxima over [0, T] of the
 components of the difference (``kernels/table1.MEASURES``). From them, without another run:
 
-* ``DIR/table1_paper.csv`` (``table1_<protocol>.csv`` for the others; q, n, alpha, C, r, then the paper's
-  values and how many h were done): the paper's definition read literally: plain l^q over the n + 2
-  components, max over the interpolants, factor 2 C;
+* ``DIR/table1_paper.csv`` (``table1_<protocol>.csv`` for the others; q, n, alpha, C, r, C_true, then the
+  paper's values and how many h were done): the paper's definition read literally: plain l^q over the n + 2
+  components, max over the interpolants, factor 2 C; C in the paper's printed convention, C_true the constant
+  of eps ~ 2 C h^alpha;
+* ``DIR/table1_alpha_checks_<protocol>.csv`` and ``DIR/table1_ranges_<protocol>.csv``: what the runs say about
+  the rows whose alpha is not the printed one (``alpha_checks``: coarse nodes, the slope at both ends of the
+  grid, the ranges of h that reproduce each row and the whole table, the horizon);
 * ``DIR/table1_candidates_<protocol>.csv``: every convention of the search (``NORMS`` x ``TIMES`` x
   ``FACTORS`` x h ranges), each with its (q, n) rows and ratio to the printed C; :func:`merge` gathers those of
   several protocols into one table, a row per convention (docs/bench/table1_candidates.csv);
-* ``DIR/table1_eps.png``: eps(h) against h beside the paper's 2 C h^alpha;
+* ``DIR/table1_eps.png``: eps(h) against h beside the paper's line;
 * ``DIR/figure3.png`` .. ``figure5.png``: the paper's figures 3-5, the loops {x(t), F(t) - m x''(t)} over
   400 <= t <= 500 with N = 10^6 (h = 5e-4).
 """
@@ -254,6 +261,13 @@ def eps_of(record, q, norm, time_norm):
     return max(maxima[kind][measure] for kind in TIMES[time_norm] for measure in measures)
 
 
+def when_of(record, q, norm, time_norm):
+    """The time (s) at which eps(h) of one run (``eps_of``) reaches its max over [0, T]."""
+    places = [(kind, measure) for kind in TIMES[time_norm] for measure in NORMS[(q, norm)]]
+    kind, measure = max(places, key=lambda place: record["maxima"][place[0]][place[1]])
+    return record["when"][kind][measure]
+
+
 def table(records, protocol: Protocol, q, norm, time_norm, factor, h_range=None):
     """Rows {q, n, alpha, C, r, ...} of one convention over the finished runs (``h_range``: (lo, hi) to fit over
     the runs with lo <= h <= hi only)."""
@@ -276,15 +290,136 @@ def table(records, protocol: Protocol, q, norm, time_norm, factor, h_range=None)
     return rows
 
 
+def printed_c(c_true: float) -> float:
+    """The C the paper prints for the true constant ``c_true`` of eps ~ 2 C h^alpha: its fit is base 10,
+    log10 eps = alpha log10 h + b10, and it prints exp(b10) / 2, so C_printed = (2 C_true)^(1 / ln 10) / 2."""
+    return (2.0 * c_true) ** (1.0 / math.log(10.0)) / 2.0
+
+
+def true_c(c_printed: float) -> float:
+    """The inverse of :func:`printed_c`: eps ~ 2 C h^alpha with C = (2 C_printed)^(ln 10) / 2."""
+    return (2.0 * c_printed) ** math.log(10.0) / 2.0
+
+
 def paper_rows(records, protocol: Protocol):
-    """The table of the paper's definition (``PAPER``) for q = inf then 2, with how complete the h grid is."""
+    """The table of the paper's definition (``PAPER``) for q = inf then 2, with how complete the h grid is:
+    C in the paper's printed convention (:func:`printed_c`), C_true the constant of eps ~ 2 C h^alpha."""
     rows = []
     for q in ("inf", "2"):
         for row in table(records, protocol, q, PAPER["norm"], PAPER["time"], PAPER["factor"]):
-            row.update(h_total=protocol.R + 1, complete=row["h_count"] == protocol.R + 1, T=protocol.T,
-                       protocol=protocol.name, stepper=protocol.stepper)
+            row.update(C=printed_c(row["C"]), C_true=row["C"], h_total=protocol.R + 1,
+                       complete=row["h_count"] == protocol.R + 1, T=protocol.T, protocol=protocol.name,
+                       stepper=protocol.stepper)
             rows.append(row)
     return rows
+
+
+def matches_printed(value: float, printed: float, decimals: int) -> str:
+    """How ``value`` gives the ``printed`` number with ``decimals`` decimals: "truncated", "rounded", "both" or ""
+    (neither: it leaves the printed digits)."""
+    target = round(printed * 10 ** decimals)
+    ways = [name for name, digits in (("truncated", math.floor(value * 10 ** decimals)),
+                                      ("rounded", round(value * 10 ** decimals))) if digits == target]
+    return "both" if len(ways) == 2 else "".join(ways)
+
+
+PRINTED_DECIMALS = dict(alpha=5, C=5, r=6)  # Table 1 prints alpha and C with 5 decimals, r with 6
+
+
+def _line_fits(x, y, lo, hi):
+    """alpha, b, r of the least-squares line over x[lo:hi], y[lo:hi] for arrays of (lo, hi), from prefix sums."""
+    sums = [np.concatenate(([0.0], np.cumsum(v))) for v in (np.ones_like(x), x, y, x * x, x * y, y * y)]
+    k, sx, sy, sxx, sxy, syy = (s[hi] - s[lo] for s in sums)
+    vxx, vxy, vyy = sxx - sx * sx / k, sxy - sx * sy / k, syy - sy * sy / k
+    alpha = vxy / vxx
+    return alpha, (sy - alpha * sx) / k, vxy / np.sqrt(vxx * vyy)
+
+
+def alpha_checks(records, protocol: Protocol, shortest: int = 20):
+    """What the stored runs say about the rows whose alpha leaves the printed one: for each (q, n) of the paper's
+    definition, with C in the printed convention,
+
+    * ``alpha``, ``C``, ``r`` over every h, and how each gives the printed digits (``matches_printed``);
+    * ``alpha_coarse``, ``C_coarse``: the max over the coarse nodes only (not the interpolants);
+    * ``alpha_small``, ``alpha_large``: the slope over the ``shortest`` smallest and largest h (the curvature of
+      eps(h): the fit's alpha is a property of its range);
+    * ``windows``: how many ranges of consecutive h (at least ``shortest`` of them) reproduce alpha, C and r to
+      the printed digits, and the widest (``window_h_min``, ``window_h_max``);
+    * ``latest_max_t``: the latest time (s) at which an eps(h) of the row reaches its max over [0, T]: a shorter
+      horizon leaves every eps(h) as it is down to that time, and the runs cannot say what it does below.
+
+    Returns (rows, common): ``common`` lists, for every range of consecutive h, the rows it reproduces, the ranges
+    that reproduce the most rows first (one range for the whole table: no range is fitted to one row)."""
+    rows, matched = [], {}
+    for q in ("inf", "2"):
+        for n in protocol.ns:
+            chosen = sorted((r for r in records.values() if r["n"] == n), key=lambda r: r["h"])
+            if len(chosen) < max(shortest, 2):
+                continue
+            x = np.log([r["h"] for r in chosen])
+            y = np.log([eps_of(r, q, PAPER["norm"], PAPER["time"]) for r in chosen])
+            coarse = np.log([eps_of(r, q, PAPER["norm"], "coarse") for r in chosen])
+            paper_alpha, paper_c = PAPER_TABLE_1.get((q, n), (math.nan, math.nan))
+            paper_r = PAPER_CORRELATION.get((q, n), math.nan)
+            count = len(x)
+            lo, hi = (a.ravel() for a in np.meshgrid(np.arange(count + 1), np.arange(count + 1), indexing="ij"))
+            keep = hi - lo >= shortest
+            lo, hi = lo[keep], hi[keep]
+            alphas, bs, rs = _line_fits(x, y, lo, hi)
+            cs = np.array([printed_c(math.exp(b) / 2.0) for b in bs])
+            good = np.array([all(matches_printed(v, p, PRINTED_DECIMALS[name]) for name, v, p in
+                                 (("alpha", a, paper_alpha), ("C", c, paper_c), ("r", r, paper_r)))
+                             for a, c, r in zip(alphas, cs, rs)])
+            for a, b in zip(lo[good], hi[good]):
+                matched.setdefault((int(a), int(b)), []).append((q, n))
+            alpha, b, r = fit(np.exp(x), np.exp(y))
+            alpha_coarse, b_coarse, _ = fit(np.exp(x), np.exp(coarse))
+            c = printed_c(math.exp(b) / 2.0)
+            widest = int(np.argmax(np.where(good, hi - lo, -1))) if good.any() else None
+            rows.append(dict(
+                q=q, n=n, alpha=alpha, C=c, r=r, paper_alpha=paper_alpha, paper_C=paper_c, paper_r=paper_r,
+                alpha_digits=matches_printed(alpha, paper_alpha, 5), C_digits=matches_printed(c, paper_c, 5),
+                r_digits=matches_printed(r, paper_r, 6), C_ratio=c / paper_c,
+                alpha_coarse=alpha_coarse, C_coarse=printed_c(math.exp(b_coarse) / 2.0),
+                alpha_small=fit(np.exp(x[:shortest]), np.exp(y[:shortest]))[0],
+                alpha_large=fit(np.exp(x[-shortest:]), np.exp(y[-shortest:]))[0],
+                windows=int(good.sum()),
+                window_h_min=math.exp(x[lo[widest]]) if widest is not None else math.nan,
+                window_h_max=math.exp(x[hi[widest] - 1]) if widest is not None else math.nan,
+                latest_max_t=max(when_of(r, q, PAPER["norm"], PAPER["time"]) for r in chosen)))
+    hs = sorted({r["h"] for r in records.values()})
+    common = sorted(({"h_min": hs[a], "h_max": hs[b - 1], "h_count": b - a, "rows": len(which),
+                      "which": " ".join(f"{q}/{n}" for q, n in which)} for (a, b), which in matched.items()),
+                    key=lambda c: (-c["rows"], -c["h_count"]))
+    return rows, common
+
+
+def horizon_ratios(records, protocol: Protocol, ns, js, horizons):
+    """eps(h_j) over [0, T'] divided by eps(h_j) over [0, T] (the stored run), for q = inf and 2, each n in ``ns``,
+    j in ``js`` and T' in ``horizons``: how much a shorter horizon could lower eps (new lockstep runs of T' / h_j
+    steps). Returns rows {n, j, h, horizon, ratio_inf, ratio_2}."""
+    rows = []
+    for n in ns:
+        for j in js:
+            stored = records[(n, j)]
+            for horizon in horizons:
+                run = lockstep_run(paper_scene(n, protocol.T), stored["h"], protocol.stepper,
+                                   steps=round(horizon / stored["h"]), theta=protocol.theta, held=False)
+                run.update(h=stored["h"])
+                rows.append(dict(n=n, j=j, h=stored["h"], horizon=horizon,
+                                 **{f"ratio_{q}": eps_of(run, q, PAPER["norm"], PAPER["time"])
+                                    / eps_of(stored, q, PAPER["norm"], PAPER["time"]) for q in ("inf", "2")}))
+    return rows
+
+
+def load_runs(folder: str) -> dict:
+    """The runs of a runs folder ({(n, j): record}), read only (``docs/bench/table1_paper_runs``)."""
+    done = {}
+    for path in sorted(glob.glob(os.path.join(folder, "n*-j*.json"))):
+        with open(path) as fh:
+            record = json.load(fh)
+        done[(record["n"], record["j"])] = record
+    return done
 
 
 def h_ranges(protocol: Protocol):
@@ -411,7 +546,8 @@ def figures(folder: str):
 
 def figure_eps(folder: str, records, protocol: Protocol):
     """``table1_eps.png``: eps(h) of the paper's definition against h for every n (q = inf and 2), beside the line
-    2 C h^alpha of the paper's Table 1; return its path."""
+    of the paper's Table 1, 2 C h^alpha with its printed C read in its convention (:func:`true_c`); return its
+    path."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -427,9 +563,9 @@ def figure_eps(folder: str, records, protocol: Protocol):
             ax.loglog(hs, [eps_of(r, q, PAPER["norm"], PAPER["time"]) for r in chosen], "o", ms=3, color=f"C{i}",
                       label=f"n = {n}")
             alpha, c = PAPER_TABLE_1[(q, n)] if (q, n) in PAPER_TABLE_1 else (math.nan, math.nan)
-            ax.loglog(hs, 2 * c * hs ** alpha, "--", lw=0.8, color=f"C{i}")
+            ax.loglog(hs, 2 * true_c(c) * hs ** alpha, "--", lw=0.8, color=f"C{i}")
         ax.set(xlabel="h (s)", ylabel=f"eps(h) = max_t |u_h - u_h/2|_{q}",
-               title=f"q = {q}: measured (dots), the paper's 2 C h^alpha (dashed)")
+               title=f"q = {q}: measured (dots), the paper's Table 1 (dashed)")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     path = os.path.join(folder, "table1_eps.png")
@@ -554,7 +690,12 @@ def finish(folder, protocol, done, elapsed, new_runs, figures_too=True) -> dict:
     """Write the tables (and figures) from the finished runs; return a summary."""
     paper = paper_rows(done, protocol)
     name = "table1_paper.csv" if protocol.name == "paper" else f"table1_{protocol.name}.csv"
-    _write_csv(os.path.join(folder, name), paper, ("q", "n", "alpha", "C", "r"))
+    _write_csv(os.path.join(folder, name), paper, ("q", "n", "alpha", "C", "r", "C_true"))
+    checks, common = alpha_checks(done, protocol) if done else ([], [])
+    _write_csv(os.path.join(folder, f"table1_alpha_checks_{protocol.name}.csv"), checks,
+               ("q", "n", "alpha", "C", "r", "paper_alpha", "paper_C", "paper_r"))
+    _write_csv(os.path.join(folder, f"table1_ranges_{protocol.name}.csv"), common,
+               ("rows", "h_count", "h_min", "h_max", "which"))
     candidates = candidate_rows(done, protocol)
     _write_csv(os.path.join(folder, f"table1_candidates_{protocol.name}.csv"), candidates,
                ("norm", "time", "factor", "h_range", "q", "n", "alpha", "C", "r", "paper_C", "ratio"))
@@ -576,10 +717,10 @@ def main(folder: str, protocol: str, resume: bool = False, workers=None, schedul
         print(f"prandtl-fmu bench --table1: {exc}", file=sys.stderr)
         return 2
     rate = summary["steps"] / summary["run_seconds"] if summary["run_seconds"] > 0 else math.nan
-    print("q,n,alpha,C,r,paper_C,h_count")
+    print("q,n,alpha,C,r,C_true,paper_alpha,paper_C,paper_r,h_count")
     for row in summary["rows"]:
-        print(f"{row['q']},{row['n']},{row['alpha']:.5f},{row['C']:.5f},{row['r']:.6f},{row['paper_C']},"
-              f"{row['h_count']}")
+        print(f"{row['q']},{row['n']},{row['alpha']:.7f},{row['C']:.7f},{row['r']:.8f},{row['C_true']:.5f},"
+              f"{row['paper_alpha']},{row['paper_C']},{row['paper_r']},{row['h_count']}")
     status = "complete" if summary["runs"] == summary["total_runs"] else (
         f"PARTIAL: {summary['runs']} of {summary['total_runs']} (n, h) runs done; {summary['steps_left']:.3g} "
         f"steps left, about {summary['steps_left'] / rate / 3600:.3g} h at the measured rate on one worker")
