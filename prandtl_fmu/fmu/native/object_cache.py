@@ -146,7 +146,7 @@ class KernelObjects:
 
     def keep(self, emitted: dict) -> None:
         """Keep what this build compiled and emitted (``{target: (paths, external)}``); a failure to write is no
-        failure of the build."""
+        failure of the build (said once on stderr, naming the folder)."""
         root = _root()
         if root is None or self._compiled is None:
             return
@@ -174,8 +174,10 @@ class KernelObjects:
             finally:
                 shutil.rmtree(partial, ignore_errors=True)
             _prune(root)
-        except OSError:
-            pass
+        except OSError as error:
+            from ... import _jit
+
+            _jit._say(root, error, "this build's objects are not kept: the next build of these kernels compiles")
 
 
 def _remove(entry: Path) -> None:

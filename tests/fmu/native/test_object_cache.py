@@ -157,3 +157,19 @@ def test_what_a_killed_build_left_is_removed(tmp_path, cache):
     assert not left.exists()
     assert writing.exists()
     assert (cache / ("ab" * 32)).is_dir()
+
+
+def test_an_entry_that_cannot_be_written_is_said_once_and_the_build_goes_on(tmp_path, cache, capsys):
+    """A cache folder that cannot take the entry (here a file where the folder of entries should be, as a full or
+    read-only disk): ``keep`` raises nothing, writes nothing, and one line on stderr names the folder."""
+    from prandtl_fmu import _jit
+
+    cache.parent.mkdir(parents=True)
+    cache.write_text("not a folder")
+    _jit._SAID.discard(str(cache))
+    build, emitted = stand_in_build(tmp_path, "cd" * 32, {name: b"object" for name in NAMES})
+    build.keep(emitted)
+    build.keep(emitted)
+    [line] = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"warning: the compiled-code cache {cache} cannot be written ("), line
+    assert cache.read_text() == "not a folder"
