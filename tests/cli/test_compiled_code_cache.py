@@ -5,6 +5,7 @@ folder that cannot be written are said once on stderr, naming the folder, and th
 The kernel is ``kernels.smooth.elastic_force`` (k0 x + k3 x^3), small enough to compile in a fresh cache folder in
 about a second, at two signatures: (2, 3, None) gives 6 and (2, None, 3) gives 24."""
 import hashlib
+import json
 import os
 import pickle
 import subprocess
@@ -31,8 +32,6 @@ def run(cache, *arguments):
     done = subprocess.run([sys.executable, "-c", RUN, *arguments], capture_output=True, text=True, timeout=300,
                           env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), PRANDTL_FMU_JIT_CACHE="1"))
     assert done.returncode == 0, done.stderr[-3000:]
-    import json
-
     return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
 
 

@@ -119,8 +119,8 @@ right:
   ret double %q
 }
 """
-    assert fast_math(llvm.parse_assembly(ir)) == ["call afn", "fadd contract", "fcmp fast", "fdiv reassoc nsz", "fmul contract",
-                                  "phi nnan ninf"]
+    assert fast_math(llvm.parse_assembly(ir)) == ["call afn", "fadd contract", "fcmp fast", "fdiv reassoc nsz",
+                                                  "fmul contract", "phi nnan ninf"]
     plain = ir
     for flags in ("contract ", "reassoc nsz ", "afn ", "fast ", "nnan ninf "):
         plain = plain.replace(f" {flags}double", " double").replace(f" {flags}olt", " olt")
