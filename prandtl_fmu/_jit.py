@@ -231,6 +231,7 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
     base = getattr(caching, "_CacheLocator", None)
     if impl is None or mixin is None or base is None or not hasattr(impl, "_locator_classes"):
         return False
+    guarded = _guard_entries(root)
 
     class DigestLocator(mixin, base):
         """numba's cache locator for this package's functions: a folder per package digest."""
@@ -256,14 +257,14 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
             self = cls(py_func, py_file)
             try:
                 self.ensure_cache_path()
-            except OSError:
-                pass  # the root was writable at import (a full disk gets here): loads miss, a save says why
-            return self  # never None: numba's next locator would cache beside the sources
+            except OSError:  # the root was writable at import (a full disk gets here)
+                if not guarded:
+                    return None
+            return self  # loads miss, a failed save is said (_guard_entries); None: numba's next locator decides
 
     DigestLocator.prandtl_fmu = True
     impl._locator_classes.insert(0, DigestLocator)
     _refuse_unimportable_entries()
-    _guard_entries(root)
     return True
 
 
@@ -299,7 +300,7 @@ SAVE_LOCK_SECONDS = 30.0
 CHECKSUM = "prandtl_fmu sha256"
 
 
-def _guard_entries(root: pathlib.Path) -> None:
+def _guard_entries(root: pathlib.Path) -> bool:
     """Make numba's cache entries under ``root`` safe to save from many processes, checked when loaded, and a
     failed save no failure of the run. Another package's caches keep numba's own load and save.
 
@@ -318,17 +319,19 @@ def _guard_entries(root: pathlib.Path) -> None:
       cannot be read, a compile result for another signature than the one asked for, or one numba cannot
       rebuild, is a miss: the function compiles, and its save overwrites the entry.
     * A save that fails (ENOSPC, EROFS, EACCES, EDQUOT, ...) is said once on stderr, naming the folder
-      (:func:`_say`), and this process saves nothing more there."""
+      (:func:`_say`), and this process saves nothing more there.
+
+    False if numba's internals differ from what it needs (nothing guarded)."""
     cache_file = getattr(caching, "IndexDataCacheFile", None)
     cache = getattr(caching, "Cache", None)
     needed = ("save", "load", "_load_index", "_save_index", "_data_name", "_data_path", "_dump", "_open_for_write")
     if cache_file is None or cache is None or not all(hasattr(cache_file, name) for name in needed) \
             or not all(hasattr(cache, name) for name in ("load_overload", "save_overload")):
-        return
+        return False
     roots = getattr(cache_file.save, "prandtl_fmu_guarded_roots", None)
     if roots is not None:  # another copy of the package (an FMU's) guards its folder: one guard for both
         roots.add(str(root))
-        return
+        return True
     roots = {str(root)}
     unlockable = set()  # folders this process gave up locking (no locks there, or the wait ran out)
     unsaved = set()  # folders a save failed in: this process saves nothing more there
@@ -407,6 +410,7 @@ def _guard_entries(root: pathlib.Path) -> None:
     save.prandtl_fmu_guarded_roots = roots
     cache_file.save, cache_file.load = save, load
     cache.load_overload, cache.save_overload = load_overload, save_overload
+    return True
 
 
 def _compiled_for(key, data) -> bool:
