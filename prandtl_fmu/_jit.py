@@ -29,8 +29,18 @@ folder, never beside the sources:
   (``CACHE``): never beside the sources;
 * processes that fill one folder at once (the workers of a test run or of a
   sweep, the FMUs of one co-simulation) save their entries under a lock of the
-  folder (:func:`_save_entries_under_a_lock`): numba's own save can lose one
-  of two entries saved at the same moment;
+  folder (:func:`_guard_entries`): numba's own save can lose one of two
+  entries saved at the same moment;
+* an entry is checked when it is loaded: the index records the SHA-256 of each
+  data file beside numba's own keys, and a data file whose bytes are not the
+  recorded ones (emptied, truncated, garbage, another signature's), an index
+  that cannot be read, or code compiled for another signature is a miss: the
+  function compiles again and its entry is written anew (numba itself stops
+  with the error, or runs another signature's machine code: a crash);
+* a save that fails (a full disk, a folder made read-only) is no failure of the
+  run: one line on stderr names the cache folder, and the process carries on
+  without saving; a cache folder that cannot be written at the start is said
+  in one line too (every process then compiles what it runs);
 * each edit of the kernels, or upgrade, starts a new folder; a process marks
   its own as used when it starts and removes the folders of the library and of
   the FMUs' bundled copies that no process started on for a month
@@ -42,7 +52,9 @@ process).
 import hashlib
 import os
 import pathlib
+import pickle
 import re
+import sys
 import time
 
 from numba import njit
@@ -119,20 +131,40 @@ def cache_root() -> pathlib.Path:
 
 def _usable_root():
     """:func:`cache_root`, created and marked as used now (:func:`prune_stale`); None if it cannot be (no home,
-    read-only disk, ...)."""
+    read-only disk, ...), said once on stderr (:func:`_say`)."""
+    root = None
     try:
         root = cache_root()
         root.mkdir(parents=True, exist_ok=True)
         probe = root / f".probe-{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()
-    except (OSError, RuntimeError, ValueError):
+    except (OSError, RuntimeError, ValueError) as error:
+        _say(root or "~/.cache/numba", error, "nothing compiled is saved: every process compiles "
+             "what it runs (NUMBA_CACHE_DIR moves the cache)")
         return None
     try:
         prune_stale(root)
     except Exception:  # never let the cache's housekeeping stop the library from importing
         pass
     return root
+
+
+_SAID = set()  # the cache folders this process has said something about
+
+
+def _say(root, error: BaseException, consequence: str) -> None:
+    """One line on stderr, once per process and folder: the compiled-code cache ``root`` cannot be written
+    (``error``), and what follows from it."""
+    if str(root) in _SAID:
+        return
+    _SAID.add(str(root))
+    reason = getattr(error, "strerror", None) or str(error) or type(error).__name__
+    try:
+        print(f"warning: the compiled-code cache {root} cannot be written ({reason}): {consequence}",
+              file=sys.stderr, flush=True)
+    except Exception:  # no stderr (a GUI host of an FMU): nothing to say it on
+        pass
 
 
 # The folders of compiled code this package makes beside one another: the library's and, for the PythonFMU
@@ -199,6 +231,7 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
     base = getattr(caching, "_CacheLocator", None)
     if impl is None or mixin is None or base is None or not hasattr(impl, "_locator_classes"):
         return False
+    guarded = _guard_entries(root)
 
     class DigestLocator(mixin, base):
         """numba's cache locator for this package's functions: a folder per package digest."""
@@ -224,14 +257,14 @@ def _install_locator(root: pathlib.Path, digest: str) -> bool:
             self = cls(py_func, py_file)
             try:
                 self.ensure_cache_path()
-            except OSError:
-                return None  # the root was writable at import: only a full disk gets here
-            return self
+            except OSError:  # the root was writable at import (a full disk gets here)
+                if not guarded:
+                    return None
+            return self  # loads miss, a failed save is said (_guard_entries); None: numba's next locator decides
 
     DigestLocator.prandtl_fmu = True
     impl._locator_classes.insert(0, DigestLocator)
     _refuse_unimportable_entries()
-    _save_entries_under_a_lock(root)
     return True
 
 
@@ -262,55 +295,138 @@ def _refuse_unimportable_entries() -> None:
 SAVE_LOCK_SECONDS = 30.0
 
 
-def _save_entries_under_a_lock(root: pathlib.Path) -> None:
-    """Make numba's save of a cache entry safe against other processes filling the same cache folder (the
-    workers of a test run, of a sweep, the FMUs of one co-simulation). numba reads a function's index, adds the
-    entry and writes the index back with no lock: of two processes saving at once, the last one's index wins
-    and the other's entry is lost (data files no index names were found in a cache here; every later process
-    compiled those functions again), and both may pick the same data file for different signatures, so that
-    the index names one signature's file for another. Here the read, the choice of the file and both writes
-    happen under an exclusive lock of the folder's ``.save.lock`` (released by the system if the process dies),
-    and the data is written before the index names it. Where the folder cannot be locked (a file system
-    without locks, a lock file this user cannot open) or the wait runs out, the entry is saved as numba saves
-    it: never worse than without the lock. Another package's caches keep numba's own save."""
+# A key of ours in a function's index, beside numba's (signature, target, bytecode) keys: (CHECKSUM, data file name)
+# -> the SHA-256 of the bytes saved in that data file. numba's own load looks up its keys only and never sees these.
+CHECKSUM = "prandtl_fmu sha256"
+
+
+def _guard_entries(root: pathlib.Path) -> bool:
+    """Make numba's cache entries under ``root`` safe to save from many processes, checked when loaded, and a
+    failed save no failure of the run. Another package's caches keep numba's own load and save.
+
+    * The save: numba reads a function's index, adds the entry and writes the index back with no lock: of two
+      processes saving at once, the last one's index wins and the other's entry is lost (data files no index
+      names were found in a cache here; every later process compiled those functions again), and both may pick
+      the same data file for different signatures, so that the index names one signature's file for another.
+      Here the read, the choice of the file and both writes happen under an exclusive lock of the folder's
+      ``.save.lock`` (released by the system if the process dies), and the data is written before the index
+      names it, with its SHA-256 (:data:`CHECKSUM`). Where the folder cannot be locked (a file system without
+      locks, a lock file this user cannot open) or the wait runs out, the entry is saved the same way without
+      the lock: never worse than numba's own save. An index that cannot be read is written anew.
+    * The load: numba stops with the error of an index or data file it cannot unpickle (EOFError of an emptied
+      one: every later run failed), and runs whatever machine code a data file holds (another signature's: a
+      crash). Here a data file whose bytes are not the ones its index recorded, an index or a data file that
+      cannot be read, a compile result for another signature than the one asked for, or one numba cannot
+      rebuild, is a miss: the function compiles, and its save overwrites the entry.
+    * A save that fails (ENOSPC, EROFS, EACCES, EDQUOT, ...) is said once on stderr, naming the folder
+      (:func:`_say`), and this process saves nothing more there.
+
+    False if numba's internals differ from what it needs (nothing guarded)."""
     cache_file = getattr(caching, "IndexDataCacheFile", None)
-    needed = ("save", "_load_index", "_save_index", "_save_data", "_data_name")
-    if cache_file is None or not all(hasattr(cache_file, name) for name in needed):
-        return
-    roots = getattr(cache_file.save, "prandtl_fmu_roots", None)
-    if roots is not None:  # another copy of the package (an FMU's) patched it: one lock per folder for both
+    cache = getattr(caching, "Cache", None)
+    needed = ("save", "load", "_load_index", "_save_index", "_data_name", "_data_path", "_dump", "_open_for_write")
+    if cache_file is None or cache is None or not all(hasattr(cache_file, name) for name in needed) \
+            or not all(hasattr(cache, name) for name in ("load_overload", "save_overload")):
+        return False
+    roots = getattr(cache_file.save, "prandtl_fmu_guarded_roots", None)
+    if roots is not None:  # another copy of the package (an FMU's) guards its folder: one guard for both
         roots.add(str(root))
-        return
-    original = cache_file.save
+        return True
     roots = {str(root)}
     unlockable = set()  # folders this process gave up locking (no locks there, or the wait ran out)
+    unsaved = set()  # folders a save failed in: this process saves nothing more there
+    original = {"save": cache_file.save, "load": cache_file.load, "load_overload": cache.load_overload,
+                "save_overload": cache.save_overload}
 
-    def locked_save(self, key, data):
-        overloads = self._load_index()
+    def root_of(holder):
+        path = str(getattr(holder, "_cache_path", ""))
+        return next((mine for mine in roots if path == mine or path.startswith(mine + os.sep)), None)
+
+    def checked_save(self, key, data):
+        try:
+            overloads = self._load_index()
+        except Exception:  # damaged: written anew
+            overloads = {}
         name = overloads.get(key)
         if name is None:
             taken = set(overloads.values())
             name = next(self._data_name(i) for i in range(1, len(taken) + 2) if self._data_name(i) not in taken)
-            self._save_data(name, data)
-            overloads[key] = name
-            self._save_index(overloads)
-        else:
-            self._save_data(name, data)
+        saved = self._dump(data)
+        with self._open_for_write(self._data_path(name)) as out:
+            out.write(saved)
+        overloads[key] = name
+        overloads[(CHECKSUM, name)] = hashlib.sha256(saved).hexdigest()
+        self._save_index(overloads)
 
     def save(self, key, data):
-        path = str(getattr(self, "_cache_path", ""))
-        root = next((mine for mine in roots if path == mine or path.startswith(mine + os.sep)), None)
-        if root is None or root in unlockable:
-            return original(self, key, data)
-        with _Locked(os.path.join(root, ".save.lock")) as held:
-            if held:
-                locked_save(self, key, data)
-                return None
-        unlockable.add(root)
-        return original(self, key, data)
+        root = root_of(self)
+        if root is None:
+            return original["save"](self, key, data)
+        if root not in unlockable:
+            with _Locked(os.path.join(root, ".save.lock")) as held:
+                if held:
+                    return checked_save(self, key, data)
+            unlockable.add(root)
+        return checked_save(self, key, data)
 
-    save.prandtl_fmu_roots = roots
-    cache_file.save = save
+    def load(self, key):
+        if root_of(self) is None:
+            return original["load"](self, key)
+        try:
+            overloads = self._load_index()
+            name = overloads.get(key)
+            if name is None:
+                return None
+            with open(self._data_path(name), "rb") as saved_file:
+                saved = saved_file.read()
+            if hashlib.sha256(saved).hexdigest() != overloads.get((CHECKSUM, name)):
+                return None  # damaged, another signature's, or saved by a save that did not record it
+            data = pickle.loads(saved)
+        except Exception:  # an index or a data file that cannot be read or unpickled
+            return None
+        return data if _compiled_for(key, data) else None
+
+    def load_overload(self, sig, target_context):
+        if root_of(self) is None:
+            return original["load_overload"](self, sig, target_context)
+        try:
+            return original["load_overload"](self, sig, target_context)
+        except Exception:  # an entry numba cannot rebuild (or a folder it cannot read): compiled again
+            return None
+
+    def save_overload(self, sig, data):
+        root = root_of(self)
+        if root is None:
+            return original["save_overload"](self, sig, data)
+        if root in unsaved:
+            return None
+        try:
+            return original["save_overload"](self, sig, data)
+        except OSError as error:
+            unsaved.add(root)
+            _say(root, error, "this process carries on without saving what it compiles")
+            return None
+
+    save.prandtl_fmu_guarded_roots = roots
+    cache_file.save, cache_file.load = save, load
+    cache.load_overload, cache.save_overload = load_overload, save_overload
+    return True
+
+
+def _compiled_for(key, data) -> bool:
+    """Whether ``data``, a data file's payload, holds code for the signature of the index key ``key``: a compile
+    result's payload holds its signature (numba's ``CompileResult._reduce``: the fourth item); a payload of
+    another form is not checked (its checksum was)."""
+    signature = data[3] if isinstance(data, tuple) and len(data) > 3 else None
+    if not hasattr(signature, "args"):
+        return True
+    try:
+        from numba.core import sigutils
+
+        args, return_type = sigutils.normalize_signature(key[0])
+        return tuple(signature.args) == tuple(args) and return_type in (None, signature.return_type)
+    except Exception:
+        return False
 
 
 class _Locked:

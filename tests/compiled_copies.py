@@ -7,7 +7,7 @@ the callers now hand such arguments as ``np.int64`` / ``np.bool_``.
 The check reads the cache's index files (every signature any process compiled from these sources, with this
 numba), not the dispatchers of this process, which hold only what this process compiled or loaded: a kernel
 loaded whole from the cache never types its callees (the package saves each entry under a lock of the cache
-folder, so no process's entry is lost from the index: ``_jit._save_entries_under_a_lock``); the checks name the
+folder, so no process's entry is lost from the index: ``_jit._guard_entries``); the checks name the
 kernels they need to find, so that an empty or disabled cache fails instead of passing.
 """
 import pickle
@@ -31,7 +31,7 @@ def cached_signatures() -> dict:
         except Exception:  # being replaced by another process, or unreadable here: not this run's to judge
             continue
         name = path.name.split("-")[0]
-        found.setdefault(name, []).extend(str(key[0]) for key in overloads)
+        found.setdefault(name, []).extend(str(key[0]) for key in overloads if key[0] != _jit.CHECKSUM)
     return found
 
 

@@ -175,6 +175,8 @@ def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(t
     processes saving 40 entries each into one index, all at once, leave 240 entries, each naming its own data."""
     from numba.core import caching
 
+    from prandtl_fmu import _jit
+
     workers, count = 6, 40
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PRANDTL_FMU_JIT_CACHE="1")
     running = [subprocess.Popen([sys.executable, "-c", SAVER, str(w), str(count), str(tmp_path)], env=env,
@@ -195,24 +197,25 @@ def test_processes_saving_into_one_cache_at_once_lose_no_entry_and_mix_no_data(t
                 worker.kill()
     [folder] = list((tmp_path / "cache").glob("prandtl_fmu-*/race"))
     index = caching.IndexDataCacheFile(cache_path=str(folder), filename_base="f", source_stamp="s")
-    entries = index._load_index()
+    entries = {key: name for key, name in index._load_index().items() if key[0] != _jit.CHECKSUM}
     assert sorted(entries) == [(w, i) for w in range(workers) for i in range(count)]
-    assert all(index._load_data(name) == ("data of", *key) for key, name in entries.items())
+    assert all(index.load(key) == ("data of", *key) for key in entries)  # each checked against its checksum
     assert len(set(entries.values())) == workers * count
 
 
 @pytest.mark.parametrize("lock_error", ["no locks here", "held past the wait"])
-def test_a_folder_that_cannot_be_locked_gets_numba_s_own_save_never_none(tmp_path, monkeypatch, lock_error):
-    """Where the lock cannot be had, the entry is saved as numba saves it: at once on a file system without
-    locks (ENOLCK: no wait), after SAVE_LOCK_SECONDS when another process holds the lock, and that folder is then
-    saved without the lock for the rest of the process (no wait at every save)."""
+def test_a_folder_that_cannot_be_locked_is_saved_without_the_lock_never_not_at_all(tmp_path, monkeypatch,
+                                                                                      lock_error):
+    """Where the lock cannot be had, the entry is saved without it: at once on a file system without locks
+    (ENOLCK: no wait), after SAVE_LOCK_SECONDS when another process holds the lock, and that folder is then saved
+    without the lock for the rest of the process (no wait at every save)."""
     import errno
 
     from numba.core import caching
 
     from prandtl_fmu import _jit
 
-    roots = caching.IndexDataCacheFile.save.prandtl_fmu_roots
+    roots = caching.IndexDataCacheFile.save.prandtl_fmu_guarded_roots
     calls = []
 
     def refuse(descriptor):
@@ -234,9 +237,8 @@ def test_a_folder_that_cannot_be_locked_gets_numba_s_own_save_never_none(tmp_pat
         index.save(("b",), "data of b")
     finally:
         roots.discard(str(tmp_path))
-    entries = index._load_index()
-    assert {key: index._load_data(name) for key, name in entries.items()} == {("a",): "data of a",
-                                                                               ("b",): "data of b"}
+    entries = [key for key in index._load_index() if key[0] != _jit.CHECKSUM]
+    assert {key: index.load(key) for key in entries} == {("a",): "data of a", ("b",): "data of b"}
     assert tries == 1 if lock_error == "no locks here" else tries >= 2  # one try, or tries until the wait ran out
     assert len(calls) == tries  # the second save did not try again
 

@@ -265,6 +265,21 @@ LIBM_INTRINSIC = re.compile(r"llvm\.(experimental\.constrained\.)?(sin|cos|tan|s
                             r"|sinh|cosh|tanh|exp|exp2|exp10|log|log2|log10|pow|powi|fma|fmuladd)\.")
 
 
+# LLVM's fast-math flags on a floating-point instruction: each lets the code generator change the result's bits, and
+# each target does it its own way (``contract`` lets an fmul and an fadd fuse into one rounding: an fmadd on aarch64,
+# two roundings on x86-64 without FMA; ``reassoc``, ``afn``, ``arcp``: another order, an approximate function, x * 1/y;
+# ``nnan``, ``ninf``, ``nsz``: NaN, inf and -0 assumed away). The kernels are IEEE arithmetic (``_jit.kernel``: no
+# fastmath), so none is allowed
+FAST_MATH = re.compile(r"=\s*(?:(?:tail|musttail|notail)\s+)?(fadd|fsub|fmul|fdiv|frem|fneg|fcmp|fptrunc|fpext|call"
+                       r"|phi|select)((?:\s+(?:nnan|ninf|nsz|arcp|contract|afn|reassoc|fast)\b)+)")
+
+
+def fast_math(module) -> list:
+    """The floating-point instructions of ``module`` (llvmlite's) that carry fast-math flags (:data:`FAST_MATH`),
+    as ``"fmul contract"``, each kind once, sorted."""
+    return sorted({f"{opcode} {' '.join(flags.split())}" for opcode, flags in FAST_MATH.findall(str(module))})
+
+
 def may_link(symbol: str) -> bool:
     """Whether a kernel's object may need ``symbol`` from the link (see :data:`EXACT_C`)."""
     return symbol in EXACT_C or symbol in NUMBA_HELPERS or symbol.startswith(RUNTIME_PREFIXES)
@@ -304,6 +319,11 @@ def emit_objects(compiled, folder, target: Target) -> tuple:
             raise NativeBuildError(f"the native kernel {c_name} calls {', '.join(calls)}: not the same bits on "
                                    "every platform, or not in the native binary (a defect of prandtl_fmu, whose "
                                    "kernels call prandtl_fmu.libm: please report it)")
+        flagged = fast_math(module)
+        if flagged:
+            raise NativeBuildError(f"the native kernel {c_name} has fast-math arithmetic ({', '.join(flagged)}): "
+                                   "not the same bits on every platform (a defect of prandtl_fmu, whose kernels "
+                                   "are IEEE arithmetic: please report it)")
         external.update(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
         external.update(g.name for g in module.global_variables if g.is_declaration)
         path = folder / f"{c_name}.o"

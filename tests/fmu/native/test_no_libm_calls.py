@@ -89,6 +89,65 @@ def test_a_native_build_refuses_a_kernel_that_calls_libm(tmp_path, target):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_the_check_sees_fast_math_flags():
+    """On written IR: a floating-point instruction with a fast-math flag (``contract``, which lets an fmul and an fadd
+    fuse into aarch64's fmadd, ``fast``, ``reassoc``, ``afn``, ``nnan`` ... on arithmetic, a compare, a call or a
+    phi) is named once per kind, as ``"fmul contract"``; the same instructions without flags, an integer's ``nsw`` and
+    a flag's name in a global's text are not."""
+    import llvmlite.binding as llvm
+
+    from prandtl_fmu.fmu.native.platforms import fast_math
+
+    ir = """
+@note = private constant [13 x i8] c"fmul contract"
+declare double @llvm.sqrt.f64(double)
+define double @f(double %x, double %y, i64 %n, i1 %c) {
+entry:
+  %a = fmul contract double %x, %y
+  %b = fadd contract double %a, %x
+  %c2 = fmul contract double %b, %y
+  %d = fdiv reassoc nsz double %c2, %x
+  %e = tail call afn double @llvm.sqrt.f64(double %d)
+  %f = fcmp fast olt double %e, %x
+  %m = add nsw i64 %n, 1
+  br i1 %c, label %left, label %right
+left:
+  br label %right
+right:
+  %p = phi nnan ninf double [ %e, %entry ], [ %x, %left ]
+  %q = select i1 %f, double %p, double %y
+  ret double %q
+}
+"""
+    assert fast_math(llvm.parse_assembly(ir)) == ["call afn", "fadd contract", "fcmp fast", "fdiv reassoc nsz",
+                                                  "fmul contract", "phi nnan ninf"]
+    plain = ir
+    for flags in ("contract ", "reassoc nsz ", "afn ", "fast ", "nnan ninf "):
+        plain = plain.replace(f" {flags}double", " double").replace(f" {flags}olt", " olt")
+    assert fast_math(llvm.parse_assembly(plain)) == []
+
+
+@pytest.mark.parametrize("target", ["x86_64-linux", "aarch64-linux", "x86_64-windows"])
+def test_a_native_build_refuses_fast_math(tmp_path, target):
+    """A cfunc compiled with ``fastmath={'contract'}`` (x * y + x: an fmadd on aarch64, an fmul and an fadd on
+    x86-64) is refused in one line naming the C function and its flagged instructions, and no object is emitted."""
+    from numba import cfunc, types
+
+    from prandtl_fmu.fmu.native.assemble import NativeBuildError
+    from prandtl_fmu.fmu.native.platforms import TARGETS, emit_objects
+
+    @cfunc(types.float64(types.float64, types.float64), fastmath={"contract"})
+    def fused(x, y):
+        return x * y + x
+
+    with pytest.raises(NativeBuildError) as refused:
+        emit_objects([("prandtl_fused", fused)], tmp_path, TARGETS[target])
+    message = str(refused.value)
+    assert message.startswith("the native kernel prandtl_fused has fast-math arithmetic (") and "\n" not in message
+    assert "fmul contract" in message and "fadd contract" in message, message
+    assert list(tmp_path.iterdir()) == []
+
+
 def needed_symbols(path) -> set:
     """What the object at ``path`` needs from the link (``nm -u``): its undefined symbols, and its weak undefined
     ones but numba's mangled names of compiled functions (``_ZN...``: a COFF object refers to the copies other
