@@ -12,32 +12,39 @@ and the results are
     D(A) = oint F dx = pi A b_1          (J)     the energy dissipated per cycle,
     loss factor = D / (pi K A^2) = b_1 / a_1.
 
-Two methods, chosen from the scene:
+Three methods, chosen from the scene:
 
 * ``exact`` (parallel springs, a cubic spring, a dashpot, Prandtl branches on either kernel, a Masing backbone;
-  plain Coulomb friction): the branches are rate independent and piecewise linear, so once x has been to A
-  and to -A every branch that slips in the steady cycle has slipped, and the next excursions repeat exactly
-  (checked). Between two slip events the force is linear in x; the events of each half cycle are known from
-  the elongations at the reversal (a branch sticking at u slips after eta - u more), so the cycle is driven
-  through exactly those points (one compiled call per half cycle) and integrated in closed form segment by
-  segment: int F dx by the trapezoid (exact on a line), int F x / sqrt(A^2 - x^2) dx with the antiderivatives
-  -sqrt(A^2 - x^2) and (A^2/2) asin(x/A) - (x/2) sqrt(A^2 - x^2). No sampling error: rounding only. The cubic
+  plain Coulomb friction): every part has a closed form and K, D add over parallel parts. A branch k, eta
+  that slips in the steady cycle (eta < A: once x has been to A and to -A its elongation is -eta at the
+  bottom and eta at the top, whatever u0) gives K = (k / 2 pi)(y - sin y) with y = 4 asin(sqrt(eta / A))
+  (the stick angle in a form that keeps eta / A below the rounding of 1; a series for small y) and
+  D = 4 k eta (A - eta); one that does not (eta >= A) is elastic about its offset: K = k, D = 0. The cubic
   spring adds 3/4 k3 A^2 to K and nothing to D; the dashpot pi c omega A^2 to D; Coulomb friction alpha on
-  the mass 4 alpha A to D and nothing to K;
-* ``quadrature`` (the continuum, Dahl, branches with series dashpots, a delay, a history): N samples per
+  the mass 4 alpha A to D and nothing to K. Rounding only: ``error`` 0;
+* ``spectrum`` (the continuum, Segalman's joint, a piecewise spectrum, with the springs and dashpot above):
+  the branch forms integrated over the spectrum by Gauss-Legendre on the pieces of each segment cut where
+  eta(s) = A (:func:`closed_forms.spectrum_forms`), the nodes doubled from FIRST_NODES until a_1 and b_1
+  each change by at most the tolerance; ``error`` the last change (the rule converges much faster than
+  that: the error of the result is far below it);
+* ``quadrature`` (Dahl, branches with series dashpots, a delay, a history): N samples per
   cycle, the force at each from the exact moves between samples (x linear in between), cycles repeated until
   the first harmonic settles (:func:`prandtl_fmu.frequency.settled`: the last change and the geometric tail of
   those to come within a quarter of the tolerance; or a cycle that repeats to rounding), the trapezoid rule
   in theta for a_1, b_1; N doubled from 64 until two successive N agree to the tolerance (1e-3 relative by
   default), a_1 and b_1 each against its own size
-  (:func:`relative_change`: K and D both to the tolerance). Past 2^16 samples per cycle or MAX_CYCLES
-  cycles, the amplitude is refused with what was reached (deep macro-slip, where the stick after a reversal
-  is shorter than a sample, is the usual case).
+  (:func:`relative_change`: K and D both to the tolerance); ``error`` the last change, an estimate. Past
+  2^16 samples per cycle or MAX_CYCLES cycles, the amplitude is refused with what was reached.
+
+A number that overflows or underflows (K, D or the loss factor at an extreme amplitude) is refused naming the
+amplitude; the loss factor D / (pi K A^2) is formed without A^2. Where K = 0 < D (a dashpot or Coulomb
+friction alone) the loss factor is infinite: ``math.inf``, written as an empty field in the CSV.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from dataclasses import dataclass
 from typing import Optional
 
@@ -46,16 +53,19 @@ import numpy as np
 from ..compiled import choose_branch_kernel, compile_model
 from ..kernels import stack
 from ..kernels.drive import drive, drive_with_memory
-from ..kernels.play import write_elongations
 from ..loads import ConstantLoad
 from ..memory import has_memory
 from ..stepping import _progress_bar
+from .closed_forms import branch_forms, spectrum_forms
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
 
 # The quadrature's first and last number of samples per cycle, and the most cycles run to reach the steady one.
 FIRST_SAMPLES = 64
 MAX_SAMPLES = 2**16
 MAX_CYCLES = 400
+# The spectrum's first and last number of Gauss-Legendre nodes on each piece of a segment.
+FIRST_NODES = 64
+MAX_NODES = 1024
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,9 +73,9 @@ class Description:
     """K(A), D(A) and the loss factor at each amplitude: arrays of shape (amplitudes,).
 
     ``amplitude`` A (m), ``stiffness`` K (N/m), ``dissipation`` D (J per cycle), ``loss_factor``
-    D / (pi K A^2); ``method`` "exact" or "quadrature" for each; ``error`` the estimated relative error of
-    the first harmonic (0 for exact: rounding only); ``frequency`` (Hz) of the cycles, None for a rate-
-    independent element (whose results do not depend on it).
+    D / (pi K A^2) (inf where K = 0 < D); ``method`` "exact", "spectrum" or "quadrature" for each;
+    ``error`` the estimated relative error of the first harmonic (0 for exact: rounding only); ``frequency``
+    (Hz) of the cycles, None for a rate-independent element (whose results do not depend on it).
     """
 
     amplitude: np.ndarray
@@ -77,9 +87,11 @@ class Description:
     frequency: Optional[float]
 
     def columns(self) -> dict:
-        """The CSV's columns: amplitude, stiffness, dissipation, loss_factor (the contract), method, error."""
+        """The CSV's columns: amplitude, stiffness, dissipation, loss_factor (the contract), method, error; an
+        infinite loss factor (K = 0 < D) is None: an empty field."""
+        loss = [None if math.isinf(value) else value for value in self.loss_factor.tolist()]
         return {"amplitude": self.amplitude, "stiffness": self.stiffness, "dissipation": self.dissipation,
-                "loss_factor": self.loss_factor, "method": list(self.method), "error": self.error}
+                "loss_factor": loss, "method": list(self.method), "error": self.error}
 
 
 def rate_dependent_effects(scene) -> list:
@@ -115,19 +127,20 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
         frequency = None  # rate independent: the results do not depend on it
     coulomb = _coulomb_threshold(scene)
     element = dataclasses.replace(scene, mass=None, friction=None, load=ConstantLoad(0.0), causality="force")
-    exact = _is_piecewise_linear(element)
+    method = _method(element)
     rows = []
     bar = _progress_bar(progress, total=amplitudes.shape[0], label=f"{scene.name} describe")
     try:
         for amplitude in amplitudes.tolist():
-            if exact:
-                a1, b1 = exact_harmonic(element, amplitude, frequency)
-                error, method = 0.0, "exact"
+            if method in ("exact", "spectrum"):
+                stiffness, dissipation, error = exact_forms(element, amplitude, frequency, tolerance)
             else:
                 a1, b1, error = quadrature_harmonic(element, amplitude, frequency or 1.0, tolerance)
-                method = "quadrature"
-            b1 += 4.0 * coulomb / math.pi  # alpha sgn(cos theta): b_1 = 4 alpha / pi, a_1 = 0
-            rows.append(_row(scene, amplitude, a1, b1, error, method))
+                stiffness, dissipation = a1 / amplitude, math.pi * amplitude * b1
+                _check_range(scene, amplitude, "D", dissipation, b1)
+            friction = 4.0 * coulomb * amplitude  # alpha sgn(cos theta): D = 4 alpha A, nothing in phase
+            _check_range(scene, amplitude, "D", friction, coulomb)
+            rows.append(_row(scene, amplitude, stiffness, dissipation + friction, error, method))
             bar.update(1)
     finally:
         bar.close()
@@ -136,15 +149,44 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
                        table[:, 4], frequency)
 
 
-def _row(scene, amplitude, a1, b1, error, method) -> tuple:
-    stiffness = a1 / amplitude
-    dissipation = math.pi * amplitude * b1
-    loss = b1 / a1 if a1 != 0 else math.inf
-    for name, value in (("K", stiffness), ("D", dissipation), ("the loss factor", loss)):
-        if not math.isfinite(value):
-            raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} is not a finite number (K = "
-                                 f"{stiffness!r} N/m): the element has no stiffness in phase with x there")
+def _row(scene, amplitude, stiffness, dissipation, error, method) -> tuple:
+    """The row of one amplitude, its numbers checked: finite, and either 0 or normal (an overflow or an
+    underflow is refused naming the amplitude). The loss factor of K = 0 < D (a dashpot, Coulomb friction
+    alone) is infinite: ``math.inf`` here, an empty field in the CSV."""
+    for name, value in (("K", stiffness), ("D", dissipation)):
+        _check_range(scene, amplitude, name, value)
+    if stiffness == 0.0:
+        if dissipation == 0.0:
+            raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m the element carries no force (K = D = 0): "
+                                 "it has no loss factor")
+        loss = math.inf
+    else:
+        loss = loss_factor(stiffness, dissipation, amplitude)
+        _check_range(scene, amplitude, "the loss factor", loss, dissipation)
     return amplitude, stiffness, dissipation, loss, error, method
+
+
+def loss_factor(stiffness: float, dissipation: float, amplitude: float) -> float:
+    """D / (pi K A^2) without forming A^2 (which overflows from A ~ 1e154 and underflows below 1e-154): the
+    mantissas and the exponents apart; inf past the largest float."""
+    mk, ek = math.frexp(stiffness)
+    md, ed = math.frexp(dissipation)
+    ma, ea = math.frexp(amplitude)
+    try:
+        return math.ldexp(md / (math.pi * mk * ma * ma), ed - ek - 2 * ea)
+    except OverflowError:
+        return math.copysign(math.inf, md * mk)
+
+
+def _check_range(scene, amplitude, name, value, *factors) -> None:
+    """FrequencyError naming the amplitude when ``value`` overflowed (not finite) or underflowed (below the
+    smallest normal number, or 0 while every one of ``factors`` is not)."""
+    if not math.isfinite(value):
+        raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} overflows (beyond "
+                             f"{sys.float_info.max:.3g}): the amplitude is too large for this element")
+    if (value != 0.0 and abs(value) < sys.float_info.min) or (value == 0.0 and factors and all(factors)):
+        raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} underflows (below "
+                             f"{sys.float_info.min:.3g}): the amplitude is too small for this element")
 
 
 def _coulomb_threshold(scene) -> float:
@@ -160,54 +202,64 @@ def _coulomb_threshold(scene) -> float:
     return float(friction.alpha)
 
 
-def _is_piecewise_linear(element) -> bool:
-    """Whether the exact method applies: no continuum, no series dashpots, no memory."""
-    branches = element.branches
-    return not (branches is not None and branches.continuum) and not element.has_series_dashpots \
-        and element.delay is None and element.history is None and element.dahl is None
+def _method(element) -> str:
+    """"exact" for springs, a dashpot and Prandtl branches, "spectrum" with a spectrum of branches (the
+    continuum) instead, "quadrature" with series dashpots, Dahl or memory."""
+    if element.has_series_dashpots or element.delay is not None or element.history is not None \
+            or element.dahl is not None:
+        return "quadrature"
+    return "spectrum" if element.branches is not None and element.branches.continuum else "exact"
 
 
-# ----------------------------------------------------------------- exact: the piecewise-linear cycle
+# ----------------------------------------------------------------- exact and spectrum: closed forms
 
-def exact_harmonic(element, amplitude: float, frequency: Optional[float]) -> tuple:
-    """``(a_1, b_1)`` (N) of the steady cycle of a piecewise-linear ``element`` (massless) under x = A sin(theta),
-    in closed form segment by segment (see the module)."""
+def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance: float) -> tuple:
+    """``(K, D, estimated relative error)`` of the steady cycle of a rate-independent ``element`` (massless,
+    its branches Prandtl's or a spectrum; a dashpot beside them) under x = A sin(theta): the closed forms of
+    its parts (see the module), each checked against over- and underflow; error 0 but for a spectrum."""
     A = float(amplitude)
-    springs = dataclasses.replace(element, cubic=None, damper=None)  # k0 and the branches: linear between events
-    model = compile_model(springs, choose_branch_kernel(springs, "projected"))
-    k = model[4]
-    u = _fresh_branches(springs, k)
-    eta = springs.branches.yield_displacement if springs.branches is not None else np.zeros(0)
-
-    def move(path, start):
-        path = np.ascontiguousarray(path, dtype=float)
-        forces = np.empty_like(path)
-        zeros = np.zeros_like(path)
-        drive(model, u, start, path, zeros, zeros, forces, None)
-        return forces
-
-    move(np.array([A, -A]), 0.0)  # the first quarter, the first descent: every branch that will slip has slipped
-    at_bottom = _elongations(springs, k, u)
-    force_bottom = move(np.array([A, -A]), -A)[-1]
-    scale = max(A, float(np.max(eta, initial=0.0)))
-    if not np.allclose(_elongations(springs, k, u), at_bottom, rtol=0.0, atol=1e-12 * scale):
-        raise FrequencyError(f"{element.source}: at A = {A!r} m the cycle of the branches does not repeat after "
-                             "the second excursion (a rate-independent element must): please report it")
-    up = np.concatenate((_events(-A + eta - at_bottom, A, rising=True), [A]))
-    forces_up = move(up, -A)
-    at_top = _elongations(springs, k, u)
-    down = np.concatenate((_events(A - eta - at_top, A, rising=False), [-A]))
-    forces_down = move(down, A)
-    work_up, moment_up = line_integrals(np.concatenate(([-A], up)), np.concatenate(([force_bottom], forces_up)), A)
-    work_down, moment_down = line_integrals(np.concatenate(([A], down)),
-                                            np.concatenate(([forces_up[-1]], forces_down)), A)
-    a1 = (moment_up - moment_down) / (math.pi * A)
-    b1 = (work_up + work_down) / (math.pi * A)
+    stiffness, dissipation = 0.0, 0.0
+    if element.spring is not None:
+        stiffness += element.spring.k0
     if element.cubic is not None:
-        a1 += 0.75 * element.cubic.k3 * A**3  # k3 A^3 sin^3 = k3 A^3 (3 sin - sin 3 theta) / 4
+        cubic = 0.75 * element.cubic.k3 * A * A  # k3 A^3 sin^3 = k3 A^3 (3 sin - sin 3 theta) / 4
+        _check_range(element, A, "K", cubic, element.cubic.k3)
+        stiffness += cubic
     if element.has_dashpot:
-        b1 += element.damper.c * 2.0 * math.pi * frequency * A  # c v = c omega A cos(theta)
-    return a1, b1
+        rate = element.damper.c * 2.0 * math.pi * frequency  # c v = c omega A cos(theta)
+        dashpot = math.pi * rate * A * A
+        _check_range(element, A, "D", dashpot, rate)
+        dissipation += dashpot
+    branches, error = element.branches, 0.0
+    if branches is not None and branches.continuum:
+        k, d, error = spectrum_integral(element, A, tolerance)
+        stiffness, dissipation = stiffness + k, dissipation + d
+    elif branches is not None:
+        k, d = branch_forms(branches.stiffness, branches.yield_displacement, A)
+        stiffness += math.fsum(k.tolist())
+        dissipation += math.fsum(d.tolist())
+    return stiffness, dissipation, error
+
+
+def spectrum_integral(element, amplitude: float, tolerance: float) -> tuple:
+    """``(K, D, estimated relative error)`` of a spectrum of branches (the continuum): the branch forms
+    integrated over s by Gauss-Legendre (:func:`closed_forms.spectrum_forms`), the nodes doubled from
+    FIRST_NODES until a_1 = K A and b_1 = D / (pi A) each change by at most the tolerance (:func:`relative_change`);
+    the error is that last change. FrequencyError past MAX_NODES."""
+    A = amplitude
+    nodes, previous = FIRST_NODES, None
+    while True:
+        k, d = spectrum_forms(element.branches, [A], nodes)
+        harmonic = complex(float(k[0]) * A, float(d[0]) / (math.pi * A))
+        if previous is not None:
+            change = relative_change(harmonic, previous)
+            if change <= tolerance:
+                return float(k[0]), float(d[0]), change
+            if nodes >= MAX_NODES:
+                raise FrequencyError(f"{element.source}: at A = {A!r} m the integral over the spectrum did not "
+                                     f"converge to {tolerance:g} relative by {MAX_NODES} nodes (the last two "
+                                     f"differ by {change:.3g} relative)")
+        previous, nodes = harmonic, 2 * nodes
 
 
 def _fresh_branches(element, k):
@@ -216,47 +268,6 @@ def _fresh_branches(element, k):
     if stack.is_stack(k):
         return stack.fresh_state(k, 0.0)
     return np.array(element.branches.u0, dtype=float)
-
-
-def _elongations(element, k, u) -> np.ndarray:
-    if element.branches is None:
-        return np.zeros(0)
-    out = np.empty(element.branches.n)
-    write_elongations(k, u, out)
-    return out
-
-
-def _events(points, A, rising: bool) -> np.ndarray:
-    """The slip events strictly inside (-A, A), in the order of the motion."""
-    inside = np.unique(points[(points > -A) & (points < A)])
-    return inside if rising else inside[::-1]
-
-
-def line_integrals(xs, fs, A) -> tuple:
-    """``(int F dx, int F x / sqrt(A^2 - x^2) dx)`` along the polyline through (xs[j], fs[j]) (xs monotone, in
-    [-A, A], either direction: oriented integrals), exactly: F is linear on each segment.
-
-    The second is A int F sin(t) dt with x = A sin(t), t = asin(x / A) in [-pi/2, pi/2]; on a segment
-    F = F_1 + s (A sin t - x_1) and, with d = t_2 - t_1 and m = (t_1 + t_2) / 2, the integrals
-    int sin t dt = 2 sin(m) sin(d / 2) and int sin^2 t dt = d sin^2(m) + cos(2 m) (d - sin d) / 2 are written
-    without the cancellation of differences of antiderivatives (which lost digits on short segments)."""
-    xs = np.asarray(xs, dtype=float)
-    fs = np.asarray(fs, dtype=float)
-    x1, x2, f1, f2 = xs[:-1], xs[1:], fs[:-1], fs[1:]
-    keep = x2 != x1
-    x1, x2, f1, f2 = x1[keep], x2[keep], f1[keep], f2[keep]
-    work = float(np.sum(0.5 * (f1 + f2) * (x2 - x1)))
-    slope = (f2 - f1) / (x2 - x1)
-    t1 = np.arcsin(np.clip(x1 / A, -1.0, 1.0))
-    t2 = np.arcsin(np.clip(x2 / A, -1.0, 1.0))
-    d = t2 - t1
-    mid = 0.5 * (t1 + t2)
-    d2 = d * d
-    d_minus_sin = np.where(np.abs(d) < 1e-2, d * d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)), d - np.sin(d))
-    sine = 2.0 * np.sin(mid) * np.sin(0.5 * d)
-    square = d * np.sin(mid) ** 2 + 0.5 * np.cos(2.0 * mid) * d_minus_sin
-    moment = A * float(np.sum((f1 - slope * x1) * sine + slope * A * square))
-    return work, moment
 
 
 # ----------------------------------------------------------------- quadrature: a sampled steady cycle

@@ -107,6 +107,25 @@ def test_a_rate_dependent_scene_with_its_frequency(tmp_path):
     assert float(table["dissipation"][0]) == pytest.approx(math.pi * 0.2 * 2 * math.pi * 2 * 0.25, rel=1e-13)
 
 
+def test_an_infinite_loss_factor_is_an_empty_field(tmp_path):
+    """A dashpot alone: K = 0, D = pi c w A^2, the loss factor infinite: written as an empty field, exit 0."""
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"damper": {"c": 1.0}})
+    assert main(["describe", scene, "--amplitudes", "0.5", "--frequency", "0.5", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert float(table["stiffness"][0]) == 0.0 and table["loss_factor"] == [""]
+    assert float(table["dissipation"][0]) == pytest.approx(math.pi * 2 * math.pi * 0.5 * 0.25, rel=1e-15)
+
+
+def test_an_amplitude_whose_numbers_overflow_is_named(tmp_path, capsys):
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"spring": {"k0": 1.0}, "damper": {"c": 1.0}})
+    assert main(["describe", scene, "--amplitudes", "0.5,1e300", "--frequency", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "at A = 1e+300 m, D overflows" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
 def test_a_result_that_cannot_reach_its_accuracy_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
     from prandtl_fmu.frequency import response
 
