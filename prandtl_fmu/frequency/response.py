@@ -15,7 +15,8 @@ changes still to come (r the larger of the last two ratios d_p / d_(p-1)), is at
 at least four periods (or when X repeats to 1e-12); past MAX_PERIODS periods the frequency is refused with
 the change reached. Then M is doubled (from the settled state) until two successive M agree to the tolerance
 (1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
-the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0).
+the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0). A frequency
+so high that the mass's motion F0 / (m omega^2) underflows in the steps is refused (:func:`_check_resolved`).
 
 The stepper: the one given, else the one the scene's ``[solver]`` names, else ``exact`` where it applies
 (exact between events: M only sets the quadrature of X) and the branches are few (EXACT_UP_TO), else
@@ -33,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from dataclasses import dataclass
 from typing import Optional
 
@@ -53,6 +55,8 @@ MAX_STEPS = 2**17
 FIRST_STEPS = {"exact": 64, "verlet": 256}
 FIRST_STEPS_DEFAULT = 1024
 SWEEPS = ("up", "down", "both")
+# The smallest move of x in one step that keeps its digits: the smallest normal number over the rounding.
+SMALLEST_MOVE = sys.float_info.min / sys.float_info.epsilon
 # The most branches for which the automatic choice takes ``exact`` (each slip is an event of its own: on the
 # paper's 100 branches a period costs ~50 times one of verlet at 512 steps).
 EXACT_UP_TO = 16
@@ -139,6 +143,8 @@ def frequency_response(scene, force_amplitude: float, frequencies, *, tolerance:
         raise FrequencyError(f"sweep: must be one of {', '.join(SWEEPS)}, got {sweep!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise FrequencyError(f"workers: must be a whole number >= 1, got {workers!r}")
+    for frequency in frequencies.tolist():
+        _check_resolved(scene, force_amplitude, frequency)
     forced = _forced(scene, force_amplitude, float(frequencies[0]))
     stepper = choose_stepper(forced, stepper)
     directions = ("up", "down") if sweep == "both" else (sweep,)
@@ -157,6 +163,19 @@ def frequency_response(scene, force_amplitude: float, frequencies, *, tolerance:
     table = np.array([row[:4] + row[5:] for row in rows], dtype=float).reshape(-1, 6)
     return Response(table[:, 0], table[:, 1], table[:, 2], tuple(row[4] for row in rows), table[:, 3].astype(int),
                     table[:, 4].astype(int), table[:, 5], stepper, force_amplitude)
+
+
+def _check_resolved(scene, force_amplitude: float, frequency: float) -> None:
+    """FrequencyError when the motion at ``frequency`` is below what the steps resolve in floating point: far
+    above resonance the mass moves F0 / (m omega^2), and a step of h = 1 / (f M) moves it by about that over
+    M^2; once that falls below the smallest normal number over the rounding (SMALLEST_MOVE), x underflows to 0
+    and its phase (-pi up there) is lost."""
+    omega = 2.0 * math.pi * frequency
+    motion = math.log10(force_amplitude) - math.log10(scene.mass.m) - 2.0 * math.log10(omega)
+    if motion - 2.0 * math.log10(MAX_STEPS) < math.log10(SMALLEST_MOVE):
+        raise FrequencyError(f"{scene.source}: at f = {frequency!r} Hz the mass moves about F0 / (m (2 pi f)^2) = "
+                             f"1e{motion:.0f} m, too small for floating-point steps (x would underflow): lower "
+                             "the frequency or raise --force-amplitude")
 
 
 def _forced(scene, force_amplitude: float, frequency: float):

@@ -444,6 +444,20 @@ def test_a_mass_that_friction_holds_does_not_move():
     assert r.amplitude[0] == 0.0 and r.phase[0] == 0.0
 
 
+def test_far_above_resonance_the_phase_is_minus_pi_until_the_motion_underflows():
+    """m x'' + c x' + k x = F0 cos(w t) at f = 1e20 and 1e100 Hz against the linear response (x lags by pi);
+    at 1e200 Hz F0 / (m w^2) ~ 1e-401 m underflows: refused naming the frequency, not amplitude 0, phase 0."""
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.1})
+    for f in (1e20, 1e100):  # each from rest: continued from 1e20 Hz, x's offset of 1e-42 m hides 1e-202 m
+        r = frequency_response(scene, 1.0, [f], sweep="up", stepper="verlet")
+        amplitude, phase = linear(1.0, f, 1.0)
+        assert r.amplitude[0] == pytest.approx(amplitude, rel=1e-3)
+        assert abs(np.exp(1j * r.phase[0]) - np.exp(1j * phase)) < 1e-3
+        assert abs(np.exp(1j * r.phase[0]) + 1) < 1e-3  # -pi (or pi)
+    with pytest.raises(FrequencyError, match=re.escape("at f = 1e+200 Hz the mass moves about")):
+        frequency_response(scene, 1.0, [1e200], sweep="up")
+
+
 def test_a_response_that_cannot_settle_says_so(monkeypatch):
     from prandtl_fmu.frequency import response
 
