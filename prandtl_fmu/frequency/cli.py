@@ -36,7 +36,7 @@ def add_parser(commands, scene_help: str) -> None:
                           help="displacement amplitudes (m, > 0): the describing function at each")
     describe.add_argument("--frequency", metavar="F",
                           help="frequency (Hz, > 0) of the cycles of --amplitudes: needed by a rate-dependent "
-                               "element (dashpot, series dashpots, delay, history)")
+                               "element (dashpot, series dashpots, delay, history, Stribeck or belt friction)")
     describe.add_argument("--force-amplitude", metavar="F0",
                           help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass: the frequency response")
     describe.add_argument("--frequencies", metavar="f1,f2,...", help="forcing frequencies (Hz, > 0)")

@@ -56,7 +56,7 @@ from ..kernels.drive import drive, drive_with_memory
 from ..loads import ConstantLoad
 from ..memory import has_memory
 from ..stepping import _progress_bar
-from .closed_forms import branch_forms, spectrum_forms
+from .closed_forms import branch_forms, gauss_legendre, spectrum_forms
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
 
 # The quadrature's first and last number of samples per cycle, and the most cycles run to reach the steady one.
@@ -66,6 +66,9 @@ MAX_CYCLES = 400
 # The spectrum's first and last number of Gauss-Legendre nodes on each piece of a segment.
 FIRST_NODES = 64
 MAX_NODES = 1024
+# The cuts of each piece of the cycle towards its ends for the Stribeck friction's layer: at 10^-1 ... 10^-GRADING
+# of its length.
+GRADING = 10
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,6 +108,9 @@ def rate_dependent_effects(scene) -> list:
         names.append("[delay]")
     if scene.history is not None:
         names.append("[history]")
+    friction = scene.friction
+    if friction is not None and (friction.stribeck_velocity is not None or friction.belt_velocity != 0.0):
+        names.append("[friction] with a Stribeck drop or a moving belt")
     return names
 
 
@@ -125,7 +131,6 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
                              "give the frequency of the cycles (--frequency)")
     if not rate:
         frequency = None  # rate independent: the results do not depend on it
-    coulomb = _coulomb_threshold(scene)
     element = dataclasses.replace(scene, mass=None, friction=None, load=ConstantLoad(0.0), causality="force")
     method = _method(element)
     rows = []
@@ -138,9 +143,10 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
                 a1, b1, error = quadrature_harmonic(element, amplitude, frequency or 1.0, tolerance)
                 stiffness, dissipation = a1 / amplitude, math.pi * amplitude * b1
                 _check_range(scene, amplitude, "D", dissipation, b1)
-            friction = 4.0 * coulomb * amplitude  # alpha sgn(cos theta): D = 4 alpha A, nothing in phase
-            _check_range(scene, amplitude, "D", friction, coulomb)
-            rows.append(_row(scene, amplitude, stiffness, dissipation + friction, error, method))
+            if scene.friction is not None:
+                friction, friction_error = friction_dissipation(scene, amplitude, frequency, tolerance)
+                dissipation, error = dissipation + friction, max(error, friction_error)
+            rows.append(_row(scene, amplitude, stiffness, dissipation, error, method))
             bar.update(1)
     finally:
         bar.close()
@@ -159,7 +165,7 @@ def _row(scene, amplitude, stiffness, dissipation, error, method) -> tuple:
         if dissipation == 0.0:
             raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m the element carries no force (K = D = 0): "
                                  "it has no loss factor")
-        loss = math.inf
+        loss = math.copysign(math.inf, dissipation)
     else:
         loss = loss_factor(stiffness, dissipation, amplitude)
         _check_range(scene, amplitude, "the loss factor", loss, dissipation)
@@ -189,17 +195,53 @@ def _check_range(scene, amplitude, name, value, *factors) -> None:
                              f"{sys.float_info.min:.3g}): the amplitude is too small for this element")
 
 
-def _coulomb_threshold(scene) -> float:
-    """alpha (N) of plain Coulomb friction of the mass on a fixed ground (0 without); FrequencyError for a
-    Stribeck drop or a moving belt (not part of an element driven in displacement)."""
-    friction = scene.friction
-    if friction is None:
-        return 0.0
-    if friction.stribeck_velocity is not None or friction.belt_velocity != 0.0:
-        raise FrequencyError(f"{scene.source}: [friction] with a Stribeck drop or a moving belt depends on the "
-                             "velocity's size and the belt: describe takes plain Coulomb friction on a fixed "
-                             "ground only")
-    return float(friction.alpha)
+def friction_dissipation(scene, amplitude: float, frequency: Optional[float], tolerance: float) -> tuple:
+    """``(D, estimated relative error)`` of the friction of the mass on the ground (``[friction]``) under
+    x = A sin(theta): the force F = sign(w) a(|w|), w = A omega cos(theta) - v_b the velocity against the
+    belt, a = alpha_k + (alpha - alpha_k) exp(-|w| / v_s) (Stribeck; alpha for Coulomb). F depends on cos(theta)
+    only: nothing in phase with x (a_1 = 0), and D = pi A b_1 = 2 A int_0^pi F cos(theta) d theta. Its part
+    alpha_k sign(w) in closed form, 4 alpha_k A sqrt(1 - r^2) for |r| = |v_b / (A omega)| < 1 (0 otherwise:
+    w keeps its sign); the Stribeck part by Gauss-Legendre on the pieces of [0, pi] where w keeps its sign,
+    each cut geometrically towards its ends (GRADING cuts at 10^-j of its length: the exponential is a layer
+    of width v_s / (A omega) there), the nodes doubled from FIRST_NODES until D changes by at most the
+    tolerance (the error)."""
+    friction, A = scene.friction, float(amplitude)
+    speed = A * 2.0 * math.pi * frequency if frequency is not None else math.inf  # A omega
+    ratio = friction.belt_velocity / speed
+    kinetic = friction.alpha_kinetic if friction.stribeck_velocity is not None else friction.alpha
+    sliding = math.sqrt(max(0.0, (1.0 - ratio) * (1.0 + ratio)))  # sin(theta*), cos(theta*) = r
+    dissipation = 4.0 * kinetic * A * sliding if abs(ratio) < 1.0 else 0.0
+    _check_range(scene, A, "D", dissipation, kinetic, sliding)
+    if friction.stribeck_velocity is None or friction.alpha == friction.alpha_kinetic:
+        return dissipation, 0.0
+    turn = math.acos(ratio) if abs(ratio) < 1.0 else None
+    ends = [0.0, turn, math.pi] if turn is not None else [0.0, math.pi]
+    pieces = []
+    for lo, hi in zip(ends[:-1], ends[1:]):  # graded towards both ends, where |w| is smallest (a thin layer)
+        grading = [(hi - lo) * 0.1**k for k in range(1, GRADING + 1)]
+        cuts = sorted({lo, hi, *(lo + g for g in grading), *(hi - g for g in grading)})
+        pieces += [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+    drop = friction.alpha - friction.alpha_kinetic
+    nodes, previous = FIRST_NODES, None
+    while True:
+        x, w = gauss_legendre(nodes)
+        total = 0.0
+        for lo, hi in pieces:
+            theta = lo + 0.5 * (hi - lo) * (x + 1.0)
+            relative = speed * np.cos(theta) - friction.belt_velocity
+            side = math.copysign(1.0, speed * math.cos(0.5 * (lo + hi)) - friction.belt_velocity)
+            total += 0.5 * (hi - lo) * side * float(np.sum(w * np.exp(-np.abs(relative) / friction.stribeck_velocity)
+                                                          * np.cos(theta)))
+        stribeck = 2.0 * A * drop * total
+        if previous is not None:
+            change = abs(stribeck - previous) / max(abs(dissipation + stribeck), NEGLIGIBLE * abs(stribeck), 1e-300)
+            if change <= tolerance:
+                _check_range(scene, A, "D", dissipation + stribeck)
+                return dissipation + stribeck, change
+            if nodes >= MAX_NODES:
+                raise FrequencyError(f"{scene.source}: at A = {A!r} m the Stribeck friction's integral over the "
+                                     f"cycle did not converge to {tolerance:g} relative by {MAX_NODES} nodes")
+        previous, nodes = stribeck, 2 * nodes
 
 
 def _method(element) -> str:

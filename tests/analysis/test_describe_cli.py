@@ -126,6 +126,21 @@ def test_an_amplitude_whose_numbers_overflow_is_named(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_friction_on_a_belt_in_both_modes(tmp_path):
+    """Friction with a Stribeck drop on a moving belt: the describing function (at --frequency) and the
+    frequency response both take it (--amplitudes refused it, --force-amplitude did not); a dashpot damps
+    the stick-slip that the drop would excite."""
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.5},
+                             "friction": {"alpha": 0.3, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1,
+                                          "belt_velocity": 0.5}})
+    assert main(["describe", scene, "--amplitudes", "0.5", "--frequency", "0.5", "--out", str(out)]) == 0
+    assert float(read_csv(out)["stiffness"][0]) == 1.0 and float(read_csv(out)["dissipation"][0]) > 0
+    out.unlink()
+    assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 0
+    assert float(read_csv(out)["amplitude"][0]) > 0
+
+
 def test_a_result_that_cannot_reach_its_accuracy_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
     from prandtl_fmu.frequency import response
 

@@ -202,6 +202,50 @@ def test_the_exact_method_against_an_event_driven_cycle_from_any_u0():
         assert d.dissipation[0] == pytest.approx(math.pi * A * b1, rel=1e-11, abs=1e-14)
 
 
+def friction_precise(alpha, alpha_kinetic, stribeck_velocity, belt_velocity, A, f, digits=30):
+    """D = oint F dx of the friction force F = sign(w) a(|w|) (w = x' - v_b) under x = A sin(theta), by mpmath
+    over [0, 2 pi] cut where w changes sign."""
+    import mpmath
+
+    with mpmath.workdps(digits):
+        speed = mpmath.mpf(A) * 2 * mpmath.pi * f
+        r = belt_velocity / speed
+
+        def force(theta):
+            w = speed * mpmath.cos(theta) - belt_velocity
+            size = alpha if stribeck_velocity is None else \
+                alpha_kinetic + (alpha - alpha_kinetic) * mpmath.exp(-abs(w) / stribeck_velocity)
+            return mpmath.sign(w) * size * A * mpmath.cos(theta)  # F dx / d theta
+
+        cuts = [0, mpmath.acos(r), 2 * mpmath.pi - mpmath.acos(r), 2 * mpmath.pi] if abs(r) < 1 else \
+            [0, mpmath.pi, 2 * mpmath.pi]
+        return float(mpmath.quad(force, cuts))
+
+
+@pytest.mark.parametrize("friction", [
+    {"alpha": 0.5, "belt_velocity": 0.3},
+    {"alpha": 0.5, "belt_velocity": -5.0},  # the belt outruns the mass: F constant, D = 0
+    {"alpha": 0.5, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1},
+    {"alpha": 0.5, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1, "belt_velocity": 2.0},  # negative D
+    {"alpha": 0.5, "alpha_kinetic": 0.2, "stribeck_velocity": 1e-4, "belt_velocity": 0.3},
+])
+def test_friction_with_a_stribeck_drop_or_on_a_belt(friction):
+    """Friction of the mass with a Stribeck drop or on a moving belt (refused before, while the frequency
+    response took it): nothing in phase with x, D against oint F dx in 30 digits, within the error column;
+    it needs the frequency."""
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, friction=friction)
+    with pytest.raises(FrequencyError, match=re.escape("[friction] with a Stribeck drop or a moving belt")):
+        describe_amplitudes(scene, [0.1])
+    f, A = 0.5, np.array([0.1, 0.5, 1.0])
+    d = describe_amplitudes(scene, A, frequency=f)
+    assert np.all(d.stiffness == 1.0)
+    for amplitude, D, error in zip(A, d.dissipation, d.error):
+        truth = friction_precise(friction["alpha"], friction.get("alpha_kinetic", friction["alpha"]),
+                                 friction.get("stribeck_velocity"), friction.get("belt_velocity", 0.0), amplitude, f)
+        assert error <= 1e-3
+        assert abs(D - truth) <= max(error, 1e-13) * abs(truth) + 1e-15 * friction["alpha"] * amplitude
+
+
 # ----------------------------------------------------------------- the quadrature, with its stated accuracy
 
 def test_the_maxwell_element_of_a_series_dashpot_that_never_slips():
