@@ -5,9 +5,10 @@ Two questions that engineers who model joints and friction dampers ask first (do
 * :func:`describe_amplitudes`: the element driven in displacement, x = A sin(theta), theta = 2 pi f t, to
   its steady cycle; its first harmonic F_1 = a_1 sin(theta) + b_1 cos(theta) gives the effective stiffness
   K(A) = a_1 / A (N/m, the in-phase part: the describing function), the energy dissipated per cycle
-  D(A) = oint F dx = pi A b_1 (J), and the loss factor D / (pi K A^2) = b_1 / a_1. Exact (closed-form
-  integrals over the piecewise-linear cycle) for springs and Prandtl branches, a refined quadrature with a
-  stated relative accuracy otherwise (``describing.py``);
+  D(A) = oint F dx = pi A b_1 (J), and the loss factor D / (pi K A^2) = b_1 / a_1. Exact (the closed forms
+  of each part, added) for springs, a dashpot, Prandtl branches and friction of the mass; the closed forms
+  integrated over a spectrum of branches; a refined quadrature of the sampled cycle otherwise; each with a
+  stated relative accuracy (``describing.py``);
 * :func:`frequency_response`: a scene with a mass under F = F0 cos(2 pi f t): the steady first harmonic of
   x, x_1 = amplitude cos(2 pi f t + phase) (m, radians), frequency by frequency, swept up and down with
   continuation where the response has several branches (``response.py``).

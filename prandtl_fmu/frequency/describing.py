@@ -69,6 +69,9 @@ MAX_NODES = 1024
 # The cuts of each piece of the cycle towards its ends for the Stribeck friction's layer: at 10^-1 ... 10^-GRADING
 # of its length.
 GRADING = 10
+# A sum one of whose parts underflowed keeps its digits only if it is this large: the smallest normal number
+# over the rounding.
+SMALLEST_PART = sys.float_info.min / sys.float_info.epsilon
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +122,7 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
     """K(A), D(A) and the loss factor of ``scene``'s element at each of ``amplitudes`` (m, > 0) (see the module).
 
     ``frequency`` (Hz, > 0) of x = A sin(2 pi f t): required by a rate-dependent element (dashpot, series
-    dashpots, delay, history), ignored otherwise. ``tolerance``: the relative accuracy of the quadrature.
+    dashpots, delay, history, friction with a Stribeck drop or on a belt), ignored otherwise. ``tolerance``: the relative accuracy of the quadrature.
     FrequencyError names the culprit (bad input, or an amplitude whose cycle does not settle or converge)."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
@@ -137,15 +140,21 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
     bar = _progress_bar(progress, total=amplitudes.shape[0], label=f"{scene.name} describe")
     try:
         for amplitude in amplitudes.tolist():
+            lost = set()  # K or D with a part that underflowed: refused unless the total dwarfs it
             if method in ("exact", "spectrum"):
-                stiffness, dissipation, error = exact_forms(element, amplitude, frequency, tolerance)
+                stiffness, dissipation, error = exact_forms(element, amplitude, frequency, tolerance, lost)
             else:
                 a1, b1, error = quadrature_harmonic(element, amplitude, frequency or 1.0, tolerance)
                 stiffness, dissipation = a1 / amplitude, math.pi * amplitude * b1
-                _check_range(scene, amplitude, "D", dissipation, b1)
+                _check_range(scene, amplitude, "D", dissipation)
+                if _underflowed(dissipation, b1):
+                    lost.add("D")
             if scene.friction is not None:
-                friction, friction_error = friction_dissipation(scene, amplitude, frequency, tolerance)
+                friction, friction_error = friction_dissipation(scene, amplitude, frequency, tolerance, lost)
                 dissipation, error = dissipation + friction, max(error, friction_error)
+            for name, total in (("K", stiffness), ("D", dissipation)):
+                if name in lost and abs(total) < SMALLEST_PART:
+                    raise _underflow(scene, amplitude, name)
             rows.append(_row(scene, amplitude, stiffness, dissipation, error, method))
             bar.update(1)
     finally:
@@ -184,6 +193,11 @@ def loss_factor(stiffness: float, dissipation: float, amplitude: float) -> float
         return math.copysign(math.inf, md * mk)
 
 
+def _underflowed(value, *factors) -> bool:
+    """Whether a product of ``factors`` (none 0) came out below the smallest normal number."""
+    return abs(value) < sys.float_info.min and all(factors)
+
+
 def _check_range(scene, amplitude, name, value, *factors) -> None:
     """FrequencyError naming the amplitude when ``value`` overflowed (not finite) or underflowed (below the
     smallest normal number, or 0 while every one of ``factors`` is not)."""
@@ -191,11 +205,15 @@ def _check_range(scene, amplitude, name, value, *factors) -> None:
         raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} overflows (beyond "
                              f"{sys.float_info.max:.3g}): the amplitude is too large for this element")
     if (value != 0.0 and abs(value) < sys.float_info.min) or (value == 0.0 and factors and all(factors)):
-        raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} underflows (below "
-                             f"{sys.float_info.min:.3g}): the amplitude is too small for this element")
+        raise _underflow(scene, amplitude, name)
 
 
-def friction_dissipation(scene, amplitude: float, frequency: Optional[float], tolerance: float) -> tuple:
+def _underflow(scene, amplitude, name) -> FrequencyError:
+    return FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} underflows (below "
+                          f"{sys.float_info.min:.3g}): the amplitude is too small for this element")
+
+
+def friction_dissipation(scene, amplitude: float, frequency: Optional[float], tolerance: float, lost: set) -> tuple:
     """``(D, estimated relative error)`` of the friction of the mass on the ground (``[friction]``) under
     x = A sin(theta): the force F = sign(w) a(|w|), w = A omega cos(theta) - v_b the velocity against the
     belt, a = alpha_k + (alpha - alpha_k) exp(-|w| / v_s) (Stribeck; alpha for Coulomb). F depends on cos(theta)
@@ -211,7 +229,9 @@ def friction_dissipation(scene, amplitude: float, frequency: Optional[float], to
     kinetic = friction.alpha_kinetic if friction.stribeck_velocity is not None else friction.alpha
     sliding = math.sqrt(max(0.0, (1.0 - ratio) * (1.0 + ratio)))  # sin(theta*), cos(theta*) = r
     dissipation = 4.0 * kinetic * A * sliding if abs(ratio) < 1.0 else 0.0
-    _check_range(scene, A, "D", dissipation, kinetic, sliding)
+    _check_range(scene, A, "D", dissipation)
+    if _underflowed(dissipation, kinetic, sliding):
+        lost.add("D")
     if friction.stribeck_velocity is None or friction.alpha == friction.alpha_kinetic:
         return dissipation, 0.0
     turn = math.acos(ratio) if abs(ratio) < 1.0 else None
@@ -255,22 +275,27 @@ def _method(element) -> str:
 
 # ----------------------------------------------------------------- exact and spectrum: closed forms
 
-def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance: float) -> tuple:
+def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance: float, lost: set) -> tuple:
     """``(K, D, estimated relative error)`` of the steady cycle of a rate-independent ``element`` (massless,
     its branches Prandtl's or a spectrum; a dashpot beside them) under x = A sin(theta): the closed forms of
-    its parts (see the module), each checked against over- and underflow; error 0 but for a spectrum."""
+    its parts (see the module), each checked against overflow; "K" or "D" added to ``lost`` where a part of
+    it underflowed. Error 0 but for a spectrum."""
     A = float(amplitude)
     stiffness, dissipation = 0.0, 0.0
     if element.spring is not None:
         stiffness += element.spring.k0
     if element.cubic is not None:
         cubic = 0.75 * element.cubic.k3 * A * A  # k3 A^3 sin^3 = k3 A^3 (3 sin - sin 3 theta) / 4
-        _check_range(element, A, "K", cubic, element.cubic.k3)
+        _check_range(element, A, "K", cubic)
+        if _underflowed(cubic, element.cubic.k3):
+            lost.add("K")
         stiffness += cubic
     if element.has_dashpot:
         rate = element.damper.c * 2.0 * math.pi * frequency  # c v = c omega A cos(theta)
         dashpot = math.pi * rate * A * A
-        _check_range(element, A, "D", dashpot, rate)
+        _check_range(element, A, "D", dashpot)
+        if _underflowed(dashpot, rate):
+            lost.add("D")
         dissipation += dashpot
     branches, error = element.branches, 0.0
     if branches is not None and branches.continuum:
