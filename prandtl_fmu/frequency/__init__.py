@@ -101,14 +101,21 @@ def settled(changes: list, tolerance: float) -> bool:
     last one plus the geometric tail of those still to come, d r / (1 - r) with r the larger of the last two
     ratios d_p / d_(p-1), is at most tolerance / 4 (a transient decaying like exp(-t / T) leaves what the
     tail counts; a ratio >= 1, no decay yet, is never steady)."""
+    return settling_remainder(changes) <= 0.25 * tolerance
+
+
+def settling_remainder(changes: list) -> float:
+    """What :func:`settled` measures: the last change plus the geometric tail of those still to come (inf
+    before three changes are known or while they do not decay): an estimate of how far the last harmonic is
+    from the steady one."""
     if len(changes) < 3:
-        return False
+        return math.inf
     last = changes[-1]
     ratios = [b / a if a > 0 else (0.0 if b == 0 else math.inf) for a, b in zip(changes[-3:-1], changes[-2:])]
     ratio = max(ratios)
     if not ratio < 1.0:
-        return False
-    return last + last * ratio / (1.0 - ratio) <= 0.25 * tolerance
+        return math.inf
+    return last + last * ratio / (1.0 - ratio)
 
 
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",

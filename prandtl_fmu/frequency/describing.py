@@ -31,10 +31,13 @@ Three methods, chosen from the scene:
   cycle, the force at each from the exact moves between samples (x linear in between), cycles repeated until
   the first harmonic settles (:func:`prandtl_fmu.frequency.settled`: the last change and the geometric tail of
   those to come within a quarter of the tolerance; or a cycle that repeats to rounding), the trapezoid rule
-  in theta for a_1, b_1; N doubled from 64 until two successive N agree to the tolerance (1e-3 relative by
-  default), a_1 and b_1 each against its own size
-  (:func:`relative_change`: K and D both to the tolerance); ``error`` the last change, an estimate. Past
-  2^16 samples per cycle or MAX_CYCLES cycles, the amplitude is refused with what was reached.
+  in theta for a_1, b_1; N doubled from 64 until the error estimate is within the tolerance (1e-3 relative
+  by default): the larger of the last two changes of a_1 and b_1 under a doubling, each against its own size
+  (:func:`relative_change`: K and D both), plus the settling remainder (the last change from cycle to cycle
+  and its geometric tail). One change alone is not enough: where a kink of the force (a slip) falls between
+  samples the convergence is uneven, and a branch with a series dashpot in deep slip was 2.5 times further
+  from the converged cycle than its last change. Past 2^16 samples per cycle or MAX_CYCLES cycles, the
+  amplitude is refused with what was reached.
 
 A number that overflows or underflows (K, D or the loss factor at an extreme amplitude) is refused naming the
 amplitude; the loss factor D / (pi K A^2) is formed without A^2. Where K = 0 < D (a dashpot or Coulomb
@@ -57,7 +60,7 @@ from ..loads import ConstantLoad
 from ..memory import has_memory
 from ..stepping import _progress_bar
 from .closed_forms import branch_forms, gauss_legendre, spectrum_forms
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled, settling_remainder
 
 # The quadrature's first and last number of samples per cycle, and the most cycles run to reach the steady one.
 FIRST_SAMPLES = 64
@@ -341,25 +344,31 @@ def _fresh_branches(element, k):
 
 def quadrature_harmonic(element, amplitude: float, frequency: float, tolerance: float) -> tuple:
     """``(a_1, b_1, estimated relative error)`` of the steady cycle by the refined quadrature (see the
-    module); FrequencyError when it does not settle or converge within the bounds."""
-    previous = None
+    module): the error is the larger of the last two changes under a doubling of N (one alone can be small by
+    chance where a kink of the force falls between samples) plus the settling remainder; FrequencyError when
+    it does not settle or converge within the bounds."""
+    previous, changes = None, []
     samples = FIRST_SAMPLES
+    error = math.inf
     while True:
-        harmonic = steady_harmonic(element, amplitude, frequency, samples, tolerance)
+        harmonic, remainder = steady_harmonic(element, amplitude, frequency, samples, tolerance)
         if previous is not None:
-            change = relative_change(harmonic, previous)
-            if change <= tolerance:
-                return harmonic.real, harmonic.imag, change
+            changes.append(relative_change(harmonic, previous))
+            if len(changes) >= 2:
+                error = max(changes[-2:]) + remainder
+                if error <= tolerance:
+                    return harmonic.real, harmonic.imag, error
         if samples >= MAX_SAMPLES:
             raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the first harmonic did not settle to "
-                                 f"{tolerance:g} relative by {MAX_SAMPLES} samples per cycle (the last two "
-                                 f"refinements differ by {change:.3g} relative)")
+                                 f"{tolerance:g} relative by {MAX_SAMPLES} samples per cycle (its estimated "
+                                 f"error is {error:.3g} relative)")
         previous, samples = harmonic, 2 * samples
 
 
-def steady_harmonic(element, amplitude: float, frequency: float, samples: int, tolerance: float) -> complex:
-    """a_1 + i b_1 (N) of the steady cycle sampled at ``samples`` points: cycles from x = 0 and the initial
-    state until two successive cycles agree to tolerance / 4 (with the geometric tail of their differences)."""
+def steady_harmonic(element, amplitude: float, frequency: float, samples: int, tolerance: float) -> tuple:
+    """``(a_1 + i b_1 (N), remainder)`` of the steady cycle sampled at ``samples`` points: cycles from x = 0
+    and the initial state until two successive cycles agree to tolerance / 4 (with the geometric tail of their
+    differences: the remainder, :func:`settling_remainder`; 0 for a cycle that repeats to rounding)."""
     period = 1.0 / frequency
     step = period / samples
     scene = dataclasses.replace(element, solver=dataclasses.replace(element.solver, step=step))  # the delay's grid
@@ -387,8 +396,10 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
         if harmonic is not None:
             change = relative_change(new, harmonic)
             changes.append(change)
-            if abs(new - harmonic) <= ROUNDING * abs(new) or settled(changes, tolerance):
-                return new
+            if abs(new - harmonic) <= ROUNDING * abs(new):
+                return new, 0.0
+            if settled(changes, tolerance):
+                return new, settling_remainder(changes)
         harmonic = new
     raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the cycle did not settle within {MAX_CYCLES} "
                          f"cycles (f = {frequency!r} Hz): the first harmonic still changed by {change:.3g} "
