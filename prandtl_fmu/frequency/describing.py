@@ -15,13 +15,14 @@ and the results are
 Three methods, chosen from the scene:
 
 * ``exact`` (parallel springs, a cubic spring, a dashpot, Prandtl branches on either kernel, a Masing backbone;
-  plain Coulomb friction): every part has a closed form and K, D add over parallel parts. A branch k, eta
+  friction of the mass): every part has a closed form and K, D add over parallel parts. A branch k, eta
   that slips in the steady cycle (eta < A: once x has been to A and to -A its elongation is -eta at the
   bottom and eta at the top, whatever u0) gives K = (k / 2 pi)(y - sin y) with y = 4 asin(sqrt(eta / A))
   (the stick angle in a form that keeps eta / A below the rounding of 1; a series for small y) and
   D = 4 k eta (A - eta); one that does not (eta >= A) is elastic about its offset: K = k, D = 0. The cubic
   spring adds 3/4 k3 A^2 to K and nothing to D; the dashpot pi c omega A^2 to D; Coulomb friction alpha on
-  the mass 4 alpha A to D and nothing to K. Rounding only: ``error`` 0;
+  the mass 4 alpha A to D and nothing to K (with a Stribeck drop or on a belt: :func:`friction_dissipation`,
+  whose error is added). Rounding only: ``error`` 0;
 * ``spectrum`` (the continuum, Segalman's joint, a piecewise spectrum, with the springs and dashpot above):
   the branch forms integrated over the spectrum by Gauss-Legendre on the pieces of each segment cut where
   eta(s) = A (:func:`closed_forms.spectrum_forms`), the nodes doubled from FIRST_NODES until a_1 and b_1
@@ -125,8 +126,9 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
     """K(A), D(A) and the loss factor of ``scene``'s element at each of ``amplitudes`` (m, > 0) (see the module).
 
     ``frequency`` (Hz, > 0) of x = A sin(2 pi f t): required by a rate-dependent element (dashpot, series
-    dashpots, delay, history, friction with a Stribeck drop or on a belt), ignored otherwise. ``tolerance``: the relative accuracy of the quadrature.
-    FrequencyError names the culprit (bad input, or an amplitude whose cycle does not settle or converge)."""
+    dashpots, delay, history, friction with a Stribeck drop or on a belt), ignored otherwise. ``tolerance``:
+    the relative accuracy of the quadratures. FrequencyError names the culprit (bad input, or an amplitude
+    whose cycle does not settle or converge)."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     rate = rate_dependent_effects(scene)

@@ -159,7 +159,8 @@ def test_a_cubic_spring_at_a_huge_amplitude_and_the_numbers_that_overflow_or_und
     assert d.dissipation[0] == 0.0 and d.loss_factor[0] == 0.0
     d = describe_amplitudes(element(spring={"k0": 1.0}, cubic={"k3": 2.0}), [1e-200])  # 3/4 k3 A^2 is lost in k0
     assert d.stiffness[0] == 1.0
-    cases = [(element(cubic={"k3": 2.0}), 1e-200, None, "K underflows"),(element(spring={"k0": 1.0}, cubic={"k3": 2.0}), 1e200, None, "K overflows"),
+    cases = [(element(cubic={"k3": 2.0}), 1e-200, None, "K underflows"),
+             (element(spring={"k0": 1.0}, cubic={"k3": 2.0}), 1e200, None, "K overflows"),
              (element(spring={"k0": 1.0}, damper={"c": 1.0}), 1e300, 1.0, "D overflows"),
              (element(spring={"k0": 1.0}, damper={"c": 1.0}), 1e-200, 1.0, "D underflows"),
              (element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 1.0}), 1e-320, None, "D underflows")]
