@@ -215,7 +215,8 @@ def _check_range(scene, amplitude, name, value, *factors) -> None:
 
 def _underflow(scene, amplitude, name) -> FrequencyError:
     return FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} underflows (below "
-                          f"{sys.float_info.min:.3g}): the amplitude is too small for this element")
+                          f"{sys.float_info.min:.3g}): this amplitude is out of the floating-point range of "
+                          "this element")
 
 
 def friction_dissipation(scene, amplitude: float, frequency: Optional[float], tolerance: float, lost: set) -> tuple:
@@ -305,9 +306,19 @@ def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance
     branches, error = element.branches, 0.0
     if branches is not None and branches.continuum:
         k, d, error = spectrum_integral(element, A, tolerance)
+        if abs(k) < sys.float_info.min:
+            lost.add("K")
+        if abs(d) < sys.float_info.min and A > branches.eta[0]:  # some branches slip
+            lost.add("D")
         stiffness, dissipation = stiffness + k, dissipation + d
     elif branches is not None:
-        k, d = branch_forms(branches.stiffness, branches.yield_displacement, A)
+        eta = branches.yield_displacement
+        k, d = branch_forms(branches.stiffness, eta, A)
+        slipping = (eta > 0) & (eta < A)  # K > 0 and D > 0 in truth
+        if np.any(slipping & (k < sys.float_info.min)):
+            lost.add("K")
+        if np.any(slipping & (d < sys.float_info.min)):
+            lost.add("D")
         stiffness += math.fsum(k.tolist())
         dissipation += math.fsum(d.tolist())
     return stiffness, dissipation, error

@@ -152,8 +152,9 @@ def test_a_dashpot_or_coulomb_friction_alone_has_an_infinite_loss_factor():
 
 def test_a_cubic_spring_at_a_huge_amplitude_and_the_numbers_that_overflow_or_underflow():
     """3/4 k3 A^2 is finite at A = 1e103 (its A^3 is not); what overflows (K at 1e200, a dashpot's D at 1e300)
-    or underflows (a cubic spring's K alone, a dashpot's D at 1e-200) is refused naming the amplitude; a part
-    that underflows beside a larger one is rounding."""
+    or underflows (a cubic spring's K alone, a dashpot's D at 1e-200, a slipping branch's K at 1e300, a
+    spectrum's D at 1e-200) is refused naming the amplitude; a part that underflows beside a larger one is
+    rounding."""
     d = describe_amplitudes(element(spring={"k0": 1.0}, cubic={"k3": 2.0}), [1e103])
     assert d.stiffness[0] == pytest.approx(1.0 + 0.75 * 2.0 * 1e206, rel=1e-15)
     assert d.dissipation[0] == 0.0 and d.loss_factor[0] == 0.0
@@ -163,7 +164,9 @@ def test_a_cubic_spring_at_a_huge_amplitude_and_the_numbers_that_overflow_or_und
              (element(spring={"k0": 1.0}, cubic={"k3": 2.0}), 1e200, None, "K overflows"),
              (element(spring={"k0": 1.0}, damper={"c": 1.0}), 1e300, 1.0, "D overflows"),
              (element(spring={"k0": 1.0}, damper={"c": 1.0}), 1e-200, 1.0, "D underflows"),
-             (element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 1.0}), 1e-320, None, "D underflows")]
+             (element(mass={"m": 1.0}, spring={"k0": 1.0}, friction={"alpha": 1.0}), 1e-320, None, "D underflows"),
+             (element(branches={"k": [1.0], "eta": [0.1]}), 1e300, None, "K underflows"),  # was K = 0, loss inf
+             (_iwan(-0.5), 1e-200, None, "D underflows")]  # was D = 0, loss factor 0
     for scene, A, f, message in cases:
         with pytest.raises(FrequencyError, match=re.escape(f"at A = {A!r} m, {message}")):
             describe_amplitudes(scene, [A], frequency=f)
