@@ -16,7 +16,7 @@ import math
 import sys
 
 _EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A) (J per cycle), loss_factor "
-           "D/(pi K A^2) (an empty field where it is infinite: K = 0 < D, a dashpot or Coulomb friction alone), "
+           "D/(pi K A^2) (an empty field where it is infinite: K = 0, a dashpot or friction alone), "
            "method (exact, spectrum or quadrature), error (estimated relative error; 0: rounding only); or "
            "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
            "cos(2 pi f t + phase)), sweep (up or down), steps_per_period, periods, error. Exit status 2, one "
@@ -196,7 +196,7 @@ def csv_text(columns: dict) -> str:
 
 def _cell(value) -> str:
     value = value.item() if hasattr(value, "item") else value  # a numpy scalar
-    if value is None:  # the infinite loss factor of K = 0 < D
+    if value is None:  # the infinite loss factor of K = 0
         return ""
     if isinstance(value, str):
         return value

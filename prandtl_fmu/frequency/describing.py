@@ -41,7 +41,7 @@ Three methods, chosen from the scene:
   amplitude is refused with what was reached.
 
 A number that overflows or underflows (K, D or the loss factor at an extreme amplitude) is refused naming the
-amplitude; the loss factor D / (pi K A^2) is formed without A^2. Where K = 0 < D (a dashpot or Coulomb
+amplitude; the loss factor D / (pi K A^2) is formed without A^2. Where K = 0 and D is not (a dashpot or
 friction alone) the loss factor is infinite: ``math.inf``, written as an empty field in the CSV.
 """
 from __future__ import annotations
@@ -83,7 +83,7 @@ class Description:
     """K(A), D(A) and the loss factor at each amplitude: arrays of shape (amplitudes,).
 
     ``amplitude`` A (m), ``stiffness`` K (N/m), ``dissipation`` D (J per cycle), ``loss_factor``
-    D / (pi K A^2) (inf where K = 0 < D); ``method`` "exact", "spectrum" or "quadrature" for each;
+    D / (pi K A^2) (+-inf where K = 0 and D is not); ``method`` "exact", "spectrum" or "quadrature" for each;
     ``error`` the estimated relative error of the first harmonic (0 for exact: rounding only); ``frequency``
     (Hz) of the cycles, None for a rate-independent element (whose results do not depend on it).
     """
@@ -98,7 +98,7 @@ class Description:
 
     def columns(self) -> dict:
         """The CSV's columns: amplitude, stiffness, dissipation, loss_factor (the contract), method, error; an
-        infinite loss factor (K = 0 < D) is None: an empty field."""
+        infinite loss factor (K = 0, D not) is None: an empty field."""
         loss = [None if math.isinf(value) else value for value in self.loss_factor.tolist()]
         return {"amplitude": self.amplitude, "stiffness": self.stiffness, "dissipation": self.dissipation,
                 "loss_factor": loss, "method": list(self.method), "error": self.error}
@@ -171,8 +171,8 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
 
 def _row(scene, amplitude, stiffness, dissipation, error, method) -> tuple:
     """The row of one amplitude, its numbers checked: finite, and either 0 or normal (an overflow or an
-    underflow is refused naming the amplitude). The loss factor of K = 0 < D (a dashpot, Coulomb friction
-    alone) is infinite: ``math.inf`` here, an empty field in the CSV."""
+    underflow is refused naming the amplitude). The loss factor of K = 0 and D not (a dashpot, friction
+    alone) is infinite: +-``math.inf`` here, an empty field in the CSV."""
     for name, value in (("K", stiffness), ("D", dissipation)):
         _check_range(scene, amplitude, name, value)
     if stiffness == 0.0:
