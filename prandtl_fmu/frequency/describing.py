@@ -324,6 +324,14 @@ def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance
     return stiffness, dissipation, error
 
 
+def exact_harmonic(element, amplitude: float, frequency: Optional[float],
+                   tolerance: float = DEFAULT_TOLERANCE) -> tuple:
+    """``(a_1, b_1)`` (N) of the steady cycle of a rate-independent ``element`` (see :func:`exact_forms`):
+    a_1 = K A, b_1 = D / (pi A)."""
+    stiffness, dissipation, _ = exact_forms(element, amplitude, frequency, tolerance, set())
+    return stiffness * amplitude, dissipation / (math.pi * amplitude)
+
+
 def spectrum_integral(element, amplitude: float, tolerance: float) -> tuple:
     """``(K, D, estimated relative error)`` of a spectrum of branches (the continuum): the branch forms
     integrated over s by Gauss-Legendre (:func:`closed_forms.spectrum_forms`), the nodes doubled from
