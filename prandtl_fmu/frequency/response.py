@@ -13,8 +13,9 @@ steady when the relative change d_p of X over the last period (or, if larger, th
 of the period against |X|: a periodic motion comes back), plus the geometric tail d_p r / (1 - r) of the
 changes still to come (r the larger of the last two ratios d_p / d_(p-1)), is at most tolerance / 4, after
 at least four periods (or when X repeats to 1e-12); past MAX_PERIODS periods the frequency is refused with
-the change reached. Then M is doubled (from the settled state) until two successive M agree to the tolerance
-(1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
+the change reached. Then M is doubled (from the settled state) until the relative change of X under the last
+doubling plus the settling remainder (:func:`prandtl_fmu.frequency.settling_remainder`: what the settling test
+leaves) is at most the tolerance (1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
 the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0). A frequency
 so high that the mass's motion F0 / (m omega^2) underflows in the steps is refused (:func:`_check_resolved`).
 
@@ -47,7 +48,7 @@ from ..loads import HarmonicLoad
 from ..stability import stability_problem
 from ..steppers import STEPPERS, get_stepper
 from ..stepping import ElementError, _failure, _progress_bar, integrate
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled, settling_remainder
 
 MAX_PERIODS = 3000
 MAX_STEPS = 2**17
@@ -72,7 +73,7 @@ class Response:
 
     ``frequency`` (Hz), ``amplitude`` (m), ``phase`` (rad, of x against F0 cos(2 pi f t)); ``sweep`` "up" or
     "down" for each row; ``steps_per_period`` and ``periods`` (run at the last M) as taken; ``error`` the
-    relative change of X at the last doubling of M (the stated accuracy). ``stepper``: the stepper used.
+    relative change of X at the last doubling of M plus the settling remainder (the stated accuracy). ``stepper``: the stepper used.
     """
 
     frequency: np.ndarray
@@ -210,9 +211,10 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
         steps *= 2  # an explicit stepper's limit (omega h < 2) first
     previous = None
     while True:
-        harmonic, state, periods = steady_period(forced, stepper, frequency, steps, state, tolerance)
+        harmonic, state, periods, remainder = steady_period(forced, stepper, frequency, steps, state, tolerance)
         if previous is not None:
             error = abs(harmonic - previous) / abs(harmonic) if harmonic != 0 else abs(harmonic - previous)
+            error += remainder
             if error <= tolerance:
                 return harmonic, state, steps, periods, error
         if steps >= MAX_STEPS:
@@ -223,8 +225,8 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
 
 
 def steady_period(forced, stepper: str, frequency: float, steps: int, state, tolerance: float) -> tuple:
-    """``(X, state, periods)``: periods of ``steps`` steps from ``state`` until X settles (the settling test of
-    the module)."""
+    """``(X, state, periods, remainder)``: periods of ``steps`` steps from ``state`` until X settles (the
+    settling test of the module); ``remainder`` what it leaves (:func:`settling_remainder`)."""
     period = 1.0 / frequency
     h = period / steps
     scene = forced
@@ -266,7 +268,8 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
             change = moved / abs(new) if new != 0 else (0.0 if moved == 0 else math.inf)
             changes.append(change)
             if change <= 1e-12 or settled(changes, tolerance):
-                return new, (x, v, None if u is None else u.copy()), number + 1
+                remainder = change if change <= 1e-12 else settling_remainder(changes)
+                return new, (x, v, None if u is None else u.copy()), number + 1, remainder
         harmonic = new
     raise NotSettled(f"{forced.source}: at f = {frequency!r} Hz the response did not settle within {MAX_PERIODS} "
                      f"periods ({stepper!r}, {steps} steps per period): X still changed by {change:.3g} relative "

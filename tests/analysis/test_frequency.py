@@ -473,6 +473,19 @@ def test_a_tiny_force_gives_the_linear_response_with_every_branch_sticking():
     assert r.sweep == ("up",) * 4 and np.all(r.error <= 1e-3)
 
 
+def test_the_error_column_of_the_response_bounds_its_error_at_a_lightly_damped_resonance():
+    """docs/frequency.md's friction damper (c = 0.02) at a tiny F0, at and near its resonance: the first harmonic
+    against the linear one within the error column, which counts what the settling test leaves (the change
+    of X under a doubling of M alone said 3.8e-5 for an error of 1.6e-4)."""
+    scene = element(mass={"m": 1.0}, spring={"k0": 1.0}, damper={"c": 0.02}, branches={"k": [1.0], "alpha": [0.1]})
+    f = math.sqrt(2.0) / (2 * math.pi) * np.array([0.99, 1.0])
+    r = frequency_response(scene, 1e-4, f, sweep="up")
+    amplitude, phase = linear(1e-4, f, 2.0, c=0.02)
+    computed, exact = r.amplitude * np.exp(1j * r.phase), amplitude * np.exp(1j * phase)
+    assert np.all(np.abs(computed - exact) <= r.error * np.abs(exact)), (np.abs(computed / exact - 1), r.error)
+    assert np.all(r.error <= 1e-3)
+
+
 def test_a_large_force_gives_the_response_of_k0_and_c_alone():
     """Every branch slips: the branches add a Coulomb force sum alpha_i sgn(v) (0.25 N), of relative size
     2.5e-5 against F0 = 1e4 N: the response is k0's and c's to the stated accuracy."""
