@@ -84,8 +84,9 @@ class Description:
 
     ``amplitude`` A (m), ``stiffness`` K (N/m), ``dissipation`` D (J per cycle), ``loss_factor``
     D / (pi K A^2) (+-inf where K = 0 and D is not); ``method`` "exact", "spectrum" or "quadrature" for each;
-    ``error`` the estimated relative error of the first harmonic (0 for exact: rounding only); ``frequency``
-    (Hz) of the cycles, None for a rate-independent element (whose results do not depend on it).
+    ``error`` the estimated relative error of the first harmonic (0 for exact, rounding only, but for a
+    Stribeck drop or a belt); ``frequency`` (Hz) of the cycles, None for a rate-independent element (whose
+    results do not depend on it).
     """
 
     amplitude: np.ndarray
