@@ -6,7 +6,7 @@
   K(A) and the loss factor (exact), with the sum of the branches' closed forms and the continuum's (n -> inf)
   drawn over; its frequency response to F0 = 0.3 and 0.45 N (the paper's), both sweeps;
 * ``iwan.png``: a lap joint as Segalman's four-parameter Iwan model (F_S = 1 N, K_T = 10^6 N/m, chi = -0.5,
-  beta = 0.5): K(A), D(A) and the loss factor (quadrature, 1e-3), with the spectrum's closed forms and
+  beta = 0.5): K(A), D(A) and the loss factor (spectrum), with the spectrum's closed forms and
   Segalman's micro-slip D = 4 R A^(chi+3) / ((chi+2)(chi+3));
 * ``damper.png``: a friction damper (m = 1 kg, k0 = 1 N/m, one branch k = 1 N/m, alpha = 0.1 N, c = 0.02 N s/m):
   K(A) and the loss factor with the closed forms, and |X| / F0 against f for F0 from 0.02 to 2 N: from the
@@ -82,9 +82,9 @@ def iwan(plt, out):
     A = params["phi_max"] * np.geomspace(1e-3, 30.0, 36)
     description = describe_amplitudes(scene, A)
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.4), layout="constrained")
-    draw_description(description, scene, [axes[0], axes[2]], label="quadrature (1e-3)")
+    draw_description(description, scene, [axes[0], axes[2]], label="computed (spectrum)")
     fine = np.geomspace(A.min(), A.max(), 200)
-    axes[1].loglog(description.amplitude, description.dissipation, "o", ms=4, label="quadrature (1e-3)")
+    axes[1].loglog(description.amplitude, description.dissipation, "o", ms=4, label="computed (spectrum)")
     axes[1].loglog(fine, closed_form(scene, fine)[1], "-", lw=1, label="closed form (the spectrum)")
     micro = fine[fine <= params["phi_max"]]
     axes[1].loglog(micro, iwan_microslip_dissipation(params["R"], IWAN["chi"], micro), "--", lw=1,

@@ -5,9 +5,10 @@ Two questions that engineers who model joints and friction dampers ask first (do
 * :func:`describe_amplitudes`: the element driven in displacement, x = A sin(theta), theta = 2 pi f t, to
   its steady cycle; its first harmonic F_1 = a_1 sin(theta) + b_1 cos(theta) gives the effective stiffness
   K(A) = a_1 / A (N/m, the in-phase part: the describing function), the energy dissipated per cycle
-  D(A) = oint F dx = pi A b_1 (J), and the loss factor D / (pi K A^2) = b_1 / a_1. Exact (closed-form
-  integrals over the piecewise-linear cycle) for springs and Prandtl branches, a refined quadrature with a
-  stated relative accuracy otherwise (``describing.py``);
+  D(A) = oint F dx = pi A b_1 (J), and the loss factor D / (pi K A^2) = b_1 / a_1. Exact (the closed forms
+  of each part, added) for springs, a dashpot, Prandtl branches and friction of the mass; the closed forms
+  integrated over a spectrum of branches; a refined quadrature of the sampled cycle otherwise; each with a
+  stated relative accuracy (``describing.py``);
 * :func:`frequency_response`: a scene with a mass under F = F0 cos(2 pi f t): the steady first harmonic of
   x, x_1 = amplitude cos(2 pi f t + phase) (m, radians), frequency by frequency, swept up and down with
   continuation where the response has several branches (``response.py``).
@@ -100,14 +101,21 @@ def settled(changes: list, tolerance: float) -> bool:
     last one plus the geometric tail of those still to come, d r / (1 - r) with r the larger of the last two
     ratios d_p / d_(p-1), is at most tolerance / 4 (a transient decaying like exp(-t / T) leaves what the
     tail counts; a ratio >= 1, no decay yet, is never steady)."""
+    return settling_remainder(changes) <= 0.25 * tolerance
+
+
+def settling_remainder(changes: list) -> float:
+    """What :func:`settled` measures: the last change plus the geometric tail of those still to come (inf
+    before three changes are known or while they do not decay): an estimate of how far the last harmonic is
+    from the steady one."""
     if len(changes) < 3:
-        return False
+        return math.inf
     last = changes[-1]
     ratios = [b / a if a > 0 else (0.0 if b == 0 else math.inf) for a, b in zip(changes[-3:-1], changes[-2:])]
     ratio = max(ratios)
     if not ratio < 1.0:
-        return False
-    return last + last * ratio / (1.0 - ratio) <= 0.25 * tolerance
+        return math.inf
+    return last + last * ratio / (1.0 - ratio)
 
 
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",

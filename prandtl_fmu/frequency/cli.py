@@ -16,7 +16,8 @@ import math
 import sys
 
 _EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A) (J per cycle), loss_factor "
-           "D/(pi K A^2), method (exact or quadrature), error (estimated relative error; 0: rounding only); or "
+           "D/(pi K A^2) (an empty field where it is infinite: K = 0, a dashpot or friction alone), "
+           "method (exact, spectrum or quadrature), error (estimated relative error; 0: rounding only); or "
            "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
            "cos(2 pi f t + phase)), sweep (up or down), steps_per_period, periods, error. Exit status 2, one "
            "line, nothing written, on bad input and when a result cannot reach the tolerance.")
@@ -35,7 +36,7 @@ def add_parser(commands, scene_help: str) -> None:
                           help="displacement amplitudes (m, > 0): the describing function at each")
     describe.add_argument("--frequency", metavar="F",
                           help="frequency (Hz, > 0) of the cycles of --amplitudes: needed by a rate-dependent "
-                               "element (dashpot, series dashpots, delay, history)")
+                               "element (dashpot, series dashpots, delay, history, Stribeck or belt friction)")
     describe.add_argument("--force-amplitude", metavar="F0",
                           help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass: the frequency response")
     describe.add_argument("--frequencies", metavar="f1,f2,...", help="forcing frequencies (Hz, > 0)")
@@ -195,6 +196,8 @@ def csv_text(columns: dict) -> str:
 
 def _cell(value) -> str:
     value = value.item() if hasattr(value, "item") else value  # a numpy scalar
+    if value is None:  # the infinite loss factor of K = 0
+        return ""
     if isinstance(value, str):
         return value
     if isinstance(value, int) and not isinstance(value, bool):

@@ -12,32 +12,43 @@ and the results are
     D(A) = oint F dx = pi A b_1          (J)     the energy dissipated per cycle,
     loss factor = D / (pi K A^2) = b_1 / a_1.
 
-Two methods, chosen from the scene:
+Three methods, chosen from the scene:
 
 * ``exact`` (parallel springs, a cubic spring, a dashpot, Prandtl branches on either kernel, a Masing backbone;
-  plain Coulomb friction): the branches are rate independent and piecewise linear, so once x has been to A
-  and to -A every branch that slips in the steady cycle has slipped, and the next excursions repeat exactly
-  (checked). Between two slip events the force is linear in x; the events of each half cycle are known from
-  the elongations at the reversal (a branch sticking at u slips after eta - u more), so the cycle is driven
-  through exactly those points (one compiled call per half cycle) and integrated in closed form segment by
-  segment: int F dx by the trapezoid (exact on a line), int F x / sqrt(A^2 - x^2) dx with the antiderivatives
-  -sqrt(A^2 - x^2) and (A^2/2) asin(x/A) - (x/2) sqrt(A^2 - x^2). No sampling error: rounding only. The cubic
+  friction of the mass): every part has a closed form and K, D add over parallel parts. A branch k, eta
+  that slips in the steady cycle (eta < A: once x has been to A and to -A its elongation is -eta at the
+  bottom and eta at the top, whatever u0) gives K = (k / 2 pi)(y - sin y) with y = 4 asin(sqrt(eta / A))
+  (the stick angle in a form that keeps eta / A below the rounding of 1; a series for small y) and
+  D = 4 k eta (A - eta); one that does not (eta >= A) is elastic about its offset: K = k, D = 0. The cubic
   spring adds 3/4 k3 A^2 to K and nothing to D; the dashpot pi c omega A^2 to D; Coulomb friction alpha on
-  the mass 4 alpha A to D and nothing to K;
-* ``quadrature`` (the continuum, Dahl, branches with series dashpots, a delay, a history): N samples per
+  the mass 4 alpha A to D and nothing to K (with a Stribeck drop or on a belt: :func:`friction_dissipation`,
+  whose error is added). Rounding only: ``error`` 0;
+* ``spectrum`` (the continuum, Segalman's joint, a piecewise spectrum, with the springs and dashpot above):
+  the branch forms integrated over the spectrum by Gauss-Legendre on the pieces of each segment cut where
+  eta(s) = A (:func:`closed_forms.spectrum_forms`), the nodes doubled from FIRST_NODES until a_1 and b_1
+  each change by at most the tolerance; ``error`` the last change (the rule converges much faster than
+  that: the error of the result is far below it);
+* ``quadrature`` (Dahl, branches with series dashpots, a delay, a history): N samples per
   cycle, the force at each from the exact moves between samples (x linear in between), cycles repeated until
   the first harmonic settles (:func:`prandtl_fmu.frequency.settled`: the last change and the geometric tail of
   those to come within a quarter of the tolerance; or a cycle that repeats to rounding), the trapezoid rule
-  in theta for a_1, b_1; N doubled from 64 until two successive N agree to the tolerance (1e-3 relative by
-  default), a_1 and b_1 each against its own size
-  (:func:`relative_change`: K and D both to the tolerance). Past 2^16 samples per cycle or MAX_CYCLES
-  cycles, the amplitude is refused with what was reached (deep macro-slip, where the stick after a reversal
-  is shorter than a sample, is the usual case).
+  in theta for a_1, b_1; N doubled from 64 until the error estimate is within the tolerance (1e-3 relative
+  by default): the larger of the last two changes of a_1 and b_1 under a doubling, each against its own size
+  (:func:`relative_change`: K and D both), plus the settling remainder (the last change from cycle to cycle
+  and its geometric tail). One change alone is not enough: where a kink of the force (a slip) falls between
+  samples the convergence is uneven, and a branch with a series dashpot in deep slip was 2.5 times further
+  from the converged cycle than its last change. Past 2^16 samples per cycle or MAX_CYCLES cycles, the
+  amplitude is refused with what was reached.
+
+A number that overflows or underflows (K, D or the loss factor at an extreme amplitude) is refused naming the
+amplitude; the loss factor D / (pi K A^2) is formed without A^2. Where K = 0 and D is not (a dashpot or
+friction alone) the loss factor is infinite: ``math.inf``, written as an empty field in the CSV.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from dataclasses import dataclass
 from typing import Optional
 
@@ -46,16 +57,25 @@ import numpy as np
 from ..compiled import choose_branch_kernel, compile_model
 from ..kernels import stack
 from ..kernels.drive import drive, drive_with_memory
-from ..kernels.play import write_elongations
 from ..loads import ConstantLoad
 from ..memory import has_memory
 from ..stepping import _progress_bar
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
+from .closed_forms import branch_forms, gauss_legendre, spectrum_forms
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled, settling_remainder
 
 # The quadrature's first and last number of samples per cycle, and the most cycles run to reach the steady one.
 FIRST_SAMPLES = 64
 MAX_SAMPLES = 2**16
 MAX_CYCLES = 400
+# The spectrum's first and last number of Gauss-Legendre nodes on each piece of a segment.
+FIRST_NODES = 64
+MAX_NODES = 1024
+# The cuts of each piece of the cycle towards its ends for the Stribeck friction's layer: at 10^-1 ... 10^-GRADING
+# of its length.
+GRADING = 10
+# A sum one of whose parts underflowed keeps its digits only if it is this large: the smallest normal number
+# over the rounding.
+SMALLEST_PART = sys.float_info.min / sys.float_info.epsilon
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,9 +83,10 @@ class Description:
     """K(A), D(A) and the loss factor at each amplitude: arrays of shape (amplitudes,).
 
     ``amplitude`` A (m), ``stiffness`` K (N/m), ``dissipation`` D (J per cycle), ``loss_factor``
-    D / (pi K A^2); ``method`` "exact" or "quadrature" for each; ``error`` the estimated relative error of
-    the first harmonic (0 for exact: rounding only); ``frequency`` (Hz) of the cycles, None for a rate-
-    independent element (whose results do not depend on it).
+    D / (pi K A^2) (+-inf where K = 0 and D is not); ``method`` "exact", "spectrum" or "quadrature" for each;
+    ``error`` the estimated relative error of the first harmonic (0 for exact, rounding only, but for a
+    Stribeck drop or a belt); ``frequency`` (Hz) of the cycles, None for a rate-independent element (whose
+    results do not depend on it).
     """
 
     amplitude: np.ndarray
@@ -77,9 +98,11 @@ class Description:
     frequency: Optional[float]
 
     def columns(self) -> dict:
-        """The CSV's columns: amplitude, stiffness, dissipation, loss_factor (the contract), method, error."""
+        """The CSV's columns: amplitude, stiffness, dissipation, loss_factor (the contract), method, error; an
+        infinite loss factor (K = 0, D not) is None: an empty field."""
+        loss = [None if math.isinf(value) else value for value in self.loss_factor.tolist()]
         return {"amplitude": self.amplitude, "stiffness": self.stiffness, "dissipation": self.dissipation,
-                "loss_factor": self.loss_factor, "method": list(self.method), "error": self.error}
+                "loss_factor": loss, "method": list(self.method), "error": self.error}
 
 
 def rate_dependent_effects(scene) -> list:
@@ -93,6 +116,9 @@ def rate_dependent_effects(scene) -> list:
         names.append("[delay]")
     if scene.history is not None:
         names.append("[history]")
+    friction = scene.friction
+    if friction is not None and (friction.stribeck_velocity is not None or friction.belt_velocity != 0.0):
+        names.append("[friction] with a Stribeck drop or a moving belt")
     return names
 
 
@@ -101,8 +127,9 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
     """K(A), D(A) and the loss factor of ``scene``'s element at each of ``amplitudes`` (m, > 0) (see the module).
 
     ``frequency`` (Hz, > 0) of x = A sin(2 pi f t): required by a rate-dependent element (dashpot, series
-    dashpots, delay, history), ignored otherwise. ``tolerance``: the relative accuracy of the quadrature.
-    FrequencyError names the culprit (bad input, or an amplitude whose cycle does not settle or converge)."""
+    dashpots, delay, history, friction with a Stribeck drop or on a belt), ignored otherwise. ``tolerance``:
+    the relative accuracy of the quadratures. FrequencyError names the culprit (bad input, or an amplitude
+    whose cycle does not settle or converge)."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     rate = rate_dependent_effects(scene)
@@ -113,21 +140,28 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
                              "give the frequency of the cycles (--frequency)")
     if not rate:
         frequency = None  # rate independent: the results do not depend on it
-    coulomb = _coulomb_threshold(scene)
     element = dataclasses.replace(scene, mass=None, friction=None, load=ConstantLoad(0.0), causality="force")
-    exact = _is_piecewise_linear(element)
+    method = _method(element)
     rows = []
     bar = _progress_bar(progress, total=amplitudes.shape[0], label=f"{scene.name} describe")
     try:
         for amplitude in amplitudes.tolist():
-            if exact:
-                a1, b1 = exact_harmonic(element, amplitude, frequency)
-                error, method = 0.0, "exact"
+            lost = set()  # K or D with a part that underflowed: refused unless the total dwarfs it
+            if method in ("exact", "spectrum"):
+                stiffness, dissipation, error = exact_forms(element, amplitude, frequency, tolerance, lost)
             else:
                 a1, b1, error = quadrature_harmonic(element, amplitude, frequency or 1.0, tolerance)
-                method = "quadrature"
-            b1 += 4.0 * coulomb / math.pi  # alpha sgn(cos theta): b_1 = 4 alpha / pi, a_1 = 0
-            rows.append(_row(scene, amplitude, a1, b1, error, method))
+                stiffness, dissipation = a1 / amplitude, math.pi * amplitude * b1
+                _check_range(scene, amplitude, "D", dissipation)
+                if _underflowed(dissipation, b1):
+                    lost.add("D")
+            if scene.friction is not None:
+                friction, friction_error = friction_dissipation(scene, amplitude, frequency, tolerance, lost)
+                dissipation, error = dissipation + friction, max(error, friction_error)
+            for name, total in (("K", stiffness), ("D", dissipation)):
+                if name in lost and abs(total) < SMALLEST_PART:
+                    raise _underflow(scene, amplitude, name)
+            rows.append(_row(scene, amplitude, stiffness, dissipation, error, method))
             bar.update(1)
     finally:
         bar.close()
@@ -136,78 +170,188 @@ def describe_amplitudes(scene, amplitudes, frequency: Optional[float] = None, *,
                        table[:, 4], frequency)
 
 
-def _row(scene, amplitude, a1, b1, error, method) -> tuple:
-    stiffness = a1 / amplitude
-    dissipation = math.pi * amplitude * b1
-    loss = b1 / a1 if a1 != 0 else math.inf
-    for name, value in (("K", stiffness), ("D", dissipation), ("the loss factor", loss)):
-        if not math.isfinite(value):
-            raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} is not a finite number (K = "
-                                 f"{stiffness!r} N/m): the element has no stiffness in phase with x there")
+def _row(scene, amplitude, stiffness, dissipation, error, method) -> tuple:
+    """The row of one amplitude, its numbers checked: finite, and either 0 or normal (an overflow or an
+    underflow is refused naming the amplitude). The loss factor of K = 0 and D not (a dashpot, friction
+    alone) is infinite: +-``math.inf`` here, an empty field in the CSV."""
+    for name, value in (("K", stiffness), ("D", dissipation)):
+        _check_range(scene, amplitude, name, value)
+    if stiffness == 0.0:
+        if dissipation == 0.0:
+            raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m the element carries no force (K = D = 0): "
+                                 "it has no loss factor")
+        loss = math.copysign(math.inf, dissipation)
+    else:
+        loss = loss_factor(stiffness, dissipation, amplitude)
+        _check_range(scene, amplitude, "the loss factor", loss, dissipation)
     return amplitude, stiffness, dissipation, loss, error, method
 
 
-def _coulomb_threshold(scene) -> float:
-    """alpha (N) of plain Coulomb friction of the mass on a fixed ground (0 without); FrequencyError for a
-    Stribeck drop or a moving belt (not part of an element driven in displacement)."""
-    friction = scene.friction
-    if friction is None:
-        return 0.0
-    if friction.stribeck_velocity is not None or friction.belt_velocity != 0.0:
-        raise FrequencyError(f"{scene.source}: [friction] with a Stribeck drop or a moving belt depends on the "
-                             "velocity's size and the belt: describe takes plain Coulomb friction on a fixed "
-                             "ground only")
-    return float(friction.alpha)
+def loss_factor(stiffness: float, dissipation: float, amplitude: float) -> float:
+    """D / (pi K A^2) without forming A^2 (which overflows from A ~ 1e154 and underflows below 1e-154): the
+    mantissas and the exponents apart; inf past the largest float."""
+    mk, ek = math.frexp(stiffness)
+    md, ed = math.frexp(dissipation)
+    ma, ea = math.frexp(amplitude)
+    try:
+        return math.ldexp(md / (math.pi * mk * ma * ma), ed - ek - 2 * ea)
+    except OverflowError:
+        return math.copysign(math.inf, md * mk)
 
 
-def _is_piecewise_linear(element) -> bool:
-    """Whether the exact method applies: no continuum, no series dashpots, no memory."""
-    branches = element.branches
-    return not (branches is not None and branches.continuum) and not element.has_series_dashpots \
-        and element.delay is None and element.history is None and element.dahl is None
+def _underflowed(value, *factors) -> bool:
+    """Whether a product of ``factors`` (none 0) came out below the smallest normal number."""
+    return abs(value) < sys.float_info.min and all(factors)
 
 
-# ----------------------------------------------------------------- exact: the piecewise-linear cycle
+def _check_range(scene, amplitude, name, value, *factors) -> None:
+    """FrequencyError naming the amplitude when ``value`` overflowed (not finite) or underflowed (below the
+    smallest normal number, or 0 while every one of ``factors`` is not)."""
+    if not math.isfinite(value):
+        raise FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} overflows (beyond "
+                             f"{sys.float_info.max:.3g}): the amplitude is too large for this element")
+    if (value != 0.0 and abs(value) < sys.float_info.min) or (value == 0.0 and factors and all(factors)):
+        raise _underflow(scene, amplitude, name)
 
-def exact_harmonic(element, amplitude: float, frequency: Optional[float]) -> tuple:
-    """``(a_1, b_1)`` (N) of the steady cycle of a piecewise-linear ``element`` (massless) under x = A sin(theta),
-    in closed form segment by segment (see the module)."""
+
+def _underflow(scene, amplitude, name) -> FrequencyError:
+    return FrequencyError(f"{scene.source}: at A = {amplitude!r} m, {name} underflows (below "
+                          f"{sys.float_info.min:.3g}): this amplitude is out of the floating-point range of "
+                          "this element")
+
+
+def friction_dissipation(scene, amplitude: float, frequency: Optional[float], tolerance: float, lost: set) -> tuple:
+    """``(D, estimated relative error)`` of the friction of the mass on the ground (``[friction]``) under
+    x = A sin(theta): the force F = sign(w) a(|w|), w = A omega cos(theta) - v_b the velocity against the
+    belt, a = alpha_k + (alpha - alpha_k) exp(-|w| / v_s) (Stribeck; alpha for Coulomb). F depends on cos(theta)
+    only: nothing in phase with x (a_1 = 0), and D = pi A b_1 = 2 A int_0^pi F cos(theta) d theta. Its part
+    alpha_k sign(w) in closed form, 4 alpha_k A sqrt(1 - r^2) for |r| = |v_b / (A omega)| < 1 (0 otherwise:
+    w keeps its sign); the Stribeck part by Gauss-Legendre on the pieces of [0, pi] where w keeps its sign,
+    each cut geometrically towards its ends (GRADING cuts at 10^-j of its length: the exponential is a layer
+    of width v_s / (A omega) there), the nodes doubled from FIRST_NODES until D changes by at most the
+    tolerance (the error)."""
+    friction, A = scene.friction, float(amplitude)
+    speed = A * 2.0 * math.pi * frequency if frequency is not None else math.inf  # A omega
+    ratio = friction.belt_velocity / speed
+    kinetic = friction.alpha_kinetic if friction.stribeck_velocity is not None else friction.alpha
+    sliding = math.sqrt(max(0.0, (1.0 - ratio) * (1.0 + ratio)))  # sin(theta*), cos(theta*) = r
+    dissipation = 4.0 * kinetic * A * sliding if abs(ratio) < 1.0 else 0.0
+    _check_range(scene, A, "D", dissipation)
+    if _underflowed(dissipation, kinetic, sliding):
+        lost.add("D")
+    if friction.stribeck_velocity is None or friction.alpha == friction.alpha_kinetic:
+        return dissipation, 0.0
+    turn = math.acos(ratio) if abs(ratio) < 1.0 else None
+    ends = [0.0, turn, math.pi] if turn is not None else [0.0, math.pi]
+    pieces = []
+    for lo, hi in zip(ends[:-1], ends[1:]):  # graded towards both ends, where |w| is smallest (a thin layer)
+        grading = [(hi - lo) * 0.1**k for k in range(1, GRADING + 1)]
+        cuts = sorted({lo, hi, *(lo + g for g in grading), *(hi - g for g in grading)})
+        pieces += [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+    drop = friction.alpha - friction.alpha_kinetic
+    nodes, previous = FIRST_NODES, None
+    while True:
+        x, w = gauss_legendre(nodes)
+        total = 0.0
+        for lo, hi in pieces:
+            theta = lo + 0.5 * (hi - lo) * (x + 1.0)
+            relative = speed * np.cos(theta) - friction.belt_velocity
+            side = math.copysign(1.0, speed * math.cos(0.5 * (lo + hi)) - friction.belt_velocity)
+            total += 0.5 * (hi - lo) * side * float(np.sum(w * np.exp(-np.abs(relative) / friction.stribeck_velocity)
+                                                          * np.cos(theta)))
+        stribeck = 2.0 * A * drop * total
+        if previous is not None:
+            change = abs(stribeck - previous) / max(abs(dissipation + stribeck), NEGLIGIBLE * abs(stribeck), 1e-300)
+            if change <= tolerance:
+                _check_range(scene, A, "D", dissipation + stribeck)
+                return dissipation + stribeck, change
+            if nodes >= MAX_NODES:
+                raise FrequencyError(f"{scene.source}: at A = {A!r} m the Stribeck friction's integral over the "
+                                     f"cycle did not converge to {tolerance:g} relative by {MAX_NODES} nodes")
+        previous, nodes = stribeck, 2 * nodes
+
+
+def _method(element) -> str:
+    """"exact" for springs, a dashpot and Prandtl branches, "spectrum" with a spectrum of branches (the
+    continuum) instead, "quadrature" with series dashpots, Dahl or memory."""
+    if element.has_series_dashpots or element.delay is not None or element.history is not None \
+            or element.dahl is not None:
+        return "quadrature"
+    return "spectrum" if element.branches is not None and element.branches.continuum else "exact"
+
+
+# ----------------------------------------------------------------- exact and spectrum: closed forms
+
+def exact_forms(element, amplitude: float, frequency: Optional[float], tolerance: float, lost: set) -> tuple:
+    """``(K, D, estimated relative error)`` of the steady cycle of a rate-independent ``element`` (massless,
+    its branches Prandtl's or a spectrum; a dashpot beside them) under x = A sin(theta): the closed forms of
+    its parts (see the module), each checked against overflow; "K" or "D" added to ``lost`` where a part of
+    it underflowed. Error 0 but for a spectrum."""
     A = float(amplitude)
-    springs = dataclasses.replace(element, cubic=None, damper=None)  # k0 and the branches: linear between events
-    model = compile_model(springs, choose_branch_kernel(springs, "projected"))
-    k = model[4]
-    u = _fresh_branches(springs, k)
-    eta = springs.branches.yield_displacement if springs.branches is not None else np.zeros(0)
-
-    def move(path, start):
-        path = np.ascontiguousarray(path, dtype=float)
-        forces = np.empty_like(path)
-        zeros = np.zeros_like(path)
-        drive(model, u, start, path, zeros, zeros, forces, None)
-        return forces
-
-    move(np.array([A, -A]), 0.0)  # the first quarter, the first descent: every branch that will slip has slipped
-    at_bottom = _elongations(springs, k, u)
-    force_bottom = move(np.array([A, -A]), -A)[-1]
-    scale = max(A, float(np.max(eta, initial=0.0)))
-    if not np.allclose(_elongations(springs, k, u), at_bottom, rtol=0.0, atol=1e-12 * scale):
-        raise FrequencyError(f"{element.source}: at A = {A!r} m the cycle of the branches does not repeat after "
-                             "the second excursion (a rate-independent element must): please report it")
-    up = np.concatenate((_events(-A + eta - at_bottom, A, rising=True), [A]))
-    forces_up = move(up, -A)
-    at_top = _elongations(springs, k, u)
-    down = np.concatenate((_events(A - eta - at_top, A, rising=False), [-A]))
-    forces_down = move(down, A)
-    work_up, moment_up = line_integrals(np.concatenate(([-A], up)), np.concatenate(([force_bottom], forces_up)), A)
-    work_down, moment_down = line_integrals(np.concatenate(([A], down)),
-                                            np.concatenate(([forces_up[-1]], forces_down)), A)
-    a1 = (moment_up - moment_down) / (math.pi * A)
-    b1 = (work_up + work_down) / (math.pi * A)
+    stiffness, dissipation = 0.0, 0.0
+    if element.spring is not None:
+        stiffness += element.spring.k0
     if element.cubic is not None:
-        a1 += 0.75 * element.cubic.k3 * A**3  # k3 A^3 sin^3 = k3 A^3 (3 sin - sin 3 theta) / 4
+        cubic = 0.75 * element.cubic.k3 * A * A  # k3 A^3 sin^3 = k3 A^3 (3 sin - sin 3 theta) / 4
+        _check_range(element, A, "K", cubic)
+        if _underflowed(cubic, element.cubic.k3):
+            lost.add("K")
+        stiffness += cubic
     if element.has_dashpot:
-        b1 += element.damper.c * 2.0 * math.pi * frequency * A  # c v = c omega A cos(theta)
-    return a1, b1
+        rate = element.damper.c * 2.0 * math.pi * frequency  # c v = c omega A cos(theta)
+        dashpot = math.pi * rate * A * A
+        _check_range(element, A, "D", dashpot)
+        if _underflowed(dashpot, rate):
+            lost.add("D")
+        dissipation += dashpot
+    branches, error = element.branches, 0.0
+    if branches is not None and branches.continuum:
+        k, d, error = spectrum_integral(element, A, tolerance)
+        if abs(k) < sys.float_info.min:
+            lost.add("K")
+        if abs(d) < sys.float_info.min and A > branches.eta[0]:  # some branches slip
+            lost.add("D")
+        stiffness, dissipation = stiffness + k, dissipation + d
+    elif branches is not None:
+        eta = branches.yield_displacement
+        k, d = branch_forms(branches.stiffness, eta, A)
+        slipping = (eta > 0) & (eta < A)  # K > 0 and D > 0 in truth
+        if np.any(slipping & (k < sys.float_info.min)):
+            lost.add("K")
+        if np.any(slipping & (d < sys.float_info.min)):
+            lost.add("D")
+        stiffness += math.fsum(k.tolist())
+        dissipation += math.fsum(d.tolist())
+    return stiffness, dissipation, error
+
+
+def exact_harmonic(element, amplitude: float, frequency: Optional[float],
+                   tolerance: float = DEFAULT_TOLERANCE) -> tuple:
+    """``(a_1, b_1)`` (N) of the steady cycle of a rate-independent ``element`` (see :func:`exact_forms`):
+    a_1 = K A, b_1 = D / (pi A)."""
+    stiffness, dissipation, _ = exact_forms(element, amplitude, frequency, tolerance, set())
+    return stiffness * amplitude, dissipation / (math.pi * amplitude)
+
+
+def spectrum_integral(element, amplitude: float, tolerance: float) -> tuple:
+    """``(K, D, estimated relative error)`` of a spectrum of branches (the continuum): the branch forms
+    integrated over s by Gauss-Legendre (:func:`closed_forms.spectrum_forms`), the nodes doubled from
+    FIRST_NODES until a_1 = K A and b_1 = D / (pi A) each change by at most the tolerance (:func:`relative_change`);
+    the error is that last change. FrequencyError past MAX_NODES."""
+    A = amplitude
+    nodes, previous = FIRST_NODES, None
+    while True:
+        k, d = spectrum_forms(element.branches, [A], nodes)
+        harmonic = complex(float(k[0]) * A, float(d[0]) / (math.pi * A))
+        if previous is not None:
+            change = relative_change(harmonic, previous)
+            if change <= tolerance:
+                return float(k[0]), float(d[0]), change
+            if nodes >= MAX_NODES:
+                raise FrequencyError(f"{element.source}: at A = {A!r} m the integral over the spectrum did not "
+                                     f"converge to {tolerance:g} relative by {MAX_NODES} nodes (the last two "
+                                     f"differ by {change:.3g} relative)")
+        previous, nodes = harmonic, 2 * nodes
 
 
 def _fresh_branches(element, k):
@@ -218,70 +362,35 @@ def _fresh_branches(element, k):
     return np.array(element.branches.u0, dtype=float)
 
 
-def _elongations(element, k, u) -> np.ndarray:
-    if element.branches is None:
-        return np.zeros(0)
-    out = np.empty(element.branches.n)
-    write_elongations(k, u, out)
-    return out
-
-
-def _events(points, A, rising: bool) -> np.ndarray:
-    """The slip events strictly inside (-A, A), in the order of the motion."""
-    inside = np.unique(points[(points > -A) & (points < A)])
-    return inside if rising else inside[::-1]
-
-
-def line_integrals(xs, fs, A) -> tuple:
-    """``(int F dx, int F x / sqrt(A^2 - x^2) dx)`` along the polyline through (xs[j], fs[j]) (xs monotone, in
-    [-A, A], either direction: oriented integrals), exactly: F is linear on each segment.
-
-    The second is A int F sin(t) dt with x = A sin(t), t = asin(x / A) in [-pi/2, pi/2]; on a segment
-    F = F_1 + s (A sin t - x_1) and, with d = t_2 - t_1 and m = (t_1 + t_2) / 2, the integrals
-    int sin t dt = 2 sin(m) sin(d / 2) and int sin^2 t dt = d sin^2(m) + cos(2 m) (d - sin d) / 2 are written
-    without the cancellation of differences of antiderivatives (which lost digits on short segments)."""
-    xs = np.asarray(xs, dtype=float)
-    fs = np.asarray(fs, dtype=float)
-    x1, x2, f1, f2 = xs[:-1], xs[1:], fs[:-1], fs[1:]
-    keep = x2 != x1
-    x1, x2, f1, f2 = x1[keep], x2[keep], f1[keep], f2[keep]
-    work = float(np.sum(0.5 * (f1 + f2) * (x2 - x1)))
-    slope = (f2 - f1) / (x2 - x1)
-    t1 = np.arcsin(np.clip(x1 / A, -1.0, 1.0))
-    t2 = np.arcsin(np.clip(x2 / A, -1.0, 1.0))
-    d = t2 - t1
-    mid = 0.5 * (t1 + t2)
-    d2 = d * d
-    d_minus_sin = np.where(np.abs(d) < 1e-2, d * d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)), d - np.sin(d))
-    sine = 2.0 * np.sin(mid) * np.sin(0.5 * d)
-    square = d * np.sin(mid) ** 2 + 0.5 * np.cos(2.0 * mid) * d_minus_sin
-    moment = A * float(np.sum((f1 - slope * x1) * sine + slope * A * square))
-    return work, moment
-
-
 # ----------------------------------------------------------------- quadrature: a sampled steady cycle
 
 def quadrature_harmonic(element, amplitude: float, frequency: float, tolerance: float) -> tuple:
     """``(a_1, b_1, estimated relative error)`` of the steady cycle by the refined quadrature (see the
-    module); FrequencyError when it does not settle or converge within the bounds."""
-    previous = None
+    module): the error is the larger of the last two changes under a doubling of N (one alone can be small by
+    chance where a kink of the force falls between samples) plus the settling remainder; FrequencyError when
+    it does not settle or converge within the bounds."""
+    previous, changes = None, []
     samples = FIRST_SAMPLES
+    error = math.inf
     while True:
-        harmonic = steady_harmonic(element, amplitude, frequency, samples, tolerance)
+        harmonic, remainder = steady_harmonic(element, amplitude, frequency, samples, tolerance)
         if previous is not None:
-            change = relative_change(harmonic, previous)
-            if change <= tolerance:
-                return harmonic.real, harmonic.imag, change
+            changes.append(relative_change(harmonic, previous))
+            if len(changes) >= 2:
+                error = max(changes[-2:]) + remainder
+                if error <= tolerance:
+                    return harmonic.real, harmonic.imag, error
         if samples >= MAX_SAMPLES:
             raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the first harmonic did not settle to "
-                                 f"{tolerance:g} relative by {MAX_SAMPLES} samples per cycle (the last two "
-                                 f"refinements differ by {change:.3g} relative)")
+                                 f"{tolerance:g} relative by {MAX_SAMPLES} samples per cycle (its estimated "
+                                 f"error is {error:.3g} relative)")
         previous, samples = harmonic, 2 * samples
 
 
-def steady_harmonic(element, amplitude: float, frequency: float, samples: int, tolerance: float) -> complex:
-    """a_1 + i b_1 (N) of the steady cycle sampled at ``samples`` points: cycles from x = 0 and the initial
-    state until two successive cycles agree to tolerance / 4 (with the geometric tail of their differences)."""
+def steady_harmonic(element, amplitude: float, frequency: float, samples: int, tolerance: float) -> tuple:
+    """``(a_1 + i b_1 (N), remainder)`` of the steady cycle sampled at ``samples`` points: cycles from x = 0
+    and the initial state until two successive cycles agree to tolerance / 4 (with the geometric tail of their
+    differences: the remainder, :func:`settling_remainder`; 0 for a cycle that repeats to rounding)."""
     period = 1.0 / frequency
     step = period / samples
     scene = dataclasses.replace(element, solver=dataclasses.replace(element.solver, step=step))  # the delay's grid
@@ -309,8 +418,10 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
         if harmonic is not None:
             change = relative_change(new, harmonic)
             changes.append(change)
-            if abs(new - harmonic) <= ROUNDING * abs(new) or settled(changes, tolerance):
-                return new
+            if abs(new - harmonic) <= ROUNDING * abs(new):
+                return new, 0.0
+            if settled(changes, tolerance):
+                return new, settling_remainder(changes)
         harmonic = new
     raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the cycle did not settle within {MAX_CYCLES} "
                          f"cycles (f = {frequency!r} Hz): the first harmonic still changed by {change:.3g} "

@@ -13,9 +13,11 @@ steady when the relative change d_p of X over the last period (or, if larger, th
 of the period against |X|: a periodic motion comes back), plus the geometric tail d_p r / (1 - r) of the
 changes still to come (r the larger of the last two ratios d_p / d_(p-1)), is at most tolerance / 4, after
 at least four periods (or when X repeats to 1e-12); past MAX_PERIODS periods the frequency is refused with
-the change reached. Then M is doubled (from the settled state) until two successive M agree to the tolerance
-(1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
-the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0).
+the change reached. Then M is doubled (from the settled state) until the relative change of X under the last
+doubling plus the settling remainder (:func:`prandtl_fmu.frequency.settling_remainder`: what the settling test
+leaves) is at most the tolerance (1e-3 relative of |X| by default); past MAX_STEPS steps per period, refused. The phase is that of x against
+the force: x lags by -phase, in (-pi, pi]; 0 where the mass does not move at all (amplitude 0). A frequency
+so high that the mass's motion F0 / (m omega^2) underflows in the steps is refused (:func:`_check_resolved`).
 
 The stepper: the one given, else the one the scene's ``[solver]`` names, else ``exact`` where it applies
 (exact between events: M only sets the quadrature of X) and the branches are few (EXACT_UP_TO), else
@@ -33,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from dataclasses import dataclass
 from typing import Optional
 
@@ -45,7 +48,7 @@ from ..loads import HarmonicLoad
 from ..stability import stability_problem
 from ..steppers import STEPPERS, get_stepper
 from ..stepping import ElementError, _failure, _progress_bar, integrate
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, settled, settling_remainder
 
 MAX_PERIODS = 3000
 MAX_STEPS = 2**17
@@ -53,6 +56,8 @@ MAX_STEPS = 2**17
 FIRST_STEPS = {"exact": 64, "verlet": 256}
 FIRST_STEPS_DEFAULT = 1024
 SWEEPS = ("up", "down", "both")
+# The smallest move of x in one step that keeps its digits: the smallest normal number over the rounding.
+SMALLEST_MOVE = sys.float_info.min / sys.float_info.epsilon
 # The most branches for which the automatic choice takes ``exact`` (each slip is an event of its own: on the
 # paper's 100 branches a period costs ~50 times one of verlet at 512 steps).
 EXACT_UP_TO = 16
@@ -68,7 +73,7 @@ class Response:
 
     ``frequency`` (Hz), ``amplitude`` (m), ``phase`` (rad, of x against F0 cos(2 pi f t)); ``sweep`` "up" or
     "down" for each row; ``steps_per_period`` and ``periods`` (run at the last M) as taken; ``error`` the
-    relative change of X at the last doubling of M (the stated accuracy). ``stepper``: the stepper used.
+    relative change of X at the last doubling of M plus the settling remainder (the stated accuracy). ``stepper``: the stepper used.
     """
 
     frequency: np.ndarray
@@ -139,6 +144,8 @@ def frequency_response(scene, force_amplitude: float, frequencies, *, tolerance:
         raise FrequencyError(f"sweep: must be one of {', '.join(SWEEPS)}, got {sweep!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise FrequencyError(f"workers: must be a whole number >= 1, got {workers!r}")
+    for frequency in frequencies.tolist():
+        _check_resolved(scene, force_amplitude, frequency)
     forced = _forced(scene, force_amplitude, float(frequencies[0]))
     stepper = choose_stepper(forced, stepper)
     directions = ("up", "down") if sweep == "both" else (sweep,)
@@ -157,6 +164,19 @@ def frequency_response(scene, force_amplitude: float, frequencies, *, tolerance:
     table = np.array([row[:4] + row[5:] for row in rows], dtype=float).reshape(-1, 6)
     return Response(table[:, 0], table[:, 1], table[:, 2], tuple(row[4] for row in rows), table[:, 3].astype(int),
                     table[:, 4].astype(int), table[:, 5], stepper, force_amplitude)
+
+
+def _check_resolved(scene, force_amplitude: float, frequency: float) -> None:
+    """FrequencyError when the motion at ``frequency`` is below what the steps resolve in floating point: far
+    above resonance the mass moves F0 / (m omega^2), and a step of h = 1 / (f M) moves it by about that over
+    M^2; once that falls below the smallest normal number over the rounding (SMALLEST_MOVE), x underflows to 0
+    and its phase (-pi up there) is lost."""
+    omega = 2.0 * math.pi * frequency
+    motion = math.log10(force_amplitude) - math.log10(scene.mass.m) - 2.0 * math.log10(omega)
+    if motion - 2.0 * math.log10(MAX_STEPS) < math.log10(SMALLEST_MOVE):
+        raise FrequencyError(f"{scene.source}: at f = {frequency!r} Hz the mass moves about F0 / (m (2 pi f)^2) = "
+                             f"1e{motion:.0f} m, too small for floating-point steps (x would underflow): lower "
+                             "the frequency or raise --force-amplitude")
 
 
 def _forced(scene, force_amplitude: float, frequency: float):
@@ -191,9 +211,10 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
         steps *= 2  # an explicit stepper's limit (omega h < 2) first
     previous = None
     while True:
-        harmonic, state, periods = steady_period(forced, stepper, frequency, steps, state, tolerance)
+        harmonic, state, periods, remainder = steady_period(forced, stepper, frequency, steps, state, tolerance)
         if previous is not None:
             error = abs(harmonic - previous) / abs(harmonic) if harmonic != 0 else abs(harmonic - previous)
+            error += remainder
             if error <= tolerance:
                 return harmonic, state, steps, periods, error
         if steps >= MAX_STEPS:
@@ -204,8 +225,8 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
 
 
 def steady_period(forced, stepper: str, frequency: float, steps: int, state, tolerance: float) -> tuple:
-    """``(X, state, periods)``: periods of ``steps`` steps from ``state`` until X settles (the settling test of
-    the module)."""
+    """``(X, state, periods, remainder)``: periods of ``steps`` steps from ``state`` until X settles (the
+    settling test of the module); ``remainder`` what it leaves (:func:`settling_remainder`)."""
     period = 1.0 / frequency
     h = period / steps
     scene = forced
@@ -247,7 +268,8 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
             change = moved / abs(new) if new != 0 else (0.0 if moved == 0 else math.inf)
             changes.append(change)
             if change <= 1e-12 or settled(changes, tolerance):
-                return new, (x, v, None if u is None else u.copy()), number + 1
+                remainder = change if change <= 1e-12 else settling_remainder(changes)
+                return new, (x, v, None if u is None else u.copy()), number + 1, remainder
         harmonic = new
     raise NotSettled(f"{forced.source}: at f = {frequency!r} Hz the response did not settle within {MAX_PERIODS} "
                      f"periods ({stepper!r}, {steps} steps per period): X still changed by {change:.3g} relative "

@@ -107,6 +107,40 @@ def test_a_rate_dependent_scene_with_its_frequency(tmp_path):
     assert float(table["dissipation"][0]) == pytest.approx(math.pi * 0.2 * 2 * math.pi * 2 * 0.25, rel=1e-13)
 
 
+def test_an_infinite_loss_factor_is_an_empty_field(tmp_path):
+    """A dashpot alone: K = 0, D = pi c w A^2, the loss factor infinite: written as an empty field, exit 0."""
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"damper": {"c": 1.0}})
+    assert main(["describe", scene, "--amplitudes", "0.5", "--frequency", "0.5", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert float(table["stiffness"][0]) == 0.0 and table["loss_factor"] == [""]
+    assert float(table["dissipation"][0]) == pytest.approx(math.pi * 2 * math.pi * 0.5 * 0.25, rel=1e-15)
+
+
+def test_an_amplitude_whose_numbers_overflow_is_named(tmp_path, capsys):
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"spring": {"k0": 1.0}, "damper": {"c": 1.0}})
+    assert main(["describe", scene, "--amplitudes", "0.5,1e300", "--frequency", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "at A = 1e+300 m, D overflows" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_friction_on_a_belt_in_both_modes(tmp_path):
+    """Friction with a Stribeck drop on a moving belt: the describing function (at --frequency) and the
+    frequency response both take it (--amplitudes refused it, --force-amplitude did not); a dashpot damps
+    the stick-slip that the drop would excite."""
+    out = tmp_path / "d.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.5},
+                             "friction": {"alpha": 0.3, "alpha_kinetic": 0.2, "stribeck_velocity": 0.1,
+                                          "belt_velocity": 0.5}})
+    assert main(["describe", scene, "--amplitudes", "0.5", "--frequency", "0.5", "--out", str(out)]) == 0
+    assert float(read_csv(out)["stiffness"][0]) == 1.0 and float(read_csv(out)["dissipation"][0]) > 0
+    out.unlink()
+    assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 0
+    assert float(read_csv(out)["amplitude"][0]) > 0
+
+
 def test_a_result_that_cannot_reach_its_accuracy_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
     from prandtl_fmu.frequency import response
 
