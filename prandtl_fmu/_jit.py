@@ -40,7 +40,8 @@ folder, never beside the sources:
 * a save that fails (a full disk, a folder made read-only) is no failure of the
   run: one line on stderr names the cache folder, and the process carries on
   without saving; a cache folder that cannot be written at the start is said
-  in one line too (every process then compiles what it runs);
+  in one line too: a read-only one that exists is still read (a shared,
+  prebuilt cache), else every process compiles what it runs;
 * each edit of the kernels, or upgrade, starts a new folder; a process marks
   its own as used when it starts and removes the folders of the library and of
   the FMUs' bundled copies that no process started on for a month
@@ -140,6 +141,11 @@ def _usable_root():
         probe.write_bytes(b"")
         probe.unlink()
     except (OSError, RuntimeError, ValueError) as error:
+        if root is not None and root.is_dir() and os.access(root, os.R_OK | os.X_OK):
+            # a cache made read-only (a shared, prebuilt one): what it holds is loaded, nothing new is saved
+            _say(root, error, "what it holds is loaded, nothing newly compiled is saved (NUMBA_CACHE_DIR moves "
+                 "the cache)")
+            return root
         _say(root or "~/.cache/numba", error, "nothing compiled is saved: every process compiles "
              "what it runs (NUMBA_CACHE_DIR moves the cache)")
         return None

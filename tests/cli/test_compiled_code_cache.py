@@ -27,10 +27,23 @@ RUN = textwrap.dedent("""\
 CLEAN = [6.0, 24.0]
 
 
-def run(cache, *arguments):
-    """RUN in a process of its own with the cache folder ``cache``: (its JSON line, its stderr)."""
+def _without_overriding_file_rights():
+    """In the child, before it runs Python: drop the capabilities that let root write a read-only folder
+    (CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH) from its bounding set, so that the exec'ed interpreter is held to
+    the folder's rights as any user is (Linux's prctl PR_CAPBSET_DROP; a user without them has nothing to drop)."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    for capability in (1, 2):
+        libc.prctl(24, capability, 0, 0, 0)
+
+
+def run(cache, *arguments, read_only=False):
+    """RUN in a process of its own with the cache folder ``cache``: (its JSON line, its stderr). ``read_only``:
+    held to the files' rights even as root (:func:`_without_overriding_file_rights`)."""
     done = subprocess.run([sys.executable, "-c", RUN, *arguments], capture_output=True, text=True, timeout=300,
-                          env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), PRANDTL_FMU_JIT_CACHE="1"))
+                          env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), PRANDTL_FMU_JIT_CACHE="1"),
+                          preexec_fn=_without_overriding_file_rights if read_only else None)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
 
@@ -126,3 +139,28 @@ def test_a_cache_folder_that_cannot_be_written_is_said_once(tmp_path):
     [line] = said.splitlines()
     assert line.startswith(f"warning: the compiled-code cache {blocker / 'cache'}/prandtl_fmu-"), line
     assert "nothing compiled is saved" in line, line
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the child drops root's rights with Linux's prctl")
+def test_a_read_only_cache_is_loaded_and_said_once(tmp_path):
+    """A filled cache made read-only (a shared, prebuilt one): the next process loads every entry (compiles
+    nothing: the cache serves, where it used to compile every run), gives the clean numbers and says in one line
+    naming the folder that nothing new is saved; the cache's files are unchanged."""
+    cache = tmp_path / "cache"
+    clean, _ = run(cache)
+    assert clean == {"forces": CLEAN, "misses": 2}
+    files = sorted(cache.rglob("*"))
+    before = {path: path.read_bytes() for path in files if path.is_file()}
+    for path in [cache, *files]:
+        path.chmod(path.stat().st_mode & ~0o222)
+    try:
+        loaded, said = run(cache, read_only=True)
+    finally:
+        for path in [cache, *files]:
+            path.chmod(path.stat().st_mode | 0o200)
+    assert loaded == {"forces": CLEAN, "misses": 0}
+    [line] = said.splitlines()
+    [folder] = list(cache.glob("prandtl_fmu-*"))
+    assert line.startswith(f"warning: the compiled-code cache {folder} cannot be written ("), line
+    assert "what it holds is loaded" in line, line
+    assert sorted(cache.rglob("*")) == files and all(path.read_bytes() == data for path, data in before.items())
