@@ -119,7 +119,8 @@ NOT_FOR_USERS = (
     (r"(?<![\w/.-])/tmp(?:/|\b)", "a path of a temporary folder"),
     (r"\b(?:this|the development|our) machine\b", "\"this machine\" (which? say its kind)"),
     (r"\b(?:19|20)\d\d-[01]\d-[0-3]\d\b", "a calendar date (CHANGELOG.md holds them)"),
-    (rf"\b(?:{MONTHS}) [0-3]?\d(?:st|nd|rd|th)?\b|\b[0-3]?\d (?:{MONTHS})\b", "a calendar date (CHANGELOG.md holds them)"),
+    (rf"\b(?:{MONTHS}) [0-3]?\d(?:st|nd|rd|th)?\b|\b[0-3]?\d (?:{MONTHS})\b",
+     "a calendar date (CHANGELOG.md holds them)"),
 )
 
 
@@ -144,7 +145,8 @@ def test_the_pages_carry_no_history_of_their_making():
 
 def test_the_history_rule_finds_what_it_refuses():
     """The rule above, on text written here: it must find each kind (a rule that finds nothing passes all)."""
-    refused = ("a /tmp script", "written to /tmp/run.csv", "on this machine", "on the development machine", "(2026-11-29, evening)",
+    refused = ("a /tmp script", "written to /tmp/run.csv", "on this machine", "on the development machine",
+               "(2026-11-29, evening)",
                "since November 25", "on 3 December")
     kept = ("a temporary folder (mktemp -d)", "x_tmp = 1", "a 2-core x86-64 machine", "version 2.0.1",
             "the 1e-3 tolerance", "/usr/tmpfile")
