@@ -36,26 +36,30 @@ class FrequencyError(ValueError):
     """Bad input, or a computation that cannot reach its stated accuracy: one line saying which and why."""
 
 
-def read_scene(path: Union[str, os.PathLike]):
+def read_scene(path: Union[str, os.PathLike], networks: bool = False):
     """``(scene, stepper)``: the scene file (or packaged scene) ``path``, read without needing ``[load]`` or
     ``[solver]``, and the stepper its ``[solver]`` names (None when it has none). SceneError on a broken rule;
-    FrequencyError for a network scene."""
+    FrequencyError for a network scene unless ``networks`` (harmonic balance takes them)."""
     from ..scene import read_document
 
-    return scene_of_document(*read_document(path))
+    return scene_of_document(*read_document(path), networks=networks)
 
 
-def parse_scene(text: Union[str, bytes], source: str = "<scene>"):
+def parse_scene(text: Union[str, bytes], source: str = "<scene>", networks: bool = False):
     """:func:`read_scene` for scene TOML text (``source`` names it in messages)."""
     from ..scene import toml_document
 
-    return scene_of_document(toml_document(text, source), source)
+    return scene_of_document(toml_document(text, source), source, networks=networks)
 
 
-def scene_of_document(doc: dict, source: str):
+def scene_of_document(doc: dict, source: str, networks: bool = False):
     """:func:`read_scene` for a parsed TOML document."""
     from ..scene import scene_from_document
 
+    if networks and isinstance(doc, dict) and ("network" in doc or "chain" in doc):
+        if "solver" not in doc:
+            doc = dict(doc, solver=dict(_NO_SOLVER, stepper="implicit"))
+        return scene_from_document(doc, source, check_stepper=False), None
     if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
         raise FrequencyError(f"{source}: describe takes an element scene ([mass], [spring], [branches], ...), "
                              "not a [network] or [chain]")
@@ -111,7 +115,8 @@ def settled(changes: list, tolerance: float) -> bool:
 
 
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",
-         "frequency_response": "response", "NotSettled": "response"}
+         "frequency_response": "response", "NotSettled": "response", "Curve": "curve",
+         "harmonic_response": "curve", "Backbone": "modes", "nonlinear_mode": "modes"}
 
 
 def __getattr__(name: str):
@@ -122,5 +127,6 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response", "describe_amplitudes",
-           "frequency_response", "parse_scene", "read_scene"]
+__all__ = ["Backbone", "Curve", "DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response",
+           "describe_amplitudes", "frequency_response", "harmonic_response", "nonlinear_mode", "parse_scene",
+           "read_scene"]
