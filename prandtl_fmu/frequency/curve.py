@@ -69,11 +69,13 @@ class Curve:
 def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: Optional[int] = None,
                       node: Optional[str] = None, load_node: Optional[str] = None,
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True,
-                      progress: Optional[bool] = None) -> Curve:
+                      samples: Optional[int] = None) -> Curve:
     """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t) from the
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
     taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
-    load node). FrequencyError names the culprit or says where the curve stopped and why."""
+    load node); ``stability``: compute the Floquet multipliers (else every point is marked stable and its
+    multiplier NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError names the culprit
+    or says where the curve stopped and why."""
     force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
@@ -82,11 +84,12 @@ def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: 
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     count = int(np.unique(frequencies).size)
     if harmonics is not None:
-        balance = HarmonicBalance(system, harmonics, force_amplitude)
+        balance = HarmonicBalance(system, harmonics, force_amplitude, samples)
         points = continue_curve(balance, low, high, count)
         change = None
     else:
-        balance, points, change = _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance)
+        balance, points, change = _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance,
+                                                    samples)
     return _curve(balance, points, where, stability, change)
 
 
@@ -101,10 +104,10 @@ def _summary(balance, points, where) -> np.ndarray:
     return np.array([X[0], X[np.argmax(np.abs(X))], X[-1]])
 
 
-def _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance) -> tuple:
+def _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance, samples) -> tuple:
     previous, change = None, math.inf
     for H in HARMONIC_STEPS:
-        balance = HarmonicBalance(system, H, force_amplitude)
+        balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H))
         points = continue_curve(balance, low, high, count)
         summary = _summary(balance, points, where)
         if previous is not None:

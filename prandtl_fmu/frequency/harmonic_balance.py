@@ -39,8 +39,8 @@ import numpy as np
 
 from . import FrequencyError
 
-MIN_SAMPLES = 64
-SAMPLES_PER_HARMONIC = 16
+MIN_SAMPLES = 256
+SAMPLES_PER_HARMONIC = 64
 NEWTON_ITERATIONS = 40
 # converged: the last Newton step moved q by at most this fraction of |q| (max norm), or R is at most this
 # fraction of F0
@@ -205,6 +205,9 @@ class HarmonicBalance:
         self.H = H = int(harmonics)
         self.L = L = 2 * H + 1
         self.N = N = samples or sample_count(H)
+        if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or not 2 * H + 2 <= N <= 2**20:
+            raise FrequencyError(f"samples: must be a whole number in [2 H + 2, 2^20] = [{2 * H + 2}, {2**20}], "
+                                 f"got {samples!r}")
         theta = 2.0 * math.pi * np.arange(N) / N
         basis = np.empty((N, L))
         basis[:, 0] = 1.0

@@ -50,20 +50,21 @@ class Backbone:
 
 
 def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = None, node: Optional[str] = None,
-                   tolerance: float = DEFAULT_TOLERANCE) -> Backbone:
+                   tolerance: float = DEFAULT_TOLERANCE, samples: Optional[int] = None) -> Backbone:
     """The backbone of nonlinear mode ``mode`` (1: the lowest) of ``scene`` at ``amplitudes`` (m, of x at
-    ``node``; default the first node with a mass) (see the module). FrequencyError names the culprit."""
+    ``node``; default the first node with a mass) (see the module); ``samples``: N of the AFT (default
+    ``harmonic_balance.sample_count``). FrequencyError names the culprit."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     system = periodic_system(scene)
     where = system.node_index(node)
     if harmonics is not None:
-        values = _backbone(system, mode, amplitudes, where, harmonics)
+        values = _backbone(system, mode, amplitudes, where, harmonics, samples)
         change = None
     else:
         previous, change = None, math.inf
         for H in HARMONIC_STEPS:
-            values = _backbone(system, mode, amplitudes, where, H)
+            values = _backbone(system, mode, amplitudes, where, H, samples)
             if previous is not None:
                 change = float(np.max(np.abs(values - previous) / np.maximum(np.abs(values), 1e-300)))
                 if change <= tolerance:
@@ -110,9 +111,9 @@ def linear_mode(system, mode: int) -> tuple:
     return math.sqrt(values[mode - 1]), shape
 
 
-def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: int) -> np.ndarray:
+def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: int, samples) -> np.ndarray:
     """(amplitudes, 2): omega and xi at each amplitude, in the order given."""
-    balance = HarmonicBalance(system, harmonics, 1.0)
+    balance = HarmonicBalance(system, harmonics, 1.0, samples)
     L = balance.L
     free = list(balance.free)
     fixed = [free.index(where * L + 1), free.index(where * L + 2)]
