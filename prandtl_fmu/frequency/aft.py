@@ -48,7 +48,8 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
             if q >= 0:
                 forces[q, j] -= s
             slope = 3.0 * cubic_k3[c] * e[j] * e[j]
-            tangent[pair, j, :] += slope * basis[j, :]
+            for l in range(basis.shape[1]):
+                tangent[pair, j, l] += slope * basis[j, l]
     for b in range(branch_k.shape[0]):
         p, q = branch_ends[b, 0], branch_ends[b, 1]
         pair = branch_pair[b]
@@ -67,7 +68,8 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
                 forces[p, j] += s
                 if q >= 0:
                     forces[q, j] -= s
-                tangent[pair, j, :] += k * (basis[j, :] - 0.5 * basis[top, :] - 0.5 * basis[bottom, :])
+                for l in range(basis.shape[1]):
+                    tangent[pair, j, l] += k * (basis[j, l] - 0.5 * (basis[top, l] + basis[bottom, l]))
             elongations[b] = e[0] - centre
             continue
         u = eta
@@ -90,7 +92,8 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
                 u = -eta
                 anchor = j
             else:
-                tangent[pair, j, :] += k * (basis[j, :] - basis[anchor, :])
+                for l in range(basis.shape[1]):
+                    tangent[pair, j, l] += k * (basis[j, l] - basis[anchor, l])
             forces[p, j] += k * u
             if q >= 0:
                 forces[q, j] -= k * u

@@ -1,7 +1,7 @@
 """Arc-length continuation of a harmonic balance in (coefficients, omega), through folds.
 
 The curve R(q, omega) = 0 is followed from omega_min to omega_max in scaled unknowns y = (q / q_ref,
-(omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (max norm; the scale is
+(omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (2-norm; the scale is
 updated as the curve grows, the tangent rescaled with it):
 
 * tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised (the previous tangent's side kept: a
@@ -12,8 +12,9 @@ updated as the curve grows, the tangent rescaled with it):
   moves further than DRIFT steps from its prediction (at a kink of the Jacobian, where a slip starts, Newton can
   leap to another part of the curve) counts as not converged;
 * step: ds grows or shrinks by the corrector's iterations against TARGET_ITERATIONS (at most doubled, at
-  least halved), within [MIN_STEP, max_step]; max_step is the frequency range over the count of listed
-  frequencies (a linear curve gets at least as many points as frequencies asked);
+  least halved), within [MIN_STEP, max_step]; max_step is ARC_ESTIMATE over the count of listed frequencies
+  less one (a curve through one resonance gets about as many points as frequencies asked, more where it
+  bends);
 * fold: where the omega-component of the tangent changes sign between two points; located by the secant
   method on that component along the arc between them (at most FOLD_ITERATIONS correctors, to 1e-9 of the
   step) and kept as a point of its own, marked;
@@ -36,6 +37,7 @@ FOLD_ITERATIONS = 40
 MAX_POINTS = 20000
 CONVERGED = 1e-10  # a corrector step below this (scaled max norm) has converged
 CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries the corner's sphere
+ARC_ESTIMATE = 6.0  # about the scaled arc length of a curve through one resonance and its folds
 DRIFT = 0.5  # a corrector may move at most this many arc-length steps from its prediction
 
 
@@ -47,8 +49,8 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     points = [(omega_min, q, False)]
     if span <= 0:
         return points
-    scale = max(np.max(np.abs(q)), 1e-300)
-    max_step = 1.0 / max(count - 1, 8)
+    scale = max(np.linalg.norm(q), 1e-300)
+    max_step = ARC_ESTIMATE / max(count - 1, 8)
     step = max_step
     omega = omega_min
     tangent = _tangent(balance, q, omega, None, scale, span)
@@ -79,7 +81,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
             raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
                                  f"(at amplitude {_amplitude(balance, q_new)!r} m): it does not reach "
                                  f"{_hz(omega_max)!r} Hz from there")
-        scale_new = max(scale, np.max(np.abs(q_new)))
+        scale_new = max(scale, np.linalg.norm(q_new))
         heading = tangent
         if cornered:  # the way on is the chord from the corner, not the tangent before it
             heading = _scaled(q_new, omega_new, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)

@@ -24,6 +24,10 @@ from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
+# The Floquet multipliers are computed at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at
+# every point between two computed ones that disagree; the points between two that agree take their verdict
+# (their ``multiplier`` is NaN): a loss of stability and its return within fewer points would be missed.
+STABILITY_STRIDE = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,7 +36,7 @@ class Curve:
 
     ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
     ``stable`` (bool), ``fold`` (bool: a located fold), ``multiplier`` the largest |Floquet multiplier| (NaN
-    where stability was not computed), ``amplitudes``: {node: first-harmonic amplitude (m)} for every node with
+    where it was not computed: see STABILITY_STRIDE), ``amplitudes``: {node: first-harmonic amplitude (m)} for every node with
     a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
     harmonic at the last increase of H (None when H was given)."""
 
@@ -131,10 +135,26 @@ def _curve(balance, points, where, stability, change) -> Curve:
     largest = np.full(len(points), np.nan)
     stable = np.ones(len(points), dtype=bool)
     if stability:
-        for index, (w, q, _) in enumerate(points):
-            values = multipliers(balance, q, w)
-            largest[index] = float(np.max(np.abs(values)))
-            stable[index] = is_stable(values)
+        def check(index):
+            if np.isnan(largest[index]):
+                w, q, _ = points[index]
+                values = multipliers(balance, q, w)
+                largest[index] = float(np.max(np.abs(values)))
+                stable[index] = is_stable(values)
+
+        count = len(points)
+        checked = set(range(0, count, STABILITY_STRIDE)) | {count - 1}
+        for fold in (i for i, p in enumerate(points) if p[2]):
+            checked |= {max(fold - 1, 0), min(fold + 1, count - 1)}
+        checked = sorted(checked)
+        for index in checked:
+            check(index)
+        for before, after in zip(checked[:-1], checked[1:]):
+            if stable[before] == stable[after]:
+                stable[before + 1:after] = stable[before]
+            else:
+                for index in range(before + 1, after):
+                    check(index)
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),

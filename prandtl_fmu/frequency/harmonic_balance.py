@@ -17,7 +17,8 @@ D the derivative on one node's coefficients in units of omega ((a_h, b_h) -> h (
 of g by alternating frequency-time: x sampled at N points per period (N = SAMPLES_PER_HARMONIC H rounded up
 to a power of two, at least MIN_SAMPLES), the forces on the elements' steady cycle at the samples, the
 harmonics by numpy's real FFT (``aft.py``: exact at the samples for the branches and springs; the FFT of the
-samples is the trapezoid rule, the stated quadrature of a force whose cycle has kinks between samples).
+samples is the trapezoid rule, the stated quadrature of a force whose cycle has kinks between samples: its
+error falls like 1 / N^2, about 1e-5 of the first harmonic at N = 512 on a friction damper).
 
 The Jacobian dR/dq is exact in structure: the linear part as written, dG/dq from each element's slope at each
 sample through the same FFT, for a branch with the anchor of its stick (``aft.py``): exact for the sampled
@@ -218,6 +219,8 @@ class HarmonicBalance:
             derivative[2 * h - 1, 2 * h] = h  # d/d theta of a cos + b sin: (h b) cos + (-h a) sin
             derivative[2 * h, 2 * h - 1] = -h
         self.basis = basis
+        # the harmonics of samples as a matrix (the real FFT's, for the Jacobian's few columns: one product)
+        self.projection = basis.T * np.where(np.arange(L) == 0, 1.0, 2.0)[:, None] / N
         self.derivative = derivative
         n = system.n
         identity = np.eye(L)
@@ -269,7 +272,7 @@ class HarmonicBalance:
         G = self.harmonics_of(self._forces).reshape(n * L)
         jacobian = np.zeros((n * L, n * L))
         if s.pairs:
-            blocks = np.swapaxes(self.harmonics_of(np.swapaxes(self._tangent, 1, 2)), 1, 2)  # (pairs, L, L)
+            blocks = self.projection @ self._tangent  # (pairs, L, L)
             for (p, r), block in zip(s.pairs, blocks):
                 jacobian[p * L:(p + 1) * L, p * L:(p + 1) * L] += block
                 if r >= 0:
