@@ -31,6 +31,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from common import write_rows  # noqa: E402
 from prandtl_fmu.frequency import parse_scene  # noqa: E402
 from prandtl_fmu.frequency.curve import harmonic_response  # noqa: E402
+from prandtl_fmu.frequency.floquet import run_periods  # noqa: E402
 from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system  # noqa: E402
 
 FORCE = 0.2
@@ -54,36 +55,22 @@ def first_harmonic(balance, q) -> complex:
     return complex(full[1], -full[2])
 
 
-def sweep_to(scene, omega_path, steps, tolerance=1e-5, max_periods=20000):
-    """The network swept along ``omega_path`` (rad/s), each frequency settled from the last one's state: the
-    first harmonic of x_a at the last frequency, and the time taken per frequency."""
-    from prandtl_fmu.loads import HarmonicLoad
-    from prandtl_fmu.network.driver import NetworkElement
-    from prandtl_fmu.network.model import NetworkScene
-    from prandtl_fmu.scene_tables import Solver
-
-    state = None
+def sweep_to(balance, omega_path, steps, tolerance=1e-5, max_periods=20000):
+    """The network swept along ``omega_path`` (rad/s), each frequency settled from the last one's state (the
+    first from rest): the first harmonic of x_a at the last frequency, and the time taken per frequency."""
+    n = balance.system.n
+    state = (np.zeros(n), np.zeros(n), np.zeros(len(balance.system.network.elements)))
+    weights = np.exp(-1j * 2 * math.pi * np.arange(1, steps + 1) / steps) * 2 / steps
     started = time.perf_counter()
+    X = None
     for omega in omega_path:
-        period = 2 * math.pi / omega
-        h = period / steps
-        network = NetworkScene("sweep", scene.network, HarmonicLoad(FORCE, omega), Solver("implicit", h, period, h))
-        runner = NetworkElement(network, "implicit", h)
-        if state is not None:
-            runner.x[:], runner.v[:], runner.u[:] = state
-        runner.time = 0.0
-        previous, X = None, None
-        weights = np.exp(-1j * omega * h * np.arange(1, steps + 1)) * 2 / steps
+        previous = None
         for _ in range(max_periods):
-            samples = np.empty(steps)
-            for j in range(steps):
-                runner.advance(h, 0.0, scene_load=True)
-                samples[j] = runner.x[0]
-            X = complex(samples @ weights)
+            x, state = run_periods(balance, omega, state, 1, steps)
+            X = complex(x[:, 0] @ weights)
             if previous is not None and abs(X - previous) <= tolerance * abs(X):
                 break
             previous = X
-        state = (runner.x.copy(), runner.v.copy(), runner.u.copy())
     return X, (time.perf_counter() - started) / len(omega_path)
 
 
@@ -132,7 +119,7 @@ def main():
         for branch, f in probes:
             omega = 2 * math.pi * f
             path = np.linspace(2 * math.pi * (LOW if branch == "upper" else HIGH), omega, 8)
-            X, per_frequency = sweep_to(scene, path, steps)
+            X, per_frequency = sweep_to(HarmonicBalance(system, 1, FORCE), path, steps)
             rows.append({"measure": f"sweep M={steps} at {f:.4f} Hz ({branch})", "value": per_frequency,
                          "unit": "s per frequency", "note": f"difference from H=21: "
                          f"{abs(abs(X) - reference[f]) / reference[f]:.3g}; 200 frequencies: "

@@ -91,3 +91,32 @@ def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
         columns.append((run(dx, dv) - base) / epsilon)
     rows = np.concatenate((np.ones(count), np.full(count, omega)))
     return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega): dimensionless
+
+
+def run_periods(balance, omega, state, periods: int, steps: int) -> tuple:
+    """Integrate ``balance``'s system under F0 cos(omega t) for ``periods`` periods of ``steps`` implicit steps
+    from ``state`` (x, v, u) at t = 0 (one compiled call per period): ``(x of the last period (steps, n), the
+    state at the end)``. The reference the tests and the benchmark hold the harmonic balance against."""
+    from ..loads import HarmonicLoad
+    from ..network.driver import NetworkElement, loop_for, run_loop
+    from ..network.model import NetworkScene
+    from ..scene_tables import Solver
+    from ..stepping import ElementError
+
+    system = balance.system
+    period = 2.0 * math.pi / omega
+    h = period / steps
+    scene = NetworkScene(system.name, system.network, HarmonicLoad(balance.force_amplitude, omega),
+                         Solver("implicit", h, period, h), system.source)
+    runner = NetworkElement(scene, "implicit", h)
+    x, v, u = (np.array(a, dtype=float) for a in state)
+    piece = runner.piece.copy()
+    piece[:] = 0
+    out = np.empty((steps, 2 * system.n + 2))
+    load = scene.load.compile()
+    for number in range(periods):
+        taken, _ = run_loop(loop_for("implicit"), runner.model, load, x, v, u, piece, 0.0, number * steps, h, 1,
+                            out, None, runner.account, None, runner.dissipated, None, runner.work)
+        if taken < steps:
+            raise ElementError(f"{system.source}: a step failed at f = {omega / (2 * math.pi)!r} Hz")
+    return out[:, 0:2 * system.n:2].copy(), (x, v, u)
