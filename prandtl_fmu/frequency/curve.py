@@ -36,8 +36,8 @@ class Curve:
 
     ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
     ``stable`` (bool), ``fold`` (bool: a located fold), ``multiplier`` the largest |Floquet multiplier| (NaN
-    where it was not computed: see STABILITY_STRIDE), ``amplitudes``: {node: first-harmonic amplitude (m)} for every node with
-    a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
+    where it was not computed: see STABILITY_STRIDE), ``amplitudes``: {node: first-harmonic amplitude (m)} for
+    every node with a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
     harmonic at the last increase of H (None when H was given)."""
 
     frequency: np.ndarray
@@ -78,8 +78,8 @@ def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: 
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
     taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
     load node); ``stability``: compute the Floquet multipliers (else every point is marked stable and its
-    multiplier NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError names the culprit
-    or says where the curve stopped and why."""
+    multiplier NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError
+    names the culprit or says where the curve stopped and why."""
     force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)

@@ -319,17 +319,16 @@ class HarmonicBalance:
         solved = self._newton(omega, start)
         if solved is not None:
             return solved
-        full = self.force_amplitude
-        q = self.linear_guess(omega) * 0.0
+        where = self.system.load_node * self.L + 1
+        q = 0.1 * start
         try:
             for fraction in np.linspace(0.1, 1.0, 10).tolist():
-                self.force = self.force * 0.0
-                self.force[self.system.load_node * self.L + 1] = full * fraction
-                q = self._newton(omega, q if fraction > 0.1 else start * fraction)
+                self.force[where] = self.force_amplitude * fraction
+                q = self._newton(omega, q)
                 if q is None:
                     break
         finally:
-            self.force[self.system.load_node * self.L + 1] = full
+            self.force[where] = self.force_amplitude
         if q is None:
             raise FrequencyError(f"{self.system.source}: harmonic balance did not converge at f = "
                                  f"{omega / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
