@@ -133,7 +133,7 @@ def test_plot_without_matplotlib_names_the_extra(tmp_path, capsys, monkeypatch):
 def test_the_figures_are_written(tmp_path):
     pytest.importorskip("matplotlib")
     for arguments in (["--amplitudes", "0.05,0.1,0.3,1"],
-                      ["--force-amplitude", "0.05", "--frequencies", "0.1,0.2,0.3"]):
+                      ["--force-amplitude", "0.05", "--frequencies", "0.1,0.2,0.3", "--method", "time"]):
         plot = tmp_path / "figure.png"
         scene = write(tmp_path, DAMPER if "--force-amplitude" in arguments else JOINT)
         assert main(["describe", scene, *arguments, "--plot", str(plot), "--out", str(tmp_path / "o.csv")]) == 0
