@@ -114,7 +114,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
 
 
 def _hz(omega: float) -> float:
-    return omega / (2.0 * math.pi)
+    return float(omega) / (2.0 * math.pi)
 
 
 def _amplitude(balance, q) -> float:

@@ -186,3 +186,33 @@ def test_what_harmonic_balance_does_not_take_is_named(tmp_path, capsys):
         err = capsys.readouterr().err
         assert culprit in err and "--method time" in err and len(err.strip().splitlines()) == 1
         assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_harmonics_chosen_by_the_tolerance_reach_it():
+    """Without H, the curve's first harmonic at its peak is within the tolerance of H = 21's there."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene = element(DAMPER)
+    curve = harmonic_response(scene, 0.1, [0.15, 0.19], tolerance=1e-3, stability=False)
+    assert curve.harmonics > 1 and curve.change <= 1e-3
+    peak = int(np.argmax(curve.amplitude))
+    reference = HarmonicBalance(periodic_system(scene), 21, 0.1)
+    q = reference.solve_at(2 * math.pi * curve.frequency[peak])
+    X = complex(reference.full(q)[1], -reference.full(q)[2])
+    assert abs(abs(X) - curve.amplitude[peak]) <= 1e-3 * abs(X)
+
+
+@pytest.mark.slow
+def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, monkeypatch):
+    from prandtl_fmu.frequency import continuation
+
+    monkeypatch.setattr(continuation, "_correct", lambda *args: None)
+    monkeypatch.setattr(continuation, "_around_corner", lambda *args: None)
+    out = tmp_path / "out.csv"
+    status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.15,0.19",
+                   "--harmonics", "3", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and "cannot continue past f = 0.15 Hz" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
