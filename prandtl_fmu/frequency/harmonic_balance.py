@@ -141,7 +141,7 @@ def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
     node = network.load_node
     if load_node is not None:
         if load_node not in network.nodes:
-            raise FrequencyError(f"--node: {load_node!r} is not a node of {scene.source} "
+            raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} "
                                  f"({', '.join(network.nodes)})")
         node = network.nodes.index(load_node)
     network = dataclasses.replace(network, load_node=node)
@@ -331,7 +331,7 @@ class HarmonicBalance:
             self.force[where] = self.force_amplitude
         if q is None:
             raise FrequencyError(f"{self.system.source}: harmonic balance did not converge at f = "
-                                 f"{omega / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
+                                 f"{float(omega) / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
                                  "(from the linear response, nor with the force raised in 10 steps)")
         return q
 

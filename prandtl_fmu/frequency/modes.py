@@ -141,7 +141,7 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
         else:
             state = _stepped(balance, state, last, A, fixed, keep)
         if state is None:
-            raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = {A!r} m "
+            raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = {float(A)!r} m "
                                  f"(H = {harmonics}) within {NEWTON_ITERATIONS} Newton iterations per step, "
                                  f"with the amplitude step halved {MAX_HALVINGS} times")
         last = A
