@@ -27,7 +27,7 @@ HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
 # The Floquet multipliers are computed at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at
 # every point between two computed ones that disagree; the points between two that agree take their verdict
 # (their ``multiplier`` is NaN): a loss of stability and its return within fewer points would be missed.
-STABILITY_STRIDE = 8
+STABILITY_STRIDE = 16
 
 
 @dataclass(frozen=True, eq=False)
