@@ -61,8 +61,9 @@ def scene_of_document(doc: dict, source: str, networks: bool = False):
             doc = dict(doc, solver=dict(_NO_SOLVER, stepper="implicit"))
         return scene_from_document(doc, source, check_stepper=False), None
     if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
-        raise FrequencyError(f"{source}: describe takes an element scene ([mass], [spring], [branches], ...), "
-                             "not a [network] or [chain]")
+        raise FrequencyError(f"{source}: this takes an element scene ([mass], [spring], [branches], ...), not a "
+                             "[network] or [chain] (a network's joint: --amplitudes with --between I,J; its "
+                             "response: harmonic balance)")
     named = None
     if isinstance(doc, dict) and isinstance(doc.get("solver"), dict) and "stepper" in doc["solver"]:
         named = doc["solver"]["stepper"]

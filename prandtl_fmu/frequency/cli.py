@@ -1,6 +1,7 @@
 """``prandtl-fmu describe``: the frequency domain from the command line (docs/frequency.md).
 
-    prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--tolerance TOL] [--out CSV] [--plot PNG]
+    prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--between I,J] [--tolerance TOL] [--out CSV]
+                         [--plot PNG]
     prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... [--harmonics H] [--node NAME]
                          [--load-node NAME] [--tolerance TOL] [--out CSV] [--plot PNG]
     prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... --method time [--sweep up|down|both]
@@ -59,6 +60,9 @@ def add_parser(commands, scene_help: str) -> None:
                                "a mass)")
     describe.add_argument("--load-node", metavar="NAME",
                           help="node the force acts on (default: the network's load_node; the element's mass)")
+    describe.add_argument("--between", metavar="I,J",
+                          help="with --amplitudes on a network: the describing function of the elements joining "
+                               "nodes I and J (or ground), driven in the relative displacement")
     describe.add_argument("--mode", metavar="N",
                           help="with --amplitudes: the nonlinear mode N (1: the lowest) by the extended periodic "
                                "motion concept: frequency and damping ratio against the amplitude at --node")
@@ -181,7 +185,7 @@ def _check_mode(args) -> dict:
     for option, value in (("--force-amplitude", args.force_amplitude), ("--frequencies", args.frequencies),
                           ("--frequency", args.frequency), ("--sweep", args.sweep), ("--stepper", args.stepper),
                           ("--scheduler", args.scheduler), ("--workers", args.workers), ("--method", args.method),
-                          ("--load-node", args.load_node)):
+                          ("--load-node", args.load_node), ("--between", args.between)):
         if value is not None:
             raise ValueError(f"{option} does not belong to a nonlinear mode (--mode)")
     values = {"mode": _whole(args.mode, "--mode", 1, 10000), "amplitudes": _numbers(args.amplitudes, "--amplitudes"),
@@ -217,7 +221,18 @@ def run(args) -> int:
 
         balance = "mode" in values or values.get("method") == "harmonic-balance"
         backbone = None
-        scene, named = read_scene(args.scene, networks=balance)
+        scene, named = read_scene(args.scene, networks=balance or args.between is not None)
+        if args.between is not None:
+            if "mode" in values or "amplitudes" not in values:
+                raise ValueError("--between belongs to the describing function (--amplitudes) of a network")
+            from ..network.model import NetworkScene
+
+            if not isinstance(scene, NetworkScene):
+                raise ValueError(f"--between: {args.scene} is an element scene, not a network (describe it without "
+                                 "--between)")
+            from .describing import joint_element
+
+            scene = joint_element(scene, args.between)
         if "mode" in values:
             from .modes import nonlinear_mode
 

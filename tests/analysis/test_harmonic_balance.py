@@ -216,3 +216,26 @@ def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, m
     err = capsys.readouterr().err
     assert status == 2 and "cannot continue past f = 0.15 Hz" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_network_joint_s_describing_function_is_its_elements_closed_forms(tmp_path, capsys):
+    """--between: the elements joining two nodes driven in the relative displacement; the two-mass joint's
+    Jenkins branch (k = 2, eta = 0.05) gives the elastic-perfectly-plastic K and D; a slider beside a branch adds
+    4 alpha A to D."""
+    out = tmp_path / "joint.csv"
+    amplitudes = [0.01, 0.05, 0.1, 1.0]
+    assert main(["describe", "networks/two-mass-joint", "--amplitudes", ",".join(map(str, amplitudes)),
+                 "--between", "b,a", "--out", str(out)]) == 0
+    table = read_csv(out)
+    for A, K, D in zip(amplitudes, table["stiffness"], table["dissipation"]):
+        assert (float(K), float(D)) == pytest.approx(epp(2.0, 0.05, A), rel=1e-12, abs=1e-15)
+    assert main(["describe", "networks/two-masses-slider", "--amplitudes", "0.01,1", "--between", "a,b", "--out",
+                 str(out)]) == 0
+    table = read_csv(out)
+    for A, K, D in zip([0.01, 1.0], table["stiffness"], table["dissipation"]):
+        K_b, D_b = epp(50.0, 0.02, A)
+        assert (float(K), float(D)) == pytest.approx((K_b, D_b + 4 * 2.0 * A), rel=1e-12)
+    for arguments, culprit in ((["--between", "a,nowhere"], "--between"), (["--between", "a,a"], "--between")):
+        assert main(["describe", "networks/two-mass-joint", "--amplitudes", "0.1", *arguments]) == 2
+        err = capsys.readouterr().err
+        assert culprit in err and len(err.strip().splitlines()) == 1
