@@ -17,7 +17,7 @@ Measured, in one run of this script:
   down), with M = 2048 and 8192: its time per frequency, its difference from H = 21 (backward Euler is first
   order: the difference falls as 1 / M), and the time a 200-frequency sweep would take at that cost.
 
-    python benchmarks/harmonic_balance.py [--out docs/bench/harmonic_balance.csv]
+    python benchmarks/harmonic_balance.py [--out docs/bench/harmonic_balance.csv] [--no-sweep]
 """
 import argparse
 import math
@@ -77,6 +77,7 @@ def sweep_to(balance, omega_path, steps, tolerance=1e-5, max_periods=20000):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=os.path.join("docs", "bench", "harmonic_balance.csv"))
+    parser.add_argument("--no-sweep", action="store_true", help="the harmonic balance only (the sweep takes minutes)")
     args = parser.parse_args()
     scene, _ = parse_scene(scene_text(), "two-mass-iwan-joint", networks=True)
     frequencies = np.linspace(LOW, HIGH, 200)
@@ -115,7 +116,7 @@ def main():
                 rows.append({"measure": f"error H={H} at {f:.4f} Hz ({branch})", "value": abs(X - reference[f]) /
                              reference[f], "unit": "relative", "note": f"|X| = {X:.6g} m"})
                 print(rows[-1])
-    for steps in (2048, 8192):
+    for steps in () if args.no_sweep else (2048, 8192):
         for branch, f in probes:
             omega = 2 * math.pi * f
             path = np.linspace(2 * math.pi * (LOW if branch == "upper" else HIGH), omega, 8)

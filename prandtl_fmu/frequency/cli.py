@@ -111,8 +111,8 @@ def _check(args) -> dict:
                              "and --plot (or --mode alone for its CSV)")
         if args.method == "time":
             raise ValueError("--mode belongs to --method harmonic-balance, not to --method time")
-        mode = _check_mode(argparse_copy(args, force_amplitude=None, frequencies=None, load_node=None))
-        args = argparse_copy(args, amplitudes=None, mode=None)
+        mode = _check_mode(_copy_args(args, force_amplitude=None, frequencies=None, load_node=None))
+        args = _copy_args(args, amplitudes=None, mode=None)
         values = _check(args)
         values["backbone"] = mode
         return values
@@ -134,6 +134,8 @@ def _check(args) -> dict:
         if args.frequency is not None:
             raise ValueError("--frequency sets the cycles of --amplitudes; the frequency response takes "
                              "--frequencies")
+        if args.between is not None:
+            raise ValueError("--between belongs to the describing function (--amplitudes) of a network")
         method = args.method or "harmonic-balance"
         wrong = (("--sweep", args.sweep), ("--stepper", args.stepper), ("--scheduler", args.scheduler),
                  ("--workers", args.workers)) if method == "harmonic-balance" else (
@@ -163,7 +165,7 @@ def _check(args) -> dict:
     return values
 
 
-def argparse_copy(args, **changes):
+def _copy_args(args, **changes):
     """A copy of the parsed ``args`` with some options changed."""
     import argparse
 

@@ -132,13 +132,12 @@ def test_points_marked_unstable_leave_their_orbit_and_stable_ones_keep_it():
 
 @pytest.mark.slow
 def test_a_network_with_a_joint_end_to_end_from_the_command_line(tmp_path):
+    pytest.importorskip("matplotlib")
     out = tmp_path / "curve.csv"
     plot = tmp_path / "curve.png"
-    arguments = ["describe", "networks/two-mass-joint", "--force-amplitude", "0.2", "--frequencies", "0.1,0.4",
-                 "--harmonics", "3", "--out", str(out)]
-    if pytest.importorskip("matplotlib"):
-        arguments += ["--plot", str(plot), "--mode", "1", "--amplitudes", "0.1,0.5,1,2"]
-    assert main(arguments) == 0
+    assert main(["describe", "networks/two-mass-joint", "--force-amplitude", "0.2", "--frequencies", "0.1,0.4",
+                 "--harmonics", "3", "--out", str(out), "--plot", str(plot), "--mode", "1", "--amplitudes",
+                 "0.1,0.5,1,2"]) == 0
     table = read_csv(out)
     assert list(table)[:6] == ["frequency", "amplitude", "phase", "stable", "amplitude_a", "amplitude_b"]
     f = np.array(table["frequency"], dtype=float)
@@ -149,7 +148,8 @@ def test_a_network_with_a_joint_end_to_end_from_the_command_line(tmp_path):
     assert plot.read_bytes()[:4] == b"\x89PNG"
     backbone = tmp_path / "backbone.csv"
     assert main(["describe", "networks/two-mass-joint", "--mode", "2", "--amplitudes", "0.01,0.5,2", "--harmonics",
-                 "3", "--out", str(backbone)]) == 0
+                 "3", "--out", str(backbone), "--plot", str(tmp_path / "backbone.png")]) == 0
+    assert (tmp_path / "backbone.png").read_bytes()[:4] == b"\x89PNG"
     modes = read_csv(backbone)
     assert list(modes) == ["amplitude", "frequency", "damping_ratio"]
     zeta = np.array(modes["damping_ratio"], dtype=float)
