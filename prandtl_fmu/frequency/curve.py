@@ -52,6 +52,7 @@ class Curve:
     change: Optional[float]
     node: str
     force_amplitude: float
+    load_node: str
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,
@@ -158,4 +159,5 @@ def _curve(balance, points, where, stability, change) -> Curve:
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
-                 largest, amplitudes, coefficients, balance.H, change, system.nodes[where], balance.force_amplitude)
+                 largest, amplitudes, coefficients, balance.H, change, system.nodes[where], balance.force_amplitude,
+                 system.nodes[system.load_node])

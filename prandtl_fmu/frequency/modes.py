@@ -14,6 +14,9 @@ m omega^2 = K(A) and damping ratio D(A) / (2 pi K(A) A^2) (c / (2 m omega) more 
 The first amplitude starts from the linear mode with every branch sticking (the massless nodes condensed);
 each next one from the last solution scaled by the ratio of the amplitudes, with the step halved (at most
 MAX_HALVINGS times) where Newton does not converge within NEWTON_ITERATIONS.
+
+:func:`synthesis`: the forced response near the mode's resonance from the backbone alone (single nonlinear
+mode synthesis).
 """
 from __future__ import annotations
 
@@ -35,7 +38,8 @@ class Backbone:
     """The nonlinear mode ``mode`` at each amplitude: arrays of shape (amplitudes,), in the order given.
 
     ``amplitude`` (m) of the first harmonic of x at ``node``, ``frequency`` (Hz), ``damping_ratio``;
-    ``harmonics`` H; ``change`` the relative change at the last increase of H (None when H was given)."""
+    ``harmonics`` H; ``change`` the relative change at the last increase of H (None when H was given);
+    ``shape`` the mode's first harmonic at every node per unit amplitude (complex, (amplitudes, n))."""
 
     amplitude: np.ndarray
     frequency: np.ndarray
@@ -44,6 +48,9 @@ class Backbone:
     node: str
     harmonics: int
     change: Optional[float]
+    shape: np.ndarray  # (amplitudes, n) complex: the first harmonic a_1 - i b_1 of every node over the amplitude
+    mass: np.ndarray  # (n,) the nodes' masses
+    nodes: tuple
 
     def columns(self) -> dict:
         return {"amplitude": self.amplitude, "frequency": self.frequency, "damping_ratio": self.damping_ratio}
@@ -59,12 +66,12 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     system = periodic_system(scene)
     where = system.node_index(node)
     if harmonics is not None:
-        values = _backbone(system, mode, amplitudes, where, harmonics, samples)
+        values, shape = _backbone(system, mode, amplitudes, where, harmonics, samples)
         change = None
     else:
         previous, change = None, math.inf
         for H in HARMONIC_STEPS:
-            values = _backbone(system, mode, amplitudes, where, H, samples)
+            values, shape = _backbone(system, mode, amplitudes, where, H, samples)
             if previous is not None:
                 change = float(np.max(np.abs(values - previous) / np.maximum(np.abs(values), 1e-300)))
                 if change <= tolerance:
@@ -76,7 +83,42 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
                                  f"relative from H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics: give "
                                  "--harmonics, or a larger --tolerance")
     return Backbone(amplitudes, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
-                    system.nodes[where], harmonics, change)
+                    system.nodes[where], harmonics, change, shape, system.mass.copy(), system.nodes)
+
+
+def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[str] = None) -> tuple:
+    """The forced response under F0 cos(Omega t) on ``load_node`` (default: the backbone's node) synthesised from
+    the one nonlinear mode (single nonlinear mode synthesis): at each amplitude a of the backbone, with omega(a),
+    zeta(a) and the shape psi(a) (per unit amplitude), the modal equation
+
+        (omega^2 - Omega^2 + 2 i zeta omega Omega) m_psi a = conj(psi_L) F0,    m_psi = sum_i m_i |psi_i|^2,
+
+    gives |.| = F0 |psi_L| / (m_psi a), a quadratic in Omega^2: up to two Omega per amplitude, below and above
+    the backbone. Where the mode dominates the response (near its resonance, modes well apart) it is the
+    forced response; with one harmonic and a conservative nonlinearity plus viscous damping it is exactly the
+    harmonic balance's. Returns ``(frequency (Hz), amplitude (m))`` along the curve: up the lower side, down
+    the upper side (amplitudes where the force cannot reach are left out)."""
+    force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
+    where = backbone.nodes.index(load_node) if load_node is not None else backbone.nodes.index(backbone.node)
+    a = backbone.amplitude
+    order = np.argsort(a)
+    a = a[order]
+    omega = 2.0 * math.pi * backbone.frequency[order]
+    zeta = backbone.damping_ratio[order]
+    shape = backbone.shape[order]
+    modal_mass = np.sum(backbone.mass[None, :] * np.abs(shape) ** 2, axis=1)
+    right = (force_amplitude * np.abs(shape[:, where]) / (modal_mass * a)) ** 2
+    # Omega^4 + (4 zeta^2 - 2) omega^2 Omega^2 + omega^4 - right = 0
+    b = (4.0 * zeta**2 - 2.0) * omega**2
+    disc = b * b - 4.0 * (omega**4 - right)
+    with np.errstate(invalid="ignore"):
+        root = np.sqrt(disc)
+        low = np.sqrt((-b - root) / 2.0)
+        high = np.sqrt((-b + root) / 2.0)
+    low_ok, high_ok = np.isfinite(low) & (disc >= 0), np.isfinite(high) & (disc >= 0)
+    frequency = np.concatenate((low[low_ok], high[high_ok][::-1])) / (2.0 * math.pi)
+    amplitude = np.concatenate((a[low_ok], a[high_ok][::-1]))
+    return frequency, amplitude
 
 
 def linear_mode(system, mode: int) -> tuple:
@@ -112,7 +154,8 @@ def linear_mode(system, mode: int) -> tuple:
 
 
 def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: int, samples) -> np.ndarray:
-    """(amplitudes, 2): omega and xi at each amplitude, in the order given."""
+    """((amplitudes, 2): omega and xi at each amplitude, (amplitudes, n): the first harmonic of every node per
+    unit amplitude), in the order given."""
     balance = HarmonicBalance(system, harmonics, 1.0, samples)
     L = balance.L
     free = list(balance.free)
@@ -126,6 +169,7 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
     xi0 = float(shape @ system.damping @ shape / (shape @ C @ shape))
     order = np.argsort(amplitudes)
     out = np.empty((amplitudes.size, 2))
+    shapes = np.empty((amplitudes.size, system.n), dtype=complex)
     state = None
     last = None
     for index in order.tolist():
@@ -146,7 +190,9 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
                                  f"with the amplitude step halved {MAX_HALVINGS} times")
         last = A
         out[index] = state[1], state[2]
-    return out
+        full = balance.full(state[0]).reshape(system.n, L)
+        shapes[index] = (full[:, 1] - 1j * full[:, 2]) / A
+    return out, shapes
 
 
 def _from_small(balance, q, omega, xi, fixed, keep, A):

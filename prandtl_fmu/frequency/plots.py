@@ -121,7 +121,8 @@ def plot_response(response, scene, path: str) -> None:
 
 def draw_curve(curve, axes, backbone=None) -> None:
     """Draw the harmonic balance's curve on ``axes`` (two: amplitude, phase against the frequency): stable parts
-    solid, unstable parts dashed, folds marked; ``backbone`` (a :class:`modes.Backbone`) over the amplitudes."""
+    solid, unstable parts dashed, folds marked; ``backbone`` (a :class:`modes.Backbone`) over the amplitudes, with
+    the response synthesised from it (``modes.synthesis``) dotted."""
     amplitude_axes, phase_axes = axes
     f, stable = curve.frequency, curve.stable
     for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
@@ -138,8 +139,14 @@ def draw_curve(curve, axes, backbone=None) -> None:
     amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {curve.harmonics})")
     amplitude_axes.plot([], [], "--", color="C0", label="unstable")
     if backbone is not None:
+        from .modes import synthesis
+
         amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-", color="C2", lw=1,
                             label=f"backbone, mode {backbone.mode}")
+        if backbone.node == curve.node:
+            f_s, a_s = synthesis(backbone, curve.force_amplitude, curve.load_node)
+            inside = (f_s >= f.min()) & (f_s <= f.max())
+            amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2", lw=1, label="single-mode synthesis")
     amplitude_axes.set_yscale("log")
     amplitude_axes.set_xlabel("frequency f (Hz)")
     amplitude_axes.set_ylabel(f"amplitude of x_{curve.node} (m)")

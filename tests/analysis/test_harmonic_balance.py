@@ -239,3 +239,17 @@ def test_a_network_joint_s_describing_function_is_its_elements_closed_forms(tmp_
         assert main(["describe", "networks/two-mass-joint", "--amplitudes", "0.1", *arguments]) == 2
         err = capsys.readouterr().err
         assert culprit in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_single_mode_synthesis_of_duffing_with_one_harmonic_is_the_single_term_curve():
+    """EPMC of m x'' + c x' + k x + k3 x^3 with one harmonic: omega^2 = (k + 3/4 k3 a^2) / m, 2 zeta omega m = c; the
+    synthesis then satisfies a^2 [(k + 3/4 k3 a^2 - m W^2)^2 + (c W)^2] = F^2 exactly, on both sides."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode, synthesis
+
+    backbone = nonlinear_mode(element(DUFFING), 1, np.linspace(0.05, 2.5, 60), harmonics=1)
+    f, a = synthesis(backbone, 0.2)
+    W = 2 * math.pi * f
+    assert f.size > 60  # both sides where the force reaches
+    residual = a * a * ((1.0 + 0.375 * a * a - W * W) ** 2 + (0.05 * W) ** 2) - 0.04
+    assert np.max(np.abs(residual)) <= 1e-9
