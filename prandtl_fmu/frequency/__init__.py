@@ -10,7 +10,12 @@ Two questions that engineers who model joints and friction dampers ask first (do
   stated relative accuracy otherwise (``describing.py``);
 * :func:`frequency_response`: a scene with a mass under F = F0 cos(2 pi f t): the steady first harmonic of
   x, x_1 = amplitude cos(2 pi f t + phase) (m, radians), frequency by frequency, swept up and down with
-  continuation where the response has several branches (``response.py``).
+  continuation where the response has several branches (``response.py``: time integration);
+* :func:`harmonic_response`: the same response of an element with a mass or a network by harmonic balance
+  (``harmonic_balance.py``, ``aft.py``), continued along the arc length through its folds
+  (``continuation.py``), each point's stability from Floquet multipliers (``floquet.py``) (``curve.py``);
+* :func:`nonlinear_mode`: a nonlinear mode's frequency and damping ratio against its amplitude by the extended
+  periodic motion concept (``modes.py``).
 
 A scene needs no ``[load]`` or ``[solver]`` for either (:func:`read_scene`): both drive the element themselves
 and choose their steps; a ``[solver]`` table, when present, names the stepper of the frequency response.
