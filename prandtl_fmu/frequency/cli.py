@@ -67,20 +67,21 @@ def add_parser(commands, scene_help: str) -> None:
                           help="with --amplitudes: the nonlinear mode N (1: the lowest) by the extended periodic "
                                "motion concept: frequency and damping ratio against the amplitude at --node")
     describe.add_argument("--sweep", choices=("up", "down", "both"),
-                          help="sweep direction(s) of the frequency response (default: both for a nonlinear scene)")
+                          help="--method time: sweep direction(s) (default: both for a nonlinear scene)")
     describe.add_argument("--stepper", choices=list(STEPPERS),
-                          help="stepper of the frequency response (default: the scene's [solver] stepper, else "
+                          help="--method time: the stepper (default: the scene's [solver] stepper, else "
                                "exact where it applies, else verlet, else implicit)")
     describe.add_argument("--tolerance", metavar="TOL", default="1e-3",
                           help="relative accuracy of the first harmonic (default 1e-3)")
     describe.add_argument("--scheduler", metavar="ADDRESS",
-                          help="run the frequencies on a running dask scheduler (tcp://host:8786)")
+                          help="--method time: run the frequencies on a running dask scheduler (tcp://host:8786)")
     describe.add_argument("--workers", metavar="N",
-                          help="run the frequencies on a LocalCluster of N worker processes")
+                          help="--method time: run the frequencies on a LocalCluster of N worker processes")
     describe.add_argument("--out", help="CSV file to write (default: standard output)")
     describe.add_argument("--plot", metavar="PNG",
-                          help="figure: K(A) and the loss factor against A (log axes), or the frequency response "
-                               "by sweep; closed forms drawn over")
+                          help="figure: K(A) and the loss factor against A (log axes); the curve with its unstable "
+                               "part dashed and its folds (with --mode: the backbone over it); the backbone; or the "
+                               "time sweep's response by sweep; closed forms drawn over")
 
 
 def _numbers(text, option: str) -> list:
