@@ -11,7 +11,12 @@ Two questions that engineers who model joints and friction dampers ask first (do
   stated relative accuracy (``describing.py``);
 * :func:`frequency_response`: a scene with a mass under F = F0 cos(2 pi f t): the steady first harmonic of
   x, x_1 = amplitude cos(2 pi f t + phase) (m, radians), frequency by frequency, swept up and down with
-  continuation where the response has several branches (``response.py``).
+  continuation where the response has several branches (``response.py``: time integration);
+* :func:`harmonic_response`: the same response of an element with a mass or a network by harmonic balance
+  (``harmonic_balance.py``, ``aft.py``), continued along the arc length through its folds
+  (``continuation.py``), each point's stability from Floquet multipliers (``floquet.py``) (``curve.py``);
+* :func:`nonlinear_mode`: a nonlinear mode's frequency and damping ratio against its amplitude by the extended
+  periodic motion concept (``modes.py``).
 
 A scene needs no ``[load]`` or ``[solver]`` for either (:func:`read_scene`): both drive the element themselves
 and choose their steps; a ``[solver]`` table, when present, names the stepper of the frequency response.
@@ -37,29 +42,34 @@ class FrequencyError(ValueError):
     """Bad input, or a computation that cannot reach its stated accuracy: one line saying which and why."""
 
 
-def read_scene(path: Union[str, os.PathLike]):
+def read_scene(path: Union[str, os.PathLike], networks: bool = False):
     """``(scene, stepper)``: the scene file (or packaged scene) ``path``, read without needing ``[load]`` or
     ``[solver]``, and the stepper its ``[solver]`` names (None when it has none). SceneError on a broken rule;
-    FrequencyError for a network scene."""
+    FrequencyError for a network scene unless ``networks`` (harmonic balance takes them)."""
     from ..scene import read_document
 
-    return scene_of_document(*read_document(path))
+    return scene_of_document(*read_document(path), networks=networks)
 
 
-def parse_scene(text: Union[str, bytes], source: str = "<scene>"):
+def parse_scene(text: Union[str, bytes], source: str = "<scene>", networks: bool = False):
     """:func:`read_scene` for scene TOML text (``source`` names it in messages)."""
     from ..scene import toml_document
 
-    return scene_of_document(toml_document(text, source), source)
+    return scene_of_document(toml_document(text, source), source, networks=networks)
 
 
-def scene_of_document(doc: dict, source: str):
+def scene_of_document(doc: dict, source: str, networks: bool = False):
     """:func:`read_scene` for a parsed TOML document."""
     from ..scene import scene_from_document
 
+    if networks and isinstance(doc, dict) and ("network" in doc or "chain" in doc):
+        if "solver" not in doc:
+            doc = dict(doc, solver=dict(_NO_SOLVER, stepper="implicit"))
+        return scene_from_document(doc, source, check_stepper=False), None
     if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
-        raise FrequencyError(f"{source}: describe takes an element scene ([mass], [spring], [branches], ...), "
-                             "not a [network] or [chain]")
+        raise FrequencyError(f"{source}: this takes an element scene ([mass], [spring], [branches], ...), not a "
+                             "[network] or [chain] (a network's joint: --amplitudes with --between I,J; its "
+                             "response: harmonic balance)")
     named = None
     if isinstance(doc, dict) and isinstance(doc.get("solver"), dict) and "stepper" in doc["solver"]:
         named = doc["solver"]["stepper"]
@@ -119,7 +129,8 @@ def settling_remainder(changes: list) -> float:
 
 
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",
-         "frequency_response": "response", "NotSettled": "response"}
+         "frequency_response": "response", "NotSettled": "response", "Curve": "curve",
+         "harmonic_response": "curve", "Backbone": "modes", "nonlinear_mode": "modes"}
 
 
 def __getattr__(name: str):
@@ -130,5 +141,6 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response", "describe_amplitudes",
-           "frequency_response", "parse_scene", "read_scene"]
+__all__ = ["Backbone", "Curve", "DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response",
+           "describe_amplitudes", "frequency_response", "harmonic_response", "nonlinear_mode", "parse_scene",
+           "read_scene"]

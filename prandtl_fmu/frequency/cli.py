@@ -1,14 +1,20 @@
 """``prandtl-fmu describe``: the frequency domain from the command line (docs/frequency.md).
 
-    prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--tolerance TOL] [--out CSV] [--plot PNG]
-    prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... [--sweep up|down|both]
+    prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--between I,J] [--tolerance TOL] [--out CSV]
+                         [--plot PNG]
+    prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... [--harmonics H] [--node NAME]
+                         [--load-node NAME] [--tolerance TOL] [--out CSV] [--plot PNG]
+    prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... --method time [--sweep up|down|both]
                          [--stepper S] [--tolerance TOL] [--scheduler ADDRESS | --workers N] [--out CSV]
                          [--plot PNG]
+    prandtl-fmu describe SCENE --mode 1 --amplitudes A1,A2,... [--harmonics H] [--node NAME] [--out CSV]
 
-The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``, the second
-``frequency,amplitude,phase,sweep,steps_per_period,periods,error`` (phase in radians). Exit status 2, one line
-and nothing written, on bad input (naming the culprit) and when a result cannot reach its accuracy (saying
-what was reached); 0 otherwise (docs/cli.md: every exit is 0 or 2).
+The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``; the second (harmonic balance,
+the default) ``frequency,amplitude,phase,stable``, ``amplitude_<node>`` for every node with a mass, ``fold`` and
+``multiplier``; the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error``
+(phase in radians); the fourth (a nonlinear mode) ``amplitude,frequency,damping_ratio``. Exit status 2, one
+line and nothing written, on bad input (naming the culprit) and when a result cannot reach its accuracy
+(saying what was reached); 0 otherwise (docs/cli.md: every exit is 0 or 2).
 """
 from __future__ import annotations
 
@@ -19,8 +25,11 @@ _EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A
            "D/(pi K A^2) (an empty field where it is infinite: K = 0, a dashpot or friction alone), "
            "method (exact, spectrum or quadrature), error (estimated relative error; 0: rounding only); or "
            "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
-           "cos(2 pi f t + phase)), sweep (up or down), steps_per_period, periods, error. Exit status 2, one "
-           "line, nothing written, on bad input and when a result cannot reach the tolerance.")
+           "cos(2 pi f t + phase)), then stable, amplitude_<node>, fold, multiplier (harmonic balance) or sweep (up "
+           "or down), steps_per_period, periods, error (--method time); or amplitude, frequency, damping_ratio "
+           "(--mode). Exit status 2, one line, nothing written, on bad input and when a result cannot reach the "
+           "tolerance.")
+METHODS = ("harmonic-balance", "time")
 
 
 def add_parser(commands, scene_help: str) -> None:
@@ -39,22 +48,41 @@ def add_parser(commands, scene_help: str) -> None:
                                "element (dashpot, series dashpots, delay, history, Stribeck or belt friction)")
     describe.add_argument("--force-amplitude", metavar="F0",
                           help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass: the frequency response")
-    describe.add_argument("--frequencies", metavar="f1,f2,...", help="forcing frequencies (Hz, > 0)")
+    describe.add_argument("--frequencies", metavar="f1,f2,...",
+                          help="forcing frequencies (Hz, > 0); harmonic balance follows the curve from the lowest "
+                               "to the highest")
+    describe.add_argument("--method", choices=METHODS,
+                          help="of the frequency response: harmonic-balance (default: the periodic state solved "
+                               "for, continued through folds, its stability) or time (the time-integration sweep)")
+    describe.add_argument("--harmonics", metavar="H",
+                          help="harmonics of the harmonic balance (default: chosen by --tolerance)")
+    describe.add_argument("--node", metavar="NAME",
+                          help="node whose first harmonic gives amplitude and phase (default: the first node with "
+                               "a mass)")
+    describe.add_argument("--load-node", metavar="NAME",
+                          help="node the force acts on (default: the network's load_node; the element's mass)")
+    describe.add_argument("--between", metavar="I,J",
+                          help="with --amplitudes on a network: the describing function of the elements joining "
+                               "nodes I and J (or ground), driven in the relative displacement")
+    describe.add_argument("--mode", metavar="N",
+                          help="with --amplitudes: the nonlinear mode N (1: the lowest) by the extended periodic "
+                               "motion concept: frequency and damping ratio against the amplitude at --node")
     describe.add_argument("--sweep", choices=("up", "down", "both"),
-                          help="sweep direction(s) of the frequency response (default: both for a nonlinear scene)")
+                          help="--method time: sweep direction(s) (default: both for a nonlinear scene)")
     describe.add_argument("--stepper", choices=list(STEPPERS),
-                          help="stepper of the frequency response (default: the scene's [solver] stepper, else "
+                          help="--method time: the stepper (default: the scene's [solver] stepper, else "
                                "exact where it applies, else verlet, else implicit)")
     describe.add_argument("--tolerance", metavar="TOL", default="1e-3",
                           help="relative accuracy of the first harmonic (default 1e-3)")
     describe.add_argument("--scheduler", metavar="ADDRESS",
-                          help="run the frequencies on a running dask scheduler (tcp://host:8786)")
+                          help="--method time: run the frequencies on a running dask scheduler (tcp://host:8786)")
     describe.add_argument("--workers", metavar="N",
-                          help="run the frequencies on a LocalCluster of N worker processes")
+                          help="--method time: run the frequencies on a LocalCluster of N worker processes")
     describe.add_argument("--out", help="CSV file to write (default: standard output)")
     describe.add_argument("--plot", metavar="PNG",
-                          help="figure: K(A) and the loss factor against A (log axes), or the frequency response "
-                               "by sweep; closed forms drawn over")
+                          help="figure: K(A) and the loss factor against A (log axes); the curve with its unstable "
+                               "part dashed and its folds (with --mode: the backbone over it); the backbone; or the "
+                               "time sweep's response by sweep; closed forms drawn over")
 
 
 def _numbers(text, option: str) -> list:
@@ -74,15 +102,31 @@ def _numbers(text, option: str) -> list:
 
 def _check(args) -> dict:
     """Every option checked before any work: the parsed values, or ValueError naming the culprit."""
-    by_amplitude = args.amplitudes is not None
+    by_amplitude = args.amplitudes is not None and args.mode is None
+    by_mode = args.mode is not None
     by_force = args.force_amplitude is not None
+    if by_mode and not by_force:
+        return _check_mode(args)
+    if by_mode:  # the backbone over the curve
+        if not args.plot or args.amplitudes is None:
+            raise ValueError("--mode with --force-amplitude draws the backbone over the curve: give --amplitudes "
+                             "and --plot (or --mode alone for its CSV)")
+        if args.method == "time":
+            raise ValueError("--mode belongs to --method harmonic-balance, not to --method time")
+        mode = _check_mode(_copy_args(args, force_amplitude=None, frequencies=None, load_node=None))
+        args = _copy_args(args, amplitudes=None, mode=None)
+        values = _check(args)
+        values["backbone"] = mode
+        return values
     if by_amplitude == by_force:
         raise ValueError("give either --amplitudes (the describing function) or --force-amplitude with "
                          "--frequencies (the frequency response)" + (", not both" if by_amplitude else ""))
     if by_amplitude:
         for option, value in (("--frequencies", args.frequencies), ("--sweep", args.sweep),
                               ("--stepper", args.stepper), ("--scheduler", args.scheduler),
-                              ("--workers", args.workers)):
+                              ("--workers", args.workers), ("--method", args.method),
+                              ("--harmonics", args.harmonics), ("--node", args.node),
+                              ("--load-node", args.load_node)):
             if value is not None:
                 raise ValueError(f"{option} belongs to the frequency response (--force-amplitude), not to "
                                  "--amplitudes")
@@ -92,6 +136,16 @@ def _check(args) -> dict:
         if args.frequency is not None:
             raise ValueError("--frequency sets the cycles of --amplitudes; the frequency response takes "
                              "--frequencies")
+        if args.between is not None:
+            raise ValueError("--between belongs to the describing function (--amplitudes) of a network")
+        method = args.method or "harmonic-balance"
+        wrong = (("--sweep", args.sweep), ("--stepper", args.stepper), ("--scheduler", args.scheduler),
+                 ("--workers", args.workers)) if method == "harmonic-balance" else (
+                 ("--harmonics", args.harmonics), ("--node", args.node), ("--load-node", args.load_node))
+        for option, value in wrong:
+            if value is not None:
+                other = "time" if method == "harmonic-balance" else "harmonic-balance"
+                raise ValueError(f"{option} belongs to --method {other}, not to --method {method}")
     values = {"tolerance": _numbers(args.tolerance, "--tolerance")[0]}
     if not values["tolerance"] < 1 or values["tolerance"] < 1e-12:
         raise ValueError(f"--tolerance: must be in [1e-12, 1), got {args.tolerance}")
@@ -101,12 +155,49 @@ def _check(args) -> dict:
     else:
         values["force_amplitude"] = _numbers(args.force_amplitude, "--force-amplitude")[0]
         values["frequencies"] = _numbers(args.frequencies, "--frequencies")
+        values["method"] = args.method or "harmonic-balance"
+        if args.harmonics is not None:
+            values["harmonics"] = _whole(args.harmonics, "--harmonics", 1, 256)
         if args.workers is not None:
             if not args.workers.strip().isdigit() or int(args.workers) < 1:
                 raise ValueError(f"--workers: must be a whole number >= 1, got {args.workers!r}")
             if args.scheduler:
                 raise ValueError("--workers sets up a LocalCluster; with --scheduler the cluster has its own workers")
             values["workers"] = int(args.workers)
+    return values
+
+
+def _copy_args(args, **changes):
+    """A copy of the parsed ``args`` with some options changed."""
+    import argparse
+
+    return argparse.Namespace(**dict(vars(args), **changes))
+
+
+def _whole(text, option: str, low: int, high: int) -> int:
+    """The whole number of ``option`` in [low, high]; ValueError naming the option."""
+    text = str(text).strip()
+    if not text.isdigit() or not low <= int(text) <= high:
+        raise ValueError(f"{option}: must be a whole number in [{low}, {high}], got {text!r}")
+    return int(text)
+
+
+def _check_mode(args) -> dict:
+    """The options of a nonlinear mode (--mode N --amplitudes ...), checked."""
+    if args.amplitudes is None:
+        raise ValueError("--mode needs --amplitudes (m, of x at --node)")
+    for option, value in (("--force-amplitude", args.force_amplitude), ("--frequencies", args.frequencies),
+                          ("--frequency", args.frequency), ("--sweep", args.sweep), ("--stepper", args.stepper),
+                          ("--scheduler", args.scheduler), ("--workers", args.workers), ("--method", args.method),
+                          ("--load-node", args.load_node), ("--between", args.between)):
+        if value is not None:
+            raise ValueError(f"{option} does not belong to a nonlinear mode (--mode)")
+    values = {"mode": _whole(args.mode, "--mode", 1, 10000), "amplitudes": _numbers(args.amplitudes, "--amplitudes"),
+              "tolerance": _numbers(args.tolerance, "--tolerance")[0]}
+    if not values["tolerance"] < 1 or values["tolerance"] < 1e-12:
+        raise ValueError(f"--tolerance: must be in [1e-12, 1), got {args.tolerance}")
+    if args.harmonics is not None:
+        values["harmonics"] = _whole(args.harmonics, "--harmonics", 1, 256)
     return values
 
 
@@ -132,8 +223,38 @@ def run(args) -> int:
                 raise ValueError(f"--plot {exc}") from None
         from . import read_scene
 
-        scene, named = read_scene(args.scene)
-        if "amplitudes" in values:
+        balance = "mode" in values or values.get("method") == "harmonic-balance"
+        backbone = None
+        scene, named = read_scene(args.scene, networks=balance or args.between is not None)
+        if args.between is not None:
+            if "mode" in values or "amplitudes" not in values:
+                raise ValueError("--between belongs to the describing function (--amplitudes) of a network")
+            from ..network.model import NetworkScene
+
+            if not isinstance(scene, NetworkScene):
+                raise ValueError(f"--between: {args.scene} is an element scene, not a network (describe it without "
+                                 "--between)")
+            from .describing import joint_element
+
+            scene = joint_element(scene, args.between)
+        if "mode" in values:
+            from .modes import nonlinear_mode
+
+            result = nonlinear_mode(scene, values["mode"], values["amplitudes"], harmonics=values.get("harmonics"),
+                                    node=args.node, tolerance=values["tolerance"])
+        elif balance:
+            from .curve import harmonic_response
+
+            result = harmonic_response(scene, values["force_amplitude"], values["frequencies"],
+                                       harmonics=values.get("harmonics"), node=args.node,
+                                       load_node=args.load_node, tolerance=values["tolerance"])
+            if "backbone" in values:
+                from .modes import nonlinear_mode
+
+                mode = values["backbone"]
+                backbone = nonlinear_mode(scene, mode["mode"], mode["amplitudes"], harmonics=mode.get("harmonics"),
+                                          node=args.node, tolerance=mode["tolerance"])
+        elif "amplitudes" in values:
             from .describing import describe_amplitudes
 
             result = describe_amplitudes(scene, values["amplitudes"], values["frequency"],
@@ -156,9 +277,14 @@ def run(args) -> int:
         sys.stdout.write(text)
         sys.stdout.flush()
     if args.plot:
-        from .plots import plot_description, plot_response
+        from . import plots
 
-        (plot_description if "amplitudes" in values else plot_response)(result, scene, args.plot)
+        if "mode" in values:
+            plots.plot_backbone(result, scene, args.plot)
+        elif balance:
+            plots.plot_curve(result, scene, args.plot, backbone)
+        else:
+            (plots.plot_description if "amplitudes" in values else plots.plot_response)(result, scene, args.plot)
     return 0
 
 

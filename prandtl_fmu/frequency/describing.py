@@ -445,3 +445,40 @@ def relative_change(new: complex, old: complex) -> float:
         return 0.0 if new == old else math.inf
     return max(abs(new.real - old.real) / max(abs(new.real), floor),
                abs(new.imag - old.imag) / max(abs(new.imag), floor))
+
+
+# ----------------------------------------------------------------- a network's joint
+
+def joint_element(scene, between: str):
+    """The elements of network ``scene`` joining the two nodes ``between`` ("i,j") as one element scene: their
+    springs, cubic springs, dashpots and branches in parallel (sliders as Coulomb friction alpha), driven in the
+    relative displacement x_j - x_i by :func:`describe_amplitudes` (the joint's force against the relative
+    amplitude). FrequencyError when the names are not two nodes or no element joins them."""
+    from . import scene_of_document
+
+    names = [name.strip() for name in str(between).split(",")]
+    nodes = scene.network.nodes
+    if len(names) != 2 or any(name not in nodes and name != "ground" for name in names) or names[0] == names[1]:
+        raise FrequencyError(f"--between: must be two different nodes of {scene.source} (or ground) as i,j "
+                             f"({', '.join(nodes)}), got {between!r}")
+    ends = {-1 if name == "ground" else nodes.index(name) for name in names}
+    joint = [e for e in scene.network.elements if set(e.between) == ends]
+    if not joint:
+        raise FrequencyError(f"--between: no element joins {names[0]} and {names[1]} in {scene.source}")
+    total = {kind: sum(e.value for e in joint if e.kind == kind) for kind in ("spring", "cubic", "dashpot", "slider")}
+    branches = [e for e in joint if e.kind == "branch"]
+    doc = {"name": f"{scene.name}-{names[0]}-{names[1]}", "mass": {"m": 1.0}}
+    if total["spring"] > 0:
+        doc["spring"] = {"k0": total["spring"]}
+    if total["cubic"] > 0:
+        doc["cubic"] = {"k3": total["cubic"]}
+    if total["dashpot"] > 0:
+        doc["damper"] = {"c": total["dashpot"]}
+    if total["slider"] > 0:
+        doc["friction"] = {"alpha": total["slider"]}
+    if branches:
+        doc["branches"] = {"k": [e.value for e in branches], "eta": [e.eta for e in branches],
+                           "u0": [e.sense * e.u0 for e in branches]}
+        if any(e.c > 0 for e in branches):
+            doc["branches"]["c"] = [e.c for e in branches]
+    return scene_of_document(doc, f"{scene.source} ({names[0]}-{names[1]})")[0]

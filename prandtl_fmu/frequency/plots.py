@@ -117,3 +117,70 @@ def plot_response(response, scene, path: str) -> None:
     draw_response(response, scene, axes)
     fig.suptitle(f"{scene.name}: frequency response ({response.stepper})")
     save_figure(fig, path)
+
+
+def draw_curve(curve, axes, backbone=None) -> None:
+    """Draw the harmonic balance's curve on ``axes`` (two: amplitude, phase against the frequency): stable parts
+    solid, unstable parts dashed, folds marked; ``backbone`` (a :class:`modes.Backbone`) over the amplitudes, with
+    the response synthesised from it (``modes.synthesis``) dotted."""
+    amplitude_axes, phase_axes = axes
+    f, stable = curve.frequency, curve.stable
+    for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
+        start = 0
+        for end in range(1, f.size + 1):
+            if end == f.size or stable[end] != stable[start]:
+                stop = min(end + 1, f.size)  # join the pieces
+                ax.plot(f[start:stop], values[start:stop], "-" if stable[start] else "--", color="C0", lw=1.2,
+                        label=None)
+                start = end
+        folds = curve.folds
+        if folds.size:
+            ax.plot(f[folds], values[folds], "o", color="C3", ms=5, label="fold")
+    amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {curve.harmonics})")
+    amplitude_axes.plot([], [], "--", color="C0", label="unstable")
+    if backbone is not None:
+        from .modes import synthesis
+
+        amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-", color="C2", lw=1,
+                            label=f"backbone, mode {backbone.mode}")
+        if backbone.node == curve.node:
+            f_s, a_s = synthesis(backbone, curve.force_amplitude, curve.load_node)
+            inside = (f_s >= f.min()) & (f_s <= f.max())
+            amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2", lw=1, label="single-mode synthesis")
+    amplitude_axes.set_yscale("log")
+    amplitude_axes.set_xlabel("frequency f (Hz)")
+    amplitude_axes.set_ylabel(f"amplitude of x_{curve.node} (m)")
+    amplitude_axes.set_title(f"harmonic balance, F0 = {curve.force_amplitude:g} N")
+    phase_axes.set_xlabel("frequency f (Hz)")
+    phase_axes.set_ylabel("phase of x against F (degrees)")
+    phase_axes.set_title("phase")
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+
+
+def plot_curve(curve, scene, path: str, backbone=None) -> None:
+    """Write the figure of :func:`draw_curve` to ``path``."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    draw_curve(curve, axes, backbone)
+    fig.suptitle(f"{scene.name}: forced response by harmonic balance")
+    save_figure(fig, path)
+
+
+def plot_backbone(backbone, scene, path: str) -> None:
+    """Write the backbone (frequency and damping ratio against the amplitude) to ``path``."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    axes[0].semilogy(backbone.frequency, backbone.amplitude, "o-", ms=4, lw=1)
+    axes[0].set_xlabel("frequency f (Hz)")
+    axes[0].set_ylabel(f"amplitude of x_{backbone.node} (m)")
+    axes[0].set_title(f"backbone of mode {backbone.mode} (H = {backbone.harmonics})")
+    axes[1].semilogx(backbone.amplitude, backbone.damping_ratio, "o-", ms=4, lw=1)
+    axes[1].set_xlabel(f"amplitude of x_{backbone.node} (m)")
+    axes[1].set_ylabel("damping ratio")
+    axes[1].set_title("modal damping")
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
+    fig.suptitle(f"{scene.name}: nonlinear mode by EPMC")
+    save_figure(fig, path)

@@ -44,7 +44,7 @@ def test_amplitudes_write_the_describing_function(tmp_path, capsys):
 
 def test_a_frequency_response_to_standard_output(tmp_path, capsys):
     status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "1e-4", "--frequencies", "0.1,0.3",
-                   "--sweep", "up"])
+                   "--method", "time", "--sweep", "up"])
     assert status == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("frequency,amplitude,phase,sweep")
@@ -65,7 +65,7 @@ def test_a_frequency_response_to_standard_output(tmp_path, capsys):
     (["--force-amplitude", "1"], "--frequencies"),
     (["--force-amplitude", "1", "--frequencies", "0.1,-0.2"], "--frequencies"),
     (["--force-amplitude", "-1", "--frequencies", "0.1"], "--force-amplitude"),
-    (["--force-amplitude", "1", "--frequencies", "0.1", "--workers", "0"], "--workers"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--method", "time", "--workers", "0"], "--workers"),
     (["--amplitudes", "0.1", "--frequencies", "0.1"], "--frequencies"),
     (["--amplitudes", "0.1", "--tolerance", "2"], "--tolerance"),
     (["--amplitudes", "0.1", "--plot", "figure.nope"], "--plot"),
@@ -147,7 +147,8 @@ def test_a_result_that_cannot_reach_its_accuracy_is_one_line_and_exit_2(tmp_path
     monkeypatch.setattr(response, "MAX_PERIODS", 3)
     out = tmp_path / "r.csv"
     scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.001}})
-    assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 2
+    assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--method", "time", "--out",
+                 str(out)]) == 2
     err = capsys.readouterr().err
     assert "did not settle" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
@@ -166,7 +167,7 @@ def test_plot_without_matplotlib_names_the_extra(tmp_path, capsys, monkeypatch):
 def test_the_figures_are_written(tmp_path):
     pytest.importorskip("matplotlib")
     for arguments in (["--amplitudes", "0.05,0.1,0.3,1"],
-                      ["--force-amplitude", "0.05", "--frequencies", "0.1,0.2,0.3"]):
+                      ["--force-amplitude", "0.05", "--frequencies", "0.1,0.2,0.3", "--method", "time"]):
         plot = tmp_path / "figure.png"
         scene = write(tmp_path, DAMPER if "--force-amplitude" in arguments else JOINT)
         assert main(["describe", scene, *arguments, "--plot", str(plot), "--out", str(tmp_path / "o.csv")]) == 0

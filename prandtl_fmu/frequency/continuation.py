@@ -1,0 +1,259 @@
+"""Arc-length continuation of a harmonic balance in (coefficients, omega), through folds.
+
+The curve R(q, omega) = 0 is followed from omega_min to omega_max in scaled unknowns y = (q / q_ref,
+(omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (2-norm; the scale is
+updated as the curve grows, the tangent rescaled with it):
+
+* tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised (the previous tangent's side kept: a
+  fold is passed, not turned back on);
+* predictor y + ds t; corrector: Newton on [R(y); t . (y - y_pred)] = 0 (the step's hyperplane), at most
+  CORRECTOR_ITERATIONS iterations; a corrector that does not converge halves ds, down to MIN_STEP, then the
+  curve is refused where it stopped (FrequencyError: the frequency, the amplitude and why); a corrector that
+  moves further than DRIFT steps from its prediction (at a kink of the Jacobian, where a slip starts, Newton can
+  leap to another part of the curve) counts as not converged;
+* step: ds grows or shrinks by the corrector's iterations against TARGET_ITERATIONS (at most doubled, at
+  least halved), within [MIN_STEP, max_step]; max_step is ARC_ESTIMATE over the count of listed frequencies
+  less one (a curve through one resonance gets about as many points as frequencies asked, more where it
+  bends);
+* fold: where the omega-component of the tangent changes sign between two points; located by the secant
+  method on that component along the arc between them (at most FOLD_ITERATIONS correctors, to 1e-9 of the
+  step) and kept as a point of its own, marked;
+* end: the point past omega_max is replaced by the point at omega_max (the corrector with omega fixed). At
+  most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import FrequencyError
+from .harmonic_balance import solve_linear
+
+CORRECTOR_ITERATIONS = 12
+TARGET_ITERATIONS = 4
+MIN_STEP = 1e-7
+FOLD_ITERATIONS = 40
+MAX_POINTS = 20000
+CONVERGED = 1e-10  # a corrector step below this (scaled max norm) has converged
+CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries the corner's sphere
+ARC_ESTIMATE = 6.0  # about the scaled arc length of a curve through one resonance and its folds
+DRIFT = 0.5  # a corrector may move at most this many arc-length steps from its prediction
+
+
+def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None) -> list:
+    """``[(omega, q_free, is_fold)]`` along the curve of ``balance`` (:class:`HarmonicBalance`) from
+    ``omega_min`` to ``omega_max`` (rad/s) (see the module); ``count``: the frequencies listed."""
+    span = omega_max - omega_min
+    q = balance.solve_at(omega_min)
+    points = [(omega_min, q, False)]
+    if span <= 0:
+        return points
+    scale = max(np.linalg.norm(q), 1e-300)
+    max_step = ARC_ESTIMATE / max(count - 1, 8)
+    step = max_step
+    omega = omega_min
+    tangent = _tangent(balance, q, omega, None, scale, span)
+    if tangent is None:
+        raise FrequencyError(f"{balance.system.source}: the curve cannot start at f = {_hz(omega)!r} Hz: the "
+                             "Jacobian is singular there")
+    while True:
+        if len(points) > MAX_POINTS:
+            raise FrequencyError(f"{balance.system.source}: the curve did not reach f = {_hz(omega_max)!r} Hz "
+                                 f"within {MAX_POINTS} points (at f = {_hz(omega)!r} Hz)")
+        new = None
+        cornered = False
+        while new is None:
+            predicted = _scaled(q, omega, scale, omega_min, span) + step * tangent
+            new = _correct(balance, predicted, tangent, scale, omega_min, span, step)
+            if new is None and step < CORNER * max_step:
+                new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
+                cornered = new is not None
+            if new is None:
+                step *= 0.5
+                if step < MIN_STEP:
+                    raise FrequencyError(
+                        f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} Hz (first-"
+                        f"harmonic amplitude {_amplitude(balance, q)!r} m): the corrector does not converge even "
+                        f"with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the curve)")
+        q_new, omega_new, iterations = new
+        if omega_new < omega_min - 1e-9 * span:
+            raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
+                                 f"(at amplitude {_amplitude(balance, q_new)!r} m): it does not reach "
+                                 f"{_hz(omega_max)!r} Hz from there")
+        scale_new = max(scale, np.linalg.norm(q_new))
+        heading = tangent
+        if cornered:  # the way on is the chord from the corner, not the tangent before it
+            heading = _scaled(q_new, omega_new, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)
+            heading /= np.linalg.norm(heading)
+        tangent_new = _tangent(balance, q_new, omega_new, _rescaled(heading, scale, scale_new), scale_new, span)
+        if tangent_new is None:
+            raise FrequencyError(f"{balance.system.source}: the curve cannot continue at f = {_hz(omega_new)!r} Hz: "
+                                 "the Jacobian of the augmented system is singular there (a branch point)")
+        if omega_new >= omega_max:
+            q_end = _fixed_frequency(balance, q, q_new, omega, omega_new, omega_max)
+            if q_end is not None:
+                points.append((omega_max, q_end, False))
+                if progress is not None:
+                    progress.update(1)
+                return points
+            step *= 0.5
+            continue
+        if tangent_new[-1] * _rescaled(tangent, scale, scale_new)[-1] < 0:
+            fold = None if cornered else _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step)
+            if fold is not None:
+                points.append((fold[1], fold[0], True))
+            else:  # a corner: the fold is the point the curve turns at
+                points[-1] = (points[-1][0], points[-1][1], True)
+        points.append((omega_new, q_new, False))
+        if progress is not None:
+            progress.update(1)
+        tangent, scale, q, omega = tangent_new, scale_new, q_new, omega_new
+        factor = min(2.0, max(0.5, TARGET_ITERATIONS / max(iterations, 1)))
+        step = min(max_step, max(MIN_STEP, step * factor))
+
+
+def _hz(omega: float) -> float:
+    return float(omega) / (2.0 * math.pi)
+
+
+def _amplitude(balance, q) -> float:
+    full = balance.full(q)
+    L = balance.L
+    node = balance.system.load_node
+    return float(math.hypot(full[node * L + 1], full[node * L + 2]))
+
+
+def _scaled(q, omega, scale, omega_min, span) -> np.ndarray:
+    return np.concatenate((q / scale, [(omega - omega_min) / span]))
+
+
+def _unscaled(y, scale, omega_min, span) -> tuple:
+    return y[:-1] * scale, omega_min + y[-1] * span
+
+
+def _rescaled(tangent, old, new) -> np.ndarray:
+    out = tangent.copy()
+    out[:-1] *= old / new
+    return out / np.linalg.norm(out)
+
+
+def _augmented(balance, q, omega, scale, span):
+    residual, jacobian, by_omega, _ = balance.evaluate(q, omega)
+    return residual, np.hstack((jacobian * scale, by_omega[:, None] * span))
+
+
+def _tangent(balance, q, omega, previous, scale, span):
+    _, matrix = _augmented(balance, q, omega, scale, span)
+    row = previous if previous is not None else np.eye(matrix.shape[1])[-1]
+    t = solve_linear(np.vstack((matrix, row)), np.eye(matrix.shape[1])[-1])
+    if t is None:
+        return None
+    return t / np.linalg.norm(t)
+
+
+def _correct(balance, predicted, tangent, scale, omega_min, span, step):
+    """Newton on [R; t . (y - y_pred)] from the prediction ``step`` along the tangent: (q, omega, iterations),
+    or None (no convergence, or a corrector that went further than DRIFT steps from the prediction)."""
+    y = predicted.copy()
+    force = balance.force_amplitude
+    for iteration in range(1, CORRECTOR_ITERATIONS + 1):
+        q, omega = _unscaled(y, scale, omega_min, span)
+        residual, matrix = _augmented(balance, q, omega, scale, span)
+        system = np.vstack((matrix, tangent))
+        right = -np.concatenate((residual, [tangent @ (y - predicted)]))
+        delta = solve_linear(system, right)
+        if delta is None:
+            return None
+        y = y + delta
+        if np.linalg.norm(y - predicted) > DRIFT * max(step, 1e-300) or _unscaled(y, scale, omega_min, span)[1] <= 0:
+            return None  # gone far from the prediction: another part of the curve, or none; a shorter step
+        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * force and \
+                np.max(np.abs(delta)) <= 1e-6:
+            q, omega = _unscaled(y, scale, omega_min, span)
+            return q, omega, iteration
+    return None
+
+
+def _around_corner(balance, q, omega, tangent, scale, omega_min, span, step):
+    """The point at arc length ``step`` from (q, omega) on the sphere |y - y_0| = step, from the prediction
+    along ``tangent``: the way on past a corner of the curve (the sampled forces make the curve piecewise
+    smooth; where a fold falls on a kink, no hyperplane ahead meets the curve). Not the way back: the chord
+    must not point against the tangent by more than 135 degrees, and the point must not be where we came from.
+    (q, omega, iterations) or None."""
+    start = _scaled(q, omega, scale, omega_min, span)
+    for turn in (0.0, 0.5, 1.0):
+        guess = start + step * (tangent if turn == 0 else _turned(tangent, turn))
+        y = guess.copy()
+        for iteration in range(1, CORRECTOR_ITERATIONS + 1):
+            q_y, omega_y = _unscaled(y, scale, omega_min, span)
+            if omega_y <= 0:
+                break
+            residual, matrix = _augmented(balance, q_y, omega_y, scale, span)
+            chord = y - start
+            system = np.vstack((matrix, 2.0 * chord))
+            right = -np.concatenate((residual, [chord @ chord - step * step]))
+            delta = solve_linear(system, right)
+            if delta is None:
+                break
+            y = y + delta
+            if np.max(np.abs(delta)) <= CONVERGED:
+                chord = (y - start) / step
+                if chord @ tangent > -0.7:
+                    q_y, omega_y = _unscaled(y, scale, omega_min, span)
+                    return q_y, omega_y, iteration
+                break
+    return None
+
+
+def _turned(tangent, amount):
+    """The tangent with its frequency component reversed in part (a guess past a fold's corner)."""
+    out = tangent.copy()
+    out[-1] *= 1.0 - 2.0 * amount
+    norm = np.linalg.norm(out)
+    return out / norm if norm > 0 else tangent
+
+
+def _fixed_frequency(balance, q0, q1, omega0, omega1, omega_end):
+    """The point at omega_end between two points (linear interpolation, then Newton at omega fixed)."""
+    weight = (omega_end - omega0) / (omega1 - omega0) if omega1 != omega0 else 1.0
+    guess = q0 + weight * (q1 - q0)
+    return balance._newton(omega_end, guess)
+
+
+def _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step):
+    """The fold between the point (q, omega) and the one ``step`` further along ``tangent``: (q, omega) where
+    the omega-component of the tangent is 0 (secant on it, bracketed), or None if the correctors fail."""
+    start = _scaled(q, omega, scale, omega_min, span)
+
+    def at(s):
+        point = _correct(balance, start + s * tangent, tangent, scale, omega_min, span, max(s, 1e-3 * step))
+        if point is None:
+            return None
+        t = _tangent(balance, point[0], point[1], tangent, scale, span)
+        return None if t is None else (point[0], point[1], t[-1])
+
+    low, high = 0.0, step
+    f_low = tangent[-1]
+    end = at(high)
+    if end is None:
+        return None
+    f_high = end[2]
+    best = end
+    for iteration in range(FOLD_ITERATIONS):
+        if high - low <= 1e-9 * step:
+            break
+        s = high - f_high * (high - low) / (f_high - f_low) if f_high != f_low else 0.5 * (low + high)
+        if not low < s < high or iteration % 3 == 2:  # a bisection now and then: the bracket shrinks
+            s = 0.5 * (low + high)
+        point = at(s)
+        if point is None:
+            return None
+        best = point
+        if abs(point[2]) <= 1e-12:
+            break
+        if point[2] * f_low > 0:
+            low, f_low = s, point[2]
+        else:
+            high, f_high = s, point[2]
+    return best[0], best[1]

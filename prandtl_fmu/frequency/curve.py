@@ -1,0 +1,163 @@
+"""The forced response by harmonic balance: the whole curve, its folds and the stability of each point.
+
+:func:`harmonic_response` joins ``harmonic_balance.py`` (the periodic state at one frequency), ``continuation.py``
+(the curve from the lowest listed frequency to the highest, through its folds) and ``floquet.py`` (stable or
+not). Without ``harmonics`` H is chosen by the tolerance: curves with H = 1, 3, 5, 7, ... (HARMONIC_STEPS) until
+the first harmonic of x at the node changes by at most ``tolerance`` relative from one H to the next, at the
+curve's peak and at both ends (the curve of the larger H is kept); past the last H of HARMONIC_STEPS it is
+refused with the change reached.
+
+The first harmonic of x at a node, x_1 = a_1 cos(omega t) + b_1 sin(omega t) = amplitude cos(omega t + phase):
+amplitude = |a_1 - i b_1| (m), phase = arg(a_1 - i b_1) (rad), as the time sweep (``response.py``) defines
+them.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
+from .continuation import continue_curve
+from .harmonic_balance import HarmonicBalance, periodic_system
+
+HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
+# The Floquet multipliers are computed at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at
+# every point between two computed ones that disagree; the points between two that agree take their verdict
+# (their ``multiplier`` is NaN): a loss of stability and its return within fewer points would be missed.
+STABILITY_STRIDE = 16
+
+
+@dataclass(frozen=True, eq=False)
+class Curve:
+    """The points of the curve in the order taken: arrays of shape (points,).
+
+    ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
+    ``stable`` (bool), ``fold`` (bool: a located fold), ``multiplier`` the largest |Floquet multiplier| (NaN
+    where it was not computed: see STABILITY_STRIDE), ``amplitudes``: {node: first-harmonic amplitude (m)} for
+    every node with a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
+    harmonic at the last increase of H (None when H was given)."""
+
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    phase: np.ndarray
+    stable: np.ndarray
+    fold: np.ndarray
+    multiplier: np.ndarray
+    amplitudes: dict
+    coefficients: np.ndarray
+    harmonics: int
+    change: Optional[float]
+    node: str
+    force_amplitude: float
+    load_node: str
+
+    def columns(self) -> dict:
+        """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,
+        multiplier."""
+        out = {"frequency": self.frequency, "amplitude": self.amplitude, "phase": self.phase,
+               "stable": ["true" if s else "false" for s in self.stable.tolist()]}
+        for name, values in self.amplitudes.items():
+            out[f"amplitude_{name}"] = values
+        out["fold"] = ["true" if f else "false" for f in self.fold.tolist()]
+        out["multiplier"] = self.multiplier
+        return out
+
+    @property
+    def folds(self) -> np.ndarray:
+        """The indices of the located folds."""
+        return np.flatnonzero(self.fold)
+
+
+def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: Optional[int] = None,
+                      node: Optional[str] = None, load_node: Optional[str] = None,
+                      tolerance: float = DEFAULT_TOLERANCE, stability: bool = True,
+                      samples: Optional[int] = None) -> Curve:
+    """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t) from the
+    lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
+    taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
+    load node); ``stability``: compute the Floquet multipliers (else every point is marked stable and its
+    multiplier NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError
+    names the culprit or says where the curve stopped and why."""
+    force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
+    frequencies = positive_values(frequencies, "frequencies")
+    tolerance = check_tolerance(tolerance)
+    system = periodic_system(scene, load_node)
+    where = system.node_index(node)
+    low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
+    count = int(np.unique(frequencies).size)
+    if harmonics is not None:
+        balance = HarmonicBalance(system, harmonics, force_amplitude, samples)
+        points = continue_curve(balance, low, high, count)
+        change = None
+    else:
+        balance, points, change = _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance,
+                                                    samples)
+    return _curve(balance, points, where, stability, change)
+
+
+def _first_harmonic(balance, points, where) -> np.ndarray:
+    L = balance.L
+    return np.array([complex(balance.full(q)[where * L + 1], -balance.full(q)[where * L + 2]) for _, q, _ in points])
+
+
+def _summary(balance, points, where) -> np.ndarray:
+    """The first harmonic at the peak and at both ends: what the choice of H compares."""
+    X = _first_harmonic(balance, points, where)
+    return np.array([X[0], X[np.argmax(np.abs(X))], X[-1]])
+
+
+def _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance, samples) -> tuple:
+    previous, change = None, math.inf
+    for H in HARMONIC_STEPS:
+        balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H))
+        points = continue_curve(balance, low, high, count)
+        summary = _summary(balance, points, where)
+        if previous is not None:
+            change = float(np.max(np.abs(summary - previous) / np.maximum(np.abs(summary), 1e-300)))
+            if change <= tolerance:
+                return balance, points, change
+        previous = summary
+    raise FrequencyError(f"{system.source}: the first harmonic still changed by {change:.3g} relative from "
+                         f"H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics (tolerance {tolerance:g}): "
+                         "give --harmonics, or a larger --tolerance")
+
+
+def _curve(balance, points, where, stability, change) -> Curve:
+    from .floquet import is_stable, multipliers
+
+    system = balance.system
+    L = balance.L
+    omega = np.array([p[0] for p in points])
+    coefficients = np.array([balance.full(q).reshape(system.n, L) for _, q, _ in points])
+    X = coefficients[:, where, 1] - 1j * coefficients[:, where, 2]
+    largest = np.full(len(points), np.nan)
+    stable = np.ones(len(points), dtype=bool)
+    if stability:
+        def check(index):
+            if np.isnan(largest[index]):
+                w, q, _ = points[index]
+                values = multipliers(balance, q, w)
+                largest[index] = float(np.max(np.abs(values)))
+                stable[index] = is_stable(values)
+
+        count = len(points)
+        checked = set(range(0, count, STABILITY_STRIDE)) | {count - 1}
+        for fold in (i for i, p in enumerate(points) if p[2]):
+            checked |= {max(fold - 1, 0), min(fold + 1, count - 1)}
+        checked = sorted(checked)
+        for index in checked:
+            check(index)
+        for before, after in zip(checked[:-1], checked[1:]):
+            if stable[before] == stable[after]:
+                stable[before + 1:after] = stable[before]
+            else:
+                for index in range(before + 1, after):
+                    check(index)
+    amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
+    phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
+    return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
+                 largest, amplitudes, coefficients, balance.H, change, system.nodes[where], balance.force_amplitude,
+                 system.nodes[system.load_node])

@@ -1,0 +1,122 @@
+"""Stability of a periodic state: Floquet multipliers from the monodromy of one period.
+
+The choice: the monodromy matrix by finite differences, each column one period integrated with the project's
+own ``implicit`` network stepper (``network/kernels.py``: an exact active-set method for the branches, backward
+Euler in time) from the harmonic balance's state at t = 0 with x or v of one node with a mass perturbed, the
+orbit's own period integrated beside it; Phi[:, k] = (state(T) perturbed - state(T)) / epsilon over the x and v
+of the nodes with a mass (a massless node follows them; a branch's elongation u is carried from the orbit's,
+u at t = 0 from the sampled cycle of ``aft.py``). Why not Hill's method: its eigenvalues come from the Jacobian
+of the harmonic balance, whose truncation puts spurious eigenvalues beside the true ones, and with the kinks of
+slipping branches the sorting of the physical ones is not reliable; the monodromy sees the slips and sticks as
+they happen (the perturbed runs cross the same events a little earlier or later).
+
+Backward Euler damps: with M steps per period a multiplier is shrunk by about exp(-(2 pi)^2 / (2 M)
+(omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
+extrapolated (Richardson, first order: 2 Phi_2M - Phi_M), which leaves an error of order 1 / M^2.
+
+A point is ``stable`` when every multiplier has |mu| <= 1 + MARGIN (MARGIN covers the finite differences and
+the extrapolation; a fold, where one multiplier crosses 1, is stable to either side within it).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+STEPS = 256
+MARGIN = 2e-3
+PERTURBATION = 1e-6
+
+
+def orbit_start(balance, q_free, omega) -> tuple:
+    """(x, v, u) at t = 0 of the harmonic balance's orbit: per node, and per network element (u of branches)."""
+    full = balance.full(q_free)
+    coefficients = full.reshape(balance.system.n, balance.L)
+    H = balance.H
+    x = coefficients[:, 0] + coefficients[:, 1::2].sum(axis=1)
+    v = omega * (coefficients[:, 2::2] * np.arange(1, H + 1)).sum(axis=1)
+    balance.nonlinear(full)  # the elongations of the branches at sample 0
+    u = np.zeros(len(balance.system.network.elements))
+    u[balance.system.branch_index] = balance.elongations
+    return x, v, u
+
+
+def multipliers(balance, q_free, omega, steps: int = STEPS) -> np.ndarray:
+    """The Floquet multipliers (complex, (2 n_mass,)) of the orbit of ``balance`` at ``omega`` (rad/s)."""
+    coarse = _monodromy(balance, q_free, omega, steps)
+    fine = _monodromy(balance, q_free, omega, 2 * steps)
+    return np.linalg.eigvals(2.0 * fine - coarse)
+
+
+def is_stable(values: np.ndarray) -> bool:
+    return bool(np.max(np.abs(values)) <= 1.0 + MARGIN)
+
+
+def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
+    from ..loads import HarmonicLoad
+    from ..network.driver import NetworkElement
+    from ..network.model import NetworkScene
+    from ..scene_tables import Solver
+
+    system = balance.system
+    period = 2.0 * math.pi / omega
+    h = period / steps
+    scene = NetworkScene(system.name, system.network, HarmonicLoad(balance.force_amplitude, omega),
+                         Solver("implicit", h, period, h), system.source)
+    element = NetworkElement(scene, "implicit", h)
+    x, v, u = orbit_start(balance, q_free, omega)
+    massive = system.massive
+    size = max(float(np.max(np.abs(x))), float(np.max(np.abs(v))) / omega, 1e-300)
+    epsilon = PERTURBATION * size
+
+    def run(dx, dv):
+        element.reset()
+        element.x[:] = x + dx
+        element.v[:] = v + dv
+        element.u[:] = u
+        element.piece[:] = 0
+        element.time = 0.0
+        element.advance(period, 0.0, scene_load=True)
+        return np.concatenate((element.x[massive], element.v[massive]))
+
+    base = run(0.0, 0.0)
+    count = len(massive)
+    columns = []
+    for k in range(2 * count):
+        dx, dv = np.zeros(system.n), np.zeros(system.n)
+        if k < count:
+            dx[massive[k]] = epsilon
+        else:
+            dv[massive[k - count]] = epsilon * omega
+        columns.append((run(dx, dv) - base) / epsilon)
+    rows = np.concatenate((np.ones(count), np.full(count, omega)))
+    return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega): dimensionless
+
+
+def run_periods(balance, omega, state, periods: int, steps: int) -> tuple:
+    """Integrate ``balance``'s system under F0 cos(omega t) for ``periods`` periods of ``steps`` implicit steps
+    from ``state`` (x, v, u) at t = 0 (one compiled call per period): ``(x of the last period (steps, n), the
+    state at the end)``. The reference the tests and the benchmark hold the harmonic balance against."""
+    from ..loads import HarmonicLoad
+    from ..network.driver import NetworkElement, loop_for, run_loop
+    from ..network.model import NetworkScene
+    from ..scene_tables import Solver
+    from ..stepping import ElementError
+
+    system = balance.system
+    period = 2.0 * math.pi / omega
+    h = period / steps
+    scene = NetworkScene(system.name, system.network, HarmonicLoad(balance.force_amplitude, omega),
+                         Solver("implicit", h, period, h), system.source)
+    runner = NetworkElement(scene, "implicit", h)
+    x, v, u = (np.array(a, dtype=float) for a in state)
+    piece = runner.piece.copy()
+    piece[:] = 0
+    out = np.empty((steps, 2 * system.n + 2))
+    load = scene.load.compile()
+    for number in range(periods):
+        taken, _ = run_loop(loop_for("implicit"), runner.model, load, x, v, u, piece, 0.0, number * steps, h, 1,
+                            out, None, runner.account, None, runner.dissipated, None, runner.work)
+        if taken < steps:
+            raise ElementError(f"{system.source}: a step failed at f = {omega / (2 * math.pi)!r} Hz")
+    return out[:, 0:2 * system.n:2].copy(), (x, v, u)

@@ -1,0 +1,374 @@
+"""Harmonic balance: the periodic state of a scene with masses, solved for directly.
+
+A scene (the element with ``[mass]``, or a network with masses) is one system of n nodes,
+
+    M x'' + C x' + K x + g(x) = F(t),      F = F0 cos(omega t) on the load's node,
+
+M = diag(m) (kg; a massless node has no inertia: an algebraic unknown), C and K (N s/m, N/m) assembled from the
+dashpots and springs, g the restoring force of the nonlinear elements (cubic springs, Prandtl branches:
+``aft.py``). The element is the network of one node ``mass`` with its k0, k3, c and branches to the ground.
+
+Each node's motion is its mean and H harmonics, x_i(t) = a_0 + sum_h a_h cos(h omega t) + b_h sin(h omega t):
+unknowns q (n L, L = 2 H + 1, node by node, in the order a_0, a_1, b_1, ..., a_H, b_H). The residual is
+
+    R(q, omega) = (K (x) I + omega C (x) D + omega^2 M (x) D^2) q + G(q) - f,
+
+D the derivative on one node's coefficients in units of omega ((a_h, b_h) -> h (b_h, -a_h)), G the harmonics
+of g by alternating frequency-time: x sampled at N points per period (N = SAMPLES_PER_HARMONIC H rounded up
+to a power of two, at least MIN_SAMPLES), the forces on the elements' steady cycle at the samples, the
+harmonics by numpy's real FFT (``aft.py``: exact at the samples for the branches and springs; the FFT of the
+samples is the trapezoid rule, the stated quadrature of a force whose cycle has kinks between samples: its
+error falls like 1 / N^2, about 1e-5 of the first harmonic at N = 512 on a friction damper).
+
+The Jacobian dR/dq is exact in structure: the linear part as written, dG/dq from each element's slope at each
+sample through the same FFT, for a branch with the anchor of its stick (``aft.py``): exact for the sampled
+map, so Newton's iteration converges in a few steps once the slip pattern is right. dR/d omega is exact.
+
+A node's mean is an unknown where springs or cubic springs hold the node to the ground; elsewhere it is 0
+(branches carry no mean on their centred cycle, so no equation would set it). The equations of the other
+coefficients are solved with Newton's method, at most NEWTON_ITERATIONS iterations; a point that does not
+converge within them is refused (FrequencyError, saying where and how far it got).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from . import FrequencyError
+
+MIN_SAMPLES = 256
+SAMPLES_PER_HARMONIC = 64
+NEWTON_ITERATIONS = 40
+# converged: the last Newton step moved q by at most this fraction of |q| (max norm), or R is at most this
+# fraction of F0
+STEP_TOLERANCE = 1e-10
+RESIDUAL_TOLERANCE = 1e-11
+ELEMENT_NODE = "mass"
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicSystem:
+    """A scene as n nodes (see the module): ``nodes`` names, ``mass`` (n,), ``stiffness`` and ``damping``
+    (n, n); the nonlinear elements as (count, 2) ``*_ends`` (-1: the ground), ``cubic_k3``, ``branch_k``,
+    ``branch_eta``, each with the index of its pair of nodes in ``pairs``; ``load_node``; ``network``: the same
+    system as a network (the time integration of the stability check runs it) and ``branch_index``: the index
+    of each branch among the network's elements."""
+
+    name: str
+    source: str
+    nodes: tuple
+    mass: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    cubic_ends: np.ndarray
+    cubic_k3: np.ndarray
+    cubic_pair: np.ndarray
+    branch_ends: np.ndarray
+    branch_k: np.ndarray
+    branch_eta: np.ndarray
+    branch_pair: np.ndarray
+    pairs: tuple
+    load_node: int
+    network: object
+    branch_index: np.ndarray
+    held: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.nodes)
+
+    @property
+    def massive(self) -> list:
+        """The indices of the nodes with a mass."""
+        return [i for i in range(self.n) if self.mass[i] > 0]
+
+    def node_index(self, name: Optional[str], default: Optional[int] = None) -> int:
+        """The index of node ``name`` (None: ``default``, else the first node with a mass)."""
+        if name is None:
+            return self.massive[0] if default is None else default
+        if name not in self.nodes:
+            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({', '.join(self.nodes)})")
+        return self.nodes.index(name)
+
+
+def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
+    """The :class:`PeriodicSystem` of an element scene (with ``[mass]``) or a network scene; ``load_node``: the
+    node the harmonic force acts on (default: the network's ``load_node``; the element's mass). FrequencyError
+    for what harmonic balance does not take (and why)."""
+    from ..network.model import NetworkScene
+
+    network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene)
+    for element in network.elements:
+        if element.kind == "slider":
+            raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
+                                 "sticks, which harmonic balance cannot sample: model the joint as branches "
+                                 "(k, eta: a slider behind a spring) or use --method time")
+        if element.kind == "branch" and element.c > 0:
+            raise FrequencyError(f"{scene.source}: branch {element.name}: a series dashpot (c > 0) is not taken "
+                                 "by harmonic balance: use --method time")
+    if not np.any(network.mass > 0):
+        raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one")
+    n = network.n
+    stiffness, damping = np.zeros((n, n)), np.zeros((n, n))
+    cubic, branches, pairs, links = [], [], [], []
+
+    def pair_of(ends):
+        key = (min(ends), max(ends)) if min(ends) >= 0 else (max(ends), -1)
+        if key not in pairs:
+            pairs.append(key)
+        return pairs.index(key)
+
+    for index, element in enumerate(network.elements):
+        p, q = element.between
+        if element.kind in ("spring", "dashpot"):
+            target = stiffness if element.kind == "spring" else damping
+            if element.kind == "spring":
+                links.append((p, q))
+            target[p, p] += element.value
+            if q >= 0:
+                target[q, q] += element.value
+                target[p, q] -= element.value
+                target[q, p] -= element.value
+        elif element.kind == "cubic":
+            cubic.append((p, q, element.value, pair_of((p, q))))
+            links.append((p, q))
+        else:
+            branches.append((p, q, element.value, element.eta, pair_of((p, q)), index))
+    node = network.load_node
+    if load_node is not None:
+        if load_node not in network.nodes:
+            raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} "
+                                 f"({', '.join(network.nodes)})")
+        node = network.nodes.index(load_node)
+    network = dataclasses.replace(network, load_node=node)
+    cubic_table = np.array([c[:3] for c in cubic], dtype=float).reshape(-1, 3)
+    branch_table = np.array([b[:4] for b in branches], dtype=float).reshape(-1, 4)
+    return PeriodicSystem(
+        scene.name, scene.source, tuple(network.nodes), np.array(network.mass, dtype=float), stiffness, damping,
+        cubic_table[:, :2].astype(np.int64).copy(), cubic_table[:, 2].copy(),
+        np.array([c[3] for c in cubic], dtype=np.int64), branch_table[:, :2].astype(np.int64).copy(),
+        branch_table[:, 2].copy(), branch_table[:, 3].copy(), np.array([b[4] for b in branches], dtype=np.int64),
+        tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links))
+
+
+def _element_network(scene):
+    """The element scene as a network of one node ``mass``, its effects to the ground; FrequencyError for the
+    effects harmonic balance does not take."""
+    from ..network.model import Element, Network
+
+    if scene.mass is None:
+        raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
+                             "resonance: describe it with --amplitudes)")
+    refused = [(scene.friction, "[friction] (Coulomb friction of the mass: set-valued while it sticks)"),
+               (scene.dahl, "[dahl]"), (scene.delay, "[delay]"), (scene.history, "[history]")]
+    if scene.branches is not None and scene.branches.continuum:
+        refused.append((scene.branches, "a continuum of branches"))
+    if scene.has_series_dashpots:
+        refused.append((True, "[branches] c (series dashpots)"))
+    for present, name in refused:
+        if present is not None:
+            raise FrequencyError(f"{scene.source}: {name} is not taken by harmonic balance: use --method time")
+    elements = []
+    if scene.spring is not None and scene.spring.k0 > 0:
+        elements.append(Element("spring", "k0", (0, -1), float(scene.spring.k0)))
+    if scene.cubic is not None:
+        elements.append(Element("cubic", "k3", (0, -1), float(scene.cubic.k3)))
+    if scene.has_dashpot:
+        elements.append(Element("dashpot", "c", (0, -1), float(scene.damper.c)))
+    if scene.branches is not None:
+        b = scene.branches
+        for i, (k, eta, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), b.u0.tolist())):
+            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, 0.0, u0))
+    mass = scene.mass
+    return Network((ELEMENT_NODE,), np.array([mass.m]), np.array([mass.x0]), np.array([mass.v0]),
+                   tuple(elements), 0)
+
+
+def sample_count(harmonics: int) -> int:
+    """N, the samples per period of H harmonics (see the module)."""
+    return max(MIN_SAMPLES, 1 << int(math.ceil(math.log2(SAMPLES_PER_HARMONIC * harmonics))))
+
+
+class HarmonicBalance:
+    """The residual and Jacobian of ``system`` with ``harmonics`` H (see the module) under F0 cos(omega t).
+
+    ``free``: the indices of the unknowns (the means fixed at 0 left out); :meth:`evaluate` works on those."""
+
+    def __init__(self, system: PeriodicSystem, harmonics: int, force_amplitude: float,
+                 samples: Optional[int] = None):
+        if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or not 1 <= harmonics <= 256:
+            raise FrequencyError(f"--harmonics: must be a whole number in [1, 256], got {harmonics!r}")
+        self.system = system
+        self.H = H = int(harmonics)
+        self.L = L = 2 * H + 1
+        self.N = N = samples or sample_count(H)
+        if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or not 2 * H + 2 <= N <= 2**20:
+            raise FrequencyError(f"samples: must be a whole number in [2 H + 2, 2^20] = [{2 * H + 2}, {2**20}], "
+                                 f"got {samples!r}")
+        theta = 2.0 * math.pi * np.arange(N) / N
+        basis = np.empty((N, L))
+        basis[:, 0] = 1.0
+        derivative = np.zeros((L, L))
+        for h in range(1, H + 1):
+            basis[:, 2 * h - 1] = np.cos(h * theta)
+            basis[:, 2 * h] = np.sin(h * theta)
+            derivative[2 * h - 1, 2 * h] = h  # d/d theta of a cos + b sin: (h b) cos + (-h a) sin
+            derivative[2 * h, 2 * h - 1] = -h
+        self.basis = basis
+        # the harmonics of samples as a matrix (the real FFT's, for the Jacobian's few columns: one product)
+        self.projection = basis.T * np.where(np.arange(L) == 0, 1.0, 2.0)[:, None] / N
+        self.derivative = derivative
+        n = system.n
+        identity = np.eye(L)
+        self.linear_stiffness = np.kron(system.stiffness, identity)
+        self.linear_damping = np.kron(system.damping, derivative)
+        self.linear_inertia = np.kron(np.diag(system.mass), derivative @ derivative)
+        self.mass_velocity = np.kron(np.diag(system.mass), derivative)
+        self.force = np.zeros(n * L)
+        self.force[system.load_node * L + 1] = float(force_amplitude)
+        self.force_amplitude = float(force_amplitude)
+        self.free = np.array([i * L + l for i in range(n) for l in range(L) if l > 0 or system.held[i]],
+                             dtype=np.int64)
+        self._forces = np.empty((n, N))
+        self._tangent = np.empty((max(len(system.pairs), 1), N, L))
+        self.elongations = np.zeros(system.branch_k.shape[0])
+
+    # ------------------------------------------------------------- the harmonics and the samples
+
+    def harmonics_of(self, samples: np.ndarray) -> np.ndarray:
+        """The coefficients (..., L) of real samples (..., N) over one period (numpy's real FFT)."""
+        spectrum = np.fft.rfft(samples, axis=-1) / self.N
+        out = np.empty(samples.shape[:-1] + (self.L,))
+        out[..., 0] = spectrum[..., 0].real
+        out[..., 1::2] = 2.0 * spectrum[..., 1:self.H + 1].real
+        out[..., 2::2] = -2.0 * spectrum[..., 1:self.H + 1].imag
+        return out
+
+    def full(self, free_values: np.ndarray) -> np.ndarray:
+        """All n L coefficients from the free ones (the fixed means 0)."""
+        q = np.zeros(self.system.n * self.L)
+        q[self.free] = free_values
+        return q
+
+    def samples(self, q: np.ndarray) -> np.ndarray:
+        """x at the N samples of one period, (n, N), from all n L coefficients."""
+        return q.reshape(self.system.n, self.L) @ self.basis.T
+
+    # ------------------------------------------------------------- residual and Jacobian
+
+    def nonlinear(self, q: np.ndarray) -> tuple:
+        """(G (n L,), dG/dq (n L, n L)) at all coefficients q."""
+        from .aft import restoring_samples
+
+        s = self.system
+        n, L = s.n, self.L
+        x = self.samples(q)
+        restoring_samples(x, self.basis, s.cubic_ends, s.cubic_k3, s.cubic_pair, s.branch_ends, s.branch_k,
+                          s.branch_eta, s.branch_pair, self._forces, self._tangent, self.elongations)
+        G = self.harmonics_of(self._forces).reshape(n * L)
+        jacobian = np.zeros((n * L, n * L))
+        if s.pairs:
+            blocks = self.projection @ self._tangent  # (pairs, L, L)
+            for (p, r), block in zip(s.pairs, blocks):
+                jacobian[p * L:(p + 1) * L, p * L:(p + 1) * L] += block
+                if r >= 0:
+                    jacobian[r * L:(r + 1) * L, r * L:(r + 1) * L] += block
+                    jacobian[p * L:(p + 1) * L, r * L:(r + 1) * L] -= block
+                    jacobian[r * L:(r + 1) * L, p * L:(p + 1) * L] -= block
+        return G, jacobian
+
+    def evaluate(self, free_values: np.ndarray, omega: float, xi: float = 0.0, forced: bool = True) -> tuple:
+        """``(R, dR/dq, dR/domega, dR/dxi)`` on the free unknowns at ``omega`` (rad/s); ``xi`` (1/s): the
+        negative viscous term -xi M x' of a nonlinear mode (0: the forced response); ``forced``: with F0."""
+        q = self.full(free_values)
+        G, nonlinear = self.nonlinear(q)
+        velocity = self.linear_damping - xi * self.mass_velocity
+        linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia
+        residual = linear @ q + G - (self.force if forced else 0.0)
+        jacobian = linear + nonlinear
+        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q
+        by_xi = -omega * (self.mass_velocity @ q)
+        f = self.free
+        return residual[f], jacobian[np.ix_(f, f)], by_omega[f], by_xi[f]
+
+    def linear_guess(self, omega: float) -> np.ndarray:
+        """The free unknowns of the response with every branch sticking and no cubic spring (a first guess)."""
+        s = self.system
+        stuck = s.stiffness.copy()
+        for (p, r), k in zip(s.branch_ends.tolist(), s.branch_k.tolist()):
+            stuck[p, p] += k
+            if r >= 0:
+                stuck[r, r] += k
+                stuck[p, r] -= k
+                stuck[r, p] -= k
+        matrix = np.kron(stuck, np.eye(self.L)) + omega * self.linear_damping + omega * omega * self.linear_inertia
+        f = self.free
+        try:
+            return np.linalg.solve(matrix[np.ix_(f, f)], self.force[f])
+        except np.linalg.LinAlgError:
+            return np.linalg.lstsq(matrix[np.ix_(f, f)], self.force[f], rcond=None)[0]
+
+    def solve_at(self, omega: float, guess: Optional[np.ndarray] = None) -> np.ndarray:
+        """The free unknowns at ``omega`` by Newton's method from ``guess`` (default :meth:`linear_guess`; then
+        the force raised in steps if Newton does not converge at once); FrequencyError past the bounds."""
+        start = self.linear_guess(omega) if guess is None else guess
+        solved = self._newton(omega, start)
+        if solved is not None:
+            return solved
+        where = self.system.load_node * self.L + 1
+        q = 0.1 * start
+        try:
+            for fraction in np.linspace(0.1, 1.0, 10).tolist():
+                self.force[where] = self.force_amplitude * fraction
+                q = self._newton(omega, q)
+                if q is None:
+                    break
+        finally:
+            self.force[where] = self.force_amplitude
+        if q is None:
+            raise FrequencyError(f"{self.system.source}: harmonic balance did not converge at f = "
+                                 f"{float(omega) / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
+                                 "(from the linear response, nor with the force raised in 10 steps)")
+        return q
+
+    def _newton(self, omega: float, q: np.ndarray) -> Optional[np.ndarray]:
+        q = np.array(q, dtype=float)
+        for _ in range(NEWTON_ITERATIONS):
+            residual, jacobian, _, _ = self.evaluate(q, omega)
+            step = solve_linear(jacobian, -residual)
+            if step is None:
+                return None
+            q = q + step
+            if np.max(np.abs(step)) <= STEP_TOLERANCE * max(np.max(np.abs(q)), 1e-300) or \
+                    np.max(np.abs(residual)) <= RESIDUAL_TOLERANCE * self.force_amplitude:
+                return q
+        return None
+
+
+def solve_linear(matrix: np.ndarray, right: np.ndarray) -> Optional[np.ndarray]:
+    """``matrix^-1 right``, or None where the matrix is singular or the result not finite."""
+    try:
+        out = np.linalg.solve(matrix, right)
+    except np.linalg.LinAlgError:
+        return None
+    return out if np.all(np.isfinite(out)) else None
+
+
+def _held_nodes(n: int, links: list) -> np.ndarray:
+    """For each of ``n`` nodes, whether the ``links`` (p, q) (springs and cubic springs; q = -1 the ground)
+    join it to the ground, through other nodes too: its mean is an unknown (see the module)."""
+    parent = list(range(n + 1))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in links:
+        parent[find(a)] = find(n if b < 0 else b)
+    return np.array([find(i) == find(n) for i in range(n)], dtype=bool)

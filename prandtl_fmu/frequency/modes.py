@@ -1,0 +1,246 @@
+"""Nonlinear modes by the extended periodic motion concept (EPMC, Krack 2015): the backbone of a jointed structure.
+
+The free system with a negative viscous term that makes its motion periodic,
+
+    M x'' + (C - xi M) x' + K x + g(x) = 0,
+
+is solved by harmonic balance (``harmonic_balance.py``: H harmonics, the same AFT and Jacobian) for omega and
+xi at each amplitude A of the first harmonic of x at the node: the phase is fixed by b_1 = 0 and the amplitude
+by a_1 = A there, so x_node's first harmonic is A cos(omega t). The mode's frequency is omega / (2 pi) (Hz) and
+its damping ratio xi / (2 omega): the viscous damping xi M that the motion needs to be undamped is the mode's
+own damping. With one harmonic, a mass m on an element whose describing function is K(A), D(A) has
+m omega^2 = K(A) and damping ratio D(A) / (2 pi K(A) A^2) (c / (2 m omega) more with a dashpot c).
+
+The first amplitude starts from the linear mode with every branch sticking (the massless nodes condensed);
+each next one from the last solution scaled by the ratio of the amplitudes, with the step halved (at most
+MAX_HALVINGS times) where Newton does not converge within NEWTON_ITERATIONS.
+
+:func:`synthesis`: the forced response near the mode's resonance from the backbone alone (single nonlinear
+mode synthesis).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
+from .harmonic_balance import NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
+
+MAX_HALVINGS = 30
+HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
+
+
+@dataclass(frozen=True, eq=False)
+class Backbone:
+    """The nonlinear mode ``mode`` at each amplitude: arrays of shape (amplitudes,), in the order given.
+
+    ``amplitude`` (m) of the first harmonic of x at ``node``, ``frequency`` (Hz), ``damping_ratio``;
+    ``harmonics`` H; ``change`` the relative change at the last increase of H (None when H was given);
+    ``shape`` the mode's first harmonic at every node per unit amplitude (complex, (amplitudes, n))."""
+
+    amplitude: np.ndarray
+    frequency: np.ndarray
+    damping_ratio: np.ndarray
+    mode: int
+    node: str
+    harmonics: int
+    change: Optional[float]
+    shape: np.ndarray  # (amplitudes, n) complex: the first harmonic a_1 - i b_1 of every node over the amplitude
+    mass: np.ndarray  # (n,) the nodes' masses
+    nodes: tuple
+
+    def columns(self) -> dict:
+        return {"amplitude": self.amplitude, "frequency": self.frequency, "damping_ratio": self.damping_ratio}
+
+
+def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = None, node: Optional[str] = None,
+                   tolerance: float = DEFAULT_TOLERANCE, samples: Optional[int] = None) -> Backbone:
+    """The backbone of nonlinear mode ``mode`` (1: the lowest) of ``scene`` at ``amplitudes`` (m, of x at
+    ``node``; default the first node with a mass) (see the module); ``samples``: N of the AFT (default
+    ``harmonic_balance.sample_count``). FrequencyError names the culprit."""
+    amplitudes = positive_values(amplitudes, "amplitudes")
+    tolerance = check_tolerance(tolerance)
+    system = periodic_system(scene)
+    where = system.node_index(node)
+    if harmonics is not None:
+        values, shape = _backbone(system, mode, amplitudes, where, harmonics, samples)
+        change = None
+    else:
+        previous, change = None, math.inf
+        for H in HARMONIC_STEPS:
+            values, shape = _backbone(system, mode, amplitudes, where, H, samples)
+            if previous is not None:
+                change = float(np.max(np.abs(values - previous) / np.maximum(np.abs(values), 1e-300)))
+                if change <= tolerance:
+                    harmonics = H
+                    break
+            previous = values
+        else:
+            raise FrequencyError(f"{system.source}: the mode's frequency and damping still changed by {change:.3g} "
+                                 f"relative from H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics: give "
+                                 "--harmonics, or a larger --tolerance")
+    return Backbone(amplitudes, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
+                    system.nodes[where], harmonics, change, shape, system.mass.copy(), system.nodes)
+
+
+def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[str] = None) -> tuple:
+    """The forced response under F0 cos(Omega t) on ``load_node`` (default: the backbone's node) synthesised from
+    the one nonlinear mode (single nonlinear mode synthesis): at each amplitude a of the backbone, with omega(a),
+    zeta(a) and the shape psi(a) (per unit amplitude), the modal equation
+
+        (omega^2 - Omega^2 + 2 i zeta omega Omega) m_psi a = conj(psi_L) F0,    m_psi = sum_i m_i |psi_i|^2,
+
+    gives |.| = F0 |psi_L| / (m_psi a), a quadratic in Omega^2: up to two Omega per amplitude, below and above
+    the backbone. Where the mode dominates the response (near its resonance, modes well apart) it is the
+    forced response; with one harmonic and a conservative nonlinearity plus viscous damping it is exactly the
+    harmonic balance's. Returns ``(frequency (Hz), amplitude (m))`` along the curve: up the lower side, down
+    the upper side (amplitudes where the force cannot reach are left out)."""
+    force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
+    where = backbone.nodes.index(load_node) if load_node is not None else backbone.nodes.index(backbone.node)
+    a = backbone.amplitude
+    order = np.argsort(a)
+    a = a[order]
+    omega = 2.0 * math.pi * backbone.frequency[order]
+    zeta = backbone.damping_ratio[order]
+    shape = backbone.shape[order]
+    modal_mass = np.sum(backbone.mass[None, :] * np.abs(shape) ** 2, axis=1)
+    right = (force_amplitude * np.abs(shape[:, where]) / (modal_mass * a)) ** 2
+    # Omega^4 + (4 zeta^2 - 2) omega^2 Omega^2 + omega^4 - right = 0
+    b = (4.0 * zeta**2 - 2.0) * omega**2
+    disc = b * b - 4.0 * (omega**4 - right)
+    with np.errstate(invalid="ignore"):
+        root = np.sqrt(disc)
+        low = np.sqrt((-b - root) / 2.0)
+        high = np.sqrt((-b + root) / 2.0)
+    low_ok, high_ok = np.isfinite(low) & (disc >= 0), np.isfinite(high) & (disc >= 0)
+    frequency = np.concatenate((low[low_ok], high[high_ok][::-1])) / (2.0 * math.pi)
+    amplitude = np.concatenate((a[low_ok], a[high_ok][::-1]))
+    return frequency, amplitude
+
+
+def linear_mode(system, mode: int) -> tuple:
+    """(omega (rad/s), shape (n,)) of the linear mode ``mode`` with every branch sticking, the massless nodes
+    condensed."""
+    stuck = system.stiffness.copy()
+    for (p, r), k in zip(system.branch_ends.tolist(), system.branch_k.tolist()):
+        stuck[p, p] += k
+        if r >= 0:
+            stuck[r, r] += k
+            stuck[p, r] -= k
+            stuck[r, p] -= k
+    massive = system.massive
+    massless = [i for i in range(system.n) if i not in massive]
+    if mode > len(massive):
+        raise FrequencyError(f"--mode: {system.source} has {len(massive)} node(s) with a mass, so "
+                             f"{len(massive)} mode(s); got {mode}")
+    K = stuck[np.ix_(massive, massive)]
+    coupling = stuck[np.ix_(massless, massive)]
+    if massless:
+        condensed = np.linalg.solve(stuck[np.ix_(massless, massless)], coupling)
+        K = K - stuck[np.ix_(massive, massless)] @ condensed
+    scale = 1.0 / np.sqrt(system.mass[massive])
+    values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
+    if values[mode - 1] <= 0:
+        raise FrequencyError(f"{system.source}: mode {mode} has no stiffness with every branch sticking (a rigid-body "
+                             "mode): nothing holds it")
+    shape = np.zeros(system.n)
+    shape[massive] = vectors[:, mode - 1] * scale
+    if massless:
+        shape[massless] = -condensed @ shape[massive]
+    return math.sqrt(values[mode - 1]), shape
+
+
+def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: int, samples) -> np.ndarray:
+    """((amplitudes, 2): omega and xi at each amplitude, (amplitudes, n): the first harmonic of every node per
+    unit amplitude), in the order given."""
+    balance = HarmonicBalance(system, harmonics, 1.0, samples)
+    L = balance.L
+    free = list(balance.free)
+    fixed = [free.index(where * L + 1), free.index(where * L + 2)]
+    keep = np.array([i for i in range(len(free)) if i not in fixed], dtype=np.int64)
+    omega0, shape = linear_mode(system, mode)
+    if abs(shape[where]) < 1e-9 * np.max(np.abs(shape)):
+        raise FrequencyError(f"--node: mode {mode} does not move node {system.nodes[where]}: its amplitude cannot "
+                             "set the mode's (choose another --node)")
+    C = np.diag(system.mass)
+    xi0 = float(shape @ system.damping @ shape / (shape @ C @ shape))
+    order = np.argsort(amplitudes)
+    out = np.empty((amplitudes.size, 2))
+    shapes = np.empty((amplitudes.size, system.n), dtype=complex)
+    state = None
+    last = None
+    for index in order.tolist():
+        A = float(amplitudes[index])
+        if state is None:
+            q = np.zeros(len(free))
+            for i in range(system.n):
+                if i * L + 1 in free:
+                    q[free.index(i * L + 1)] = shape[i] / shape[where] * A
+            state = _newton(balance, q, omega0, xi0, fixed, keep, A)
+            if state is None:
+                state = _from_small(balance, q, omega0, xi0, fixed, keep, A)
+        else:
+            state = _stepped(balance, state, last, A, fixed, keep)
+        if state is None:
+            raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = {float(A)!r} m "
+                                 f"(H = {harmonics}) within {NEWTON_ITERATIONS} Newton iterations per step, "
+                                 f"with the amplitude step halved {MAX_HALVINGS} times")
+        last = A
+        out[index] = state[1], state[2]
+        full = balance.full(state[0]).reshape(system.n, L)
+        shapes[index] = (full[:, 1] - 1j * full[:, 2]) / A
+    return out, shapes
+
+
+def _from_small(balance, q, omega, xi, fixed, keep, A):
+    """From the linear mode at an amplitude small enough that nothing slips, up to A."""
+    small = A * 1e-6
+    state = _newton(balance, q * 1e-6, omega, xi, fixed, keep, small)
+    return None if state is None else _stepped(balance, state, small, A, fixed, keep)
+
+
+def _stepped(balance, state, A_from, A_to, fixed, keep):
+    """From the solution at A_from to A_to, halving the ratio where Newton fails."""
+    q, omega, xi = state
+    current = A_from
+    target = A_to
+    halvings = 0
+    while True:
+        ratio = target / current
+        trial = _newton(balance, q * ratio, omega, xi, fixed, keep, target)
+        if trial is not None:
+            q, omega, xi = trial
+            current = target
+            if current == A_to:
+                return trial
+            target = A_to
+            continue
+        halvings += 1
+        if halvings > MAX_HALVINGS:
+            return None
+        target = math.sqrt(current * target)
+
+
+def _newton(balance, q, omega, xi, fixed, keep, A):
+    """(q, omega, xi) of the mode at amplitude A by Newton from the guess, or None."""
+    q = np.array(q, dtype=float)
+    q[fixed[0]], q[fixed[1]] = A, 0.0
+    for _ in range(NEWTON_ITERATIONS):
+        residual, jacobian, by_omega, by_xi = balance.evaluate(q, omega, xi, forced=False)
+        matrix = np.hstack((jacobian[:, keep], by_omega[:, None], by_xi[:, None]))
+        step = solve_linear(matrix, -residual)
+        if step is None:
+            return None
+        q[keep] += step[:-2]
+        omega += step[-2]
+        xi += step[-1]
+        if not omega > 0:
+            return None
+        small = np.max(np.abs(step[:-2])) <= 1e-10 * np.max(np.abs(q)) and abs(step[-2]) <= 1e-10 * omega and \
+            abs(step[-1]) <= 1e-10 * max(abs(xi), 1e-6 * omega)
+        if small:
+            return q, omega, xi
+    return None

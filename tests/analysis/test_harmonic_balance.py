@@ -1,0 +1,256 @@
+"""Harmonic balance (``prandtl_fmu/frequency/harmonic_balance.py``, ``continuation.py``, ``floquet.py``,
+``modes.py``): the Duffing oscillator's single-harmonic closed form, the nonlinear mode of a mass on a Jenkins
+element against the describing function, the time sweep at stable points, unstable points integrated, a network
+from the command line, and bad input."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+from prandtl_fmu.frequency import parse_scene, read_scene
+
+from tests.analysis.test_describe_cli import read_csv, write
+from tests.analysis.test_frequency import epp
+
+DUFFING = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05}}
+DAMPER = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02},
+          "branches": {"k": [1.0], "alpha": [0.1]}}
+
+
+def element(tables):
+    from tests.conftest import scene_text
+
+    return parse_scene(scene_text(tables))[0]
+
+
+def duffing_frequencies(a, m=1.0, k=1.0, k3=0.5, c=0.05, F=0.2):
+    """The two omega (rad/s) of the single-term Duffing curve a^2 [(k + 3/4 k3 a^2 - m w^2)^2 + (c w)^2] = F^2 at
+    each amplitude a (NaN past the peak): a quadratic in w^2."""
+    stiff = k + 0.75 * k3 * a * a
+    b = 2 * m * stiff - c * c
+    disc = b * b - 4 * m * m * (stiff * stiff - F * F / (a * a))
+    root = np.sqrt(np.where(disc >= 0, disc, np.nan))
+    with np.errstate(invalid="ignore"):  # past the peak: NaN
+        return np.sqrt((b - root) / (2 * m * m)), np.sqrt((b + root) / (2 * m * m))
+
+
+@pytest.mark.slow
+def test_duffing_with_one_harmonic_is_the_single_term_curve_its_folds_and_peak():
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    curve = harmonic_response(element(DUFFING), 0.2, [0.5 / (2 * math.pi), 2.0 / (2 * math.pi)], harmonics=1,
+                              stability=False)
+    w, a = 2 * math.pi * curve.frequency, curve.amplitude
+    residual = a * a * ((1.0 + 0.375 * a * a - w * w) ** 2 + (0.05 * w) ** 2) - 0.04
+    assert np.max(np.abs(residual)) <= 1e-10
+    # the closed form's folds: the extrema of omega along the curve, parametrised by a (low branch up, high down)
+    fine = np.linspace(1e-3, 3.0, 400001)
+    low, high = duffing_frequencies(fine)
+    keep = np.isfinite(low)
+    path = np.concatenate((low[keep], high[keep][::-1]))
+    inner = np.flatnonzero((np.diff(np.sign(np.diff(path))) != 0)) + 1
+    folds = np.sort(path[inner])
+    assert folds.size == 2 and curve.folds.size == 2
+    assert np.sort(w[curve.folds]) == pytest.approx(folds, rel=1e-7)
+    peak = fine[keep][-1]
+    assert a.max() <= peak * (1 + 1e-9) and a.max() == pytest.approx(peak, rel=2e-3)
+    # the curve passes both folds in order: up to the higher one, back to the lower, up to the end
+    assert w[curve.folds[0]] > w[curve.folds[1]] and curve.frequency[-1] == pytest.approx(2.0 / (2 * math.pi))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("c", [0.0, 0.05])
+def test_one_harmonic_nonlinear_mode_of_a_jenkins_element_is_its_describing_function(c):
+    """m x'' + c x' + k0 x + Jenkins(k, eta): m omega^2 = K(A), damping ratio D(A) / (2 pi K A^2) + c / (2 m omega),
+    with K and D the elastic-perfectly-plastic closed forms; the AFT's quadrature converges to them."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    m, k0, k, eta = 2.0, 1.0, 3.0, 0.1
+    tables = {"mass": {"m": m}, "spring": {"k0": k0}, "branches": {"k": [k], "eta": [eta]}}
+    if c:
+        tables["damper"] = {"c": c}
+    amplitudes = [0.05, 0.15, 0.3, 1.0, 5.0]
+    errors = []
+    for samples in (256, 4096):
+        backbone = nonlinear_mode(element(tables), 1, amplitudes, harmonics=1, samples=samples)
+        error = 0.0
+        for A, f, zeta in zip(amplitudes, backbone.frequency, backbone.damping_ratio):
+            K, D = epp(k, eta, A)
+            K += k0
+            omega = math.sqrt(K / m)
+            expected = D / (2 * math.pi * K * A * A) + c / (2 * m * omega)
+            error = max(error, abs(f - omega / (2 * math.pi)) / f, abs(zeta - expected) / max(expected, 1e-3))
+        errors.append(error)
+    assert errors[1] <= 1e-4 and errors[1] < errors[0] / 4  # the trapezoid rule over a kinked cycle: ~ 1 / N^2
+
+
+@pytest.mark.slow
+def test_stable_points_agree_with_the_time_sweep_on_a_friction_damper():
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.response import frequency_response
+
+    scene = element(DAMPER)
+    curve = harmonic_response(scene, 0.1, [0.15, 0.19], harmonics=7)
+    assert np.all(curve.stable)
+    picks = [np.argmin(np.abs(curve.frequency - f)) for f in (0.16, 0.17, 0.18)]
+    response = frequency_response(scene, 0.1, curve.frequency[picks], sweep="up", tolerance=1e-4)
+    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=3e-4)
+    assert response.phase == pytest.approx(curve.phase[picks], abs=3e-4)
+
+
+def _first_harmonic_after(balance, q, omega, periods):
+    """The first-harmonic amplitude of x at the load's node over the last of ``periods`` periods integrated with
+    the implicit network stepper from the orbit's start (2048 steps per period: backward Euler's damping per
+    period, about (2 pi)^2 / (2 steps), is 1 % here)."""
+    from prandtl_fmu.frequency.floquet import orbit_start, run_periods
+
+    steps = 2048
+    x, _ = run_periods(balance, omega, orbit_start(balance, q, omega), periods, steps)
+    weights = np.exp(-1j * 2 * math.pi * np.arange(1, steps + 1) / steps) * 2 / steps
+    return abs(x[:, balance.system.load_node] @ weights)
+
+
+@pytest.mark.slow
+def test_points_marked_unstable_leave_their_orbit_and_stable_ones_keep_it():
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene, _ = read_scene("networks/two-mass-joint", networks=True)
+    curve = harmonic_response(scene, 0.2, [0.1, 0.4], harmonics=5)
+    assert curve.folds.size == 2
+    first, second = curve.folds
+    unstable = np.flatnonzero(~curve.stable)
+    assert unstable.size and first <= unstable.min() and unstable.max() <= second  # between the folds only
+    balance = HarmonicBalance(periodic_system(scene), 5, 0.2)
+    for index, leaves in ((unstable[unstable.size // 2], True), (first // 2, False)):
+        omega = 2 * math.pi * curve.frequency[index]
+        q = curve.coefficients[index].reshape(-1)[balance.free]
+        after = _first_harmonic_after(balance, q, omega, 60)
+        moved = abs(after - curve.amplitude[index]) / curve.amplitude[index]
+        assert (moved > 0.1) if leaves else (moved < 1e-2), (index, moved)
+
+
+@pytest.mark.slow
+def test_a_network_with_a_joint_end_to_end_from_the_command_line(tmp_path):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "curve.csv"
+    plot = tmp_path / "curve.png"
+    assert main(["describe", "networks/two-mass-joint", "--force-amplitude", "0.2", "--frequencies", "0.1,0.4",
+                 "--harmonics", "3", "--out", str(out), "--plot", str(plot), "--mode", "1", "--amplitudes",
+                 "0.1,0.5,1,2"]) == 0
+    table = read_csv(out)
+    assert list(table)[:6] == ["frequency", "amplitude", "phase", "stable", "amplitude_a", "amplitude_b"]
+    f = np.array(table["frequency"], dtype=float)
+    assert f[0] == 0.1 and f[-1] == pytest.approx(0.4, rel=1e-12)
+    assert set(table["stable"]) == {"true", "false"} and table["fold"].count("true") == 2
+    assert np.allclose(np.array(table["amplitude"], dtype=float), np.array(table["amplitude_a"], dtype=float),
+                       rtol=1e-14, atol=0)
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    backbone = tmp_path / "backbone.csv"
+    assert main(["describe", "networks/two-mass-joint", "--mode", "2", "--amplitudes", "0.01,0.5,2", "--harmonics",
+                 "3", "--out", str(backbone), "--plot", str(tmp_path / "backbone.png")]) == 0
+    assert (tmp_path / "backbone.png").read_bytes()[:4] == b"\x89PNG"
+    modes = read_csv(backbone)
+    assert list(modes) == ["amplitude", "frequency", "damping_ratio"]
+    zeta = np.array(modes["damping_ratio"], dtype=float)
+    assert zeta[1] > 2 * zeta[0] > 0  # the out-of-phase mode: the joint slips at 0.5 m; at 0.01 m it sticks
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--harmonics", "0"], "--harmonics"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--harmonics", "two"], "--harmonics"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--sweep", "up"], "--sweep"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--method", "time", "--harmonics", "3"], "--harmonics"),
+    (["--force-amplitude", "1", "--frequencies", "0.1", "--node", "nowhere"], "--node"),
+    (["--mode", "1"], "--amplitudes"),
+    (["--mode", "0", "--amplitudes", "0.1"], "--mode"),
+    (["--mode", "2", "--amplitudes", "0.1"], "--mode"),
+    (["--mode", "1", "--amplitudes", "0.1", "--frequencies", "0.1"], "--frequencies"),
+    (["--mode", "1", "--amplitudes", "0.1", "--force-amplitude", "1", "--frequencies", "0.1"], "--plot"),
+])
+def test_bad_input_is_one_line_and_exit_2_with_nothing_written(tmp_path, capsys, arguments, culprit):
+    out = tmp_path / "out.csv"
+    status = main(["describe", write(tmp_path, DAMPER), *arguments, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_what_harmonic_balance_does_not_take_is_named(tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    cases = [("networks/two-masses-slider", "slider"),
+             (write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "friction": {"alpha": 0.1}}), "[friction]")]
+    for scene, culprit in cases:
+        assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert culprit in err and "--method time" in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_harmonics_chosen_by_the_tolerance_reach_it():
+    """Without H, the curve's first harmonic at its peak is within the tolerance of H = 21's there."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene = element(DAMPER)
+    curve = harmonic_response(scene, 0.1, [0.15, 0.19], tolerance=1e-3, stability=False)
+    assert curve.harmonics > 1 and curve.change <= 1e-3
+    peak = int(np.argmax(curve.amplitude))
+    reference = HarmonicBalance(periodic_system(scene), 21, 0.1)
+    q = reference.solve_at(2 * math.pi * curve.frequency[peak])
+    X = complex(reference.full(q)[1], -reference.full(q)[2])
+    assert abs(abs(X) - curve.amplitude[peak]) <= 1e-3 * abs(X)
+
+
+@pytest.mark.slow
+def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, monkeypatch):
+    from prandtl_fmu.frequency import continuation
+
+    monkeypatch.setattr(continuation, "_correct", lambda *args: None)
+    monkeypatch.setattr(continuation, "_around_corner", lambda *args: None)
+    out = tmp_path / "out.csv"
+    status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.15,0.19",
+                   "--harmonics", "3", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and "cannot continue past f = 0.15 Hz" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_a_network_joint_s_describing_function_is_its_elements_closed_forms(tmp_path, capsys):
+    """--between: the elements joining two nodes driven in the relative displacement; the two-mass joint's
+    Jenkins branch (k = 2, eta = 0.05) gives the elastic-perfectly-plastic K and D; a slider beside a branch adds
+    4 alpha A to D."""
+    out = tmp_path / "joint.csv"
+    amplitudes = [0.01, 0.05, 0.1, 1.0]
+    assert main(["describe", "networks/two-mass-joint", "--amplitudes", ",".join(map(str, amplitudes)),
+                 "--between", "b,a", "--out", str(out)]) == 0
+    table = read_csv(out)
+    for A, K, D in zip(amplitudes, table["stiffness"], table["dissipation"]):
+        assert (float(K), float(D)) == pytest.approx(epp(2.0, 0.05, A), rel=1e-12, abs=1e-15)
+    assert main(["describe", "networks/two-masses-slider", "--amplitudes", "0.01,1", "--between", "a,b", "--out",
+                 str(out)]) == 0
+    table = read_csv(out)
+    for A, K, D in zip([0.01, 1.0], table["stiffness"], table["dissipation"]):
+        K_b, D_b = epp(50.0, 0.02, A)
+        assert (float(K), float(D)) == pytest.approx((K_b, D_b + 4 * 2.0 * A), rel=1e-12)
+    for arguments, culprit in ((["--between", "a,nowhere"], "--between"), (["--between", "a,a"], "--between")):
+        assert main(["describe", "networks/two-mass-joint", "--amplitudes", "0.1", *arguments]) == 2
+        err = capsys.readouterr().err
+        assert culprit in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_single_mode_synthesis_of_duffing_with_one_harmonic_is_the_single_term_curve():
+    """EPMC of m x'' + c x' + k x + k3 x^3 with one harmonic: omega^2 = (k + 3/4 k3 a^2) / m, 2 zeta omega m = c; the
+    synthesis then satisfies a^2 [(k + 3/4 k3 a^2 - m W^2)^2 + (c W)^2] = F^2 exactly, on both sides."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode, synthesis
+
+    backbone = nonlinear_mode(element(DUFFING), 1, np.linspace(0.05, 2.5, 60), harmonics=1)
+    f, a = synthesis(backbone, 0.2)
+    W = 2 * math.pi * f
+    assert f.size > 60  # both sides where the force reaches
+    residual = a * a * ((1.0 + 0.375 * a * a - W * W) ** 2 + (0.05 * W) ** 2) - 0.04
+    assert np.max(np.abs(residual)) <= 1e-9
