@@ -328,4 +328,6 @@ def _cell(value) -> str:
         return value
     if isinstance(value, int) and not isinstance(value, bool):
         return str(value)
+    if not math.isfinite(float(value)):  # every column says where it has no number (None): never nan or inf
+        raise ValueError(f"a CSV cell would be {value!r} (a defect of prandtl_fmu: please report it)")
     return repr(float(value))

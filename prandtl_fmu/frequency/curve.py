@@ -35,8 +35,9 @@ class Curve:
     """The points of the curve in the order taken: arrays of shape (points,).
 
     ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
-    ``stable`` (bool), ``fold`` (bool: a located fold), ``multiplier`` the largest |Floquet multiplier| (NaN
-    where it was not computed: see STABILITY_STRIDE), ``amplitudes``: {node: first-harmonic amplitude (m)} for
+    ``stable`` (bool; None for a curve computed with ``stability=False``), ``fold`` (bool: a located fold),
+    ``multiplier`` the largest |Floquet multiplier| (NaN where it was not computed: see STABILITY_STRIDE; an
+    empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
     every node with a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
     harmonic at the last increase of H (None when H was given)."""
 
@@ -56,13 +57,17 @@ class Curve:
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,
-        multiplier."""
+        multiplier. A curve computed without its stability (``stability=False``) has no such columns: it
+        says nothing it did not compute."""
+        if self.stable is None:
+            raise ValueError("the curve was computed without its stability (stability=False): no stable column")
         out = {"frequency": self.frequency, "amplitude": self.amplitude, "phase": self.phase,
                "stable": ["true" if s else "false" for s in self.stable.tolist()]}
         for name, values in self.amplitudes.items():
             out[f"amplitude_{name}"] = values
         out["fold"] = ["true" if f else "false" for f in self.fold.tolist()]
-        out["multiplier"] = self.multiplier
+        # an empty field where the multipliers were not computed (the point's stability is its neighbours')
+        out["multiplier"] = [None if math.isnan(m) else m for m in self.multiplier.tolist()]
         return out
 
     @property
@@ -78,8 +83,8 @@ def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: 
     """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t) from the
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
     taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
-    load node); ``stability``: compute the Floquet multipliers (else every point is marked stable and its
-    multiplier NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError
+    load node); ``stability``: compute the Floquet multipliers (else ``stable`` is None and every multiplier
+    NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError
     names the culprit or says where the curve stopped and why."""
     force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
     frequencies = positive_values(frequencies, "frequencies")
@@ -156,6 +161,8 @@ def _curve(balance, points, where, stability, change) -> Curve:
             else:
                 for index in range(before + 1, after):
                     check(index)
+    if not stability:
+        stable = None
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),

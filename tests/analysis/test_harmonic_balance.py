@@ -146,6 +146,11 @@ def test_a_network_with_a_joint_end_to_end_from_the_command_line(tmp_path):
     assert set(table["stable"]) == {"true", "false"} and table["fold"].count("true") == 2
     assert np.allclose(np.array(table["amplitude"], dtype=float), np.array(table["amplitude_a"], dtype=float),
                        rtol=1e-14, atol=0)
+    # a multiplier where it was computed, an empty field where not: never nan (and some of each, at the folds)
+    computed = [cell for cell in table["multiplier"] if cell != ""]
+    assert 0 < len(computed) < len(table["multiplier"])
+    assert all(np.isfinite(float(cell)) and float(cell) > 0 for cell in computed)
+    assert "nan" not in out.read_text().lower() and "inf" not in out.read_text().lower()
     assert plot.read_bytes()[:4] == b"\x89PNG"
     backbone = tmp_path / "backbone.csv"
     assert main(["describe", "networks/two-mass-joint", "--mode", "2", "--amplitudes", "0.01,0.5,2", "--harmonics",
@@ -254,3 +259,14 @@ def test_single_mode_synthesis_of_duffing_with_one_harmonic_is_the_single_term_c
     assert f.size > 60  # both sides where the force reaches
     residual = a * a * ((1.0 + 0.375 * a * a - W * W) ** 2 + (0.05 * W) ** 2) - 0.04
     assert np.max(np.abs(residual)) <= 1e-9
+
+
+def test_a_csv_cell_is_a_number_or_empty_never_nan(tmp_path):
+    """The frequency domain's CSV writer: None is an empty field, a non-finite float a refusal (a defect), never
+    a 'nan' or 'inf' cell that a reader takes for a number."""
+    from prandtl_fmu.frequency.cli import csv_text
+
+    assert csv_text({"a": [1.5, None], "b": ["true", "false"]}) == "a,b\n1.5,true\n,false\n"
+    for bad in (float("nan"), float("inf"), np.float64(-np.inf)):
+        with pytest.raises(ValueError, match="defect"):
+            csv_text({"a": [bad]})
