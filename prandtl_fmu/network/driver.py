@@ -94,10 +94,6 @@ def failure_message(scene: NetworkScene, stepper: str, status: int, time: float,
         return (f"{where} refused: the active-set search did not end within its budget of "
                 f"{kernels.search_budget(n, count)} iterations ({kernels.SEARCH_PER_TERM} per node and element "
                 f"+ {kernels.SEARCH_CONSTANT}); a smaller step needs fewer")
-    if status == -4:
-        return (f"{where} refused: its linear system is too ill-conditioned for double precision (a stiffness "
-                "beyond 1e10 times a node's inertia m/h^2: a stiff spring between light masses); take a smaller "
-                "step, or join such nodes into one")
     return f"{where} refused: a number overflowed (not finite)"
 
 
