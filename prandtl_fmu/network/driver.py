@@ -354,7 +354,7 @@ class NetworkElement(OutputMemo):
         value = float(value)
         if not math.isfinite(value):
             raise ValueError(f"time must be finite, got {value!r}")
-        if self._grid is not None and abs(value - self.time) <= 1e-9 * self._grid:
+        if self._grid is not None and abs(value - self.time) <= 1e-9 * min(self._grid, abs(value)):
             return
         self._origin, self._steps = value, 0
 
@@ -406,7 +406,7 @@ class NetworkElement(OutputMemo):
             raise ValueError(f"duration {duration!r} s is shorter than {SHORTEST_STEP:g} s")
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is more than 2^53 steps of h = {h!r} s")
-        whole, rest = split_duration(duration, h)
+        whole, rest = split_duration(duration, h, self.time + duration)
         if not (whole or rest):  # shorter than rounding of h: no step, the clock on its grid (Element.advance)
             return
         if whole + (rest > 0) > ADVANCE_BUDGET:
@@ -601,7 +601,7 @@ class NetworkConnector(NetworkElement):
         saved_force = self._force
         node = self.scene.network.load_node
         duration = time - start
-        if split_duration(duration, self.h) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
+        if split_duration(duration, self.h, time) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
             duration = 0.0
         try:
             if duration == 0:
@@ -611,7 +611,7 @@ class NetworkConnector(NetworkElement):
                     raise ElementError(failure_message(self.scene, "instant", status, start, 0.0))
             else:
                 h = self.h
-                whole, rest = split_duration(duration, h)
+                whole, rest = split_duration(duration, h, time)
                 if whole + (rest > 0) > ADVANCE_BUDGET:
                     raise ElementError(f"{self.scene.source}: a move over {duration!r} s takes more than "
                                        f"{ADVANCE_BUDGET:.0e} steps")

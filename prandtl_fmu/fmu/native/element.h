@@ -245,7 +245,7 @@ static const char* advance(Element* e, double duration, double force, int scene_
         if (e->clock.grid != 0.0 && fabs(duration - e->clock.grid) <= 1e-9 * e->clock.grid)
             h = e->clock.grid; /* ... of the grid's step when it is that to rounding */
     }
-    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    problem = plan_advance(duration, h, element_time(e) + duration, &whole, &rest, buffer, size);
     if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
         return problem;
     problem = delay_time_problem(e->mem, element_time(e), element_time(e) + duration, buffer, size);

@@ -361,7 +361,7 @@ static const char* advance(Instance* c, double duration, double force, int scene
     Load l;
     if (duration == 0.0)
         return NULL;
-    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    problem = plan_advance(duration, h, element_time(e) + duration, &whole, &rest, buffer, size);
     if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
         return problem;
     l = load_of(force, scene_load, &c->noise, c->noise_cache);
@@ -394,7 +394,7 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
     }
     prandtl_kernel_failed = 0;
     if (duration > 0) {
-        split_duration(duration, h, &whole, &rest);
+        split_duration(duration, h, time, &whole, &rest);
         if (whole == 0 && rest == 0) /* below rounding of h: a sample at the instant it is at (move_to) */
             duration = 0;
     }
