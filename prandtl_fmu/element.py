@@ -370,6 +370,8 @@ class Element(OutputMemo):
         account = np.array([plain_number(value, "energy_account") for value in booked], dtype=float)
         if account.shape[0] != 4:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 4")
+        if np.any(account[1:] < 0):  # (sliders, dashpot, friction: a dissipation never gives energy back)
+            raise ValueError(f"state has energy_account = {booked!r}: a dissipated energy is negative")
         kind = state.get("branch_kernel", "play")
         if not isinstance(kind, str):
             raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")

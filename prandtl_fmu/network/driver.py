@@ -301,6 +301,9 @@ class NetworkElement(OutputMemo):
     element's rules: :class:`prandtl_fmu.driver.Element`). Outputs: :attr:`x`, :attr:`v` (per node),
     :attr:`reaction`, :meth:`energy`."""
 
+    # set_state checks a saved reaction against what the state's x, v and u fix of it (kernels.reaction_fits)
+    CHECKS_REACTION = True
+
     def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
                  noise=UNCHANGED):
         self.scene = scene
@@ -467,8 +470,17 @@ class NetworkElement(OutputMemo):
         problem = stepper_problem(with_noise(scene, self.noise), self.stepper)
         if problem:
             raise SceneError(f"{', '.join(values)}: {problem}")
+        model = network.compile()
+        # the reaction in the state as it stands, under the new coefficients (as the element's): what x, v, u fix
+        # of it changes with them, the stuck sliders' part stays (set_state checks a saved one against the same)
+        if self.CHECKS_REACTION:
+            stepped = np.bool_(self._grid is not None)
+            before = kernels.reaction_range(self.model, self.x, self.v, self.u, self.piece, stepped)[0]
+            after = kernels.reaction_range(model, self.x, self.v, self.u, self.piece, stepped)[0]
+            if after != before:
+                self._reaction = self._reaction - before + after
         self.scene = scene
-        self.model = network.compile()
+        self.model = model
         self._touch()
 
     def get_state(self) -> dict:
@@ -521,8 +533,16 @@ class NetworkElement(OutputMemo):
         problem = stepper_problem(with_noise(self.scene.with_network(restored), self.noise), self.stepper)
         if problem:
             raise ValueError(f"state's parameters: {problem}")
+        model = restored.compile()
+        reaction = scalars[2]
+        if self.CHECKS_REACTION and not kernels.reaction_fits(model, arrays["x"], arrays["v"], arrays["u"], piece.astype(np.int64),
+                                     np.bool_(grid is not None), reaction):
+            fixed, free, _ = kernels.reaction_range(model, arrays["x"], arrays["v"], arrays["u"],
+                                                    piece.astype(np.int64), np.bool_(grid is not None))
+            raise ValueError(f"state's reaction ({reaction!r} N) is not the one its x, v and u give ({fixed!r} N, "
+                             f"{free!r} N either way by its stuck sliders)")
         self.scene = self.scene.with_network(restored)
-        self.model = restored.compile()
+        self.model = model
         self.x[:], self.v[:], self.u[:] = arrays["x"], arrays["v"], arrays["u"]
         self.piece[:] = piece.astype(np.int64)
         self.account[:], self.dissipated[:] = arrays["account"], arrays["dissipated"]
@@ -540,6 +560,9 @@ class NetworkConnector(NetworkElement):
     the rest of the network responds (masses, dashpots, sliders). A move at the committed time is an instant
     (:func:`kernels.jump_node`: the masses and dashpots do not move). :attr:`force` is the force of the
     network's elements on that node (what holds the motion). The load's node must stay massless."""
+
+    # its reaction after an instant's move is the last step's, and its node's v the master's: not what x, v fix
+    CHECKS_REACTION = False
 
     def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
                  noise=UNCHANGED):

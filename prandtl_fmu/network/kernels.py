@@ -1352,6 +1352,62 @@ def initial_reaction(model, x, v, u, force):
     return total
 
 
+SAVED_REACTION = 1e-8  # a saved reaction within this of the forces' scale from what the state fixes: its rounding
+
+
+@kernel
+def reaction_fits(model, x, v, u, piece, stepped, reaction):
+    """Whether ``reaction``, a saved state's, is one its x, v, u and pieces allow (:func:`reaction_range`)."""
+    fixed, free, scale = reaction_range(model, x, v, u, piece, stepped)
+    return abs(reaction - fixed) <= free + SAVED_REACTION * scale
+
+
+@kernel
+def reaction_range(model, x, v, u, piece, stepped):
+    """``(fixed, free, scale)``: what a state's x, v, u and pieces fix of the reaction, how far from it the
+    reaction may lie, and the forces' scale (a restored state's reaction is checked, not trusted: a forged one
+    was shown as it was).
+
+    The reaction is the elements' force on the ground. The state fixes that of every element to the ground but
+    a stuck slider: a spring's k x_i, a cubic spring's k3 x_i^3, a dashpot's c v_i (v the last step's d / h), a
+    branch's k u (u the clipped elongation, at a kink too), a slipping slider's alpha times its direction; a
+    stuck slider carries anything within alpha (its node's balance over the last step, which the state does
+    not hold). Before any step (``stepped`` False) a dashpot at a massless node was rigid in the instant's
+    equilibrium (:func:`initial_reaction`): it may carry anything. A saved reaction fits when it lies within
+    the stuck sliders' (and rigid dashpots') range of what is fixed, to SAVED_REACTION of the forces' scale."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    fixed = 0.0
+    free = 0.0
+    scale = 0.0
+    for e in range(kind.shape[0]):
+        if ends[e, 1] != GROUND:
+            continue
+        i = ends[e, 0]
+        kd = kind[e]
+        a = coef[e, 0]
+        if kd == SPRING:
+            f = a * x[i]
+        elif kd == CUBIC:
+            f = a * x[i] * x[i] * x[i]
+        elif kd == DASHPOT:
+            if not stepped and not mass[i] > 0.0:
+                free = np.inf
+                f = 0.0
+            else:
+                f = a * v[i]
+        elif kd == BRANCH:
+            f = a * u[e]
+        elif piece[e] == STUCK:
+            free += a
+            scale += a
+            f = 0.0
+        else:
+            f = a if piece[e] > 0 else -a
+        fixed += f
+        scale += abs(f)
+    return fixed, free, scale
+
+
 @kernel
 def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
     """An instant's move of ``node`` to ``target`` (a connector's sample at the time it already is at): the

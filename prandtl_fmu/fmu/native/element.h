@@ -492,8 +492,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (problem != NULL)
         return problem;
     for (i = 0; i < 4; i++) /* numbers only, as the library's saved state */
-        if (!isfinite(e->account[i]))
-            return "its energy account is not finite";
+        if (!isfinite(e->account[i]) || (i > 0 && e->account[i] < 0)) /* (a dissipation never gives back) */
+            return "its energy account is not finite (or a dissipation is negative)";
     if (!(isfinite(e->out[0]) && isfinite(e->out[1]) && isfinite(e->out[2]) && isfinite(e->initial_energy)))
         return "its outputs are not finite"; /* (its energy row is not read: computed again, FORGET_DERIVED) */
     if (FOLDS && !e->play && !TAKES_STACK[e->stepper])

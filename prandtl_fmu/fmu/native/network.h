@@ -581,6 +581,18 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
             return buffer;
         }
     }
+#if !CONNECTOR
+    { /* the reaction, checked against what x, v and u fix of it (NetworkElement.set_state: kernels.reaction_fits) */
+        Element* w = (Element*)e; /* (read only: the kernel writes nothing of it) */
+        double range[2] = {0.0, 0.0};
+        if (!reaction_check(NET(w), w->x, w->v, w->u, w->piece, (int64_t)(e->clock.grid != 0.0), e->reaction,
+                            range)) {
+            snprintf(buffer, size, "its reaction (%.17g N) is not the one its x, v and u give (%.17g N, %.17g N either "
+                     "way by its stuck sliders)", e->reaction, range[0], range[1]);
+            return buffer;
+        }
+    }
+#endif
     return NULL;
 }
 
