@@ -534,11 +534,10 @@ class NetworkElement(OutputMemo):
         if problem:
             raise ValueError(f"state's parameters: {problem}")
         model = restored.compile()
-        reaction = scalars[2]
-        if self.CHECKS_REACTION and not kernels.reaction_fits(model, arrays["x"], arrays["v"], arrays["u"], piece.astype(np.int64),
-                                     np.bool_(grid is not None), reaction):
-            fixed, free, _ = kernels.reaction_range(model, arrays["x"], arrays["v"], arrays["u"],
-                                                    piece.astype(np.int64), np.bool_(grid is not None))
+        reaction, pieces, stepped = scalars[2], piece.astype(np.int64), np.bool_(grid is not None)
+        if self.CHECKS_REACTION and not kernels.reaction_fits(model, arrays["x"], arrays["v"], arrays["u"], pieces,
+                                                              stepped, reaction):
+            fixed, free, _ = kernels.reaction_range(model, arrays["x"], arrays["v"], arrays["u"], pieces, stepped)
             raise ValueError(f"state's reaction ({reaction!r} N) is not the one its x, v and u give ({fixed!r} N, "
                              f"{free!r} N either way by its stuck sliders)")
         self.scene = self.scene.with_network(restored)

@@ -69,6 +69,9 @@ SEARCH_PER_TERM = 8
 SEARCH_CONSTANT = 200
 SETTLE_ITERATIONS = 64  # Newton's corrections of a settled step (:func:`settle`): one for linear pieces
 SETTLED = 2.0 ** -26  # a new position within this fraction of itself from the root is kept as it is (settle)
+# a node that falls below this fraction of its place in one step may miss its root by SETTLED of itself (x + d
+# rounds at a few ulps of x: 4 eps |x| = 2^-24 |x| SETTLED); above it, x + d is within SETTLED of the root
+FALLEN = 2.0 ** -24
 LINE_SEARCH_LIMIT = 200  # bisection/Newton iterations of one line search along a cubic spring's Newton step
 ROUNDING = 64.0 * np.finfo(np.float64).eps  # relative size of a rounding error in a force balance
 
@@ -560,8 +563,9 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
     (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number. A massless
     chain takes its O(n) programme (``chain.py``), every other network (or a chain past that programme's
-    budget) the active-set method. ``chain_work``: the arrays the chain's programme works in (``chain.scratch``; None: allocated by
-    it). The kernels here always hand it: one compiled solve_step, not a second for an omitted argument."""
+    budget) the active-set method. ``chain_work``: the arrays the chain's programme works in
+    (``chain.scratch``; None: allocated by it). The kernels here always hand it: one compiled solve_step, not a
+    second for an omitted argument."""
     status = chain_step(model, x, piece, force, fixed_node, work[0], work[5], chain_work)
     if status != -1:
         return status
@@ -870,8 +874,9 @@ def settle(model, x, v, u, piece, h, force, fixed_node, work):
     positions are of the order of the old ones. A node that falls by decades in one step (a load of 1e17 N
     released, a spring made 1e20 times stiffer) may land anywhere within ulp(x) of its place: 1e17 + d gave
     0 where the answer is 3 (:func:`prandtl_fmu.kernels.increment.settle` is the element's cure of the same).
-    So when a node's new position is below half its old one, the step's equations are evaluated at the new
-    positions themselves (:func:`_forces_at`) on the step's final pieces; where a node misses its root by
+    So when a node's new position is below FALLEN of its old one (where that rounding can reach SETTLED of it;
+    a node that crosses 0 in a dynamic run is not checked, at no cost), the step's equations are evaluated at
+    the new positions themselves (:func:`_forces_at`) on the step's final pieces; where a node misses its root by
     more than SETTLED of itself, Newton's corrections on the free clusters (the step's own linear algebra)
     bring every free node to the root: one correction for the linear
     pieces, Newton's convergence with cubic springs, at most SETTLE_ITERATIONS. The constraints' forces are
@@ -884,7 +889,7 @@ def settle(model, x, v, u, piece, h, force, fixed_node, work):
     fell = False
     for j in range(n):
         x1[j] = x[j] + d[j]
-        if abs(x1[j]) < 0.5 * abs(x[j]):
+        if abs(x1[j]) < FALLEN * abs(x[j]):
             fell = True
     if not fell:
         return False
