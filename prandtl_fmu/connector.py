@@ -271,6 +271,8 @@ class Connector(OutputMemo):
         account = number_list(state["energy_account"], "energy_account")
         if account.shape[0] != 3 or values[3] not in (-1.0, 1.0):
             raise ValueError("state does not fit the connector")
+        if np.any(account[1:] < 0):  # (sliders, dashpot: a dissipation never gives energy back)
+            raise ValueError(f"state has energy_account = {account.tolist()!r}: a dissipated energy is negative")
         kind = state["branch_kernel"]
         if kind != self.branch_kernel:
             raise ValueError(f"state has branch kernel {kind!r}, the connector uses {self.branch_kernel!r}")

@@ -113,13 +113,13 @@ class Element(OutputMemo):
 
     @time.setter
     def time(self, value: float) -> None:
-        """Set the clock (a master's communication point): a value within 1e-9 h of the element's own time is
-        the same instant (a master's clock that adds up its steps drifts by ulps) and keeps the grid; another
-        starts a new grid there."""
+        """Set the clock (a master's communication point): a value within 1e-9 h and 1e-9 of itself of the
+        element's own time is the same instant (a master's clock that adds up its steps drifts by ulps) and keeps
+        the grid; another starts a new grid there."""
         value = float(value)
         if not math.isfinite(value):
             raise ValueError(f"time must be finite, got {value!r}")
-        if self._grid is not None and abs(value - self.time) <= 1e-9 * self._grid:
+        if self._grid is not None and abs(value - self.time) <= 1e-9 * min(self._grid, abs(value)):
             return
         self._origin, self._steps = value, 0
 
@@ -202,7 +202,7 @@ class Element(OutputMemo):
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is {duration / h:.3g} steps of h = {h!r} s: more than 2^53 "
                              "cannot be counted exactly; advance by shorter durations or with a larger step")
-        whole, rest = split_duration(duration, h)
+        whole, rest = split_duration(duration, h, self.time + duration)
         # below rounding of h: no step, and the clock stays on its grid (the time setter takes the master's next
         # communication point, within 1e-9 h of it, as this instant)
         if not (whole or rest):
@@ -370,6 +370,8 @@ class Element(OutputMemo):
         account = np.array([plain_number(value, "energy_account") for value in booked], dtype=float)
         if account.shape[0] != 4:
             raise ValueError(f"state has {account.shape[0]} energy account entries, the element has 4")
+        if np.any(account[1:] < 0):  # (sliders, dashpot, friction: a dissipation never gives energy back)
+            raise ValueError(f"state has energy_account = {booked!r}: a dissipated energy is negative")
         kind = state.get("branch_kernel", "play")
         if not isinstance(kind, str):
             raise ValueError(f"state has branch kernel {kind!r}, which does not fit the element")

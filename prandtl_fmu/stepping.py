@@ -151,17 +151,21 @@ def integrate(loop, model, load, x, v, u, t_base, first_step, h, steps_per_row, 
                 energy, out_energy)
 
 
-def split_duration(duration: float, h: float) -> tuple:
+def split_duration(duration: float, h: float, end: float = math.inf) -> tuple:
     """``(whole, rest)``: ``duration`` as ``whole`` steps of h and a last shorter step ``rest`` (s, 0 if none).
 
     A duration within 1e-9 h of a whole multiple of h (rounding of a master's
     clock that adds up 0.05 s steps drifts by ulps, e.g. 0.04999999999999716)
     is whole steps only, so that a result does not depend on that drift. After
-    the whole steps, a remainder ``rest < 1e-9 h`` is that rounding too and is
-    dropped, also when the duration itself is below 1e-9 h: ``(0, 0.0)``, no
-    step at all (OMSimulator's clock of 2000 x 0.1 s ends 7.1e-12 s short of
-    200 s and steps that remainder: a white noise's increment over it moved v
-    by 2e-6). The native runtime's C (``fmu/native``) applies the same rule.
+    the whole steps, a remainder below 1e-9 h and below 1e-9 |end| (``end``:
+    the clock's time after the duration) is that rounding too and is dropped,
+    also when the duration itself is below it: ``(0, 0.0)``, no step at all
+    (OMSimulator's clock of 2000 x 0.1 s ends 7.1e-12 s short of 200 s and
+    steps that remainder: a white noise's increment over it moved v by 2e-6).
+    A clock's rounding is a fraction of its time: a step h far longer than the
+    duration (1e20 s, advanced by 1 s) does not make the duration rounding, it
+    is one step of the duration (the step cut to the interval). The native
+    runtime's C (``fmu/native``) applies the same rule.
     """
     ratio = duration / h
     nearest = round(ratio)
@@ -169,7 +173,7 @@ def split_duration(duration: float, h: float) -> tuple:
         return nearest, 0.0
     whole = math.floor(ratio)
     rest = duration - whole * h
-    return whole, rest if rest >= 1e-9 * h else 0.0
+    return whole, rest if rest >= 1e-9 * min(h, abs(end)) else 0.0
 
 
 def _advance(loop, model, load, x, v, u, t_base, first_step, whole, rest, h, out, out_u, account,

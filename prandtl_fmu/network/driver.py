@@ -94,10 +94,6 @@ def failure_message(scene: NetworkScene, stepper: str, status: int, time: float,
         return (f"{where} refused: the active-set search did not end within its budget of "
                 f"{kernels.search_budget(n, count)} iterations ({kernels.SEARCH_PER_TERM} per node and element "
                 f"+ {kernels.SEARCH_CONSTANT}); a smaller step needs fewer")
-    if status == -4:
-        return (f"{where} refused: its linear system is too ill-conditioned for double precision (a stiffness "
-                "beyond 1e10 times a node's inertia m/h^2: a stiff spring between light masses); take a smaller "
-                "step, or join such nodes into one")
     return f"{where} refused: a number overflowed (not finite)"
 
 
@@ -305,6 +301,9 @@ class NetworkElement(OutputMemo):
     element's rules: :class:`prandtl_fmu.driver.Element`). Outputs: :attr:`x`, :attr:`v` (per node),
     :attr:`reaction`, :meth:`energy`."""
 
+    # set_state checks a saved reaction against what the state's x, v and u fix of it (kernels.reaction_fits)
+    CHECKS_REACTION = True
+
     def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
                  noise=UNCHANGED):
         self.scene = scene
@@ -358,7 +357,7 @@ class NetworkElement(OutputMemo):
         value = float(value)
         if not math.isfinite(value):
             raise ValueError(f"time must be finite, got {value!r}")
-        if self._grid is not None and abs(value - self.time) <= 1e-9 * self._grid:
+        if self._grid is not None and abs(value - self.time) <= 1e-9 * min(self._grid, abs(value)):
             return
         self._origin, self._steps = value, 0
 
@@ -410,7 +409,7 @@ class NetworkElement(OutputMemo):
             raise ValueError(f"duration {duration!r} s is shorter than {SHORTEST_STEP:g} s")
         if not duration / h < MAX_STEPS:
             raise ValueError(f"duration {duration!r} s is more than 2^53 steps of h = {h!r} s")
-        whole, rest = split_duration(duration, h)
+        whole, rest = split_duration(duration, h, self.time + duration)
         if not (whole or rest):  # shorter than rounding of h: no step, the clock on its grid (Element.advance)
             return
         if whole + (rest > 0) > ADVANCE_BUDGET:
@@ -471,8 +470,17 @@ class NetworkElement(OutputMemo):
         problem = stepper_problem(with_noise(scene, self.noise), self.stepper)
         if problem:
             raise SceneError(f"{', '.join(values)}: {problem}")
+        model = network.compile()
+        # the reaction in the state as it stands, under the new coefficients (as the element's): what x, v, u fix
+        # of it changes with them, the stuck sliders' part stays (set_state checks a saved one against the same)
+        if self.CHECKS_REACTION:
+            stepped = np.bool_(self._grid is not None)
+            before = kernels.reaction_range(self.model, self.x, self.v, self.u, self.piece, stepped)[0]
+            after = kernels.reaction_range(model, self.x, self.v, self.u, self.piece, stepped)[0]
+            if after != before:
+                self._reaction = self._reaction - before + after
         self.scene = scene
-        self.model = network.compile()
+        self.model = model
         self._touch()
 
     def get_state(self) -> dict:
@@ -525,8 +533,15 @@ class NetworkElement(OutputMemo):
         problem = stepper_problem(with_noise(self.scene.with_network(restored), self.noise), self.stepper)
         if problem:
             raise ValueError(f"state's parameters: {problem}")
+        model = restored.compile()
+        reaction, pieces, stepped = scalars[2], piece.astype(np.int64), np.bool_(grid is not None)
+        if self.CHECKS_REACTION and not kernels.reaction_fits(model, arrays["x"], arrays["v"], arrays["u"], pieces,
+                                                              stepped, reaction):
+            fixed, free, _ = kernels.reaction_range(model, arrays["x"], arrays["v"], arrays["u"], pieces, stepped)
+            raise ValueError(f"state's reaction ({reaction!r} N) is not the one its x, v and u give ({fixed!r} N, "
+                             f"{free!r} N either way by its stuck sliders)")
         self.scene = self.scene.with_network(restored)
-        self.model = restored.compile()
+        self.model = model
         self.x[:], self.v[:], self.u[:] = arrays["x"], arrays["v"], arrays["u"]
         self.piece[:] = piece.astype(np.int64)
         self.account[:], self.dissipated[:] = arrays["account"], arrays["dissipated"]
@@ -544,6 +559,9 @@ class NetworkConnector(NetworkElement):
     the rest of the network responds (masses, dashpots, sliders). A move at the committed time is an instant
     (:func:`kernels.jump_node`: the masses and dashpots do not move). :attr:`force` is the force of the
     network's elements on that node (what holds the motion). The load's node must stay massless."""
+
+    # its reaction after an instant's move is the last step's, and its node's v the master's: not what x, v fix
+    CHECKS_REACTION = False
 
     def __init__(self, scene: NetworkScene, stepper: Optional[str] = None, step: Optional[float] = None,
                  noise=UNCHANGED):
@@ -605,7 +623,7 @@ class NetworkConnector(NetworkElement):
         saved_force = self._force
         node = self.scene.network.load_node
         duration = time - start
-        if split_duration(duration, self.h) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
+        if split_duration(duration, self.h, time) == (0, 0.0):  # below rounding of h: a sample at the instant it is at
             duration = 0.0
         try:
             if duration == 0:
@@ -615,7 +633,7 @@ class NetworkConnector(NetworkElement):
                     raise ElementError(failure_message(self.scene, "instant", status, start, 0.0))
             else:
                 h = self.h
-                whole, rest = split_duration(duration, h)
+                whole, rest = split_duration(duration, h, time)
                 if whole + (rest > 0) > ADVANCE_BUDGET:
                     raise ElementError(f"{self.scene.source}: a move over {duration!r} s takes more than "
                                        f"{ADVANCE_BUDGET:.0e} steps")

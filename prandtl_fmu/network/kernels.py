@@ -67,9 +67,13 @@ KINK = 2
 # Budget of one implicit step: active-set iterations per element and node, plus this constant.
 SEARCH_PER_TERM = 8
 SEARCH_CONSTANT = 200
+SETTLE_ITERATIONS = 64  # Newton's corrections of a settled step (:func:`settle`): one for linear pieces
+SETTLED = 2.0 ** -26  # a new position within this fraction of itself from the root is kept as it is (settle)
+# a node that falls below this fraction of its place in one step may miss its root by SETTLED of itself (x + d
+# rounds at a few ulps of x: 4 eps |x| = 2^-24 |x| SETTLED); above it, x + d is within SETTLED of the root
+FALLEN = 2.0 ** -24
 LINE_SEARCH_LIMIT = 200  # bisection/Newton iterations of one line search along a cubic spring's Newton step
 ROUNDING = 64.0 * np.finfo(np.float64).eps  # relative size of a rounding error in a force balance
-ILL_CONDITIONED = 1e-10  # a pivot this far below its diagonal leaves fewer than 6 right digits: refused
 
 
 @kernel
@@ -301,32 +305,38 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a,
 
 @kernel
 def _factor(a, band, first_row, anchor):
-    """In-place banded LDL^T of the symmetric a (a[c, 0] = D_c, a[c, t] = L[c, c - t]), from row
-    ``first_row`` on (the rows above are factored). Returns the first cluster whose pivot vanishes (-1:
-    none): the matrix is singular there (a floppy cluster); its pivot is left unset. A cluster with an anchor
-    (inertia, or an element to a held node) is never singular: its pivot is at least its anchor; if rounding
-    cancelled its pivot below ILL_CONDITIONED of its diagonal (a stiff spring between light masses: k h^2 / m
-    beyond 1e10), the solve would be wrong in its leading digits: returns -2 - c."""
+    """In-place banded LDL^T of the clusters' matrix H (a[c, 0] = D_c, a[c, t] = L[c, c - t] on return), from
+    row ``first_row`` on (the rows above are factored). Returns the first cluster whose pivot vanishes (-1:
+    none): the matrix is singular there (a floppy cluster: no mass and no stiffness to anything held); its
+    pivot is left unset.
+
+    H is a graph Laplacian of the elements' stiffnesses (off the diagonal -kappa <= 0) plus its anchors (each
+    cluster's own inertia and elements to held nodes: the row sums). Its pivots are computed without a single
+    subtraction (Grassmann, Taksar and Heyman's elimination for M-matrices): eliminating cluster k keeps every
+    off-diagonal entry <= 0 and adds |H[m, k]| s_k / D_k to the row sum s_m of each cluster m it touches, and
+    D_k = s_k + sum of |H[m, k]| over the clusters not yet eliminated. The diagonal as assembled (a sum that
+    rounds a soft spring beside a stiff one away) is never read: a pivot is exact to a few roundings whatever
+    the stiffnesses' contrast (a ground spring of 1e-20 beside a spring of 1 keeps its 1e-20), and it is 0
+    only where a cluster truly has nothing to hold it. ``anchor`` holds the row sums as they are eliminated.
+    """
     count = a.shape[0]
-    for c in range(first_row, count):
-        diagonal = a[c, 0]
-        first = max(0, c - band)
-        for k in range(first, c):
-            s = a[c, c - k]
-            for m in range(first, k):
-                if k - m <= band:
-                    s -= a[c, c - m] * a[m, 0] * a[k, k - m]
-            a[c, c - k] = s / a[k, 0]
-        pivot = diagonal
-        for m in range(first, c):
-            pivot -= a[c, c - m] * a[c, c - m] * a[m, 0]
-        if anchor[c] > 0.0:
-            if not pivot > ILL_CONDITIONED * diagonal:
-                return -2 - c  # rounding ate the pivot: the stiffness dwarfs the inertia
-            pivot = max(pivot, anchor[c])
-        elif not pivot > ROUNDING * diagonal:
-            return c
-        a[c, 0] = pivot
+    for k in range(first_row, count):
+        last = min(count, k + band + 1)
+        pivot = anchor[k]
+        for m in range(k + 1, last):
+            pivot -= a[m, m - k]  # (<= 0: a sum of magnitudes)
+        if not pivot > 0.0:
+            return k
+        a[k, 0] = pivot
+        for m in range(k + 1, last):
+            coupling = a[m, m - k]
+            if coupling == 0.0:
+                continue
+            anchor[m] -= coupling * (anchor[k] / pivot)
+            for c in range(m + 1, last):  # the Schur complement's couplings grow in magnitude only
+                a[c, c - m] -= a[c, c - k] * (coupling / pivot)
+        for m in range(k + 1, last):
+            a[m, m - k] /= pivot
     return -1
 
 
@@ -551,11 +561,11 @@ def solve_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment, wor
     """The increment d (work[0]) of one implicit step and the force each element carries (work[5]); the
     pieces are updated in place. ``fixed_node`` >= 0: that node's increment is imposed (the connector).
     Returns the number of iterations taken, or -1 when the budget ran out, -2 when no equilibrium exists
-    (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number, -4 when the
-    linear system is too ill-conditioned to be solved in double precision. A massless chain takes its O(n)
-    programme (``chain.py``), every other network (or a chain past that programme's budget) the active-set
-    method. ``chain_work``: the arrays the chain's programme works in (``chain.scratch``; None: allocated by
-    it). The kernels here always hand it: one compiled solve_step, not a second for an omitted argument."""
+    (a floppy part of the network is pushed with nothing to stop it), -3 on a non-finite number. A massless
+    chain takes its O(n) programme (``chain.py``), every other network (or a chain past that programme's
+    budget) the active-set method. ``chain_work``: the arrays the chain's programme works in
+    (``chain.scratch``; None: allocated by it). The kernels here always hand it: one compiled solve_step, not a
+    second for an omitted argument."""
     status = chain_step(model, x, piece, force, fixed_node, work[0], work[5], chain_work)
     if status != -1:
         return status
@@ -610,8 +620,6 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
         row = np.int64(0)
         while True:
             singular = _factor(a, band, row, anchor)
-            if singular <= -2:
-                return -4
             if singular < 0:
                 break
             # a floppy cluster (no mass, no stiffness along z): J is linear along the null vector z
@@ -793,11 +801,161 @@ def _excess(kind, coef, piece, term, scale, ends, e):
 
 
 @kernel
-def commit(model, x, v, u, piece, h, force, work, energy, dissipated):
-    """Apply the increment found by :func:`solve_step`: x, v, the branches' elongations; book the energy
-    (``energy`` = [work of the load, dissipated by sliders, by dashpots], or None) and each element's
-    dissipation (``dissipated``, or None). Returns the reaction on the ground."""
+def _forces_at(model, x1, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree, links):
+    """:func:`_gradient` at the new positions x1 = x + d themselves: a spring's and a cubic spring's force
+    from x1_i - x1_j (not from their elongation at the step's start plus delta_e, whose sum rounds at the
+    start's size), the inertia, the dashpots and the branches from d as there. ``a`` and ``anchor`` (or None)
+    get the clusters' matrix (its band already known: ``a``'s width); ``degree`` and ``links`` (or None) the
+    constraints of each node."""
     mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    for j in range(n):
+        grad[j] = mass[j] / (h * h) * (d[j] - h * v[j])
+        scale[j] = mass[j] / (h * h) * (abs(d[j]) + abs(h * v[j]))
+        if a is not None:
+            c = cluster[j]
+            if c >= 0:
+                a[c, 0] += mass[j] / (h * h)
+                anchor[c] += mass[j] / (h * h)
+    if degree is not None:
+        for q in range(n + 1):
+            degree[q] = 0
+            links[q] = 0
+    grad[load_node] -= force
+    scale[load_node] += abs(force)
+    for e in range(kind.shape[0]):
+        i, j = ends[e, 0], ends[e, 1]
+        kd = kind[e]
+        if j == GROUND:
+            rel_x, delta = x1[i], d[i]
+        else:
+            rel_x, delta = x1[i] - x1[j], d[i] - d[j]
+        if kd == SPRING or kd == CUBIC:
+            delta = 0.0
+        f, kappa = term_force(kd, coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
+        term[e] = f
+        size = abs(f) + kappa * (abs(rel_x) + abs(delta) + abs(u[e]))
+        grad[i] += f
+        scale[i] += size
+        if j != GROUND:
+            grad[j] -= f
+            scale[j] += size
+        constraint = is_constraint(kd, piece[e])
+        if degree is not None and constraint:
+            jj = n if j == GROUND else j
+            degree[i] += 1
+            links[i] ^= e
+            degree[jj] += 1
+            links[jj] ^= e
+        if a is not None and not constraint and kappa != 0.0:
+            ci = cluster[i]
+            cj = -1 if j == GROUND else cluster[j]
+            if ci == cj:
+                continue
+            if ci >= 0 and cj >= 0:
+                a[ci, 0] += kappa
+                a[cj, 0] += kappa
+                a[max(ci, cj), abs(ci - cj)] -= kappa
+            elif ci >= 0:
+                a[ci, 0] += kappa
+                anchor[ci] += kappa
+            else:
+                a[cj, 0] += kappa
+                anchor[cj] += kappa
+
+
+@kernel
+def settle(model, x, v, u, piece, h, force, fixed_node, work):
+    """The new positions of a solved step, settled where the increment's rounding swamps them: True when
+    they are (then in work[2], d and the elements' forces in work[0] and work[5] brought to them), False
+    (nothing changed) in every other step.
+
+    The step is solved for the increments d, exact to their rounding, ulp(x): nothing while the new
+    positions are of the order of the old ones. A node that falls by decades in one step (a load of 1e17 N
+    released, a spring made 1e20 times stiffer) may land anywhere within ulp(x) of its place: 1e17 + d gave
+    0 where the answer is 3 (:func:`prandtl_fmu.kernels.increment.settle` is the element's cure of the same).
+    So when a node's new position is below FALLEN of its old one (where that rounding can reach SETTLED of it;
+    a node that crosses 0 in a dynamic run is not checked, at no cost), the step's equations are evaluated at
+    the new positions themselves (:func:`_forces_at`) on the step's final pieces; where a node misses its root by
+    more than SETTLED of itself, Newton's corrections on the free clusters (the step's own linear algebra)
+    bring every free node to the root: one correction for the linear
+    pieces, Newton's convergence with cubic springs, at most SETTLE_ITERATIONS. The constraints' forces are
+    then read again (the reaction). The pieces are kept: a correction is of the order of ulp(x) and moves no
+    element over a kink but one within that rounding of it. The positions are kept as they are where the
+    clusters' matrix is singular there (a cubic spring at rest alone)."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    n = mass.shape[0]
+    d, grad, x1, parent, cluster, term, subtree, queue, degree, links, scale = work
+    fell = False
+    for j in range(n):
+        x1[j] = x[j] + d[j]
+        if abs(x1[j]) < FALLEN * abs(x[j]):
+            fell = True
+    if not fell:
+        return False
+    count = _clusters(n, kind, ends, piece, parent, cluster, fixed_node)
+    band = np.int64(0)  # (not the constant 0: a literal argument compiles _factor again)
+    for e in range(kind.shape[0]):
+        j = ends[e, 1]
+        if j != GROUND and not is_constraint(kind[e], piece[e]) and cluster[ends[e, 0]] >= 0 and cluster[j] >= 0:
+            band = max(band, abs(cluster[ends[e, 0]] - cluster[j]))
+    trial = np.empty(kind.shape[0])  # the elements' forces while settling (term keeps the solve's until then)
+    for iteration in range(SETTLE_ITERATIONS):
+        a = np.zeros((count, band + 1))
+        anchor = np.zeros(count)
+        _forces_at(model, x1, v, u, piece, d, h, force, grad, trial, scale, cluster, a, anchor, None, None)
+        rhs = np.zeros(count)
+        size = np.zeros(count)
+        for j in range(n):
+            if cluster[j] >= 0:
+                rhs[cluster[j]] -= grad[j]
+                size[cluster[j]] += scale[j]
+        balanced = True
+        for c in range(count):
+            if not abs(rhs[c]) <= ROUNDING * size[c]:
+                balanced = False
+        if balanced and iteration == 0:
+            return False  # at the root already: kept, bit for bit
+        if balanced or _factor(a, band, np.int64(0), anchor) >= 0:
+            break
+        q = _solve(a, band, rhs)
+        finite = True
+        for c in range(count):
+            if not abs(q[c]) < np.inf:
+                finite = False
+        if not finite:
+            break
+        if iteration == 0:
+            near = True  # every node within SETTLED of itself from the root: kept, bit for bit
+            for j in range(n):
+                if cluster[j] >= 0 and not abs(q[cluster[j]]) <= SETTLED * abs(x1[j]):
+                    near = False
+            if near:
+                return False
+        moved = False
+        for j in range(n):
+            if cluster[j] >= 0:
+                correction = q[cluster[j]]
+                if x1[j] + correction != x1[j]:
+                    moved = True
+                x1[j] += correction
+                d[j] += correction
+        if not moved:
+            break
+    _forces_at(model, x1, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, degree, links)
+    _multipliers(model, piece.copy(), grad, queue, degree, links, subtree, term, scale, fixed_node, np.bool_(False))
+    return True
+
+
+@kernel
+def commit(model, x, v, u, piece, h, force, fixed_node, work, energy, dissipated):
+    """Apply the increment found by :func:`solve_step`: x, v, the branches' elongations (the new positions
+    settled where the increment's rounding swamps them: :func:`settle`; ``fixed_node`` the node whose motion
+    was imposed, or NO_NODE); book the energy (``energy`` = [work of the load, dissipated by sliders, by
+    dashpots], or None) and each element's dissipation (``dissipated``, or None). Returns the reaction on the
+    ground."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    settled = settle(model, x, v, u, piece, h, force, fixed_node, work)
     d = work[0]
     term = work[5]
     reaction = 0.0
@@ -831,8 +989,9 @@ def commit(model, x, v, u, piece, h, force, work, energy, dissipated):
             reaction += term[e]
     if energy is not None:
         energy[0] += force * d[load_node]
+    settled_x = work[2]
     for j in range(mass.shape[0]):
-        x[j] += d[j]
+        x[j] = settled_x[j] if settled else x[j] + d[j]
         v[j] = d[j] / h
     return reaction
 
@@ -847,7 +1006,7 @@ def implicit_step(model, load, t, h, x, v, u, piece, work, energy, dissipated, c
     status = solve_step(model, x, v, u, piece, h, force, NO_NODE, 0.0, work, chain_work)
     if status < 0:
         return status, np.nan
-    return status, commit(model, x, v, u, piece, h, force, work, energy, dissipated)
+    return status, commit(model, x, v, u, piece, h, force, NO_NODE, work, energy, dissipated)
 
 
 @kernel
@@ -1049,7 +1208,7 @@ def move_node(model, x, v, u, piece, work, energy, dissipated, node, target, who
         status = solve_step(model, x, v, u, piece, size, 0.0, node, there - x[node], work, chain_work)
         if status < 0:
             return status, p
-        commit(model, x, v, u, piece, size, 0.0, work, energy, dissipated)
+        commit(model, x, v, u, piece, size, 0.0, node, work, energy, dissipated)
         if energy is not None:  # the work of what imposes the motion: its force (at t + h) times the move
             energy[0] += node_force(model, work[5], node) * work[0][node]
     return 0, count
@@ -1136,7 +1295,7 @@ def initial_state(model, x, v, u, piece, force):
     status = solve_step(instant, x, np.zeros(n), u2, piece2, 1.0, force, NO_NODE, 0.0, work, chain_scratch(n))
     if status < 0:
         return status
-    commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, work, None, None)
+    commit(instant, x, np.zeros(n), u2, piece2, 1.0, force, NO_NODE, work, None, None)
     for e in range(kind.shape[0]):  # the elements keep the pieces they reached; a rigid dashpot is a dashpot
         u[e] = u2[extra + e]
         if kind[e] == SLIDER or kind[e] == BRANCH:
@@ -1198,6 +1357,62 @@ def initial_reaction(model, x, v, u, force):
     return total
 
 
+SAVED_REACTION = 1e-8  # a saved reaction within this of the forces' scale from what the state fixes: its rounding
+
+
+@kernel
+def reaction_fits(model, x, v, u, piece, stepped, reaction):
+    """Whether ``reaction``, a saved state's, is one its x, v, u and pieces allow (:func:`reaction_range`)."""
+    fixed, free, scale = reaction_range(model, x, v, u, piece, stepped)
+    return abs(reaction - fixed) <= free + SAVED_REACTION * scale
+
+
+@kernel
+def reaction_range(model, x, v, u, piece, stepped):
+    """``(fixed, free, scale)``: what a state's x, v, u and pieces fix of the reaction, how far from it the
+    reaction may lie, and the forces' scale (a restored state's reaction is checked, not trusted: a forged one
+    was shown as it was).
+
+    The reaction is the elements' force on the ground. The state fixes that of every element to the ground but
+    a stuck slider: a spring's k x_i, a cubic spring's k3 x_i^3, a dashpot's c v_i (v the last step's d / h), a
+    branch's k u (u the clipped elongation, at a kink too), a slipping slider's alpha times its direction; a
+    stuck slider carries anything within alpha (its node's balance over the last step, which the state does
+    not hold). Before any step (``stepped`` False) a dashpot at a massless node was rigid in the instant's
+    equilibrium (:func:`initial_reaction`): it may carry anything. A saved reaction fits when it lies within
+    the stuck sliders' (and rigid dashpots') range of what is fixed, to SAVED_REACTION of the forces' scale."""
+    mass, kind, ends, coef, load_node, has_cubic = model
+    fixed = 0.0
+    free = 0.0
+    scale = 0.0
+    for e in range(kind.shape[0]):
+        if ends[e, 1] != GROUND:
+            continue
+        i = ends[e, 0]
+        kd = kind[e]
+        a = coef[e, 0]
+        if kd == SPRING:
+            f = a * x[i]
+        elif kd == CUBIC:
+            f = a * x[i] * x[i] * x[i]
+        elif kd == DASHPOT:
+            if not stepped and not mass[i] > 0.0:
+                free = np.inf
+                f = 0.0
+            else:
+                f = a * v[i]
+        elif kd == BRANCH:
+            f = a * u[e]
+        elif piece[e] == STUCK:
+            free += a
+            scale += a
+            f = 0.0
+        else:
+            f = a if piece[e] > 0 else -a
+        fixed += f
+        scale += abs(f)
+    return fixed, free, scale
+
+
 @kernel
 def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
     """An instant's move of ``node`` to ``target`` (a connector's sample at the time it already is at): the
@@ -1221,7 +1436,7 @@ def jump_node(model, x, v, u, piece, energy, dissipated, node, target):
         return status, np.nan
     d = work[0]
     rates = v.copy()
-    commit(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, work, None, None)
+    commit(instant, x, np.zeros(n), u2, piece2, 1.0, 0.0, node, work, None, None)
     for j in range(n):
         v[j] = rates[j]
     term = work[5]

@@ -173,4 +173,56 @@ step = 0.0005
 stop_time = 1.0
 output_interval = 0.01
 """,
+    # one node on a spring and a branch beside it (issue 59: a node that falls by decades in one step; a mass)
+    "one_node": """
+name = "one_node"
+
+[network]
+nodes = ["a"]
+mass = [0.0]
+load_node = "a"
+
+[[network.spring]]
+between = ["a", "ground"]
+k = 1.0
+
+[[network.branch]]
+between = ["a", "ground"]
+k = 1.0
+eta = 1.0
+
+[solver]
+stepper = "implicit"
+step = 0.001
+stop_time = 1.0
+output_interval = 0.001
+""",
+    # a soft ground spring beside a stiff one (issue 59: the pivots of a large stiffness contrast)
+    "contrast": """
+name = "contrast"
+
+[network]
+nodes = ["a", "b"]
+mass = [0.0, 0.0]
+load_node = "b"
+
+[[network.spring]]
+between = ["a", "ground"]
+k = 1e-14
+
+[[network.branch]]
+between = ["a", "ground"]
+k = 1.0
+eta = 1.0
+
+[[network.spring]]
+between = ["a", "b"]
+k = 1.0
+
+[solver]
+stepper = "implicit"
+step = 0.001
+stop_time = 1.0
+output_interval = 0.001
+""",
 }

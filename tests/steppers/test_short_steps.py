@@ -26,6 +26,40 @@ SHORT = 7e-12  # what OMSimulator stepped at the end of the white-noise scene's 
 ])
 def test_split_duration_drops_what_is_rounding(duration, h, expected):
     assert split_duration(duration, h) == expected
+    assert split_duration(duration, h, 200.0) == expected  # (OMSimulator's clock ends at 200 s)
+
+
+@pytest.mark.parametrize("h", [1e3, 1e20, 1e300])
+def test_a_step_longer_than_the_interval_is_cut_to_it(h):
+    # a clock's rounding is a fraction of its time: 1 s of a clock at 1..5 s is no rounding, whatever h is
+    for end in (1.0, 5.0):
+        assert split_duration(1.0, h, end) == (0, 1.0)
+    assert split_duration(1e-8, h, 1.0) == (0, 1e-8)
+    assert split_duration(1e-10, h, 1e2) == (0, 0.0)  # below 1e-9 of the clock and of h: rounding
+
+
+def test_an_element_with_a_step_longer_than_its_advances_takes_them_as_steps():
+    # Element(scene, step=1e20) advanced by 1 s five times stayed at x = 0 (each advance was 'rounding');
+    # each is one step of 1 s: the element with step = 1 to the bit
+    scene = load_scene(SCENES / "masing-bilinear.toml")
+    long, exact = Element(scene, step=1e20), Element(scene, step=1.0)
+    for _ in range(5):
+        for element in (long, exact):
+            element.advance(1.0, 5.0)
+        assert (long.x, long.v, long.time, long.reaction) == (exact.x, exact.v, exact.time, exact.reaction)
+    assert long.x != 0.0 and long.time == 5.0
+    long.time = 5.0 + 1e-12  # a master's clock's rounding is still the same instant
+    assert long.time == 5.0
+
+
+def test_a_network_with_a_step_longer_than_its_advances_takes_them_as_steps():
+    scene = parse_scene(network_text(False), "net.toml")
+    long, exact = NetworkElement(scene, step=1e300), NetworkElement(scene, step=0.25)
+    for _ in range(4):
+        for network in (long, exact):
+            network.advance(0.25, 3.0)
+        assert network_state(long) == network_state(exact)
+    assert long.x[0] != 0.0 and long.time == 1.0
 
 
 def test_split_duration_keeps_a_remainder_above_rounding():

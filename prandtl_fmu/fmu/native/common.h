@@ -234,19 +234,21 @@ typedef struct { double origin, grid; int64_t steps; } Clock;
 
 static double clock_time(const Clock* k) { return k->steps ? k->origin + (double)k->steps * k->grid : k->origin; }
 
-/* Element.time = value: within 1e-9 of the grid's step of the time, the same instant (the grid goes on) */
+/* Element.time = value: within 1e-9 of the grid's step and of the time itself, the same instant (the grid goes
+ * on) */
 static void clock_set(Clock* k, double value)
 {
-    if (k->grid != 0.0 && fabs(value - clock_time(k)) <= 1e-9 * k->grid)
+    if (k->grid != 0.0 && fabs(value - clock_time(k)) <= 1e-9 * fmin(k->grid, fabs(value)))
         return;
     k->origin = value;
     k->steps = 0;
 }
 
 /* stepping.split_duration: whole steps of h, then a last shorter one; within 1e-9 h of whole steps, whole steps
- * only, and a remainder below 1e-9 h after them (a duration below it too: no step at all) is a master's clock's
- * rounding, dropped */
-static void split_duration(double duration, double h, double* whole, double* rest)
+ * only, and a remainder below 1e-9 h and 1e-9 |end| after them (a duration below it too: no step at all) is a
+ * master's clock's rounding, dropped (``end``: the clock's time after the duration; a step far longer than the
+ * duration is cut to it) */
+static void split_duration(double duration, double h, double end, double* whole, double* rest)
 {
     double ratio = duration / h, nearest = nearbyint(ratio);
     if (nearest >= 1 && fabs(ratio - nearest) <= 1e-9) {
@@ -256,13 +258,14 @@ static void split_duration(double duration, double h, double* whole, double* res
     }
     *whole = floor(ratio);
     *rest = duration - *whole * h;
-    if (!(*rest >= 1e-9 * h))
+    if (!(*rest >= 1e-9 * fmin(h, fabs(end))))
         *rest = 0.0;
 }
 
 /* Element.advance's (NetworkElement.advance's) checks of a duration in steps of h, in the library's words: NULL
  * and its split (whole, rest; (0, 0): no step at all), or why not */
-static const char* plan_advance(double duration, double h, double* whole, double* rest, char* buffer, size_t size)
+static const char* plan_advance(double duration, double h, double end, double* whole, double* rest, char* buffer,
+                                size_t size)
 {
     if (duration < SHORTEST_STEP) {
         snprintf(buffer, size, NETWORK ? "the duration is shorter than %g s" : "the duration is shorter than %g s (a "
@@ -277,7 +280,7 @@ static const char* plan_advance(double duration, double h, double* whole, double
                      "durations or with a larger step", MAX_STEPS);
         return buffer;
     }
-    split_duration(duration, h, whole, rest);
+    split_duration(duration, h, end, whole, rest);
     if (*whole + (*rest > 0) > ADVANCE_BUDGET) { /* never run for days */
         snprintf(buffer, size, "an advance of %.17g s takes %.4g steps of h = %.17g s, more than the budget of %.0e "
                  "steps of one advance: advance by shorter durations%s or with a larger step", duration,

@@ -208,8 +208,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
           (s->initialized == 0 || s->initialized == 1)))
         return "it holds a non-finite or out-of-range value";
     for (i = 0; i < 3; i++)
-        if (!isfinite(e->account[i]))
-            return "its energy account is not finite";
+        if (!isfinite(e->account[i]) || (i > 0 && e->account[i] < 0)) /* (a dissipation never gives back) */
+            return "its energy account is not finite (or a dissipation is negative)";
     for (i = 0; i < (STACK ? 0 : NB); i++) {
         if (!(fabs(e->u[i]) <= ETA[i])) {
             snprintf(buffer, size, "branch %d has elongation %.17g beyond its range %.17g", i + 1, e->u[i], ETA[i]);

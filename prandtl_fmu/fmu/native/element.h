@@ -245,7 +245,7 @@ static const char* advance(Element* e, double duration, double force, int scene_
         if (e->clock.grid != 0.0 && fabs(duration - e->clock.grid) <= 1e-9 * e->clock.grid)
             h = e->clock.grid; /* ... of the grid's step when it is that to rounding */
     }
-    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    problem = plan_advance(duration, h, element_time(e) + duration, &whole, &rest, buffer, size);
     if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
         return problem;
     problem = delay_time_problem(e->mem, element_time(e), element_time(e) + duration, buffer, size);
@@ -492,8 +492,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     if (problem != NULL)
         return problem;
     for (i = 0; i < 4; i++) /* numbers only, as the library's saved state */
-        if (!isfinite(e->account[i]))
-            return "its energy account is not finite";
+        if (!isfinite(e->account[i]) || (i > 0 && e->account[i] < 0)) /* (a dissipation never gives back) */
+            return "its energy account is not finite (or a dissipation is negative)";
     if (!(isfinite(e->out[0]) && isfinite(e->out[1]) && isfinite(e->out[2]) && isfinite(e->initial_energy)))
         return "its outputs are not finite"; /* (its energy row is not read: computed again, FORGET_DERIVED) */
     if (FOLDS && !e->play && !TAKES_STACK[e->stepper])

@@ -361,7 +361,7 @@ static const char* advance(Instance* c, double duration, double force, int scene
     Load l;
     if (duration == 0.0)
         return NULL;
-    problem = plan_advance(duration, h, &whole, &rest, buffer, size);
+    problem = plan_advance(duration, h, element_time(e) + duration, &whole, &rest, buffer, size);
     if (problem != NULL || (whole == 0 && rest == 0)) /* (0, 0): below rounding of h, no step, the clock stays */
         return problem;
     l = load_of(force, scene_load, &c->noise, c->noise_cache);
@@ -394,7 +394,7 @@ static const char* move(Instance* c, Element* e, double x, double v, double time
     }
     prandtl_kernel_failed = 0;
     if (duration > 0) {
-        split_duration(duration, h, &whole, &rest);
+        split_duration(duration, h, time, &whole, &rest);
         if (whole == 0 && rest == 0) /* below rounding of h: a sample at the instant it is at (move_to) */
             duration = 0;
     }
@@ -581,6 +581,18 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
             return buffer;
         }
     }
+#if !CONNECTOR
+    { /* the reaction, checked against what x, v and u fix of it (NetworkElement.set_state: kernels.reaction_fits) */
+        Element* w = (Element*)e; /* (read only: the kernel writes nothing of it) */
+        double range[2] = {0.0, 0.0};
+        if (!reaction_check(NET(w), w->x, w->v, w->u, w->piece, (int64_t)(e->clock.grid != 0.0), e->reaction,
+                            range)) {
+            snprintf(buffer, size, "its reaction (%.17g N) is not the one its x, v and u give (%.17g N, %.17g N either "
+                     "way by its stuck sliders)", e->reaction, range[0], range[1]);
+            return buffer;
+        }
+    }
+#endif
     return NULL;
 }
 

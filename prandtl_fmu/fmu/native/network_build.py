@@ -179,6 +179,7 @@ def scene_header(scene, variables, guid, steppers, symbols, digest, connector, a
                 f"double, {ptr})",
         "load_force": f"double load_force({load_args}, double)",
         "jump": f"int64_t jump_c({net}, {ptr}, {ptr}, {ptr}, {iptr}, {ptr}, {ptr}, double, {ptr})",
+        "reaction_check": f"int64_t reaction_check({net}, {ptr}, {ptr}, {ptr}, {iptr}, int64_t, double, {ptr})",
     }
     noisy = (f"int64_t {{name}}({net}, {ptr}, {ptr}, {ptr}, {iptr}, {ptr}, {ptr}, {ptr}, {work}, {load_args}, "
              f"double, int64_t, double, int64_t, {iptr}, double, int64_t, double, {iptr})")

@@ -26,7 +26,10 @@ lf, nl as the element's):
   (the load's node to ``target`` in ``whole`` steps of h and one of ``rest``) -> its status; force[0] the force
   of the elements on the load's node (``kernels.node_force``);
 * ``jump(net, x, v, u, piece, account, dissipated, target, force)``: ``kernels.jump_node`` (the load's node to
-  ``target`` in an instant) -> its status; force[0] the force that holds the node.
+  ``target`` in an instant) -> its status; force[0] the force that holds the node;
+* ``reaction_check(net, x, v, u, piece, stepped, reaction, range)`` (the element's): ``kernels.reaction_fits``
+  of a restored state's reaction -> 1 when it fits; range[0], range[1] what x, v, u fix of it and how far the
+  stuck sliders let it lie (``kernels.reaction_range``).
 """
 from __future__ import annotations
 
@@ -49,6 +52,7 @@ SIGNATURES = {
             f"types.float64, types.float64, {_P})",
     "load_force": f"types.float64({_LOAD}, types.float64)",
     "jump": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, {_P}, {_P}, types.float64, {_P})",
+    "reaction_check": f"types.int64({_NET}, {_P}, {_P}, {_P}, {_I}, types.int64, types.float64, {_P})",
 }
 
 _TEMPLATE = '''
@@ -118,6 +122,16 @@ def initial(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep
     return 0
 
 
+def reaction_check(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, stepped, reaction,
+                   rangep):
+    model = _net(massp, coefp, kindp, endsp, load_node, has_cubic)
+    x, v, u, piece = carray(xp, ({n},)), carray(vp, ({n},)), carray(up, ({e},)), carray(piecep, ({e},))
+    fixed, free, scale = reaction_range(model, x, v, u, piece, stepped != 0)
+    rangep[0] = fixed
+    rangep[1] = free
+    return 1 if reaction_fits(model, x, v, u, piece, stepped != 0, reaction) else 0
+
+
 def jump(massp, coefp, kindp, endsp, load_node, has_cubic, xp, vp, up, piecep, accountp, dissipatedp, target,
          forcep):
     status, held = jump_node(_net(massp, coefp, kindp, endsp, load_node, has_cubic), carray(xp, ({n},)),
@@ -155,12 +169,13 @@ def compile_network(scene, steppers, connector: bool) -> list:
     source = _TEMPLATE.format(**shape)
     from ...loads import force_at
 
-    names = ["energies", "initial", "load_force"] + (["move", "jump"] if connector else [])
+    names = ["energies", "initial", "load_force"] + (["move", "jump"] if connector else ["reaction_check"])
     compiled = []
     for stepper in [None] + list(steppers):
         namespace = dict(carray=carray, np=np, kinetic=nk.kinetic, stored=nk.stored, force_at=force_at,
                          move_node=nk.move_node, node_force=nk.node_force, jump_node=nk.jump_node,
                          initial_state=nk.initial_state, initial_reaction=nk.initial_reaction,
+                         reaction_range=nk.reaction_range, reaction_fits=nk.reaction_fits,
                          run=loop_for(stepper) if stepper else None)
         exec(compile(source, f"<prandtl_fmu native network kernels of {scene.source}>", "exec"), namespace)
         for helper in ("_net", "_work", "_load", "_noisy_load"):  # inlined into each C function

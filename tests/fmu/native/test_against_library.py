@@ -274,6 +274,28 @@ def test_with_scene_load_the_native_fmu_reproduces_simulate_with_each_stepper_it
         assert np.abs(library.x).max() > 1e-2
 
 
+@pytest.mark.slow  # (the quick suite does not build this scene)
+def test_a_step_longer_than_the_communication_step_is_cut_to_it(held):
+    """step = 1e300 s: each doStep of 1 s is one step of 1 s, as Element(scene, step=1e300) takes it (the FMU
+    returned fmi2OK and never moved: the whole communication step counted as a clock's rounding)."""
+    from tests.fmu_tools import Slave
+
+    fmu, scene_path = held["smooth"]
+    scene = load_scene(scene_path)
+    slave = Slave(fmu, start_values={"stepper": "implicit", "step": 1e300})
+    element = Element(scene, stepper="implicit", step=1e300)
+    names = ["x", "v", "reaction"]
+    try:
+        for force in (5.0, 5.0, -2.0, 0.0):
+            slave.step(1.0, force)
+            element.advance(1.0, force)
+            assert same(outputs(slave, names), expected(element, names)), force
+        assert element.x != 0.0 and element.time == 4.0
+        assert not [m for m in slave.messages if m[0] != 0], slave.messages
+    finally:
+        slave.close()
+
+
 def test_a_dashpot_set_to_zero_and_back_mid_run_is_the_library_bit_for_bit(held):
     """A massive element's dashpot set to c = 0 (and -0.0) by the master and back, mid-run, under every stepper
     the FMU holds: x, v, the reaction, the stiffness and the energy account equal Element.advance's with the same
