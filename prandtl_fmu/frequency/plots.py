@@ -156,7 +156,8 @@ def draw_curve(curve, axes, backbone=None) -> None:
     phase_axes.set_title("phase")
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:  # the phase panel has labels only where something is drawn over
+            ax.legend(fontsize=8)
 
 
 def plot_curve(curve, scene, path: str, backbone=None) -> None:
