@@ -20,8 +20,8 @@ exceptions and their reasons):
    ``resources``, ``saved_state``
 2. loads and effects with memory, compiled: ``loads``, ``memory``, ``memory.dahl``, ``memory.delay``,
    ``memory.history``
-3. kernels: ``kernels``, ``memory.solve``, ``network.kernels``, ``network.chain``
-4. steppers: ``steppers``, and the loops built over their steps (``kernels.table1``: Table 1's lockstep)
+3. kernels: ``kernels``, ``network.kernels``, ``network.chain``
+4. steppers: ``steppers``
 5. scenes: ``schema``, ``effects``, ``masing``, ``scene_tables``, ``scene``, ``stability``, ``network.model``
 6. a run's parts: ``compiled``, ``stepping``
 7. the stepped objects and the network's driver: ``element``, ``connector``, ``network.driver``
@@ -29,6 +29,12 @@ exceptions and their reasons):
 9. the FMUs of both runtimes: ``fmu``
 10. tools: ``sweep``, ``identify``, ``plots``, ``bench``, ``frequency``
 11. the command line: ``cli``, ``__main__``
+
+A folder groups a subject; the layers order its modules. ``network/`` is the one subject whose modules sit on
+several layers, and must: its kernels (3) are the building blocks of its stepper, its scene model (5) is part of
+what ``scene.py`` reads and ``compiled.py`` compiles, and its driver (7) runs them, as ``kernels/``, ``scene.py``
+and ``element.py`` do for one mass. Each module's layer is listed above and checked; the folder as a whole
+straddles them.
 
 This ``__init__`` imports nothing at load: its public names resolve on first use.
 """

@@ -28,7 +28,7 @@ from .loads import force_at
 from .memory import force_now, has_memory
 from .memory import delay as memory_delay
 from .memory.dahl import after as dahl_after
-from .memory.solve import solve_dahl_increment
+from .kernels.dahl_increment import solve_dahl_increment
 from .scene import Scene
 from .stability import stability_problem
 from .steppers import get_stepper

@@ -11,13 +11,13 @@ The paper fitted in base 10, log10 eps = alpha log10 h + b10, and printed C = ex
 
 over h_j = h_min^((R - j) / R) h_max^(j / R), j = 0..R, with R = 99, h_min = 1e-6, h_max = 1e-2 (``PROTOCOLS``).
 u = (x, y, u_1..u_n), u_h the piecewise-linear interpolant of the nodes, so the C^0 norm is the max over every node
-of the fine run (``kernels/table1.py``). Each (n, h) is one lockstep run of h and h/2 on the memory stack
+of the fine run (``bench/lockstep.py``). Each (n, h) is one lockstep run of h and h/2 on the memory stack
 (cost per node: the stack's depth, not n), written to DIR/runs/ as it finishes (``--resume`` skips those); the
 runs go to dask.distributed when it is installed (the ``sweep`` extra), else one after the other.
 
 Each run keeps, for the kinds of node (coarse nodes; fine nodes against the linear interpolant; fine nodes
 against the coarse value held over its step, except in the paper protocol), the maxima over [0, T] of the
-components of the difference (``kernels/table1.MEASURES``). From them, without another run:
+components of the difference (``bench/lockstep.MEASURES``). From them, without another run:
 
 * ``DIR/table1_paper.csv`` (``table1_<protocol>.csv`` for the others; q, n, alpha, C, r, C_true, then the
   paper's values and how many h were done): the paper's definition read literally: plain l^q over the n + 2
@@ -65,7 +65,7 @@ class Protocol:
     T: float
     ns: tuple
     stepper: str = "projected"
-    theta: float = 0.0  # a step from t_p sees the load at t_p + theta h (kernels/table1.py)
+    theta: float = 0.0  # a step from t_p sees the load at t_p + theta h (bench/lockstep.py)
     held: bool = True  # also measure against the coarse run held over its step (a candidate; costs a third more)
 
     def steps(self):
@@ -100,7 +100,7 @@ PROTOCOLS = {
     "quick": Protocol("quick", 1e-3, 1e-2, 5, 20.0, (3, 10, 100)),
 }
 
-# the norms of the search: (q, name) -> how a norm over time comes from a run's maxima (kernels/table1.MEASURES)
+# the norms of the search: (q, name) -> how a norm over time comes from a run's maxima (bench/lockstep.MEASURES)
 NORMS = {
     ("inf", "plain"): ("x", "v", "u_max"),          # l^inf over (x, y, u_1..u_n): the paper's definition
     ("inf", "u"): ("u_max",),                       # the elongations only
@@ -118,7 +118,7 @@ NORMS = {
     ("2", "mean"): ("l2_mean",),                    # sqrt(x^2 + y^2 + sum u_i^2 / n): the 1/n of (7.19)
     ("2", "xv"): ("l2_xv",),
 }
-TIMES = {  # which nodes the max over [0, T] runs over (kernels/table1.KINDS)
+TIMES = {  # which nodes the max over [0, T] runs over (bench/lockstep.KINDS)
     "interpolants": ("coarse", "linear"),  # every fine node, the coarse run interpolated: the C^0 norm of (8.2)
     "coarse": ("coarse",),                 # the coarse nodes only
     "held": ("coarse", "held"),            # piecewise-constant u_h (the v_h of section 2)
@@ -140,13 +140,13 @@ class Table1Error(ValueError):
 
 def lockstep_run(scene, h: float, stepper: str = "projected", steps=None, progress=None, theta: float = 0.0,
                  held: bool = True) -> dict:
-    """Run ``scene`` at h and h/2 in lockstep (``kernels/table1.py``) over ``steps`` coarse steps (default
+    """Run ``scene`` at h and h/2 in lockstep (``bench/lockstep.py``) over ``steps`` coarse steps (default
     round(T / h)) and return the maxima of the difference: ``{"maxima": {kind: {measure: value}}, "when":
     ..., "seconds": ..., "steps": ...}``. ValueError if the scene does not fit (the memory stack, no memory
     effects, no noise, a mass); RuntimeError if a state stops being finite."""
     from ..compiled import compile_model
     from ..kernels import stack
-    from ..kernels import table1 as kernels
+    from . import lockstep as kernels
     from ..memory import has_memory
     from ..stepping import initial_state
 

@@ -53,7 +53,7 @@ Effects with memory (``memory/``): the delay's and the history's forces at t_{p+
 state (the delayed instant interpolated inside the step when tau < h; the history's variables integrated
 exactly with x linear over the step), so they join G as a constant and a stiffness; Dahl's force at t_{p+1} is
 the exact Dahl operator over the increment w, a non-decreasing term of G solved by bracketing and Illinois
-(``memory/solve.py``). Their work is booked with the load's.
+(``kernels/dahl_increment.py``). Their work is booked with the load's.
 
 Massless element (no [mass]): the same equation without the m terms. With a
 dashpot it is backward Euler on c x' = F - ...; without, the quasi-static
@@ -74,7 +74,7 @@ from ..kernels.series import BACKWARD, move_branches
 from ..loads import force_at, impulse, with_noise
 from ..memory import linear_force, record
 from ..memory.dahl import after
-from ..memory.solve import solve_dahl_increment
+from ..kernels.dahl_increment import solve_dahl_increment
 
 BRANCH_STACK = True  # takes the memory stack (kernels/stack.py) for many branches
 ORDER = 1

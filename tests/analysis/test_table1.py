@@ -1,4 +1,4 @@
-"""The paper's Table 1 machinery (prandtl_fmu/bench/table1.py, prandtl_fmu/kernels/table1.py): the lockstep
+"""The paper's Table 1 machinery (prandtl_fmu/bench/table1.py, prandtl_fmu/bench/lockstep.py): the lockstep
 distance computed on the memory stack against a dense computation written here, the fit against synthetic
 data, the resumable folder, and the command's refusals."""
 import csv
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu.bench import table1
-from prandtl_fmu.kernels.table1 import KINDS, MEASURES, SHORT
+from prandtl_fmu.bench.lockstep import KINDS, MEASURES, SHORT
 
 from tests.conftest import make_scene
 
@@ -18,7 +18,7 @@ from tests.conftest import make_scene
 def _dense_scheme_measures(m, k0, k, eta, u0, force, h, steps):
     """Scheme (5.1) on (x, v, u_1..u_n) with every branch stored (no stack), run at h and h/2 side by side, and
     the maxima of the differences at the coarse nodes, at the fine nodes against the coarse run's linear
-    interpolant and against its held value: a straightforward version of kernels/table1.py."""
+    interpolant and against its held value: a straightforward version of bench/lockstep.py."""
     def step(t, x, v, u, dt):
         a = (force(t) - k0 * x - k @ u) / m
         return x + dt * v, v + dt * a, np.clip(u + dt * v, -eta, eta)
@@ -87,7 +87,7 @@ def test_the_lockstep_keeps_its_maxima_with_one_compiled_kernel():
     scene = make_scene(cubic=None, damper=None)
     maxima = table1.lockstep_run(scene, 0.02, steps=50)["maxima"]
     assert all(maxima[kind]["x"] > 0.0 for kind in KINDS)
-    assert literal_signatures("table1._keep") == []
+    assert literal_signatures("lockstep._keep") == []
 
 
 @pytest.mark.parametrize("n, seed, spread", [(7, 11, 0.0), (300, 12, 0.0), (3000, 13, 0.7), (3000, 15, 0.0),
@@ -96,7 +96,7 @@ def test_any_weighted_sum_of_three_stacks_has_the_dense_norms(n, seed, spread):
     """Three memory stacks moved along different random paths (pieces that overlap anywhere, long cells whose
     slopes differ), summed with random weights: the merged cells give the norms of the dense profiles."""
     from prandtl_fmu.kernels import stack
-    from prandtl_fmu.kernels.table1 import difference, plain_sums
+    from prandtl_fmu.bench.lockstep import difference, plain_sums
 
     rng = np.random.default_rng(seed)
     k = rng.uniform(0.1, 1.0, n)

@@ -556,7 +556,7 @@ def compile_kernels(scene, steppers) -> list:
     from ...loads import force_at
     from ...memory import force_now
     from ...memory.dahl import after as dahl_after
-    from ...memory.solve import solve_dahl_increment
+    from ...kernels.dahl_increment import solve_dahl_increment
     from ...steppers import get_stepper
 
     checks = [("state_check", compile_state_check(scene))] if is_stack_scene(scene) else []

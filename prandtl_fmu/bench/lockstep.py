@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import generic_kernel, kernel
 from ..memory import prepare
-from . import stack
+from ..kernels import stack
 
 SHORT = 64  # a cell of at most this many branches is summed branch by branch
 
@@ -246,7 +246,7 @@ def lockstep_for(step):
     return generic_kernel(lockstep)
 
 
-from ..steppers import projected as _projected, symplectic as _symplectic  # noqa: E402  (steppers import kernels)
+from ..steppers import projected as _projected, symplectic as _symplectic  # noqa: E402
 
 _projected_lockstep = lockstep_for(_projected.step)
 _symplectic_lockstep = lockstep_for(_symplectic.step)

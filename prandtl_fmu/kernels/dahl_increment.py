@@ -15,8 +15,8 @@ strength: plastic collapse), the result is NaN and the step is refused by the dr
 import numpy as np
 
 from .._jit import inline_kernel, kernel
-from ..kernels.increment import _cubic_stiffness, _plus_spring, residual
-from .dahl import _power, after
+from .increment import _cubic_stiffness, _plus_spring, residual
+from ..memory.dahl import _power, after
 
 _EPS = 2.220446049250313e-16
 MAX_NEWTON = 200  # Newton steps (safeguarded by the bracket once there is one)
