@@ -53,16 +53,13 @@ def is_stable(values: np.ndarray) -> bool:
 
 
 def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
-    from ..loads import HarmonicLoad
     from ..network.driver import NetworkElement
-    from ..network.model import NetworkScene
     from ..scene_tables import Solver
 
     system = balance.system
     period = 2.0 * math.pi / omega
     h = period / steps
-    scene = NetworkScene(system.name, system.network, HarmonicLoad(balance.force_amplitude, omega),
-                         Solver("implicit", h, period, h), system.source)
+    scene = forced_scene(balance, omega, Solver("implicit", h, period, h))
     element = NetworkElement(scene, "implicit", h)
     x, v, u = orbit_start(balance, q_free, omega)
     massive = system.massive
@@ -93,21 +90,44 @@ def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
     return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega): dimensionless
 
 
-def run_periods(balance, omega, state, periods: int, steps: int) -> tuple:
-    """Integrate ``balance``'s system under F0 cos(omega t) for ``periods`` periods of ``steps`` implicit steps
-    from ``state`` (x, v, u) at t = 0 (one compiled call per period): ``(x of the last period (steps, n), the
-    state at the end)``. The reference the tests and the benchmark hold the harmonic balance against."""
+def forced_scene(balance, omega, solver):
+    """The network of ``balance`` under its force at ``omega`` as a scene the network steppers run: F0 cos(omega t)
+    on the load's node; base excitation (in relative coordinates, see ``harmonic_balance.py``): m Y0 omega^2
+    cos(omega t) on the one node with a mass (FrequencyError for several: the network's load acts on one node)."""
+    import dataclasses
+
     from ..loads import HarmonicLoad
-    from ..network.driver import NetworkElement, loop_for, run_loop
     from ..network.model import NetworkScene
+    from . import FrequencyError
+
+    system = balance.system
+    network = system.network
+    if balance.base_amplitude is None:
+        amplitude = balance.force_amplitude
+    else:
+        if len(system.massive) != 1:
+            raise FrequencyError(f"{system.source}: the stability of base excitation is computed for one node with "
+                                 f"a mass (here {len(system.massive)}): the network's load acts on one node; "
+                                 "compute the curve with stability=False")
+        node = system.massive[0]
+        network = dataclasses.replace(network, load_node=node)
+        amplitude = float(system.mass[node]) * balance.base_amplitude * omega * omega
+    return NetworkScene(system.name, network, HarmonicLoad(amplitude, omega), solver, system.source)
+
+
+def run_periods(balance, omega, state, periods: int, steps: int) -> tuple:
+    """Integrate ``balance``'s system under its force at ``omega`` (:func:`forced_scene`; base excitation: in
+    relative coordinates) for ``periods`` periods of ``steps`` implicit steps from ``state`` (x, v, u) at t = 0
+    (one compiled call per period): ``(x of the last period (steps, n), the state at the end)``. The reference
+    the tests and the benchmark hold the harmonic balance against."""
+    from ..network.driver import NetworkElement, loop_for, run_loop
     from ..scene_tables import Solver
     from ..stepping import ElementError
 
     system = balance.system
     period = 2.0 * math.pi / omega
     h = period / steps
-    scene = NetworkScene(system.name, system.network, HarmonicLoad(balance.force_amplitude, omega),
-                         Solver("implicit", h, period, h), system.source)
+    scene = forced_scene(balance, omega, Solver("implicit", h, period, h))
     runner = NetworkElement(scene, "implicit", h)
     x, v, u = (np.array(a, dtype=float) for a in state)
     piece = runner.piece.copy()
