@@ -89,7 +89,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
     taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
     load node); ``stability``: compute the Floquet multipliers (else ``stable`` is None and every multiplier
-    NaN; base excitation: for one node with a mass); ``samples``: N of the AFT (default
+    NaN); ``samples``: N of the AFT (default
     ``harmonic_balance.sample_count``). FrequencyError names the culprit or says where the curve stopped and
     why."""
     if (force_amplitude is None) == (base_amplitude is None):
@@ -109,10 +109,6 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     count = int(np.unique(frequencies).size)
-    if stability and base_amplitude is not None and len(system.massive) != 1:
-        from .floquet import forced_scene
-
-        forced_scene(HarmonicBalance(system, 1, None, None, base_amplitude), low, None)  # refused before any work
     if harmonics is not None:
         balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
         points = continue_curve(balance, low, high, count)

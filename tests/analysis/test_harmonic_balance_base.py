@@ -190,3 +190,95 @@ def write_text(tables):
     from tests.conftest import scene_text
 
     return scene_text(tables)
+
+
+TWO_MASSES_ON_A_BASE = """
+name = "two masses on a moving base"
+[network]
+nodes = ["a", "b", "base"]
+mass = [1.0, 1.0, 0.0]
+load_node = "base"
+[[network.spring]]
+name = "ka"
+between = ["a", "base"]
+k = 1.0
+[[network.spring]]
+name = "kb"
+between = ["b", "base"]
+k = 1.0
+[[network.cubic]]
+name = "k3"
+between = ["a", "base"]
+k3 = 0.5
+[[network.branch]]
+name = "joint"
+between = ["a", "b"]
+k = 2.0
+eta = 0.05
+[[network.dashpot]]
+name = "ca"
+between = ["a", "base"]
+c = 0.02
+[[network.dashpot]]
+name = "cb"
+between = ["b", "base"]
+c = 0.02
+[solver]
+stepper = "implicit"
+step = 0.01
+stop_time = 1.0
+output_interval = 0.01
+"""
+
+
+@pytest.mark.slow
+def test_base_excited_points_marked_unstable_leave_their_orbit_and_stable_ones_keep_it(tmp_path):
+    """The two-mass joint with its support moving (the ground a node of its own whose motion the connector
+    imposes, written out here: absolute coordinates) from the orbit of a point of the curve: the most unstable
+    point's first harmonic leaves it within 60 periods, a stable one keeps it."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.floquet import orbit_start
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+    from prandtl_fmu.network.driver import NetworkConnector
+
+    scene, _ = read_scene("networks/two-mass-joint", networks=True)
+    Y = 0.1
+    curve = harmonic_response(scene, frequencies=[0.1, 0.4], base_amplitude=Y, harmonics=3)
+    unstable = np.flatnonzero(~curve.stable)
+    assert curve.folds.size >= 2 and unstable.size
+    system = periodic_system(scene)
+    balance = HarmonicBalance(system, 3, None, None, Y)
+    path = tmp_path / "base.toml"
+    path.write_text(TWO_MASSES_ON_A_BASE)
+    moving, _ = read_scene(str(path), networks=True)
+    names = [e.name for e in moving.network.elements]
+    steps, periods = 1024, 60
+    worst = unstable[np.nanargmax(np.where(np.isnan(curve.multiplier[unstable]), -1, curve.multiplier[unstable]))]
+    for index, leaves in ((worst, True), (10, False)):
+        omega = 2 * math.pi * curve.frequency[index]
+        h = 2 * math.pi / omega / steps
+        connector = NetworkConnector(moving, "implicit", h)
+        z, v, u = orbit_start(balance, (curve.coefficients[index] - _base(balance, Y)).reshape(-1)[balance.free],
+                              omega)
+        connector.reset()
+        connector.x[:] = np.append(z + Y, Y)
+        connector.v[:] = np.append(v, 0.0)
+        connector.u[:] = [u[[e.name for e in system.network.elements].index(name)] if name == "joint" else 0.0
+                          for name in names]
+        connector.piece[:] = 0
+        x_a = np.empty(steps)
+        for step in range(1, periods * steps + 1):
+            t = step * h
+            connector.move_to(Y * math.cos(omega * t), -Y * omega * math.sin(omega * t), t)
+            x_a[(step - 1) % steps] = connector.x[0]
+        weights = np.exp(-1j * omega * h * np.arange(1, steps + 1)) * 2 / steps
+        moved = abs(abs(x_a @ weights) - curve.amplitude[index]) / curve.amplitude[index]
+        assert (moved > 0.1) if leaves else (moved < 1e-2), (index, moved)
+
+
+def _base(balance, Y):
+    """The base's motion y = Y cos(omega t) as harmonics of every node (n, L): what x = z + y adds to z."""
+    out = np.zeros((balance.system.n, balance.L))
+    out[:, 1] = Y
+    return out
