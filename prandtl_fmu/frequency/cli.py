@@ -13,8 +13,9 @@
 The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``; the second (harmonic balance,
 the default) ``frequency,amplitude,phase,stable``, ``amplitude_<node>`` for every node with a mass, ``fold`` and
 ``multiplier`` (with several amplitudes, one curve per amplitude, one after the other, and the column
-``force_amplitude`` or ``base_amplitude`` after ``stable``; under base excitation x is the absolute motion); the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error``
-(phase in radians); the fourth (a nonlinear mode) ``amplitude,frequency,damping_ratio``. Exit status 2, one
+``force_amplitude`` or ``base_amplitude`` after ``stable``; under base excitation x is the absolute motion);
+the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error`` (phase in
+radians); the fourth (a nonlinear mode) ``amplitude,frequency,damping_ratio``. Exit status 2, one
 line and nothing written, on bad input (naming the culprit) and when a result cannot reach its accuracy
 (saying what was reached); 0 otherwise (docs/cli.md: every exit is 0 or 2).
 """
