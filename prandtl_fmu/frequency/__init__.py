@@ -15,6 +15,8 @@ Two questions that engineers who model joints and friction dampers ask first (do
 * :func:`harmonic_response`: the same response of an element with a mass or a network by harmonic balance
   (``harmonic_balance.py``, ``aft.py``), continued along the arc length through its folds
   (``continuation.py``), each point's stability from Floquet multipliers (``floquet.py``) (``curve.py``);
+  under a force on a node or the motion of the base (base excitation); :func:`harmonic_responses`: one
+  curve per amplitude (a parameter study), on dask.distributed or in this process;
 * :func:`nonlinear_mode`: a nonlinear mode's frequency and damping ratio against its amplitude by the extended
   periodic motion concept (``modes.py``).
 
@@ -130,7 +132,8 @@ def settling_remainder(changes: list) -> float:
 
 _LAZY = {"Description": "describing", "describe_amplitudes": "describing", "Response": "response",
          "frequency_response": "response", "NotSettled": "response", "Curve": "curve",
-         "harmonic_response": "curve", "Backbone": "modes", "nonlinear_mode": "modes"}
+         "harmonic_response": "curve", "harmonic_responses": "curve", "Curves": "curve", "Backbone": "modes",
+         "nonlinear_mode": "modes"}
 
 
 def __getattr__(name: str):
@@ -141,6 +144,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["Backbone", "Curve", "DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled", "Response",
-           "describe_amplitudes", "frequency_response", "harmonic_response", "nonlinear_mode", "parse_scene",
+__all__ = ["Backbone", "Curve", "Curves", "DEFAULT_TOLERANCE", "Description", "FrequencyError", "NotSettled",
+           "Response", "describe_amplitudes", "frequency_response", "harmonic_response", "harmonic_responses",
+           "nonlinear_mode", "parse_scene",
            "read_scene"]

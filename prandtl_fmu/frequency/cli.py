@@ -2,8 +2,9 @@
 
     prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--between I,J] [--tolerance TOL] [--out CSV]
                          [--plot PNG]
-    prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... [--harmonics H] [--node NAME]
-                         [--load-node NAME] [--tolerance TOL] [--out CSV] [--plot PNG]
+    prandtl-fmu describe SCENE (--force-amplitude F0[,F1,...] | --base-amplitude Y0[,Y1,...])
+                         --frequencies f1,f2,... [--harmonics H] [--node NAME] [--load-node NAME] [--tolerance TOL]
+                         [--scheduler ADDRESS | --workers N] [--out CSV] [--plot PNG]
     prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... --method time [--sweep up|down|both]
                          [--stepper S] [--tolerance TOL] [--scheduler ADDRESS | --workers N] [--out CSV]
                          [--plot PNG]
@@ -11,8 +12,10 @@
 
 The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``; the second (harmonic balance,
 the default) ``frequency,amplitude,phase,stable``, ``amplitude_<node>`` for every node with a mass, ``fold`` and
-``multiplier``; the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error``
-(phase in radians); the fourth (a nonlinear mode) ``amplitude,frequency,damping_ratio``. Exit status 2, one
+``multiplier`` (with several amplitudes, one curve per amplitude, one after the other, and the column
+``force_amplitude`` or ``base_amplitude`` after ``stable``; under base excitation x is the absolute motion);
+the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error`` (phase in
+radians); the fourth (a nonlinear mode) ``amplitude,frequency,damping_ratio``. Exit status 2, one
 line and nothing written, on bad input (naming the culprit) and when a result cannot reach its accuracy
 (saying what was reached); 0 otherwise (docs/cli.md: every exit is 0 or 2).
 """
@@ -25,7 +28,9 @@ _EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A
            "D/(pi K A^2) (an empty field where it is infinite: K = 0, a dashpot or friction alone), "
            "method (exact, spectrum or quadrature), error (estimated relative error; 0: rounding only); or "
            "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
-           "cos(2 pi f t + phase)), then stable, amplitude_<node>, fold, multiplier (harmonic balance) or sweep (up "
+           "cos(2 pi f t + phase); with --base-amplitude, of the absolute x against the base's Y0 cos(2 pi f t)), "
+           "then stable, force_amplitude or base_amplitude (several amplitudes only), amplitude_<node>, fold, "
+           "multiplier (harmonic balance) or sweep (up "
            "or down), steps_per_period, periods, error (--method time); or amplitude, frequency, damping_ratio "
            "(--mode). Exit status 2, one line, nothing written, on bad input and when a result cannot reach the "
            "tolerance.")
@@ -39,15 +44,21 @@ def add_parser(commands, scene_help: str) -> None:
     describe = commands.add_parser(
         "describe", epilog=_EPILOG,
         help="the frequency domain: K(A), D(A) and the loss factor of the element driven in displacement "
-             "(--amplitudes), or the steady response of its mass to F0 cos(2 pi f t) (--force-amplitude)")
+             "(--amplitudes), or the steady response of its masses to F0 cos(2 pi f t) (--force-amplitude) or "
+             "to the motion Y0 cos(2 pi f t) of their support (--base-amplitude)")
     describe.add_argument("scene", help=scene_help + "; needs no [load] or [solver]")
     describe.add_argument("--amplitudes", metavar="A1,A2,...",
                           help="displacement amplitudes (m, > 0): the describing function at each")
     describe.add_argument("--frequency", metavar="F",
                           help="frequency (Hz, > 0) of the cycles of --amplitudes: needed by a rate-dependent "
                                "element (dashpot, series dashpots, delay, history, Stribeck or belt friction)")
-    describe.add_argument("--force-amplitude", metavar="F0",
-                          help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass: the frequency response")
+    describe.add_argument("--force-amplitude", metavar="F0[,F1,...]",
+                          help="force amplitude F0 (N, > 0) of F0 cos(2 pi f t) on the mass (--load-node): the "
+                               "frequency response; several: one curve each (harmonic balance)")
+    describe.add_argument("--base-amplitude", metavar="Y0[,Y1,...]",
+                          help="instead of --force-amplitude: the support (the ground) moves, y = Y0 cos(2 pi f t) "
+                               "(m, > 0); amplitude and phase are of the absolute motion x against y (harmonic "
+                               "balance); several: one curve each")
     describe.add_argument("--frequencies", metavar="f1,f2,...",
                           help="forcing frequencies (Hz, > 0); harmonic balance follows the curve from the lowest "
                                "to the highest")
@@ -75,9 +86,10 @@ def add_parser(commands, scene_help: str) -> None:
     describe.add_argument("--tolerance", metavar="TOL", default="1e-3",
                           help="relative accuracy of the first harmonic (default 1e-3)")
     describe.add_argument("--scheduler", metavar="ADDRESS",
-                          help="--method time: run the frequencies on a running dask scheduler (tcp://host:8786)")
+                          help="run on a running dask scheduler (tcp://host:8786): the frequencies of --method "
+                               "time; one curve per amplitude of harmonic balance")
     describe.add_argument("--workers", metavar="N",
-                          help="--method time: run the frequencies on a LocalCluster of N worker processes")
+                          help="run on a LocalCluster of N worker processes (as --scheduler)")
     describe.add_argument("--out", help="CSV file to write (default: standard output)")
     describe.add_argument("--plot", metavar="PNG",
                           help="figure: K(A) and the loss factor against A (log axes); the curve with its unstable "
@@ -104,7 +116,11 @@ def _check(args) -> dict:
     """Every option checked before any work: the parsed values, or ValueError naming the culprit."""
     by_amplitude = args.amplitudes is not None and args.mode is None
     by_mode = args.mode is not None
-    by_force = args.force_amplitude is not None
+    if args.force_amplitude is not None and args.base_amplitude is not None:
+        raise ValueError("give either --force-amplitude (a force on a node) or --base-amplitude (the support's "
+                         "motion), not both")
+    by_force = args.force_amplitude is not None or args.base_amplitude is not None
+    load_option = "--base-amplitude" if args.base_amplitude is not None else "--force-amplitude"
     if by_mode and not by_force:
         return _check_mode(args)
     if by_mode:  # the backbone over the curve
@@ -113,14 +129,16 @@ def _check(args) -> dict:
                              "and --plot (or --mode alone for its CSV)")
         if args.method == "time":
             raise ValueError("--mode belongs to --method harmonic-balance, not to --method time")
-        mode = _check_mode(_copy_args(args, force_amplitude=None, frequencies=None, load_node=None))
+        mode = _check_mode(_copy_args(args, force_amplitude=None, base_amplitude=None, frequencies=None,
+                                      load_node=None, scheduler=None, workers=None))
         args = _copy_args(args, amplitudes=None, mode=None)
         values = _check(args)
         values["backbone"] = mode
         return values
     if by_amplitude == by_force:
-        raise ValueError("give either --amplitudes (the describing function) or --force-amplitude with "
-                         "--frequencies (the frequency response)" + (", not both" if by_amplitude else ""))
+        raise ValueError("give either --amplitudes (the describing function) or --force-amplitude (or "
+                         "--base-amplitude) with --frequencies (the frequency response)"
+                         + (", not both" if by_amplitude else ""))
     if by_amplitude:
         for option, value in (("--frequencies", args.frequencies), ("--sweep", args.sweep),
                               ("--stepper", args.stepper), ("--scheduler", args.scheduler),
@@ -128,20 +146,20 @@ def _check(args) -> dict:
                               ("--harmonics", args.harmonics), ("--node", args.node),
                               ("--load-node", args.load_node)):
             if value is not None:
-                raise ValueError(f"{option} belongs to the frequency response (--force-amplitude), not to "
-                                 "--amplitudes")
+                raise ValueError(f"{option} belongs to the frequency response (--force-amplitude or "
+                                 "--base-amplitude), not to --amplitudes")
     else:
         if args.frequencies is None:
-            raise ValueError("--force-amplitude needs --frequencies (Hz)")
+            raise ValueError(f"{load_option} needs --frequencies (Hz)")
         if args.frequency is not None:
             raise ValueError("--frequency sets the cycles of --amplitudes; the frequency response takes "
                              "--frequencies")
         if args.between is not None:
             raise ValueError("--between belongs to the describing function (--amplitudes) of a network")
         method = args.method or "harmonic-balance"
-        wrong = (("--sweep", args.sweep), ("--stepper", args.stepper), ("--scheduler", args.scheduler),
-                 ("--workers", args.workers)) if method == "harmonic-balance" else (
-                 ("--harmonics", args.harmonics), ("--node", args.node), ("--load-node", args.load_node))
+        wrong = (("--sweep", args.sweep), ("--stepper", args.stepper)) if method == "harmonic-balance" else (
+                 ("--harmonics", args.harmonics), ("--node", args.node), ("--load-node", args.load_node),
+                 ("--base-amplitude", args.base_amplitude))
         for option, value in wrong:
             if value is not None:
                 other = "time" if method == "harmonic-balance" else "harmonic-balance"
@@ -153,9 +171,17 @@ def _check(args) -> dict:
         values["amplitudes"] = _numbers(args.amplitudes, "--amplitudes")
         values["frequency"] = None if args.frequency is None else _numbers(args.frequency, "--frequency")[0]
     else:
-        values["force_amplitude"] = _numbers(args.force_amplitude, "--force-amplitude")[0]
+        values["base"] = args.base_amplitude is not None
+        values["load_amplitudes"] = _numbers(args.base_amplitude if values["base"] else args.force_amplitude,
+                                             load_option)
+        if values["base"] and args.load_node is not None:
+            raise ValueError("--load-node names where a force acts; --base-amplitude moves the support under every "
+                             "node")
         values["frequencies"] = _numbers(args.frequencies, "--frequencies")
         values["method"] = args.method or "harmonic-balance"
+        if values["method"] == "time" and len(values["load_amplitudes"]) > 1:
+            raise ValueError("--force-amplitude: several amplitudes (one curve each) belong to --method "
+                             "harmonic-balance; --method time takes one")
         if args.harmonics is not None:
             values["harmonics"] = _whole(args.harmonics, "--harmonics", 1, 256)
         if args.workers is not None:
@@ -186,7 +212,8 @@ def _check_mode(args) -> dict:
     """The options of a nonlinear mode (--mode N --amplitudes ...), checked."""
     if args.amplitudes is None:
         raise ValueError("--mode needs --amplitudes (m, of x at --node)")
-    for option, value in (("--force-amplitude", args.force_amplitude), ("--frequencies", args.frequencies),
+    for option, value in (("--force-amplitude", args.force_amplitude), ("--base-amplitude", args.base_amplitude),
+                          ("--frequencies", args.frequencies),
                           ("--frequency", args.frequency), ("--sweep", args.sweep), ("--stepper", args.stepper),
                           ("--scheduler", args.scheduler), ("--workers", args.workers), ("--method", args.method),
                           ("--load-node", args.load_node), ("--between", args.between)):
@@ -243,11 +270,14 @@ def run(args) -> int:
             result = nonlinear_mode(scene, values["mode"], values["amplitudes"], harmonics=values.get("harmonics"),
                                     node=args.node, tolerance=values["tolerance"])
         elif balance:
-            from .curve import harmonic_response
+            from .curve import harmonic_responses
 
-            result = harmonic_response(scene, values["force_amplitude"], values["frequencies"],
-                                       harmonics=values.get("harmonics"), node=args.node,
-                                       load_node=args.load_node, tolerance=values["tolerance"])
+            key = "base_amplitudes" if values["base"] else "force_amplitudes"
+            curves = harmonic_responses(scene, values["frequencies"], **{key: values["load_amplitudes"]},
+                                        harmonics=values.get("harmonics"), node=args.node,
+                                        load_node=args.load_node, tolerance=values["tolerance"],
+                                        scheduler=args.scheduler, workers=values.get("workers"))
+            result = curves.curves[0] if len(curves.curves) == 1 else curves
             if "backbone" in values:
                 from .modes import nonlinear_mode
 
@@ -262,7 +292,7 @@ def run(args) -> int:
         else:
             from .response import frequency_response
 
-            result = frequency_response(scene, values["force_amplitude"], values["frequencies"],
+            result = frequency_response(scene, values["load_amplitudes"][0], values["frequencies"],
                                         tolerance=values["tolerance"], stepper=args.stepper or named,
                                         sweep=args.sweep, scheduler=args.scheduler, workers=values.get("workers"))
     except (FrequencyError, SceneError, ValueError) as exc:
@@ -282,7 +312,7 @@ def run(args) -> int:
         if "mode" in values:
             plots.plot_backbone(result, scene, args.plot)
         elif balance:
-            plots.plot_curve(result, scene, args.plot, backbone)
+            plots.plot_curve(curves.curves, scene, args.plot, backbone)
         else:
             (plots.plot_description if "amplitudes" in values else plots.plot_response)(result, scene, args.plot)
     return 0

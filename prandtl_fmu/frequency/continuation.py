@@ -156,7 +156,6 @@ def _correct(balance, predicted, tangent, scale, omega_min, span, step):
     """Newton on [R; t . (y - y_pred)] from the prediction ``step`` along the tangent: (q, omega, iterations),
     or None (no convergence, or a corrector that went further than DRIFT steps from the prediction)."""
     y = predicted.copy()
-    force = balance.force_amplitude
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         q, omega = _unscaled(y, scale, omega_min, span)
         residual, matrix = _augmented(balance, q, omega, scale, span)
@@ -168,7 +167,7 @@ def _correct(balance, predicted, tangent, scale, omega_min, span, step):
         y = y + delta
         if np.linalg.norm(y - predicted) > DRIFT * max(step, 1e-300) or _unscaled(y, scale, omega_min, span)[1] <= 0:
             return None  # gone far from the prediction: another part of the curve, or none; a shorter step
-        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * force and \
+        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega) and \
                 np.max(np.abs(delta)) <= 1e-6:
             q, omega = _unscaled(y, scale, omega_min, span)
             return q, omega, iteration

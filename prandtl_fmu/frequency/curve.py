@@ -9,7 +9,8 @@ refused with the change reached.
 
 The first harmonic of x at a node, x_1 = a_1 cos(omega t) + b_1 sin(omega t) = amplitude cos(omega t + phase):
 amplitude = |a_1 - i b_1| (m), phase = arg(a_1 - i b_1) (rad), as the time sweep (``response.py``) defines
-them.
+them. Under base excitation (``base_amplitude`` Y0: the ground moves, y = Y0 cos(omega t)) x is the absolute
+motion, x = z + y from the relative z that the balance solves for, and its phase is against y.
 """
 from __future__ import annotations
 
@@ -38,8 +39,10 @@ class Curve:
     ``stable`` (bool; None for a curve computed with ``stability=False``), ``fold`` (bool: a located fold),
     ``multiplier`` the largest |Floquet multiplier| (NaN where it was not computed: see STABILITY_STRIDE; an
     empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
-    every node with a mass; ``coefficients`` (points, n, 2 H + 1); ``harmonics`` H; ``change`` the relative change of the first
-    harmonic at the last increase of H (None when H was given)."""
+    every node with a mass; ``coefficients`` (points, n, 2 H + 1) of x; ``harmonics`` H; ``change`` the relative
+    change of the first harmonic at the last increase of H (None when H was given); ``force_amplitude`` F0, or
+    None under base excitation, whose ``base_amplitude`` Y0 it is (x then the absolute motion, see the
+    module)."""
 
     frequency: np.ndarray
     amplitude: np.ndarray
@@ -52,8 +55,9 @@ class Curve:
     harmonics: int
     change: Optional[float]
     node: str
-    force_amplitude: float
+    force_amplitude: Optional[float]
     load_node: str
+    base_amplitude: Optional[float] = None
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,
@@ -76,17 +80,29 @@ class Curve:
         return np.flatnonzero(self.fold)
 
 
-def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: Optional[int] = None,
-                      node: Optional[str] = None, load_node: Optional[str] = None,
+def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencies=None, *,
+                      harmonics: Optional[int] = None, node: Optional[str] = None, load_node: Optional[str] = None,
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True,
-                      samples: Optional[int] = None) -> Curve:
-    """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t) from the
+                      samples: Optional[int] = None, base_amplitude: Optional[float] = None) -> Curve:
+    """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t), or
+    (``base_amplitude`` Y0 instead of ``force_amplitude``) to the base's motion Y0 cos(2 pi f t), from the
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
     taken (default: the first node with a mass); ``load_node``: where the force acts (default: the scene's
     load node); ``stability``: compute the Floquet multipliers (else ``stable`` is None and every multiplier
-    NaN); ``samples``: N of the AFT (default ``harmonic_balance.sample_count``). FrequencyError
-    names the culprit or says where the curve stopped and why."""
-    force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
+    NaN); ``samples``: N of the AFT (default
+    ``harmonic_balance.sample_count``). FrequencyError names the culprit or says where the curve stopped and
+    why."""
+    if (force_amplitude is None) == (base_amplitude is None):
+        raise FrequencyError("give either a force amplitude or a base amplitude"
+                             + (", not both" if force_amplitude is not None else ""))
+    if force_amplitude is not None:
+        force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
+    else:
+        base_amplitude = float(positive_values([base_amplitude], "base amplitude")[0])
+        if load_node is not None:
+            raise FrequencyError("load node: base excitation moves the ground under every node, not one node")
+    if frequencies is None:
+        raise FrequencyError("frequencies: at least one value is needed")
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
     system = periodic_system(scene, load_node)
@@ -94,18 +110,21 @@ def harmonic_response(scene, force_amplitude: float, frequencies, *, harmonics: 
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     count = int(np.unique(frequencies).size)
     if harmonics is not None:
-        balance = HarmonicBalance(system, harmonics, force_amplitude, samples)
+        balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
         points = continue_curve(balance, low, high, count)
         change = None
     else:
-        balance, points, change = _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance,
-                                                    samples)
+        balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
+                                                    where, tolerance, samples)
     return _curve(balance, points, where, stability, change)
 
 
 def _first_harmonic(balance, points, where) -> np.ndarray:
+    """The first harmonic of x at node ``where`` at each point (absolute under base excitation)."""
     L = balance.L
-    return np.array([complex(balance.full(q)[where * L + 1], -balance.full(q)[where * L + 2]) for _, q, _ in points])
+    base = balance.base_amplitude or 0.0
+    return np.array([complex(balance.full(q)[where * L + 1] + base, -balance.full(q)[where * L + 2])
+                     for _, q, _ in points])
 
 
 def _summary(balance, points, where) -> np.ndarray:
@@ -114,10 +133,12 @@ def _summary(balance, points, where) -> np.ndarray:
     return np.array([X[0], X[np.argmax(np.abs(X))], X[-1]])
 
 
-def _chosen_harmonics(system, force_amplitude, low, high, count, where, tolerance, samples) -> tuple:
+def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,
+                      samples) -> tuple:
     previous, change = None, math.inf
     for H in HARMONIC_STEPS:
-        balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H))
+        balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
+                                  base_amplitude)
         points = continue_curve(balance, low, high, count)
         summary = _summary(balance, points, where)
         if previous is not None:
@@ -137,6 +158,8 @@ def _curve(balance, points, where, stability, change) -> Curve:
     L = balance.L
     omega = np.array([p[0] for p in points])
     coefficients = np.array([balance.full(q).reshape(system.n, L) for _, q, _ in points])
+    if balance.base_amplitude is not None:
+        coefficients[:, :, 1] += balance.base_amplitude  # x = z + y, y = Y0 cos(omega t)
     X = coefficients[:, where, 1] - 1j * coefficients[:, where, 2]
     largest = np.full(len(points), np.nan)
     stable = np.ones(len(points), dtype=bool)
@@ -167,4 +190,84 @@ def _curve(balance, points, where, stability, change) -> Curve:
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
                  largest, amplitudes, coefficients, balance.H, change, system.nodes[where], balance.force_amplitude,
-                 system.nodes[system.load_node])
+                 system.nodes[system.load_node], balance.base_amplitude)
+
+
+# ----------------------------------------------------------------- many curves: a parameter study
+
+@dataclass(frozen=True, eq=False)
+class Curves:
+    """The curves of one scene at several amplitudes (a parameter study): ``curves`` in the order of
+    ``amplitudes``, the force amplitudes F0 (N) or, with ``base``, the base amplitudes Y0 (m)."""
+
+    curves: tuple
+    amplitudes: np.ndarray
+    base: bool
+
+    @property
+    def column(self) -> str:
+        """The column that says which amplitude a row belongs to."""
+        return "base_amplitude" if self.base else "force_amplitude"
+
+    def columns(self) -> dict:
+        """One curve's columns (:meth:`Curve.columns`) for each curve, their rows one curve after the other in
+        the order of ``amplitudes``; with several, the column :attr:`column` (the curve's amplitude) after the
+        contract's first four (frequency, amplitude, phase, stable), before amplitude_<node>. One curve: its own
+        columns, unchanged."""
+        each = [curve.columns() for curve in self.curves]
+        if len(each) == 1:
+            return each[0]
+        names = list(each[0])
+        out = {name: [value for columns in each for value in list(columns[name])] for name in names[:4]}
+        out[self.column] = [float(a) for a, columns in zip(self.amplitudes.tolist(), each)
+                            for _ in range(len(columns["frequency"]))]
+        for name in names[4:]:
+            out[name] = [value for columns in each for value in list(columns[name])]
+        return out
+
+
+def harmonic_responses(scene, frequencies, *, force_amplitudes=None, base_amplitudes=None, client=None,
+                       scheduler: Optional[str] = None, workers: Optional[int] = None, **options) -> Curves:
+    """:func:`harmonic_response` at each of ``force_amplitudes`` (F0, N) or of ``base_amplitudes`` (Y0, m):
+    one curve per amplitude. On dask.distributed (``client``, ``scheduler`` or ``workers``: a LocalCluster of
+    that many processes; the ``sweep`` extra) each curve is one task; without, the curves run one after the
+    other in this process. The same curves either way (each is computed by the same function from the same
+    input). ``options``: those of :func:`harmonic_response`."""
+    if (force_amplitudes is None) == (base_amplitudes is None):
+        raise FrequencyError("give either force amplitudes or base amplitudes"
+                             + (", not both" if force_amplitudes is not None else ""))
+    base = base_amplitudes is not None
+    amplitudes = positive_values(base_amplitudes if base else force_amplitudes,
+                                 "base amplitudes" if base else "force amplitudes")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise FrequencyError(f"workers: must be a whole number >= 1, got {workers!r}")
+
+    def arguments(amplitude):
+        return dict(options, base_amplitude=amplitude) if base else dict(options, force_amplitude=amplitude)
+
+    if client is None and scheduler is None and workers is None:
+        curves = [harmonic_response(scene, frequencies=frequencies, **arguments(a)) for a in amplitudes.tolist()]
+    else:
+        curves = _on_cluster(scene, frequencies, [arguments(a) for a in amplitudes.tolist()], client, scheduler,
+                             workers)
+    return Curves(tuple(curves), amplitudes, base)
+
+
+def _on_cluster(scene, frequencies, tasks, client, scheduler, workers) -> list:
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise FrequencyError("curves on dask.distributed need the sweep extra (distributed is missing): "
+                             "pip install \"prandtl_fmu[sweep]\"") from None
+    from ..sweep import _client
+
+    owned = []
+    try:
+        if client is None:
+            client = _client(scheduler, workers, owned)
+        futures = [client.submit(harmonic_response, scene, frequencies=frequencies, pure=False, **task)
+                   for task in tasks]
+        return [future.result() for future in futures]
+    finally:
+        for thing in reversed(owned):
+            thing.close()

@@ -194,12 +194,14 @@ def sample_count(harmonics: int) -> int:
 
 
 class HarmonicBalance:
-    """The residual and Jacobian of ``system`` with ``harmonics`` H (see the module) under F0 cos(omega t).
+    """The residual and Jacobian of ``system`` with ``harmonics`` H (see the module) under F0 cos(omega t) on
+    the load's node, or (``base_amplitude`` Y0, ``force_amplitude`` None) the base's motion Y0 cos(omega t), in
+    relative coordinates.
 
     ``free``: the indices of the unknowns (the means fixed at 0 left out); :meth:`evaluate` works on those."""
 
-    def __init__(self, system: PeriodicSystem, harmonics: int, force_amplitude: float,
-                 samples: Optional[int] = None):
+    def __init__(self, system: PeriodicSystem, harmonics: int, force_amplitude: Optional[float],
+                 samples: Optional[int] = None, base_amplitude: Optional[float] = None):
         if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or not 1 <= harmonics <= 256:
             raise FrequencyError(f"--harmonics: must be a whole number in [1, 256], got {harmonics!r}")
         self.system = system
@@ -228,9 +230,18 @@ class HarmonicBalance:
         self.linear_damping = np.kron(system.damping, derivative)
         self.linear_inertia = np.kron(np.diag(system.mass), derivative @ derivative)
         self.mass_velocity = np.kron(np.diag(system.mass), derivative)
-        self.force = np.zeros(n * L)
-        self.force[system.load_node * L + 1] = float(force_amplitude)
-        self.force_amplitude = float(force_amplitude)
+        # the force's cosine coefficients, times omega^power: F0 on the load's node (power 0), or m_j Y0 on
+        # every node with a mass (power 2: base excitation)
+        self.load = np.zeros(n * L)
+        if base_amplitude is None:
+            self.load[system.load_node * L + 1] = float(force_amplitude)
+            self.power = 0
+        else:
+            self.load[np.arange(n) * L + 1] = system.mass * float(base_amplitude)
+            self.power = 2
+        self.force_amplitude = None if force_amplitude is None else float(force_amplitude)
+        self.base_amplitude = None if base_amplitude is None else float(base_amplitude)
+        self.fraction = 1.0  # of the force, while :meth:`solve_at` raises it in steps
         self.free = np.array([i * L + l for i in range(n) for l in range(L) if l > 0 or system.held[i]],
                              dtype=np.int64)
         self._forces = np.empty((n, N))
@@ -281,6 +292,14 @@ class HarmonicBalance:
                     jacobian[r * L:(r + 1) * L, p * L:(p + 1) * L] -= block
         return G, jacobian
 
+    def force(self, omega: float) -> np.ndarray:
+        """The harmonics (n L,) of the force at ``omega`` (rad/s)."""
+        return self.load * (self.fraction * omega**self.power)
+
+    def force_scale(self, omega: float) -> float:
+        """The largest force amplitude at ``omega``: the scale of the residual's tolerance."""
+        return float(np.max(np.abs(self.load))) * omega**self.power
+
     def evaluate(self, free_values: np.ndarray, omega: float, xi: float = 0.0, forced: bool = True) -> tuple:
         """``(R, dR/dq, dR/domega, dR/dxi)`` on the free unknowns at ``omega`` (rad/s); ``xi`` (1/s): the
         negative viscous term -xi M x' of a nonlinear mode (0: the forced response); ``forced``: with F0."""
@@ -288,9 +307,11 @@ class HarmonicBalance:
         G, nonlinear = self.nonlinear(q)
         velocity = self.linear_damping - xi * self.mass_velocity
         linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia
-        residual = linear @ q + G - (self.force if forced else 0.0)
+        residual = linear @ q + G - (self.force(omega) if forced else 0.0)
         jacobian = linear + nonlinear
         by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q
+        if forced and self.power:
+            by_omega = by_omega - self.power * self.force(omega) / omega
         by_xi = -omega * (self.mass_velocity @ q)
         f = self.free
         return residual[f], jacobian[np.ix_(f, f)], by_omega[f], by_xi[f]
@@ -308,9 +329,9 @@ class HarmonicBalance:
         matrix = np.kron(stuck, np.eye(self.L)) + omega * self.linear_damping + omega * omega * self.linear_inertia
         f = self.free
         try:
-            return np.linalg.solve(matrix[np.ix_(f, f)], self.force[f])
+            return np.linalg.solve(matrix[np.ix_(f, f)], self.force(omega)[f])
         except np.linalg.LinAlgError:
-            return np.linalg.lstsq(matrix[np.ix_(f, f)], self.force[f], rcond=None)[0]
+            return np.linalg.lstsq(matrix[np.ix_(f, f)], self.force(omega)[f], rcond=None)[0]
 
     def solve_at(self, omega: float, guess: Optional[np.ndarray] = None) -> np.ndarray:
         """The free unknowns at ``omega`` by Newton's method from ``guess`` (default :meth:`linear_guess`; then
@@ -319,16 +340,15 @@ class HarmonicBalance:
         solved = self._newton(omega, start)
         if solved is not None:
             return solved
-        where = self.system.load_node * self.L + 1
         q = 0.1 * start
         try:
             for fraction in np.linspace(0.1, 1.0, 10).tolist():
-                self.force[where] = self.force_amplitude * fraction
+                self.fraction = fraction
                 q = self._newton(omega, q)
                 if q is None:
                     break
         finally:
-            self.force[where] = self.force_amplitude
+            self.fraction = 1.0
         if q is None:
             raise FrequencyError(f"{self.system.source}: harmonic balance did not converge at f = "
                                  f"{float(omega) / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
@@ -344,7 +364,7 @@ class HarmonicBalance:
                 return None
             q = q + step
             if np.max(np.abs(step)) <= STEP_TOLERANCE * max(np.max(np.abs(q)), 1e-300) or \
-                    np.max(np.abs(residual)) <= RESIDUAL_TOLERANCE * self.force_amplitude:
+                    np.max(np.abs(residual)) <= RESIDUAL_TOLERANCE * self.fraction * self.force_scale(omega):
                 return q
         return None
 

@@ -119,40 +119,55 @@ def plot_response(response, scene, path: str) -> None:
     save_figure(fig, path)
 
 
-def draw_curve(curve, axes, backbone=None) -> None:
-    """Draw the harmonic balance's curve on ``axes`` (two: amplitude, phase against the frequency): stable parts
-    solid, unstable parts dashed, folds marked; ``backbone`` (a :class:`modes.Backbone`) over the amplitudes, with
-    the response synthesised from it (``modes.synthesis``) dotted."""
+def draw_curve(curves, axes, backbone=None) -> None:
+    """Draw the harmonic balance's curve (a :class:`curve.Curve`, or several: one colour each, labelled by its
+    amplitude) on ``axes`` (two: amplitude, phase against the frequency): stable parts solid, unstable parts
+    dashed, folds marked; ``backbone`` (a :class:`modes.Backbone`) over the amplitudes, with the response
+    synthesised from it (``modes.synthesis``, under a force) dotted."""
+    curves = list(curves) if isinstance(curves, (list, tuple)) else [curves]
     amplitude_axes, phase_axes = axes
-    f, stable = curve.frequency, curve.stable
-    for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
-        start = 0
-        for end in range(1, f.size + 1):
-            if end == f.size or stable[end] != stable[start]:
-                stop = min(end + 1, f.size)  # join the pieces
-                ax.plot(f[start:stop], values[start:stop], "-" if stable[start] else "--", color="C0", lw=1.2,
-                        label=None)
-                start = end
-        folds = curve.folds
-        if folds.size:
-            ax.plot(f[folds], values[folds], "o", color="C3", ms=5, label="fold")
-    amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {curve.harmonics})")
-    amplitude_axes.plot([], [], "--", color="C0", label="unstable")
+    several = len(curves) > 1
+    for index, curve in enumerate(curves):
+        color = f"C{index % 10}" if several else "C0"
+        f, stable = curve.frequency, curve.stable
+        for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
+            start = 0
+            for end in range(1, f.size + 1):
+                if end == f.size or stable[end] != stable[start]:
+                    stop = min(end + 1, f.size)  # join the pieces
+                    ax.plot(f[start:stop], values[start:stop], "-" if stable[start] else "--", color=color, lw=1.2,
+                            label=None)
+                    start = end
+            folds = curve.folds
+            if folds.size:
+                ax.plot(f[folds], values[folds], "o", color="C3", ms=5, label="fold" if index == 0 else None)
+        if several:
+            amplitude_axes.plot([], [], "-", color=color, label=_excitation(curve))
+    first = curves[0]
+    if several:
+        amplitude_axes.plot([], [], "--", color="0.4", label="unstable")
+    else:
+        amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {first.harmonics})")
+        amplitude_axes.plot([], [], "--", color="C0", label="unstable")
     if backbone is not None:
         from .modes import synthesis
 
-        amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-", color="C2", lw=1,
+        amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-", color="C2" if not several else "k", lw=1,
                             label=f"backbone, mode {backbone.mode}")
-        if backbone.node == curve.node:
-            f_s, a_s = synthesis(backbone, curve.force_amplitude, curve.load_node)
-            inside = (f_s >= f.min()) & (f_s <= f.max())
-            amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2", lw=1, label="single-mode synthesis")
+        for curve in curves:
+            if backbone.node == curve.node and curve.base_amplitude is None:
+                f_s, a_s = synthesis(backbone, curve.force_amplitude, curve.load_node)
+                inside = (f_s >= curve.frequency.min()) & (f_s <= curve.frequency.max())
+                amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2" if not several else "k", lw=1,
+                                    label="single-mode synthesis" if curve is curves[0] else None)
     amplitude_axes.set_yscale("log")
     amplitude_axes.set_xlabel("frequency f (Hz)")
-    amplitude_axes.set_ylabel(f"amplitude of x_{curve.node} (m)")
-    amplitude_axes.set_title(f"harmonic balance, F0 = {curve.force_amplitude:g} N")
+    amplitude_axes.set_ylabel(f"amplitude of x_{first.node} (m)")
+    amplitude_axes.set_title(f"harmonic balance (H = {first.harmonics})" if several
+                             else f"harmonic balance, {_excitation(first)}")
     phase_axes.set_xlabel("frequency f (Hz)")
-    phase_axes.set_ylabel("phase of x against F (degrees)")
+    phase_axes.set_ylabel("phase of x against " + ("the base's motion" if first.base_amplitude is not None
+                                                   else "F") + " (degrees)")
     phase_axes.set_title("phase")
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
@@ -160,11 +175,17 @@ def draw_curve(curve, axes, backbone=None) -> None:
             ax.legend(fontsize=8)
 
 
-def plot_curve(curve, scene, path: str, backbone=None) -> None:
-    """Write the figure of :func:`draw_curve` to ``path``."""
+def _excitation(curve) -> str:
+    if curve.base_amplitude is not None:
+        return f"base Y0 = {curve.base_amplitude:g} m"
+    return f"F0 = {curve.force_amplitude:g} N"
+
+
+def plot_curve(curves, scene, path: str, backbone=None) -> None:
+    """Write the figure of :func:`draw_curve` (one curve or several) to ``path``."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
-    draw_curve(curve, axes, backbone)
+    draw_curve(curves, axes, backbone)
     fig.suptitle(f"{scene.name}: forced response by harmonic balance")
     save_figure(fig, path)
 
