@@ -597,10 +597,18 @@ def _default_experiment(parent, scene) -> None:
     ET.SubElement(parent, "DefaultExperiment", attributes)
 
 
+def interpolates_inputs(scene, runtime: str) -> bool:
+    """Whether the FMU takes its input's derivatives (FMI 2.0 canInterpolateInputs, fmi2SetRealInputDerivatives of
+    F, orders 1 and 2): the native element's (the PythonFMU runtime's loader has no such call; the connector's and
+    the network's inputs are held)."""
+    return runtime == "native" and not is_network(scene) and scene.causality != "displacement"
+
+
 def fmi2_root(scene, guid: str, generation_tool: str, generated: Optional[str] = None,
-              needs_execution_tool: bool = True) -> ET.Element:
+              needs_execution_tool: bool = True, can_interpolate_inputs: bool = False) -> ET.Element:
     """The FMI 2.0 model description of ``scene``'s FMU as an XML tree (PythonFMU's layout: what its builder
-    writes from a slave's ``to_xml``): ``generated`` the generationDateAndTime (None: now)."""
+    writes from a slave's ``to_xml``): ``generated`` the generationDateAndTime (None: now);
+    ``can_interpolate_inputs``: see :func:`interpolates_inputs`."""
     import datetime
 
     rows = variables(scene)
@@ -613,7 +621,7 @@ def fmi2_root(scene, guid: str, generation_tool: str, generated: Optional[str] =
         "author": AUTHOR, "version": __version__})
     ET.SubElement(root, "CoSimulation", {
         "needsExecutionTool": str(needs_execution_tool).lower(), "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canInterpolateInputs": str(can_interpolate_inputs).lower(), "canBeInstantiatedOnlyOncePerProcess": "false",
         "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "modelIdentifier": identifier,
         "canNotUseMemoryManagementFunctions": "true"})
     _unit_definitions(root, sorted({row.unit for row in rows if row.unit is not None}))
@@ -718,7 +726,8 @@ def model_description(scene, fmi: int = 2, guid: str = "", runtime: str = "nativ
         return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     if fmi != 2 or arrays:
         raise ValueError(f"fmi={fmi}, arrays={arrays}: FMI 2.0 (no arrays) or 3.0")
-    root = fmi2_root(scene, guid, generation_tool or NATIVE_TOOL, generated, needs_execution_tool=runtime == "python")
+    root = fmi2_root(scene, guid, generation_tool or NATIVE_TOOL, generated, needs_execution_tool=runtime == "python",
+                     can_interpolate_inputs=interpolates_inputs(scene, runtime))
     _held_steppers(root, steppers)
     return fmi2_text(root)
 

@@ -191,6 +191,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
     from ... import scene as library_rules
     from ... import stability
     from ...kernels import stack
+    from ...loads import POLYNOMIAL
     from ...steppers import get_stepper
 
     branches = scene.branches
@@ -290,6 +291,10 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         f"STRIBECK_UNRESOLVED = {stability.STRIBECK_UNRESOLVED}, SERIES_UNSTABLE = {stability.SERIES_UNSTABLE} }};",
         "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
             [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
+        # an input given with its derivatives (loads.polynomial): its load kind, and the steppers that take it
+        f"static const int64_t LOAD_POLYNOMIAL = {POLYNOMIAL};",
+        "static const int POLYNOMIAL_INPUT[] = {" + ", ".join(
+            [str(int(getattr(get_stepper(name), "POLYNOMIAL_INPUT", True))) for name in steppers] + ["0"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",

@@ -539,6 +539,7 @@ typedef struct {
     int64_t n;
     Noise noise;
     int64_t* cache;
+    double origin[1]; /* a polynomial's (loads.polynomial): its table of one time, t pointing here */
 } Load;
 static const double NO_TABLE[1] = {0.0};
 
@@ -566,6 +567,7 @@ static Load load_of(double force, int scene_load, const Noise* noise, int64_t* c
     l.noise.seed = noise != NULL ? noise->seed : 0;
     l.noise.unit = noise != NULL ? noise->unit : 1.0;
     l.cache = cache;
+    l.origin[0] = 0.0;
     return l;
 }
 #endif

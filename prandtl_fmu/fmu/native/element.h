@@ -57,6 +57,7 @@ typedef struct {
     int scene_load, stepper_valid, initialized;
     char stepper[32];
     double mpar[N_MEMP]; /* the memory's parameters the master set */
+    double dF[2];        /* F's derivatives the master set (fmi2SetRealInputDerivatives) */
     Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
@@ -74,7 +75,8 @@ typedef struct {
 #define SETTINGS(to, from)                                                                                     \
     COPY_FIELD(to, from, F), COPY_FIELD(to, from, step), COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, par), \
         COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid),   \
-        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar)
+        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar),           \
+        COPY_FIELD(to, from, dF)
 #define SETTABLE(what) ((what) == W_F || (what) == W_PARAM || (what) == W_CBRANCH || (what) == W_STEP || \
                         (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT || (what) == W_MEMORY)
 
@@ -107,6 +109,7 @@ typedef struct {
     Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
     double saved_u[SAVED_U];
     double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
+    double dF[2];        /* F' and F'' the master set for the next doStep (fmi2SetRealInputDerivatives; 0: held) */
     double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
     int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
     double limits[3];    /* |x|, |v|, |an account's entry| below which every output is surely a number ... */
@@ -230,8 +233,8 @@ static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first
 /* Element.advance under ``force`` (plus the scene's [load] with ``scene_load``) and the white ``noise`` (its
  * Brownian tree's ``cache``): NULL, or why the step was not taken (the element then is as it was: the caller rolls
  * back); ``failed_at`` NaN: refused before any step (a duration of too many steps) */
-static const char* advance(Element* e, double duration, double force, int scene_load, const Noise* noise,
-                           int64_t* cache, double* failed_at, char* buffer, size_t size)
+static const char* advance(Element* e, double duration, double force, const double* derivatives, int scene_load,
+                           const Noise* noise, int64_t* cache, double* failed_at, char* buffer, size_t size)
 {
     double h = e->h, whole, rest, t_base;
     int64_t first, taken;
@@ -252,6 +255,13 @@ static const char* advance(Element* e, double duration, double force, int scene_
     if (problem != NULL)
         return problem;
     l = load_of(force, scene_load, noise, cache);
+    if (derivatives[0] != 0.0 || derivatives[1] != 0.0) { /* Element._load_of: the polynomial from the time now */
+        l.kind = LOAD_POLYNOMIAL;
+        l.lk[1] = derivatives[0];
+        l.lk[2] = derivatives[1];
+        l.origin[0] = element_time(e);
+        l.t = l.origin;
+    }
     e->force = force;
     e->scene_load = scene_load;
     clock_regrid(&e->clock, h);
@@ -455,6 +465,7 @@ static void defaults(Instance* c)
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
     instantiated(c);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
+    c->dF[0] = c->dF[1] = 0.0;
     clear_element(&c->el);
     hand_over(c);
     prandtl_kernel_failed = 0;
@@ -472,7 +483,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const char* problem;
     int i;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
-          isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) &&
+          isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) && isfinite(s->dF[0]) &&
+          isfinite(s->dF[1]) &&
           (e->play == 0 || (FOLDS && e->play == 1)) && (e->scene_load == 0 || e->scene_load == 1) &&
           (e->row_stale == 0 || e->row_stale == 1) &&
           (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
@@ -685,6 +697,61 @@ static void hand_over_settings(Instance* c)
         warn_if_unstable(c);
 }
 
+/* ------------------------------------------------------------------ F's derivatives (FMI 2.0) */
+
+#define HAS_INPUT_DERIVATIVES 1
+
+/* why F's derivatives cannot drive the next step, or NULL: with scene_load (F plus the scene's [load], which F's
+ * derivatives do not describe) or a stepper whose closed forms know the scene's load kinds only (Element's
+ * _derivatives_of, its words) */
+static const char* derivatives_problem(Instance* c, char* buffer, size_t size)
+{
+    int stepper = stepper_index(c->stepper);
+    if (c->dF[0] == 0.0 && c->dF[1] == 0.0)
+        return NULL;
+    if (c->scene_load)
+        return "force derivatives with scene_load: the force is F plus the scene's [load], which the derivatives of F "
+               "alone do not describe";
+    if (stepper >= 0 && !POLYNOMIAL_INPUT[stepper]) {
+        snprintf(buffer, size, "force derivatives with stepper '%s': its closed forms take the scene's load kinds, not "
+                 "a polynomial force; use another stepper or hold the force", STEPPER_NAMES[stepper]);
+        return buffer;
+    }
+    return NULL;
+}
+
+/* fmi2SetRealInputDerivatives: F' (order 1) and F'' (order 2) of the input F at the next doStep's start; over that
+ * step F(t) = F + F' (t - t0) + F'' (t - t0)^2 / 2 (loads.polynomial, evaluated by the kernels). Every entry checked
+ * (a value reference of F, an order 1 or 2, a finite value), then all set; fmi2SetReal of F sets them to 0. */
+static int core_set_input_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[],
+                                      const double value[], const char* function)
+{
+    size_t i;
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    for (i = 0; i < n; i++) {
+        const Var* var = find(vr[i], T_REAL);
+        if (var == NULL || var->what != W_F) {
+            say(c, ST_ERROR, "%s refused: value reference %u is not the continuous input F (the only input whose "
+                "derivatives this FMU takes); nothing set", function, vr[i]);
+            return ST_ERROR;
+        }
+        if (order[i] != 1 && order[i] != 2) {
+            say(c, ST_ERROR, "%s refused: order %d of F: this FMU takes orders 1 and 2 (maxInputDerivativeOrder); "
+                "nothing set", function, (int)order[i]);
+            return ST_ERROR;
+        }
+        if (!isfinite(value[i])) {
+            say(c, ST_ERROR, "%s refused: F's derivative of order %d = %.17g must be finite; nothing set", function,
+                (int)order[i], value[i]);
+            return ST_ERROR;
+        }
+    }
+    for (i = 0; i < n; i++)
+        c->dF[order[i] - 1] = value[i];
+    return ST_OK;
+}
+
 #ifdef PRANDTL_BENCH_KERNEL_ONLY
 /* benchmarks/dostep_cost.py only, never in a build of the package: a doStep that is the kernel's advance of one
  * step of H from t and nothing else (no check, no checkpoint, no clock), what the library's Element.advance pays
@@ -712,10 +779,16 @@ static int step(Instance* c, double t, double H)
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
         return ST_DISCARD;
     }
+    problem = derivatives_problem(c, buffer, sizeof buffer);
+    if (problem != NULL) {
+        say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
+        return ST_DISCARD;
+    }
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     clock_set(&c->el.clock, t);
     prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer, sizeof buffer);
+    problem = advance(&c->el, H, c->F, c->dF, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer,
+                      sizeof buffer);
     if (problem != NULL && isnan(failed_at)) { /* refused before any step */
         rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
@@ -739,6 +812,7 @@ static int step(Instance* c, double t, double H)
             "overflow); the state is unchanged", time, c->F, overflowed->name, value);
         return ST_DISCARD;
     }
+    c->dF[0] = c->dF[1] = 0.0; /* they described F over this step (set at its start): the next is held unless set */
     return ST_OK;
 }
 #endif
@@ -757,9 +831,10 @@ static int fixed_problem(Instance* c, const Var* var, double value)
 
 static void core_set_float(Instance* c, const Var* var, double value)
 {
-    if (var->what == W_F)
+    if (var->what == W_F) {
         c->F = value;
-    else if (var->what == W_PARAM) {
+        c->dF[0] = c->dF[1] = 0.0; /* a new value of F: the derivatives set for the old one no longer hold */
+    } else if (var->what == W_PARAM) {
         c->par[var->index] = value;
         c->handed = 0;
     } else if (var->what == W_MEMORY) {

@@ -163,9 +163,16 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueR
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
-    BEGIN(fmi2SetRealInputDerivatives, INSTANTIATED | INITIALIZING | STEPPING);
+    BEGIN(fmi2SetRealInputDerivatives, INITIALIZING | STEPPING);
+#ifdef HAS_INPUT_DERIVATIVES /* the element: F's (element.h) */
+    return (fmi2Status)core_set_input_derivatives(c, vr, n, order, value, "fmi2SetRealInputDerivatives");
+#else
+    if (!arrays_given(c, n, vr, value, "fmi2SetRealInputDerivatives") ||
+        !(n == 0 || given(c, order, "fmi2SetRealInputDerivatives", "order")))
+        return fmi2Error;
     say(c, fmi2Error, "fmi2SetRealInputDerivatives: the FMU holds its input over a step");
     return fmi2Error;
+#endif
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
