@@ -21,6 +21,7 @@ from .kernels.drive import tangent
 from .kernels.energy import kinetic, stored
 from .kernels.friction import reaction
 from .kernels.play import branch_force, write_elongations
+from .kernels.rates import exact_rates, output_rates
 from .loads import held, noise_problem, plus, polynomial, with_white_noise
 from .memory import (check_memory_state, copy_memory, has_memory, memory_state, put_back, restore_memory)
 from .memory import time_problem as memory_time_problem
@@ -178,6 +179,24 @@ class Element(OutputMemo):
         on its threshold that the motion pushes on slides and adds nothing)."""
         direction = -1.0 if self.v < 0 else 1.0
         return self._memo("stiffness", lambda: float(tangent(self.model, self.x, self.u, direction)))
+
+    def output_derivatives(self, force: float, scene_load: bool = False) -> dict:
+        """The time derivatives of the outputs at the current state under ``force`` held (plus the scene's [load]
+        at the element's time with ``scene_load``), one-sided for the motion ahead (``kernels/rates.py``):
+        ``{(name, order): value}`` with ("x", 1) = v, and for an element with a mass ("x", 2) = ("v", 1) = a,
+        and where they are exact (``rates.exact_rates``: no friction on the mass, no series dashpot, no effect with
+        memory) ("reaction", 1) = R' and, but with ``scene_load`` (whose F' it does not take), ("v", 2) = a'."""
+        found = {("x", 1): float(self.v)}
+        if self.scene.mass is None:
+            return found
+        out = np.empty(3)
+        output_rates(self.model, self._load_of(force, scene_load), self.time, self.x, self.v, self.u, out)
+        found[("x", 2)] = found[("v", 1)] = float(out[0])
+        if exact_rates(self.scene):
+            found[("reaction", 1)] = float(out[2])
+            if not scene_load:
+                found[("v", 2)] = float(out[1])
+        return found
 
     def elongations(self) -> Optional[np.ndarray]:
         """The branch elongations u_i (m), in the scene's order, as a new array (O(n) with the memory

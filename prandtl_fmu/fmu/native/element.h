@@ -453,6 +453,72 @@ static int surely_showable(Instance* c)
     return isfinite(reaction_now(c));
 }
 
+/* fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives: the ``order``-th time derivative of the output ``var`` at
+ * the state under the F set now, held (Element.output_derivatives: the kernel rates, kernels/rates.py), into
+ * ``value``; NULL, or why it is not given (in ``buffer``) */
+static const char* output_derivative(Instance* c, const Var* var, int order, double* value, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double xv[2] = {e->x, e->v}, out[3] = {0.0, 0.0, 0.0};
+    Load l;
+    int which; /* 0: a, 1: a', 2: R', -1: v */
+    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_REACTION))
+        return "not an output whose derivatives this FMU gives (x, v, reaction)";
+    if (order < 1 || order > 2) {
+        snprintf(buffer, size, "order %d: this FMU gives orders 1 and 2 (maxOutputDerivativeOrder)", order);
+        return buffer;
+    }
+    which = var->what == W_X ? order - 2 : var->what == W_V ? order - 1 : 2 + (order - 1) * 8;
+    if (which > 2)
+        return "the reaction's derivative of order 2 is not given (its tangent's rate is not an output of the model)";
+    if (which >= 0 && !HAS_MASS)
+        return "a massless element's v follows F: only x's derivative of order 1 (v) is given";
+    if (which >= 1 && !EXACT_RATES)
+        return "not exact for this scene (a friction on the mass, series dashpots or an effect with memory): only x's "
+               "derivatives and v's of order 1 are given";
+    if (which == 1 && c->scene_load)
+        return "v's derivative of order 2 is not given with scene_load (it would need the scene's load's rate)";
+    if (which < 0) {
+        *value = e->v;
+        return NULL;
+    }
+    l = load_of(c->F, c->scene_load, NULL, NULL);
+    prandtl_kernel_failed = 0;
+    KERNEL(e, rates)(BRANCHES(e), xv, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, element_time(e), out);
+    *value = out[which];
+    if (prandtl_kernel_failed || !isfinite(*value))
+        return "it is not a finite number here";
+    return NULL;
+}
+
+/* the body of fmi2GetRealOutputDerivatives and fmi3GetOutputDerivatives (``function``): every entry checked and
+ * computed, then written (nothing written on a refusal) */
+#define HAS_OUTPUT_DERIVATIVES 1
+static int core_get_output_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[], double value[],
+                                       size_t nvalues, const char* function)
+{
+    char buffer[256];
+    size_t i;
+    double found[8];
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    if (nvalues < n || n > sizeof found / sizeof found[0]) {
+        say(c, ST_ERROR, "%s refused: %zu value references for %zu values (at most %zu at once)", function, n, nvalues,
+            sizeof found / sizeof found[0]);
+        return ST_ERROR;
+    }
+    for (i = 0; i < n; i++) {
+        const char* problem = output_derivative(c, find(vr[i], T_REAL), order[i], &found[i], buffer, sizeof buffer);
+        if (problem != NULL) {
+            say(c, ST_ERROR, "%s refused: value reference %u, order %d: %s; nothing written", function, vr[i],
+                (int)order[i], problem);
+            return ST_ERROR;
+        }
+    }
+    memcpy(value, found, n * sizeof(double));
+    return ST_OK;
+}
+
 /* an Integer: n (the scene's), or noise_seed */
 static int32_t integer_value(Instance* c, const Var* var)
 {

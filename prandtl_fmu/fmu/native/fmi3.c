@@ -56,6 +56,7 @@ static void emit(void* instance, int status, const char* category, const char* m
  * event mode, no configuration mode and no clocks; a setter is refused after fmi3Terminate) */
 #define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
 #define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
+#define MASK_OUTPUT_DERIVATIVES (STEPPING | TERMINATED) /* fmi3GetOutputDerivatives: Step Mode, Terminated */
 
 /* a function this co-simulation FMU does not provide: fmi3Error, with the reason */
 static fmi3Status not_provided(fmi3Instance instance, const char* message)
@@ -466,9 +467,22 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
+#ifdef HAS_DIRECTIONAL_DERIVATIVES /* the connector: d force / d (x, v), scalars (connector.h) */
+{
+    BEGIN(fmi3GetDirectionalDerivative, MASK_GET);
+    if (nSeed != nKnowns || nSensitivity != nUnknowns) {
+        say(c, ST_ERROR, "fmi3GetDirectionalDerivative refused: %zu seeds for %zu knowns, %zu sensitivities for %zu "
+            "unknowns (scalars: one each)", nSeed, nKnowns, nSensitivity, nUnknowns);
+        return fmi3Error;
+    }
+    return (fmi3Status)core_directional_derivative(c, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity,
+                                                   "fmi3GetDirectionalDerivative");
+}
+#else
 {
     return not_provided(instance, "fmi3GetDirectionalDerivative: not provided by this co-simulation FMU");
 }
+#endif
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
@@ -586,9 +600,15 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t* nConti
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
+#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction, scalars (element.h) */
+    CHECKED(fmi3GetOutputDerivatives, MASK_OUTPUT_DERIVATIVES,
+            core_get_output_derivatives(c, valueReferences, nValueReferences, orders, values, nValues,
+                                        "fmi3GetOutputDerivatives"))
+#else
 {
     return not_provided(instance, "fmi3GetOutputDerivatives: not provided by this co-simulation FMU");
 }
+#endif
 
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference, fmi3Float64 activationTime)
 {

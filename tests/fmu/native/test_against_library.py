@@ -5,6 +5,7 @@ small C host of tests/c_host run with no Python at all; a binary that names no P
 PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
 import contextlib
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -1079,9 +1080,12 @@ def _fmpy_derivative_buffers_sized(monkeypatch):
     monkeypatch.setattr(simulation.Input, "__init__", sized)
 
 
-def test_a_tabulated_force_in_simulate_fmu_converges_at_second_order_with_input_derivatives(fmus, monkeypatch):
+@pytest.mark.parametrize("spacings", [SPACINGS[:4], pytest.param(SPACINGS, marks=pytest.mark.slow)],
+                         ids=["0.5-0.05", "0.5-0.01"])
+def test_a_tabulated_force_in_simulate_fmu_converges_at_second_order_with_input_derivatives(fmus, monkeypatch,
+                                                                                           spacings):
     """The paper's FMU in FMPy's simulate_fmu under its force 0.45 cos(0.5 t) given as a table at spacings 0.5 ...
-    0.01 s, against the library's element under the continuous force (the same internal steps): the error in x at
+    0.05 s (0.01 s under the slow marker), against the library's element under the continuous force (the same internal steps): the error in x at
     t = 12 s falls at order ~1 with the input held over a step, >= 1.8 with set_input_derivatives=True (FMPy hands
     the slope of the table's piece as F'; its buffer defect worked around: see _fmpy_derivative_buffers_sized,
     which says so should FMPy fix it)."""
@@ -1092,6 +1096,148 @@ def test_a_tabulated_force_in_simulate_fmu_converges_at_second_order_with_input_
         _tabulated_error(fmu, element.x, 0.5, True)
     _fmpy_derivative_buffers_sized(monkeypatch)
     for derivatives, least, most in ((False, 0.8, 1.3), (True, 1.8, 2.5)):
-        errors = np.array([_tabulated_error(fmu, element.x, spacing, derivatives) for spacing in SPACINGS])
-        slope = np.polyfit(np.log(SPACINGS), np.log(errors), 1)[0]
+        errors = np.array([_tabulated_error(fmu, element.x, spacing, derivatives) for spacing in spacings])
+        slope = np.polyfit(np.log(spacings), np.log(errors), 1)[0]
         assert least <= slope <= most, (derivatives, errors, slope)
+
+
+# ------------------------------------------------------------------ output derivatives (issue 61)
+
+ASKED = [("x", 1), ("x", 2), ("v", 1), ("v", 2), ("reaction", 1)]
+
+
+def _output_derivatives(slave, asked=ASKED):
+    return slave.fmu.getRealOutputDerivatives([slave.vr[name] for name, _ in asked], [order for _, order in asked])
+
+
+def test_output_derivatives_are_the_library_s_and_the_slopes_of_the_fmu_s_own_outputs(fmus):
+    """The paper's FMU after random steps: x's derivatives (v, a), v's (a, a') and the reaction's rate equal
+    Element.output_derivatives to the bit; and they are the slopes of the FMU's own outputs: from a saved state,
+    exact steps of delta and 2 delta under F held give forward differences (Richardson's for order 1) that agree
+    to 1e-6 relative (order 1) and 1e-4 (order 2)."""
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'maxOutputDerivativeOrder="2"' in description
+    rng = np.random.default_rng(9)
+    with fmu_and_element(fmu, scene, "projected") as (slave, element, names):
+        for j in range(12):
+            step_both(slave, element, rng, names, j)
+        force = float(slave.get("F"))
+        wanted = element.output_derivatives(force)
+        got = _output_derivatives(slave)
+        assert same(got, [wanted[key] for key in ASKED])
+        assert got[0] == slave.get("v") and got[1] == got[2] and abs(got[1]) > 1e-3
+        slave.set("stepper", "exact")  # x, v exact over a step under F held: differences show the derivatives
+        saved, start = slave.fmu.getFMUstate(), slave.time
+        delta = 1e-5
+        values = [slave.get("x", "v", "reaction")]
+        for span in (delta, 2 * delta):
+            slave.fmu.setFMUstate(saved)
+            slave.fmu.doStep(start, span)
+            values.append(slave.get("x", "v", "reaction"))
+        slave.fmu.setFMUstate(saved)
+        slave.fmu.freeFMUstate(saved)
+        y0, y1, y2 = (np.array(row) for row in values)
+        first = (4 * (y1 - y0) - (y2 - y0)) / (2 * delta)  # y' + O(delta^2)
+        second = (y2 - 2 * y1 + y0) / delta ** 2  # y'' + O(delta)
+        after = _output_derivatives(slave)
+        assert same(after, got)  # the state set back: the same derivatives
+        x1, x2, v1, v2, r1 = got
+        for slope, derivative, tolerance in ((first[0], x1, 1e-6), (first[1], v1, 1e-6), (first[2], r1, 1e-6),
+                                             (second[0], x2, 1e-4), (second[1], v2, 1e-4)):
+            assert slope == pytest.approx(derivative, rel=tolerance, abs=1e-9), (slope, derivative)
+
+
+def test_output_derivatives_refuse_what_they_do_not_give(fmus):
+    """An order other than 1 and 2, the reaction's order 2, an output that has none (stiffness), an input (F), a
+    NULL order: fmi2Error with the reason, nothing written."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    fmu, _ = fmus["paper"]
+    slave = Slave(fmu)
+    try:
+        slave.step(0.1, 0.3)
+        for asked, words in (([("x", 3)], "order 3"), ([("x", 0)], "order 0"),
+                             ([("reaction", 2)], "the reaction's derivative of order 2 is not given"),
+                             ([("x", 1), ("stiffness", 1)], "not an output whose derivatives"),
+                             ([("F", 1)], "not an output whose derivatives")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                _output_derivatives(slave, asked)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+        assert _output_derivatives(slave, [("x", 1)]) == [slave.get("v")]
+    finally:
+        slave.close()
+
+
+# ------------------------------------------------------------------ the connector's directional derivatives (issue 61)
+
+def _directional(slave, knowns, seeds):
+    return slave.fmu.getDirectionalDerivative([slave.vr["force"]], [slave.vr[name] for name in knowns], list(seeds))
+
+
+@pytest.mark.parametrize("name", list(CONNECTORS))
+def test_the_connector_s_directional_derivatives_are_the_slopes_of_its_force(connectors, name):
+    """d force/d x (the tangent stiffness for the move from the committed x to the x set) and d force/d v (the
+    dashpot's c) of the native connector: both are the slopes of its own force output under the input moved a little
+    further (the outputs preview the inputs set last), to 1e-6 relative; the first is the output stiffness where
+    v points the way of that move; a combined seed is their sum."""
+    from tests.fmu_tools import Slave
+
+    slave = Slave(connectors[name]["native"], start_values={"x": 0.02})
+    description = zipfile.ZipFile(connectors[name]["native"]).read("modelDescription.xml").decode()
+    assert 'providesDirectionalDerivative="true"' in description
+    rng = np.random.default_rng(6)
+    committed, compared = 0.02, 0
+    try:
+        for j in range(20):
+            x, v = float(rng.uniform(-0.4, 0.4)), float(rng.uniform(-1, 1))
+            if j:
+                slave.step(0.05)
+                committed = slave.get("x")
+            slave.set("x", x)
+            slave.set("v", v)
+            by_x, = _directional(slave, ["x"], [1.0])
+            by_v, = _directional(slave, ["v"], [1.0])
+            if (x - committed) * v > 0:
+                assert by_x == slave.get("stiffness")
+                compared += 1
+            force = slave.get("force")
+            ahead = math.copysign(1e-7, x - committed)  # further along the move the force is a function of
+            slave.set("x", x + ahead)
+            slope_x = (slave.get("force") - force) / ahead
+            slave.set("x", x)
+            slave.set("v", v + 1e-3)
+            slope_v = (slave.get("force") - force) / 1e-3
+            slave.set("v", v)
+            assert by_x == pytest.approx(slope_x, rel=1e-6, abs=1e-6), (j, by_x, slope_x)
+            assert by_v == pytest.approx(slope_v, rel=1e-9, abs=1e-12), (j, by_v, slope_v)
+            both, = _directional(slave, ["v", "x"], [0.5, 2.0])
+            assert both == pytest.approx(2.0 * by_x + 0.5 * by_v, rel=1e-15)
+        assert compared >= 5
+    finally:
+        slave.close()
+
+
+def test_the_connector_refuses_directional_derivatives_it_does_not_have(connectors):
+    """An unknown other than force, a known other than x and v or listed twice, a NaN seed: fmi2Error with the
+    reason logged; the element FMU declares none and refuses them as before."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    slave = Slave(connectors["series"]["native"], start_values={"x": 0.02})
+    try:
+        for unknown, knowns, seeds, words in (("stiffness", ["x"], [1.0], "is not the output force"),
+                                              ("force", ["x", "x"], [1.0, 1.0], "listed twice"),
+                                              ("force", ["c"], [1.0], "is not the input x or v"),
+                                              ("force", ["x"], [float("nan")], "is not finite")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                slave.fmu.getDirectionalDerivative([slave.vr[unknown]], [slave.vr[n] for n in knowns], seeds)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+    finally:
+        slave.close()
