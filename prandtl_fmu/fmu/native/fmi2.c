@@ -159,6 +159,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueR
 #ifdef HAS_DIRECTIONAL_DERIVATIVES /* the connector: d force / d (x, v) (connector.h) */
     return (fmi2Status)core_directional_derivative(c, u, nu, z, nz, dv, dz, "fmi2GetDirectionalDerivative");
 #else
+    if (!(arrays_given(c, nu, u, dz, "fmi2GetDirectionalDerivative") &&
+          arrays_given(c, nz, z, dv, "fmi2GetDirectionalDerivative")))
+        return fmi2Error;
     say(c, fmi2Error, "fmi2GetDirectionalDerivative: not provided (read the output stiffness)");
     return fmi2Error;
 #endif

@@ -404,3 +404,19 @@ def test_bad_input_derivatives_are_refused_with_a_logged_reason_never_a_crash(fm
             assert run.said(words), (words, run.logs)
     else:
         assert len(run.said("the FMU holds its input over a step")) == len(bad), run.logs
+
+
+def test_bad_output_derivative_requests_are_refused_with_a_logged_reason_never_a_crash(fmus):
+    """fmi2GetRealOutputDerivatives of the element asked for order 0 and 3, the reaction's order 2, an input, an
+    unknown value reference: each an error with its reason, nothing written; x's order 1 is v."""
+    host, fmu = fmus["element", 2]
+    bad = ["oderiv:x:0", "oderiv:x:3", "oderiv:reaction:2", "oderiv:F:1", "oderiv:999999:1"]
+    run = ran(run_trust(host, fmu, ["setup:0", "enter", "setb:scene_load:0", "exit", "setr:F:0.3", "step:0:0.1"]
+                        + bad + ["oderiv:x:1", "getr:v"]))
+    for command in bad:
+        assert run.status(command) == ERROR, command
+    assert run.status("oderiv:x:1") == OK
+    assert len(run.values) == 2 and run.values[0][1] == run.values[1][1]  # x' = v, to the bit
+    for words in ("order 0", "order 3", "the reaction's derivative of order 2 is not given",
+                  "not an output whose derivatives"):
+        assert run.said(words), (words, run.logs)
