@@ -689,8 +689,9 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         "modelIdentifier": identifier, "needsExecutionTool": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
         "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-        "hasEventMode": "false",
+        "providesIntermediateUpdate": str(interpolates_inputs(scene, "native")).lower(),
+        "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false",
+        **({"recommendedIntermediateInputSmoothness": "0"} if interpolates_inputs(scene, "native") else {}),
         **({"maxOutputDerivativeOrder": str(output_derivative_order(scene, "native"))}
            if output_derivative_order(scene, "native") else {}),
         **({"providesDirectionalDerivatives": "true"} if provides_directional_derivatives(scene, "native") else {})})
@@ -721,6 +722,8 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         for key in ("min", "max"):
             if getattr(row, key) is not None:
                 attributes[key] = f"{getattr(row, key):.17g}"
+        if row.name == "F" and row.causality == "input" and interpolates_inputs(scene, "native"):
+            attributes["intermediateUpdate"] = "true"  # the master may set it at every internal step
         element = ET.SubElement(node, row.type, attributes)
         if row.dimension is not None:
             ET.SubElement(element, "Dimension", {"valueReference": str(by_name[row.dimension].value_reference)})

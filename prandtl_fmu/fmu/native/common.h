@@ -39,7 +39,7 @@ extern __thread int prandtl_kernel_failed;
 enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
 #endif
 /* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
-enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8 };
+enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8, INTERMEDIATE_UPDATE = 16 };
 #define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
 /* the first fields of every kind's Instance: the host's (its environment and logger, which the FMI version's
  * layer calls: emit()), the logging, the phase and whether the last step failed */

@@ -110,6 +110,9 @@ typedef struct {
     double saved_u[SAVED_U];
     double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
     double dF[2];        /* F' and F'' the master set for the next doStep (fmi2SetRealInputDerivatives; 0: held) */
+    /* FMI 3.0 intermediate update: the master's callback (NULL: none), asked at every internal step for F (fmi3.c) */
+    void (*ask_inputs)(void* instance, double time, int first);
+    void (*intermediate_update)(void); /* (the callback itself, of FMI 3.0's type: fmi3.c) */
     double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
     int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
     double limits[3];    /* |x|, |v|, |an account's entry| below which every output is surely a number ... */
@@ -531,7 +534,7 @@ static void defaults(Instance* c)
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
     instantiated(c);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
-    c->dF[0] = c->dF[1] = 0.0;
+    c->dF[0] = c->dF[1] = 0.0; /* (ask_inputs is the instantiation's: a reset keeps it) */
     clear_element(&c->el);
     hand_over(c);
     prandtl_kernel_failed = 0;
@@ -818,6 +821,43 @@ static int core_set_input_derivatives(Instance* c, const unsigned vr[], size_t n
     return ST_OK;
 }
 
+/* FMI 3.0 intermediate update (c->ask_inputs): the doStep taken one internal step at a time, the master asked for F
+ * at the start of each (it may set F there: intermediateUpdate="true"), each step the library's Element.advance(h,
+ * F) of that F; a stepper that takes one step per doStep (exact) is asked once. The split into whole steps and a
+ * shorter last one is the doStep's (plan_advance); NULL, or why a step was not taken (*failed_at as advance's). */
+#define HAS_INTERMEDIATE_UPDATE 1
+static const char* advance_with_updates(Instance* c, double H, double* failed_at, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double whole = 0.0, rest = 0.0;
+    const char* problem = NULL;
+    int64_t p, steps;
+    *failed_at = NAN;
+    if (!STEP_IS_OUTPUT[e->stepper]) {
+        problem = plan_advance(H, e->h, &whole, &rest, buffer, size);
+        if (problem != NULL || (whole == 0 && rest == 0))
+            return problem;
+    }
+    steps = STEP_IS_OUTPUT[e->stepper] ? 1 : (int64_t)whole + (rest > 0);
+    for (p = 0; p < steps; p++) {
+        double start = element_time(e);
+        c->ask_inputs(c, start, p == 0);
+        if (!isfinite(c->F)) {
+            *failed_at = start;
+            snprintf(buffer, size, "F = %.17g set at the intermediate update at t = %.17g is not finite", c->F, start);
+            return buffer;
+        }
+        problem = advance(e, STEP_IS_OUTPUT[e->stepper] ? H : p < (int64_t)whole ? e->h : rest, c->F, c->dF,
+                          c->scene_load, &c->noise, c->noise_cache, failed_at, buffer, size);
+        if (problem != NULL) {
+            if (isnan(*failed_at))
+                *failed_at = start;
+            return problem;
+        }
+    }
+    return NULL;
+}
+
 #ifdef PRANDTL_BENCH_KERNEL_ONLY
 /* benchmarks/dostep_cost.py only, never in a build of the package: a doStep that is the kernel's advance of one
  * step of H from t and nothing else (no check, no checkpoint, no clock), what the library's Element.advance pays
@@ -853,8 +893,9 @@ static int step(Instance* c, double t, double H)
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     clock_set(&c->el.clock, t);
     prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->dF, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer,
-                      sizeof buffer);
+    problem = c->ask_inputs != NULL ? advance_with_updates(c, H, &failed_at, buffer, sizeof buffer)
+              : advance(&c->el, H, c->F, c->dF, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer,
+                        sizeof buffer);
     if (problem != NULL && isnan(failed_at)) { /* refused before any step */
         rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
@@ -886,6 +927,10 @@ static int step(Instance* c, double t, double H)
 /* the fixed parameters (core.h): x0 and v0 (the initial state), an effect with memory's */
 static int fixed_problem(Instance* c, const Var* var, double value)
 {
+    if (c->phase == INTERMEDIATE_UPDATE && var->what != W_F) { /* only F is intermediateUpdate="true" */
+        say(c, ST_ERROR, "%s refused in intermediate update mode: only F may be set there", var->name);
+        return ST_ERROR;
+    }
     if (var->what == W_PARAM && c->initialized && (var->index == P_X0 || var->index == P_V0) &&
         value != c->par[var->index]) {
         say(c, ST_ERROR, "parameter %s = %.17g refused: %s is fixed (the initial state) and cannot change after "

@@ -54,7 +54,9 @@ static void emit(void* instance, int status, const char* category, const char* m
 
 /* the phases of FMI 3.0 co-simulation a function is allowed in (Reference-FMUs' MASK_fmi3..., this FMU having no
  * event mode, no configuration mode and no clocks; a setter is refused after fmi3Terminate) */
-#define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
+#define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED | INTERMEDIATE_UPDATE)
+/* fmi3SetFloat64: also in intermediate update mode (the element's F alone there: element.h fixed_problem) */
+#define MASK_SET_FLOAT (MASK_SET | INTERMEDIATE_UPDATE)
 #define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
 #define MASK_OUTPUT_DERIVATIVES (STEPPING | TERMINATED) /* fmi3GetOutputDerivatives: Step Mode, Terminated */
 
@@ -71,6 +73,23 @@ const char* fmi3GetVersion(void) { return fmi3Version; }
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n, const fmi3String categories[])
     CHECKED(fmi3SetDebugLogging, ANY_PHASE, core_set_debug_logging(c, on, n, categories))
 
+#ifdef HAS_INTERMEDIATE_UPDATE
+/* the master's intermediate update callback at an internal step's start ``time`` (element.h advance_with_updates): in
+ * intermediate update mode it may set F; no early return (canReturnEarlyAfterIntermediateUpdate="false") */
+static void ask_inputs(void* instance, double time, int first)
+{
+    Instance* c = (Instance*)instance;
+    fmi3Boolean early = fmi3False;
+    fmi3Float64 early_time = time;
+    int phase = c->phase;
+    c->phase = INTERMEDIATE_UPDATE;
+    ((fmi3IntermediateUpdateCallback)c->intermediate_update)((fmi3InstanceEnvironment)c->env, time, fmi3True,
+                                                              fmi3False, first ? fmi3False : fmi3True, fmi3False,
+                                                              &early, &early_time);
+    c->phase = phase;
+}
+#endif
+
 fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
                                          fmi3Boolean logging, fmi3Boolean event_mode, fmi3Boolean early_return,
                                          const fmi3ValueReference intermediate[], size_t n_intermediate,
@@ -85,8 +104,15 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
             token ? token : "(null)", GUID);
     else if (event_mode)
         say(c, ST_ERROR, "fmi3InstantiateCoSimulation refused: this FMU has no event mode");
-    else
+    else {
+#ifdef HAS_INTERMEDIATE_UPDATE /* the element: F asked for at every internal step (element.h) */
+        if (update != NULL) {
+            c->intermediate_update = (void (*)(void))update;
+            c->ask_inputs = ask_inputs;
+        }
+#endif
         return instance_started(c);
+    }
     instance_free(c);
     return NULL;
 }
@@ -268,7 +294,7 @@ static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nvalues)
 {
-    BEGIN(fmi3SetFloat64, MASK_SET);
+    BEGIN(fmi3SetFloat64, MASK_SET_FLOAT);
     if (nvalues != nvr) {
         say(c, ST_ERROR, "fmi3SetFloat64 refused: %zu values for %zu scalar variables", nvalues, nvr);
         return fmi3Error;

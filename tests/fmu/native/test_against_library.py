@@ -1241,3 +1241,70 @@ def test_the_connector_refuses_directional_derivatives_it_does_not_have(connecto
             assert any(words in message for _, message in slave.messages), (words, slave.messages)
     finally:
         slave.close()
+
+
+# ------------------------------------------------------------------ FMI 3.0: intermediate update (issue 61)
+
+def test_fmi3_intermediate_update_sets_f_at_every_internal_step_as_the_library(fmus3):
+    """The paper's FMI 3.0 FMU instantiated with an intermediate update callback (what FMPy's
+    instantiate_fmu(..., intermediate_update=...) hands): the FMU calls it at the start of every internal step
+    (the first of a doStep with intermediateStepFinished false), the master sets F there to the paper's force of
+    that instant, and x, v equal the library's Element advanced step by step under the same F, to the bit
+    (projected and implicit, steps not multiples of h); a setter of anything but F in the callback is refused
+    (only F is intermediateUpdate="true"); fmi3GetOutputDerivatives gives x's order 1 = v."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    from prandtl_fmu.stepping import split_duration
+
+    fmu, scene_path = fmus3["paper"]
+    scene = load_scene(scene_path)
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'providesIntermediateUpdate="true"' in description and 'intermediateUpdate="true"' in description
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = extract(str(fmu))
+    for stepper in ("projected", "implicit"):
+        slave = FMU3Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName=stepper)
+        asked, refused, messages = [], [], []
+
+        def update(env, time, set_requested, get_requested, finished, can_return_early, early, early_time):
+            asked.append((time, bool(finished)))
+            slave.setFloat64([vr["F"]], [0.45 * math.cos(0.5 * time)])
+            if len(asked) == 7:  # a parameter in intermediate update mode
+                try:
+                    slave.setFloat64([vr["m"]], [2.0])
+                except FMICallException as error:
+                    refused.append(error.status)
+
+        def logger(env, status, category, message):
+            messages.append(message.decode())
+
+        slave.instantiate(intermediateUpdate=update, logMessage=logger)
+        slave.enterInitializationMode(startTime=0.0)
+        slave.setBoolean([vr["scene_load"]], [False])
+        slave.setString([vr["stepper"]], [stepper])
+        slave.exitInitializationMode()
+        element = Element(scene, stepper=stepper)
+        t = 0.0
+        try:
+            for size in (0.05, 0.0137, 0.1, 0.02):
+                start = len(asked)
+                slave.doStep(t, size)
+                t += size
+                assert asked[start][1] is False and all(finished for _, finished in asked[start + 1:])
+                whole, rest = split_duration(size, element.h)  # the doStep's split, as the FMU makes it
+                spans = [element.h] * int(whole) + ([rest] if rest else [])
+                assert len(spans) == len(asked) - start
+                for (time, _), span in zip(asked[start:], spans):
+                    element.time = time
+                    element.advance(span, 0.45 * math.cos(0.5 * time))
+                assert slave.getFloat64([vr["x"], vr["v"]]) == [element.x, element.v], (stepper, t)
+            assert refused == [3] and any("only F may be set there" in message for message in messages)
+            assert slave.getOutputDerivatives([vr["x"]], [1]) == [element.v]
+            assert abs(element.x) > 1e-3
+        finally:
+            slave.terminate()
+            slave.freeInstance()
