@@ -21,7 +21,8 @@ from .kernels.drive import tangent
 from .kernels.energy import kinetic, stored
 from .kernels.friction import reaction
 from .kernels.play import branch_force, write_elongations
-from .loads import held, noise_problem, plus, with_white_noise
+from .kernels.rates import exact_rates, output_rates
+from .loads import held, noise_problem, plus, polynomial, with_white_noise
 from .memory import (check_memory_state, copy_memory, has_memory, memory_state, put_back, restore_memory)
 from .memory import time_problem as memory_time_problem
 from .noise import new_cache
@@ -85,11 +86,34 @@ class Element(OutputMemo):
         self.noise = noise
         self._touch()
 
-    def _load_of(self, force: float, scene_load: bool):
-        """The compiled load of an advance: ``force`` held (plus the scene's [load] with ``scene_load``), and
+    def _load_of(self, force: float, scene_load: bool, derivatives=None):
+        """The compiled load of an advance: ``force`` held (plus the scene's [load] with ``scene_load``), or with
+        ``derivatives`` (F', F'') its Taylor polynomial from the element's time (:func:`loads.polynomial`), and
         the element's white noise."""
-        base = plus(self.scene.load.compile(), force) if scene_load else held(force)
+        if derivatives is not None:
+            base = polynomial(force, derivatives[0], derivatives[1], self.time)
+        else:
+            base = plus(self.scene.load.compile(), force) if scene_load else held(force)
         return with_white_noise(base, self.noise, self._noise_cache)
+
+    def _derivatives_of(self, force_derivatives, scene_load: bool):
+        """``force_derivatives`` (F', F'') as two floats, None when both are zero (the force is held: the same
+        compiled load, bit for bit, as without them); ValueError naming the culprit."""
+        if force_derivatives is None:
+            return None
+        rate, curvature = (float(value) for value in force_derivatives)
+        for order, value in ((1, rate), (2, curvature)):
+            if not math.isfinite(value):
+                raise ValueError(f"the force's derivative of order {order} must be finite, got {value!r}")
+        if rate == 0.0 and curvature == 0.0:
+            return None
+        if scene_load:
+            raise ValueError("force derivatives with scene_load: the force is F plus the scene's [load], which the "
+                             "derivatives of F alone do not describe")
+        if not getattr(get_stepper(self.stepper), "POLYNOMIAL_INPUT", True):
+            raise ValueError(f"force derivatives with stepper {self.stepper!r}: its closed forms take the scene's "
+                             "load kinds, not a polynomial force; use another stepper or hold the force")
+        return rate, curvature
 
     def reset(self, force: float = 0.0) -> None:
         """Back to the scene's initial state at time 0 under the held ``force`` (massless: see
@@ -156,6 +180,24 @@ class Element(OutputMemo):
         direction = -1.0 if self.v < 0 else 1.0
         return self._memo("stiffness", lambda: float(tangent(self.model, self.x, self.u, direction)))
 
+    def output_derivatives(self, force: float, scene_load: bool = False) -> dict:
+        """The time derivatives of the outputs at the current state under ``force`` held (plus the scene's [load]
+        at the element's time with ``scene_load``), one-sided for the motion ahead (``kernels/rates.py``):
+        ``{(name, order): value}`` with ("x", 1) = v, and for an element with a mass ("x", 2) = ("v", 1) = a,
+        and where they are exact (``rates.exact_rates``: no friction on the mass, no series dashpot, no effect with
+        memory) ("reaction", 1) = R' and, but with ``scene_load`` (whose F' it does not take), ("v", 2) = a'."""
+        found = {("x", 1): float(self.v)}
+        if self.scene.mass is None:
+            return found
+        out = np.empty(3)
+        output_rates(self.model, self._load_of(force, scene_load), self.time, self.x, self.v, self.u, out)
+        found[("x", 2)] = found[("v", 1)] = float(out[0])
+        if exact_rates(self.scene):
+            found[("reaction", 1)] = float(out[2])
+            if not scene_load:
+                found[("v", 2)] = float(out[1])
+        return found
+
     def elongations(self) -> Optional[np.ndarray]:
         """The branch elongations u_i (m), in the scene's order, as a new array (O(n) with the memory
         stack); None without branches or for the continuum."""
@@ -177,10 +219,13 @@ class Element(OutputMemo):
         """_energy_columns for the one row of the element, in floats (numpy on a row of 5 costs 10 us)."""
         return _account_columns(self.scene, self.initial_energy, *self._energy_row[0].tolist())
 
-    def advance(self, duration: float, force: float, scene_load: bool = False) -> None:
+    def advance(self, duration: float, force: float, scene_load: bool = False, force_derivatives=None) -> None:
         """Advance by ``duration`` (s) with the force held at ``force`` (N); with ``scene_load``, the force is
         ``force`` plus the scene's ``[load]`` F(t), evaluated by the stepper as in :func:`simulate` (the
-        element's ``time`` is the load's clock). A duration below 1e-9 h, like a remainder below it after the
+        element's ``time`` is the load's clock). With ``force_derivatives`` = (F', F'') (N/s, N/s^2) the force is
+        F(t) = force + F' (t - t0) + F'' (t - t0)^2 / 2 from the element's time t0, evaluated wherever the stepper
+        evaluates its force (an FMU input given with its derivatives; not with ``scene_load``, nor with a stepper
+        whose closed forms know the scene's load kinds only: ValueError). A duration below 1e-9 h, like a remainder below it after the
         whole steps, is rounding of a master's clock (:func:`split_duration`): it changes nothing.
 
         ElementError (state unchanged) when a step cannot be taken.
@@ -189,6 +234,7 @@ class Element(OutputMemo):
             raise ValueError(f"duration must be finite and >= 0, got {duration!r}")
         if not math.isfinite(force):
             raise ValueError(f"force must be finite, got {force!r}")
+        derivatives = self._derivatives_of(force_derivatives, scene_load)
         if duration == 0:
             return
         h = self.h
@@ -218,8 +264,9 @@ class Element(OutputMemo):
             raise ElementError(f"{self.scene.source}: the advance to t = {self.time + duration!r} s refused: "
                                f"{problem}")
         saved = self.checkpoint()
-        load = self._load_of(force, scene_load)
-        self.force, self._load = float(force), load
+        load = self._load_of(force, scene_load, derivatives)
+        # the reaction's F(t) after the advance is the force as set (an FMU's input variable), held
+        self.force, self._load = float(force), load if derivatives is None else self._load_of(force, scene_load)
         self._touch()  # the compiled loop writes the state and the outputs in place
         if self._grid != h:  # a new step: the grid starts again at the current time
             self._origin, self._steps, self._grid = self.time, 0, h

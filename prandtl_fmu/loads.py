@@ -28,7 +28,7 @@ from . import libm
 from . import noise as brownian_tree
 from ._jit import kernel
 
-CONSTANT, HARMONIC, TABLE, RANDOM = 0, 1, 2, 3
+CONSTANT, HARMONIC, TABLE, RANDOM, POLYNOMIAL = 0, 1, 2, 3, 4
 _NO_TABLE = np.zeros(1)
 # the Brownian tree sees time in noise units to this many significant bits (see tree_time)
 TREE_TIME_BITS = 48
@@ -196,6 +196,17 @@ def held(value: float):
     return (CONSTANT, float(value), 0.0, 0.0, _NO_TABLE, _NO_TABLE)
 
 
+def polynomial(value: float, rate: float, curvature: float, origin: float):
+    """The compiled load of an FMU input given with its derivatives at a communication point ``origin`` (s):
+
+        F(t) = value + rate (t - origin) + curvature (t - origin)^2 / 2
+
+    (N, N/s, N/s^2), evaluated by :func:`force_at` wherever a stepper evaluates its force (FMI 2.0's
+    fmi2SetRealInputDerivatives, orders 1 and 2). The tuple is ``(POLYNOMIAL, value, rate, curvature, [origin],
+    [0])``: a C caller hands the origin as a table of one time."""
+    return (POLYNOMIAL, float(value), float(rate), float(curvature), np.array([float(origin)]), _NO_TABLE)
+
+
 def plus(load, value: float):
     """A compiled ``load`` plus a constant ``value`` (N): the scene's load and an FMU's input F (its noise kept)."""
     return (load[0], load[1] + float(value)) + tuple(load[2:])
@@ -209,6 +220,9 @@ def force_at(load, t):
         return offset
     if kind == HARMONIC:
         return offset + amplitude * libm.cos(omega * t)
+    if kind == POLYNOMIAL:  # (polynomial: offset, amplitude, omega hold F, F', F''; time[0] the origin)
+        tau = t - time[0]
+        return offset + tau * (amplitude + 0.5 * omega * tau)
     if kind == RANDOM:
         total = 0.0
         for j in range(time.shape[0]):

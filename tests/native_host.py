@@ -220,7 +220,7 @@ def run_trust(host: Path, fmu: Native, commands, logging: bool = False, timeout:
     written = {}  # the command as the host prints it -> as the caller wrote it
     for command in commands:
         parts = command.split(":")
-        named = parts[0] in ("setr", "getr", "geta", "sets", "seti", "geti", "setb", "nulla")
+        named = parts[0] in ("setr", "getr", "geta", "sets", "seti", "geti", "setb", "nulla", "deriv", "oderiv")
         if named and len(parts) > 1 and parts[1] in fmu.vr:
             parts[1] = str(fmu.vr[parts[1]])
         argv.append(":".join(parts))

@@ -597,10 +597,34 @@ def _default_experiment(parent, scene) -> None:
     ET.SubElement(parent, "DefaultExperiment", attributes)
 
 
+def interpolates_inputs(scene, runtime: str) -> bool:
+    """Whether the FMU takes its input's derivatives (FMI 2.0 canInterpolateInputs, fmi2SetRealInputDerivatives of
+    F, orders 1 and 2): the native element's (the PythonFMU runtime's loader has no such call; the connector's and
+    the network's inputs are held)."""
+    return runtime == "native" and not is_network(scene) and scene.causality != "displacement"
+
+
+def output_derivative_order(scene, runtime: str) -> int:
+    """FMI's maxOutputDerivativeOrder of the FMU: 2 for the native element (x: v, a; v: a, a' where exact;
+    reaction: its rate where exact, ``kernels/rates.py``; fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives),
+    else 0 (none given)."""
+    return 2 if interpolates_inputs(scene, runtime) else 0
+
+
+def provides_directional_derivatives(scene, runtime: str) -> bool:
+    """Whether the FMU gives directional derivatives (FMI 2.0 providesDirectionalDerivative, FMI 3.0
+    providesDirectionalDerivatives): the native connector's, d force = (d force/d x) dx + (d force/d v) dv (its one
+    output with direct feedthrough; the element has none)."""
+    return runtime == "native" and not is_network(scene) and scene.causality == "displacement"
+
+
 def fmi2_root(scene, guid: str, generation_tool: str, generated: Optional[str] = None,
-              needs_execution_tool: bool = True) -> ET.Element:
+              needs_execution_tool: bool = True, can_interpolate_inputs: bool = False,
+              max_output_derivative_order: int = 0, directional: bool = False) -> ET.Element:
     """The FMI 2.0 model description of ``scene``'s FMU as an XML tree (PythonFMU's layout: what its builder
-    writes from a slave's ``to_xml``): ``generated`` the generationDateAndTime (None: now)."""
+    writes from a slave's ``to_xml``): ``generated`` the generationDateAndTime (None: now);
+    ``can_interpolate_inputs``, ``max_output_derivative_order``, ``directional``: see :func:`interpolates_inputs`,
+    :func:`output_derivative_order`, :func:`provides_directional_derivatives`."""
     import datetime
 
     rows = variables(scene)
@@ -613,9 +637,11 @@ def fmi2_root(scene, guid: str, generation_tool: str, generated: Optional[str] =
         "author": AUTHOR, "version": __version__})
     ET.SubElement(root, "CoSimulation", {
         "needsExecutionTool": str(needs_execution_tool).lower(), "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canInterpolateInputs": str(can_interpolate_inputs).lower(), "canBeInstantiatedOnlyOncePerProcess": "false",
         "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "modelIdentifier": identifier,
-        "canNotUseMemoryManagementFunctions": "true"})
+        "canNotUseMemoryManagementFunctions": "true",
+        **({"maxOutputDerivativeOrder": str(max_output_derivative_order)} if max_output_derivative_order else {}),
+        **({"providesDirectionalDerivative": "true"} if directional else {})})
     _unit_definitions(root, sorted({row.unit for row in rows if row.unit is not None}))
     categories = ET.SubElement(root, "LogCategories")
     for name, description in LOG_CATEGORIES:
@@ -663,8 +689,12 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         "modelIdentifier": identifier, "needsExecutionTool": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
         "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-        "hasEventMode": "false"})
+        "providesIntermediateUpdate": str(interpolates_inputs(scene, "native")).lower(),
+        "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false",
+        **({"recommendedIntermediateInputSmoothness": "0"} if interpolates_inputs(scene, "native") else {}),
+        **({"maxOutputDerivativeOrder": str(output_derivative_order(scene, "native"))}
+           if output_derivative_order(scene, "native") else {}),
+        **({"providesDirectionalDerivatives": "true"} if provides_directional_derivatives(scene, "native") else {})})
     # FMI 2.0's units (sorted), then those only FMI 3.0's variables use (time's s, the elongations' m)
     units = sorted({row.unit for row in variables(scene) if row.unit is not None})
     units += [unit for unit in ("s", "m") if unit not in units and any(row.unit == unit for row in rows)]
@@ -692,6 +722,8 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         for key in ("min", "max"):
             if getattr(row, key) is not None:
                 attributes[key] = f"{getattr(row, key):.17g}"
+        if row.name == "F" and row.causality == "input" and interpolates_inputs(scene, "native"):
+            attributes["intermediateUpdate"] = "true"  # the master may set it at every internal step
         element = ET.SubElement(node, row.type, attributes)
         if row.dimension is not None:
             ET.SubElement(element, "Dimension", {"valueReference": str(by_name[row.dimension].value_reference)})
@@ -718,7 +750,10 @@ def model_description(scene, fmi: int = 2, guid: str = "", runtime: str = "nativ
         return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     if fmi != 2 or arrays:
         raise ValueError(f"fmi={fmi}, arrays={arrays}: FMI 2.0 (no arrays) or 3.0")
-    root = fmi2_root(scene, guid, generation_tool or NATIVE_TOOL, generated, needs_execution_tool=runtime == "python")
+    root = fmi2_root(scene, guid, generation_tool or NATIVE_TOOL, generated, needs_execution_tool=runtime == "python",
+                     can_interpolate_inputs=interpolates_inputs(scene, runtime),
+                     max_output_derivative_order=output_derivative_order(scene, runtime),
+                     directional=provides_directional_derivatives(scene, runtime))
     _held_steppers(root, steppers)
     return fmi2_text(root)
 

@@ -162,7 +162,8 @@ def index_html(model_description: bytes, scene, runtime: str = "python", stepper
     version = "fmi3" if fmi3 else "fmi2"
     if runtime == "native":
         refusal = f"{version}Error"
-        requirements = _NATIVE_REQUIREMENTS.format(version="3.0" if fmi3 else "2.0")
+        requirements = (_NATIVE_REQUIREMENTS.format(version="3.0" if fmi3 else "2.0")
+                        + _derivatives_text(root.find("CoSimulation")))
     else:
         refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
         requirements = _PYTHON_REQUIREMENTS
@@ -186,6 +187,23 @@ from the library's sources, and a C layer that only marshals values, validates c
 needs no Python, no <code>LD_PRELOAD</code> and no <code>PYTHONPATH</code> in the host: any FMI {version}
 co-simulation master loads it as it is. Its binary is built for Linux x86-64 (the libc and libm of the machine
 that built it). Every refusal is logged with a declared category, whatever the logging setting.</p>"""
+
+
+def _derivatives_text(capabilities) -> str:
+    """What the model description declares of derivatives and intermediate update, in a paragraph ("" if none)."""
+    said = []
+    if capabilities.get("canInterpolateInputs") == "true":
+        said.append("it takes F's first and second derivatives (<code>fmi2SetRealInputDerivatives</code>): over the "
+                    "next step its force is F + F' (t - t0) + F'' (t - t0)^2 / 2, evaluated at every internal step")
+    if capabilities.get("providesIntermediateUpdate") == "true":
+        said.append("with an intermediate update callback it asks the master for F at every internal step")
+    if capabilities.get("maxOutputDerivativeOrder"):
+        said.append("it gives its outputs' time derivatives up to order "
+                    f"{capabilities.get('maxOutputDerivativeOrder')} (x: v, a; v: a, a'; the reaction's rate; "
+                    "one-sided, for the motion ahead)")
+    if "true" in (capabilities.get("providesDirectionalDerivative"), capabilities.get("providesDirectionalDerivatives")):
+        said.append("it gives the directional derivatives of its force in x (the tangent stiffness) and v (c)")
+    return f"<p>For coupling at second order: {'; '.join(said)}.</p>" if said else ""
 
 
 def _connector_body(scene, refusal: str) -> str:

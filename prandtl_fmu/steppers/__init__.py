@@ -18,7 +18,9 @@ A stepper module defines
 * ``ORDER``: the order of convergence in h (``math.inf`` for ``exact``);
 * optionally ``STEP_IS_OUTPUT = True`` (the driver then takes one step per
   output interval: h does not set the accuracy) and ``failure_reason_for(scene)`` (a function that says in
-  words why a step that failed could not be taken: which bound of an event search ran out);
+  words why a step that failed could not be taken: which bound of an event search ran out), and
+  ``POLYNOMIAL_INPUT = False`` for a scheme whose closed forms know the scene's load kinds only, not an FMU input
+  given with its derivatives (``loads.polynomial``);
 * every stepper books the energy account (``kernels/energy.py``): no output is ever NaN;
 * a docstring with the update formula and the stability of the scheme.
 

@@ -131,6 +131,7 @@ from .exact_common import (_EPS, EVENT_FLOOR, EVENT_RATE, ILLINOIS_LIMIT, NOT_FI
 ORDER = math.inf
 
 STEP_IS_OUTPUT = True  # one step per output interval: h does not set the accuracy
+POLYNOMIAL_INPUT = False  # its phases are closed forms of the load's kind: a constant, a harmonic, a table's line
 
 
 def loop_for(scene):

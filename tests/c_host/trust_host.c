@@ -15,6 +15,8 @@
              step:T:H | save | restore | freestate | dump:PATH (the saved state serialized into PATH)
              load:PATH (PATH deserialized into the saved state) | poke:PATH (PATH's bytes over the saved state's
              memory) | debug:0|1
+             deriv:VR:ORDER:VALUE (FMI 2.0: fmi2SetRealInputDerivatives of one variable)
+             oderiv:VR:ORDER (FMI 2.0: fmi2GetRealOutputDerivatives of one variable)
              nullc (every function with a NULL instance) | nulla (functions with NULL pointer arguments) */
 #include <dlfcn.h>
 #include <stdio.h>
@@ -256,6 +258,16 @@ static void null_arguments(Instance c, ValueReference vr)
     call("nulla:GetRealStatus(value)", F(GetRealStatus)(c, fmi2LastSuccessfulTime, NULL));
     call("nulla:GetBooleanStatus(value)", F(GetBooleanStatus)(c, fmi2Terminated, NULL));
     call("nulla:GetStatus(value)", F(GetStatus)(c, fmi2DoStepStatus, NULL));
+    call("nulla:SetRealInputDerivatives(vr)", F(SetRealInputDerivatives)(c, NULL, 1, &integer, &real));
+    call("nulla:SetRealInputDerivatives(order)", F(SetRealInputDerivatives)(c, &vr, 1, NULL, &real));
+    call("nulla:SetRealInputDerivatives(value)", F(SetRealInputDerivatives)(c, &vr, 1, &integer, NULL));
+    call("nulla:GetRealOutputDerivatives(vr)", F(GetRealOutputDerivatives)(c, NULL, 1, &integer, &real));
+    call("nulla:GetRealOutputDerivatives(order)", F(GetRealOutputDerivatives)(c, &vr, 1, NULL, &real));
+    call("nulla:GetRealOutputDerivatives(value)", F(GetRealOutputDerivatives)(c, &vr, 1, &integer, NULL));
+    call("nulla:GetDirectionalDerivative(unknowns)", F(GetDirectionalDerivative)(c, NULL, 1, &vr, 1, &real, &real));
+    call("nulla:GetDirectionalDerivative(knowns)", F(GetDirectionalDerivative)(c, &vr, 1, NULL, 1, &real, &real));
+    call("nulla:GetDirectionalDerivative(seed)", F(GetDirectionalDerivative)(c, &vr, 1, &vr, 1, NULL, &real));
+    call("nulla:GetDirectionalDerivative(sensitivity)", F(GetDirectionalDerivative)(c, &vr, 1, &vr, 1, &real, NULL));
     (void)integer;
     (void)flag;
     (void)text;
@@ -399,6 +411,21 @@ int main(int argc, char** argv)
 #endif
         } else if (strncmp(command, "debug:", 6) == 0) {
             status = F(SetDebugLogging)(c, atoi(rest) ? 1 : 0, 0, NULL);
+#if FMI_VERSION == 2
+        } else if (strncmp(command, "deriv:", 6) == 0) { /* deriv:VR:ORDER:VALUE, fmi2SetRealInputDerivatives */
+            ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
+            const char* after = strchr(rest, ':') + 1;
+            fmi2Integer order = (fmi2Integer)strtol(after, NULL, 10);
+            double value = strtod(strchr(after, ':') + 1, NULL);
+            status = F(SetRealInputDerivatives)(c, &vr, 1, &order, &value);
+        } else if (strncmp(command, "oderiv:", 7) == 0) { /* oderiv:VR:ORDER, fmi2GetRealOutputDerivatives */
+            ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
+            fmi2Integer order = (fmi2Integer)strtol(strchr(rest, ':') + 1, NULL, 10);
+            double value = 0.0;
+            status = F(GetRealOutputDerivatives)(c, &vr, 1, &order, &value);
+            if (status == fmi2OK)
+                printf("VALUE %u %.17g\n", vr, value);
+#endif
         } else if (strncmp(command, "setr:", 5) == 0) {
             ValueReference vr = (ValueReference)strtoul(rest, NULL, 10);
             double value = strtod(strchr(rest, ':') + 1, NULL);

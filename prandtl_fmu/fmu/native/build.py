@@ -191,6 +191,8 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
     from ... import scene as library_rules
     from ... import stability
     from ...kernels import stack
+    from ...kernels.rates import exact_rates
+    from ...loads import POLYNOMIAL
     from ...steppers import get_stepper
 
     branches = scene.branches
@@ -260,6 +262,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         f"#define HAS_FRICTION {int(friction is not None)}",
         f"#define HAS_STRIBECK {int(friction is not None and friction.stribeck_velocity is not None)}",
         f"#define HAS_SERIES {int(scene.has_series_dashpots)}",
+        f"#define EXACT_RATES {int(exact_rates(scene))} /* kernels/rates.exact_rates: a' and R' are exact */",
         f'static const char GUID[] = "{guid}";',
         f'static const char DIGEST[] = "{digest}";',
         f"static const double P_SCENE[10] = {_c_array(values.values())};",
@@ -290,6 +293,10 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         f"STRIBECK_UNRESOLVED = {stability.STRIBECK_UNRESOLVED}, SERIES_UNSTABLE = {stability.SERIES_UNSTABLE} }};",
         "static const int STEP_IS_OUTPUT[] = {" + ", ".join(
             [str(int(getattr(get_stepper(name), "STEP_IS_OUTPUT", False))) for name in steppers] + ["0"]) + "};",
+        # an input given with its derivatives (loads.polynomial): its load kind, and the steppers that take it
+        f"static const int64_t LOAD_POLYNOMIAL = {POLYNOMIAL};",
+        "static const int POLYNOMIAL_INPUT[] = {" + ", ".join(
+            [str(int(getattr(get_stepper(name), "POLYNOMIAL_INPUT", True))) for name in steppers] + ["0"]) + "};",
         f'static const char DEFAULT_STEPPER[] = "{scene.solver.stepper}";',
         f"static const double DEFAULT_STEP = {float(scene.solver.step)!r};",
         f"static const int N_VALUE = {-1 if branches is not None and branches.continuum else n};",
@@ -324,6 +331,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         "limits": "int64_t {name}(" + e + ", P)",
         "row": "int64_t {name}(" + e + ", P, P, P)",
         "initial": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t)",
+        "rates": "int64_t {name}(" + e + ", P, int64_t, P, P, P, int64_t, double, P)",
         # the connector's own (kernels._CONNECTOR_SIGNATURES: the element's arrays and memory; its elongations
         # the branches' arrays alone)
         "elongations": ("int64_t {name}(P, P, P, P, P, P)" if scene.causality == "displacement"
@@ -331,6 +339,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         "move": "int64_t {name}(" + e + ", double, double, double, P, P, P, P, P)",
         "cforce": "double {name}(" + e + ", double, double, double)",
         "ctangent": "double {name}(" + e + ", double, double)",
+        "cdirectional": "double {name}(" + e + ", double, double, double, double)",
         "cstored": "double {name}(" + e + ", double)",
         "cinitial": "int64_t {name}(" + e + ")",
     }
@@ -352,8 +361,8 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"
-    functions = (("move", "cforce", "ctangent", "cstored", "cinitial", "elongations") if connector
-                 else ("record", "row", "stiffness", "limits", "initial", "elongations"))
+    functions = (("move", "cforce", "ctangent", "cdirectional", "cstored", "cinitial", "elongations") if connector
+                 else ("record", "row", "stiffness", "limits", "initial", "elongations", "rates"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]
         unfolded = chosen + "p" if folds else chosen  # the O(n) kernel's functions: what exact runs on

@@ -21,6 +21,7 @@ static const char* phase_name(int phase)
     case INITIALIZING: return "initialization mode";
     case STEPPING: return STEPPING_NAME;
     case TERMINATED: return "terminated";
+    case INTERMEDIATE_UPDATE: return "intermediate update mode";
     }
     return "unknown";
 }

@@ -39,7 +39,7 @@ extern __thread int prandtl_kernel_failed;
 enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P_BELT, N_PARAMS };
 #endif
 /* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
-enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8 };
+enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8, INTERMEDIATE_UPDATE = 16 };
 #define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
 /* the first fields of every kind's Instance: the host's (its environment and logger, which the FMI version's
  * layer calls: emit()), the logging, the phase and whether the last step failed */
@@ -542,6 +542,7 @@ typedef struct {
     int64_t n;
     Noise noise;
     int64_t* cache;
+    double origin[1]; /* a polynomial's (loads.polynomial): its table of one time, t pointing here */
 } Load;
 static const double NO_TABLE[1] = {0.0};
 
@@ -569,6 +570,7 @@ static Load load_of(double force, int scene_load, const Noise* noise, int64_t* c
     l.noise.seed = noise != NULL ? noise->seed : 0;
     l.noise.unit = noise != NULL ? noise->unit : 1.0;
     l.cache = cache;
+    l.origin[0] = 0.0;
     return l;
 }
 #endif

@@ -179,6 +179,64 @@ static double real_value(Instance* c, const Var* var)
     return NAN;
 }
 
+/* fmi2GetDirectionalDerivative, fmi3GetDirectionalDerivative (``function``): d force = (d force/d x) dx + (d force/d v)
+ * dv at the element moved to the inputs set last (the outputs' preview), the tangent for the direction of the move
+ * from the committed x to the x set (at the committed x itself: of v, else of the last motion, as the output
+ * stiffness); ``unknown`` must be force,
+ * ``known`` x and v (each at most once), their seeds ``seed`` (kernel cdirectional: no arithmetic here) */
+#define HAS_DIRECTIONAL_DERIVATIVES 1
+static int core_directional_derivative(Instance* c, const unsigned unknown[], size_t n_unknown, const unsigned known[],
+                                       size_t n_known, const double seed[], double sensitivity[], const char* function)
+{
+    Element* preview;
+    double dx = 0.0, dv = 0.0, direction, value;
+    int seen_x = 0, seen_v = 0;
+    size_t i;
+    if (!(given(c, unknown, function, "unknowns") && given(c, known, function, "knowns") &&
+          given(c, seed, function, "seed") && given(c, sensitivity, function, "sensitivity")))
+        return ST_ERROR;
+    if (n_unknown != 1) {
+        say(c, ST_ERROR, "%s refused: %zu unknowns: this FMU has one output with a directional derivative, force",
+            function, n_unknown);
+        return ST_ERROR;
+    }
+    if (find(unknown[0], T_REAL) == NULL || find(unknown[0], T_REAL)->what != W_FORCE) {
+        say(c, ST_ERROR, "%s refused: unknown %u is not the output force (the one output with a directional "
+            "derivative)", function, unknown[0]);
+        return ST_ERROR;
+    }
+    for (i = 0; i < n_known; i++) {
+        const Var* var = find(known[i], T_REAL);
+        int* seen = var == NULL ? NULL : var->what == W_X ? &seen_x : var->what == W_V ? &seen_v : NULL;
+        if (seen == NULL || *seen) {
+            say(c, ST_ERROR, "%s refused: known %u is not the input x or v, or is listed twice", function, known[i]);
+            return ST_ERROR;
+        }
+        if (!isfinite(seed[i])) {
+            say(c, ST_ERROR, "%s refused: the seed %.17g of known %u is not finite", function, seed[i], known[i]);
+            return ST_ERROR;
+        }
+        *seen = 1;
+        *(var->what == W_X ? &dx : &dv) = seed[i];
+    }
+    if (!(isfinite(c->x_in) && isfinite(c->v_in))) {
+        say(c, ST_ERROR, "%s refused: the inputs x = %.17g, v = %.17g are not finite", function, c->x_in, c->v_in);
+        return ST_ERROR;
+    }
+    preview = previewed(c);
+    /* the force is the function of x that moves the branches from the committed x to it: its slope is the tangent
+     * for that move's direction (on both sides of x, between switches); at the committed x, for the motion ahead */
+    direction = c->x_in != c->el.x || preview->v == 0 ? preview->direction : copysign(1.0, preview->v);
+    prandtl_kernel_failed = 0;
+    value = KERNEL(preview, cdirectional)(KERNEL_ARGS_OF(preview), preview->x, direction, dx, dv);
+    if (prandtl_kernel_failed || !isfinite(value)) {
+        say(c, ST_ERROR, "%s refused: the derivative is not a finite number here", function);
+        return ST_ERROR;
+    }
+    sensitivity[0] = value;
+    return ST_OK;
+}
+
 static void defaults(Instance* c)
 {
     memcpy(c->par, P_SCENE, sizeof c->par);

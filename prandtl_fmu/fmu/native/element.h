@@ -57,6 +57,7 @@ typedef struct {
     int scene_load, stepper_valid, initialized;
     char stepper[32];
     double mpar[N_MEMP]; /* the memory's parameters the master set */
+    double dF[2];        /* F's derivatives the master set (fmi2SetRealInputDerivatives) */
     Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
@@ -74,7 +75,8 @@ typedef struct {
 #define SETTINGS(to, from)                                                                                     \
     COPY_FIELD(to, from, F), COPY_FIELD(to, from, step), COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, par), \
         COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid),   \
-        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar)
+        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar),           \
+        COPY_FIELD(to, from, dF)
 #define SETTABLE(what) ((what) == W_F || (what) == W_PARAM || (what) == W_CBRANCH || (what) == W_STEP || \
                         (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT || (what) == W_MEMORY)
 
@@ -107,6 +109,10 @@ typedef struct {
     Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
     double saved_u[SAVED_U];
     double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
+    double dF[2];        /* F' and F'' the master set for the next doStep (fmi2SetRealInputDerivatives; 0: held) */
+    /* FMI 3.0 intermediate update: the master's callback (NULL: none), asked at every internal step for F (fmi3.c) */
+    void (*ask_inputs)(void* instance, double time, int first);
+    void (*intermediate_update)(void); /* (the callback itself, of FMI 3.0's type: fmi3.c) */
     double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
     int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
     double limits[3];    /* |x|, |v|, |an account's entry| below which every output is surely a number ... */
@@ -230,8 +236,8 @@ static int64_t integrate(Element* e, const Load* l, double t_base, int64_t first
 /* Element.advance under ``force`` (plus the scene's [load] with ``scene_load``) and the white ``noise`` (its
  * Brownian tree's ``cache``): NULL, or why the step was not taken (the element then is as it was: the caller rolls
  * back); ``failed_at`` NaN: refused before any step (a duration of too many steps) */
-static const char* advance(Element* e, double duration, double force, int scene_load, const Noise* noise,
-                           int64_t* cache, double* failed_at, char* buffer, size_t size)
+static const char* advance(Element* e, double duration, double force, const double* derivatives, int scene_load,
+                           const Noise* noise, int64_t* cache, double* failed_at, char* buffer, size_t size)
 {
     double h = e->h, whole, rest, t_base;
     int64_t first, taken;
@@ -252,6 +258,13 @@ static const char* advance(Element* e, double duration, double force, int scene_
     if (problem != NULL)
         return problem;
     l = load_of(force, scene_load, noise, cache);
+    if (derivatives[0] != 0.0 || derivatives[1] != 0.0) { /* Element._load_of: the polynomial from the time now */
+        l.kind = LOAD_POLYNOMIAL;
+        l.lk[1] = derivatives[0];
+        l.lk[2] = derivatives[1];
+        l.origin[0] = element_time(e);
+        l.t = l.origin;
+    }
     e->force = force;
     e->scene_load = scene_load;
     clock_regrid(&e->clock, h);
@@ -443,6 +456,72 @@ static int surely_showable(Instance* c)
     return isfinite(reaction_now(c));
 }
 
+/* fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives: the ``order``-th time derivative of the output ``var`` at
+ * the state under the F set now, held (Element.output_derivatives: the kernel rates, kernels/rates.py), into
+ * ``value``; NULL, or why it is not given (in ``buffer``) */
+static const char* output_derivative(Instance* c, const Var* var, int order, double* value, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double xv[2] = {e->x, e->v}, out[3] = {0.0, 0.0, 0.0};
+    Load l;
+    int which; /* 0: a, 1: a', 2: R', -1: v */
+    if (var == NULL || !(var->what == W_X || var->what == W_V || var->what == W_REACTION))
+        return "not an output whose derivatives this FMU gives (x, v, reaction)";
+    if (order < 1 || order > 2) {
+        snprintf(buffer, size, "order %d: this FMU gives orders 1 and 2 (maxOutputDerivativeOrder)", order);
+        return buffer;
+    }
+    which = var->what == W_X ? order - 2 : var->what == W_V ? order - 1 : 2 + (order - 1) * 8;
+    if (which > 2)
+        return "the reaction's derivative of order 2 is not given (its tangent's rate is not an output of the model)";
+    if (which >= 0 && !HAS_MASS)
+        return "a massless element's v follows F: only x's derivative of order 1 (v) is given";
+    if (which >= 1 && !EXACT_RATES)
+        return "not exact for this scene (a friction on the mass, series dashpots or an effect with memory): only x's "
+               "derivatives and v's of order 1 are given";
+    if (which == 1 && c->scene_load)
+        return "v's derivative of order 2 is not given with scene_load (it would need the scene's load's rate)";
+    if (which < 0) {
+        *value = e->v;
+        return NULL;
+    }
+    l = load_of(c->F, c->scene_load, NULL, NULL);
+    prandtl_kernel_failed = 0;
+    KERNEL(e, rates)(BRANCHES(e), xv, l.kind, l.lk, (double*)l.t, (double*)l.f, l.n, element_time(e), out);
+    *value = out[which];
+    if (prandtl_kernel_failed || !isfinite(*value))
+        return "it is not a finite number here";
+    return NULL;
+}
+
+/* the body of fmi2GetRealOutputDerivatives and fmi3GetOutputDerivatives (``function``): every entry checked and
+ * computed, then written (nothing written on a refusal) */
+#define HAS_OUTPUT_DERIVATIVES 1
+static int core_get_output_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[], double value[],
+                                       size_t nvalues, const char* function)
+{
+    char buffer[256];
+    size_t i;
+    double found[8];
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    if (nvalues < n || n > sizeof found / sizeof found[0]) {
+        say(c, ST_ERROR, "%s refused: %zu value references for %zu values (at most %zu at once)", function, n, nvalues,
+            sizeof found / sizeof found[0]);
+        return ST_ERROR;
+    }
+    for (i = 0; i < n; i++) {
+        const char* problem = output_derivative(c, find(vr[i], T_REAL), order[i], &found[i], buffer, sizeof buffer);
+        if (problem != NULL) {
+            say(c, ST_ERROR, "%s refused: value reference %u, order %d: %s; nothing written", function, vr[i],
+                (int)order[i], problem);
+            return ST_ERROR;
+        }
+    }
+    memcpy(value, found, n * sizeof(double));
+    return ST_OK;
+}
+
 /* an Integer: n (the scene's), or noise_seed */
 static int32_t integer_value(Instance* c, const Var* var)
 {
@@ -455,6 +534,7 @@ static void defaults(Instance* c)
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
     instantiated(c);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
+    c->dF[0] = c->dF[1] = 0.0; /* (ask_inputs is the instantiation's: a reset keeps it) */
     clear_element(&c->el);
     hand_over(c);
     prandtl_kernel_failed = 0;
@@ -472,7 +552,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const char* problem;
     int i;
     if (!(e->stepper >= 0 && e->stepper < N_STEPPERS && isfinite(e->h) && e->h > 0 && isfinite(e->x) &&
-          isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) &&
+          isfinite(e->v) && isfinite(e->force) && isfinite(s->F) && isfinite(s->start_time) && isfinite(s->dF[0]) &&
+          isfinite(s->dF[1]) &&
           (e->play == 0 || (FOLDS && e->play == 1)) && (e->scene_load == 0 || e->scene_load == 1) &&
           (e->row_stale == 0 || e->row_stale == 1) &&
           (s->scene_load == 0 || s->scene_load == 1) && (s->stepper_valid == 0 || s->stepper_valid == 1) &&
@@ -685,6 +766,98 @@ static void hand_over_settings(Instance* c)
         warn_if_unstable(c);
 }
 
+/* ------------------------------------------------------------------ F's derivatives (FMI 2.0) */
+
+#define HAS_INPUT_DERIVATIVES 1
+
+/* why F's derivatives cannot drive the next step, or NULL: with scene_load (F plus the scene's [load], which F's
+ * derivatives do not describe) or a stepper whose closed forms know the scene's load kinds only (Element's
+ * _derivatives_of, its words) */
+static const char* derivatives_problem(Instance* c, char* buffer, size_t size)
+{
+    int stepper = stepper_index(c->stepper);
+    if (c->dF[0] == 0.0 && c->dF[1] == 0.0)
+        return NULL;
+    if (c->scene_load)
+        return "force derivatives with scene_load: the force is F plus the scene's [load], which the derivatives of F "
+               "alone do not describe";
+    if (stepper >= 0 && !POLYNOMIAL_INPUT[stepper]) {
+        snprintf(buffer, size, "force derivatives with stepper '%s': its closed forms take the scene's load kinds, not "
+                 "a polynomial force; use another stepper or hold the force", STEPPER_NAMES[stepper]);
+        return buffer;
+    }
+    return NULL;
+}
+
+/* fmi2SetRealInputDerivatives: F' (order 1) and F'' (order 2) of the input F at the next doStep's start; over that
+ * step F(t) = F + F' (t - t0) + F'' (t - t0)^2 / 2 (loads.polynomial, evaluated by the kernels). Every entry checked
+ * (a value reference of F, an order 1 or 2, a finite value), then all set; fmi2SetReal of F sets them to 0. */
+static int core_set_input_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[],
+                                      const double value[], const char* function)
+{
+    size_t i;
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    for (i = 0; i < n; i++) {
+        const Var* var = find(vr[i], T_REAL);
+        if (var == NULL || var->what != W_F) {
+            say(c, ST_ERROR, "%s refused: value reference %u is not the continuous input F (the only input whose "
+                "derivatives this FMU takes); nothing set", function, vr[i]);
+            return ST_ERROR;
+        }
+        if (order[i] != 1 && order[i] != 2) {
+            say(c, ST_ERROR, "%s refused: order %d of F: this FMU takes orders 1 and 2 (maxInputDerivativeOrder); "
+                "nothing set", function, (int)order[i]);
+            return ST_ERROR;
+        }
+        if (!isfinite(value[i])) {
+            say(c, ST_ERROR, "%s refused: F's derivative of order %d = %.17g must be finite; nothing set", function,
+                (int)order[i], value[i]);
+            return ST_ERROR;
+        }
+    }
+    for (i = 0; i < n; i++)
+        c->dF[order[i] - 1] = value[i];
+    return ST_OK;
+}
+
+/* FMI 3.0 intermediate update (c->ask_inputs): the doStep taken one internal step at a time, the master asked for F
+ * at the start of each (it may set F there: intermediateUpdate="true"), each step the library's Element.advance(h,
+ * F) of that F; a stepper that takes one step per doStep (exact) is asked once. The split into whole steps and a
+ * shorter last one is the doStep's (plan_advance); NULL, or why a step was not taken (*failed_at as advance's). */
+#define HAS_INTERMEDIATE_UPDATE 1
+static const char* advance_with_updates(Instance* c, double H, double* failed_at, char* buffer, size_t size)
+{
+    Element* e = &c->el;
+    double whole = 0.0, rest = 0.0;
+    const char* problem = NULL;
+    int64_t p, steps;
+    *failed_at = NAN;
+    if (!STEP_IS_OUTPUT[e->stepper]) {
+        problem = plan_advance(H, e->h, &whole, &rest, buffer, size);
+        if (problem != NULL || (whole == 0 && rest == 0))
+            return problem;
+    }
+    steps = STEP_IS_OUTPUT[e->stepper] ? 1 : (int64_t)whole + (rest > 0);
+    for (p = 0; p < steps; p++) {
+        double start = element_time(e);
+        c->ask_inputs(c, start, p == 0);
+        if (!isfinite(c->F)) {
+            *failed_at = start;
+            snprintf(buffer, size, "F = %.17g set at the intermediate update at t = %.17g is not finite", c->F, start);
+            return buffer;
+        }
+        problem = advance(e, STEP_IS_OUTPUT[e->stepper] ? H : p < (int64_t)whole ? e->h : rest, c->F, c->dF,
+                          c->scene_load, &c->noise, c->noise_cache, failed_at, buffer, size);
+        if (problem != NULL) {
+            if (isnan(*failed_at))
+                *failed_at = start;
+            return problem;
+        }
+    }
+    return NULL;
+}
+
 #ifdef PRANDTL_BENCH_KERNEL_ONLY
 /* benchmarks/dostep_cost.py only, never in a build of the package: a doStep that is the kernel's advance of one
  * step of H from t and nothing else (no check, no checkpoint, no clock), what the library's Element.advance pays
@@ -712,10 +885,17 @@ static int step(Instance* c, double t, double H)
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
         return ST_DISCARD;
     }
+    problem = derivatives_problem(c, buffer, sizeof buffer);
+    if (problem != NULL) {
+        say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
+        return ST_DISCARD;
+    }
     checkpoint(c); /* slave.do_step: element.checkpoint(), then the time */
     clock_set(&c->el.clock, t);
     prandtl_kernel_failed = 0;
-    problem = advance(&c->el, H, c->F, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer, sizeof buffer);
+    problem = c->ask_inputs != NULL ? advance_with_updates(c, H, &failed_at, buffer, sizeof buffer)
+              : advance(&c->el, H, c->F, c->dF, c->scene_load, &c->noise, c->noise_cache, &failed_at, buffer,
+                        sizeof buffer);
     if (problem != NULL && isnan(failed_at)) { /* refused before any step */
         rollback(c);
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
@@ -739,6 +919,7 @@ static int step(Instance* c, double t, double H)
             "overflow); the state is unchanged", time, c->F, overflowed->name, value);
         return ST_DISCARD;
     }
+    c->dF[0] = c->dF[1] = 0.0; /* they described F over this step (set at its start): the next is held unless set */
     return ST_OK;
 }
 #endif
@@ -746,6 +927,10 @@ static int step(Instance* c, double t, double H)
 /* the fixed parameters (core.h): x0 and v0 (the initial state), an effect with memory's */
 static int fixed_problem(Instance* c, const Var* var, double value)
 {
+    if (c->phase == INTERMEDIATE_UPDATE && var->what != W_F) { /* only F is intermediateUpdate="true" */
+        say(c, ST_ERROR, "%s refused in intermediate update mode: only F may be set there", var->name);
+        return ST_ERROR;
+    }
     if (var->what == W_PARAM && c->initialized && (var->index == P_X0 || var->index == P_V0) &&
         value != c->par[var->index]) {
         say(c, ST_ERROR, "parameter %s = %.17g refused: %s is fixed (the initial state) and cannot change after "
@@ -757,9 +942,10 @@ static int fixed_problem(Instance* c, const Var* var, double value)
 
 static void core_set_float(Instance* c, const Var* var, double value)
 {
-    if (var->what == W_F)
+    if (var->what == W_F) {
         c->F = value;
-    else if (var->what == W_PARAM) {
+        c->dF[0] = c->dF[1] = 0.0; /* a new value of F: the derivatives set for the old one no longer hold */
+    } else if (var->what == W_PARAM) {
         c->par[var->index] = value;
         c->handed = 0;
     } else if (var->what == W_MEMORY) {

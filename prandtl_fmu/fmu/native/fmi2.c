@@ -152,28 +152,49 @@ fmi2Status fmi2SetString(fmi2Component instance, const fmi2ValueReference vr[], 
 
 /* ------------------------------------------------------------------ the rest of FMI 2.0 co-simulation */
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueReference u[], size_t nu,
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueReference u[], size_t nu, /* unknowns */
                                         const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[])
 {
     BEGIN(fmi2GetDirectionalDerivative, MASK_GET);
+#ifdef HAS_DIRECTIONAL_DERIVATIVES /* the connector: d force / d (x, v) (connector.h) */
+    return (fmi2Status)core_directional_derivative(c, u, nu, z, nz, dv, dz, "fmi2GetDirectionalDerivative");
+#else
+    if (!(arrays_given(c, nu, u, dz, "fmi2GetDirectionalDerivative") &&
+          arrays_given(c, nz, z, dv, "fmi2GetDirectionalDerivative")))
+        return fmi2Error;
     say(c, fmi2Error, "fmi2GetDirectionalDerivative: not provided (read the output stiffness)");
     return fmi2Error;
+#endif
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
-    BEGIN(fmi2SetRealInputDerivatives, INSTANTIATED | INITIALIZING | STEPPING);
+    BEGIN(fmi2SetRealInputDerivatives, INITIALIZING | STEPPING);
+#ifdef HAS_INPUT_DERIVATIVES /* the element: F's (element.h) */
+    return (fmi2Status)core_set_input_derivatives(c, vr, n, order, value, "fmi2SetRealInputDerivatives");
+#else
+    if (!arrays_given(c, n, vr, value, "fmi2SetRealInputDerivatives") ||
+        !(n == 0 || given(c, order, "fmi2SetRealInputDerivatives", "order")))
+        return fmi2Error;
     say(c, fmi2Error, "fmi2SetRealInputDerivatives: the FMU holds its input over a step");
     return fmi2Error;
+#endif
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t n,
                                         const fmi2Integer order[], fmi2Real value[])
 {
     BEGIN(fmi2GetRealOutputDerivatives, MASK_STATUS);
+#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction (element.h) */
+    return (fmi2Status)core_get_output_derivatives(c, vr, n, order, value, n, "fmi2GetRealOutputDerivatives");
+#else
+    if (!arrays_given(c, n, vr, value, "fmi2GetRealOutputDerivatives") ||
+        !(n == 0 || given(c, order, "fmi2GetRealOutputDerivatives", "order")))
+        return fmi2Error;
     say(c, fmi2Error, "fmi2GetRealOutputDerivatives: not provided");
     return fmi2Error;
+#endif
 }
 
 /* a status this FMU does not have (no asynchronous step): fmi2Discard, as the standard says, with the reason */

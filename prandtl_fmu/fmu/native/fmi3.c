@@ -54,8 +54,11 @@ static void emit(void* instance, int status, const char* category, const char* m
 
 /* the phases of FMI 3.0 co-simulation a function is allowed in (Reference-FMUs' MASK_fmi3..., this FMU having no
  * event mode, no configuration mode and no clocks; a setter is refused after fmi3Terminate) */
-#define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
+#define MASK_GET (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED | INTERMEDIATE_UPDATE)
+/* fmi3SetFloat64: also in intermediate update mode (the element's F alone there: element.h fixed_problem) */
+#define MASK_SET_FLOAT (MASK_SET | INTERMEDIATE_UPDATE)
 #define MASK_SET (INSTANTIATED | INITIALIZING | STEPPING)
+#define MASK_OUTPUT_DERIVATIVES (STEPPING | TERMINATED) /* fmi3GetOutputDerivatives: Step Mode, Terminated */
 
 /* a function this co-simulation FMU does not provide: fmi3Error, with the reason */
 static fmi3Status not_provided(fmi3Instance instance, const char* message)
@@ -69,6 +72,23 @@ const char* fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n, const fmi3String categories[])
     CHECKED(fmi3SetDebugLogging, ANY_PHASE, core_set_debug_logging(c, on, n, categories))
+
+#ifdef HAS_INTERMEDIATE_UPDATE
+/* the master's intermediate update callback at an internal step's start ``time`` (element.h advance_with_updates): in
+ * intermediate update mode it may set F; no early return (canReturnEarlyAfterIntermediateUpdate="false") */
+static void ask_inputs(void* instance, double time, int first)
+{
+    Instance* c = (Instance*)instance;
+    fmi3Boolean early = fmi3False;
+    fmi3Float64 early_time = time;
+    int phase = c->phase;
+    c->phase = INTERMEDIATE_UPDATE;
+    ((fmi3IntermediateUpdateCallback)c->intermediate_update)((fmi3InstanceEnvironment)c->env, time, fmi3True,
+                                                              fmi3False, first ? fmi3False : fmi3True, fmi3False,
+                                                              &early, &early_time);
+    c->phase = phase;
+}
+#endif
 
 fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
                                          fmi3Boolean logging, fmi3Boolean event_mode, fmi3Boolean early_return,
@@ -84,8 +104,15 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
             token ? token : "(null)", GUID);
     else if (event_mode)
         say(c, ST_ERROR, "fmi3InstantiateCoSimulation refused: this FMU has no event mode");
-    else
+    else {
+#ifdef HAS_INTERMEDIATE_UPDATE /* the element: F asked for at every internal step (element.h) */
+        if (update != NULL) {
+            c->intermediate_update = (void (*)(void))update;
+            c->ask_inputs = ask_inputs;
+        }
+#endif
         return instance_started(c);
+    }
     instance_free(c);
     return NULL;
 }
@@ -267,7 +294,7 @@ static fmi3Status get_float64(Instance* c, const fmi3ValueReference vr[], size_t
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nvalues)
 {
-    BEGIN(fmi3SetFloat64, MASK_SET);
+    BEGIN(fmi3SetFloat64, MASK_SET_FLOAT);
     if (nvalues != nvr) {
         say(c, ST_ERROR, "fmi3SetFloat64 refused: %zu values for %zu scalar variables", nvalues, nvr);
         return fmi3Error;
@@ -466,9 +493,22 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
+#ifdef HAS_DIRECTIONAL_DERIVATIVES /* the connector: d force / d (x, v), scalars (connector.h) */
+{
+    BEGIN(fmi3GetDirectionalDerivative, MASK_GET);
+    if (nSeed != nKnowns || nSensitivity != nUnknowns) {
+        say(c, ST_ERROR, "fmi3GetDirectionalDerivative refused: %zu seeds for %zu knowns, %zu sensitivities for %zu "
+            "unknowns (scalars: one each)", nSeed, nKnowns, nSensitivity, nUnknowns);
+        return fmi3Error;
+    }
+    return (fmi3Status)core_directional_derivative(c, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity,
+                                                   "fmi3GetDirectionalDerivative");
+}
+#else
 {
     return not_provided(instance, "fmi3GetDirectionalDerivative: not provided by this co-simulation FMU");
 }
+#endif
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
@@ -586,9 +626,15 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t* nConti
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
+#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction, scalars (element.h) */
+    CHECKED(fmi3GetOutputDerivatives, MASK_OUTPUT_DERIVATIVES,
+            core_get_output_derivatives(c, valueReferences, nValueReferences, orders, values, nValues,
+                                        "fmi3GetOutputDerivatives"))
+#else
 {
     return not_provided(instance, "fmi3GetOutputDerivatives: not provided by this co-simulation FMU");
 }
+#endif
 
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference, fmi3Float64 activationTime)
 {

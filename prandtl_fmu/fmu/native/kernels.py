@@ -29,6 +29,8 @@ the load, ``lt``/``lf``/``nl`` its table):
 * ``row(p, k, eta, cs, u, mp, ms, nd, xv, account, erow)``: the energy row of the state (kinetic, stored, the
   account), what ``record`` writes into erow;
 * ``stiffness(p, k, eta, cs, u, mp, ms, nd, xv)`` -> the tangent stiffness;
+* ``rates(p, k, eta, cs, u, mp, ms, nd, xv, kind, lk, lt, lf, nl, t, out)``: a, a' and the reaction's rate at the
+  state under the load held (``kernels/rates.output_rates``: the outputs' derivatives a master reads);
 * ``limits(p, k, eta, cs, u, mp, ms, nd, out)``: the magnitudes of x, v and the account's entries below which
   every output is surely a number (``kernels/showable.limits``): a doStep then computes none of them to show
   only numbers;
@@ -45,7 +47,9 @@ the load, ``lt``/``lf``/``nl`` its table):
 The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(..., x_start, v_start, t_start, x,
 v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
 with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cforce(..., x, v,
-t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cstored(..., x)``; ``cinitial(...)``
+t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cdirectional(..., x, direction, dx, dv)``
+(d force = (tangent + the memory's slope) dx + c dv: the directional derivative a master asks for; the memory's
+forces do not move with v at an instant), ``cstored(..., x)``; ``cinitial(...)``
 (a fresh memory stack and memory); ``elongations(p, k, eta, cs, u, out)`` (the branches' arrays alone).
 
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
@@ -87,6 +91,8 @@ _SIGNATURES = {
     "initial": f"types.int64({_ELEMENT}, {_PTR}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64)",
     "force_at": f"types.float64(types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, {_PTR})",
     "elongations": f"types.int64({_ELEMENT}, {_PTR})",
+    "rates": f"types.int64({_ELEMENT}, {_PTR}, types.int64, {_PTR}, {_PTR}, {_PTR}, types.int64, types.float64, "
+             f"{_PTR})",
 }
 
 _TEMPLATE = '''
@@ -150,6 +156,12 @@ def row(p, kp, etap, csp, up, mp, msp, nd, xv, accountp, erowp):
 def stiffness(p, kp, etap, csp, up, mp, msp, nd, xv):
     direction = -1.0 if xv[1] < 0 else 1.0
     return tangent(_model(p, kp, etap, csp, mp, msp, nd), xv[0], {u}, direction)
+
+
+def rates(p, kp, etap, csp, up, mp, msp, nd, xv, kind, lk, lt, lf, nl, t, outp):
+    output_rates(_model(p, kp, etap, csp, mp, msp, nd), _load(kind, lk, lt, lf, nl), t, xv[0], xv[1], {u},
+                 carray(outp, (3,)))
+    return 0
 
 
 def limits(p, kp, etap, csp, up, mp, msp, nd, outp):
@@ -223,6 +235,11 @@ def ctangent(p, kp, etap, csp, up, mp, msp, nd, x, direction):
     return tangent(model, x, {u}, direction) + tangent_now(model[8], direction)
 
 
+def cdirectional(p, kp, etap, csp, up, mp, msp, nd, x, direction, dx, dv):
+    model = _model(p, kp, etap, csp, mp, msp, nd)
+    return (tangent(model, x, {u}, direction) + tangent_now(model[8], direction)) * dx + model[3] * dv
+
+
 def cstored(p, kp, etap, csp, up, mp, msp, nd, x):
     m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
     return stored(x, k0, k3, k, {u})
@@ -249,6 +266,7 @@ _CONNECTOR_SIGNATURES = {
     "move": f"types.int64({_ELEMENT}, types.float64, types.float64, types.float64, {', '.join([_PTR] * 5)})",
     "cforce": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64)",
     "ctangent": f"types.float64({_ELEMENT}, types.float64, types.float64)",
+    "cdirectional": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64, types.float64)",
     "cstored": f"types.float64({_ELEMENT}, types.float64)",
     "cinitial": f"types.int64({_ELEMENT})",
     "elongations": f"types.int64({', '.join([_PTR] * 6)})",
@@ -541,13 +559,14 @@ def compile_kernels(scene, steppers) -> list:
     ``advance_<stepper>_<variant>``, ``noisy_<stepper>_<variant>`` (``advance_noisy``, for the steppers that take
     a white noise), ``record_<variant>``, ``row_<variant>``, ``stiffness_<variant>``, ``limits_<variant>``,
     ``initial_<variant>``,
-    ``elongations_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
+    ``elongations_<variant>``, ``rates_<variant>``, ``force_at``; for a scene that :func:`folds`, the same on the O(n) kernel
     (``<variant>p``) and ``fold``."""
     from numba import carray, cfunc, njit, types  # noqa: F401  (the generated source uses them)
 
     from ...kernels.drive import tangent
     from ...kernels.energy import kinetic, stored
     from ...kernels.friction import reaction
+    from ...kernels.rates import output_rates
     from ...kernels.increment import solve_increment
     from ...kernels.play import branch_force, move, write_elongations
     from ...kernels.showable import limits as showable_limits
@@ -584,14 +603,14 @@ def compile_kernels(scene, steppers) -> list:
                                  solve_increment=solve_increment, write_elongations=write_elongations,
                                  elastic_force=elastic_force, force_at=force_at, start=start,
                                  force_now=force_now, solve_dahl_increment=solve_dahl_increment,
-                                 dahl_after=dahl_after,
+                                 dahl_after=dahl_after, output_rates=output_rates,
                                  run=get_stepper(stepper).loop_for(quiet) if stepper else None,
                                  run_noisy=get_stepper(stepper).loop_for(noisy) if takes_noise else None)
                 exec(compile(source, f"<prandtl_fmu native kernels of {scene.source}>", "exec"), namespace)
                 for helper in ("_model", "_load", "_noisy_load"):  # inlined into each C function
                     namespace[helper] = njit(inline="always")(namespace[helper])
                 names = (["advance"] + (["advance_noisy"] if takes_noise else []) if stepper
-                         else ["record", "row", "stiffness", "limits", "initial", "elongations"])
+                         else ["record", "row", "stiffness", "limits", "initial", "elongations", "rates"])
                 if stepper is None and not compiled_force:
                     names.append("force_at")  # the scene's load alone: once
                     compiled_force = True

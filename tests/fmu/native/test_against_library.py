@@ -5,6 +5,7 @@ small C host of tests/c_host run with no Python at all; a binary that names no P
 PythonFMU FMU makes them; a checked FMU state; two instances on two threads."""
 import contextlib
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -962,3 +963,370 @@ def test_the_fmi3_description_speaks_fmi3_and_gives_every_output_its_dependencie
         n = root.find("ModelVariables/Int32[@name='n']")  # FMI 2.0's local constant (arrays: UInt64, structural)
         scene = load_scene(fmus3[name][1])
         assert n is not None and int(n.get("start")) == scene.branches.n >= 0
+
+
+# ------------------------------------------------------------------ F given with its derivatives (issue 61)
+
+def _set_derivatives(slave, orders, values):
+    """fmi2SetRealInputDerivatives of F: ``orders`` and ``values`` alike long."""
+    slave.fmu.setRealInputDerivatives([slave.vr["F"]] * len(orders), list(orders), list(values))
+
+
+def test_input_derivatives_drive_the_native_fmu_as_the_library_bit_for_bit(fmus):
+    """The paper's FMU (projected, implicit, verlet), F set with random F' and F'' before each of 30 random steps
+    (some not multiples of the step; every fifth step F alone, held): x, v, the reaction, the stiffness and the
+    energy account equal Element.advance(..., force_derivatives=(F', F'')) to the bit. A state saved with
+    derivatives set carries them: restored, the next step is the same again."""
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'canInterpolateInputs="true"' in description
+    for stepper in ("projected", "implicit", "verlet"):
+        rng = np.random.default_rng(5)
+        with fmu_and_element(fmu, scene, stepper) as (slave, element, names):
+            for j in range(30):
+                size, force = float(rng.choice([0.013, 0.05, 0.1, 0.0371])), float(rng.uniform(-0.6, 0.6))
+                rate, curvature = (float(value) for value in rng.uniform(-2.0, 2.0, 2))
+                time = slave.time
+                slave.set("F", force)
+                if j % 5:
+                    _set_derivatives(slave, (2, 1), (curvature, rate))  # any order of entries
+                else:
+                    rate = curvature = 0.0
+                if j == 17:
+                    saved, checkpoint = slave.fmu.getFMUstate(), element.get_state()
+                    slave.fmu.doStep(time, size)  # a step from the state saved, then the state restored
+                    slave.fmu.setFMUstate(saved)
+                    slave.fmu.freeFMUstate(saved)
+                    element.set_state(checkpoint)
+                slave.step(size)
+                element.time = time
+                element.advance(size, force, force_derivatives=(rate, curvature))
+                assert same(outputs(slave, names), expected(element, names)), (stepper, j)
+            assert abs(element.x) > 1e-3
+
+
+def test_derivatives_hold_for_one_step_and_a_new_f_clears_them(fmus):
+    """The derivatives describe F over the step that starts where they were set (FMI 2.0: inputs and their
+    derivatives refer to the start of a communication step): the step after is held unless they are set again,
+    and fmi2SetReal of F sets them to zero (the master's new value has no derivative until it gives one)."""
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    with fmu_and_element(fmu, scene, "projected") as (slave, element, names):
+        slave.set("F", 0.3)
+        _set_derivatives(slave, (1, 2), (0.5, -0.4))
+        slave.step(0.2)
+        element.advance(0.2, 0.3, force_derivatives=(0.5, -0.4))
+        slave.step(0.2)  # held at 0.3
+        element.time = 0.2
+        element.advance(0.2, 0.3)
+        assert same(outputs(slave, names), expected(element, names))
+        _set_derivatives(slave, (1,), (0.7,))
+        slave.set("F", -0.1)  # clears the 0.7 just set
+        slave.step(0.2)
+        element.time = 0.4
+        element.advance(0.2, -0.1)
+        assert same(outputs(slave, names), expected(element, names))
+
+
+def test_bad_input_derivatives_are_refused_with_their_reason(fmus):
+    """fmi2SetRealInputDerivatives refuses (fmi2Error, logged, nothing set) a value reference that is not F, an
+    order other than 1 and 2, a value that is not finite; a step with derivatives under scene_load or with
+    'exact' (closed forms of the scene's load kinds) is discarded naming why, the state unchanged."""
+    from fmpy.fmi1 import FMICallException
+
+    fmu, _ = fmus["paper"]
+    from tests.fmu_tools import Slave
+
+    slave = Slave(fmu)
+    try:
+        for vrs, orders, values, words in (([slave.vr["x"]], [1], [0.1], "is not the continuous input F"),
+                                           ([slave.vr["F"]], [3], [0.1], "order 3 of F"),
+                                           ([slave.vr["F"]], [0], [0.1], "order 0 of F"),
+                                           ([slave.vr["F"], slave.vr["F"]], [1, 2], [0.1, float("nan")],
+                                            "order 2 = nan must be finite")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                slave.fmu.setRealInputDerivatives(vrs, orders, values)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+        x = slave.get("x")
+        slave.step(0.1, 0.2)  # nothing was set: held
+        held_x = slave.get("x")
+        assert held_x != x
+        for setting, words in ((("scene_load", True), "force derivatives with scene_load"),
+                               (("stepper", "exact"), "force derivatives with stepper 'exact'")):
+            slave.set(*setting)
+            _set_derivatives(slave, (1,), (0.5,))
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                slave.fmu.doStep(slave.time, 0.1)
+            assert any(words in message for _, message in slave.messages), slave.messages
+            assert slave.get("x") == held_x
+            slave.set(*{"scene_load": ("scene_load", False), "stepper": ("stepper", "projected")}[setting[0]])
+    finally:
+        slave.close()
+
+
+SPACINGS = np.array([0.5, 0.2, 0.1, 0.05, 0.02, 0.01])
+
+
+def _tabulated_error(fmu, reference, spacing, derivatives):
+    """|x(STOP) - reference| of the FMU in FMPy's simulate_fmu under the paper's force tabulated every ``spacing``
+    s (FMPy interpolates it linearly and, with ``derivatives``, hands the slope as F')."""
+    from fmpy import simulate_fmu
+
+    times = np.arange(0.0, 12.0 + spacing / 2, spacing)
+    table = np.array(list(zip(times, 0.45 * np.cos(0.5 * times))), dtype=[("time", float), ("F", float)])
+    result = simulate_fmu(str(fmu), stop_time=12.0, output_interval=spacing, input=table, output=["x"],
+                          start_values={"scene_load": False, "stepper": "projected"},
+                          set_input_derivatives=derivatives)
+    assert result["time"][-1] == pytest.approx(12.0)
+    return abs(result["x"][-1] - reference)
+
+
+def _fmpy_derivative_buffers_sized(monkeypatch):
+    """FMPy 0.3.32's simulate_fmu(set_input_derivatives=True) gives each type of continuous input a buffer of 9
+    derivatives and assigns the inputs' derivatives to it whole: with fewer than 9 inputs (ours has one) it raises
+    "Can only assign sequence of same size" at the first step. Its Input objects get buffers of their inputs'
+    count instead (what FMPy means to hand: one first derivative per input)."""
+    import ctypes
+
+    from fmpy import simulation
+
+    original = simulation.Input.__init__
+
+    def sized(self, *arguments, **keywords):
+        original(self, *arguments, **keywords)
+        self.continuous = [info._replace(derivatives=(ctypes.c_double * len(info.vrs))()) for info in self.continuous]
+
+    monkeypatch.setattr(simulation.Input, "__init__", sized)
+
+
+@pytest.mark.parametrize("spacings", [SPACINGS[:4], pytest.param(SPACINGS, marks=pytest.mark.slow)],
+                         ids=["0.5-0.05", "0.5-0.01"])
+def test_a_tabulated_force_in_simulate_fmu_converges_at_second_order_with_input_derivatives(fmus, monkeypatch,
+                                                                                           spacings):
+    """The paper's FMU in FMPy's simulate_fmu under its force 0.45 cos(0.5 t) given as a table at spacings 0.5 ...
+    0.05 s (0.01 s under the slow marker), against the library's element under the continuous force (the same internal steps): the error in x at
+    t = 12 s falls at order ~1 with the input held over a step, >= 1.8 with set_input_derivatives=True (FMPy hands
+    the slope of the table's piece as F'; its buffer defect worked around: see _fmpy_derivative_buffers_sized,
+    which says so should FMPy fix it)."""
+    fmu, scene_path = fmus["paper"]
+    element = Element(load_scene(scene_path), stepper="projected")
+    element.advance(12.0, 0.0, scene_load=True)
+    with pytest.raises(ValueError, match="Can only assign sequence of same size"):  # FMPy's defect, still there
+        _tabulated_error(fmu, element.x, 0.5, True)
+    _fmpy_derivative_buffers_sized(monkeypatch)
+    for derivatives, least, most in ((False, 0.8, 1.3), (True, 1.8, 2.5)):
+        errors = np.array([_tabulated_error(fmu, element.x, spacing, derivatives) for spacing in spacings])
+        slope = np.polyfit(np.log(spacings), np.log(errors), 1)[0]
+        assert least <= slope <= most, (derivatives, errors, slope)
+
+
+# ------------------------------------------------------------------ output derivatives (issue 61)
+
+ASKED = [("x", 1), ("x", 2), ("v", 1), ("v", 2), ("reaction", 1)]
+
+
+def _output_derivatives(slave, asked=ASKED):
+    return slave.fmu.getRealOutputDerivatives([slave.vr[name] for name, _ in asked], [order for _, order in asked])
+
+
+def test_output_derivatives_are_the_library_s_and_the_slopes_of_the_fmu_s_own_outputs(fmus):
+    """The paper's FMU after random steps: x's derivatives (v, a), v's (a, a') and the reaction's rate equal
+    Element.output_derivatives to the bit; and they are the slopes of the FMU's own outputs: from a saved state,
+    exact steps of delta and 2 delta under F held give forward differences (Richardson's for order 1) that agree
+    to 1e-6 relative (order 1) and 1e-4 (order 2)."""
+    fmu, scene_path = fmus["paper"]
+    scene = load_scene(scene_path)
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'maxOutputDerivativeOrder="2"' in description
+    rng = np.random.default_rng(9)
+    with fmu_and_element(fmu, scene, "projected") as (slave, element, names):
+        for j in range(12):
+            step_both(slave, element, rng, names, j)
+        force = float(slave.get("F"))
+        wanted = element.output_derivatives(force)
+        got = _output_derivatives(slave)
+        assert same(got, [wanted[key] for key in ASKED])
+        assert got[0] == slave.get("v") and got[1] == got[2] and abs(got[1]) > 1e-3
+        slave.set("stepper", "exact")  # x, v exact over a step under F held: differences show the derivatives
+        saved, start = slave.fmu.getFMUstate(), slave.time
+        delta = 1e-5
+        values = [slave.get("x", "v", "reaction")]
+        for span in (delta, 2 * delta):
+            slave.fmu.setFMUstate(saved)
+            slave.fmu.doStep(start, span)
+            values.append(slave.get("x", "v", "reaction"))
+        slave.fmu.setFMUstate(saved)
+        slave.fmu.freeFMUstate(saved)
+        y0, y1, y2 = (np.array(row) for row in values)
+        first = (4 * (y1 - y0) - (y2 - y0)) / (2 * delta)  # y' + O(delta^2)
+        second = (y2 - 2 * y1 + y0) / delta ** 2  # y'' + O(delta)
+        after = _output_derivatives(slave)
+        assert same(after, got)  # the state set back: the same derivatives
+        x1, x2, v1, v2, r1 = got
+        for slope, derivative, tolerance in ((first[0], x1, 1e-6), (first[1], v1, 1e-6), (first[2], r1, 1e-6),
+                                             (second[0], x2, 1e-4), (second[1], v2, 1e-4)):
+            assert slope == pytest.approx(derivative, rel=tolerance, abs=1e-9), (slope, derivative)
+
+
+def test_output_derivatives_refuse_what_they_do_not_give(fmus):
+    """An order other than 1 and 2, the reaction's order 2, an output that has none (stiffness), an input (F), a
+    NULL order: fmi2Error with the reason, nothing written."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    fmu, _ = fmus["paper"]
+    slave = Slave(fmu)
+    try:
+        slave.step(0.1, 0.3)
+        for asked, words in (([("x", 3)], "order 3"), ([("x", 0)], "order 0"),
+                             ([("reaction", 2)], "the reaction's derivative of order 2 is not given"),
+                             ([("x", 1), ("stiffness", 1)], "not an output whose derivatives"),
+                             ([("F", 1)], "not an output whose derivatives")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                _output_derivatives(slave, asked)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+        assert _output_derivatives(slave, [("x", 1)]) == [slave.get("v")]
+    finally:
+        slave.close()
+
+
+# ------------------------------------------------------------------ the connector's directional derivatives (issue 61)
+
+def _directional(slave, knowns, seeds):
+    return slave.fmu.getDirectionalDerivative([slave.vr["force"]], [slave.vr[name] for name in knowns], list(seeds))
+
+
+@pytest.mark.parametrize("name", list(CONNECTORS))
+def test_the_connector_s_directional_derivatives_are_the_slopes_of_its_force(connectors, name):
+    """d force/d x (the tangent stiffness for the move from the committed x to the x set) and d force/d v (the
+    dashpot's c) of the native connector: both are the slopes of its own force output under the input moved a little
+    further (the outputs preview the inputs set last), to 1e-6 relative; the first is the output stiffness where
+    v points the way of that move; a combined seed is their sum."""
+    from tests.fmu_tools import Slave
+
+    slave = Slave(connectors[name]["native"], start_values={"x": 0.02})
+    description = zipfile.ZipFile(connectors[name]["native"]).read("modelDescription.xml").decode()
+    assert 'providesDirectionalDerivative="true"' in description
+    rng = np.random.default_rng(6)
+    committed, compared = 0.02, 0
+    try:
+        for j in range(20):
+            x, v = float(rng.uniform(-0.4, 0.4)), float(rng.uniform(-1, 1))
+            if j:
+                slave.step(0.05)
+                committed = slave.get("x")
+            slave.set("x", x)
+            slave.set("v", v)
+            by_x, = _directional(slave, ["x"], [1.0])
+            by_v, = _directional(slave, ["v"], [1.0])
+            if (x - committed) * v > 0:
+                assert by_x == slave.get("stiffness")
+                compared += 1
+            force = slave.get("force")
+            ahead = math.copysign(1e-7, x - committed)  # further along the move the force is a function of
+            slave.set("x", x + ahead)
+            slope_x = (slave.get("force") - force) / ahead
+            slave.set("x", x)
+            slave.set("v", v + 1e-3)
+            slope_v = (slave.get("force") - force) / 1e-3
+            slave.set("v", v)
+            assert by_x == pytest.approx(slope_x, rel=1e-6, abs=1e-6), (j, by_x, slope_x)
+            assert by_v == pytest.approx(slope_v, rel=1e-9, abs=1e-12), (j, by_v, slope_v)
+            both, = _directional(slave, ["v", "x"], [0.5, 2.0])
+            assert both == pytest.approx(2.0 * by_x + 0.5 * by_v, rel=1e-15)
+        assert compared >= 5
+    finally:
+        slave.close()
+
+
+def test_the_connector_refuses_directional_derivatives_it_does_not_have(connectors):
+    """An unknown other than force, a known other than x and v or listed twice, a NaN seed: fmi2Error with the
+    reason logged; the element FMU declares none and refuses them as before."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    slave = Slave(connectors["series"]["native"], start_values={"x": 0.02})
+    try:
+        for unknown, knowns, seeds, words in (("stiffness", ["x"], [1.0], "is not the output force"),
+                                              ("force", ["x", "x"], [1.0, 1.0], "listed twice"),
+                                              ("force", ["c"], [1.0], "is not the input x or v"),
+                                              ("force", ["x"], [float("nan")], "is not finite")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                slave.fmu.getDirectionalDerivative([slave.vr[unknown]], [slave.vr[n] for n in knowns], seeds)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+    finally:
+        slave.close()
+
+
+# ------------------------------------------------------------------ FMI 3.0: intermediate update (issue 61)
+
+def test_fmi3_intermediate_update_sets_f_at_every_internal_step_as_the_library(fmus3):
+    """The paper's FMI 3.0 FMU instantiated with an intermediate update callback (what FMPy's
+    instantiate_fmu(..., intermediate_update=...) hands): the FMU calls it at the start of every internal step
+    (the first of a doStep with intermediateStepFinished false), the master sets F there to the paper's force of
+    that instant, and x, v equal the library's Element advanced step by step under the same F, to the bit
+    (projected and implicit, steps not multiples of h); a setter of anything but F in the callback is refused
+    (only F is intermediateUpdate="true"); fmi3GetOutputDerivatives gives x's order 1 = v."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    from prandtl_fmu.stepping import split_duration
+
+    fmu, scene_path = fmus3["paper"]
+    scene = load_scene(scene_path)
+    description = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'providesIntermediateUpdate="true"' in description and 'intermediateUpdate="true"' in description
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = extract(str(fmu))
+    for stepper in ("projected", "implicit"):
+        slave = FMU3Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName=stepper)
+        asked, refused, messages = [], [], []
+
+        def update(env, time, set_requested, get_requested, finished, can_return_early, early, early_time):
+            asked.append((time, bool(finished)))
+            slave.setFloat64([vr["F"]], [0.45 * math.cos(0.5 * time)])
+            if len(asked) == 7:  # a parameter in intermediate update mode
+                try:
+                    slave.setFloat64([vr["m"]], [2.0])
+                except FMICallException as error:
+                    refused.append(error.status)
+
+        def logger(env, status, category, message):
+            messages.append(message.decode())
+
+        slave.instantiate(intermediateUpdate=update, logMessage=logger)
+        slave.enterInitializationMode(startTime=0.0)
+        slave.setBoolean([vr["scene_load"]], [False])
+        slave.setString([vr["stepper"]], [stepper])
+        slave.exitInitializationMode()
+        element = Element(scene, stepper=stepper)
+        t = 0.0
+        try:
+            for size in (0.05, 0.0137, 0.1, 0.02):
+                start = len(asked)
+                slave.doStep(t, size)
+                t += size
+                assert asked[start][1] is False and all(finished for _, finished in asked[start + 1:])
+                whole, rest = split_duration(size, element.h)  # the doStep's split, as the FMU makes it
+                spans = [element.h] * int(whole) + ([rest] if rest else [])
+                assert len(spans) == len(asked) - start
+                for (time, _), span in zip(asked[start:], spans):
+                    element.time = time
+                    element.advance(span, 0.45 * math.cos(0.5 * time))
+                assert slave.getFloat64([vr["x"], vr["v"]]) == [element.x, element.v], (stepper, t)
+            assert refused == [3] and any("only F may be set there" in message for message in messages)
+            assert slave.getOutputDerivatives([vr["x"]], [1]) == [element.v]
+            assert abs(element.x) > 1e-3
+        finally:
+            slave.terminate()
+            slave.freeInstance()

@@ -5,7 +5,8 @@ Each sequence runs in its own process, the C host of tests/c_host/trust_host.c b
 they run (the FMU too): calls in any order, NULL instances and pointers, NaN, inf, huge and subnormal values for
 every Real variable, communication points and steps, stepper names that are NULL, unknown or too long, and FMU
 state blobs that are valid, truncated, bit-flipped, forged with a recomputed checksum or garbage, loaded by
-fmi2/3DeSerializeFMUState or written over a state's memory before fmi2/3SetFMUState. Every call must return (the
+fmi2/3DeSerializeFMUState or written over a state's memory before fmi2/3SetFMUState, input derivatives set and output
+derivatives asked for with any reference and order (FMI 2.0). Every call must return (the
 process ends by itself within its time limit, no crash, no sanitizer report), every message has a declared
 category, and every value a getter hands out with an OK status is finite."""
 import math
@@ -103,6 +104,9 @@ def sequence(rng, fmu, paths) -> list:
             commands.append(f"dump:{paths[0].parent / 'dumped.bin'}")
         elif kind == 19:
             commands.append(pick(["nullc", f"nulla:{pick(list(fmu.vr))}"]))
+        elif kind == 20 and fmu.fmi == 2:  # F's derivatives set, an output's asked (any variable, any order)
+            order = pick([0, 1, 2, 3, -1])
+            commands.append(pick([f"deriv:{pick(reals)}:{order}:{pick(REALS)!r}", f"oderiv:{pick(reals)}:{order}"]))
         elif kind == 20 and fmu.fmi == 3 and any(name.startswith("u_") for name in fmu.vr):
             # an elongation u_i (the array u with arrays) asked with 0 to 4 values
             elongations = [name for name in fmu.vr if name == "u" or name.startswith("u_")]

@@ -375,3 +375,48 @@ def test_a_forged_field_with_a_recomputed_checksum_is_refused(fmus, fmi, name, f
     assert run.status(f"load:{bad}") == ERROR and run.status("restore") == ERROR, run.out
     assert len(run.said(reason)) == 2, (reason, run.logs)
     assert run.status("step:0.3:0.1") == OK and math.isfinite(run.values[-1][1])
+
+
+# ------------------------------------------------------------------ input derivatives (issue 61)
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_bad_input_derivatives_are_refused_with_a_logged_reason_never_a_crash(fmus, name):
+    """fmi2SetRealInputDerivatives handed a variable that is not F, an unknown value reference, order 0 or 3, a NaN:
+    each an error with its reason (logging off), nothing set, the instance steps on; the element takes F's orders 1
+    and 2; the connector, whose inputs are held, refuses any, saying so."""
+    host, fmu = fmus[name, 2]
+    given = "F" if name == "element" else "x"
+    bad = [f"deriv:{given}:3:0.1", f"deriv:{given}:0:0.1", "deriv:999999:1:0.1", f"deriv:{given}:1:nan"]
+    if name == "element":
+        bad.append("deriv:x:1:0.1")
+    good = ["deriv:F:1:0.5", "deriv:F:2:-0.3"] if name == "element" else []
+    start = ["setup:0", "enter", "setb:scene_load:0", "exit"] if name == "element" else START  # F alone
+    run = ran(run_trust(host, fmu, start + bad + good + ["step:0:0.1", "getr:" + _output(name)]))
+    for command in bad:
+        assert run.status(command) == ERROR, command
+    for command in good:
+        assert run.status(command) == OK, command
+    assert run.status("step:0:0.1") == OK and len(run.values) == 1 and math.isfinite(run.values[0][1])
+    if name == "element":
+        for words in ("order 3 of F", "order 0 of F", "value reference 999999 is not the continuous input F",
+                      "order 1 = nan must be finite", f"value reference {fmu.vr['x']} is not the continuous input F"):
+            assert run.said(words), (words, run.logs)
+    else:
+        assert len(run.said("the FMU holds its input over a step")) == len(bad), run.logs
+
+
+def test_bad_output_derivative_requests_are_refused_with_a_logged_reason_never_a_crash(fmus):
+    """fmi2GetRealOutputDerivatives of the element asked for order 0 and 3, the reaction's order 2, an input, an
+    unknown value reference: each an error with its reason, nothing written; x's order 1 is v."""
+    host, fmu = fmus["element", 2]
+    bad = ["oderiv:x:0", "oderiv:x:3", "oderiv:reaction:2", "oderiv:F:1", "oderiv:999999:1"]
+    run = ran(run_trust(host, fmu, ["setup:0", "enter", "setb:scene_load:0", "exit", "setr:F:0.3", "step:0:0.1"]
+                        + bad + ["oderiv:x:1", "getr:v"]))
+    for command in bad:
+        assert run.status(command) == ERROR, command
+    assert run.status("oderiv:x:1") == OK
+    assert len(run.values) == 2 and run.values[0][1] == run.values[1][1]  # x' = v, to the bit
+    for words in ("order 0", "order 3", "the reaction's derivative of order 2 is not given",
+                  "not an output whose derivatives"):
+        assert run.said(words), (words, run.logs)
