@@ -354,6 +354,9 @@ CONNECTOR_FORGERIES = {
     "k0 = 1e300 in use": ({8 * 3: 1e300}, "parameter k0: |1e+300| is outside"),
     "c_branch[1] = -1 in use": ({8 * 10: -1.0}, "parameter c_branch[1]: must be > 0"),
     "a NaN direction": ({8 * (10 + N_SERIES) + 24: math.nan}, "non-finite or out-of-range value"),
+    # the account after u[3]: [0] unused, [1] the sliders' dissipation, [2] the dashpots'
+    "a negative dissipation": ({connector_u(N_SERIES) - ELEMENT_AT + 8 * (N_SERIES + 1): -1.0},
+                               "a dissipation is negative"),
 }
 
 
