@@ -38,7 +38,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import FrequencyError
+from . import DEFAULT_TOLERANCE, FrequencyError
 
 MIN_SAMPLES = 256
 SAMPLES_PER_HARMONIC = 64
@@ -48,6 +48,11 @@ NEWTON_ITERATIONS = 40
 STEP_TOLERANCE = 1e-10
 RESIDUAL_TOLERANCE = 1e-11
 ELEMENT_NODE = "mass"
+# a spectrum of branches as branches (:func:`spectrum_branches`): the Gauss-Legendre points per panel, the most
+# nodes per segment and the amplitudes its first harmonic is checked at
+SPECTRUM_RULE = 8
+SPECTRUM_MAX_NODES = 1024
+SPECTRUM_AMPLITUDES = 25
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,13 +100,14 @@ class PeriodicSystem:
         return self.nodes.index(name)
 
 
-def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
+def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = DEFAULT_TOLERANCE) -> PeriodicSystem:
     """The :class:`PeriodicSystem` of an element scene (with ``[mass]``) or a network scene; ``load_node``: the
-    node the harmonic force acts on (default: the network's ``load_node``; the element's mass). FrequencyError
-    for what harmonic balance does not take (and why)."""
+    node the harmonic force acts on (default: the network's ``load_node``; the element's mass); ``tolerance``:
+    of a spectrum of branches' quadrature (:func:`spectrum_branches`). FrequencyError for what harmonic balance
+    does not take (and why)."""
     from ..network.model import NetworkScene
 
-    network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene)
+    network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene, tolerance)
     for element in network.elements:
         if element.kind == "slider":
             raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
@@ -155,9 +161,10 @@ def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
         tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links))
 
 
-def _element_network(scene):
-    """The element scene as a network of one node ``mass``, its effects to the ground; FrequencyError for the
-    effects harmonic balance does not take."""
+def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
+    """The element scene as a network of one node ``mass``, its effects to the ground (a spectrum of branches as
+    the branches of :func:`spectrum_branches`); FrequencyError for the effects harmonic balance does not
+    take."""
     from ..network.model import Element, Network
 
     if scene.mass is None:
@@ -165,8 +172,6 @@ def _element_network(scene):
                              "resonance: describe it with --amplitudes)")
     refused = [(scene.friction, "[friction] (Coulomb friction of the mass: set-valued while it sticks)"),
                (scene.dahl, "[dahl]"), (scene.delay, "[delay]"), (scene.history, "[history]")]
-    if scene.branches is not None and scene.branches.continuum:
-        refused.append((scene.branches, "a continuum of branches"))
     if scene.has_series_dashpots:
         refused.append((True, "[branches] c (series dashpots)"))
     for present, name in refused:
@@ -179,13 +184,85 @@ def _element_network(scene):
         elements.append(Element("cubic", "k3", (0, -1), float(scene.cubic.k3)))
     if scene.has_dashpot:
         elements.append(Element("dashpot", "c", (0, -1), float(scene.damper.c)))
-    if scene.branches is not None:
+    if scene.branches is not None and scene.branches.continuum:
+        k, eta = spectrum_branches(scene.branches, tolerance, scene.source)
+        for i, (k_i, eta_i) in enumerate(zip(k.tolist(), eta.tolist())):
+            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k_i, eta_i, 0.0, 0.0))
+    elif scene.branches is not None:
         b = scene.branches
         for i, (k, eta, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), b.u0.tolist())):
             elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, 0.0, u0))
     mass = scene.mass
     return Network((ELEMENT_NODE,), np.array([mass.m]), np.array([mass.x0]), np.array([mass.v0]),
                    tuple(elements), 0)
+
+
+def spectrum_branches(branches, tolerance: float = DEFAULT_TOLERANCE, source: str = "scene") -> tuple:
+    """``(k, eta)``: a spectrum of branches (``effects.ContinuousBranches``: k(s) = c_j eta(s)^p_j, eta linear on
+    each segment [s_j, s_j+1]) as finitely many Prandtl branches, the nodes of a stated quadrature with their
+    weights as stiffnesses. On each segment, composite Gauss-Legendre (SPECTRUM_RULE points on each of P equal
+    panels of t in [0, 1]) under s = s_j + (s_j+1 - s_j) (1 - cos(pi t)) / 2 (which takes an end singularity of
+    eta^p at eta = 0):
+
+        k_i = w_i ds/dt(t_i) c_j eta(s_i)^p_j,      eta_i = eta(s_i);
+
+    a flat segment (a Dirac) is one branch, c_j eta^p_j (s_j+1 - s_j). Unlike describe's integral
+    (``closed_forms.spectrum_forms``) the nodes cannot be cut where eta(s) = A: A is an unknown of the balance.
+    The count: P doubled from 1 until the first harmonic of the branches' force under
+    x = A sin(theta) (their closed forms, ``closed_forms.branch_forms``: a_1 + i b_1 = K A + i D / (pi A))
+    changes by at most ``tolerance`` of its size from one count to the next, at each of SPECTRUM_AMPLITUDES
+    amplitudes from eta_max / 1000 to 4 eta_max (every regime: micro-slip, the slip of the spectrum's part,
+    macro-slip); FrequencyError past SPECTRUM_MAX_NODES nodes per segment. (Panels rather than one rule of
+    many points: the kink of each branch's forms at eta = A falls inside some panel wherever A is, and
+    numpy's ``leggauss`` costs O(n^3) for n points.)"""
+    from .closed_forms import branch_forms, gauss_legendre
+
+    top = float(np.max(branches.eta))
+    amplitudes = np.geomspace(1e-3, 4.0, SPECTRUM_AMPLITUDES) * (top if top > 0 else 1.0)
+
+    x, w = gauss_legendre(SPECTRUM_RULE)
+
+    def quadrature(panels):
+        t = ((np.arange(panels)[:, None] + 0.5 * (x[None, :] + 1.0)) / panels).reshape(-1)
+        weight = np.tile(w, panels) / panels
+        k, eta = [], []
+        for j in range(branches.coefficient.shape[0]):
+            s0, s1 = float(branches.s[j]), float(branches.s[j + 1])
+            e0, e1 = float(branches.eta[j]), float(branches.eta[j + 1])
+            c, p = float(branches.coefficient[j]), float(branches.power[j])
+            if c == 0.0 or s1 <= s0:
+                continue
+            if e1 == e0:
+                k.append([c * e0**p * (s1 - s0)] if p != 0 else [c * (s1 - s0)])
+                eta.append([e0])
+                continue
+            fraction = 0.5 - 0.5 * np.cos(math.pi * t)
+            slope = 0.25 * math.pi * np.sin(math.pi * t)  # d fraction / dt times the weight's 1/2 (dt = dx / 2)
+            eta_j = e0 + (e1 - e0) * fraction
+            density = c * np.power(eta_j, p) if p != 0 else np.full_like(eta_j, c)
+            k.append(weight * slope * (s1 - s0) * density)
+            eta.append(eta_j)
+        return np.concatenate(k), np.concatenate(eta)
+
+    def first_harmonic(k, eta):
+        K, D = branch_forms(k[:, None], eta[:, None], amplitudes[None, :])
+        return K.sum(axis=0) * amplitudes + 1j * D.sum(axis=0) / (math.pi * amplitudes)
+
+    panels = 1
+    k, eta = quadrature(panels)
+    previous = first_harmonic(k, eta)
+    while True:
+        panels *= 2
+        k, eta = quadrature(panels)
+        harmonic = first_harmonic(k, eta)
+        change = float(np.max(np.abs(harmonic - previous) / np.abs(harmonic)))
+        if change <= tolerance:
+            return k, eta
+        if panels * SPECTRUM_RULE >= SPECTRUM_MAX_NODES:
+            raise FrequencyError(f"{source}: the spectrum of branches as {panels * SPECTRUM_RULE} branches per "
+                                 f"segment still changed its first harmonic by {change:.3g} relative (tolerance {tolerance:g}): give a "
+                                 "larger --tolerance, or count = n sampled branches")
+        previous = harmonic
 
 
 def sample_count(harmonics: int) -> int:

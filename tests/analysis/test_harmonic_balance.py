@@ -270,3 +270,58 @@ def test_a_csv_cell_is_a_number_or_empty_never_nan(tmp_path):
     for bad in (float("nan"), float("inf"), np.float64(-np.inf)):
         with pytest.raises(ValueError, match="defect"):
             csv_text({"a": [bad]})
+
+
+SPECTRA = {"linear": {"continuum": True, "k_total": 2.0, "eta_range": [0.05, 0.5]},
+           "iwan": {"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 5.0, "chi": -0.5, "beta": 0.1}}}
+
+
+@pytest.mark.parametrize("spectrum", sorted(SPECTRA))
+def test_one_harmonic_nonlinear_mode_on_a_spectrum_is_describe_s_spectrum_integral(spectrum):
+    """A mass on k0 and a spectrum of branches (the continuum): harmonic balance takes the spectrum as branches at
+    quadrature nodes, so with one harmonic the EPMC frequency is sqrt(K(A) / m) and the damping ratio
+    D(A) / (2 pi K A^2), K and D describe's spectrum integral (Gauss-Legendre cut where eta(s) = A)."""
+    from prandtl_fmu.frequency.describing import describe_amplitudes
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    m, tolerance = 2.0, 1e-4
+    scene = element({"mass": {"m": m}, "spring": {"k0": 1.0}, "branches": SPECTRA[spectrum]})
+    amplitudes = [0.02, 0.1, 0.3, 1.0]
+    backbone = nonlinear_mode(scene, 1, amplitudes, harmonics=1, tolerance=tolerance, samples=2048)
+    described = describe_amplitudes(scene, amplitudes, tolerance=tolerance / 10)
+    assert set(described.method) == {"spectrum"}
+    K, D, A = np.asarray(described.stiffness), np.asarray(described.dissipation), np.asarray(amplitudes)
+    assert backbone.frequency == pytest.approx(np.sqrt(K / m) / (2 * math.pi), rel=tolerance)
+    zeta = D / (2 * math.pi * K * A * A)
+    assert np.all(zeta[1:] > 1e-3)
+    assert backbone.damping_ratio == pytest.approx(zeta, rel=tolerance, abs=tolerance * zeta.max())
+
+
+def test_one_harmonic_forced_response_on_a_spectrum_is_describe_s_spectrum_integral():
+    """F0 cos(omega t) on m x'' + c x' + k0 x + spectrum: with one harmonic each point's amplitude A and phase
+    satisfy (K(A) - m omega^2 + i (c omega + D(A) / (pi A^2))) A e^(i phase) = F0, K and D describe's, to the
+    tolerance of the restoring force's first harmonic (what the spectrum's quadrature is held to)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.describing import describe_amplitudes
+
+    m, c, F0, tolerance = 1.0, 0.02, 0.1, 1e-4
+    tables = {"mass": {"m": m}, "spring": {"k0": 1.0}, "branches": SPECTRA["linear"]}
+    curve = harmonic_response(element({**tables, "damper": {"c": c}}), F0, [0.15, 0.3], harmonics=1,
+                              tolerance=tolerance, stability=False, samples=2048)
+    assert curve.frequency.size > 5
+    described = describe_amplitudes(element(tables), curve.amplitude, tolerance=tolerance / 10)
+    K, D, A = np.asarray(described.stiffness), np.asarray(described.dissipation), curve.amplitude
+    omega = 2 * math.pi * curve.frequency
+    force = (K - m * omega**2 + 1j * (c * omega + D / (math.pi * A * A))) * A * np.exp(1j * curve.phase)
+    restoring = np.abs((K + 1j * D / (math.pi * A * A)) * A)
+    assert np.all(np.abs(force - F0) <= tolerance * restoring)
+
+
+def test_a_spectrum_whose_quadrature_cannot_reach_the_tolerance_is_one_line(tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "branches": SPECTRA["linear"]})
+    status = main(["describe", scene, "--force-amplitude", "0.1", "--frequencies", "0.15,0.3", "--tolerance",
+                   "1e-12", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and "spectrum of branches" in err and "--tolerance" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
