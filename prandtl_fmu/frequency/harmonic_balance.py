@@ -24,6 +24,11 @@ The Jacobian dR/dq is exact in structure: the linear part as written, dG/dq from
 sample through the same FFT, for a branch with the anchor of its stick (``aft.py``): exact for the sampled
 map, so Newton's iteration converges in a few steps once the slip pattern is right. dR/d omega is exact.
 
+Two effects take a stated quadrature instead: a spectrum of branches (the continuum) becomes branches at
+quadrature nodes (:func:`spectrum_branches`), after which all of the above applies to them unchanged; branches
+with series dashpots are driven by the compiled kernels over periods to their steady cycle, their Jacobian and
+dG/d omega by finite differences (``driven.py``).
+
 A node's mean is an unknown where springs or cubic springs hold the node to the ground; elsewhere it is 0
 (branches carry no mean on their centred cycle, so no equation would set it). The equations of the other
 coefficients are solved with Newton's method, at most NEWTON_ITERATIONS iterations; a point that does not
@@ -61,7 +66,8 @@ class PeriodicSystem:
     (n, n); the nonlinear elements as (count, 2) ``*_ends`` (-1: the ground), ``cubic_k3``, ``branch_k``,
     ``branch_eta``, each with the index of its pair of nodes in ``pairs``; ``load_node``; ``network``: the same
     system as a network (the time integration of the stability check runs it) and ``branch_index``: the index
-    of each branch among the network's elements."""
+    of each branch among the network's elements; ``held``: the nodes whose mean is an unknown; ``series``: the
+    branches with series dashpots, one ``driven.SeriesBranches`` per pair of nodes."""
 
     name: str
     source: str
@@ -81,6 +87,7 @@ class PeriodicSystem:
     network: object
     branch_index: np.ndarray
     held: np.ndarray
+    series: tuple = ()
 
     @property
     def n(self) -> int:
@@ -113,14 +120,11 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
             raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
                                  "sticks, which harmonic balance cannot sample: model the joint as branches "
                                  "(k, eta: a slider behind a spring) or use --method time")
-        if element.kind == "branch" and element.c > 0:
-            raise FrequencyError(f"{scene.source}: branch {element.name}: a series dashpot (c > 0) is not taken "
-                                 "by harmonic balance: use --method time")
     if not np.any(network.mass > 0):
         raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one")
     n = network.n
     stiffness, damping = np.zeros((n, n)), np.zeros((n, n))
-    cubic, branches, pairs, links = [], [], [], []
+    cubic, branches, pairs, links, series = [], [], [], [], {}
 
     def pair_of(ends):
         key = (min(ends), max(ends)) if min(ends) >= 0 else (max(ends), -1)
@@ -142,6 +146,8 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
         elif element.kind == "cubic":
             cubic.append((p, q, element.value, pair_of((p, q))))
             links.append((p, q))
+        elif element.c > 0:
+            series.setdefault(pair_of((p, q)), []).append((element.value, element.eta, element.c, index))
         else:
             branches.append((p, q, element.value, element.eta, pair_of((p, q)), index))
     node = network.load_node
@@ -158,7 +164,15 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
         cubic_table[:, :2].astype(np.int64).copy(), cubic_table[:, 2].copy(),
         np.array([c[3] for c in cubic], dtype=np.int64), branch_table[:, :2].astype(np.int64).copy(),
         branch_table[:, 2].copy(), branch_table[:, 3].copy(), np.array([b[4] for b in branches], dtype=np.int64),
-        tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links))
+        tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links),
+        tuple(_series_branches(pairs[pair], pair, group) for pair, group in series.items()))
+
+
+def _series_branches(ends, pair, group):
+    from .driven import SeriesBranches, series_model
+
+    k, eta, c, index = (np.array(column) for column in zip(*group))
+    return SeriesBranches(ends, pair, series_model(k, eta, c), index.astype(np.int64))
 
 
 def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
@@ -172,8 +186,6 @@ def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
                              "resonance: describe it with --amplitudes)")
     refused = [(scene.friction, "[friction] (Coulomb friction of the mass: set-valued while it sticks)"),
                (scene.dahl, "[dahl]"), (scene.delay, "[delay]"), (scene.history, "[history]")]
-    if scene.has_series_dashpots:
-        refused.append((True, "[branches] c (series dashpots)"))
     for present, name in refused:
         if present is not None:
             raise FrequencyError(f"{scene.source}: {name} is not taken by harmonic balance: use --method time")
@@ -190,8 +202,10 @@ def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
             elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k_i, eta_i, 0.0, 0.0))
     elif scene.branches is not None:
         b = scene.branches
-        for i, (k, eta, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), b.u0.tolist())):
-            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, 0.0, u0))
+        cs = b.damping.tolist() if b.damping is not None else [0.0] * b.stiffness.shape[0]
+        for i, (k, eta, c, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), cs,
+                                                 b.u0.tolist())):
+            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, c, u0))
     mass = scene.mass
     return Network((ELEMENT_NODE,), np.array([mass.m]), np.array([mass.x0]), np.array([mass.v0]),
                    tuple(elements), 0)
@@ -324,6 +338,8 @@ class HarmonicBalance:
         self._forces = np.empty((n, N))
         self._tangent = np.empty((max(len(system.pairs), 1), N, L))
         self.elongations = np.zeros(system.branch_k.shape[0])
+        self.series_u = [np.zeros(group.index.shape[0]) for group in system.series]
+        self.by_omega = np.zeros(n * L)  # dG / d omega: the series dashpots' (``driven.py``), else 0
 
     # ------------------------------------------------------------- the harmonics and the samples
 
@@ -348,8 +364,9 @@ class HarmonicBalance:
 
     # ------------------------------------------------------------- residual and Jacobian
 
-    def nonlinear(self, q: np.ndarray) -> tuple:
-        """(G (n L,), dG/dq (n L, n L)) at all coefficients q."""
+    def nonlinear(self, q: np.ndarray, omega: Optional[float] = None) -> tuple:
+        """(G (n L,), dG/dq (n L, n L)) at all coefficients q; ``omega`` (rad/s): the frequency, which the
+        branches with series dashpots need (``driven.py``)."""
         from .aft import restoring_samples
 
         s = self.system
@@ -359,8 +376,11 @@ class HarmonicBalance:
                           s.branch_eta, s.branch_pair, self._forces, self._tangent, self.elongations)
         G = self.harmonics_of(self._forces).reshape(n * L)
         jacobian = np.zeros((n * L, n * L))
+        self.by_omega[:] = 0.0
         if s.pairs:
             blocks = self.projection @ self._tangent  # (pairs, L, L)
+            for group, u in zip(s.series, self.series_u):
+                self._series(group, u, x, q, omega, G, blocks[group.pair])
             for (p, r), block in zip(s.pairs, blocks):
                 jacobian[p * L:(p + 1) * L, p * L:(p + 1) * L] += block
                 if r >= 0:
@@ -368,6 +388,35 @@ class HarmonicBalance:
                     jacobian[p * L:(p + 1) * L, r * L:(r + 1) * L] -= block
                     jacobian[r * L:(r + 1) * L, p * L:(p + 1) * L] -= block
         return G, jacobian
+
+    def _series(self, group, u, x, q, omega, G, block) -> None:
+        """Add the force of the Maxwell branches ``group`` to G, their finite-difference derivative with
+        respect to the pair's elongation coefficients to ``block`` (L, L) and with respect to omega to
+        ``self.by_omega`` (``driven.py``); ``u`` (in place): their state at sample 0 of the steady cycle, the
+        warm start of the next call."""
+        from .driven import FINITE_STEP, steady_cycle
+
+        if omega is None or not omega > 0:
+            raise FrequencyError(f"{self.system.source}: branches with series dashpots need the frequency")
+        p, r = group.ends
+        L, period = self.L, 2.0 * math.pi / omega
+        elongation = x[p] - (x[r] if r >= 0 else 0.0)
+        forces, _ = steady_cycle(group, elongation, period, u, self.system.source)
+        harmonics = self.harmonics_of(forces)
+        G[p * L:(p + 1) * L] += harmonics
+        if r >= 0:
+            G[r * L:(r + 1) * L] -= harmonics
+        step = FINITE_STEP * max(float(np.max(np.abs(elongation))), float(np.max(group.eta)), 1e-300)
+        for l in range(L):
+            moved, _ = steady_cycle(group, elongation + step * self.basis[:, l], period, u.copy(),
+                                    self.system.source)
+            block[:, l] += (self.harmonics_of(moved) - harmonics) / step
+        faster = omega * (1.0 + FINITE_STEP)
+        moved, _ = steady_cycle(group, elongation, 2.0 * math.pi / faster, u.copy(), self.system.source)
+        by_omega = (self.harmonics_of(moved) - harmonics) / (faster - omega)
+        self.by_omega[p * L:(p + 1) * L] += by_omega
+        if r >= 0:
+            self.by_omega[r * L:(r + 1) * L] -= by_omega
 
     def force(self, omega: float) -> np.ndarray:
         """The harmonics (n L,) of the force at ``omega`` (rad/s)."""
@@ -381,12 +430,12 @@ class HarmonicBalance:
         """``(R, dR/dq, dR/domega, dR/dxi)`` on the free unknowns at ``omega`` (rad/s); ``xi`` (1/s): the
         negative viscous term -xi M x' of a nonlinear mode (0: the forced response); ``forced``: with F0."""
         q = self.full(free_values)
-        G, nonlinear = self.nonlinear(q)
+        G, nonlinear = self.nonlinear(q, omega)
         velocity = self.linear_damping - xi * self.mass_velocity
         linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia
         residual = linear @ q + G - (self.force(omega) if forced else 0.0)
         jacobian = linear + nonlinear
-        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q
+        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q + self.by_omega
         if forced and self.power:
             by_omega = by_omega - self.power * self.force(omega) / omega
         by_xi = -omega * (self.mass_velocity @ q)
@@ -397,7 +446,9 @@ class HarmonicBalance:
         """The free unknowns of the response with every branch sticking and no cubic spring (a first guess)."""
         s = self.system
         stuck = s.stiffness.copy()
-        for (p, r), k in zip(s.branch_ends.tolist(), s.branch_k.tolist()):
+        ends = s.branch_ends.tolist() + [list(g.ends) for g in s.series for _ in g.index]
+        stiffnesses = s.branch_k.tolist() + [k for g in s.series for k in g.model[4].tolist()]
+        for (p, r), k in zip(ends, stiffnesses):
             stuck[p, p] += k
             if r >= 0:
                 stuck[r, r] += k

@@ -325,3 +325,43 @@ def test_a_spectrum_whose_quadrature_cannot_reach_the_tolerance_is_one_line(tmp_
     err = capsys.readouterr().err
     assert status == 2 and "spectrum of branches" in err and "--tolerance" in err
     assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+MAXWELL = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02},
+           "branches": {"k": [1.0], "alpha": [0.1], "c": [0.5]}}
+
+
+@pytest.mark.slow
+def test_stable_points_agree_with_the_time_sweep_on_a_mass_on_a_maxwell_branch():
+    """A branch with a series dashpot (spring, slider and dashpot in series: relaxing at k / c = 2 / s, so its
+    cycle depends on the period) driven by the compiled kernels over periods until its cycle repeats: with H = 5
+    the curve's points agree with the time sweep's (--method time) to its tolerance, slip and stick alike."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.response import frequency_response
+
+    scene = element(MAXWELL)
+    curve = harmonic_response(scene, 0.1, [0.12, 0.25], harmonics=5)
+    assert np.all(curve.stable)
+    picks = [np.argmin(np.abs(curve.frequency - f)) for f in (0.14, 0.18, 0.22)]
+    response = frequency_response(scene, 0.1, curve.frequency[picks], sweep="up", tolerance=1e-4)
+    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=1e-4)
+    assert response.phase == pytest.approx(curve.phase[picks], abs=1e-4)
+    # the dashpot matters here: the same branch without it (the play operator's exact AFT) is another curve
+    plain = harmonic_response(element({**MAXWELL, "branches": {"k": [1.0], "alpha": [0.1]}}), 0.1,
+                              curve.frequency[picks][[0, -1]], harmonics=5, stability=False)
+    assert abs(plain.amplitude[-1] / curve.amplitude[picks[-1]] - 1) > 1e-2
+
+
+@pytest.mark.slow
+def test_a_stiff_series_dashpot_is_the_plain_branch():
+    """c -> infinity: the Maxwell branch (driven over periods, finite-difference Jacobian) is the Jenkins branch
+    (the play operator's exact AFT and Jacobian): the same solution to the dashpot's relaxation over a period."""
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    omega = 2 * math.pi * 0.17
+    stiff = HarmonicBalance(periodic_system(element({**MAXWELL, "branches": {**MAXWELL["branches"],
+                                                                                "c": [1e9]}})), 5, 0.1)
+    plain = HarmonicBalance(periodic_system(element({**MAXWELL, "branches": {"k": [1.0], "alpha": [0.1]}})), 5, 0.1)
+    assert stiff.system.series and not plain.system.series
+    expected = plain.full(plain.solve_at(omega))
+    assert np.max(np.abs(stiff.full(stiff.solve_at(omega)) - expected)) <= 1e-7 * np.max(np.abs(expected))
