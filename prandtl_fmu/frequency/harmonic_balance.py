@@ -274,8 +274,8 @@ def spectrum_branches(branches, tolerance: float = DEFAULT_TOLERANCE, source: st
             return k, eta
         if panels * SPECTRUM_RULE >= SPECTRUM_MAX_NODES:
             raise FrequencyError(f"{source}: the spectrum of branches as {panels * SPECTRUM_RULE} branches per "
-                                 f"segment still changed its first harmonic by {change:.3g} relative (tolerance {tolerance:g}): give a "
-                                 "larger --tolerance, or count = n sampled branches")
+                                 f"segment still changed its first harmonic by {change:.3g} relative (tolerance "
+                                 f"{tolerance:g}): give a larger --tolerance, or count = n sampled branches")
         previous = harmonic
 
 
