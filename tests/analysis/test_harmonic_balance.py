@@ -365,3 +365,27 @@ def test_a_stiff_series_dashpot_is_the_plain_branch():
     assert stiff.system.series and not plain.system.series
     expected = plain.full(plain.solve_at(omega))
     assert np.max(np.abs(stiff.full(stiff.solve_at(omega)) - expected)) <= 1e-7 * np.max(np.abs(expected))
+
+
+@pytest.mark.slow
+def test_a_network_joint_with_a_series_dashpot_keeps_its_orbit_when_integrated(tmp_path):
+    """Two masses joined by a Maxwell joint (the two-mass joint's branch with c = 3 N s/m in series): the orbit
+    of the balance (H = 5), integrated by the network stepper from its state at t = 0 (the joint's u from its
+    driven cycle), keeps its first harmonic; without the joint's force in the balance (as if it were cut) it
+    would not."""
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    from importlib import resources
+
+    source = resources.files("prandtl_fmu").joinpath("scenes/networks/two-mass-joint.toml").read_text()
+    path = tmp_path / "maxwell-joint.toml"
+    path.write_text(source.replace("eta = 0.05\n", "eta = 0.05\nc = 3.0\n", 1))
+    scene, _ = read_scene(str(path), networks=True)
+    balance = HarmonicBalance(periodic_system(scene), 5, 0.1)
+    assert balance.system.series and balance.system.series[0].ends == (0, 1)
+    for frequency in (0.12, 0.2):
+        omega = 2 * math.pi * frequency
+        q = balance.solve_at(omega)
+        amplitude = abs(complex(balance.full(q)[1], -balance.full(q)[2]))
+        after = _first_harmonic_after(balance, q, omega, 30)
+        assert abs(after - amplitude) <= 2e-3 * amplitude, (frequency, after, amplitude)
