@@ -105,7 +105,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
         raise FrequencyError("frequencies: at least one value is needed")
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
-    system = periodic_system(scene, load_node)
+    system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     count = int(np.unique(frequencies).size)

@@ -42,9 +42,11 @@ def orbit_start(balance, q_free, omega) -> tuple:
     H = balance.H
     x = coefficients[:, 0] + coefficients[:, 1::2].sum(axis=1)
     v = omega * (coefficients[:, 2::2] * np.arange(1, H + 1)).sum(axis=1)
-    balance.nonlinear(full)  # the elongations of the branches at sample 0
+    balance.nonlinear(full, omega)  # the elongations of the branches at sample 0
     u = np.zeros(len(balance.system.network.elements))
     u[balance.system.branch_index] = balance.elongations
+    for group, elongations in zip(balance.system.series, balance.series_u):
+        u[group.index] = elongations
     return x, v, u
 
 

@@ -24,6 +24,11 @@ The Jacobian dR/dq is exact in structure: the linear part as written, dG/dq from
 sample through the same FFT, for a branch with the anchor of its stick (``aft.py``): exact for the sampled
 map, so Newton's iteration converges in a few steps once the slip pattern is right. dR/d omega is exact.
 
+Two effects take a stated quadrature instead: a spectrum of branches (the continuum) becomes branches at
+quadrature nodes (:func:`spectrum_branches`), after which all of the above applies to them unchanged; branches
+with series dashpots are driven by the compiled kernels over periods to their steady cycle, their Jacobian and
+dG/d omega by finite differences (``driven.py``).
+
 A node's mean is an unknown where springs or cubic springs hold the node to the ground; elsewhere it is 0
 (branches carry no mean on their centred cycle, so no equation would set it). The equations of the other
 coefficients are solved with Newton's method, at most NEWTON_ITERATIONS iterations; a point that does not
@@ -38,7 +43,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import FrequencyError
+from . import DEFAULT_TOLERANCE, FrequencyError
 
 MIN_SAMPLES = 256
 SAMPLES_PER_HARMONIC = 64
@@ -48,6 +53,11 @@ NEWTON_ITERATIONS = 40
 STEP_TOLERANCE = 1e-10
 RESIDUAL_TOLERANCE = 1e-11
 ELEMENT_NODE = "mass"
+# a spectrum of branches as branches (:func:`spectrum_branches`): the Gauss-Legendre points per panel, the most
+# nodes per segment and the amplitudes its first harmonic is checked at
+SPECTRUM_RULE = 8
+SPECTRUM_MAX_NODES = 1024
+SPECTRUM_AMPLITUDES = 25
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +66,8 @@ class PeriodicSystem:
     (n, n); the nonlinear elements as (count, 2) ``*_ends`` (-1: the ground), ``cubic_k3``, ``branch_k``,
     ``branch_eta``, each with the index of its pair of nodes in ``pairs``; ``load_node``; ``network``: the same
     system as a network (the time integration of the stability check runs it) and ``branch_index``: the index
-    of each branch among the network's elements."""
+    of each branch among the network's elements; ``held``: the nodes whose mean is an unknown; ``series``: the
+    branches with series dashpots, one ``driven.SeriesBranches`` per pair of nodes."""
 
     name: str
     source: str
@@ -76,6 +87,7 @@ class PeriodicSystem:
     network: object
     branch_index: np.ndarray
     held: np.ndarray
+    series: tuple = ()
 
     @property
     def n(self) -> int:
@@ -95,26 +107,24 @@ class PeriodicSystem:
         return self.nodes.index(name)
 
 
-def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
+def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = DEFAULT_TOLERANCE) -> PeriodicSystem:
     """The :class:`PeriodicSystem` of an element scene (with ``[mass]``) or a network scene; ``load_node``: the
-    node the harmonic force acts on (default: the network's ``load_node``; the element's mass). FrequencyError
-    for what harmonic balance does not take (and why)."""
+    node the harmonic force acts on (default: the network's ``load_node``; the element's mass); ``tolerance``:
+    of a spectrum of branches' quadrature (:func:`spectrum_branches`). FrequencyError for what harmonic balance
+    does not take (and why)."""
     from ..network.model import NetworkScene
 
-    network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene)
+    network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene, tolerance)
     for element in network.elements:
         if element.kind == "slider":
             raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
                                  "sticks, which harmonic balance cannot sample: model the joint as branches "
                                  "(k, eta: a slider behind a spring) or use --method time")
-        if element.kind == "branch" and element.c > 0:
-            raise FrequencyError(f"{scene.source}: branch {element.name}: a series dashpot (c > 0) is not taken "
-                                 "by harmonic balance: use --method time")
     if not np.any(network.mass > 0):
         raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one")
     n = network.n
     stiffness, damping = np.zeros((n, n)), np.zeros((n, n))
-    cubic, branches, pairs, links = [], [], [], []
+    cubic, branches, pairs, links, series = [], [], [], [], {}
 
     def pair_of(ends):
         key = (min(ends), max(ends)) if min(ends) >= 0 else (max(ends), -1)
@@ -136,6 +146,8 @@ def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
         elif element.kind == "cubic":
             cubic.append((p, q, element.value, pair_of((p, q))))
             links.append((p, q))
+        elif element.c > 0:
+            series.setdefault(pair_of((p, q)), []).append((element.value, element.eta, element.c, index))
         else:
             branches.append((p, q, element.value, element.eta, pair_of((p, q)), index))
     node = network.load_node
@@ -152,12 +164,21 @@ def periodic_system(scene, load_node: Optional[str] = None) -> PeriodicSystem:
         cubic_table[:, :2].astype(np.int64).copy(), cubic_table[:, 2].copy(),
         np.array([c[3] for c in cubic], dtype=np.int64), branch_table[:, :2].astype(np.int64).copy(),
         branch_table[:, 2].copy(), branch_table[:, 3].copy(), np.array([b[4] for b in branches], dtype=np.int64),
-        tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links))
+        tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links),
+        tuple(_series_branches(pairs[pair], pair, group) for pair, group in series.items()))
 
 
-def _element_network(scene):
-    """The element scene as a network of one node ``mass``, its effects to the ground; FrequencyError for the
-    effects harmonic balance does not take."""
+def _series_branches(ends, pair, group):
+    from .driven import SeriesBranches, series_model
+
+    k, eta, c, index = (np.array(column) for column in zip(*group))
+    return SeriesBranches(ends, pair, series_model(k, eta, c), index.astype(np.int64))
+
+
+def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
+    """The element scene as a network of one node ``mass``, its effects to the ground (a spectrum of branches as
+    the branches of :func:`spectrum_branches`); FrequencyError for the effects harmonic balance does not
+    take."""
     from ..network.model import Element, Network
 
     if scene.mass is None:
@@ -165,10 +186,6 @@ def _element_network(scene):
                              "resonance: describe it with --amplitudes)")
     refused = [(scene.friction, "[friction] (Coulomb friction of the mass: set-valued while it sticks)"),
                (scene.dahl, "[dahl]"), (scene.delay, "[delay]"), (scene.history, "[history]")]
-    if scene.branches is not None and scene.branches.continuum:
-        refused.append((scene.branches, "a continuum of branches"))
-    if scene.has_series_dashpots:
-        refused.append((True, "[branches] c (series dashpots)"))
     for present, name in refused:
         if present is not None:
             raise FrequencyError(f"{scene.source}: {name} is not taken by harmonic balance: use --method time")
@@ -179,13 +196,87 @@ def _element_network(scene):
         elements.append(Element("cubic", "k3", (0, -1), float(scene.cubic.k3)))
     if scene.has_dashpot:
         elements.append(Element("dashpot", "c", (0, -1), float(scene.damper.c)))
-    if scene.branches is not None:
+    if scene.branches is not None and scene.branches.continuum:
+        k, eta = spectrum_branches(scene.branches, tolerance, scene.source)
+        for i, (k_i, eta_i) in enumerate(zip(k.tolist(), eta.tolist())):
+            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k_i, eta_i, 0.0, 0.0))
+    elif scene.branches is not None:
         b = scene.branches
-        for i, (k, eta, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), b.u0.tolist())):
-            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, 0.0, u0))
+        cs = b.damping.tolist() if b.damping is not None else [0.0] * b.stiffness.shape[0]
+        for i, (k, eta, c, u0) in enumerate(zip(b.stiffness.tolist(), b.yield_displacement.tolist(), cs,
+                                                 b.u0.tolist())):
+            elements.append(Element("branch", f"branch_{i + 1}", (0, -1), k, eta, c, u0))
     mass = scene.mass
     return Network((ELEMENT_NODE,), np.array([mass.m]), np.array([mass.x0]), np.array([mass.v0]),
                    tuple(elements), 0)
+
+
+def spectrum_branches(branches, tolerance: float = DEFAULT_TOLERANCE, source: str = "scene") -> tuple:
+    """``(k, eta)``: a spectrum of branches (``effects.ContinuousBranches``: k(s) = c_j eta(s)^p_j, eta linear on
+    each segment [s_j, s_j+1]) as finitely many Prandtl branches, the nodes of a stated quadrature with their
+    weights as stiffnesses. On each segment, composite Gauss-Legendre (SPECTRUM_RULE points on each of P equal
+    panels of t in [0, 1]) under s = s_j + (s_j+1 - s_j) (1 - cos(pi t)) / 2 (which takes an end singularity of
+    eta^p at eta = 0):
+
+        k_i = w_i ds/dt(t_i) c_j eta(s_i)^p_j,      eta_i = eta(s_i);
+
+    a flat segment (a Dirac) is one branch, c_j eta^p_j (s_j+1 - s_j). Unlike describe's integral
+    (``closed_forms.spectrum_forms``) the nodes cannot be cut where eta(s) = A: A is an unknown of the balance.
+    The count: P doubled from 1 until the first harmonic of the branches' force under
+    x = A sin(theta) (their closed forms, ``closed_forms.branch_forms``: a_1 + i b_1 = K A + i D / (pi A))
+    changes by at most ``tolerance`` of its size from one count to the next, at each of SPECTRUM_AMPLITUDES
+    amplitudes from eta_max / 1000 to 4 eta_max (every regime: micro-slip, the slip of the spectrum's part,
+    macro-slip); FrequencyError past SPECTRUM_MAX_NODES nodes per segment. (Panels rather than one rule of
+    many points: the kink of each branch's forms at eta = A falls inside some panel wherever A is, and
+    numpy's ``leggauss`` costs O(n^3) for n points.)"""
+    from .closed_forms import branch_forms, gauss_legendre
+
+    top = float(np.max(branches.eta))
+    amplitudes = np.geomspace(1e-3, 4.0, SPECTRUM_AMPLITUDES) * (top if top > 0 else 1.0)
+
+    x, w = gauss_legendre(SPECTRUM_RULE)
+
+    def quadrature(panels):
+        t = ((np.arange(panels)[:, None] + 0.5 * (x[None, :] + 1.0)) / panels).reshape(-1)
+        weight = np.tile(w, panels) / panels
+        k, eta = [], []
+        for j in range(branches.coefficient.shape[0]):
+            s0, s1 = float(branches.s[j]), float(branches.s[j + 1])
+            e0, e1 = float(branches.eta[j]), float(branches.eta[j + 1])
+            c, p = float(branches.coefficient[j]), float(branches.power[j])
+            if c == 0.0 or s1 <= s0:
+                continue
+            if e1 == e0:
+                k.append([c * e0**p * (s1 - s0)] if p != 0 else [c * (s1 - s0)])
+                eta.append([e0])
+                continue
+            fraction = 0.5 - 0.5 * np.cos(math.pi * t)
+            slope = 0.25 * math.pi * np.sin(math.pi * t)  # d fraction / dt times the weight's 1/2 (dt = dx / 2)
+            eta_j = e0 + (e1 - e0) * fraction
+            density = c * np.power(eta_j, p) if p != 0 else np.full_like(eta_j, c)
+            k.append(weight * slope * (s1 - s0) * density)
+            eta.append(eta_j)
+        return np.concatenate(k), np.concatenate(eta)
+
+    def first_harmonic(k, eta):
+        K, D = branch_forms(k[:, None], eta[:, None], amplitudes[None, :])
+        return K.sum(axis=0) * amplitudes + 1j * D.sum(axis=0) / (math.pi * amplitudes)
+
+    panels = 1
+    k, eta = quadrature(panels)
+    previous = first_harmonic(k, eta)
+    while True:
+        panels *= 2
+        k, eta = quadrature(panels)
+        harmonic = first_harmonic(k, eta)
+        change = float(np.max(np.abs(harmonic - previous) / np.abs(harmonic)))
+        if change <= tolerance:
+            return k, eta
+        if panels * SPECTRUM_RULE >= SPECTRUM_MAX_NODES:
+            raise FrequencyError(f"{source}: the spectrum of branches as {panels * SPECTRUM_RULE} branches per "
+                                 f"segment still changed its first harmonic by {change:.3g} relative (tolerance "
+                                 f"{tolerance:g}): give a larger --tolerance, or count = n sampled branches")
+        previous = harmonic
 
 
 def sample_count(harmonics: int) -> int:
@@ -247,6 +338,8 @@ class HarmonicBalance:
         self._forces = np.empty((n, N))
         self._tangent = np.empty((max(len(system.pairs), 1), N, L))
         self.elongations = np.zeros(system.branch_k.shape[0])
+        self.series_u = [np.zeros(group.index.shape[0]) for group in system.series]
+        self.by_omega = np.zeros(n * L)  # dG / d omega: the series dashpots' (``driven.py``), else 0
 
     # ------------------------------------------------------------- the harmonics and the samples
 
@@ -271,8 +364,9 @@ class HarmonicBalance:
 
     # ------------------------------------------------------------- residual and Jacobian
 
-    def nonlinear(self, q: np.ndarray) -> tuple:
-        """(G (n L,), dG/dq (n L, n L)) at all coefficients q."""
+    def nonlinear(self, q: np.ndarray, omega: Optional[float] = None) -> tuple:
+        """(G (n L,), dG/dq (n L, n L)) at all coefficients q; ``omega`` (rad/s): the frequency, which the
+        branches with series dashpots need (``driven.py``)."""
         from .aft import restoring_samples
 
         s = self.system
@@ -282,8 +376,11 @@ class HarmonicBalance:
                           s.branch_eta, s.branch_pair, self._forces, self._tangent, self.elongations)
         G = self.harmonics_of(self._forces).reshape(n * L)
         jacobian = np.zeros((n * L, n * L))
+        self.by_omega[:] = 0.0
         if s.pairs:
             blocks = self.projection @ self._tangent  # (pairs, L, L)
+            for group, u in zip(s.series, self.series_u):
+                self._series(group, u, x, q, omega, G, blocks[group.pair])
             for (p, r), block in zip(s.pairs, blocks):
                 jacobian[p * L:(p + 1) * L, p * L:(p + 1) * L] += block
                 if r >= 0:
@@ -291,6 +388,35 @@ class HarmonicBalance:
                     jacobian[p * L:(p + 1) * L, r * L:(r + 1) * L] -= block
                     jacobian[r * L:(r + 1) * L, p * L:(p + 1) * L] -= block
         return G, jacobian
+
+    def _series(self, group, u, x, q, omega, G, block) -> None:
+        """Add the force of the Maxwell branches ``group`` to G, their finite-difference derivative with
+        respect to the pair's elongation coefficients to ``block`` (L, L) and with respect to omega to
+        ``self.by_omega`` (``driven.py``); ``u`` (in place): their state at sample 0 of the steady cycle, the
+        warm start of the next call."""
+        from .driven import FINITE_STEP, steady_cycle
+
+        if omega is None or not omega > 0:
+            raise FrequencyError(f"{self.system.source}: branches with series dashpots need the frequency")
+        p, r = group.ends
+        L, period = self.L, 2.0 * math.pi / omega
+        elongation = x[p] - (x[r] if r >= 0 else 0.0)
+        forces, _ = steady_cycle(group, elongation, period, u, self.system.source)
+        harmonics = self.harmonics_of(forces)
+        G[p * L:(p + 1) * L] += harmonics
+        if r >= 0:
+            G[r * L:(r + 1) * L] -= harmonics
+        step = FINITE_STEP * max(float(np.max(np.abs(elongation))), float(np.max(group.eta)), 1e-300)
+        for l in range(L):
+            moved, _ = steady_cycle(group, elongation + step * self.basis[:, l], period, u.copy(),
+                                    self.system.source)
+            block[:, l] += (self.harmonics_of(moved) - harmonics) / step
+        faster = omega * (1.0 + FINITE_STEP)
+        moved, _ = steady_cycle(group, elongation, 2.0 * math.pi / faster, u.copy(), self.system.source)
+        by_omega = (self.harmonics_of(moved) - harmonics) / (faster - omega)
+        self.by_omega[p * L:(p + 1) * L] += by_omega
+        if r >= 0:
+            self.by_omega[r * L:(r + 1) * L] -= by_omega
 
     def force(self, omega: float) -> np.ndarray:
         """The harmonics (n L,) of the force at ``omega`` (rad/s)."""
@@ -304,12 +430,12 @@ class HarmonicBalance:
         """``(R, dR/dq, dR/domega, dR/dxi)`` on the free unknowns at ``omega`` (rad/s); ``xi`` (1/s): the
         negative viscous term -xi M x' of a nonlinear mode (0: the forced response); ``forced``: with F0."""
         q = self.full(free_values)
-        G, nonlinear = self.nonlinear(q)
+        G, nonlinear = self.nonlinear(q, omega)
         velocity = self.linear_damping - xi * self.mass_velocity
         linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia
         residual = linear @ q + G - (self.force(omega) if forced else 0.0)
         jacobian = linear + nonlinear
-        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q
+        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q + self.by_omega
         if forced and self.power:
             by_omega = by_omega - self.power * self.force(omega) / omega
         by_xi = -omega * (self.mass_velocity @ q)
@@ -320,7 +446,9 @@ class HarmonicBalance:
         """The free unknowns of the response with every branch sticking and no cubic spring (a first guess)."""
         s = self.system
         stuck = s.stiffness.copy()
-        for (p, r), k in zip(s.branch_ends.tolist(), s.branch_k.tolist()):
+        ends = s.branch_ends.tolist() + [list(g.ends) for g in s.series for _ in g.index]
+        stiffnesses = s.branch_k.tolist() + [k for g in s.series for k in g.model[4].tolist()]
+        for (p, r), k in zip(ends, stiffnesses):
             stuck[p, p] += k
             if r >= 0:
                 stuck[r, r] += k

@@ -63,7 +63,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     ``harmonic_balance.sample_count``). FrequencyError names the culprit."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
-    system = periodic_system(scene)
+    system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:
         values, shape = _backbone(system, mode, amplitudes, where, harmonics, samples)

@@ -270,3 +270,122 @@ def test_a_csv_cell_is_a_number_or_empty_never_nan(tmp_path):
     for bad in (float("nan"), float("inf"), np.float64(-np.inf)):
         with pytest.raises(ValueError, match="defect"):
             csv_text({"a": [bad]})
+
+
+SPECTRA = {"linear": {"continuum": True, "k_total": 2.0, "eta_range": [0.05, 0.5]},
+           "iwan": {"continuum": True, "density": {"kind": "iwan", "F_S": 1.0, "K_T": 5.0, "chi": -0.5, "beta": 0.1}}}
+
+
+@pytest.mark.parametrize("spectrum", sorted(SPECTRA))
+def test_one_harmonic_nonlinear_mode_on_a_spectrum_is_describe_s_spectrum_integral(spectrum):
+    """A mass on k0 and a spectrum of branches (the continuum): harmonic balance takes the spectrum as branches at
+    quadrature nodes, so with one harmonic the EPMC frequency is sqrt(K(A) / m) and the damping ratio
+    D(A) / (2 pi K A^2), K and D describe's spectrum integral (Gauss-Legendre cut where eta(s) = A)."""
+    from prandtl_fmu.frequency.describing import describe_amplitudes
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    m, tolerance = 2.0, 1e-4
+    scene = element({"mass": {"m": m}, "spring": {"k0": 1.0}, "branches": SPECTRA[spectrum]})
+    amplitudes = [0.02, 0.1, 0.3, 1.0]
+    backbone = nonlinear_mode(scene, 1, amplitudes, harmonics=1, tolerance=tolerance, samples=2048)
+    described = describe_amplitudes(scene, amplitudes, tolerance=tolerance / 10)
+    assert set(described.method) == {"spectrum"}
+    K, D, A = np.asarray(described.stiffness), np.asarray(described.dissipation), np.asarray(amplitudes)
+    assert backbone.frequency == pytest.approx(np.sqrt(K / m) / (2 * math.pi), rel=tolerance)
+    zeta = D / (2 * math.pi * K * A * A)
+    assert np.all(zeta[1:] > 1e-3)
+    assert backbone.damping_ratio == pytest.approx(zeta, rel=tolerance, abs=tolerance * zeta.max())
+
+
+def test_one_harmonic_forced_response_on_a_spectrum_is_describe_s_spectrum_integral():
+    """F0 cos(omega t) on m x'' + c x' + k0 x + spectrum: with one harmonic each point's amplitude A and phase
+    satisfy (K(A) - m omega^2 + i (c omega + D(A) / (pi A^2))) A e^(i phase) = F0, K and D describe's, to the
+    tolerance of the restoring force's first harmonic (what the spectrum's quadrature is held to)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.describing import describe_amplitudes
+
+    m, c, F0, tolerance = 1.0, 0.02, 0.1, 1e-4
+    tables = {"mass": {"m": m}, "spring": {"k0": 1.0}, "branches": SPECTRA["linear"]}
+    curve = harmonic_response(element({**tables, "damper": {"c": c}}), F0, [0.15, 0.3], harmonics=1,
+                              tolerance=tolerance, stability=False, samples=2048)
+    assert curve.frequency.size > 5
+    described = describe_amplitudes(element(tables), curve.amplitude, tolerance=tolerance / 10)
+    K, D, A = np.asarray(described.stiffness), np.asarray(described.dissipation), curve.amplitude
+    omega = 2 * math.pi * curve.frequency
+    force = (K - m * omega**2 + 1j * (c * omega + D / (math.pi * A * A))) * A * np.exp(1j * curve.phase)
+    restoring = np.abs((K + 1j * D / (math.pi * A * A)) * A)
+    assert np.all(np.abs(force - F0) <= tolerance * restoring)
+
+
+def test_a_spectrum_whose_quadrature_cannot_reach_the_tolerance_is_one_line(tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "branches": SPECTRA["linear"]})
+    status = main(["describe", scene, "--force-amplitude", "0.1", "--frequencies", "0.15,0.3", "--tolerance",
+                   "1e-12", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and "spectrum of branches" in err and "--tolerance" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+MAXWELL = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02},
+           "branches": {"k": [1.0], "alpha": [0.1], "c": [0.5]}}
+
+
+@pytest.mark.slow
+def test_stable_points_agree_with_the_time_sweep_on_a_mass_on_a_maxwell_branch():
+    """A branch with a series dashpot (spring, slider and dashpot in series: relaxing at k / c = 2 / s, so its
+    cycle depends on the period) driven by the compiled kernels over periods until its cycle repeats: with H = 5
+    the curve's points agree with the time sweep's (--method time) to its tolerance, slip and stick alike."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.response import frequency_response
+
+    scene = element(MAXWELL)
+    curve = harmonic_response(scene, 0.1, [0.12, 0.25], harmonics=5)
+    assert np.all(curve.stable)
+    picks = [np.argmin(np.abs(curve.frequency - f)) for f in (0.14, 0.18, 0.22)]
+    response = frequency_response(scene, 0.1, curve.frequency[picks], sweep="up", tolerance=1e-4)
+    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=1e-4)
+    assert response.phase == pytest.approx(curve.phase[picks], abs=1e-4)
+    # the dashpot matters here: the same branch without it (the play operator's exact AFT) is another curve
+    plain = harmonic_response(element({**MAXWELL, "branches": {"k": [1.0], "alpha": [0.1]}}), 0.1,
+                              curve.frequency[picks][[0, -1]], harmonics=5, stability=False)
+    assert abs(plain.amplitude[-1] / curve.amplitude[picks[-1]] - 1) > 1e-2
+
+
+@pytest.mark.slow
+def test_a_stiff_series_dashpot_is_the_plain_branch():
+    """c -> infinity: the Maxwell branch (driven over periods, finite-difference Jacobian) is the Jenkins branch
+    (the play operator's exact AFT and Jacobian): the same solution to the dashpot's relaxation over a period."""
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    omega = 2 * math.pi * 0.17
+    stiff = HarmonicBalance(periodic_system(element({**MAXWELL, "branches": {**MAXWELL["branches"],
+                                                                                "c": [1e9]}})), 5, 0.1)
+    plain = HarmonicBalance(periodic_system(element({**MAXWELL, "branches": {"k": [1.0], "alpha": [0.1]}})), 5, 0.1)
+    assert stiff.system.series and not plain.system.series
+    expected = plain.full(plain.solve_at(omega))
+    assert np.max(np.abs(stiff.full(stiff.solve_at(omega)) - expected)) <= 1e-7 * np.max(np.abs(expected))
+
+
+@pytest.mark.slow
+def test_a_network_joint_with_a_series_dashpot_keeps_its_orbit_when_integrated(tmp_path):
+    """Two masses joined by a Maxwell joint (the two-mass joint's branch with c = 3 N s/m in series): the orbit
+    of the balance (H = 5), integrated by the network stepper from its state at t = 0 (the joint's u from its
+    driven cycle), keeps its first harmonic; without the joint's force in the balance (as if it were cut) it
+    would not."""
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    from importlib import resources
+
+    source = resources.files("prandtl_fmu").joinpath("scenes/networks/two-mass-joint.toml").read_text()
+    path = tmp_path / "maxwell-joint.toml"
+    path.write_text(source.replace("eta = 0.05\n", "eta = 0.05\nc = 3.0\n", 1))
+    scene, _ = read_scene(str(path), networks=True)
+    balance = HarmonicBalance(periodic_system(scene), 5, 0.1)
+    assert balance.system.series and balance.system.series[0].ends == (0, 1)
+    for frequency in (0.12, 0.2):
+        omega = 2 * math.pi * frequency
+        q = balance.solve_at(omega)
+        amplitude = abs(complex(balance.full(q)[1], -balance.full(q)[2]))
+        after = _first_harmonic_after(balance, q, omega, 30)
+        assert abs(after - amplitude) <= 2e-3 * amplitude, (frequency, after, amplitude)
