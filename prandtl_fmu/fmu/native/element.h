@@ -834,7 +834,7 @@ static const char* advance_with_updates(Instance* c, double H, double* failed_at
     int64_t p, steps;
     *failed_at = NAN;
     if (!STEP_IS_OUTPUT[e->stepper]) {
-        problem = plan_advance(H, e->h, &whole, &rest, buffer, size);
+        problem = plan_advance(H, e->h, element_time(e) + H, &whole, &rest, buffer, size);
         if (problem != NULL || (whole == 0 && rest == 0))
             return problem;
     }
