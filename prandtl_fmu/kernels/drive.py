@@ -68,17 +68,20 @@ def drive_polynomial(model, u, x, v, xd, vd, duration, energy, out):
     t* = -xd[0] / xd[1] where 0 < t* < duration (plain branches only: series dashpots and effects with memory
     depend on the path's timing). energy[1] gets the sliders' dissipation, energy[2] the dashpot's
     c * integral of v^2. out = [x, v, the force k0 x + k3 x^3 + c v + sum_i k_i u_i, the direction of the last
-    motion (0: none)] at t = duration."""
+    motion (0: none)] at t = duration; all NaN, nothing moved, where the path's moves overflow."""
     m, k0, k3, c, k, eta, cs, friction, memory = model
-    at, direction = x, 0.0
+    at, turn, direction = x, 0.0, 0.0
     if xd[1] != 0.0:
         turn = -xd[0] / xd[1]
         if 0.0 < turn < duration:
             at = x + turn * (xd[0] + 0.5 * xd[1] * turn)
-            move_branches(k, eta, cs, u, at - x, turn, FLOW, energy)
-            if at != x:
-                direction = 1.0 if at > x else -1.0
     end = x + duration * (xd[0] + 0.5 * xd[1] * duration)
+    if not (abs(at - x) < np.inf and abs(end - at) < np.inf):  # an overflow: nothing moved, the caller refuses
+        out[:] = np.nan
+        return
+    if at != x:
+        move_branches(k, eta, cs, u, at - x, turn, FLOW, energy)
+        direction = 1.0 if at > x else -1.0
     move_branches(k, eta, cs, u, end - at, duration, FLOW, energy)
     if end != at:
         direction = 1.0 if end > at else -1.0

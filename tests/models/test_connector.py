@@ -411,8 +411,8 @@ def test_advance_follows_the_polynomial_path_through_its_turning_point(n):
 
 def test_advance_without_derivatives_is_the_held_sample_and_refuses_what_it_cannot_follow():
     """Without derivatives advance is move_to at the communication point (the connector stays there); a
-    non-finite derivative, a negative duration and derivatives on branches with series dashpots are refused,
-    the connector unchanged."""
+    non-finite derivative, a negative duration, derivatives on branches with series dashpots and a path that
+    overflows are refused, the connector unchanged."""
     scene = connector_scene([1.0, 2.0], [0.1, 0.2])
     held, moved = Connector(scene), Connector(scene)
     held.advance(0.3, 0.1, 0.5, 0.2)
@@ -428,4 +428,8 @@ def test_advance_without_derivatives_is_the_held_sample_and_refuses_what_it_cann
                                               "branches": {"k": [1.0], "eta": [0.1], "c": [0.5]}}), "s.toml"))
     with pytest.raises(ValueError, match="series dashpots or effects with memory"):
         series.advance(0.2, 0.0, 0.0, 0.1, x_derivatives=(1.0, 0.0))
+    from prandtl_fmu.stepping import ElementError
+    for xd in ((1e308, 0.0), (1e308, -1e308)):  # the path's end, or its turning point, beyond the floats
+        with pytest.raises(ElementError, match="x would not be finite"):
+            held.advance(0.2, 0.0, 0.6, 10.0, x_derivatives=xd)
     assert held.get_state() == moved.get_state() and series.time == 0.0
