@@ -163,7 +163,8 @@ def index_html(model_description: bytes, scene, runtime: str = "python", stepper
     if runtime == "native":
         refusal = f"{version}Error"
         requirements = (_NATIVE_REQUIREMENTS.format(version="3.0" if fmi3 else "2.0")
-                        + _derivatives_text(root.find("CoSimulation"), getattr(scene, "causality", None) == "displacement"))
+                        + _derivatives_text(root.find("CoSimulation"),
+                                            getattr(scene, "causality", None) == "displacement"))
     else:
         refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
         requirements = _PYTHON_REQUIREMENTS

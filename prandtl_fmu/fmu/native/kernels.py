@@ -48,7 +48,8 @@ The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(
 v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
 with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cpath(..., x, v,
 xd, vd, duration, account, out)``, the motion along the inputs' Taylor polynomial of ``Connector.advance``
-(``drive.drive_polynomial``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cdirectional(..., x, direction, dx, dv)``
+(``drive.drive_polynomial``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
+slope added), ``cdirectional(..., x, direction, dx, dv)``
 (d force = (tangent + the memory's slope) dx + c dv: the directional derivative a master asks for; the memory's
 forces do not move with v at an instant), ``cstored(..., x)``; ``cinitial(...)``
 (a fresh memory stack and memory); ``elongations(p, k, eta, cs, u, out)`` (the branches' arrays alone).
@@ -694,8 +695,8 @@ def _compile_fold(scene):
 
 
 def _compile_connector(scene, shape) -> list:
-    """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cpath``, ``cforce``, ``ctangent``, ``cstored``,
-    ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
+    """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cpath``, ``cforce``, ``ctangent``,
+    ``cstored``, ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
     ``drive_with_memory``, the force and the tangent add the memory's (``memory.force_now``, ``tangent_now``) and
     ``cinitial`` makes the memory fresh, as ``connector.Connector`` does."""
     from numba import carray, cfunc, njit, types

@@ -1265,7 +1265,7 @@ def test_the_connector_refuses_directional_derivatives_it_does_not_have(connecto
         slave.close()
 
 
-# ------------------------------------------------------------------ the connector's x and v with their derivatives (issue 61)
+# ------------------------------------------------------------------ the connector's input derivatives (issue 61)
 
 def _connector_outputs(connector, names):
     """The library connector's value of each FMU output ``names``."""
