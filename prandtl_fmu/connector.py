@@ -19,7 +19,10 @@ sample x(0) != 0 moves it there monotonically (a virgin loading).
 * :func:`displacement_response` runs a whole sampled history in one compiled call;
 * :class:`Connector` is the same element as a stateful object for a
   co-simulation master: :meth:`Connector.preview` gives the force at a new
-  input without moving the state, :meth:`Connector.move_to` commits it.
+  input without moving the state, :meth:`Connector.move_to` commits it,
+  :meth:`Connector.advance` is an FMU's doStep (the sample committed at the
+  communication point, then, with the inputs' derivatives, the motion along
+  their Taylor polynomial over the step, its turning point found).
 """
 from __future__ import annotations
 
@@ -33,7 +36,7 @@ from .compiled import (branch_state, choose_branch_kernel, compile_model, restor
 from .saved_state import number_list, plain_number
 from .stepping import ElementError, OutputMemo
 from .kernels import stack
-from .kernels.drive import drive, drive_with_memory, preview, tangent
+from .kernels.drive import drive, drive_polynomial, drive_with_memory, preview, tangent
 from .memory import (check_memory_state, copy_memory, force_now, has_memory, memory_state, put_back,
                      restore_memory, tangent_now)
 from .memory import time_problem as memory_time_problem
@@ -228,6 +231,58 @@ class Connector(OutputMemo):
         if dx != 0:
             self.direction = math.copysign(1.0, dx)
         self.x, self.v, self.time = float(x), float(v), time
+
+    def advance(self, x: float, v: float, time: float, duration: float, x_derivatives=None,
+                v_derivatives=None) -> None:
+        """An FMU's doStep from ``time`` over ``duration`` (s): commit the sample (x, v) at ``time`` (:meth:`move_to`);
+        with ``x_derivatives`` (x', x'') or ``v_derivatives`` (v', v'') (m/s, m/s^2; m/s^2, m/s^3: FMI 2.0's input
+        derivatives, None: held) the flanges then move over the step along
+
+            x(t) = x + x' (t - time) + x'' (t - time)^2 / 2,   v(t) = v + v' (t - time) + v'' (t - time)^2 / 2,
+
+        the branches by the exact play update along each monotone piece (the path cut at its turning point,
+        ``kernels/drive.py`` drive_polynomial), the dashpot dissipating c times the integral of v^2; the connector
+        ends at time + duration on the path's end. Without derivatives the sample is held: the connector stays at
+        ``time``. ValueError (nothing changed) for a non-finite value, a negative duration, derivatives with series
+        dashpots or effects with memory (their forces depend on the path's timing, which this does not follow);
+        ElementError (nothing changed) when an output would overflow."""
+        xd, vd = self._derivatives(x_derivatives, "x"), self._derivatives(v_derivatives, "v")
+        duration = float(duration)
+        if not (math.isfinite(duration) and duration >= 0):
+            raise ValueError(f"duration must be finite and >= 0, got {duration!r}")
+        if not (np.any(xd) or np.any(vd)):
+            self.move_to(x, v, time)
+            return
+        if self.scene.has_series_dashpots or has_memory(self.model[8]):
+            raise ValueError("input derivatives with series dashpots or effects with memory: their forces depend on "
+                             "the path's timing, which the connector does not follow; hold the inputs")
+        twin = self.copy()
+        twin.move_to(x, v, time)
+        out = np.empty(4)
+        drive_polynomial(twin.model, twin.u, twin.x, twin.v, xd, vd, duration, twin.account, out)
+        m, k0, k3, c, k, eta, cs, friction, memory = twin.model
+        outputs = {"x": out[0], "v": out[1], "force": out[2], "stored_energy": stored(out[0], k0, k3, k, twin.u),
+                   "dissipated_sliders": twin.account[SLIDERS], "dissipated_damper": twin.account[DAMPER]}
+        for name, value in outputs.items():
+            if not math.isfinite(value):
+                raise ElementError(f"the step from t = {time!r} s over {duration!r} s with x = {x!r}, x' = {xd[0]!r}, "
+                                   f"x'' = {xd[1]!r} refused: {name} would not be finite (an overflow); the connector "
+                                   "is unchanged")
+        if out[3] != 0:
+            twin.direction = float(out[3])
+        twin.x, twin.v, twin.time = float(out[0]), float(out[1]), twin.time + duration
+        self.__dict__.update(twin.__dict__)
+        self._touch()
+
+    @staticmethod
+    def _derivatives(values, name: str) -> np.ndarray:
+        """``values`` (the first and second derivatives of input ``name``) as a finite array of two, zeros for None."""
+        if values is None:
+            return np.zeros(2)
+        found = np.array([float(value) for value in values], dtype=float)
+        if found.shape != (2,) or not np.all(np.isfinite(found)):
+            raise ValueError(f"{name}_derivatives must be two finite numbers, got {values!r}")
+        return found
 
     def set_coefficients(self, **values) -> None:
         """Change k0, k3, c, c_branch, or (before the first move: they restart the memory) the coefficients of

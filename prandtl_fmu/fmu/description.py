@@ -597,18 +597,33 @@ def _default_experiment(parent, scene) -> None:
     ET.SubElement(parent, "DefaultExperiment", attributes)
 
 
-def interpolates_inputs(scene, runtime: str) -> bool:
-    """Whether the FMU takes its input's derivatives (FMI 2.0 canInterpolateInputs, fmi2SetRealInputDerivatives of
-    F, orders 1 and 2): the native element's (the PythonFMU runtime's loader has no such call; the connector's and
-    the network's inputs are held)."""
+def _native_element(scene, runtime: str) -> bool:
     return runtime == "native" and not is_network(scene) and scene.causality != "displacement"
+
+
+def interpolates_inputs(scene, runtime: str) -> bool:
+    """Whether the FMU takes its inputs' derivatives (FMI 2.0 canInterpolateInputs, fmi2SetRealInputDerivatives,
+    orders 1 and 2): the native element's of F, and the native connector's of x and v where the path's timing does
+    not matter (no series dashpots, no effect with memory: ``Connector.advance``). The PythonFMU runtime's loader
+    has no such call; the network's inputs are held."""
+    if runtime != "native" or is_network(scene):
+        return False
+    if scene.causality == "displacement":
+        return not (scene.has_series_dashpots or scene.delay is not None or scene.history is not None
+                    or scene.dahl is not None)
+    return True
+
+
+def updates_intermediately(scene, runtime: str) -> bool:
+    """Whether the FMU provides FMI 3.0's intermediate update (F set at its internal steps): the native element."""
+    return _native_element(scene, runtime)
 
 
 def output_derivative_order(scene, runtime: str) -> int:
     """FMI's maxOutputDerivativeOrder of the FMU: 2 for the native element (x: v, a; v: a, a' where exact;
     reaction: its rate where exact, ``kernels/rates.py``; fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives),
     else 0 (none given)."""
-    return 2 if interpolates_inputs(scene, runtime) else 0
+    return 2 if _native_element(scene, runtime) else 0
 
 
 def provides_directional_derivatives(scene, runtime: str) -> bool:
@@ -689,9 +704,9 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         "modelIdentifier": identifier, "needsExecutionTool": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
         "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "providesIntermediateUpdate": str(interpolates_inputs(scene, "native")).lower(),
+        "providesIntermediateUpdate": str(updates_intermediately(scene, "native")).lower(),
         "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false",
-        **({"recommendedIntermediateInputSmoothness": "0"} if interpolates_inputs(scene, "native") else {}),
+        **({"recommendedIntermediateInputSmoothness": "0"} if updates_intermediately(scene, "native") else {}),
         **({"maxOutputDerivativeOrder": str(output_derivative_order(scene, "native"))}
            if output_derivative_order(scene, "native") else {}),
         **({"providesDirectionalDerivatives": "true"} if provides_directional_derivatives(scene, "native") else {})})
@@ -722,7 +737,7 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         for key in ("min", "max"):
             if getattr(row, key) is not None:
                 attributes[key] = f"{getattr(row, key):.17g}"
-        if row.name == "F" and row.causality == "input" and interpolates_inputs(scene, "native"):
+        if row.name == "F" and row.causality == "input" and updates_intermediately(scene, "native"):
             attributes["intermediateUpdate"] = "true"  # the master may set it at every internal step
         element = ET.SubElement(node, row.type, attributes)
         if row.dimension is not None:

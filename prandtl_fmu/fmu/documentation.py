@@ -163,7 +163,8 @@ def index_html(model_description: bytes, scene, runtime: str = "python", stepper
     if runtime == "native":
         refusal = f"{version}Error"
         requirements = (_NATIVE_REQUIREMENTS.format(version="3.0" if fmi3 else "2.0")
-                        + _derivatives_text(root.find("CoSimulation")))
+                        + _derivatives_text(root.find("CoSimulation"),
+                                            getattr(scene, "causality", None) == "displacement"))
     else:
         refusal = ("fmi2Error; fmi2Fatal where the FMU runs on PythonFMU's own binary: Windows, macOS")
         requirements = _PYTHON_REQUIREMENTS
@@ -189,10 +190,14 @@ co-simulation master loads it as it is. Its binary is built for Linux x86-64 (th
 that built it). Every refusal is logged with a declared category, whatever the logging setting.</p>"""
 
 
-def _derivatives_text(capabilities) -> str:
+def _derivatives_text(capabilities, connector: bool = False) -> str:
     """What the model description declares of derivatives and intermediate update, in a paragraph ("" if none)."""
     said = []
-    if capabilities.get("canInterpolateInputs") == "true":
+    if capabilities.get("canInterpolateInputs") == "true" and connector:
+        said.append("it takes the first and second derivatives of x and v (<code>fmi2SetRealInputDerivatives</code>): "
+                    "over the next step its flanges follow x + x' (t - t0) + x'' (t - t0)^2 / 2, the branches by the "
+                    "exact play update through the path's turning point")
+    elif capabilities.get("canInterpolateInputs") == "true":
         said.append("it takes F's first and second derivatives (<code>fmi2SetRealInputDerivatives</code>): over the "
                     "next step its force is F + F' (t - t0) + F'' (t - t0)^2 / 2, evaluated at every internal step")
     if capabilities.get("providesIntermediateUpdate") == "true":

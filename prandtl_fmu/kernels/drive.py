@@ -49,6 +49,50 @@ def drive_with_memory(model, u, x_start, v_start, t_start, xs, vs, durations, fo
 
 
 @kernel
+def _dashpot_work(c, v, rate, curvature, duration):
+    """c times the integral of v(t)^2 over [0, duration] for v(t) = v + rate t + curvature t^2 / 2 (0 without a
+    dashpot: compiled away)."""
+    if c is None:
+        return 0.0
+    q = 0.5 * curvature
+    d = duration
+    return c * d * (v * v + d * (v * rate + d * ((rate * rate + 2.0 * v * q) / 3.0 + d * (0.5 * rate * q
+                                                                                        + d * q * q / 5.0))))
+
+
+@kernel
+def drive_polynomial(model, u, x, v, xd, vd, duration, energy, out):
+    """Move the branches ``u`` (in place) along the polynomial path x(t) = x + xd[0] t + xd[1] t^2 / 2 for
+    0 <= t <= ``duration`` (an FMU's input x given with its derivatives), v(t) = v + vd[0] t + vd[1] t^2 / 2. The
+    play operator is rate independent, so one move per monotone piece is exact: the path is cut at its turning point
+    t* = -xd[0] / xd[1] where 0 < t* < duration (plain branches only: series dashpots and effects with memory
+    depend on the path's timing). energy[1] gets the sliders' dissipation, energy[2] the dashpot's
+    c * integral of v^2. out = [x, v, the force k0 x + k3 x^3 + c v + sum_i k_i u_i, the direction of the last
+    motion (0: none)] at t = duration; all NaN, nothing moved, where the path's moves overflow."""
+    m, k0, k3, c, k, eta, cs, friction, memory = model
+    at, turn, direction = x, 0.0, 0.0
+    if xd[1] != 0.0:
+        turn = -xd[0] / xd[1]
+        if 0.0 < turn < duration:
+            at = x + turn * (xd[0] + 0.5 * xd[1] * turn)
+    end = x + duration * (xd[0] + 0.5 * xd[1] * duration)
+    if not (abs(at - x) < np.inf and abs(end - at) < np.inf):  # an overflow: nothing moved, the caller refuses
+        out[:] = np.nan
+        return
+    if at != x:
+        move_branches(k, eta, cs, u, at - x, turn, FLOW, energy)
+        direction = 1.0 if at > x else -1.0
+    move_branches(k, eta, cs, u, end - at, duration, FLOW, energy)
+    if end != at:
+        direction = 1.0 if end > at else -1.0
+    out[0] = end
+    out[1] = v + duration * (vd[0] + 0.5 * vd[1] * duration)
+    out[2] = smooth_force(end, out[1], k0, k3, c) + branch_force(k, u)
+    out[3] = direction
+    energy[2] += _dashpot_work(c, v, vd[0], vd[1], duration)
+
+
+@kernel
 def tangent(model, x, u, direction):
     """dF/dx at (x, u) for a motion in ``direction`` (+1 or -1): k0 + 3 k3 x^2 + the stiffnesses of the
     branches that stick (a branch on its threshold in ``direction`` slides and adds nothing)."""

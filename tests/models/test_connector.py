@@ -367,3 +367,69 @@ def test_a_host_python_without_numba_gets_a_logged_reason_naming_it_and_the_reci
                          timeout=300)
     assert "raised" in run.stdout
     assert "numba" in run.stdout and "in the host's Python" in run.stdout and "PYTHONPATH" in run.stdout
+
+
+# ------------------------------------------------------------------ the inputs' derivatives over a step (issue 61)
+
+@pytest.mark.parametrize("n", [5, 80])  # 80 branches: the memory stack
+def test_advance_follows_the_polynomial_path_through_its_turning_point(n):
+    """Connector.advance(x, v, time, H, x_derivatives=(x', x''), v_derivatives=(v', v'')): the sample committed
+    at ``time``, then the play operator along x + x' t + x'' t^2/2 over H, written out here as one clip per
+    monotone piece (the turning point t* = -x'/x'' found in the test); the dashpot's dissipation the integral of
+    c v^2 by numpy's polynomials; the end time, x, v, force and sliders' dissipation as written out. Paths that
+    turn inside the step reach branches the straight move from start to end would not."""
+    rng = np.random.default_rng(n)
+    k, eta = rng.uniform(0.1, 3.0, n), rng.uniform(0.01, 0.3, n)
+    k0, k3, c = 0.7, 0.3, 0.05
+    connector = Connector(connector_scene(k, eta, k0=k0, k3=k3, c=c))
+    u, x_now, time, damper, turned = np.zeros(n), 0.0, 0.0, 0.0, 0
+    for j in range(40):
+        x, v = float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-1, 1))
+        xd, vd = rng.uniform(-3, 3, 2), rng.uniform(-3, 3, 2)
+        H = float(rng.choice([0.05, 0.3, 1.0]))
+        if j % 3 == 0:  # a turn at 0.4 H
+            xd[1] = -xd[0] / (0.4 * H)
+        connector.advance(x, v, time, H, x_derivatives=xd.tolist(), v_derivatives=vd.tolist())
+        u = np.clip(u + (x - x_now), -eta, eta)  # the sample committed at time
+        path = np.polynomial.Polynomial([x, xd[0], xd[1] / 2])
+        turn = -xd[0] / xd[1]
+        points = [0.0] + ([turn] if 0 < turn < H else []) + [H]
+        turned += len(points) == 3
+        for a, b in zip(points[:-1], points[1:]):
+            u = np.clip(u + (path(b) - path(a)), -eta, eta)
+        speed = np.polynomial.Polynomial([v, vd[0], vd[1] / 2])
+        damper += c * (speed ** 2).integ()(H)
+        x_now, v_end, time = path(H), speed(H), time + H
+        force = k0 * x_now + k3 * x_now ** 3 + c * v_end + k @ u
+        assert connector.time == time
+        assert connector.x == pytest.approx(x_now, abs=1e-14) and connector.v == pytest.approx(v_end, abs=1e-14)
+        assert connector.force == pytest.approx(force, rel=1e-11, abs=1e-12), j
+        assert connector.energy()["dissipated_damper"] == pytest.approx(damper, rel=1e-11)
+        x_now = connector.x  # (the next sample is committed with no time between: no dashpot work)
+    assert turned >= 14
+
+
+def test_advance_without_derivatives_is_the_held_sample_and_refuses_what_it_cannot_follow():
+    """Without derivatives advance is move_to at the communication point (the connector stays there); a
+    non-finite derivative, a negative duration, derivatives on branches with series dashpots and a path that
+    overflows are refused, the connector unchanged."""
+    scene = connector_scene([1.0, 2.0], [0.1, 0.2])
+    held, moved = Connector(scene), Connector(scene)
+    held.advance(0.3, 0.1, 0.5, 0.2)
+    moved.move_to(0.3, 0.1, 0.5)
+    assert held.get_state() == moved.get_state() and held.time == 0.5
+    for kwargs, words in (({"x_derivatives": (1.0, float("nan"))}, "x_derivatives must be two finite"),
+                          ({"v_derivatives": (1.0,)}, "v_derivatives must be two finite")):
+        with pytest.raises(ValueError, match=words):
+            held.advance(0.2, 0.0, 0.6, 0.1, **kwargs)
+    with pytest.raises(ValueError, match="duration must be finite"):
+        held.advance(0.2, 0.0, 0.6, -0.1, x_derivatives=(1.0, 0.0))
+    series = Connector(parse_scene(scene_text({**connector_tables([1.0], [0.1]),
+                                              "branches": {"k": [1.0], "eta": [0.1], "c": [0.5]}}), "s.toml"))
+    with pytest.raises(ValueError, match="series dashpots or effects with memory"):
+        series.advance(0.2, 0.0, 0.0, 0.1, x_derivatives=(1.0, 0.0))
+    from prandtl_fmu.stepping import ElementError
+    for xd in ((1e308, 0.0), (1e308, -1e308)):  # the path's end, or its turning point, beyond the floats
+        with pytest.raises(ElementError, match="x would not be finite"):
+            held.advance(0.2, 0.0, 0.6, 10.0, x_derivatives=xd)
+    assert held.get_state() == moved.get_state() and series.time == 0.0

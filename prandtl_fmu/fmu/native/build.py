@@ -337,6 +337,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         "elongations": ("int64_t {name}(P, P, P, P, P, P)" if scene.causality == "displacement"
                         else "int64_t {name}(" + e + ", P)"),
         "move": "int64_t {name}(" + e + ", double, double, double, P, P, P, P, P)",
+        "cpath": "int64_t {name}(" + e + ", double, double, P, P, double, P, P)",
         "cforce": "double {name}(" + e + ", double, double, double)",
         "ctangent": "double {name}(" + e + ", double, double)",
         "cdirectional": "double {name}(" + e + ", double, double, double, double)",
@@ -361,8 +362,8 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"
-    functions = (("move", "cforce", "ctangent", "cdirectional", "cstored", "cinitial", "elongations") if connector
-                 else ("record", "row", "stiffness", "limits", "initial", "elongations", "rates"))
+    functions = (("move", "cpath", "cforce", "ctangent", "cdirectional", "cstored", "cinitial", "elongations")
+                 if connector else ("record", "row", "stiffness", "limits", "initial", "elongations", "rates"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]
         unfolded = chosen + "p" if folds else chosen  # the O(n) kernel's functions: what exact runs on

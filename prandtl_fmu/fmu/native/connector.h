@@ -47,6 +47,7 @@ typedef struct {
     double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
     int initialized;
     double mpar[N_MEMP]; /* the memory's parameters the master set */
+    double xd[2], vd[2]; /* x's and v's derivatives the master set (fmi2SetRealInputDerivatives) */
     uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
 } State;
 
@@ -62,6 +63,7 @@ typedef struct {
     Element saved;    /* core_do_step's checkpoint: a step whose outputs overflow is rolled back */
     double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
     int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
+    double xd[2], vd[2]; /* x', x'' and v', v'' the master set for the next doStep (0: held) */
 } Instance;
 
 static double element_time(const Element* e) { return e->time; }
@@ -76,7 +78,8 @@ static double element_time(const Element* e) { return e->time; }
 /* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
 #define SETTINGS(to, from)                                                                                     \
     COPY_FIELD(to, from, x_in), COPY_FIELD(to, from, v_in), COPY_FIELD(to, from, start_time),                  \
-        COPY_FIELD(to, from, par), COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, mpar)
+        COPY_FIELD(to, from, par), COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, mpar),                  \
+        COPY_FIELD(to, from, xd), COPY_FIELD(to, from, vd)
 #define SETTABLE(what) ((what) == W_X || (what) == W_V || (what) == W_PARAM || (what) == W_CBRANCH || \
                         (what) == W_MEMORY)
 #include "core.h"
@@ -243,6 +246,7 @@ static void defaults(Instance* c)
     memcpy(c->cbranch, CS_SCENE, sizeof c->cbranch);
     memcpy(c->mpar, MEM_SCENE, sizeof c->mpar);
     c->x_in = c->v_in = 0.0;
+    c->xd[0] = c->xd[1] = c->vd[0] = c->vd[1] = 0.0;
     instantiated(c);
     clear_element(&c->el);
     hand_over(c);
@@ -262,7 +266,8 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
     const char* problem;
     int i;
     if (!(isfinite(e->x) && isfinite(e->v) && isfinite(e->time) && isfinite(s->x_in) && isfinite(s->v_in) &&
-          isfinite(s->start_time) && (e->direction == 1.0 || e->direction == -1.0) &&
+          isfinite(s->start_time) && isfinite(s->xd[0]) && isfinite(s->xd[1]) && isfinite(s->vd[0]) &&
+          isfinite(s->vd[1]) && (e->direction == 1.0 || e->direction == -1.0) &&
           (s->initialized == 0 || s->initialized == 1)))
         return "it holds a non-finite or out-of-range value";
     for (i = 0; i < 3; i++)
@@ -343,15 +348,30 @@ static const char* initialize(Instance* c, char* buffer, size_t size)
 
 static void started(Instance* c) { (void)c; } /* (a connector has no load to tell of, no stepper to check) */
 
+/* Connector.advance's motion along the inputs' Taylor polynomial over ``H`` from the committed sample (kernel cpath:
+ * the play update per monotone piece, the path cut at its turning point); the inputs become the path's end */
+static void follow_derivatives(Instance* c, double H)
+{
+    Element* e = &c->el;
+    double out[4];
+    KERNEL(e, cpath)(KERNEL_ARGS_OF(e), e->x, e->v, c->xd, c->vd, H, e->account, out);
+    if (out[3] != 0)
+        e->direction = out[3];
+    e->x = c->x_in = out[0];
+    e->v = c->v_in = out[1];
+    e->time = e->time + H;
+}
+
 /* a doStep (core.h): the input sample committed at the communication point (the master's clock only moves
- * forward); a sample whose outputs would not be numbers is rolled back */
+ * forward), then, with the inputs' derivatives set, the motion along their polynomial to t + H (Connector.advance);
+ * a sample whose outputs would not be numbers is rolled back (the inputs and their derivatives kept) */
 static int step(Instance* c, double t, double H)
 {
     char buffer[512], why[400], shown[40];
     const char* problem = parameter_problem(c->par, c->cbranch, buffer, sizeof buffer);
     const Var* overflowed;
-    double value, time;
-    (void)H;
+    double value, time, x_in = c->x_in, v_in = c->v_in;
+    int polynomial = c->xd[0] != 0.0 || c->xd[1] != 0.0 || c->vd[0] != 0.0 || c->vd[1] != 0.0;
     if (problem != NULL) {
         say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
         return ST_DISCARD;
@@ -370,14 +390,19 @@ static int step(Instance* c, double t, double H)
     copy_element(&c->saved, &c->el);
     hand_over(c);
     move_to(&c->el, c->x_in, c->v_in, time);
+    if (polynomial)
+        follow_derivatives(c, H);
     overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
     if (overflowed != NULL || !(isfinite(c->el.x) && isfinite(c->el.v))) {
         copy_element(&c->el, &c->saved);
+        c->x_in = x_in;
+        c->v_in = v_in;
         say(c, ST_DISCARD, "the step to t = %.17g with x = %.17g, v = %.17g refused: %s would be %.17g, not finite "
-            "(an overflow); the state is unchanged", time, c->x_in, c->v_in,
+            "(an overflow); the state is unchanged", time, x_in, v_in,
             overflowed != NULL ? overflowed->name : "the state", overflowed != NULL ? value : NAN);
         return ST_DISCARD;
     }
+    c->xd[0] = c->xd[1] = c->vd[0] = c->vd[1] = 0.0; /* they described this step: the next is held unless set */
     return ST_OK;
 }
 
@@ -386,11 +411,13 @@ static int fixed_problem(Instance* c, const Var* var, double value) { return mem
 static void core_set_float(Instance* c, const Var* var, double value)
 {
     int j;
-    if (var->what == W_X)
+    if (var->what == W_X) {
         c->x_in = value;
-    else if (var->what == W_V)
+        c->xd[0] = c->xd[1] = 0.0; /* a new value of x: the derivatives set for the old one no longer hold */
+    } else if (var->what == W_V) {
         c->v_in = value;
-    else if (var->what == W_PARAM)
+        c->vd[0] = c->vd[1] = 0.0;
+    } else if (var->what == W_PARAM)
         c->par[var->index] = value;
     else if (var->what == W_MEMORY)
         c->mpar[var->index] = value; /* checked when handed over (the next exit of initialization mode) */
@@ -401,6 +428,50 @@ static void core_set_float(Instance* c, const Var* var, double value)
 }
 
 static void core_set_stepper(Instance* c, const char* value) { (void)c; (void)value; }
+
+/* ------------------------------------------------------------------ x's and v's derivatives (FMI 2.0) */
+
+#define HAS_INPUT_DERIVATIVES 1
+
+/* fmi2SetRealInputDerivatives: x', x'' and v', v'' (orders 1 and 2) at the next doStep's start; over that step the
+ * flanges follow x(t) = x + x' (t - t0) + x'' (t - t0)^2 / 2 (v the same with its own), Connector.advance (kernel
+ * cpath). Every entry checked (a value reference of x or v, an order 1 or 2, a finite value; a scene whose
+ * branches have series dashpots or effects with memory takes none), then all set; fmi2SetReal of x (v) sets x's
+ * (v's) to 0, a completed doStep all of them. */
+static int core_set_input_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[],
+                                      const double value[], const char* function)
+{
+    size_t i;
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    for (i = 0; i < n; i++) {
+        const Var* var = find(vr[i], T_REAL);
+        if (var == NULL || (var->what != W_X && var->what != W_V)) {
+            say(c, ST_ERROR, "%s refused: value reference %u is not the input x or v (the inputs whose derivatives "
+                "this FMU takes); nothing set", function, vr[i]);
+            return ST_ERROR;
+        }
+        if (order[i] != 1 && order[i] != 2) {
+            say(c, ST_ERROR, "%s refused: order %d of %s: this FMU takes orders 1 and 2 (maxInputDerivativeOrder); "
+                "nothing set", function, (int)order[i], var->name);
+            return ST_ERROR;
+        }
+        if (!isfinite(value[i])) {
+            say(c, ST_ERROR, "%s refused: %s's derivative of order %d = %.17g must be finite; nothing set", function,
+                var->name, (int)order[i], value[i]);
+            return ST_ERROR;
+        }
+    }
+    if (n > 0 && (HAS_SERIES || HAS_MEMORY)) {
+        say(c, ST_ERROR, "%s refused: input derivatives with series dashpots or effects with memory: their forces "
+            "depend on the path's timing, which the connector does not follow; hold the inputs; nothing set",
+            function);
+        return ST_ERROR;
+    }
+    for (i = 0; i < n; i++)
+        (find(vr[i], T_REAL)->what == W_X ? c->xd : c->vd)[order[i] - 1] = value[i];
+    return ST_OK;
+}
 
 /* the connector's one Integer is n, a constant: the motion comes in, no white noise */
 static int32_t integer_value(Instance* c, const Var* var) { (void)c; (void)var; return (int32_t)N_VALUE; }

@@ -171,7 +171,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueRe
                                        const fmi2Integer order[], const fmi2Real value[])
 {
     BEGIN(fmi2SetRealInputDerivatives, INITIALIZING | STEPPING);
-#ifdef HAS_INPUT_DERIVATIVES /* the element: F's (element.h) */
+#ifdef HAS_INPUT_DERIVATIVES /* the element: F's (element.h); the connector: x's and v's (connector.h) */
     return (fmi2Status)core_set_input_derivatives(c, vr, n, order, value, "fmi2SetRealInputDerivatives");
 #else
     if (!arrays_given(c, n, vr, value, "fmi2SetRealInputDerivatives") ||

@@ -46,8 +46,10 @@ the load, ``lt``/``lf``/``nl`` its table):
 
 The connector's (``_CONNECTOR_SIGNATURES``: the element's arrays, then): ``move(..., x_start, v_start, t_start, x,
 v, duration, force, account)``, one sample of ``connector.Connector.move_to`` (``drive_with_memory`` with effects
-with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cforce(..., x, v,
-t)``, ``ctangent(..., x, direction)`` (the memory's force and slope added), ``cdirectional(..., x, direction, dx, dv)``
+with memory, else ``drive``; the dashpot's dissipation over the sample added to the account); ``cpath(..., x, v,
+xd, vd, duration, account, out)``, the motion along the inputs' Taylor polynomial of ``Connector.advance``
+(``drive.drive_polynomial``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
+slope added), ``cdirectional(..., x, direction, dx, dv)``
 (d force = (tangent + the memory's slope) dx + c dv: the directional derivative a master asks for; the memory's
 forces do not move with v at an instant), ``cstored(..., x)``; ``cinitial(...)``
 (a fresh memory stack and memory); ``elongations(p, k, eta, cs, u, out)`` (the branches' arrays alone).
@@ -225,6 +227,13 @@ def move(p, kp, etap, csp, up, mp, msp, nd, x_start, v_start, t_start, xp, vp, d
     return 0
 
 
+def cpath(p, kp, etap, csp, up, mp, msp, nd, x, v, xdp, vdp, duration, accountp, outp):
+    model = _model(p, kp, etap, csp, mp, msp, nd)  # Connector.advance with the inputs' derivatives
+    drive_polynomial(model, {u}, x, v, carray(xdp, (2,)), carray(vdp, (2,)), duration, carray(accountp, (3,)),
+                     carray(outp, (4,)))
+    return 0
+
+
 def cforce(p, kp, etap, csp, up, mp, msp, nd, x, v, t):
     m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
     return smooth_force(x, v, k0, k3, c) + branch_force(k, {u}) + force_now(memory, t, x, v)
@@ -264,6 +273,8 @@ def elongations(p, kp, etap, csp, up, outp):
 # (the FMI 3.0 layer calls them with the branches' arrays alone)
 _CONNECTOR_SIGNATURES = {
     "move": f"types.int64({_ELEMENT}, types.float64, types.float64, types.float64, {', '.join([_PTR] * 5)})",
+    "cpath": f"types.int64({_ELEMENT}, types.float64, types.float64, {', '.join([_PTR] * 2)}, types.float64, "
+             f"{', '.join([_PTR] * 2)})",
     "cforce": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64)",
     "ctangent": f"types.float64({_ELEMENT}, types.float64, types.float64)",
     "cdirectional": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64, types.float64)",
@@ -684,13 +695,13 @@ def _compile_fold(scene):
 
 
 def _compile_connector(scene, shape) -> list:
-    """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cforce``, ``ctangent``, ``cstored``,
-    ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
+    """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cpath``, ``cforce``, ``ctangent``,
+    ``cstored``, ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
     ``drive_with_memory``, the force and the tangent add the memory's (``memory.force_now``, ``tangent_now``) and
     ``cinitial`` makes the memory fresh, as ``connector.Connector`` does."""
     from numba import carray, cfunc, njit, types
 
-    from ...kernels.drive import drive, drive_with_memory, tangent
+    from ...kernels.drive import drive, drive_polynomial, drive_with_memory, tangent
     from ...kernels.energy import stored
     from ...kernels.play import branch_force, write_elongations
     from ...kernels.smooth import smooth_force
@@ -703,7 +714,7 @@ def _compile_connector(scene, shape) -> list:
         source = _CONNECTOR_TEMPLATE.format(c="p[5]" if damped else "0.0", damped="True" if damped else "False",
                                             has_memory=has_memory, **shape)
         namespace = dict(carray=carray, read_only=read_only(), np=np, drive=drive, drive_with_memory=drive_with_memory,
-                         tangent=tangent,
+                         drive_polynomial=drive_polynomial, tangent=tangent,
                          stored=stored, branch_force=branch_force, write_elongations=write_elongations,
                          smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now)
         exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)

@@ -1265,6 +1265,110 @@ def test_the_connector_refuses_directional_derivatives_it_does_not_have(connecto
         slave.close()
 
 
+# ------------------------------------------------------------------ the connector's input derivatives (issue 61)
+
+def _connector_outputs(connector, names):
+    """The library connector's value of each FMU output ``names``."""
+    found = {"force": connector.force, "stiffness": connector.stiffness(), **connector.energy()}
+    return [found[name] for name in names]
+
+
+def _set_motion_derivatives(slave, xd, vd):
+    """fmi2SetRealInputDerivatives of x and v, orders 2 then 1 (any order of entries)."""
+    slave.fmu.setRealInputDerivatives([slave.vr["x"], slave.vr["v"], slave.vr["x"], slave.vr["v"]], [2, 2, 1, 1],
+                                      [xd[1], vd[1], xd[0], vd[0]])
+
+
+def test_the_connector_s_input_derivatives_drive_it_as_the_library_bit_for_bit(connectors):
+    """The 80-branch connector (canInterpolateInputs="true"), x and v set with random x', x'', v', v'' before each
+    of 40 steps of random sizes (every fifth held, their turning points inside the step every third): force,
+    stiffness and energies before and after each step equal Connector.advance(x, v, t, H, x_derivatives,
+    v_derivatives) to the bit, and the inputs read back the path's end. A state saved with derivatives set carries
+    them (restored, the step is the same again); a step that overflows is discarded and keeps them; fmi2SetReal of x
+    clears x's."""
+    from fmpy.fmi1 import FMICallException
+
+    from prandtl_fmu.connector import Connector
+    from tests.fmu_tools import Slave
+
+    fmu = connectors["stack"]["native"]
+    assert 'canInterpolateInputs="true"' in zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert 'canInterpolateInputs="false"' in zipfile.ZipFile(connectors["series"]["native"]).read(
+        "modelDescription.xml").decode()
+    slave = Slave(fmu, start_values={"x": 0.02})
+    names = [v.name for v in slave.md.modelVariables if v.causality == "output"]
+    connector = Connector(_scene_of(connectors, "stack"))
+    connector.move_to(0.02, 0.0, 0.0)
+    rng = np.random.default_rng(8)
+    turned = 0
+    try:
+        assert slave.get(*names) == _connector_outputs(connector, names)
+        for j in range(40):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            xd, vd = rng.uniform(-3, 3, 2), rng.uniform(-3, 3, 2)
+            size = float(rng.choice([0.01, 0.05, 0.3]))
+            if j % 3 == 0:
+                xd[1] = -xd[0] / (0.5 * size)  # a turn at half the step
+            if j % 5 == 0:
+                xd[:] = vd[:] = 0.0
+            turned += bool(xd[1]) and 0 < -xd[0] / xd[1] < size
+            slave.set("x", x)
+            slave.set("v", v)
+            if j % 5:
+                _set_motion_derivatives(slave, xd, vd)
+            if j == 17:
+                saved = slave.fmu.getFMUstate()
+                slave.fmu.doStep(slave.time, size)
+                slave.fmu.setFMUstate(saved)
+                slave.fmu.freeFMUstate(saved)
+            slave.step(size)
+            connector.advance(x, v, slave.time - size, size, x_derivatives=xd.tolist(), v_derivatives=vd.tolist())
+            assert slave.get(*names) == _connector_outputs(connector, names), j
+            assert slave.get("x", "v") == [connector.x, connector.v], j
+        assert turned >= 5
+        before = slave.get(*names)
+        slave.set("x", 0.1)
+        _set_motion_derivatives(slave, (0.0, 1e300), (0.0, 0.0))  # the cubic spring's force overflows
+        for _ in range(2):  # discarded, the derivatives kept: discarded again
+            with pytest.raises(FMICallException):
+                slave.fmu.doStep(slave.time, 1.0)
+        slave.set("x", 0.1)  # a new x: its derivatives cleared, the step held
+        slave.step(1.0)
+        connector.advance(0.1, connector.v, slave.time - 1.0, 1.0)
+        assert slave.get(*names) == _connector_outputs(connector, names) != before
+    finally:
+        slave.close()
+
+
+def _scene_of(connectors, name):
+    return load_scene(os.fspath(connectors[name]["native"]).replace(f"{name}-native.fmu", f"{name}.toml"))
+
+
+def test_the_connector_refuses_input_derivatives_with_their_reason(connectors):
+    """fmi2SetRealInputDerivatives refuses (fmi2Error, logged, nothing set) a value reference other than x and v,
+    orders 0 and 3, a NaN, and any on the connector whose branches have series dashpots."""
+    from fmpy.fmi1 import FMICallException
+
+    from tests.fmu_tools import Slave
+
+    for name, cases in (("stack", ((["force"], [1], [0.1], "is not the input x or v"),
+                                   (["x"], [3], [0.1], "order 3 of x"), (["v"], [0], [0.1], "order 0 of v"),
+                                   (["x", "v"], [1, 2], [0.1, float("nan")], "order 2 = nan must be finite"))),
+                        ("series", ((["x"], [1], [0.1], "with series dashpots or effects with memory"),))):
+        slave = Slave(connectors[name]["native"], start_values={"x": 0.02})
+        try:
+            for names, orders, values, words in cases:
+                slave.messages.clear()
+                with pytest.raises(FMICallException):
+                    slave.fmu.setRealInputDerivatives([slave.vr[n] for n in names], orders, values)
+                assert any(words in message for _, message in slave.messages), (words, slave.messages)
+            force = slave.get("force")
+            slave.step(0.1)  # nothing was set: held
+            assert slave.get("force") == force and slave.get("x") == 0.02
+        finally:
+            slave.close()
+
+
 # ------------------------------------------------------------------ FMI 3.0: intermediate update (issue 61)
 
 def test_fmi3_intermediate_update_sets_f_at_every_internal_step_as_the_library(fmus3):
