@@ -205,7 +205,8 @@ def test_a_state_whose_memory_does_not_fit_is_refused(fmus, fmi):
 
     from fmpy.fmi1 import FMICallException
 
-    mpar = tail - 8 - 24 - 8 * len(layout["names"])  # the parameters the master set: before the noise's settings
+    # the parameters the master set: before F's two input derivatives and the noise's settings
+    mpar = tail - 8 - 24 - 16 - 8 * len(layout["names"])
     assert struct.unpack_from("<d", blob, mpar + 8)[0] == 0.023  # delay_tau
     for bad, words in ((forged(tail + 8 * layout["dahl_state"], 5.0), "beyond its level F_c = 0.2"),
                        (forged(mpar + 8, 0.05), "its memory's parameters in use are not those set"),
