@@ -676,8 +676,10 @@ def test_a_forged_connector_state_is_refused(connector_fmu, fmi):
     for size, x, v in motion(7, 20):
         assert instance.move(size, x, v) == OK
     blob = instance.serialize()
-    tail = len(blob) - 8 * length  # the memory's values; the checksum just before them, the parameters set before it
-    mpar = tail - 8 - 8 * len(layout["names"])
+    # the memory's values; the checksum just before them, x's and v's input derivatives (four values) before it,
+    # the parameters set before those
+    tail = len(blob) - 8 * length
+    mpar = tail - 8 - 32 - 8 * len(layout["names"])
     assert struct.unpack_from("<d", blob, mpar + 8)[0] == 0.023  # delay_tau: the layout holds
     assert struct.unpack_from("<d", blob, tail + 8 * layout["dahl_state"])[0] != 0.0
 
