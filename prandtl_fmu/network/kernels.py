@@ -227,9 +227,13 @@ def _start_pieces(model, x, u, piece, d, h):
 
 
 @kernel
-def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree, links):
+def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree, links, at_end):
     """grad_j = dJ/dd_j on the current pieces (constraints without their multipliers); term[e] = the force of
     element e; scale[j] = the sum of the magnitudes of the forces at node j (for rounding tolerances).
+
+    ``at_end`` (np.bool_): ``x`` is the step's end x1 = x + d itself (:func:`settle`): a spring's and a cubic
+    spring's force from x1_i - x1_j alone (not from their elongation at the step's start plus delta_e, whose
+    sum rounds at the start's size); the inertia, the dashpots and the branches from d as always.
 
     In the same pass over the elements (each pass costs as much as the arithmetic: the arrays of a large
     network do not fit in the cache), where not None:
@@ -267,6 +271,8 @@ def _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a,
             rel_x, delta = x[i], d[i]
         else:
             rel_x, delta = x[i] - x[j], d[i] - d[j]
+        if at_end and (kind[e] == SPRING or kind[e] == CUBIC):
+            delta = 0.0
         f, kappa = term_force(kind[e], coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
         term[e] = f
         size = abs(f) + kappa * (abs(rel_x) + abs(delta) + abs(u[e]))  # f and what it cancelled
@@ -596,7 +602,7 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
             a = np.zeros((count, width + 1))
             anchor = np.zeros(count)
             band = _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree,
-                             links)
+                             links, np.bool_(False))
             if band <= width:
                 break
             width = band
@@ -713,7 +719,8 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
         for j in range(n):
             d[j] += step_taken * p[j]
         if update:
-            _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, None, None)
+            _gradient(model, x, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, None, None,
+                      np.bool_(False))
         if blocker >= 0:
             if step_taken == 0.0 and released_many:
                 single = True
@@ -801,70 +808,6 @@ def _excess(kind, coef, piece, term, scale, ends, e):
 
 
 @kernel
-def _forces_at(model, x1, v, u, piece, d, h, force, grad, term, scale, cluster, a, anchor, degree, links):
-    """:func:`_gradient` at the new positions x1 = x + d themselves: a spring's and a cubic spring's force
-    from x1_i - x1_j (not from their elongation at the step's start plus delta_e, whose sum rounds at the
-    start's size), the inertia, the dashpots and the branches from d as there. ``a`` and ``anchor`` (or None)
-    get the clusters' matrix (its band already known: ``a``'s width); ``degree`` and ``links`` (or None) the
-    constraints of each node."""
-    mass, kind, ends, coef, load_node, has_cubic = model
-    n = mass.shape[0]
-    for j in range(n):
-        grad[j] = mass[j] / (h * h) * (d[j] - h * v[j])
-        scale[j] = mass[j] / (h * h) * (abs(d[j]) + abs(h * v[j]))
-        if a is not None:
-            c = cluster[j]
-            if c >= 0:
-                a[c, 0] += mass[j] / (h * h)
-                anchor[c] += mass[j] / (h * h)
-    if degree is not None:
-        for q in range(n + 1):
-            degree[q] = 0
-            links[q] = 0
-    grad[load_node] -= force
-    scale[load_node] += abs(force)
-    for e in range(kind.shape[0]):
-        i, j = ends[e, 0], ends[e, 1]
-        kd = kind[e]
-        if j == GROUND:
-            rel_x, delta = x1[i], d[i]
-        else:
-            rel_x, delta = x1[i] - x1[j], d[i] - d[j]
-        if kd == SPRING or kd == CUBIC:
-            delta = 0.0
-        f, kappa = term_force(kd, coef[e, 0], coef[e, 1], coef[e, 2], piece[e], rel_x, delta, u[e], h)
-        term[e] = f
-        size = abs(f) + kappa * (abs(rel_x) + abs(delta) + abs(u[e]))
-        grad[i] += f
-        scale[i] += size
-        if j != GROUND:
-            grad[j] -= f
-            scale[j] += size
-        constraint = is_constraint(kd, piece[e])
-        if degree is not None and constraint:
-            jj = n if j == GROUND else j
-            degree[i] += 1
-            links[i] ^= e
-            degree[jj] += 1
-            links[jj] ^= e
-        if a is not None and not constraint and kappa != 0.0:
-            ci = cluster[i]
-            cj = -1 if j == GROUND else cluster[j]
-            if ci == cj:
-                continue
-            if ci >= 0 and cj >= 0:
-                a[ci, 0] += kappa
-                a[cj, 0] += kappa
-                a[max(ci, cj), abs(ci - cj)] -= kappa
-            elif ci >= 0:
-                a[ci, 0] += kappa
-                anchor[ci] += kappa
-            else:
-                a[cj, 0] += kappa
-                anchor[cj] += kappa
-
-
-@kernel
 def settle(model, x, v, u, piece, h, force, fixed_node, work):
     """The new positions of a solved step, settled where the increment's rounding swamps them: True when
     they are (then in work[2], d and the elements' forces in work[0] and work[5] brought to them), False
@@ -876,9 +819,9 @@ def settle(model, x, v, u, piece, h, force, fixed_node, work):
     0 where the answer is 3 (:func:`prandtl_fmu.kernels.increment.settle` is the element's cure of the same).
     So when a node's new position is below FALLEN of its old one (where that rounding can reach SETTLED of it;
     a node that crosses 0 in a dynamic run is not checked, at no cost), the step's equations are evaluated at
-    the new positions themselves (:func:`_forces_at`) on the step's final pieces; where a node misses its root by
-    more than SETTLED of itself, Newton's corrections on the free clusters (the step's own linear algebra)
-    bring every free node to the root: one correction for the linear
+    the new positions themselves (:func:`_gradient` with ``at_end``) on the step's final pieces; where a node
+    misses its root by more than SETTLED of itself, Newton's corrections on the free clusters (the step's own
+    linear algebra) bring every free node to the root: one correction for the linear
     pieces, Newton's convergence with cubic springs, at most SETTLE_ITERATIONS. The constraints' forces are
     then read again (the reaction). The pieces are kept: a correction is of the order of ulp(x) and moves no
     element over a kink but one within that rounding of it. The positions are kept as they are where the
@@ -903,7 +846,8 @@ def settle(model, x, v, u, piece, h, force, fixed_node, work):
     for iteration in range(SETTLE_ITERATIONS):
         a = np.zeros((count, band + 1))
         anchor = np.zeros(count)
-        _forces_at(model, x1, v, u, piece, d, h, force, grad, trial, scale, cluster, a, anchor, None, None)
+        _gradient(model, x1, v, u, piece, d, h, force, grad, trial, scale, cluster, a, anchor, None, None,
+                  np.bool_(True))
         rhs = np.zeros(count)
         size = np.zeros(count)
         for j in range(n):
@@ -942,7 +886,8 @@ def settle(model, x, v, u, piece, h, force, fixed_node, work):
                 d[j] += correction
         if not moved:
             break
-    _forces_at(model, x1, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, degree, links)
+    _gradient(model, x1, v, u, piece, d, h, force, grad, term, scale, cluster, None, None, degree, links,
+              np.bool_(True))
     _multipliers(model, piece.copy(), grad, queue, degree, links, subtree, term, scale, fixed_node, np.bool_(False))
     return True
 
