@@ -43,6 +43,7 @@ from .memory import time_problem as memory_time_problem
 from .kernels.play import branch_force, write_elongations
 from .kernels.smooth import smooth_force
 from .kernels.energy import stored
+from .kernels.rates import connector_rates
 from .scene import MEMORY_COEFFICIENTS, Scene, _coefficient_key, coefficients_of, with_coefficients
 
 # energy account of the connector: work is not booked (no load), energy[1] = sliders, energy[2] = dashpot
@@ -159,6 +160,25 @@ class Connector(OutputMemo):
         direction = self.direction if v == 0 else math.copysign(1.0, v)
         return self._memo(("stiffness", direction), lambda: float(tangent(self.model, self.x, self.u, direction)
                                                                   + tangent_now(self.model[8], direction)))
+
+    def output_derivatives(self, x: float, v: float, x_derivatives=None, v_derivatives=None) -> dict:
+        """The time derivatives of the force at the inputs (x, v) (the force :meth:`preview` shows), along the path
+        the inputs' derivatives describe (FMI 2.0's input derivatives; None: not set), one-sided for the motion
+        ahead (``kernels/rates.connector_rates``): ``{("force", 1): F', ("force", 2): F''}`` (N/s, N/s^2); x' is
+        v where x's derivatives are not set, v' and v'' zero where v's are not. Exact between switches; ValueError
+        with series dashpots or effects with memory (their forces' rates are not the tangent's), or for a
+        non-finite value."""
+        xd, vd = self._derivatives(x_derivatives, "x"), self._derivatives(v_derivatives, "v")
+        if not (math.isfinite(x) and math.isfinite(v)):
+            raise ValueError(f"the motion must be finite, got x = {x!r}, v = {v!r}")
+        if self.scene.has_series_dashpots or has_memory(self.model[8]):
+            raise ValueError("the force's derivatives with series dashpots or effects with memory: their forces' "
+                             "rates are not given")
+        twin = self.copy()
+        twin.move_to(x, v)
+        out = np.empty(2)
+        connector_rates(twin.model, twin.x, twin.v, twin.u, xd, vd, twin.direction, out)
+        return {("force", 1): float(out[0]), ("force", 2): float(out[1])}
 
     def stored_energy(self) -> float:
         """k0 x^2/2 + k3 x^4/4 + sum_i k_i u_i^2/2 (J)."""

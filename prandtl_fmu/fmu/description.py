@@ -620,10 +620,16 @@ def updates_intermediately(scene, runtime: str) -> bool:
 
 
 def output_derivative_order(scene, runtime: str) -> int:
-    """FMI's maxOutputDerivativeOrder of the FMU: 2 for the native element (x: v, a; v: a, a' where exact;
-    reaction: its rate where exact, ``kernels/rates.py``; fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives),
-    else 0 (none given)."""
-    return 2 if _native_element(scene, runtime) else 0
+    """FMI's maxOutputDerivativeOrder of the FMU (fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives,
+    ``kernels/rates.py``): 2 for the native element (x: v, a; v: a, a' where exact; reaction: its rate where
+    exact) and for the native connector's force (F', F'' along its inputs' path) but with series dashpots or effects
+    with memory; else 0 (none given)."""
+    if runtime != "native" or is_network(scene):
+        return 0
+    if scene.causality == "displacement":
+        return 0 if (scene.has_series_dashpots or scene.delay is not None or scene.history is not None
+                     or scene.dahl is not None) else 2
+    return 2
 
 
 def provides_directional_derivatives(scene, runtime: str) -> bool:

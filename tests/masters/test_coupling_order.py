@@ -9,8 +9,13 @@ communication point tc the master reads the mass's x, v, sets them on the connec
 
 * reads the mass's output derivatives (x: v, a; v: a, a') and sets them on the connector as its input derivatives
   (over the step it follows x + v (t - tc) + a (t - tc)^2 / 2, v the same with a, a');
-* Jacobi: sets F' = -A omega sin(omega tc) - force' on the mass, force' the connector's directional derivative along
-  (v, a) (d force/d x v + d force/d v a), then steps both;
+* Jacobi: sets F' = -A omega sin(omega tc) - force' and F'' = -A omega^2 cos(omega tc) - force'' on the mass,
+  force' and force'' the connector's output derivatives at its state as the last step left it (its path's end: what
+  a master reads after a step), along the mass's motion set as its input derivatives (K_t v + c a and K_t a + c a'),
+  then steps both. Read instead at the new inputs' preview they are first order: the preview moves the connector
+  back from its path's end to the mass's x (the path overshoots by O(H^3)), which takes the branches that were
+  sliding just off their thresholds, and the one-sided tangent counts them as sticking for the motion ahead, though
+  they slide again after O(H^3): a switch in nearly every step while the joint slips;
 * Gauss-Seidel: steps the connector first (its force at tc + H, at the end of the path it followed), then sets on the
   mass the slope F' of F between tc and tc + H, and steps the mass.
 
@@ -82,10 +87,11 @@ def coupled(fmus: dict, step: float, stop_time: float, scheme: str, derivatives:
                 found.append(x)
             if j == count:
                 break
-            if derivatives and scheme == "jacobi":  # force' at tc, at the connector's own state (its path's end)
+            if derivatives and scheme == "jacobi":  # force' and force'' at the connector's own state, as the step
+                # left it (its path's end), along the mass's motion: its output derivatives with (v, a), (a, a') set
                 a, jerk = mass.fmu.getRealOutputDerivatives([m["v"], m["v"]], [1, 2])
-                rate, = bushing.fmu.getDirectionalDerivative([b["force"]], [b["x"], b["v"]], [v, a])
-                bend, = bushing.fmu.getDirectionalDerivative([b["force"]], [b["x"], b["v"]], [a, jerk])
+                bushing.fmu.setRealInputDerivatives([b["x"], b["x"], b["v"], b["v"]], [1, 2, 1, 2], [v, a, a, jerk])
+                rate, bend = bushing.fmu.getRealOutputDerivatives([b["force"], b["force"]], [1, 2])
             bushing.fmu.setReal([b["x"], b["v"]], [x, v])
             force = bushing.fmu.getReal([b["force"]])[0]
             load = AMPLITUDE * math.cos(OMEGA * tc) - force

@@ -433,3 +433,91 @@ def test_advance_without_derivatives_is_the_held_sample_and_refuses_what_it_cann
         with pytest.raises(ElementError, match="x would not be finite"):
             held.advance(0.2, 0.0, 0.6, 10.0, x_derivatives=xd)
     assert held.get_state() == moved.get_state() and series.time == 0.0
+
+
+# ------------------------------------------------------------------ the force's time derivatives (issue 61)
+
+def _force_along(k, eta, u, k0, k3, c, x, path, speed, t):
+    """The force at time t along the path x + path(t) - path(0) from elongations u, written out (one clip per branch:
+    the path is monotone over [0, t] for the small t used here)."""
+    moved = np.clip(u + (path(t) - path(0.0)), -eta, eta)
+    return k0 * path(t) + k3 * path(t) ** 3 + c * speed(t) + k @ moved
+
+
+@pytest.mark.parametrize("n", [5, 80])  # 80 branches: the memory stack
+def test_the_force_s_derivatives_are_the_slopes_of_the_force_along_the_inputs_path(n):
+    """Connector.output_derivatives(x, v, x', v'): F' and F'' at the preview of (x, v) along the path x + x' t +
+    x'' t^2/2 (x' = v, x'' = v' where x's derivatives are not given; v' = v'' = 0 where v's are not), against
+    one-sided differences (second order) of the force written out here along that path (the play operator as one clip per
+    branch), to 1e-6 relative (1e-5 for F''): random states, with derivatives, without, a path that starts at rest (x' = 0: its
+    direction is x''s), and a branch on its threshold (sliding on when pushed, sticking when pulled off)."""
+    rng = np.random.default_rng(n + 61)
+    k, eta = rng.uniform(0.1, 3.0, n), rng.uniform(0.01, 0.3, n)
+    k0, k3, c = 0.7, 0.3, 0.05
+    connector = Connector(connector_scene(k, eta, k0=k0, k3=k3, c=c))
+    t, history, speeds = random_history(rng, count=80, scale=0.4)
+    checked = 0
+    for j, (time, xj, vj) in enumerate(zip(t, history, speeds)):
+        connector.move_to(float(xj), float(vj), float(time))
+        if j % 4:
+            continue
+        u = connector.elongations()
+        x = float(xj) if j % 8 else float(xj) + 1e-3  # the preview of a new x (from the committed one)
+        v = float(rng.uniform(-1, 1))
+        moved = np.clip(u + (x - connector.x), -eta, eta)
+        cases = [(None, None, (v, v and 0.0), (0.0, 0.0)),
+                 (rng.uniform(-2, 2, 2), rng.uniform(-2, 2, 2), None, None),
+                 ((0.0, float(rng.choice([-1.5, 1.5]))), (0.3, -0.7), None, None)]
+        for xd, vd, x_path, v_path in cases:
+            x1, x2 = x_path if x_path is not None else xd
+            v1, v2 = v_path if v_path is not None else vd
+            if x_path is not None:
+                x2 = v1  # x'' = v' = 0: held
+            path = np.polynomial.Polynomial([x, x1, x2 / 2])
+            speed = np.polynomial.Polynomial([v, v1, v2 / 2])
+            # one-sided differences of second order, over an interval where no branch reaches its threshold (at
+            # 1e-5 the second is rounding: |F| / delta^2)
+            ahead = np.sign(x1 if x1 else x2)
+            room = eta - ahead * moved
+            room = room[room > 0]
+            delta = min(3e-4, room.min() / (8 * (abs(x1) + abs(x2)))) if room.size else 3e-4
+            if delta < 1e-5:
+                continue
+            f0, f1, f2, f3 = (_force_along(k, eta, moved, k0, k3, c, x, path, speed, s * delta) for s in range(4))
+            first = (-3 * f0 + 4 * f1 - f2) / (2 * delta)
+            second = (2 * f0 - 5 * f1 + 4 * f2 - f3) / delta ** 2
+            got = connector.output_derivatives(x, v, None if xd is None else tuple(xd),
+                                               None if vd is None else tuple(vd))
+            assert got[("force", 1)] == pytest.approx(first, rel=1e-6, abs=1e-7), (j, xd, vd)
+            assert got[("force", 2)] == pytest.approx(second, rel=1e-5, abs=1e-6), (j, xd, vd)
+            checked += 1
+    assert checked >= 30
+    # a branch on its threshold: a move up leaves the branches it reached on +eta; moving on up they slide, turning
+    # back they stick (F'' at x' = 0 takes the direction of x'')
+    connector = Connector(connector_scene([1.0, 2.0], [0.1, 0.5], k0=0.5, k3=None, c=None))
+    connector.move_to(0.3, 0.0, 1.0)
+    up = connector.output_derivatives(0.3, 1.0)[("force", 1)]
+    down = connector.output_derivatives(0.3, -1.0)[("force", 1)]
+    assert (up, down) == (0.5 + 2.0, -(0.5 + 1.0 + 2.0))
+    assert connector.output_derivatives(0.3, 0.0, (0.0, -2.0))[("force", 2)] == -2.0 * 3.5
+    assert connector.output_derivatives(0.3, 0.0, (0.0, 2.0))[("force", 2)] == 2.0 * 2.5
+
+
+def test_the_force_s_derivatives_refuse_what_they_cannot_give():
+    """Series dashpots and effects with memory (their forces' rates are not the tangent's), a non-finite input:
+    ValueError naming it, the connector unchanged."""
+    series = Connector(parse_scene(scene_text({**connector_tables([1.0], [0.1]),
+                                              "branches": {"k": [1.0], "eta": [0.1], "c": [0.5]}}), "s.toml"))
+    with pytest.raises(ValueError, match="series dashpots or effects with memory"):
+        series.output_derivatives(0.1, 0.0)
+    delayed = Connector(parse_scene(scene_text({**connector_tables([1.0], [0.1]),
+                                               "delay": {"gain": 0.5, "tau": 0.3}}), "d.toml"))
+    with pytest.raises(ValueError, match="series dashpots or effects with memory"):
+        delayed.output_derivatives(0.1, 0.0)
+    plain = Connector(connector_scene([1.0], [0.1]))
+    before = plain.get_state()
+    with pytest.raises(ValueError, match="must be finite"):
+        plain.output_derivatives(float("nan"), 0.0)
+    with pytest.raises(ValueError, match="x_derivatives must be two finite"):
+        plain.output_derivatives(0.1, 0.0, (1.0, float("inf")))
+    assert plain.get_state() == before

@@ -186,7 +186,7 @@ def _c_array(values) -> str:
 def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays: bool = False) -> str:
     """scene.h of the element or connector: its arrays, the library's rules, the kernels' symbols, the variables
     (``variables``: the FMI 2.0 list of ``fmu/description.py``, by value reference)."""
-    from ..description import fmi3_references
+    from ..description import fmi3_references, output_derivative_order
 
     from ... import scene as library_rules
     from ... import stability
@@ -263,6 +263,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         f"#define HAS_STRIBECK {int(friction is not None and friction.stribeck_velocity is not None)}",
         f"#define HAS_SERIES {int(scene.has_series_dashpots)}",
         f"#define EXACT_RATES {int(exact_rates(scene))} /* kernels/rates.exact_rates: a' and R' are exact */",
+        f"#define OUTPUT_DERIVATIVE_ORDER {output_derivative_order(scene, 'native')} /* maxOutputDerivativeOrder */",
         f'static const char GUID[] = "{guid}";',
         f'static const char DIGEST[] = "{digest}";',
         f"static const double P_SCENE[10] = {_c_array(values.values())};",
@@ -341,6 +342,7 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         "cforce": "double {name}(" + e + ", double, double, double)",
         "ctangent": "double {name}(" + e + ", double, double)",
         "cdirectional": "double {name}(" + e + ", double, double, double, double)",
+        "crates": "int64_t {name}(" + e + ", double, double, P, P, double, P)",
         "cstored": "double {name}(" + e + ", double)",
         "cinitial": "int64_t {name}(" + e + ")",
     }
@@ -362,7 +364,8 @@ def _scene_header(scene, variables, guid, steppers, symbols, scene_bytes, arrays
         else:
             lines.append(declarations[name.split("_")[0]].format(name=name) + f' KERNEL("{symbol}");')
     connector = scene.causality == "displacement"
-    functions = (("move", "cpath", "cforce", "ctangent", "cdirectional", "cstored", "cinitial", "elongations")
+    functions = (("move", "cpath", "cforce", "ctangent", "cdirectional", "crates", "cstored", "cinitial",
+                  "elongations")
                  if connector else ("record", "row", "stiffness", "limits", "initial", "elongations", "rates"))
     for suffix in ("c", "n"):
         chosen = suffix if suffix in variants else variants[0]

@@ -240,6 +240,34 @@ static int core_directional_derivative(Instance* c, const unsigned unknown[], si
     return ST_OK;
 }
 
+/* fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives (front.h's core_get_output_derivatives): the ``order``-th
+ * time derivative of force at the element moved to the inputs set last (the outputs' preview), along the path the
+ * inputs' derivatives set for the next doStep describe, x' = v where x's are not set (Connector.output_derivatives:
+ * the kernel crates, kernels/rates.connector_rates), into ``value``; NULL, or why it is not given */
+#define HAS_OUTPUT_DERIVATIVES 1
+static const char* output_derivative(Instance* c, const Var* var, int order, double* value, char* buffer, size_t size)
+{
+    Element* preview;
+    double out[2] = {0.0, 0.0};
+    if (var == NULL || var->what != W_FORCE)
+        return "not an output whose derivatives this FMU gives (force)";
+    if (OUTPUT_DERIVATIVE_ORDER == 0)
+        return "not given with series dashpots or effects with memory (their forces' rates are not the tangent's)";
+    if (order < 1 || order > OUTPUT_DERIVATIVE_ORDER) {
+        snprintf(buffer, size, "order %d: this FMU gives orders 1 and 2 (maxOutputDerivativeOrder)", order);
+        return buffer;
+    }
+    if (!(isfinite(c->x_in) && isfinite(c->v_in)))
+        return "the inputs x and v are not finite";
+    preview = previewed(c);
+    prandtl_kernel_failed = 0;
+    KERNEL(preview, crates)(KERNEL_ARGS_OF(preview), preview->x, preview->v, c->xd, c->vd, preview->direction, out);
+    *value = out[order - 1];
+    if (prandtl_kernel_failed || !isfinite(*value))
+        return "it is not a finite number here";
+    return NULL;
+}
+
 static void defaults(Instance* c)
 {
     memcpy(c->par, P_SCENE, sizeof c->par);

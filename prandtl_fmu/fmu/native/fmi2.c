@@ -186,7 +186,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueR
                                         const fmi2Integer order[], fmi2Real value[])
 {
     BEGIN(fmi2GetRealOutputDerivatives, MASK_STATUS);
-#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction (element.h) */
+#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction; the connector: force (front.h) */
     return (fmi2Status)core_get_output_derivatives(c, vr, n, order, value, n, "fmi2GetRealOutputDerivatives");
 #else
     if (!arrays_given(c, n, vr, value, "fmi2GetRealOutputDerivatives") ||

@@ -626,7 +626,7 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t* nConti
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
-#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction, scalars (element.h) */
+#ifdef HAS_OUTPUT_DERIVATIVES /* the element: x, v, reaction; the connector: force (front.h) */
     CHECKED(fmi3GetOutputDerivatives, MASK_OUTPUT_DERIVATIVES,
             core_get_output_derivatives(c, valueReferences, nValueReferences, orders, values, nValues,
                                         "fmi3GetOutputDerivatives"))

@@ -219,4 +219,33 @@ static int core_set_strings(Instance* c, const unsigned vr[], size_t n, size_t n
     return ST_OK;
 }
 
+/* the body of fmi2GetRealOutputDerivatives and fmi3GetOutputDerivatives (``function``): every entry checked and
+ * computed by the kind's output_derivative (element.h, connector.h), then written (nothing written on a refusal) */
+#ifdef HAS_OUTPUT_DERIVATIVES
+static int core_get_output_derivatives(Instance* c, const unsigned vr[], size_t n, const int order[], double value[],
+                                       size_t nvalues, const char* function)
+{
+    char buffer[256];
+    size_t i;
+    double found[8];
+    if (!arrays_given(c, n, vr, value, function) || !(n == 0 || given(c, order, function, "order")))
+        return ST_ERROR;
+    if (nvalues < n || n > sizeof found / sizeof found[0]) {
+        say(c, ST_ERROR, "%s refused: %zu value references for %zu values (at most %zu at once)", function, n, nvalues,
+            sizeof found / sizeof found[0]);
+        return ST_ERROR;
+    }
+    for (i = 0; i < n; i++) {
+        const char* problem = output_derivative(c, find(vr[i], T_REAL), order[i], &found[i], buffer, sizeof buffer);
+        if (problem != NULL) {
+            say(c, ST_ERROR, "%s refused: value reference %u, order %d: %s; nothing written", function, vr[i],
+                (int)order[i], problem);
+            return ST_ERROR;
+        }
+    }
+    memcpy(value, found, n * sizeof(double));
+    return ST_OK;
+}
+#endif
+
 #endif

@@ -51,7 +51,8 @@ xd, vd, duration, account, out)``, the motion along the inputs' Taylor polynomia
 (``drive.drive_polynomial``); ``cforce(..., x, v, t)``, ``ctangent(..., x, direction)`` (the memory's force and
 slope added), ``cdirectional(..., x, direction, dx, dv)``
 (d force = (tangent + the memory's slope) dx + c dv: the directional derivative a master asks for; the memory's
-forces do not move with v at an instant), ``cstored(..., x)``; ``cinitial(...)``
+forces do not move with v at an instant), ``crates(..., x, v, xd, vd, direction, out)`` (the force's first and
+second time derivatives along the inputs' path: ``Connector.output_derivatives``), ``cstored(..., x)``; ``cinitial(...)``
 (a fresh memory stack and memory); ``elongations(p, k, eta, cs, u, out)`` (the branches' arrays alone).
 
 ``p`` holds the coefficients in :data:`PARAMETERS` order. ``mp``, ``ms``, ``nd``: the effects with memory
@@ -249,6 +250,12 @@ def cdirectional(p, kp, etap, csp, up, mp, msp, nd, x, direction, dx, dv):
     return (tangent(model, x, {u}, direction) + tangent_now(model[8], direction)) * dx + model[3] * dv
 
 
+def crates(p, kp, etap, csp, up, mp, msp, nd, x, v, xdp, vdp, direction, outp):
+    model = _model(p, kp, etap, csp, mp, msp, nd)  # Connector.output_derivatives: F', F'' along the inputs' path
+    connector_rates(model, x, v, {u}, carray(xdp, (2,)), carray(vdp, (2,)), direction, carray(outp, (2,)))
+    return 0
+
+
 def cstored(p, kp, etap, csp, up, mp, msp, nd, x):
     m, k0, k3, c, k, eta, cs, friction, memory = _model(p, kp, etap, csp, mp, msp, nd)
     return stored(x, k0, k3, k, {u})
@@ -278,6 +285,7 @@ _CONNECTOR_SIGNATURES = {
     "cforce": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64)",
     "ctangent": f"types.float64({_ELEMENT}, types.float64, types.float64)",
     "cdirectional": f"types.float64({_ELEMENT}, types.float64, types.float64, types.float64, types.float64)",
+    "crates": f"types.int64({_ELEMENT}, types.float64, types.float64, {', '.join([_PTR] * 2)}, types.float64, {_PTR})",
     "cstored": f"types.float64({_ELEMENT}, types.float64)",
     "cinitial": f"types.int64({_ELEMENT})",
     "elongations": f"types.int64({', '.join([_PTR] * 6)})",
@@ -696,7 +704,7 @@ def _compile_fold(scene):
 
 def _compile_connector(scene, shape) -> list:
     """The connector's C functions (``_CONNECTOR_TEMPLATE``): ``move``, ``cpath``, ``cforce``, ``ctangent``,
-    ``cstored``, ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
+    ``cdirectional``, ``crates``, ``cstored``, ``cinitial``, ``elongations``, each ``_<variant>``. With effects with memory, ``move`` is
     ``drive_with_memory``, the force and the tangent add the memory's (``memory.force_now``, ``tangent_now``) and
     ``cinitial`` makes the memory fresh, as ``connector.Connector`` does."""
     from numba import carray, cfunc, njit, types
@@ -704,6 +712,7 @@ def _compile_connector(scene, shape) -> list:
     from ...kernels.drive import drive, drive_polynomial, drive_with_memory, tangent
     from ...kernels.energy import stored
     from ...kernels.play import branch_force, write_elongations
+    from ...kernels.rates import connector_rates
     from ...kernels.smooth import smooth_force
     from ...kernels.stack import start
     from ...memory import force_now, tangent_now
@@ -716,7 +725,8 @@ def _compile_connector(scene, shape) -> list:
         namespace = dict(carray=carray, read_only=read_only(), np=np, drive=drive, drive_with_memory=drive_with_memory,
                          drive_polynomial=drive_polynomial, tangent=tangent,
                          stored=stored, branch_force=branch_force, write_elongations=write_elongations,
-                         smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now)
+                         smooth_force=smooth_force, start=start, force_now=force_now, tangent_now=tangent_now,
+                         connector_rates=connector_rates)
         exec(compile(source, f"<prandtl_fmu native connector of {scene.source}>", "exec"), namespace)
         namespace["_model"] = njit(inline="always")(namespace["_model"])
         for name, signature in _CONNECTOR_SIGNATURES.items():

@@ -1369,6 +1369,78 @@ def test_the_connector_refuses_input_derivatives_with_their_reason(connectors):
             slave.close()
 
 
+def test_the_connector_s_force_derivatives_are_the_library_s_and_the_slopes_of_its_own_force(connectors):
+    """The 80-branch connector (maxOutputDerivativeOrder="2"): after random steps along random paths, with x and v
+    set and, every other time, their derivatives, fmi2GetRealOutputDerivatives of force (orders 1 and 2) equals
+    Connector.output_derivatives to the bit; and they are the slopes of the FMU's own force along that path: from a
+    saved state, doSteps of delta, 2 delta, 3 delta with the derivatives set (x' = v, x'' = v' = 0 where none are)
+    give one-sided differences that agree to 1e-6 relative (order 1) and 1e-4 (order 2). The connector with series
+    dashpots declares none and refuses them with the reason; order 3 and another output are refused."""
+    from fmpy.fmi1 import FMICallException
+
+    from prandtl_fmu.connector import Connector
+    from tests.fmu_tools import Slave
+
+    fmu = connectors["stack"]["native"]
+    assert 'maxOutputDerivativeOrder="2"' in zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    assert "maxOutputDerivativeOrder" not in zipfile.ZipFile(connectors["series"]["native"]).read(
+        "modelDescription.xml").decode()
+    slave = Slave(fmu, start_values={"x": 0.02})
+    connector = Connector(_scene_of(connectors, "stack"))
+    connector.move_to(0.02, 0.0, 0.0)
+    rng = np.random.default_rng(61)
+    force = [slave.vr["force"]] * 2
+    compared = 0
+    try:
+        for j in range(16):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            xd, vd = rng.uniform(-3, 3, 2), rng.uniform(-3, 3, 2)
+            slave.set("x", x)
+            slave.set("v", v)
+            given = j % 2 == 1
+            if given:
+                _set_motion_derivatives(slave, xd, vd)
+            got = slave.fmu.getRealOutputDerivatives(force, [1, 2])
+            wanted = connector.output_derivatives(x, v, *((xd.tolist(), vd.tolist()) if given else ()))
+            assert got == [wanted[("force", 1)], wanted[("force", 2)]], j
+            saved, start = slave.fmu.getFMUstate(), slave.time
+            delta = 1e-4
+            values = []
+            for span in (delta, 2 * delta, 3 * delta):
+                slave.fmu.setFMUstate(saved)
+                if not given:  # the path the derivatives describe when none are set: x' = v
+                    _set_motion_derivatives(slave, (v, 0.0), (0.0, 0.0))
+                slave.fmu.doStep(start, span)
+                values.append(slave.get("force"))
+            slave.fmu.setFMUstate(saved)
+            slave.fmu.freeFMUstate(saved)
+            assert slave.fmu.getRealOutputDerivatives(force, [1, 2]) == got  # the state set back, derivatives too
+            f0, (f1, f2, f3) = slave.get("force"), values
+            first, second = (-3 * f0 + 4 * f1 - f2) / (2 * delta), (2 * f0 - 5 * f1 + 4 * f2 - f3) / delta ** 2
+            if not (first == pytest.approx(got[0], rel=1e-6, abs=1e-7)):
+                continue  # a branch reached its threshold within 3 delta: the difference straddles a switch
+            assert second == pytest.approx(got[1], rel=1e-4, abs=1e-4), (j, second, got)
+            compared += 1
+            slave.step(0.05)
+            connector.advance(x, v, slave.time - 0.05, 0.05, *((xd.tolist(), vd.tolist()) if given else ()))
+        assert compared >= 10
+        for asked, orders, words in (([slave.vr["force"]], [3], "order 3"),
+                                     ([slave.vr["stiffness"]], [1], "not an output whose derivatives")):
+            slave.messages.clear()
+            with pytest.raises(FMICallException):
+                slave.fmu.getRealOutputDerivatives(asked, orders)
+            assert any(words in message for _, message in slave.messages), (words, slave.messages)
+    finally:
+        slave.close()
+    series = Slave(connectors["series"]["native"], start_values={"x": 0.02})
+    try:
+        with pytest.raises(FMICallException):
+            series.fmu.getRealOutputDerivatives([series.vr["force"]], [1])
+        assert any("not given with series dashpots" in message for _, message in series.messages), series.messages
+    finally:
+        series.close()
+
+
 # ------------------------------------------------------------------ FMI 3.0: intermediate update (issue 61)
 
 def test_fmi3_intermediate_update_sets_f_at_every_internal_step_as_the_library(fmus3):
