@@ -1441,6 +1441,43 @@ def test_the_connector_s_force_derivatives_are_the_library_s_and_the_slopes_of_i
         series.close()
 
 
+def test_the_fmi3_connector_gives_its_force_s_derivatives_as_the_library(connectors):
+    """The 80-branch FMI 3.0 connector (maxOutputDerivativeOrder="2"): after samples at random, fmi3GetOutputDerivatives
+    of force (orders 1 and 2, x' = v, v held) equals Connector.output_derivatives at the inputs set, to the bit."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+
+    from prandtl_fmu.connector import Connector
+
+    fmu = connectors["stack"]["fmi3"]
+    md = read_model_description(str(fmu))
+    assert md.coSimulation.maxOutputDerivativeOrder == 2
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="connector")
+    slave.instantiate()
+    slave.enterInitializationMode(startTime=0.0)
+    slave.setFloat64([vr["x"]], [0.02])
+    slave.exitInitializationMode()
+    connector = Connector(_scene_of(connectors, "stack"))
+    connector.move_to(0.02, 0.0, 0.0)
+    rng = np.random.default_rng(3)
+    t = 0.0
+    try:
+        for j in range(12):
+            x, v = float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-1, 1))
+            slave.setFloat64([vr["x"], vr["v"]], [x, v])
+            wanted = connector.output_derivatives(x, v)
+            assert slave.getOutputDerivatives([vr["force"]] * 2, [1, 2]) == [wanted[("force", 1)],
+                                                                              wanted[("force", 2)]], j
+            slave.doStep(t, 0.1)
+            connector.move_to(x, v, t)
+            t += 0.1
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+
+
 # ------------------------------------------------------------------ FMI 3.0: intermediate update (issue 61)
 
 def test_fmi3_intermediate_update_sets_f_at_every_internal_step_as_the_library(fmus3):
