@@ -250,9 +250,10 @@ def make_ssp(folder, step=None):
     return path
 
 
-def run_omsimulator(folder, step, stop_time, omsimulator="OMSimulator"):
+def run_omsimulator(folder, step, stop_time, omsimulator="OMSimulator", options=()):
     """The same system in OMSimulator's binary (``omsimulator``: its path) from connector.ssp (:func:`make_ssp`):
     the arrays time, x, v, force at every step of size ``step`` (s), from its result CSV (12 significant digits).
+    ``options``: more command-line options for the binary (e.g. ``["--inputExtrapolation=true"]``).
 
     A PythonFMU FMU in a host that is not a Python process needs the host's libpython preloaded and the
     environment's packages on PYTHONPATH (the README's recipe): set here from this interpreter."""
@@ -266,7 +267,7 @@ def run_omsimulator(folder, step, stop_time, omsimulator="OMSimulator"):
     paths = [p for p in sys.path if p.endswith("-packages")] + [str(ROOT)]
     env = dict(os.environ, LD_PRELOAD=str(libpython), PYTHONPATH=os.pathsep.join(paths))
     command = [omsimulator, str(ssp), f"--stopTime={stop_time!r}", f"--stepSize={step!r}", "--mode=cs",
-               f"--resultFile={result}", f"--tempDir={folder}"]
+               f"--resultFile={result}", f"--tempDir={folder}", *options]
     done = subprocess.run(command, cwd=folder, env=env, capture_output=True, text=True, timeout=3600)
     if done.returncode != 0 or not result.exists():
         raise RuntimeError(f"OMSimulator failed (exit {done.returncode}): {done.stdout[-2000:]}{done.stderr[-2000:]}")
@@ -326,16 +327,16 @@ def fixed_step_rows(label, run_at, stop_time, steps=STEPS):
     return rows
 
 
-def master_rows(master, folder, stop_time, omsimulator="OMSimulator"):
+def master_rows(master, folder, stop_time, omsimulator="OMSimulator", omsimulator_options=()):
     """The convergence rows of one master: libcosim (fixed step and ECCO), ecos (fixed step), OMSimulator (its
-    binary ``omsimulator``), cofmupy (Jacobi and Gauss-Seidel)."""
+    binary ``omsimulator``, with the options ``omsimulator_options``), cofmupy (Jacobi and Gauss-Seidel)."""
     if master == "libcosim":
         return convergence(folder, stop_time)
     if master == "ecos":
         return fixed_step_rows("ecos", lambda step: run_ecos(folder, step, stop_time), stop_time)
     if master == "omsimulator":
-        return fixed_step_rows("omsimulator", lambda step: run_omsimulator(folder, step, stop_time, omsimulator),
-                               stop_time)
+        return fixed_step_rows("omsimulator", lambda step: run_omsimulator(folder, step, stop_time, omsimulator,
+                                                                           omsimulator_options), stop_time)
     return [row for method in ("jacobi", "gauss_seidel")
             for row in fixed_step_rows(f"cofmupy-{method}", lambda step: run_cofmupy(folder, step, stop_time, method),
                                        stop_time)]
@@ -349,13 +350,20 @@ def main():
                         help="the master to run (ecos: the [ecos] extra; omsimulator: its binary, see --omsimulator; "
                              "cofmupy: its own environment; see the README)")
     parser.add_argument("--omsimulator", default="OMSimulator", help="path of the OMSimulator binary")
+    parser.add_argument("--input-extrapolation", action="store_true",
+                        help="--master omsimulator: run it with --inputExtrapolation=true (this example's PythonFMU "
+                             "FMUs take no derivatives: it changes nothing; benchmarks/omsimulator_extrapolation.py "
+                             "runs the native FMUs)")
     parser.add_argument("--plot", help="PNG of the force-displacement loop, co-simulated against the reference")
     args = parser.parse_args()
     masters = {"libcosim": (["libcosimpy"], "cosim"), "ecos": (["ecospy"], "ecos")}
     require_extras(({f"--master {args.master}": masters[args.master]} if args.master in masters else {})
                    | ({"--plot": (["matplotlib"], "plot")} if args.plot else {}))
+    if args.input_extrapolation and args.master != "omsimulator":
+        parser.error("--input-extrapolation: an option of --master omsimulator")
     folder = build(args.out)
-    rows = master_rows(args.master, folder, args.stop_time, args.omsimulator)
+    options = ["--inputExtrapolation=true"] if args.input_extrapolation else []
+    rows = master_rows(args.master, folder, args.stop_time, args.omsimulator, options)
     path = os.path.join(args.out, "convergence.csv" if args.master == "libcosim" else f"convergence-{args.master}.csv")
     with open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
