@@ -690,12 +690,25 @@ def fmi2_root(scene, guid: str, generation_tool: str, generated: Optional[str] =
         for row in outputs:
             ET.SubElement(node, "Unknown", index=str(index[row.name]),
                           dependencies=" ".join(str(index[name]) for name in row.depends))
-        # Outputs are calculated from the initial state and parameters; no `dependencies` attribute means: from
-        # any of them.
         initial = ET.SubElement(structure, "InitialUnknowns")
         for row in outputs:
-            ET.SubElement(initial, "Unknown", index=str(index[row.name]))
+            ET.SubElement(initial, "Unknown", index=str(index[row.name]), dependencies=" ".join(
+                str(index[name]) for name in initial_dependencies(scene, row, rows)))
     return root
+
+
+def initial_dependencies(scene, row, rows) -> list:
+    """The knowns an output's initial value depends on (ModelStructure's InitialUnknowns): every parameter (the
+    initial state and the coefficients), and the inputs it depends on at initialization: those of its direct
+    feedthrough (the connector's x and v), every input where a massless node's equilibrium follows the load (a
+    massless element; any network). An element with a mass starts from its x0, v0: its outputs depend on no input
+    (without the list a master takes them to depend on F, and OMSimulator reports an algebraic loop)."""
+    inputs = [r.name for r in rows if r.causality == "input"]
+    if is_network(scene) or (scene.causality != "displacement" and scene.mass is None):
+        taken = inputs
+    else:
+        taken = [name for name in inputs if name in row.depends]
+    return [r.name for r in rows if r.causality == "parameter" or r.name in taken]
 
 
 def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
@@ -750,10 +763,12 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
             ET.SubElement(element, "Dimension", {"valueReference": str(by_name[row.dimension].value_reference)})
     structure = ET.SubElement(top, "ModelStructure")
     outputs = [row for row in rows if row.causality == "output"]
-    for tag in ("Output", "InitialUnknown"):
-        for row in outputs:
-            ET.SubElement(structure, tag, {"valueReference": str(row.value_reference), "dependencies": " ".join(
-                str(by_name[name].value_reference) for name in row.depends)})
+    for row in outputs:
+        ET.SubElement(structure, "Output", {"valueReference": str(row.value_reference), "dependencies": " ".join(
+            str(by_name[name].value_reference) for name in row.depends)})
+    for row in outputs:
+        ET.SubElement(structure, "InitialUnknown", {"valueReference": str(row.value_reference), "dependencies": " ".join(
+            str(by_name[name].value_reference) for name in initial_dependencies(scene, row, rows))})
     ET.indent(top)
     return top
 

@@ -102,3 +102,47 @@ def test_fmi2_keeps_pythonfmu_s_numbering_and_the_c_table_is_the_description(kin
             if arrays:
                 assert references["u"] == three["u"]
     assert c_variables(scene, 2) == two
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("kind", list(KINDS) + ["element, massless"])
+def test_the_initial_unknowns_name_the_knowns_they_depend_on(kind, fmi, tmp_path):
+    """ModelStructure's InitialUnknowns list their dependencies (none listed: a master takes every known, and
+    OMSimulator then reports an algebraic loop through F at initialization): every parameter, and of the inputs F
+    only where the initial value follows it (a massless element's equilibrium, a network's, a reaction with friction
+    on the mass), the connector's x and v where its output is their function. FMPy reads the description with
+    its validation on."""
+    from fmpy import read_model_description
+
+    if kind == "element, massless":
+        path = tmp_path / "massless.toml"
+        path.write_text('name = "massless"\n[spring]\nk0 = 1.0\n[branches]\nk = [1.0]\neta = [0.1]\n'
+                        '[solver]\nstepper = "implicit"\nstep = 0.01\nstop_time = 1.0\noutput_interval = 0.01\n')
+        scene = built_scene(path, None)[0]
+    else:
+        scene = _scene(kind)
+    root = ET.fromstring(description.model_description(scene, fmi=fmi, guid="{0}"))
+    rows = description.variables(scene, fmi=fmi)
+    parameters = {row.name for row in rows if row.causality == "parameter"}
+    inputs = {row.name for row in rows if row.causality == "input"}
+    depends = {row.name: set(row.depends) for row in rows if row.causality == "output"}
+    if fmi == 2:
+        names = {str(i): v.get("name") for i, v in enumerate(root.iter("ScalarVariable"), start=1)}
+        unknowns = [(names[u.get("index")], u.get("dependencies")) for u in root.find("ModelStructure/InitialUnknowns")]
+    else:
+        names = {v.get("valueReference"): v.get("name") for v in root.find("ModelVariables")}
+        unknowns = [(names[u.get("valueReference")], u.get("dependencies"))
+                    for u in root.find("ModelStructure").findall("InitialUnknown")]
+    assert [name for name, _ in unknowns] == [row.name for row in rows if row.causality == "output"]
+    for name, listed in unknowns:
+        assert listed is not None, name
+        named = {names[reference] for reference in listed.split()}
+        assert parameters <= named, name
+        if kind in ("element, massless", "network", "network connector"):
+            assert inputs <= named, name
+        else:
+            assert named & inputs == depends[name] & inputs, name
+    if kind == "element, branches":
+        assert "F" in inputs and not any("F" in {names[r] for r in listed.split()} for _, listed in unknowns)
+    (tmp_path / "modelDescription.xml").write_text(ET.tostring(root, encoding="unicode"))
+    read_model_description(str(tmp_path / "modelDescription.xml"), validate=True)
