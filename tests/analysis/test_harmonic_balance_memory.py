@@ -218,3 +218,35 @@ def test_a_history_of_rate_0_is_refused_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "rate 0" in err and "--method time" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_delay_too_long_for_the_stability_check_leaves_stable_empty(tmp_path):
+    """A delay of 30 s at 0.1 to 0.2 Hz needs more than floquet.MAX_DELAY_STATES buffer values a period: the
+    points' stability is not computed, and the CSV says so with an empty field, never a guessed true or false."""
+    from prandtl_fmu.frequency.floquet import MAX_DELAY_STATES, STEPS
+
+    assert 30.0 / (5.0 / (2 * STEPS)) > MAX_DELAY_STATES
+    out = tmp_path / "curve.csv"
+    scene = write(tmp_path, {**OSCILLATOR, "delay": {"gain": 0.05, "tau": 30.0}})
+    assert main(["describe", scene, "--force-amplitude", "0.1", "--frequencies", "0.1,0.2", "--harmonics", "1",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert len(table["stable"]) > 3 and set(table["stable"]) == {""} and set(table["multiplier"]) == {""}
+
+
+@pytest.mark.slow
+def test_a_one_harmonic_nonlinear_mode_on_dahl_is_its_describing_function():
+    """m x'' + c x' + k0 x + F_d: with one harmonic the EPMC frequency is sqrt(K(A) / m) and the damping ratio
+    D(A) / (2 pi K A^2) + c / (2 m omega), K and D describe's quadrature of Dahl's cycle (an independent
+    computation: the element's drive kernel, cycles repeated until they settle)."""
+    from prandtl_fmu.frequency.describing import describe_amplitudes
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    amplitudes = [0.002, 0.02, 0.2, 2.0]
+    backbone = nonlinear_mode(element(DAHL), 1, amplitudes, harmonics=1, samples=4096)
+    tables = {name: DAHL[name] for name in ("spring", "dahl")}
+    described = describe_amplitudes(element(tables), amplitudes, tolerance=1e-7)
+    K, D, A = np.asarray(described.stiffness), np.asarray(described.dissipation), np.asarray(amplitudes)
+    omega = np.sqrt(K / 1.0)
+    assert backbone.frequency == pytest.approx(omega / (2 * math.pi), rel=1e-5)
+    assert backbone.damping_ratio == pytest.approx(D / (2 * math.pi * K * A * A) + 0.02 / (2 * omega), rel=1e-4)
