@@ -2,6 +2,7 @@
 ``floquet.py``): a delay and a history on a linear oscillator against its closed form and its characteristic
 roots, Dahl's sampled cycle against an independent integration, stable points against the time sweep, unstable
 points integrated, and the command line."""
+import importlib.util
 import math
 
 import numpy as np
@@ -228,10 +229,15 @@ def test_a_delay_too_long_for_the_stability_check_leaves_stable_empty(tmp_path):
     assert 30.0 / (5.0 / (2 * STEPS)) > MAX_DELAY_STATES
     out = tmp_path / "curve.csv"
     scene = write(tmp_path, {**OSCILLATOR, "delay": {"gain": 0.05, "tau": 30.0}})
-    assert main(["describe", scene, "--force-amplitude", "0.1", "--frequencies", "0.1,0.2", "--harmonics", "1",
-                 "--out", str(out)]) == 0
+    plot = tmp_path / "curve.png"
+    arguments = ["describe", scene, "--force-amplitude", "0.1", "--frequencies", "0.1,0.2", "--harmonics", "1",
+                 "--out", str(out)]
+    if importlib.util.find_spec("matplotlib") is not None:  # drawn dotted: "stability not computed"
+        arguments += ["--plot", str(plot)]
+    assert main(arguments) == 0
     table = read_csv(out)
     assert len(table["stable"]) > 3 and set(table["stable"]) == {""} and set(table["multiplier"]) == {""}
+    assert "--plot" not in arguments or plot.read_bytes()[:4] == b"\x89PNG"
 
 
 @pytest.mark.slow
