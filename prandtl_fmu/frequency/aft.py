@@ -21,10 +21,25 @@ With the basis T (N, L) of the harmonics (e = T c), :func:`restoring_samples` wr
 (dS / dc)[j, :] = sum over the pair's elements of ds_j / de T[., :] into ``tangent[pair]`` (N, L); the
 caller projects them on the harmonics (a sum over j). Only at a sample that lands exactly on a slip threshold
 is the map not differentiable (a choice of side, of measure zero).
+
+Dahl's friction (``memory/dahl.py``, on one node to the ground) follows the same samples in
+:func:`dahl_cycle`: dF/dx = sigma (1 - F / F_c s)^exponent along a move of sign s is rate independent and
+``dahl.after`` integrates it exactly over a monotone move, so F is exact at the samples along the path taken
+linear between them. One period driven from F at sample 0 is a map P(F), increasing with slope in [0, 1); the
+steady cycle is its fixed point, found by Newton's method on P(F) - F kept inside a bracket (bisection where
+a Newton step leaves it), each iteration one period driven, at most DAHL_PERIODS (-1 returned past them: the
+caller refuses). With exponent 1 P is affine (each move is F1 = e^-d F + s F_c (1 - e^-d)) and one step is
+exact. The tangent is exact for the sampled map: each move's dF_1 = a dF + b d(dx), a = dF_1/dF and b =
+sigma y_1^exponent, carried over the period from dF = 0 and closed by periodicity, dF_0 = (what one period
+adds) / (1 - prod a) (0 where prod a = 1: no motion, F stays where it is, the cycle from rest F = 0).
 """
 import numpy as np
 
 from .._jit import kernel
+from ..libm import exp, pow
+from ..memory.dahl import after
+
+DAHL_PERIODS = 64
 
 
 @kernel
@@ -99,3 +114,75 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
                 forces[q, j] -= k * u
             if j == 0:
                 elongations[b] = u
+
+
+@kernel
+def dahl_cycle(e, basis, sigma, level, exponent, forces, tangent):
+    """Dahl's force (sigma, F_c = ``level``, ``exponent``) on its steady cycle along the samples ``e`` (N,):
+    ``forces`` (N,) its value at each sample, ``tangent`` (N, L) dF_j / dc with e = ``basis`` c (see the
+    module). Returns the periods driven, or -1 if the cycle was not found within DAHL_PERIODS."""
+    samples = e.shape[0]
+    part = ((sigma, level, exponent), np.zeros(1))
+    low, high = -level, level
+    start = 0.0
+    slopes = np.empty(samples)
+    pushes = np.empty(samples)
+    periods = -1
+    for period in range(DAHL_PERIODS):
+        f = start
+        product = 1.0
+        for j in range(1, samples + 1):
+            f, a, b = _dahl_move(part, f, e[j % samples] - e[j - 1], sigma, level, exponent)
+            product *= a
+        gap = f - start  # P(F) - F: decreasing in F, >= 0 at -F_c, <= 0 at F_c
+        if gap > 0.0:
+            low = start
+        else:
+            high = start
+        if abs(gap) <= 1e-15 * level or high - low <= 1e-14 * level:
+            periods = period + 1
+            break
+        guess = start + gap / (1.0 - product) if product < 1.0 else 0.5 * (low + high)
+        if not low < guess < high:
+            guess = 0.5 * (low + high)
+        start = guess
+    if periods < 0:
+        return -1
+    f = start
+    for j in range(1, samples + 1):
+        forces[j - 1] = f
+        f, a, b = _dahl_move(part, f, e[j % samples] - e[j - 1], sigma, level, exponent)
+        slopes[j % samples] = a
+        pushes[j % samples] = b
+    product = 1.0
+    for j in range(samples):
+        product *= slopes[j]
+    for l in range(basis.shape[1]):
+        change = 0.0
+        for j in range(1, samples + 1):
+            change = slopes[j % samples] * change + pushes[j % samples] * (basis[j % samples, l] - basis[j - 1, l])
+        change = change / (1.0 - product) if product < 1.0 else 0.0
+        for j in range(1, samples + 1):
+            tangent[j - 1, l] = change
+            change = slopes[j % samples] * change + pushes[j % samples] * (basis[j % samples, l] - basis[j - 1, l])
+    return periods
+
+
+@kernel
+def _dahl_move(part, f, dx, sigma, level, exponent):
+    """(F_1, dF_1/dF, dF_1/d(dx)) of Dahl's exact move ``dahl.after`` by ``dx`` from F = ``f``."""
+    f1, push = after(part, f, dx)
+    if dx == 0.0:
+        return f1, 1.0, push
+    s = 1.0 if dx > 0.0 else -1.0
+    y = max(1.0 - s * f / level, 0.0)
+    d = sigma * abs(dx) / level
+    if exponent == 1.0:
+        return f1, exp(-d), push
+    if exponent > 1.0:
+        p = exponent - 1.0
+        return f1, pow(1.0 + p * d * pow(y, p), -1.0 / p - 1.0), push
+    y1 = 1.0 - s * f1 / level
+    if y1 <= 0.0 or y <= 0.0:
+        return f1, 0.0, push
+    return f1, pow(y1 / y, exponent), push

@@ -36,7 +36,9 @@ class Curve:
     """The points of the curve in the order taken: arrays of shape (points,).
 
     ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
-    ``stable`` (bool; None for a curve computed with ``stability=False``), ``fold`` (bool: a located fold),
+    ``stable`` (bool; None for a curve computed with ``stability=False``; a numpy masked array, masked where
+    a point's multipliers were not computed (``floquet.py``: a delay too long for its buffer), an empty field
+    in the CSV), ``fold`` (bool: a located fold),
     ``multiplier`` the largest |Floquet multiplier| (NaN where it was not computed: see STABILITY_STRIDE; an
     empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
     every node with a mass; ``coefficients`` (points, n, 2 H + 1) of x; ``harmonics`` H; ``change`` the relative
@@ -66,7 +68,7 @@ class Curve:
         if self.stable is None:
             raise ValueError("the curve was computed without its stability (stability=False): no stable column")
         out = {"frequency": self.frequency, "amplitude": self.amplitude, "phase": self.phase,
-               "stable": ["true" if s else "false" for s in self.stable.tolist()]}
+               "stable": [None if s is None else "true" if s else "false" for s in self.stable.tolist()]}
         for name, values in self.amplitudes.items():
             out[f"amplitude_{name}"] = values
         out["fold"] = ["true" if f else "false" for f in self.fold.tolist()]
@@ -163,11 +165,17 @@ def _curve(balance, points, where, stability, change) -> Curve:
     X = coefficients[:, where, 1] - 1j * coefficients[:, where, 2]
     largest = np.full(len(points), np.nan)
     stable = np.ones(len(points), dtype=bool)
+    known = np.ones(len(points), dtype=bool)
+    done = set()
     if stability:
         def check(index):
-            if np.isnan(largest[index]):
+            if index not in done:
+                done.add(index)
                 w, q, _ = points[index]
                 values = multipliers(balance, q, w)
+                if values is None:  # not computed (floquet.py says where): unknown, never a guess
+                    known[index] = False
+                    return
                 largest[index] = float(np.max(np.abs(values)))
                 stable[index] = is_stable(values)
 
@@ -179,13 +187,17 @@ def _curve(balance, points, where, stability, change) -> Curve:
         for index in checked:
             check(index)
         for before, after in zip(checked[:-1], checked[1:]):
-            if stable[before] == stable[after]:
+            if known[before] and known[after] and stable[before] == stable[after]:
                 stable[before + 1:after] = stable[before]
+            elif not (known[before] or known[after]):
+                known[before + 1:after] = False
             else:
                 for index in range(before + 1, after):
                     check(index)
     if not stability:
         stable = None
+    elif not np.all(known):
+        stable = np.ma.MaskedArray(stable, mask=~known)
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),

@@ -20,6 +20,20 @@ Backward Euler damps: with M steps per period a multiplier is shrunk by about ex
 (omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
 extrapolated (Richardson, first order: 2 Phi_2M - Phi_M), which leaves an error of order 1 / M^2.
 
+An element scene with effects with memory (``[delay]``, ``[history]``, ``[dahl]``: the network stepper knows none
+of them) is integrated by the element's own ``implicit`` stepper instead (``memory/``: the delay from its
+buffer, the history's variables integrated exactly along the step, Dahl's exact move), from the orbit's state
+at t = 0 with the memory's state taken from the balance (:func:`_memory_period`), and the monodromy is over the
+whole state: x, v, each history variable z_j (its steady value from the harmonics, z_j = (r_j + omega D)^-1 y),
+F_d (from its sampled cycle), and the delay's buffer, the values of y at the grid points t - tau - h ... t
+(ceil(tau / h) + 2 of them: a discretised delay is that many states). Each is perturbed in turn, so the delay
+costs one period's run per buffer value: the cheapest sound way found here (Hill's method for the delay alone
+would need the branches' nonsmooth linearisation; the propagation of the linear part alone does not see the
+branches), bounded by MAX_DELAY_STATES values at the finer resolution (a delay longer than about two periods
+at M = 256): past it the point's stability is not computed (``None``: an empty field, never a guess). With a
+delay the two resolutions have monodromies of different sizes, so the extrapolation is on the multipliers:
+the largest ones at 2 M, each with the nearest one at M, 2 mu_2M - mu_M.
+
 A point is ``stable`` when every multiplier has |mu| <= 1 + MARGIN (MARGIN covers the finite differences and
 the extrapolation; a fold, where one multiplier crosses 1, is stable to either side within it).
 """
@@ -33,6 +47,7 @@ import numpy as np
 STEPS = 256
 MARGIN = 2e-3
 PERTURBATION = 1e-6
+MAX_DELAY_STATES = 1024
 
 
 def orbit_start(balance, q_free, omega) -> tuple:
@@ -50,8 +65,12 @@ def orbit_start(balance, q_free, omega) -> tuple:
     return x, v, u
 
 
-def multipliers(balance, q_free, omega, steps: int = STEPS) -> np.ndarray:
-    """The Floquet multipliers (complex, (2 n_mass,)) of the orbit of ``balance`` at ``omega`` (rad/s)."""
+def multipliers(balance, q_free, omega, steps: int = STEPS):
+    """The Floquet multipliers (complex, (2 n_mass,) or, with memory, one per state of :func:`_memory_period`) of
+    the orbit of ``balance`` at ``omega`` (rad/s); None where they are not computed (a delay past
+    MAX_DELAY_STATES)."""
+    if balance.system.memory is not None:
+        return _memory_multipliers(balance, q_free, omega, steps)
     coarse = _monodromy(balance, q_free, omega, steps)
     fine = _monodromy(balance, q_free, omega, 2 * steps)
     return np.linalg.eigvals(2.0 * fine - coarse)
@@ -59,6 +78,149 @@ def multipliers(balance, q_free, omega, steps: int = STEPS) -> np.ndarray:
 
 def is_stable(values: np.ndarray) -> bool:
     return bool(np.max(np.abs(values)) <= 1.0 + MARGIN)
+
+
+def _memory_multipliers(balance, q_free, omega, steps):
+    coarse = _memory_monodromy(balance, q_free, omega, steps)
+    fine = None if coarse is None else _memory_monodromy(balance, q_free, omega, 2 * steps)
+    if fine is None:
+        return None
+    if coarse.shape == fine.shape:
+        return np.linalg.eigvals(2.0 * fine - coarse)
+    values, rough = np.linalg.eigvals(fine), np.linalg.eigvals(coarse)
+    largest = values[np.argsort(-np.abs(values))[:min(8, values.size)]]
+    return np.array([2.0 * mu - rough[np.argmin(np.abs(rough - mu))] for mu in largest])
+
+
+def _memory_monodromy(balance, q_free, omega, steps):
+    """The monodromy over the state of :func:`_memory_period` by finite differences (None: a delay past
+    MAX_DELAY_STATES values)."""
+    period = _memory_period(balance, q_free, omega, steps)
+    if period is None:
+        return None
+    run, state, scales = period
+    base = run(state)
+    columns = []
+    for k in range(state.size):
+        moved = state.copy()
+        moved[k] += scales[k]
+        columns.append((run(moved) - base) / scales[k])
+    return np.array(columns).T
+
+
+def _memory_period(balance, q_free, omega, steps):
+    """``(run, state, perturbations)`` for an element scene with effects with memory: ``run`` integrates one
+    period of ``steps`` implicit steps of the element under its force from a state vector (x, v, the history's
+    z_j, Dahl's F_d, the delay's buffer: see the module) at t = 0 of the orbit and returns the same vector at
+    t = T; ``state`` the orbit's; ``perturbations`` the finite difference of each component (toward 0 for F_d,
+    which is bounded by F_c). None where the delay's buffer needs more than MAX_DELAY_STATES values."""
+    from ..compiled import compile_loop, compile_model
+    from ..effects import Branches
+    from ..loads import HarmonicLoad
+    from ..memory.delay import HEAD
+    from ..memory.history import Z
+    from ..scene_tables import Solver
+    from ..stepping import ElementError, integrate
+
+    system = balance.system
+    memory = system.memory
+    period = 2.0 * math.pi / omega
+    h = period / steps
+    delay, history, dahl = memory.delay, memory.history, memory.dahl
+    extra = 0 if delay is None else math.ceil(delay.tau / h) + 2  # the buffer's values that y(t - tau) reads
+    if extra > MAX_DELAY_STATES:
+        return None
+    scene = memory.scene
+    amplitude = balance.force_amplitude
+    if amplitude is None:  # base excitation, in relative coordinates: m Y0 omega^2 cos(omega t)
+        amplitude = float(system.mass[memory.node]) * balance.base_amplitude * omega * omega
+    changes = dict(load=HarmonicLoad(amplitude, omega), solver=Solver("implicit", h, period, h))
+    if scene.branches is not None and scene.branches.continuum:  # the balance's branches at quadrature nodes
+        changes["branches"] = Branches(system.branch_k.copy(), system.branch_eta.copy(),
+                                       np.zeros(system.branch_k.shape[0]))
+    scene = dataclasses.replace(scene, **changes)
+    model = compile_model(scene, "play")
+    loop = compile_loop(scene, "implicit")
+    load = scene.load.compile()
+    delay_part, history_part, dahl_part = model[8]
+
+    x0, v0, u_network = orbit_start(balance, q_free, omega)
+    branches = [i for i, e in enumerate(system.network.elements) if e.kind == "branch"]
+    u0 = u_network[branches].copy() if branches else None
+    coefficients = balance.full(q_free).reshape(system.n, balance.L)[memory.node]
+    D = balance.derivative
+
+    def y_coefficients(effect):
+        return omega * D @ coefficients if effect.acts_on == "v" else coefficients
+
+    def at(c, t):
+        """The value at time t of the motion with harmonics c."""
+        h_k = np.arange(1, balance.H + 1)
+        return c[0] + c[1::2] @ np.cos(h_k * omega * t) + c[2::2] @ np.sin(h_k * omega * t)
+
+    size = max(abs(x0[memory.node]), abs(v0[memory.node]) / omega, float(np.max(np.abs(coefficients))), 1e-300)
+    state, scales = [x0[memory.node], v0[memory.node]], [PERTURBATION * size, PERTURBATION * size * omega]
+    if history is not None:
+        y = y_coefficients(history)
+        y_size = size * (omega if history.acts_on == "v" else 1.0)
+        for rate in history.rate:
+            z = np.linalg.solve(rate * np.eye(balance.L) + omega * D, y)
+            state.append(z[0] + z[1::2].sum())
+            scales.append(PERTURBATION * y_size / max(rate, omega))
+    if dahl is not None:
+        state.append(balance.dahl_force)
+        scales.append(-PERTURBATION * dahl.force if balance.dahl_force > 0 else PERTURBATION * dahl.force)
+    first_step = 0
+    if delay is not None:
+        y = y_coefficients(delay)
+        periods = math.ceil((delay.tau + 2.0 * h) / period)  # start late enough that y(t - tau) is on the buffer
+        first_step = periods * steps
+        buffer = delay_part[1]
+        capacity = buffer.shape[0] - HEAD
+        grid = np.arange(first_step - capacity + 1, first_step + 1)
+        orbit_buffer = np.array([at(y, j * h) for j in grid.tolist()])
+        y_size = size * (omega if delay.acts_on == "v" else 1.0)
+        state.extend(orbit_buffer[-extra:].tolist())
+        scales.extend([PERTURBATION * y_size] * extra)
+    state, scales = np.array(state, dtype=float), np.array(scales)
+    n_history = 0 if history is None else len(history.rate)
+    out = np.empty((steps, 3))
+
+    def run(values):
+        x, v = float(values[0]), float(values[1])
+        u = None if u0 is None else u0.copy()
+        at_state = 2
+        if history_part is not None:
+            (n, _), data = history_part
+            data[1 + Z * n:1 + (Z + 1) * n] = values[at_state:at_state + n_history]
+            at_state += n_history
+        if dahl_part is not None:
+            dahl_part[1][0] = values[at_state]
+            at_state += 1
+        if delay_part is not None:
+            buffer = delay_part[1]
+            ring = np.array(orbit_buffer)
+            ring[-extra:] = values[at_state:]
+            buffer[0] = first_step
+            buffer[1] = ring[0]
+            buffer[HEAD + grid % capacity] = ring
+        x, v, taken = integrate(loop, model, load, x, v, u, 0.0, first_step, h, 1, out, None, None, None)
+        if taken < steps:
+            raise ElementError(f"{system.source}: a step of the stability check failed at f = "
+                               f"{omega / (2 * math.pi)!r} Hz")
+        result = [x, v]
+        if history_part is not None:
+            (n, _), data = history_part
+            result.extend(data[1 + Z * n:1 + (Z + 1) * n].tolist())
+        if dahl_part is not None:
+            result.append(dahl_part[1][0])
+        if delay_part is not None:
+            buffer = delay_part[1]
+            end = first_step + steps
+            result.extend(buffer[HEAD + np.arange(end - extra + 1, end + 1) % capacity].tolist())
+        return np.array(result)
+
+    return run, state, scales
 
 
 def _monodromy(balance, q_free, omega, steps) -> np.ndarray:

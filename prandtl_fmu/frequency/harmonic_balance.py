@@ -24,6 +24,27 @@ The Jacobian dR/dq is exact in structure: the linear part as written, dG/dq from
 sample through the same FFT, for a branch with the anchor of its stick (``aft.py``): exact for the sampled
 map, so Newton's iteration converges in a few steps once the slip pattern is right. dR/d omega is exact.
 
+The effects with memory of an element scene (``memory/``) act on its node:
+
+* ``[delay]`` -gain y(t - tau), y = x or x': linear, so exact per harmonic: harmonic h of y delayed is that of
+  y turned by -h omega tau, the operator exp(-omega tau D) on the coefficients (D as above), and y' = omega D x:
+  the term gain exp(-omega tau D) (x) or gain exp(-omega tau D) omega D (x') of the linear part, with its
+  exact d/d omega (-tau D times it, plus gain exp(-omega tau D) D on x');
+* ``[history]`` -int_0^t sum_j w_j exp(-r_j (t - s)) y(s) ds: in the periodic steady state z_j' = -r_j z_j + y
+  gives z_j = (r_j + omega D)^-1 y (harmonic h: Y_h / (r_j + i h omega), the mean Y_0 / r_j), the term
+  sum_j w_j (r_j + omega D)^-1 (times omega D on x') with its exact d/d omega. A rate r_j = 0 (a plain
+  integral) has no steady cycle fixed by the period (its constant is set by the whole past): refused;
+* ``[dahl]`` F_d, dF_d/dx = sigma (1 - F_d / F_c sgn x')^exponent: a hysteretic force, in AFT beside the
+  branches (``aft.dahl_cycle``): the law is rate independent and integrated exactly over each monotone move
+  (``memory/dahl.py``), so along the samples taken linear between them it is exact at the samples, as a
+  branch is; its steady cycle is the fixed point of the period map, found by Newton's method kept in a
+  bracket (each iteration one period driven, at most aft.DAHL_PERIODS; exact in one step for exponent 1,
+  where the map is affine); its Jacobian the exact tangent of that sampled map (the derivative of each move
+  carried around the cycle, closed by periodicity). The error is the samples' (the turning points fall
+  between them): like 1 / N^2.
+
+A delay or a history on x holds the node's mean as a spring does (their mean stiffness gain, w_j / r_j).
+
 Two effects take a stated quadrature instead: a spectrum of branches (the continuum) becomes branches at
 quadrature nodes (:func:`spectrum_branches`), after which all of the above applies to them unchanged; branches
 with series dashpots are driven by the compiled kernels over periods to their steady cycle, their Jacobian and
@@ -67,7 +88,8 @@ class PeriodicSystem:
     ``branch_eta``, each with the index of its pair of nodes in ``pairs``; ``load_node``; ``network``: the same
     system as a network (the time integration of the stability check runs it) and ``branch_index``: the index
     of each branch among the network's elements; ``held``: the nodes whose mean is an unknown; ``series``: the
-    branches with series dashpots, one ``driven.SeriesBranches`` per pair of nodes."""
+    branches with series dashpots, one ``driven.SeriesBranches`` per pair of nodes; ``memory``: the effects with
+    memory of an element scene (:class:`MemoryEffects`), else None."""
 
     name: str
     source: str
@@ -88,6 +110,7 @@ class PeriodicSystem:
     branch_index: np.ndarray
     held: np.ndarray
     series: tuple = ()
+    memory: Optional["MemoryEffects"] = None
 
     @property
     def n(self) -> int:
@@ -107,6 +130,51 @@ class PeriodicSystem:
         return self.nodes.index(name)
 
 
+@dataclass(frozen=True, eq=False)
+class MemoryEffects:
+    """The effects with memory of an element scene acting on node ``node`` (see the module): ``delay``,
+    ``history``, ``dahl`` (the scene's ``memory.delay.Delay``, ``memory.history.History``, ``memory.dahl.Dahl``,
+    or None); ``scene``: the element scene, whose time integration the stability check runs."""
+
+    node: int
+    delay: object
+    history: object
+    dahl: object
+    scene: object
+
+    def stiffness(self, omega: float, derivative: np.ndarray) -> tuple:
+        """``(Z, dZ/d omega)`` (L, L): the delay's and the history's force on the node's coefficients at
+        ``omega`` (rad/s) as a linear map of its x's (see the module); ``derivative``: D (L, L)."""
+        L = derivative.shape[0]
+        Z, by_omega = np.zeros((L, L)), np.zeros((L, L))
+        D = derivative
+        d = self.delay
+        if d is not None:
+            turn = np.eye(L)
+            for h in range(1, (L - 1) // 2 + 1):
+                c, s = math.cos(h * omega * d.tau), math.sin(h * omega * d.tau)
+                turn[2 * h - 1:2 * h + 1, 2 * h - 1:2 * h + 1] = [[c, -s], [s, c]]
+            turned = -d.tau * D @ turn
+            if d.acts_on == "v":
+                Z += d.gain * omega * turn @ D
+                by_omega += d.gain * (omega * turned @ D + turn @ D)
+            else:
+                Z += d.gain * turn
+                by_omega += d.gain * turned
+        s = self.history
+        if s is not None:
+            for weight, rate in zip(s.weight, s.rate):
+                inverse = np.linalg.inv(rate * np.eye(L) + omega * D)
+                turned = -inverse @ D @ inverse
+                if s.acts_on == "v":
+                    Z += weight * omega * inverse @ D
+                    by_omega += weight * (omega * turned @ D + inverse @ D)
+                else:
+                    Z += weight * inverse
+                    by_omega += weight * turned
+        return Z, by_omega
+
+
 def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = DEFAULT_TOLERANCE) -> PeriodicSystem:
     """The :class:`PeriodicSystem` of an element scene (with ``[mass]``) or a network scene; ``load_node``: the
     node the harmonic force acts on (default: the network's ``load_node``; the element's mass); ``tolerance``:
@@ -115,6 +183,9 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
     from ..network.model import NetworkScene
 
     network = scene.network if isinstance(scene, NetworkScene) else _element_network(scene, tolerance)
+    memory = None
+    if not isinstance(scene, NetworkScene) and any(e is not None for e in (scene.delay, scene.history, scene.dahl)):
+        memory = MemoryEffects(0, scene.delay, scene.history, scene.dahl, scene)
     for element in network.elements:
         if element.kind == "slider":
             raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
@@ -150,6 +221,10 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
             series.setdefault(pair_of((p, q)), []).append((element.value, element.eta, element.c, index))
         else:
             branches.append((p, q, element.value, element.eta, pair_of((p, q)), index))
+    if memory is not None:
+        on_x = [e for e in (memory.delay, memory.history) if e is not None and e.acts_on == "x"]
+        if on_x:  # the mean's stiffness (gain, w_j / r_j), as a spring's
+            links.append((memory.node, -1))
     node = network.load_node
     if load_node is not None:
         if load_node not in network.nodes:
@@ -165,7 +240,7 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
         np.array([c[3] for c in cubic], dtype=np.int64), branch_table[:, :2].astype(np.int64).copy(),
         branch_table[:, 2].copy(), branch_table[:, 3].copy(), np.array([b[4] for b in branches], dtype=np.int64),
         tuple(pairs), node, network, np.array([b[5] for b in branches], dtype=np.int64), _held_nodes(n, links),
-        tuple(_series_branches(pairs[pair], pair, group) for pair, group in series.items()))
+        tuple(_series_branches(pairs[pair], pair, group) for pair, group in series.items()), memory)
 
 
 def _series_branches(ends, pair, group):
@@ -184,11 +259,13 @@ def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
     if scene.mass is None:
         raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
                              "resonance: describe it with --amplitudes)")
-    refused = [(scene.friction, "[friction] (Coulomb friction of the mass: set-valued while it sticks)"),
-               (scene.dahl, "[dahl]"), (scene.delay, "[delay]"), (scene.history, "[history]")]
-    for present, name in refused:
-        if present is not None:
-            raise FrequencyError(f"{scene.source}: {name} is not taken by harmonic balance: use --method time")
+    if scene.friction is not None:
+        raise FrequencyError(f"{scene.source}: [friction] (Coulomb friction of the mass: set-valued while it sticks) "
+                             "is not taken by harmonic balance: use --method time")
+    if scene.history is not None and 0.0 in scene.history.rate:
+        raise FrequencyError(f"{scene.source}: [history] rate 0 (a plain integral of y) is not taken by harmonic "
+                             "balance: its steady cycle is not fixed by the period (its constant depends on the "
+                             "whole past): use --method time")
     elements = []
     if scene.spring is not None and scene.spring.k0 > 0:
         elements.append(Element("spring", "k0", (0, -1), float(scene.spring.k0)))
@@ -340,8 +417,26 @@ class HarmonicBalance:
         self.elongations = np.zeros(system.branch_k.shape[0])
         self.series_u = [np.zeros(group.index.shape[0]) for group in system.series]
         self.by_omega = np.zeros(n * L)  # dG / d omega: the series dashpots' (``driven.py``), else 0
+        self.dahl_force = 0.0  # F_d at sample 0 of its steady cycle (the state a time integration starts from)
+        self._memory_omega, self._memory_terms = None, None
 
     # ------------------------------------------------------------- the harmonics and the samples
+
+    def memory_terms(self, omega: float) -> tuple:
+        """``(Z, dZ/d omega)`` (n L, n L): the delay's and the history's linear terms at ``omega`` (zero without
+        them; see :meth:`MemoryEffects.stiffness`), cached for the last omega."""
+        memory = self.system.memory
+        if memory is None or (memory.delay is None and memory.history is None):
+            return 0.0, 0.0
+        if self._memory_omega != omega:
+            Z, by_omega = memory.stiffness(omega, self.derivative)
+            n, L = self.system.n, self.L
+            at = slice(memory.node * L, (memory.node + 1) * L)
+            self._memory_terms = (np.zeros((n * L, n * L)), np.zeros((n * L, n * L)))
+            self._memory_terms[0][at, at] = Z
+            self._memory_terms[1][at, at] = by_omega
+            self._memory_omega = omega
+        return self._memory_terms
 
     def harmonics_of(self, samples: np.ndarray) -> np.ndarray:
         """The coefficients (..., L) of real samples (..., N) over one period (numpy's real FFT)."""
@@ -377,6 +472,8 @@ class HarmonicBalance:
         G = self.harmonics_of(self._forces).reshape(n * L)
         jacobian = np.zeros((n * L, n * L))
         self.by_omega[:] = 0.0
+        if s.memory is not None and s.memory.dahl is not None:
+            self._dahl(s.memory, x, G, jacobian)
         if s.pairs:
             blocks = self.projection @ self._tangent  # (pairs, L, L)
             for group, u in zip(s.series, self.series_u):
@@ -388,6 +485,23 @@ class HarmonicBalance:
                     jacobian[p * L:(p + 1) * L, r * L:(r + 1) * L] -= block
                     jacobian[r * L:(r + 1) * L, p * L:(p + 1) * L] -= block
         return G, jacobian
+
+    def _dahl(self, memory, x, G, jacobian) -> None:
+        """Add Dahl's force on its steady cycle along the node's samples to G and its exact tangent to the
+        Jacobian (``aft.dahl_cycle``)."""
+        from .aft import DAHL_PERIODS, dahl_cycle
+
+        dahl, L, node = memory.dahl, self.L, memory.node
+        forces, tangent = np.empty(self.N), np.empty((self.N, L))
+        periods = dahl_cycle(x[node], self.basis, float(dahl.sigma), float(dahl.force), float(dahl.exponent),
+                             forces, tangent)
+        if periods < 0:
+            raise FrequencyError(f"{self.system.source}: [dahl] did not reach its periodic cycle within "
+                                 f"{DAHL_PERIODS} periods")
+        at = slice(node * L, (node + 1) * L)
+        G[at] += self.harmonics_of(forces)
+        jacobian[at, at] += self.projection @ tangent
+        self.dahl_force = float(forces[0])
 
     def _series(self, group, u, x, q, omega, G, block) -> None:
         """Add the force of the Maxwell branches ``group`` to G, their finite-difference derivative with
@@ -432,10 +546,11 @@ class HarmonicBalance:
         q = self.full(free_values)
         G, nonlinear = self.nonlinear(q, omega)
         velocity = self.linear_damping - xi * self.mass_velocity
-        linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia
+        memory, memory_by_omega = self.memory_terms(omega)
+        linear = self.linear_stiffness + omega * velocity + omega * omega * self.linear_inertia + memory
         residual = linear @ q + G - (self.force(omega) if forced else 0.0)
         jacobian = linear + nonlinear
-        by_omega = (velocity + 2.0 * omega * self.linear_inertia) @ q + self.by_omega
+        by_omega = (velocity + 2.0 * omega * self.linear_inertia + memory_by_omega) @ q + self.by_omega
         if forced and self.power:
             by_omega = by_omega - self.power * self.force(omega) / omega
         by_xi = -omega * (self.mass_velocity @ q)
@@ -454,7 +569,11 @@ class HarmonicBalance:
                 stuck[r, r] += k
                 stuck[p, r] -= k
                 stuck[r, p] -= k
-        matrix = np.kron(stuck, np.eye(self.L)) + omega * self.linear_damping + omega * omega * self.linear_inertia
+        memory = s.memory
+        if memory is not None and memory.dahl is not None:  # Dahl at a reversal: a spring sigma
+            stuck[memory.node, memory.node] += memory.dahl.sigma
+        matrix = np.kron(stuck, np.eye(self.L)) + omega * self.linear_damping + omega * omega * self.linear_inertia \
+            + self.memory_terms(omega)[0]
         f = self.free
         try:
             return np.linalg.solve(matrix[np.ix_(f, f)], self.force(omega)[f])

@@ -129,13 +129,14 @@ def draw_curve(curves, axes, backbone=None) -> None:
     several = len(curves) > 1
     for index, curve in enumerate(curves):
         color = f"C{index % 10}" if several else "C0"
-        f, stable = curve.frequency, curve.stable
+        f, stable = curve.frequency, curve.stable.tolist()  # (None where not computed: a masked entry)
+        style = {True: "-", False: "--", None: ":"}
         for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
             start = 0
             for end in range(1, f.size + 1):
                 if end == f.size or stable[end] != stable[start]:
                     stop = min(end + 1, f.size)  # join the pieces
-                    ax.plot(f[start:stop], values[start:stop], "-" if stable[start] else "--", color=color, lw=1.2,
+                    ax.plot(f[start:stop], values[start:stop], style[stable[start]], color=color, lw=1.2,
                             label=None)
                     start = end
             folds = curve.folds
@@ -149,6 +150,8 @@ def draw_curve(curves, axes, backbone=None) -> None:
     else:
         amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {first.harmonics})")
         amplitude_axes.plot([], [], "--", color="C0", label="unstable")
+    if any(None in curve.stable.tolist() for curve in curves):
+        amplitude_axes.plot([], [], ":", color="0.4", label="stability not computed")
     if backbone is not None:
         from .modes import synthesis
 
