@@ -25,9 +25,11 @@ from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
-# The Floquet multipliers are computed at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at
-# every point between two computed ones that disagree; the points between two that agree take their verdict
-# (their ``multiplier`` is NaN): a loss of stability and its return within fewer points would be missed.
+# The Floquet multipliers are computed at every point where they come from the variational equation (every node
+# with a mass, no series dashpot, no effect with memory: floquet.variational). Elsewhere, from the steppers' finite
+# differences, at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at every point between two
+# computed ones that disagree; the points between two that agree take their verdict (their ``multiplier`` is NaN):
+# a loss of stability and its return within fewer points would be missed there.
 STABILITY_STRIDE = 16
 
 
@@ -154,7 +156,7 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
 
 
 def _curve(balance, points, where, stability, change) -> Curve:
-    from .floquet import is_stable, multipliers
+    from .floquet import is_stable, multipliers, variational
 
     system = balance.system
     L = balance.L
@@ -180,7 +182,8 @@ def _curve(balance, points, where, stability, change) -> Curve:
                 stable[index] = is_stable(values)
 
         count = len(points)
-        checked = set(range(0, count, STABILITY_STRIDE)) | {count - 1}
+        stride = 1 if variational(system) else STABILITY_STRIDE  # (variational.py: a hundredth of the cost)
+        checked = set(range(0, count, stride)) | {count - 1}
         for fold in (i for i, p in enumerate(points) if p[2]):
             checked |= {max(fold - 1, 0), min(fold + 1, count - 1)}
         checked = sorted(checked)

@@ -65,15 +65,48 @@ def orbit_start(balance, q_free, omega) -> tuple:
     return x, v, u
 
 
+def variational(system) -> bool:
+    """Whether the multipliers of ``system``'s points come from the variational equation (``variational.py``):
+    every node with a mass, no series dashpot, no effect with memory; else from the finite differences of the
+    steppers (see the module)."""
+    return bool(np.all(system.mass > 0)) and not system.series and system.memory is None
+
+
 def multipliers(balance, q_free, omega, steps: int = STEPS):
     """The Floquet multipliers (complex, (2 n_mass,) or, with memory, one per state of :func:`_memory_period`) of
     the orbit of ``balance`` at ``omega`` (rad/s); None where they are not computed (a delay past
     MAX_DELAY_STATES)."""
+    if variational(balance.system):
+        return np.linalg.eigvals(variational_monodromy(balance, q_free, omega))
     if balance.system.memory is not None:
         return _memory_multipliers(balance, q_free, omega, steps)
     coarse = _monodromy(balance, q_free, omega, steps)
     fine = _monodromy(balance, q_free, omega, 2 * steps)
     return np.linalg.eigvals(2.0 * fine - coarse)
+
+
+def variational_monodromy(balance, q_free, omega) -> np.ndarray:
+    """The monodromy (2 n, 2 n) over (x, v) of the orbit of ``balance`` at ``omega`` from its variational equation
+    (``variational.py``), on the balance's N samples."""
+    from .variational import monodromy
+
+    system = balance.system
+    full = balance.full(q_free)
+    coefficients = full.reshape(system.n, balance.L)
+    x = coefficients @ balance.basis.T  # (n, N)
+    v = omega * (coefficients @ balance.derivative.T) @ balance.basis.T
+    balance.nonlinear(full, omega)  # the elongations of the branches at sample 0
+
+    def relative(values, ends):
+        return np.array([values[p] - (values[q] if q >= 0 else 0.0) for p, q in ends.tolist()]).reshape(
+            len(ends), values.shape[1])
+
+    out = np.empty((2 * system.n, 2 * system.n))
+    monodromy(2.0 * math.pi / omega, balance.N, 1.0 / system.mass, system.damping, system.stiffness,
+              system.cubic_ends, system.cubic_k3, relative(x, system.cubic_ends), system.branch_ends,
+              system.branch_k, system.branch_eta, relative(x, system.branch_ends),
+              relative(v, system.branch_ends), balance.elongations.copy(), out)
+    return out
 
 
 def is_stable(values: np.ndarray) -> bool:

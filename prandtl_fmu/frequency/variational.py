@@ -1,0 +1,177 @@
+"""The monodromy of a periodic state from its variational equation along the harmonic balance's own orbit.
+
+For a network whose nodes all have a mass, with springs, dashpots, cubic springs and Prandtl branches (no
+series dashpot, no effect with memory), a perturbation (dx, dv, du) of the orbit obeys, between the instants where
+a branch switches,
+
+    dx' = dv,   M dv' = -C dv - K dx - sum_c 3 k3 e_c(t)^2 B_c' B_c dx - sum_b k_b B_b' du_b,
+    du_b' = B_b dv while branch b sticks, du_b = 0 while it slides,
+
+B the elongation's row (e = x_p - x_q). A branch that reaches its threshold (stick to slip) has its du_b set to 0
+there: the perturbed motion slides from there on too, a little earlier or later, and loses the difference; one
+that stops sliding (slip to stick, where its elongation turns) starts from du_b = 0, the vector field being
+continuous there (v = 0). The orbit is the balance's: x and v from its harmonics at the N samples of ``aft.py``
+(linear between samples), u from the same play operator on the samples, the switches located inside each
+sample interval (a threshold where the sampled elongation reaches it, a turn where the velocity changes sign).
+The equation is integrated with the classical Runge-Kutta method of order 4, SUBSTEPS steps per sample interval
+cut at the switches, from du = 0 and each unit dx, dv in turn: Phi, the monodromy over the x and v of the nodes
+(the same restriction as the finite differences of ``floquet.py``, whose u at t = 0 is the orbit's).
+
+Its error: that of the orbit's samples (the switch instants within O(h^2) of the sampled model's) and RK4's
+O((omega_n h)^4) per step; no backward Euler's damping to extrapolate away, and one pass instead of
+4 n + 2 periods of the stepper: about a hundredth of the cost, which is what lets every point of a curve get its
+multipliers.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import kernel
+
+SUBSTEPS = 2
+
+
+@kernel
+def _derivative(z, out, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k, sticking, columns):
+    """out = z' for the perturbations z (2 n + nb, columns) at one instant (cubic_e: the cubic springs'
+    elongations then; sticking: 1 for the branches that stick)."""
+    n = inverse_mass.shape[0]
+    nb = branch_k.shape[0]
+    for col in range(columns):
+        for i in range(n):
+            out[i, col] = z[n + i, col]
+        for i in range(n):
+            force = 0.0
+            for j in range(n):
+                force -= C[i, j] * z[n + j, col] + K[i, j] * z[j, col]
+            out[n + i, col] = force
+        for c in range(cubic_k3.shape[0]):
+            p, q = cubic_ends[c, 0], cubic_ends[c, 1]
+            slope = 3.0 * cubic_k3[c] * cubic_e[c] * cubic_e[c]
+            de = z[p, col] - (z[q, col] if q >= 0 else 0.0)
+            out[n + p, col] -= slope * de
+            if q >= 0:
+                out[n + q, col] += slope * de
+        for b in range(nb):
+            p, q = branch_ends[b, 0], branch_ends[b, 1]
+            force = branch_k[b] * z[2 * n + b, col]
+            out[n + p, col] -= force
+            if q >= 0:
+                out[n + q, col] += force
+            if sticking[b]:
+                out[2 * n + b, col] = z[n + p, col] - (z[n + q, col] if q >= 0 else 0.0)
+            else:
+                out[2 * n + b, col] = 0.0
+        for i in range(n):
+            out[n + i, col] *= inverse_mass[i]
+
+
+@kernel
+def _advance(z, duration, start, h, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_samples, j, branch_ends,
+             branch_k, sticking, stages, cubic_e, samples):
+    """z advanced by ``duration`` (one RK4 step) from the fraction ``start`` of sample interval j, of length h
+    (the cubic springs' elongations linear between its samples)."""
+    columns = z.shape[1]
+    k1, k2, k3, k4, trial = stages[0], stages[1], stages[2], stages[3], stages[4]
+    fraction = duration / h
+    for stage in range(4):
+        where = start + (0.0 if stage == 0 else 0.5 * fraction if stage < 3 else fraction)
+        nxt = j + 1 if j + 1 < samples else 0
+        for c in range(cubic_k3.shape[0]):
+            cubic_e[c] = (1.0 - where) * cubic_samples[c, j] + where * cubic_samples[c, nxt]
+        if stage == 0:
+            _derivative(z, k1, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k, sticking,
+                        columns)
+            trial[:, :] = z + 0.5 * duration * k1
+        elif stage == 1:
+            _derivative(trial, k2, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
+                        sticking, columns)
+            trial[:, :] = z + 0.5 * duration * k2
+        elif stage == 2:
+            _derivative(trial, k3, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
+                        sticking, columns)
+            trial[:, :] = z + duration * k3
+        else:
+            _derivative(trial, k4, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
+                        sticking, columns)
+    z[:, :] = z + duration / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@kernel
+def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_samples, branch_ends, branch_k,
+              branch_eta, e, velocity, u0, out):
+    """out (2 n, 2 n): the monodromy over (x, v) (see the module) of one period of ``samples`` intervals; ``e``
+    and ``velocity`` (nb, samples): the branches' elongations and their rates at the samples; ``u0`` (nb,): u at
+    sample 0; ``cubic_samples`` (nc, samples): the cubic springs' elongations."""
+    n = inverse_mass.shape[0]
+    nb = branch_k.shape[0]
+    h = period / samples
+    dim = 2 * n + nb
+    z = np.zeros((dim, 2 * n))
+    for i in range(2 * n):
+        z[i, i] = 1.0
+    stages = np.zeros((5, dim, 2 * n))
+    cubic_e = np.zeros(cubic_k3.shape[0])
+    u = u0.copy()
+    sticking = np.ones(nb, dtype=np.int64)
+    _resynchronise(u, velocity, branch_eta, 0, sticking, z, n)
+    events = np.empty(nb)
+    for j in range(samples):
+        nxt = j + 1 if j + 1 < samples else 0
+        # each branch's switch inside this interval (fraction in [0, 1)), or 2 for none
+        for b in range(nb):
+            events[b] = 2.0
+            de = e[b, nxt] - e[b, j]
+            if sticking[b]:
+                if de > 0.0 and u[b] + de > branch_eta[b]:
+                    events[b] = (branch_eta[b] - u[b]) / de
+                elif de < 0.0 and u[b] + de < -branch_eta[b]:
+                    events[b] = (-branch_eta[b] - u[b]) / de
+            elif velocity[b, j] * velocity[b, nxt] < 0.0:
+                events[b] = velocity[b, j] / (velocity[b, j] - velocity[b, nxt])
+        start = 0.0
+        for _ in range(nb + 1):  # each branch switches at most once per interval here
+            first, which = 1.0, -1
+            for b in range(nb):
+                if start <= events[b] < first:
+                    first, which = events[b], b
+            span = (first - start) * h
+            if span > 0.0:
+                for piece in range(SUBSTEPS):
+                    _advance(z, span / SUBSTEPS, start + piece * (first - start) / SUBSTEPS, h, inverse_mass, C, K,
+                             cubic_ends, cubic_k3, cubic_samples, j, branch_ends, branch_k, sticking, stages,
+                             cubic_e, samples)
+            if which < 0:
+                break
+            if sticking[which]:  # reaches its threshold: slides, its perturbation lost
+                sticking[which] = 0
+                for col in range(2 * n):
+                    z[2 * n + which, col] = 0.0
+            else:  # turns: sticks from du = 0 (it was 0 while it slid)
+                sticking[which] = 1
+            events[which] = 2.0
+            start = first
+        for b in range(nb):  # the orbit's u at the next sample (the play operator on the samples)
+            moved = u[b] + e[b, nxt] - e[b, j]
+            if moved > branch_eta[b]:
+                moved = branch_eta[b]
+            elif moved < -branch_eta[b]:
+                moved = -branch_eta[b]
+            u[b] = moved
+        _resynchronise(u, velocity, branch_eta, nxt, sticking, z, n)
+    for i in range(2 * n):
+        for col in range(2 * n):
+            out[i, col] = z[i, col]
+
+
+@kernel
+def _resynchronise(u, velocity, branch_eta, j, sticking, z, n):
+    """At sample j, each branch sticks or slides as the orbit's u and velocity say (a branch on its threshold
+    with the motion pushing on slides, its perturbation lost; any other sticks)."""
+    for b in range(u.shape[0]):
+        sliding = (u[b] >= branch_eta[b] * (1.0 - 1e-12) and velocity[b, j] > 0.0) or \
+            (u[b] <= -branch_eta[b] * (1.0 - 1e-12) and velocity[b, j] < 0.0)
+        if sliding and sticking[b]:
+            for col in range(z.shape[1]):
+                z[2 * n + b, col] = 0.0
+        sticking[b] = 0 if sliding else 1
