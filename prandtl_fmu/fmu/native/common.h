@@ -55,6 +55,8 @@ enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8, INTERME
     char digest[65]
 /* statuses: the same numbers in FMI 2.0 and 3.0 */
 enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
+/* ``field`` of ``from`` into ``to`` (a kind's SETTINGS, the element's checkpoint: any type, an array too) */
+#define COPY_FIELD(to, from, field) memcpy(&(to)->field, &(from)->field, sizeof (to)->field)
 
 
 /* ------------------------------------------------------------------ logging */

@@ -21,18 +21,11 @@
 #define STEPPING_NAME "step mode"
 #define DESERIALIZE "fmi3DeserializeFMUState"
 #include "scene.h"
-#if NETWORK
-#include "network.h"
-#elif CONNECTOR
-#include "connector.h"
-#else
-#include "element.h"
-#endif
 typedef fmi3Instance FmiInstance; /* the version's types of front.h */
 typedef fmi3Status FmiStatus;
 typedef fmi3FMUState FmiState;
 typedef fmi3Byte FmiByte;
-#include "front.h"
+#include "front.h" /* over machine.h, over the kind scene.h names: element.h, connector.h or network.h */
 #ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
 #define FMU_TIME(c) element_time(&(c)->el)
 #endif
