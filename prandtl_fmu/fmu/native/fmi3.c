@@ -7,8 +7,8 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
-/* The native FMU's FMI 3.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
- * connector.h, network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
+/* The native FMU's FMI 3.0 co-simulation front over the instance layer of its kind (machine.h over element.h,
+ * connector.h or network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
  * each under its 1-based position in ModelVariables as its value reference) and the branch elongations as the
  * scalars u_1 .. u_n (VR_U_FIRST + i - 1), which every master reads; built with arrays (ARRAYS), also the array u of
  * n Float64 (VR_U), sized by the structural parameter n (UInt64, fixed). The functions of model exchange, scheduled

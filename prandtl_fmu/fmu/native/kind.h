@@ -8,8 +8,8 @@
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
 /* The types of the kind this FMU is built for (scene.h says which: NETWORK, CONNECTOR): its Element, State and
- * Instance and the macros the shared headers read (element_types.h, connector_types.h, network_types.h). The headers
- * below the kind's calls (core.h, calls.h, state.h) include this one, and nothing that includes them. */
+ * Instance and the macros the shared headers read (element_types.h, connector_types.h, network_types.h). The services
+ * below the kind's calls (core.h, calls.h, state.h) include this one; it includes common.h and the types alone. */
 #ifndef PRANDTL_KIND_H
 #define PRANDTL_KIND_H
 #include "common.h"
