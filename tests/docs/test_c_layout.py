@@ -193,6 +193,19 @@ def test_no_circle_among_the_native_headers():
     assert found == [], "the native headers name one another in a circle:\n" + explain(graph, found)
 
 
+def test_no_header_calls_a_function_of_the_fmi_fronts():
+    """The FMI fronts (fmi2.c, fmi3.c) are above every header: a header that declared a function only they define
+    and called it would name them from below (the words they define for the headers, FMI, FMU_STATE, ..., are the
+    build's configuration, as scene.h's are)."""
+    headers = {path.name: read_header(path) for path in sorted(NATIVE.glob("*.h"))}
+    in_headers = set().union(*(defined for _, defined, _, _ in headers.values()))
+    fronts = {path.name: read_header(path)[2] - in_headers for path in sorted(NATIVE.glob("*.c"))}
+    upward = [f"{name} calls {symbol} ({front})" for name, (_, _, _, uses) in headers.items()
+              for symbol, called in sorted(uses.items()) for front, functions in fronts.items()
+              if called and symbol in functions]
+    assert upward == [], "the FMI fronts named from below:\n" + "\n".join(upward)
+
+
 def test_the_reader_sees_includes_calls_types_and_macros():
     """The reader itself, on the headers: an include, a call of a function another header defines, a type and a
     macro of another header, and a hook the kind defines that the layer above the kinds calls."""

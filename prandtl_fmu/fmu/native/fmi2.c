@@ -50,7 +50,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
                               const fmi2CallbackFunctions* functions, fmi2Boolean visible, fmi2Boolean logging)
 {
     Instance* c = functions != NULL ? instance_new(name, functions->componentEnvironment,
-                                                   (void*)functions->logger, logging) : NULL;
+                                                   (void*)functions->logger, emit, logging) : NULL;
     if (c == NULL)
         return NULL;
     if (type != fmi2CoSimulation)

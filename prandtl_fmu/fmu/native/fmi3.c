@@ -89,7 +89,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
                                          fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
                                          fmi3IntermediateUpdateCallback update)
 {
-    Instance* c = instance_new(name, env, (void*)logger, logging);
+    Instance* c = instance_new(name, env, (void*)logger, emit, logging);
     if (c == NULL)
         return NULL;
     if (token == NULL || strcmp(token, GUID) != 0)

@@ -53,15 +53,16 @@ static int phase_to(Instance* c, int phase)
     return ST_OK;
 }
 
-/* a new instance for the host's environment and logger (not yet started: instance_started), or NULL (out of
- * memory) */
-static Instance* instance_new(const char* name, void* env, void* logger, int logging)
+/* a new instance for the host's environment and logger, which ``emit`` calls (the FMI version's: not yet started,
+ * instance_started), or NULL (out of memory) */
+static Instance* instance_new(const char* name, void* env, void* logger, Emit emit, int logging)
 {
     Instance* c = (Instance*)calloc(1, sizeof(Instance));
     if (c == NULL)
         return NULL;
     c->env = env;
     c->logger = logger;
+    c->emit = emit;
     c->name = strdup(name ? name : "");
     c->logging = logging ? 1 : 0;
     if (c->name == NULL) {
