@@ -1,13 +1,14 @@
 """The native C layer's headers (prandtl_fmu/fmu/native/*.h) name one another without a circle: read from the C
 text (comments and strings stripped, nothing compiled), a header names another when it includes it or uses a
 name that the other defines and it does not (a function it calls, a type, a macro, a struct, an enum constant or
-a global), and that graph has no circle. A hook (a function each kind defines and a shared header calls) is
-named only from above: a prototype declares, it does not define, so a prototype in the core and the call after
-it still name the kind's header that defines the function.
+a global; of the headers that define it, the nearest its includes reach, else all: a kind's Instance), and that
+graph has no circle. A kind's function that a shared header runs is named only from above: a prototype declares,
+it does not define, so a prototype in a shared header and the call after it name the kind's header that defines
+the function.
 
 The nodes are the headers of the folder (the vendor's FMI 3.0 headers under fmi3/ aside); ``scene.h``, generated
 per build, and the FMI fronts ``fmi2.c`` and ``fmi3.c`` are the build's configuration around them, not nodes: a
-name only they define makes no edge.
+word only they define (FMI, FMU_STATE, ...) makes no edge, and no header calls a function only they define.
 """
 import functools
 import re
