@@ -10,8 +10,9 @@ the C layer's table of variables (scene.h's ``VARS``) is made from the same list
 * ``stubs.c``, generated (``assemble.stubs``): numba's error path, which a kernel reaches only when it raises, sets a
   flag instead of calling Python; the few functions of numba's runtime that ``exact``'s arrays call
   (``assemble.NRT``); ``numba_nextafter`` is C's ``nextafter``;
-* ``fmi2.c`` or ``fmi3.c``, the FMI front (``front.h``), over the instance layer ``core.h`` (with ``state.h``,
-  ``calls.h``) and the kind ``element.h`` or ``connector.h`` (with ``common.h``) and the generated ``scene.h``.
+* ``fmi2.c`` or ``fmi3.c``, the FMI front (``front.h``), over the state machine ``machine.h``, the kind
+  ``element.h`` or ``connector.h`` (its types: ``element_types.h``, ``connector_types.h``), the services ``core.h``,
+  ``state.h``, ``calls.h`` (with ``common.h``) and the generated ``scene.h``.
 
 The element's white noise (``noise_intensity``, ``noise_seed``, ``noise_unit``): the kernels' noisy ``advance``
 beside the deterministic one, the steppers' refusals of a noise as a table (``kernels.noise_refusal``), the
@@ -138,10 +139,10 @@ def memory_lines(scene) -> list:
 
     layout = kernels.memory_layout(scene)
     names = layout["names"]
-    if scene.delay is not None:  # element.h's delay_size is memory.delay.size; its bound is DELAY_BOUND
+    if scene.delay is not None:  # common.h's delay_size is memory.delay.size; its bound is DELAY_BOUND
         ratio = math.ceil(scene.delay.tau / scene.solver.step)
         if memory_delay.size(scene.delay, scene.solver.step) != memory_delay.HEAD + ratio + 4:
-            raise NativeBuildError("the delay's buffer size is not memory.delay.size's: update element.h")
+            raise NativeBuildError("the delay's buffer size is not memory.delay.size's: update common.h")
         if ratio > DELAY_BOUND:
             raise NativeBuildError(f"{scene.source}: [delay] tau: tau / step = {scene.delay.tau / scene.solver.step:.4g} "
                                    f"values in the delay's buffer, more than the native runtime's bound of "

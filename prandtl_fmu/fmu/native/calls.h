@@ -13,6 +13,7 @@
  * refusal is logged with its reason, logging on or off, under a declared category. Glue only. */
 #ifndef PRANDTL_CALLS_H
 #define PRANDTL_CALLS_H
+#include "kind.h"
 
 static const char* phase_name(int phase)
 {

@@ -41,12 +41,16 @@ enum { P_M, P_X0, P_V0, P_K0, P_K3, P_C, P_ALPHA, P_ALPHA_KINETIC, P_STRIBECK, P
 /* the phases of an instance, one bit each: a function is allowed in a mask of them (as in the Reference-FMUs) */
 enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8, INTERMEDIATE_UPDATE = 16 };
 #define ANY_PHASE (INSTANTIATED | INITIALIZING | STEPPING | TERMINATED)
+/* the FMI version's layer (fmi2.c, fmi3.c): hands a message to the host's logger (``instance`` is its Instance) */
+typedef void (*Emit)(void* instance, int status, const char* category, const char* message);
 /* the first fields of every kind's Instance: the host's (its environment and logger, which the FMI version's
- * layer calls: emit()), the logging, the phase and whether the last step failed */
+ * layer calls: emit, handed over when the instance is made), the logging, the phase and whether the last step
+ * failed */
 #define INSTANCE_HEAD                                                                                          \
     char* name;                                                                                                \
     void* env;                                                                                                 \
     void* logger;                                                                                              \
+    Emit emit;                                                                                                 \
     int logging, phase, last_step_failed
 /* the first fields of every kind's State (state.h): the magic, the version and size, the scene's digest */
 #define STATE_HEAD                                                                                             \
@@ -55,17 +59,17 @@ enum { INSTANTIATED = 1, INITIALIZING = 2, STEPPING = 4, TERMINATED = 8, INTERME
     char digest[65]
 /* statuses: the same numbers in FMI 2.0 and 3.0 */
 enum { ST_OK, ST_WARNING, ST_DISCARD, ST_ERROR, ST_FATAL };
+/* ``field`` of ``from`` into ``to`` (a kind's SETTINGS, the element's checkpoint: any type, an array too) */
+#define COPY_FIELD(to, from, field) memcpy(&(to)->field, &(from)->field, sizeof (to)->field)
 
 
 /* ------------------------------------------------------------------ logging */
 
-/* the FMI version's layer: hands a message to the host's logger (``instance`` is its Instance) */
-static void emit(void* instance, int status, const char* category, const char* message);
+/* log a message: every status but OK reaches the logger (by the instance's emit), logging on or off, under a
+ * declared category */
+#define say(c, ...) say_to((c), (c)->emit, (c)->logger, (c)->logging, __VA_ARGS__)
 
-/* log a message: every status but OK reaches the logger, logging on or off, under a declared category */
-#define say(c, ...) say_to((c), (c)->logger, (c)->logging, __VA_ARGS__)
-
-static void say_to(void* instance, void* logger, int logging, int status, const char* format, ...)
+static void say_to(void* instance, Emit emitter, void* logger, int logging, int status, const char* format, ...)
 {
     static const char* categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
                                        "logStatusFatal", "logAll"};
@@ -85,7 +89,7 @@ static void say_to(void* instance, void* logger, int logging, int status, const 
         message[j++] = text[i];
     }
     message[j] = 0;
-    emit(instance, status, categories[status], message);
+    emitter(instance, status, categories[status], message);
 }
 
 #if !NETWORK

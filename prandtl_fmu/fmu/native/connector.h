@@ -27,62 +27,10 @@
  */
 #ifndef PRANDTL_CONNECTOR_H
 #define PRANDTL_CONNECTOR_H
-#include "common.h"
-
-typedef struct {
-    double p[N_PARAMS]; /* the coefficients in use (k0, k3, c) */
-    double cs[NB_CS];   /* the series dashpots in use */
-    double x, v, time, direction; /* the committed sample; the direction of the last motion */
-    double u[NB_ARR];
-    double account[3];  /* [1] the sliders, [2] the dashpots (connector.SLIDERS, DAMPER) */
-    double mp[N_MEMP];  /* the effects with memory: their parameters in use (kernels.memory_layout) */
-    int64_t nd;         /* the delay's buffer: its values (memory.delay.size at the tau in use; 0: no delay) */
-    int64_t mem_len;    /* the memory's state: MEM_FIXED + nd values */
-    double* mem;        /* ... on the heap (NULL in a state blob: its values follow the blob's fixed part) */
-} Element;
-
-typedef struct {
-    STATE_HEAD;
-    Element element;
-    double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int initialized;
-    double mpar[N_MEMP]; /* the memory's parameters the master set */
-    double xd[2], vd[2]; /* x's and v's derivatives the master set (fmi2SetRealInputDerivatives) */
-    uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
-} State;
-
-typedef struct {
-    INSTANCE_HEAD;
-    Element el;
-    /* what the master set */
-    double x_in, v_in, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int initialized;
-    int scene_load;   /* none here: what the FMI layers' Boolean and String calls refuse */
-    char stepper[32];
-    Element preview;  /* the outputs' state (on the heap with the instance, never a large copy on the host's stack) */
-    Element saved;    /* core_do_step's checkpoint: a step whose outputs overflow is rolled back */
-    double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
-    int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
-    double xd[2], vd[2]; /* x', x'' and v', v'' the master set for the next doStep (0: held) */
-} Instance;
-
-static double element_time(const Element* e) { return e->time; }
-
-/* the memory's arrays (core.h): the element's, its preview's and its checkpoint's */
-#define MEMORY_ARRAYS(c) {&(c)->el.mem, &(c)->preview.mem, &(c)->saved.mem}
-#define MEMORY_TAU(c) ((c)->mpar[1])
-#define MEMORY_SIZED(c, length) ((c)->el.mem_len = (c)->preview.mem_len = (c)->saved.mem_len = (length))
-/* the outputs that must be numbers after a step (core.h); no Integer to set (connector: the motion comes in) */
-#define STEP_OUTPUT(what) ((what) == W_FORCE || (what) == W_STIFFNESS || (what) == W_ENERGY)
-#define KIND_INTEGERS 1
-/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
-#define SETTINGS(to, from)                                                                                     \
-    COPY_FIELD(to, from, x_in), COPY_FIELD(to, from, v_in), COPY_FIELD(to, from, start_time),                  \
-        COPY_FIELD(to, from, par), COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, mpar),                  \
-        COPY_FIELD(to, from, xd), COPY_FIELD(to, from, vd)
-#define SETTABLE(what) ((what) == W_X || (what) == W_V || (what) == W_PARAM || (what) == W_CBRANCH || \
-                        (what) == W_MEMORY)
+#include "connector_types.h"
 #include "core.h"
+#include "calls.h"
+#include "state.h"
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
@@ -331,7 +279,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
 static int restore(Instance* c, const State* s)
 {
     char buffer[256];
-    const char* problem = state_refusal(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, state_problem, buffer, sizeof buffer);
     if (problem == NULL && HAS_MEMORY) /* the memory's arrays sized for the state's */
         problem = allocate_memory(c, s->element.mem_len, buffer, sizeof buffer);
     if (problem != NULL) {
@@ -344,7 +292,7 @@ static int restore(Instance* c, const State* s)
 
 /* ------------------------------------------------------------------ stepping */
 
-/* the exit of initialization mode (core.h): the coefficients checked and handed over, the memory sized for its
+/* the exit of initialization mode (machine.h): the coefficients checked and handed over, the memory sized for its
  * parameters, the element moved from x = 0 to the first input (the PythonFMU ConnectorKind.start) */
 static const char* initialize(Instance* c, char* buffer, size_t size)
 {
@@ -390,7 +338,7 @@ static void follow_derivatives(Instance* c, double H)
     e->time = e->time + H;
 }
 
-/* a doStep (core.h): the input sample committed at the communication point (the master's clock only moves
+/* a doStep (machine.h): the input sample committed at the communication point (the master's clock only moves
  * forward), then, with the inputs' derivatives set, the motion along their polynomial to t + H (Connector.advance);
  * a sample whose outputs would not be numbers is rolled back (the inputs and their derivatives kept) */
 static int step(Instance* c, double t, double H)
@@ -420,7 +368,7 @@ static int step(Instance* c, double t, double H)
     move_to(&c->el, c->x_in, c->v_in, time);
     if (polynomial)
         follow_derivatives(c, H);
-    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    overflowed = unshowable_output(c, real_value, &value); /* no output is ever shown NaN or inf after an OK step */
     if (overflowed != NULL || !(isfinite(c->el.x) && isfinite(c->el.v))) {
         copy_element(&c->el, &c->saved);
         c->x_in = x_in;

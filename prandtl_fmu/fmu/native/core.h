@@ -7,33 +7,15 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
-/* The instance layer of the native FMU, written once for every kind (the element, element.h; its connector,
- * connector.h; a network and its connector, network.h): the state machine of initialization and stepping, the
- * refusals every kind makes in the same words, the outputs checked after a step, the memory's arrays of the
- * effects with memory and their place in an FMU state, the setters of the stepper and the noise's seed.
- *
- * A kind's header defines its Element (what a step changes), State (its FMU state's fixed part) and Instance,
- * includes this file, then supplies what it calls:
- *   initialize(c, buffer, size)   the exit of initialization mode: the settings handed over, the element reset;
- *                                 NULL, or why not (then nothing is started)
- *   started(c)                    what it says once started (its warnings)
- *   step(c, t, H)                 a doStep of the checked sequence and times: ST_OK, or ST_DISCARD with the
- *                                 reason logged and the state as it was
- *   real_value(c, var)            a Float64 variable's value
- *   fixed_problem(c, var, value)  a value set that a fixed parameter refuses: ST_ERROR with the refusal, or ST_OK
- * and STEP_OUTPUT(what): the outputs that must be numbers after a step; SETTABLE(what): the Real variables a master
- * sets; without noise (the element connector) KIND_INTEGERS: its own Integer setters. */
+/* The services of the instance layer, written once for every kind (the element, element.h; its connector,
+ * connector.h; a network and its connector, network.h) and called by them: an instance's start values, the setters of
+ * the stepper and the noise's seed, the memory's arrays of the effects with memory and their place in an FMU state,
+ * the first output a step leaves that is not a number. It reads the kind's types (kind.h: Element, State, Instance,
+ * the macros MEMORY_ARRAYS, STEP_OUTPUT, KIND_INTEGERS) and calls none of the kind's functions: what calls them is
+ * machine.h, above the kinds. */
 #ifndef PRANDTL_CORE_H
 #define PRANDTL_CORE_H
-
-/* ``field`` of ``from`` into ``to`` (a kind's SETTINGS, the element's checkpoint: any type, an array too) */
-#define COPY_FIELD(to, from, field) memcpy(&(to)->field, &(from)->field, sizeof (to)->field)
-
-static const char* initialize(Instance* c, char* buffer, size_t size);
-static void started(Instance* c);
-static int fixed_problem(Instance* c, const Var* var, double value);
-static int step(Instance* c, double t, double H);
-static double real_value(Instance* c, const Var* var);
+#include "kind.h"
 
 /* defaults(): what every instance starts from (the settings a master sets: each kind's own) */
 static void instantiated(Instance* c)
@@ -54,65 +36,16 @@ static void instantiated(Instance* c)
 #endif
 }
 
-/* a Float64/Real the master sets: one of SETTABLE, and what a fixed parameter allows (fixed_problem) */
-static int core_check_float(Instance* c, const Var* var, unsigned vr, double value)
-{
-    if (var == NULL || !SETTABLE(var->what)) {
-        say(c, ST_ERROR, FLOAT_SETTER " refused: value reference %u is not a Real input or parameter", vr);
-        return ST_ERROR;
-    }
-    return fixed_problem(c, var, value);
-}
-
-/* fmi2/3ExitInitializationMode (the FMI layer checked the call sequence) */
-static int core_exit_initialization(Instance* c)
-{
-    char buffer[1024];
-    const char* problem;
-    if (c->phase != INITIALIZING) {
-        say(c, ST_ERROR, FMI "ExitInitializationMode refused: not in initialization mode");
-        return ST_ERROR;
-    }
-    problem = initialize(c, buffer, sizeof buffer);
-    if (problem != NULL) {
-        say(c, ST_ERROR, "initialization refused: %s", problem);
-        return ST_ERROR;
-    }
-    c->initialized = 1;
-    c->phase = STEPPING;
-    started(c);
-    return ST_OK;
-}
-
-/* fmi2/3DoStep: one communication step from t of H (the FMI layer checked the call sequence) */
-static int core_do_step(Instance* c, double t, double H)
-{
-    int status;
-    if (c->phase != STEPPING) {
-        say(c, ST_ERROR, FMI "DoStep refused: not allowed before " FMI "ExitInitializationMode nor after " FMI
-            "Terminate");
-        return ST_ERROR;
-    }
-    if (!(isfinite(t) && isfinite(H) && H >= 0 && isfinite(t + H))) {
-        say(c, ST_ERROR, FMI "DoStep refused: the communication point %.17g and step %.17g must be finite, the step "
-            ">= 0 (and their sum finite)", t, H);
-        return ST_ERROR;
-    }
-    c->last_step_failed = 1;
-    status = step(c, t, H);
-    c->last_step_failed = status != ST_OK;
-    return status;
-}
-
-/* the first output (STEP_OUTPUT) that is not a number to show after a step, its value in ``value``, or NULL */
-static const Var* unshowable_output(Instance* c, double* value)
+/* the first output (STEP_OUTPUT) that is not a number to show after a step, its value (``value_of``: the kind's
+ * real_value) in ``value``, or NULL */
+static const Var* unshowable_output(Instance* c, double (*value_of)(Instance*, const Var*), double* value)
 {
     int i;
     for (i = 0; i < N_VARS; i++) {
         const Var* var = &VARS[i];
         if (!STEP_OUTPUT(var->what))
             continue;
-        *value = real_value(c, var);
+        *value = value_of(c, var);
         if (!showable(var, *value))
             return var;
     }
@@ -152,26 +85,6 @@ static void core_set_integer(Instance* c, const Var* var, int32_t value)
     (void)var;
     c->noise_set.seed = value;
     c->handed = 0;
-}
-
-static const char* hand_over_problem(Instance* c, char* buffer, size_t size);
-static void hand_over_settings(Instance* c);
-
-/* slave._apply_settings before a step: the settings set since the last one handed over (hand_over_settings),
- * or refused with the reason (a Discard: steps are refused until it is set right): 1, or 0 */
-static int settings_handed(Instance* c)
-{
-    char buffer[1024];
-    const char* problem;
-    if (c->handed)
-        return 1;
-    problem = hand_over_problem(c, buffer, sizeof buffer);
-    if (problem != NULL) {
-        say(c, ST_DISCARD, "%s; steps are refused until it is set right", problem);
-        return 0;
-    }
-    hand_over_settings(c);
-    return 1;
 }
 #endif
 
@@ -269,12 +182,6 @@ static int memory_at_instantiation(Instance* c)
     return problem == NULL;
 }
 
-/* the doubles an FMU state holds after its fixed part (state.h), or (size_t)-1 when its count is out of range */
-#define MEM_MAX ((int64_t)MEM_FIXED + (int64_t)DELAY_BOUND + DELAY_HEAD + 5)
-#define STATE_EXTRA(s) ((s)->element.mem_len >= 0 && (s)->element.mem_len <= MEM_MAX ? \
-                        (size_t)(s)->element.mem_len : (size_t)-1)
-#define INSTANCE_EXTRA(c) ((size_t)(c)->el.mem_len)
-
 /* why the memory of a state blob (its parameters in use and set, its values after the fixed part) cannot be
  * restored, or NULL (Element.set_state, Connector.set_state: memory.check_memory_state's rules, numbers only) */
 static const char* memory_state_problem(const State* s, char* buffer, size_t size)
@@ -309,42 +216,5 @@ static const char* stack_problem(const double* k, const double* u)
     return code != 0 ? STATE_CHECK_REASONS[code - 1] : NULL;
 }
 #endif
-
-/* an FMU state of the instance: what the master set (SETTINGS), and whether it was initialized (state.h puts the
- * element and its memory in it) */
-static void capture(const Instance* c, State* s)
-{
-    SETTINGS(s, c);
-    s->initialized = c->initialized;
-}
-
-/* a state checked (state_refusal) set into the instance: its element into the instance's own arrays
- * (memory.restore_memory: the cached values recomputed, never taken from a state), what the master set, handed over
- * at the next step (which redraws the same noise's path) */
-static void restore_checked(Instance* c, const State* s)
-{
-#if NETWORK
-    c->el = s->element;
-#else
-    double* mem = c->el.mem;
-    c->el = s->element;
-    c->el.mem = mem;
-    if (HAS_MEMORY) {
-        memcpy(mem, (const double*)(s + 1), (size_t)s->element.mem_len * sizeof(double));
-        forget_memory_cache(mem);
-    }
-#endif
-    SETTINGS(c, s);
-#ifdef FORGET_DERIVED
-    FORGET_DERIVED(c);
-#endif
-#if !KIND_INTEGERS
-    c->stepper[sizeof c->stepper - 1] = 0;
-    c->handed = 0;
-#endif
-}
-
-#include "calls.h"
-#include "state.h"
 
 #endif

@@ -28,100 +28,19 @@
  */
 #ifndef PRANDTL_ELEMENT_H
 #define PRANDTL_ELEMENT_H
-#include "common.h"
-
-typedef struct {
-    double p[N_PARAMS];   /* the coefficients in use */
-    double cs[NB_CS];    /* the series dashpots in use */
-    int stepper;          /* index into STEPPER_NAMES */
-    double h;
-    double x, v, u[NB_ARR];
-    int play;             /* FOLDS: the stack unfolded to the n elongations up (a stepper that does not take it) */
-    double up[NB_PLAY];
-    double kst[K_LEN];    /* FOLDS: the stack's parameters, referring to the elongations of the last fold */
-    double account[4], out[3], erow[6], initial_energy;
-    Clock clock;          /* time = origin + steps * grid (grid 0: none yet) */
-    double force;         /* the load of the last advance: force, plus the scene's [load] with scene_load */
-    int scene_load;
-    int row_stale;        /* erow is not the state's: an advance moved it (the row is computed when read: fresh_row) */
-    double mp[N_MEMP];    /* the effects with memory: their parameters in use (kernels.memory_layout) */
-    int64_t nd;           /* the delay's buffer: its values (memory.delay.size at the tau in use; 0: no delay) */
-    int64_t mem_len;      /* the memory's state: MEM_FIXED + nd values */
-    double* mem;          /* ... on the heap (NULL in a state blob: its values follow the blob's fixed part) */
-} Element;
-
-typedef struct {
-    STATE_HEAD;
-    Element element;
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int scene_load, stepper_valid, initialized;
-    char stepper[32];
-    double mpar[N_MEMP]; /* the memory's parameters the master set */
-    double dF[2];        /* F's derivatives the master set (fmi2SetRealInputDerivatives) */
-    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
-    uint64_t checksum;   /* of the fixed part and the memory's state, element.mem_len values after it */
-} State;
-/* the memory's arrays (core.h): the element's and the checkpoint's */
-#define MEMORY_ARRAYS(c) {&(c)->el.mem, &(c)->saved_mem}
-#define MEMORY_TAU(c) ((c)->el.mp[1])
-#define MEMORY_SIZED(c, length) ((c)->el.mem_len = (length))
-/* a state set: its energy row is computed again when read, never taken from the blob (core.h: restore_checked) */
-#define FORGET_DERIVED(c) ((c)->el.row_stale = 1)
-/* the outputs that must be numbers after a step (core.h) */
-#define STEP_OUTPUT(what) ((what) == W_X || (what) == W_V || (what) == W_REACTION || (what) == W_STIFFNESS || \
-                           (what) == W_ENERGY)
-#define KIND_INTEGERS 0
-/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
-#define SETTINGS(to, from)                                                                                     \
-    COPY_FIELD(to, from, F), COPY_FIELD(to, from, step), COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, par), \
-        COPY_FIELD(to, from, cbranch), COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid),   \
-        COPY_FIELD(to, from, stepper), COPY_FIELD(to, from, noise_set), COPY_FIELD(to, from, mpar),           \
-        COPY_FIELD(to, from, dF)
-#define SETTABLE(what) ((what) == W_F || (what) == W_PARAM || (what) == W_CBRANCH || (what) == W_STEP || \
-                        (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT || (what) == W_MEMORY)
+#include "element_types.h"
+#include "core.h"
+#include "calls.h"
+#include "state.h"
 
 /* what an advance changes (driver.Element.checkpoint): a step that fails is rolled back from it; the branches'
  * state is copied in its part in use only (the memory stack's pieces), into the instance's buffer */
-typedef struct {
-    double x, v, account[4], out[3], erow[6], force;
-    Clock clock;
-    int scene_load, row_stale;
-    size_t used;
-} Checkpoint;
-#define SAVED_U (NB_ARR > NB_PLAY ? NB_ARR : NB_PLAY)
 #define CHECKPOINTED(to, from)                                                                                 \
     COPY_FIELD(to, from, x), COPY_FIELD(to, from, v), COPY_FIELD(to, from, account), COPY_FIELD(to, from, out), \
         COPY_FIELD(to, from, erow), COPY_FIELD(to, from, clock), COPY_FIELD(to, from, force),                  \
         COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, row_stale)
 
-typedef struct {
-    INSTANCE_HEAD;
-    Element el;
-    /* what the master set */
-    double F, step, start_time, par[N_PARAMS], cbranch[NB_CS];
-    int scene_load, initialized;
-    char stepper[32];
-    int stepper_valid; /* the string fitted in the buffer */
-    Noise noise_set;   /* noise_intensity, noise_seed, noise_unit */
-    int handed;        /* the settings were handed over and nothing changed since */
-    Noise noise;       /* the white noise handed over (sigma 0: none), on the force of every advance */
-    int64_t noise_cache[NOISE_CACHE_SIZE]; /* the Brownian tree's cache: scratch, never in the state */
-    Checkpoint saved;  /* core_do_step's, on the heap with the instance (never a large copy on the host's stack) */
-    double saved_u[SAVED_U];
-    double mpar[N_MEMP]; /* the memory's parameters the master set (fixed: before initialization only) */
-    double dF[2];        /* F' and F'' the master set for the next doStep (fmi2SetRealInputDerivatives; 0: held) */
-    /* FMI 3.0 intermediate update: the master's callback (NULL: none), asked at every internal step for F (fmi3.c) */
-    void (*ask_inputs)(void* instance, double time, int first);
-    void (*intermediate_update)(void); /* (the callback itself, of FMI 3.0's type: fmi3.c) */
-    double* saved_mem;   /* the checkpoint's memory state (el.mem_len values) */
-    int memory_failed;   /* the memory's state could not be allocated at instantiation (the instance is refused) */
-    double limits[3];    /* |x|, |v|, |an account's entry| below which every output is surely a number ... */
-    int limit_play;      /* ... on the branches' kernel they were given for (el.play): note_limits */
-} Instance;
-
 /* ------------------------------------------------------------------ the element */
-
-static double element_time(const Element* e) { return clock_time(&e->clock); }
 
 static int damped(const Element* e) { return HAS_DAMPER && e->p[P_C] > 0.0; }
 
@@ -133,8 +52,6 @@ static double* kernel_u(Element* e) { return e->play ? e->up : e->u; }
 static double* memory_of(Element* e) { return e->mem != NULL ? e->mem : e->mp; } /* (no memory: never read) */
 #define BRANCHES(e) (e)->p, kernel_k(e), kernel_eta(e), (e)->cs, kernel_u(e), (e)->mp, memory_of(e), (e)->nd
 #define KERNEL(e, name) ((e)->play ? (damped(e) ? name##_cp : name##_np) : (damped(e) ? name##_c : name##_n))
-
-#include "core.h"
 
 static void record(Element* e, double t)
 {
@@ -573,7 +490,7 @@ static int restore(Instance* c, const State* s)
 {
     char buffer[256];
     Instance* trial; /* the settings of the state, checked as the master's are (on the heap: an instance is large) */
-    const char* problem = state_refusal(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, state_problem, buffer, sizeof buffer);
     if (problem == NULL && (trial = (Instance*)malloc(sizeof *trial)) == NULL)
         problem = "out of memory";
     else if (problem == NULL) {
@@ -655,7 +572,7 @@ static void warn_if_unstable(Instance* c)
         say(c, ST_WARNING, "%s", problem);
 }
 
-/* the exit of initialization mode (core.h): the settings checked and handed over, the element reset under F (plus
+/* the exit of initialization mode (machine.h): the settings checked and handed over, the element reset under F (plus
  * the scene's load at the start time with scene_load) and put at the start time */
 static const char* initialize(Instance* c, char* buffer, size_t size)
 {
@@ -838,23 +755,18 @@ static const char* advance_with_updates(Instance* c, double H, double* failed_at
  * for its compiled part; the rest of a doStep's time is what this layer adds */
 static int step(Instance* c, double t, double H)
 {
-    Load l;
-    if (!settings_handed(c))
-        return ST_DISCARD;
-    l = load_of(c->F, c->scene_load, &c->noise, c->noise_cache);
+    Load l = load_of(c->F, c->scene_load, &c->noise, c->noise_cache);
     return integrate(&c->el, &l, t, 0, H, 1) == 1 ? ST_OK : ST_DISCARD;
 }
 #else
-/* a doStep (core.h; slave.do_step): the settings handed over, the element checkpointed, put at t and advanced by H
- * under F; a step that fails or would show an output that is not a number is rolled back */
+/* a doStep (machine.h, the settings handed over; slave.do_step): the element checkpointed, put at t and advanced by
+ * H under F; a step that fails or would show an output that is not a number is rolled back */
 static int step(Instance* c, double t, double H)
 {
     char buffer[512];
     const char* problem;
     const Var* overflowed;
     double failed_at, value;
-    if (!settings_handed(c))
-        return ST_DISCARD;
     if (!isfinite(c->F)) {
         say(c, ST_DISCARD, "F = %.17g refused: the force must be finite; step not taken", c->F);
         return ST_DISCARD;
@@ -885,7 +797,7 @@ static int step(Instance* c, double t, double H)
         return ST_DISCARD;
     }
     /* no output is ever shown NaN or inf after an OK step */
-    overflowed = surely_showable(c) ? NULL : unshowable_output(c, &value);
+    overflowed = surely_showable(c) ? NULL : unshowable_output(c, real_value, &value);
     if (overflowed != NULL) {
         double time = element_time(&c->el);
         rollback(c);
@@ -898,7 +810,7 @@ static int step(Instance* c, double t, double H)
 }
 #endif
 
-/* the fixed parameters (core.h): x0 and v0 (the initial state), an effect with memory's */
+/* the fixed parameters (machine.h): x0 and v0 (the initial state), an effect with memory's */
 static int fixed_problem(Instance* c, const Var* var, double value)
 {
     if (c->phase == INTERMEDIATE_UPDATE && var->what != W_F) { /* only F is intermediateUpdate="true" */

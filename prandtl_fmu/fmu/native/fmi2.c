@@ -7,8 +7,8 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
-/* The native FMU's FMI 2.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
- * connector.h, network.h): FMI 2.0's types and names, and what FMI 2.0 alone has (its statuses); what both versions
+/* The native FMU's FMI 2.0 co-simulation front over the instance layer of its kind (machine.h over element.h,
+ * connector.h or network.h): FMI 2.0's types and names, and what FMI 2.0 alone has (its statuses); what both versions
  * do alike is front.h's (the checks of a call: BEGIN, CHECKED). */
 #include "fmi2Functions.h"
 #define FMI "fmi2"
@@ -18,18 +18,11 @@
 #define STEPPING_NAME "stepComplete"
 #define DESERIALIZE "fmi2DeSerializeFMUstate"
 #include "scene.h"
-#if NETWORK
-#include "network.h"
-#elif CONNECTOR
-#include "connector.h"
-#else
-#include "element.h"
-#endif
 typedef fmi2Component FmiInstance; /* the version's types of front.h */
 typedef fmi2Status FmiStatus;
 typedef fmi2FMUstate FmiState;
 typedef fmi2Byte FmiByte;
-#include "front.h"
+#include "front.h" /* over machine.h, over the kind scene.h names: element.h, connector.h or network.h */
 #ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
 #define FMU_TIME(c) element_time(&(c)->el)
 #endif
@@ -57,7 +50,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
                               const fmi2CallbackFunctions* functions, fmi2Boolean visible, fmi2Boolean logging)
 {
     Instance* c = functions != NULL ? instance_new(name, functions->componentEnvironment,
-                                                   (void*)functions->logger, logging) : NULL;
+                                                   (void*)functions->logger, emit, logging) : NULL;
     if (c == NULL)
         return NULL;
     if (type != fmi2CoSimulation)

@@ -7,8 +7,8 @@
  * drivers do in Python around their kernels, in their order of operations: the clock (time = origin + steps * grid,
  * a duration split into whole steps) and the energy account's residual (work - dissipated - the change of kinetic
  * and stored energy). tests/fmu/native/test_refusals.py checks the refusals against the library's. */
-/* The native FMU's FMI 3.0 co-simulation front over the one instance layer (core.h) of its kind (element.h,
- * connector.h, network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
+/* The native FMU's FMI 3.0 co-simulation front over the instance layer of its kind (machine.h over element.h,
+ * connector.h or network.h; what both versions do alike: front.h): the scalars of the FMI 2.0 FMU (Float64 for Real,
  * each under its 1-based position in ModelVariables as its value reference) and the branch elongations as the
  * scalars u_1 .. u_n (VR_U_FIRST + i - 1), which every master reads; built with arrays (ARRAYS), also the array u of
  * n Float64 (VR_U), sized by the structural parameter n (UInt64, fixed). The functions of model exchange, scheduled
@@ -21,18 +21,11 @@
 #define STEPPING_NAME "step mode"
 #define DESERIALIZE "fmi3DeserializeFMUState"
 #include "scene.h"
-#if NETWORK
-#include "network.h"
-#elif CONNECTOR
-#include "connector.h"
-#else
-#include "element.h"
-#endif
 typedef fmi3Instance FmiInstance; /* the version's types of front.h */
 typedef fmi3Status FmiStatus;
 typedef fmi3FMUState FmiState;
 typedef fmi3Byte FmiByte;
-#include "front.h"
+#include "front.h" /* over machine.h, over the kind scene.h names: element.h, connector.h or network.h */
 #ifndef FMU_TIME /* the instance's time: its element's (a network connector's: its communication point) */
 #define FMU_TIME(c) element_time(&(c)->el)
 #endif
@@ -96,7 +89,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3
                                          fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
                                          fmi3IntermediateUpdateCallback update)
 {
-    Instance* c = instance_new(name, env, (void*)logger, logging);
+    Instance* c = instance_new(name, env, (void*)logger, emit, logging);
     if (c == NULL)
         return NULL;
     if (token == NULL || strcmp(token, GUID) != 0)

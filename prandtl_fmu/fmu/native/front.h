@@ -13,6 +13,7 @@
  * version's function (FMI: "fmi2", "fmi3"). Glue only. */
 #ifndef PRANDTL_FRONT_H
 #define PRANDTL_FRONT_H
+#include "machine.h"
 
 /* Every function first checks its instance (NULL: Error, nothing logged: there is no logger) and the call sequence
  * (calls.h: allowed in the phases of ``mask``, the version's state machine for co-simulation); its pointers are
@@ -32,7 +33,7 @@
         return (FmiStatus)(call);                                                                              \
     }
 
-/* the six functions of the FMU state (state.h), alike in both versions but for their names */
+/* the six functions of the FMU state (machine.h), alike in both versions but for their names */
 #define STATE_FUNCTIONS(get, set, release, size_of, serialize, deserialize)                                    \
     FmiStatus get(FmiInstance instance, FmiState* state) CHECKED(get, ANY_PHASE, core_get_state(c, state))    \
     FmiStatus set(FmiInstance instance, FmiState state) CHECKED(set, ANY_PHASE, core_set_state(c, state))     \
@@ -52,15 +53,16 @@ static int phase_to(Instance* c, int phase)
     return ST_OK;
 }
 
-/* a new instance for the host's environment and logger (not yet started: instance_started), or NULL (out of
- * memory) */
-static Instance* instance_new(const char* name, void* env, void* logger, int logging)
+/* a new instance for the host's environment and logger, which ``emit`` calls (the FMI version's: not yet started,
+ * instance_started), or NULL (out of memory) */
+static Instance* instance_new(const char* name, void* env, void* logger, Emit emit, int logging)
 {
     Instance* c = (Instance*)calloc(1, sizeof(Instance));
     if (c == NULL)
         return NULL;
     c->env = env;
     c->logger = logger;
+    c->emit = emit;
     c->name = strdup(name ? name : "");
     c->logging = logging ? 1 : 0;
     if (c->name == NULL) {

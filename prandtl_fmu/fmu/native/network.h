@@ -24,80 +24,18 @@
  */
 #ifndef PRANDTL_NETWORK_H
 #define PRANDTL_NETWORK_H
-#include "common.h"
+#include "network_types.h"
+#include "core.h"
+#include "calls.h"
+#include "state.h"
 
-/* the network in use and its state (driver.NetworkElement's model, x, v, u, piece, account, dissipated, ...) */
-typedef struct {
-    double mass[NN], coef[3 * NE_ARR]; /* the coefficients in use: (a, eta, c) per element */
-    int stepper;                        /* index into STEPPER_NAMES */
-    double h;
-    double x[NN], v[NN], u[NE_ARR];
-    int64_t piece[NE_ARR];
-    double account[3];                  /* the work of the load, dissipated by sliders, by dashpots */
-    double dissipated[NE_ARR], reaction, initial_energy;
-    Clock clock;                        /* time = origin + steps * grid (grid 0: none yet) */
-    double force;        /* the load of the last advance (plus the scene's [load] with scene_load); CONNECTOR: the
-                            force of the elements on the load's node (NetworkConnector.force) */
-    int scene_load;
-} Element;
-
-/* the workspace of a step (kernels.workspace's arrays): scratch, not state */
-typedef struct {
-    double d[NN], grad[NN], p[NN], term[NE_ARR], subtree[NN + 1], scale[NN];
-    int64_t parent[NN + 1], cluster[NN + 1], queue[NN + 1], degree[NN + 1], links[NN + 1];
-    double out[2 * NN + 2];
-} Work;
+/* a step's workspace (Work) and the network in use (Element) as the kernels take them */
 #define WORK(w) (w)->d, (w)->grad, (w)->p, (w)->parent, (w)->cluster, (w)->term, (w)->subtree, (w)->queue, \
                 (w)->degree, (w)->links, (w)->scale
 #define NET(e) (e)->mass, (e)->coef, (int64_t*)KIND, (int64_t*)ENDS, (int64_t)LOAD_NODE, (int64_t)HAS_CUBIC
 
-typedef struct {
-    STATE_HEAD;
-    Element element;
-    double F, x_in, v_in, step, start_time, time, par[N_PARAMS];
-    int scene_load, stepper_valid, initialized;
-    char stepper[32];
-    Noise noise_set;   /* the white noise's settings (nothing drawn: the path is a function of seed and time) */
-    uint64_t checksum;
-} State;
-
-typedef struct {
-    INSTANCE_HEAD;
-    Element el;
-    /* what the master set */
-    double F, x_in, v_in, step, start_time, par[N_PARAMS];
-    double time;       /* CONNECTOR: the communication point, the time of the inputs set now */
-    int scene_load, initialized;
-    char stepper[32];
-    int stepper_valid; /* the string fitted in the buffer */
-    Noise noise_set;   /* noise_intensity, noise_seed, noise_unit (the element; the connector has none) */
-    int handed;        /* the settings were handed over and nothing changed since */
-    Noise noise;       /* the white noise handed over (sigma 0: none), on the load's node at every advance */
-    int64_t noise_cache[NOISE_CACHE_SIZE]; /* the Brownian tree's cache: scratch, never in the state */
-    Element saved;     /* core_do_step's checkpoint */
-    Element preview;   /* CONNECTOR: the outputs' state: the committed one moved to the inputs set now */
-    int preview_state; /* 0: to compute, 1: computed, -1: the move failed (no outputs) */
-    char why[512];     /* why the preview's move failed */
-    Work work;
-} Instance;
-
-static double element_time(const Element* e) { return clock_time(&e->clock); }
-
 /* the FMU's time: the network's; the connector's communication point (its outputs are the network there) */
 #define FMU_TIME(c) (CONNECTOR ? (c)->time : element_time(&(c)->el))
-/* the outputs that must be numbers after a step (core.h) */
-#define STEP_OUTPUT(what) ((what) == W_X || (what) == W_V || (what) == W_REACTION || (what) == W_ENERGY || \
-                           (what) == W_DISSIPATED || (what) == W_U)
-#define KIND_INTEGERS 0
-/* what the master set, kept in an FMU state (core.h: capture, restore_checked) */
-#define SETTINGS(to, from)                                                                                     \
-    COPY_FIELD(to, from, F), COPY_FIELD(to, from, x_in), COPY_FIELD(to, from, v_in), COPY_FIELD(to, from, step), \
-        COPY_FIELD(to, from, start_time), COPY_FIELD(to, from, time), COPY_FIELD(to, from, par),               \
-        COPY_FIELD(to, from, scene_load), COPY_FIELD(to, from, stepper_valid), COPY_FIELD(to, from, stepper),  \
-        COPY_FIELD(to, from, noise_set)
-#define SETTABLE(what) ((what) == W_F || (what) == W_XIN || (what) == W_VIN || (what) == W_PARAM || \
-                        (what) == W_STEP || (what) == W_NOISE_INTENSITY || (what) == W_NOISE_UNIT)
-#include "core.h"
 
 /* ------------------------------------------------------------------ the library's rules (network/model.py) */
 
@@ -599,7 +537,7 @@ static const char* state_problem(const State* s, char* buffer, size_t size)
 static int restore(Instance* c, const State* s)
 {
     char buffer[512];
-    const char* problem = state_refusal(s, buffer, sizeof buffer);
+    const char* problem = state_refusal(s, state_problem, buffer, sizeof buffer);
     if (problem != NULL) {
         say(c, ST_ERROR, "FMU state refused (%s); the instance is unchanged", problem);
         return ST_ERROR;
@@ -612,7 +550,7 @@ static int restore(Instance* c, const State* s)
 
 /* ------------------------------------------------------------------ stepping */
 
-/* the exit of initialization mode (core.h): the settings checked and handed over, the network reset (the
+/* the exit of initialization mode (machine.h): the settings checked and handed over, the network reset (the
  * connector: moved to the first input) */
 static const char* initialize(Instance* c, char* buffer, size_t size)
 {
@@ -656,8 +594,8 @@ static void started(Instance* c)
 
 static void hand_over_settings(Instance* c) { hand_over(c); }
 
-/* a doStep (core.h): the settings handed over; the connector's input sample committed at the communication point
- * (the clock only goes on), the element checkpointed, put at t and advanced by H under F; a step that fails or
+/* a doStep (machine.h, the settings handed over): the connector's input sample committed at the communication
+ * point (the clock only goes on), the element checkpointed, put at t and advanced by H under F; a step that fails or
  * would show an output that is not a number is rolled back */
 static int step(Instance* c, double t, double H)
 {
@@ -665,8 +603,6 @@ static int step(Instance* c, double t, double H)
     const char* problem;
     const Var* overflowed;
     double value;
-    if (!settings_handed(c))
-        return ST_DISCARD;
     if (!(isfinite(c->F) && isfinite(c->x_in) && isfinite(c->v_in))) {
         say(c, ST_DISCARD, "the inputs must be finite (%s = %.17g, %.17g); step not taken", CONNECTOR ? "x, v" : "F",
             CONNECTOR ? c->x_in : c->F, CONNECTOR ? c->v_in : c->F);
@@ -696,7 +632,7 @@ static int step(Instance* c, double t, double H)
         say(c, ST_DISCARD, "step from t = %.17g refused: %s; the state is unchanged", t, problem);
         return ST_DISCARD;
     }
-    overflowed = unshowable_output(c, &value); /* no output is ever shown NaN or inf after an OK step */
+    overflowed = unshowable_output(c, real_value, &value); /* no output is ever shown NaN or inf after an OK step */
     if (overflowed != NULL) {
         double time = element_time(&c->el);
         c->el = c->saved;
