@@ -1,11 +1,17 @@
 """Stability of a periodic state: Floquet multipliers from the monodromy of one period.
 
-The choice: the monodromy matrix by finite differences, each column one period integrated with the project's
+Where every node has a mass and there is no series dashpot and no effect with memory, the monodromy comes from
+the variational equation along the balance's orbit (``variational.py``, :func:`variational_monodromy`): exact
+for the sampled orbit, a hundredth of the cost of what follows, so every point of a curve gets its multipliers.
+
+Elsewhere: the monodromy matrix by finite differences, each column one period integrated with the project's
 own ``implicit`` network stepper (``network/kernels.py``: an exact active-set method for the branches, backward
-Euler in time) from the harmonic balance's state at t = 0 with x or v of one node with a mass perturbed, the
-orbit's own period integrated beside it; Phi[:, k] = (state(T) perturbed - state(T)) / epsilon over the x and v
-of the nodes with a mass (a massless node follows them; a branch's elongation u is carried from the orbit's,
-u at t = 0 from the sampled cycle of ``aft.py``). Why not Hill's method: its eigenvalues come from the Jacobian
+Euler in time) from the harmonic balance's state at t = 0 with one component perturbed, the orbit's own period
+integrated beside it; Phi[:, k] = (state(T) perturbed - state(T)) / epsilon over the state: the x and v of the
+nodes with a mass (a massless node follows them) and the u of the branches that slide on the orbit (and of
+those with series dashpots), u at t = 0 from the sampled cycle of ``aft.py``. A branch that never slides keeps
+any offset (a neutral multiplier 1, the family of stuck positions): its u is no state of its own but moves with
+x when x is perturbed (the invariant subspace du = dx_p - dx_q). Why not Hill's method: its eigenvalues come from the Jacobian
 of the harmonic balance, whose truncation puts spurious eigenvalues beside the true ones, and with the kinks of
 slipping branches the sorting of the physical ones is not reliable; the monodromy sees the slips and sticks as
 they happen (the perturbed runs cross the same events a little earlier or later).
@@ -86,8 +92,9 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
 
 
 def variational_monodromy(balance, q_free, omega) -> np.ndarray:
-    """The monodromy (2 n, 2 n) over (x, v) of the orbit of ``balance`` at ``omega`` from its variational equation
-    (``variational.py``), on the balance's N samples."""
+    """The monodromy over x, v and the u of the branches that slide on the orbit of ``balance`` at ``omega``
+    (a stuck branch's u moves with x: ``variational.py``), from its variational equation on the balance's N
+    samples."""
     from .variational import monodromy
 
     system = balance.system
@@ -101,12 +108,22 @@ def variational_monodromy(balance, q_free, omega) -> np.ndarray:
         return np.array([values[p] - (values[q] if q >= 0 else 0.0) for p, q in ends.tolist()]).reshape(
             len(ends), values.shape[1])
 
-    out = np.empty((2 * system.n, 2 * system.n))
+    n, nb = system.n, system.branch_k.shape[0]
+    e = relative(x, system.branch_ends)
+    sliding = np.flatnonzero(np.ptp(e, axis=1) > 2.0 * system.branch_eta) if nb else np.zeros(0, dtype=np.int64)
+    # the columns: unit x and v, a stuck branch's u moving with x (du = B dx); unit u of each sliding branch
+    z = np.zeros((2 * n + nb, 2 * n + sliding.size))
+    z[np.arange(2 * n), np.arange(2 * n)] = 1.0
+    for b, (p, r) in enumerate(system.branch_ends.tolist()):
+        if b not in sliding:
+            z[2 * n + b, p] = 1.0
+            if r >= 0:
+                z[2 * n + b, r] = -1.0
+    z[2 * n + sliding, 2 * n + np.arange(sliding.size)] = 1.0
     monodromy(2.0 * math.pi / omega, balance.N, 1.0 / system.mass, system.damping, system.stiffness,
               system.cubic_ends, system.cubic_k3, relative(x, system.cubic_ends), system.branch_ends,
-              system.branch_k, system.branch_eta, relative(x, system.branch_ends),
-              relative(v, system.branch_ends), balance.elongations.copy(), out)
-    return out
+              system.branch_k, system.branch_eta, e, relative(v, system.branch_ends), balance.elongations.copy(), z)
+    return z[np.concatenate((np.arange(2 * n), 2 * n + sliding))]
 
 
 def is_stable(values: np.ndarray) -> bool:
@@ -180,6 +197,9 @@ def _memory_period(balance, q_free, omega, steps):
     x0, v0, u_network = orbit_start(balance, q_free, omega)
     branches = [i for i, e in enumerate(system.network.elements) if e.kind == "branch"]
     u0 = u_network[branches].copy() if branches else None
+    stuck_network, sliding_network = _branch_states(balance, q_free)  # a stuck branch's u moves with x
+    stuck = np.array([branches.index(i) for i in stuck_network], dtype=np.int64)
+    sliding = np.array([branches.index(i) for i in sliding_network.tolist()], dtype=np.int64)
     coefficients = balance.full(q_free).reshape(system.n, balance.L)[memory.node]
     D = balance.derivative
 
@@ -215,6 +235,10 @@ def _memory_period(balance, q_free, omega, steps):
         y_size = size * (omega if delay.acts_on == "v" else 1.0)
         state.extend(orbit_buffer[-extra:].tolist())
         scales.extend([PERTURBATION * y_size] * extra)
+    if u0 is not None:  # the sliding branches' u last
+        at_u = len(state)
+        state.extend(u0[sliding].tolist())
+        scales.extend([PERTURBATION * size] * sliding.size)
     state, scales = np.array(state, dtype=float), np.array(scales)
     n_history = 0 if history is None else len(history.rate)
     out = np.empty((steps, 3))
@@ -222,6 +246,9 @@ def _memory_period(balance, q_free, omega, steps):
     def run(values):
         x, v = float(values[0]), float(values[1])
         u = None if u0 is None else u0.copy()
+        if u is not None:
+            u[stuck] += x - state[0]
+            u[sliding] = values[at_u:at_u + sliding.size]
         at_state = 2
         if history_part is not None:
             (n, _), data = history_part
@@ -233,7 +260,7 @@ def _memory_period(balance, q_free, omega, steps):
         if delay_part is not None:
             buffer = delay_part[1]
             ring = np.array(orbit_buffer)
-            ring[-extra:] = values[at_state:]
+            ring[-extra:] = values[at_state:at_state + extra]
             buffer[0] = first_step
             buffer[1] = ring[0]
             buffer[HEAD + grid % capacity] = ring
@@ -251,44 +278,74 @@ def _memory_period(balance, q_free, omega, steps):
             buffer = delay_part[1]
             end = first_step + steps
             result.extend(buffer[HEAD + np.arange(end - extra + 1, end + 1) % capacity].tolist())
+        if u is not None:
+            result.extend(u[sliding].tolist())
         return np.array(result)
 
     return run, state, scales
 
 
 def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
+    """The monodromy over x and v of the nodes with a mass and the u of the branches that slide on the orbit (and of
+    the branches with series dashpots), by finite differences: each perturbed in turn, a stuck branch's u moved
+    with x (see ``variational.py``: its offset is neutral), one period each; in the coordinates (x, v / omega, u)."""
     system = balance.system
     x, v, u = orbit_start(balance, q_free, omega)
-    run_period = (_forced_period if balance.base_amplitude is None else _based_period)(balance, omega, steps, u)
+    run_period = (_forced_period if balance.base_amplitude is None else _based_period)(balance, omega, steps)
     massive = system.massive
+    stuck, states = _branch_states(balance, q_free)
     size = max(float(np.max(np.abs(x))), float(np.max(np.abs(v))) / omega, 1e-300)
     epsilon = PERTURBATION * size
-    base = run_period(x, v)
+    elements = system.network.elements
+
+    def state_of(x_end, v_end, u_end):
+        return np.concatenate((x_end[massive], v_end[massive], u_end[states]))
+
+    base = state_of(*run_period(x, v, u))
     count = len(massive)
     columns = []
-    for k in range(2 * count):
-        dx, dv = np.zeros(system.n), np.zeros(system.n)
+    for k in range(2 * count + len(states)):
+        dx, dv, du = np.zeros(system.n), np.zeros(system.n), np.zeros(u.shape[0])
         if k < count:
             dx[massive[k]] = epsilon
-        else:
+        elif k < 2 * count:
             dv[massive[k - count]] = epsilon * omega
-        columns.append((run_period(x + dx, v + dv) - base) / epsilon)
-    rows = np.concatenate((np.ones(count), np.full(count, omega)))
-    return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega): dimensionless
+        else:
+            du[states[k - 2 * count]] = epsilon
+        for b in stuck:
+            p, r = elements[b].between
+            du[b] += dx[p] - (dx[r] if r >= 0 else 0.0)
+        columns.append((state_of(*run_period(x + dx, v + dv, u + du)) - base) / epsilon)
+    rows = np.concatenate((np.ones(count), np.full(count, omega), np.ones(len(states))))
+    return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega, u): dimensionless
 
 
-def _forced_period(balance, omega, steps, u):
-    """One period of ``steps`` implicit steps under the force at the load's node, from (x, v) and the branches'
-    ``u`` at t = 0: a function of (x, v) giving (x, v) of the nodes with a mass at t = T."""
+def _branch_states(balance, q_free) -> tuple:
+    """``(stuck, states)``: the network indices of the plain branches that never slide on the orbit (max e - min e
+    <= 2 eta over its samples), and of the branches whose u is a state of the monodromy (the others, and those with
+    series dashpots)."""
+    system = balance.system
+    x = balance.samples(balance.full(q_free))
+    stuck, states = [], []
+    for b, ((p, r), eta) in enumerate(zip(system.branch_ends.tolist(), system.branch_eta.tolist())):
+        e = x[p] - (x[r] if r >= 0 else 0.0)
+        (stuck if np.ptp(e) <= 2.0 * eta else states).append(int(system.branch_index[b]))
+    for group in system.series:
+        states.extend(int(i) for i in group.index)
+    return stuck, np.array(states, dtype=np.int64)
+
+
+def _forced_period(balance, omega, steps):
+    """One period of ``steps`` implicit steps under the force at the load's node: a function of (x, v, u) at t = 0
+    (every node's, every element's) giving the same at t = T."""
     from ..network.driver import NetworkElement
     from ..scene_tables import Solver
 
     period = 2.0 * math.pi / omega
     h = period / steps
     element = NetworkElement(forced_scene(balance, omega, Solver("implicit", h, period, h)), "implicit", h)
-    massive = balance.system.massive
 
-    def run(x, v):
+    def run(x, v, u):
         element.reset()
         element.x[:] = x
         element.v[:] = v
@@ -296,12 +353,12 @@ def _forced_period(balance, omega, steps, u):
         element.piece[:] = 0
         element.time = 0.0
         element.advance(period, 0.0, scene_load=True)
-        return np.concatenate((element.x[massive], element.v[massive]))
+        return element.x.copy(), element.v.copy(), element.u.copy()
 
     return run
 
 
-def _based_period(balance, omega, steps, u):
+def _based_period(balance, omega, steps):
     """:func:`_forced_period` under base excitation: in absolute coordinates, the ground a massless node whose
     motion y = Y0 cos(omega t) is imposed step by step (the connector's kernel: each step moves it to y at the
     step's end), every element to the ground attached to it (it sees x_j - y = z_j, as in the balance). The state
@@ -323,7 +380,7 @@ def _based_period(balance, omega, steps, u):
     work = kernels.workspace(base + 1, len(elements))
     account, dissipated = np.zeros(3), np.zeros(len(elements))  # as the connector passes them (one compile)
 
-    def run(x, v):
+    def run(x, v, u):
         x_all = np.append(x, 0.0) + Y0  # y(0) = Y0, y'(0) = 0
         v_all = np.append(v, 0.0)
         u_all = np.array(u, dtype=float)
@@ -336,7 +393,7 @@ def _based_period(balance, omega, steps, u):
 
                 raise ElementError(f"{system.source}: a step of the stability check failed at f = "
                                    f"{omega / (2 * math.pi)!r} Hz")
-        return np.concatenate((x_all[massive] - Y0, v_all[massive]))  # y(T) = Y0, y'(T) = 0
+        return x_all[:base] - Y0, v_all[:base], u_all  # y(T) = Y0, y'(T) = 0
 
     return run
 

@@ -14,8 +14,11 @@ continuous there (v = 0). The orbit is the balance's: x and v from its harmonics
 (linear between samples), u from the same play operator on the samples, the switches located inside each
 sample interval (a threshold where the sampled elongation reaches it, a turn where the velocity changes sign).
 The equation is integrated with the classical Runge-Kutta method of order 4, SUBSTEPS steps per sample interval
-cut at the switches, from du = 0 and each unit dx, dv in turn: Phi, the monodromy over the x and v of the nodes
-(the same restriction as the finite differences of ``floquet.py``, whose u at t = 0 is the orbit's).
+cut at the switches, from each unit perturbation in turn: Phi, the monodromy over the state (x, v, u). A branch
+that never slides on the orbit keeps any offset: du - B dx is constant for it, a multiplier 1 whatever the
+motion does (the family of stuck positions, neutral). Its u is therefore not a state of its own: a perturbation
+moves it with x (du = B dx, the invariant subspace du - B dx = 0), and Phi is taken over x, v and the u of the
+branches that slide (``floquet.variational_monodromy``).
 
 Its error: that of the orbit's samples (the switch instants within O(h^2) of the sampled model's) and RK4's
 O((omega_n h)^4) per step; no backward Euler's damping to extrapolate away, and one pass instead of
@@ -99,18 +102,16 @@ def _advance(z, duration, start, h, inverse_mass, C, K, cubic_ends, cubic_k3, cu
 
 @kernel
 def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_samples, branch_ends, branch_k,
-              branch_eta, e, velocity, u0, out):
-    """out (2 n, 2 n): the monodromy over (x, v) (see the module) of one period of ``samples`` intervals; ``e``
-    and ``velocity`` (nb, samples): the branches' elongations and their rates at the samples; ``u0`` (nb,): u at
-    sample 0; ``cubic_samples`` (nc, samples): the cubic springs' elongations."""
+              branch_eta, e, velocity, u0, z):
+    """z (2 n + nb, columns), in place: the perturbations (x, v, u) at t = 0 in, at t = T out (see the module),
+    over one period of ``samples`` intervals; ``e`` and ``velocity`` (nb, samples): the branches' elongations and
+    their rates at the samples; ``u0`` (nb,): u at sample 0; ``cubic_samples`` (nc, samples): the cubic springs'
+    elongations."""
     n = inverse_mass.shape[0]
     nb = branch_k.shape[0]
     h = period / samples
     dim = 2 * n + nb
-    z = np.zeros((dim, 2 * n))
-    for i in range(2 * n):
-        z[i, i] = 1.0
-    stages = np.zeros((5, dim, 2 * n))
+    stages = np.zeros((5, dim, z.shape[1]))
     cubic_e = np.zeros(cubic_k3.shape[0])
     u = u0.copy()
     sticking = np.ones(nb, dtype=np.int64)
@@ -145,7 +146,7 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
                 break
             if sticking[which]:  # reaches its threshold: slides, its perturbation lost
                 sticking[which] = 0
-                for col in range(2 * n):
+                for col in range(z.shape[1]):
                     z[2 * n + which, col] = 0.0
             else:  # turns: sticks from du = 0 (it was 0 while it slid)
                 sticking[which] = 1
@@ -159,9 +160,6 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
                 moved = -branch_eta[b]
             u[b] = moved
         _resynchronise(u, velocity, branch_eta, nxt, sticking, z, n)
-    for i in range(2 * n):
-        for col in range(2 * n):
-            out[i, col] = z[i, col]
 
 
 @kernel

@@ -389,3 +389,70 @@ def test_a_network_joint_with_a_series_dashpot_keeps_its_orbit_when_integrated(t
         amplitude = abs(complex(balance.full(q)[1], -balance.full(q)[2]))
         after = _first_harmonic_after(balance, q, omega, 30)
         assert abs(after - amplitude) <= 2e-3 * amplitude, (frequency, after, amplitude)
+
+
+def _full_finite_monodromy(balance, q, omega, steps):
+    """The monodromy over (x, v, u) of the element (one node, its branches to the ground), by central finite
+    differences of one period of the network's implicit stepper at ``steps`` steps, written out here: each of x,
+    v and every branch's u perturbed in turn (no state left out, none moved with another)."""
+    from prandtl_fmu.frequency.floquet import orbit_start, run_periods
+
+    x, v, u = orbit_start(balance, q, omega)
+    branches = np.flatnonzero([e.kind == "branch" for e in balance.system.network.elements])
+    start = np.concatenate((x, v, u[branches]))
+    scale = 1e-7
+
+    def period(state):
+        u_all = u.copy()
+        u_all[branches] = state[2:]
+        _, (x_end, v_end, u_end) = run_periods(balance, omega, (state[:1], state[1:2], u_all), 1, steps)
+        return np.concatenate((x_end, v_end, u_end[branches]))
+
+    columns = []
+    for k in range(start.size):
+        delta = np.zeros(start.size)
+        delta[k] = scale
+        columns.append((period(start + delta) - period(start - delta)) / (2 * scale))
+    return np.array(columns).T
+
+
+def test_the_variational_monodromy_of_a_stuck_branch_is_the_linear_oscillator_s():
+    """floquet.variational_monodromy (every point's multipliers where the nodes all have a mass): on the friction
+    damper under a force too small to slip its branch, the linear oscillator's exp(A T) (A of m, k0 + k, c: its
+    eigenvalues to 1e-9; the stuck branch's neutral offset left out, its u moving with x)."""
+    from scipy.linalg import expm
+
+    from prandtl_fmu.frequency import floquet
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    system = periodic_system(element(DAMPER))
+    assert floquet.variational(system)
+    omega = 2 * math.pi * 0.2
+    stuck = HarmonicBalance(system, 5, 0.01)  # |x| ~ 0.01 / |2 - omega^2|: the branch never reaches 0.1
+    q = stuck.solve_at(omega)
+    A = np.array([[0.0, 1.0], [-2.0, -0.02]])
+    wanted = np.sort_complex(np.linalg.eigvals(expm(A * 2 * math.pi / omega)))
+    got = np.sort_complex(np.linalg.eigvals(floquet.variational_monodromy(stuck, q, omega)))
+    assert np.max(np.abs(got - wanted)) <= 1e-9, (got, wanted)
+
+
+@pytest.mark.slow
+def test_the_variational_monodromy_of_a_sliding_branch_is_the_full_finite_differences():
+    """Under a force that slips the friction damper's branch: the eigenvalues of floquet.variational_monodromy
+    against those of the monodromy over (x, v, u) by finite differences of the implicit stepper written in the
+    test, at 2048 and 4096 steps extrapolated (backward Euler, first order), to 5e-3; and the module's own finite
+    differences (``_monodromy``, the path of the scenes the variational equation does not take) agree too."""
+    from prandtl_fmu.frequency import floquet
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    system = periodic_system(element(DAMPER))
+    omega = 2 * math.pi * 0.2
+    slipping = HarmonicBalance(system, 7, 0.3)
+    q = slipping.solve_at(omega)
+    assert np.ptp(slipping.samples(slipping.full(q))[0]) > 0.2  # the branch slides
+    got = np.sort(np.abs(np.linalg.eigvals(floquet.variational_monodromy(slipping, q, omega))))
+    coarse, fine = (_full_finite_monodromy(slipping, q, omega, steps) for steps in (2048, 4096))
+    finite = np.sort(np.abs(np.linalg.eigvals(2.0 * fine - coarse)))
+    assert got == pytest.approx(finite, abs=5e-3), (got, finite)
+    coarse, fine = (floquet._monodromy(slipping, q, omega, steps) for steps in (1024, 2048))
+    assert np.sort(np.abs(np.linalg.eigvals(2.0 * fine - coarse))) == pytest.approx(got, abs=5e-3)
