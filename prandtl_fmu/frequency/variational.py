@@ -13,7 +13,7 @@ that stops sliding (slip to stick, where its elongation turns) starts from du_b 
 continuous there (v = 0). The orbit is the balance's: x and v from its harmonics at the N samples of ``aft.py``
 (linear between samples), u from the same play operator on the samples, the switches located inside each
 sample interval (a threshold where the sampled elongation reaches it, a turn where the velocity changes sign).
-The equation is integrated with the classical Runge-Kutta method of order 4, SUBSTEPS steps per sample interval
+The equation is integrated with the classical Runge-Kutta method of order 4, SUBSTEPS step per sample interval
 cut at the switches, from each unit perturbation in turn: Phi, the monodromy over the state (x, v, u). A branch
 that never slides on the orbit keeps any offset: du - B dx is constant for it, a multiplier 1 whatever the
 motion does (the family of stuck positions, neutral). Its u is therefore not a state of its own: a perturbation
@@ -31,7 +31,7 @@ import numpy as np
 
 from .._jit import kernel
 
-SUBSTEPS = 2
+SUBSTEPS = 1
 
 
 @kernel
@@ -74,30 +74,41 @@ def _advance(z, duration, start, h, inverse_mass, C, K, cubic_ends, cubic_k3, cu
              branch_k, sticking, stages, cubic_e, samples):
     """z advanced by ``duration`` (one RK4 step) from the fraction ``start`` of sample interval j, of length h
     (the cubic springs' elongations linear between its samples)."""
-    columns = z.shape[1]
+    rows, columns = z.shape[0], z.shape[1]
     k1, k2, k3, k4, trial = stages[0], stages[1], stages[2], stages[3], stages[4]
     fraction = duration / h
+    nxt = j + 1 if j + 1 < samples else 0
     for stage in range(4):
         where = start + (0.0 if stage == 0 else 0.5 * fraction if stage < 3 else fraction)
-        nxt = j + 1 if j + 1 < samples else 0
         for c in range(cubic_k3.shape[0]):
             cubic_e[c] = (1.0 - where) * cubic_samples[c, j] + where * cubic_samples[c, nxt]
         if stage == 0:
             _derivative(z, k1, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k, sticking,
                         columns)
-            trial[:, :] = z + 0.5 * duration * k1
+            _step(trial, z, k1, 0.5 * duration, rows, columns)
         elif stage == 1:
             _derivative(trial, k2, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
                         sticking, columns)
-            trial[:, :] = z + 0.5 * duration * k2
+            _step(trial, z, k2, 0.5 * duration, rows, columns)
         elif stage == 2:
             _derivative(trial, k3, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
                         sticking, columns)
-            trial[:, :] = z + duration * k3
+            _step(trial, z, k3, duration, rows, columns)
         else:
             _derivative(trial, k4, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_e, branch_ends, branch_k,
                         sticking, columns)
-    z[:, :] = z + duration / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    sixth = duration / 6.0
+    for r in range(rows):
+        for col in range(columns):
+            z[r, col] += sixth * (k1[r, col] + 2.0 * k2[r, col] + 2.0 * k3[r, col] + k4[r, col])
+
+
+@kernel
+def _step(out, z, slope, span, rows, columns):
+    """out = z + span slope, in place."""
+    for r in range(rows):
+        for col in range(columns):
+            out[r, col] = z[r, col] + span * slope[r, col]
 
 
 @kernel
