@@ -376,7 +376,6 @@ def _based_period(balance, omega, steps):
     h = 2.0 * math.pi / omega / steps
     Y0 = balance.base_amplitude
     path = Y0 * np.cos(omega * h * np.arange(1, steps + 1))
-    massive = system.massive
     work = kernels.workspace(base + 1, len(elements))
     account, dissipated = np.zeros(3), np.zeros(len(elements))  # as the connector passes them (one compile)
 
