@@ -203,9 +203,8 @@ def _derivatives_text(capabilities, connector: bool = False) -> str:
     if capabilities.get("providesIntermediateUpdate") == "true":
         said.append("with an intermediate update callback it asks the master for F at every internal step")
     if capabilities.get("maxOutputDerivativeOrder") and connector:
-        said.append("it gives its force's first and second time derivatives (<code>fmi2GetRealOutputDerivatives</code>) "
-                    "along the path its inputs' derivatives describe (x' = v where they are not set; one-sided, for "
-                    "the motion ahead)")
+        said.append("it gives its force's first and second time derivatives (its output derivatives) along the path "
+                    "its inputs' derivatives describe (x' = v where they are not set; one-sided, for the motion ahead)")
     elif capabilities.get("maxOutputDerivativeOrder"):
         said.append("it gives its outputs' time derivatives up to order "
                     f"{capabilities.get('maxOutputDerivativeOrder')} (x: v, a; v: a, a'; the reaction's rate; "

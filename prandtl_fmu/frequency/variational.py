@@ -126,9 +126,12 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
     cubic_e = np.zeros(cubic_k3.shape[0])
     u = u0.copy()
     sticking = np.ones(nb, dtype=np.int64)
-    _resynchronise(u, velocity, branch_eta, 0, sticking, z, n)
     events = np.empty(nb)
-    for j in range(samples):
+    for interval in range(samples + 1):
+        j = interval if interval < samples else 0
+        _resynchronise(u, velocity, branch_eta, j, sticking, z, n)  # at sample j, as the orbit's u says
+        if interval == samples:  # (back at sample 0: the period's end)
+            break
         nxt = j + 1 if j + 1 < samples else 0
         # each branch's switch inside this interval (fraction in [0, 1)), or 2 for none
         for b in range(nb):
@@ -170,7 +173,6 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
             elif moved < -branch_eta[b]:
                 moved = -branch_eta[b]
             u[b] = moved
-        _resynchronise(u, velocity, branch_eta, nxt, sticking, z, n)
 
 
 @kernel
