@@ -767,8 +767,10 @@ def fmi3_root(scene, guid: str, arrays: bool = False) -> ET.Element:
         ET.SubElement(structure, "Output", {"valueReference": str(row.value_reference), "dependencies": " ".join(
             str(by_name[name].value_reference) for name in row.depends)})
     for row in outputs:
-        ET.SubElement(structure, "InitialUnknown", {"valueReference": str(row.value_reference), "dependencies": " ".join(
-            str(by_name[name].value_reference) for name in initial_dependencies(scene, row, rows))})
+        known = initial_dependencies(scene, row, rows)
+        ET.SubElement(structure, "InitialUnknown", {"valueReference": str(row.value_reference),
+                                                    "dependencies": " ".join(str(by_name[name].value_reference)
+                                                                             for name in known)})
     ET.indent(top)
     return top
 

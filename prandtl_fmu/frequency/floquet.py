@@ -11,10 +11,10 @@ integrated beside it; Phi[:, k] = (state(T) perturbed - state(T)) / epsilon over
 nodes with a mass (a massless node follows them) and the u of the branches that slide on the orbit (and of
 those with series dashpots), u at t = 0 from the sampled cycle of ``aft.py``. A branch that never slides keeps
 any offset (a neutral multiplier 1, the family of stuck positions): its u is no state of its own but moves with
-x when x is perturbed (the invariant subspace du = dx_p - dx_q). Why not Hill's method: its eigenvalues come from the Jacobian
-of the harmonic balance, whose truncation puts spurious eigenvalues beside the true ones, and with the kinks of
-slipping branches the sorting of the physical ones is not reliable; the monodromy sees the slips and sticks as
-they happen (the perturbed runs cross the same events a little earlier or later).
+x when x is perturbed (the invariant subspace du = dx_p - dx_q). Why not Hill's method: its eigenvalues come
+from the Jacobian of the harmonic balance, whose truncation puts spurious eigenvalues beside the true ones, and
+with the kinks of slipping branches the sorting of the physical ones is not reliable; the monodromy sees the
+slips and sticks as they happen (the perturbed runs cross the same events a little earlier or later).
 
 Under base excitation the runs are in absolute coordinates, the ground a massless node whose motion
 y = Y0 cos(omega t) is imposed at each step (:func:`_based_period`), and the state in and out relative
@@ -110,7 +110,7 @@ def variational_monodromy(balance, q_free, omega) -> np.ndarray:
 
     n, nb = system.n, system.branch_k.shape[0]
     e = relative(x, system.branch_ends)
-    sliding = np.flatnonzero(np.ptp(e, axis=1) > 2.0 * system.branch_eta) if nb else np.zeros(0, dtype=np.int64)
+    sliding = np.flatnonzero(_slides(system, x))
     # the columns: unit x and v, a stuck branch's u moving with x (du = B dx); unit u of each sliding branch
     z = np.zeros((2 * n + nb, 2 * n + sliding.size))
     z[np.arange(2 * n), np.arange(2 * n)] = 1.0
@@ -320,16 +320,22 @@ def _monodromy(balance, q_free, omega, steps) -> np.ndarray:
     return np.array(columns).T / rows[:, None]  # in the coordinates (x, v / omega, u): dimensionless
 
 
+def _slides(system, x: np.ndarray) -> np.ndarray:
+    """For each plain branch of ``system``, whether it slides on the orbit sampled as ``x`` (n, N): max e - min e
+    > 2 eta (``aft.py``'s test of a branch that never slips)."""
+    ends = system.branch_ends
+    e = x[ends[:, 0]] - np.where(ends[:, 1:] >= 0, x[np.maximum(ends[:, 1], 0)], 0.0)
+    return np.ptp(e, axis=1) > 2.0 * system.branch_eta if ends.shape[0] else np.zeros(0, dtype=bool)
+
+
 def _branch_states(balance, q_free) -> tuple:
     """``(stuck, states)``: the network indices of the plain branches that never slide on the orbit (max e - min e
     <= 2 eta over its samples), and of the branches whose u is a state of the monodromy (the others, and those with
     series dashpots)."""
     system = balance.system
-    x = balance.samples(balance.full(q_free))
-    stuck, states = [], []
-    for b, ((p, r), eta) in enumerate(zip(system.branch_ends.tolist(), system.branch_eta.tolist())):
-        e = x[p] - (x[r] if r >= 0 else 0.0)
-        (stuck if np.ptp(e) <= 2.0 * eta else states).append(int(system.branch_index[b]))
+    slides = _slides(system, balance.samples(balance.full(q_free)))
+    stuck = [int(i) for i in system.branch_index[~slides]]
+    states = [int(i) for i in system.branch_index[slides]]
     for group in system.series:
         states.extend(int(i) for i in group.index)
     return stuck, np.array(states, dtype=np.int64)

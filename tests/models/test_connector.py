@@ -448,9 +448,10 @@ def _force_along(k, eta, u, k0, k3, c, x, path, speed, t):
 def test_the_force_s_derivatives_are_the_slopes_of_the_force_along_the_inputs_path(n):
     """Connector.output_derivatives(x, v, x', v'): F' and F'' at the preview of (x, v) along the path x + x' t +
     x'' t^2/2 (x' = v, x'' = v' where x's derivatives are not given; v' = v'' = 0 where v's are not), against
-    one-sided differences (second order) of the force written out here along that path (the play operator as one clip per
-    branch), to 1e-6 relative (1e-5 for F''): random states, with derivatives, without, a path that starts at rest (x' = 0: its
-    direction is x''s), and a branch on its threshold (sliding on when pushed, sticking when pulled off)."""
+    one-sided differences (second order) of the force written out here along that path (the play operator as one
+    clip per branch), to 1e-6 relative (1e-5 for F''): random states, with derivatives, without, a path that
+    starts at rest (x' = 0: its direction is x''s), and a branch on its threshold (sliding on when pushed,
+    sticking when pulled off)."""
     rng = np.random.default_rng(n + 61)
     k, eta = rng.uniform(0.1, 3.0, n), rng.uniform(0.01, 0.3, n)
     k0, k3, c = 0.7, 0.3, 0.05
