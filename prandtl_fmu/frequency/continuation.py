@@ -74,12 +74,12 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                 if step < MIN_STEP:
                     raise FrequencyError(
                         f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} Hz (first-"
-                        f"harmonic amplitude {_amplitude(balance, q)!r} m): the corrector does not converge even "
+                        f"harmonic amplitude {balance.amplitude_at(q, omega)!r} m): the corrector does not converge even "
                         f"with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the curve)")
         q_new, omega_new, iterations = new
         if omega_new < omega_min - 1e-9 * span:
             raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
-                                 f"(at amplitude {_amplitude(balance, q_new)!r} m): it does not reach "
+                                 f"(at amplitude {balance.amplitude_at(q_new, omega_new)!r} m): it does not reach "
                                  f"{_hz(omega_max)!r} Hz from there")
         scale_new = max(scale, np.linalg.norm(q_new))
         heading = tangent
@@ -115,13 +115,6 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
 
 def _hz(omega: float) -> float:
     return float(omega) / (2.0 * math.pi)
-
-
-def _amplitude(balance, q) -> float:
-    full = balance.full(q)
-    L = balance.L
-    node = balance.system.load_node
-    return float(math.hypot(full[node * L + 1], full[node * L + 2]))
 
 
 def _scaled(q, omega, scale, omega_min, span) -> np.ndarray:

@@ -20,7 +20,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
+from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
 
@@ -109,6 +109,10 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
         raise FrequencyError("frequencies: at least one value is needed")
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
+    if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
+        return shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies, harmonics=harmonics,
+                                          node=node, load_node=load_node, tolerance=tolerance,
+                                          stability=stability, samples=samples)
     system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())

@@ -63,6 +63,11 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     ``harmonic_balance.sample_count``). FrequencyError names the culprit."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
+    if getattr(scene, "friction", None) is not None:
+        raise FrequencyError(f"{scene.source}: [friction] (Coulomb friction of the mass) has no nonlinear mode "
+                             "here: EPMC's negative damping would run the steppers outside the c >= 0 their events "
+                             "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
+                             "(--force-amplitude) is computed, or model the contact as a branch (k, alpha)")
     system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:

@@ -1,0 +1,166 @@
+"""The forced response of friction on the mass (``[friction]``) by shooting (``frequency/shooting.py``): the
+non-stop motion of a mass on a spring with Coulomb friction in closed form, the time sweep, a mass that friction
+holds still, folds with the unstable part integrated, the command line and what is refused."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.analysis.test_describe_cli import read_csv, write
+from tests.analysis.test_harmonic_balance import element
+
+COULOMB = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "friction": {"alpha": 0.1}}
+DAMPED = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02}, "friction": {"alpha": 0.1}}
+# a hardening spring with a dashpot and friction: two folds, an unstable part between them (verlet: the cubic)
+DUFFING = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05},
+           "friction": {"alpha": 0.01}}
+
+
+def non_stop_orbit(m, k, alpha, F0, omega):
+    """The periodic motion of m x'' + k x + alpha sgn(x') = F0 cos(omega t) that never stops (Den Hartog's
+    case), written out: on the half period where v > 0, from x = -X, v = 0 at the force's phase phi, x solves the
+    linear ODE under F0 cos(omega t + phi) - alpha; X and phi by Newton's method on x(T/2) = X, v(T/2) = 0.
+    Returns (X, phi, x on a fine grid over the whole period from that reversal, t of the grid)."""
+    wn, P = math.sqrt(k / m), F0 / (k - m * omega * omega)
+
+    def at(X, phi, t):
+        A, B = -X + alpha / k - P * math.cos(phi), P * omega * math.sin(phi) / wn
+        x = A * np.cos(wn * t) + B * np.sin(wn * t) + P * np.cos(omega * t + phi) - alpha / k
+        v = -A * wn * np.sin(wn * t) + B * wn * np.cos(wn * t) - P * omega * np.sin(omega * t + phi)
+        return x, v
+
+    half = math.pi / omega
+    p = np.array([abs(P), math.pi if omega < wn else 0.0])  # the linear response's minimum
+    for _ in range(60):
+        x, v = at(*p, half)
+        r = np.array([x - p[0], v])
+        J = np.empty((2, 2))
+        for j in range(2):
+            d = np.zeros(2)
+            d[j] = 1e-7 * max(1.0, abs(p[j]))
+            x1, v1 = at(*(p + d), half)
+            J[:, j] = (np.array([x1 - p[0] - d[0], v1]) - r) / d[j]
+        p = p - np.linalg.solve(J, r)
+        if np.max(np.abs(r)) < 1e-15:
+            break
+    t = np.linspace(0.0, half, 200001)
+    x, v = at(*p, t)
+    assert p[0] > 0 and np.all(v[1:-1] > 0)  # the non-stop case: v > 0 all along the half period
+    return p[0], p[1], np.concatenate((x[:-1], -x[:-1])), np.concatenate((t[:-1], t[:-1] + half))
+
+
+@pytest.mark.parametrize("band", [(0.6, 0.9), (1.3, 3.0)])
+def test_coulomb_friction_is_den_hartogs_non_stop_motion(band):
+    """Below and above the resonance, every point's first harmonic (amplitude and phase against the force) is
+    the closed-form orbit's to the tolerance asked (1e-7), and every point is stable."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    curve = harmonic_response(element(COULOMB), 1.0, [band[0] / (2 * math.pi), band[1] / (2 * math.pi)],
+                              tolerance=1e-7)
+    assert len(curve.frequency) >= 2 and np.all(curve.stable)
+    for f, amplitude, phase in zip(curve.frequency, curve.amplitude, curve.phase):
+        omega = 2 * math.pi * f
+        X, phi, x, t = non_stop_orbit(1.0, 1.0, 0.1, 1.0, omega)
+        weights = np.exp(-1j * omega * t) * 2.0 / t.size  # the force is cos(omega t + phi) on the orbit's clock
+        first = complex(x @ weights) * np.exp(-1j * phi)  # on the clock of the force cos(omega t)
+        assert amplitude == pytest.approx(abs(first), rel=1e-7)
+        assert phase == pytest.approx(np.angle(first), abs=1e-7)
+
+
+def test_the_friction_damper_agrees_with_the_time_sweep():
+    """A mass on a spring and a dashpot with Coulomb friction through its resonance: stable everywhere, and at
+    five of its points the exact stepper's time sweep (run to 1e-5) gives the same first harmonic to 1e-4."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.response import frequency_response
+
+    scene = element(DAMPED)
+    curve = harmonic_response(scene, 0.3, [0.05, 0.3])
+    assert np.all(curve.stable) and curve.amplitude.max() > 5.0  # through the resonance
+    picks = np.unique(np.linspace(0, len(curve.frequency) - 1, 5).astype(int))
+    response = frequency_response(scene, 0.3, curve.frequency[picks], sweep="up", tolerance=1e-5)
+    assert response.amplitude == pytest.approx(curve.amplitude[picks], rel=1e-4)
+    assert response.phase == pytest.approx(curve.phase[picks], abs=1e-4)
+
+
+def test_a_mass_that_friction_holds_still_does_not_move():
+    """F0 below alpha: the mass sticks at every frequency (the time sweep's amplitude 0, phase 0)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    curve = harmonic_response(element(COULOMB), 0.05, [0.1, 0.3])
+    assert np.all(curve.amplitude == 0.0) and np.all(curve.phase == 0.0) and np.all(curve.stable)
+
+
+def test_the_orbit_is_periodic_over_the_whole_period():
+    """The symmetry solved for over half a period is the motion's: one whole period of the stepper from a point's
+    state comes back to it (to the Newton tolerance), on the damper with a branch besides the friction."""
+    from prandtl_fmu.frequency.response import choose_stepper, _forced
+    from prandtl_fmu.frequency.shooting import Shooting, prepared
+
+    scene = prepared(element(dict(DAMPED, branches={"k": [2.0], "alpha": [0.05]})))
+    stepper = choose_stepper(_forced(scene, 1.0, 0.2))
+    shooting = Shooting(scene, 0.3, None, 512, 7, 1.0, stepper)
+    for omega in (0.5, 1.2, 2.0):
+        s = shooting.solve_at(omega)
+        end, _ = shooting.run(s, omega, 2)
+        assert np.max(np.abs(end - s)) <= 1e-9 * np.max(np.abs(s))
+
+
+@pytest.mark.slow
+def test_duffing_with_friction_has_two_folds_and_its_unstable_part_leaves_its_orbit():
+    """Folds located (the frequency turns there), the points between them unstable, and integrated from 1e-6
+    off their orbit for 200 periods: an unstable point's motion leaves it (its first harmonic changes by more
+    than 1e-2 relative: here it lands on the upper branch), a stable one comes back (by less than 1e-8)."""
+    from prandtl_fmu.frequency.continuation import continue_curve
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.floquet import is_stable
+    from prandtl_fmu.frequency.response import choose_stepper, _forced
+    from prandtl_fmu.frequency.shooting import Shooting, prepared
+
+    curve = harmonic_response(element(DUFFING), 0.2, [0.5 / (2 * math.pi), 2.5 / (2 * math.pi)])
+    assert curve.folds.size == 2
+    first, second = curve.folds
+    f = curve.frequency
+    assert f[first - 1] < f[first] > f[first + 1] and f[second - 1] > f[second] < f[second + 1]
+    unstable = np.flatnonzero(~curve.stable)
+    assert unstable.size >= 3 and first <= unstable.min() and unstable.max() <= second
+    # the same curve's states, to integrate from
+    scene = prepared(element(DUFFING))
+    shooting = Shooting(scene, 0.2, None, 1024, 7, 1.0, choose_stepper(_forced(scene, 1.0, 0.2)))
+    points = continue_curve(shooting, 0.5, 2.5, 2)
+    stable = np.array([is_stable(shooting.multipliers(s, w)) for w, s, _ in points])
+    folds = [i for i, p in enumerate(points) if p[2]]
+    inside = np.flatnonzero(~stable)
+    assert len(folds) == 2 and inside.size and folds[0] <= inside.min() and inside.max() <= folds[1]
+    for index, leaves in ((inside[inside.size // 2], True), (folds[0] // 2, False)):
+        omega, s, _ = points[index]
+        amplitude = shooting.amplitude_at(s, omega)
+        end = shooting.run(s * (1.0 + 1e-6), omega, 2 * 200)[0]  # off the orbit by a little, 200 periods
+        moved = abs(shooting.amplitude_at(end, omega) - amplitude) / amplitude
+        assert (moved > 1e-2) if leaves else (moved < 1e-8), (index, moved)
+
+
+def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
+    out = tmp_path / "curve.csv"
+    assert main(["describe", write(tmp_path, DAMPED), "--force-amplitude", "0.3", "--frequencies", "0.1,0.2",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert list(table)[:4] == ["frequency", "amplitude", "phase", "stable"] and "amplitude_mass" in table
+    assert set(table["stable"]) == {"true"} and float(table["frequency"][-1]) == pytest.approx(0.2)
+    assert all(math.isfinite(float(m)) for m in table["multiplier"])
+
+
+@pytest.mark.parametrize("tables, options, culprit", [
+    (dict(COULOMB, friction={"alpha": 0.1, "belt_velocity": 0.1}), [], "moving belt"),
+    (dict(COULOMB, delay={"gain": 0.1, "tau": 0.5}), [], "[delay]"),
+    (COULOMB, ["--node", "nowhere"], "'nowhere'"),
+    (COULOMB, ["--mode", "1", "--amplitudes", "0.1"], "no nonlinear mode"),
+])
+def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables, options, culprit):
+    out = tmp_path / "out.csv"
+    arguments = options if "--mode" in options else ["--force-amplitude", "1", "--frequencies", "0.1,0.2", *options]
+    assert main(["describe", write(tmp_path, tables), *arguments, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
