@@ -25,13 +25,6 @@ from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
-# The Floquet multipliers are computed at every point where they come from the variational equation (every node
-# with a mass, no series dashpot, no effect with memory: floquet.variational). Elsewhere, from the steppers' finite
-# differences, at every STABILITY_STRIDE-th point, at both ends, beside each fold, and at every point between two
-# computed ones that disagree; the points between two that agree take their verdict (their ``multiplier`` is NaN):
-# a loss of stability and its return within fewer points would be missed there.
-STABILITY_STRIDE = 16
-
 
 @dataclass(frozen=True, eq=False)
 class Curve:
@@ -41,8 +34,8 @@ class Curve:
     ``stable`` (bool; None for a curve computed with ``stability=False``; a numpy masked array, masked where
     a point's multipliers were not computed (``floquet.py``: a delay too long for its buffer), an empty field
     in the CSV), ``fold`` (bool: a located fold),
-    ``multiplier`` the largest |Floquet multiplier| (NaN where it was not computed: see STABILITY_STRIDE; an
-    empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
+    ``multiplier`` the largest |Floquet multiplier| of each point (NaN where it was not computed: ``floquet.py``;
+    an empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
     every node with a mass; ``coefficients`` (points, n, 2 H + 1) of x; ``harmonics`` H; ``change`` the relative
     change of the first harmonic at the last increase of H (None when H was given); ``force_amplitude`` F0, or
     None under base excitation, whose ``base_amplitude`` Y0 it is (x then the absolute motion, see the
@@ -160,7 +153,7 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
 
 
 def _curve(balance, points, where, stability, change) -> Curve:
-    from .floquet import is_stable, multipliers, variational
+    from .floquet import is_stable, multipliers
 
     system = balance.system
     L = balance.L
@@ -172,35 +165,14 @@ def _curve(balance, points, where, stability, change) -> Curve:
     largest = np.full(len(points), np.nan)
     stable = np.ones(len(points), dtype=bool)
     known = np.ones(len(points), dtype=bool)
-    done = set()
-    if stability:
-        def check(index):
-            if index not in done:
-                done.add(index)
-                w, q, _ = points[index]
-                values = multipliers(balance, q, w)
-                if values is None:  # not computed (floquet.py says where): unknown, never a guess
-                    known[index] = False
-                    return
-                largest[index] = float(np.max(np.abs(values)))
-                stable[index] = is_stable(values)
-
-        count = len(points)
-        stride = 1 if variational(system) else STABILITY_STRIDE  # (variational.py: a hundredth of the cost)
-        checked = set(range(0, count, stride)) | {count - 1}
-        for fold in (i for i, p in enumerate(points) if p[2]):
-            checked |= {max(fold - 1, 0), min(fold + 1, count - 1)}
-        checked = sorted(checked)
-        for index in checked:
-            check(index)
-        for before, after in zip(checked[:-1], checked[1:]):
-            if known[before] and known[after] and stable[before] == stable[after]:
-                stable[before + 1:after] = stable[before]
-            elif not (known[before] or known[after]):
-                known[before + 1:after] = False
-            else:
-                for index in range(before + 1, after):
-                    check(index)
+    if stability:  # every point's own multipliers: a verdict is never inferred from the neighbours'
+        for index, (w, q, _) in enumerate(points):
+            values = multipliers(balance, q, w)
+            if values is None:  # not computed (floquet.py says where): unknown, never a guess
+                known[index] = False
+                continue
+            largest[index] = float(np.max(np.abs(values)))
+            stable[index] = is_stable(values)
     if not stability:
         stable = None
     elif not np.all(known):
