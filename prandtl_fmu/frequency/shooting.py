@@ -77,26 +77,31 @@ def takes(scene) -> bool:
     return not isinstance(scene, NetworkScene) and scene.friction is not None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ShootingSystem:
-    """The one node of an element scene, as ``harmonic_balance.PeriodicSystem`` names it to the curve and the
-    continuation."""
+    """The nodes of a scene, as ``harmonic_balance.PeriodicSystem`` names them to the curve and the continuation:
+    ``nodes`` names, ``mass`` (n,) (0: massless), ``load_node`` the index of the node the force acts on."""
 
     name: str
     source: str
-    mass: float
-    nodes: tuple = (ELEMENT_NODE,)
+    nodes: tuple
+    mass: np.ndarray
     load_node: int = 0
-    n: int = 1
+
+    @property
+    def n(self) -> int:
+        return len(self.nodes)
 
     @property
     def massive(self) -> list:
-        return [0]
+        return [i for i in range(self.n) if self.mass[i] > 0]
 
     def node_index(self, name: Optional[str], default: Optional[int] = None) -> int:
-        if name is not None and name != ELEMENT_NODE:
-            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({ELEMENT_NODE})")
-        return 0
+        if name is None:
+            return self.massive[0] if default is None else default
+        if name not in self.nodes:
+            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({', '.join(self.nodes)})")
+        return self.nodes.index(name)
 
 
 def prepared(scene):
@@ -124,21 +129,15 @@ def prepared(scene):
 
 
 class Shooting:
-    """The periodic state of an element scene with friction at each omega (see the module): the unknowns s
-    (x, v / omega_ref, u) at t = 0, the interface of ``HarmonicBalance`` that ``continuation.py`` uses
-    (:meth:`evaluate`, :meth:`solve_at`, :meth:`_newton`, :meth:`force_scale`, :meth:`amplitude_at`)."""
+    """The periodic state at each omega (see the module): the unknowns s (x, v / omega_ref, u) at t = 0, the
+    interface of ``HarmonicBalance`` that ``continuation.py`` uses (:meth:`evaluate`, :meth:`solve_at`,
+    :meth:`_newton`, :meth:`force_scale`, :meth:`amplitude_at`). A subclass runs its stepper: :meth:`run`."""
 
-    def __init__(self, scene, force_amplitude: Optional[float], base_amplitude: Optional[float], steps: int,
-                 harmonics: int, reference: float, stepper: str):
-        from ..compiled import compile_loop, compile_model
-        from ..loads import HarmonicLoad
-        from ..scene_tables import Solver
-
+    def __init__(self, system: ShootingSystem, force_amplitude: Optional[float], base_amplitude: Optional[float],
+                 steps: int, harmonics: int, reference: float, stepper: str, dimension: int, stiffness: float):
         if steps % 2 or steps < 2 * harmonics + 2:
             raise ValueError(f"steps: an even number >= 2 H + 2, got {steps!r}")
-        self.scene = dataclasses.replace(scene, load=HarmonicLoad(1.0, reference),
-                                         solver=Solver(stepper, 1.0 / steps, 1.0, 1.0 / steps))
-        self.system = ShootingSystem(scene.name, scene.source, float(scene.mass.m))
+        self.system = system
         self.force_amplitude = None if force_amplitude is None else float(force_amplitude)
         self.base_amplitude = None if base_amplitude is None else float(base_amplitude)
         self.M = int(steps)
@@ -146,23 +145,17 @@ class Shooting:
         self.L = 2 * self.H + 1
         self.reference = float(reference)
         self.stepper = stepper
-        self.model = compile_model(self.scene, "play")
-        self.loop = compile_loop(self.scene, stepper)
-        self.branches = 0 if scene.branches is None else int(scene.branches.n)
-        self.dimension = 2 + self.branches
-        self._out = np.empty((self.M // 2, 3))
+        self.dimension = int(dimension)
+        self.stiffness = float(stiffness)  # what holds the load's node when everything sticks: the motion's size
         self._loads = {}
-        # the stiffness the mass feels when everything sticks, for the size of the motion
-        self.stiffness = (0.0 if scene.spring is None else float(scene.spring.k0)) + (
-            0.0 if scene.branches is None else float(np.sum(scene.branches.stiffness)))
 
     # ------------------------------------------------------------- the stepper's map
 
     def amplitude_of_force(self, omega: float) -> float:
-        """F0, or m Y0 omega^2 under base excitation (the relative coordinates' force)."""
+        """F0, or m Y0 omega^2 under base excitation (the relative coordinates' force on the node with a mass)."""
         if self.force_amplitude is not None:
             return self.force_amplitude
-        return self.system.mass * self.base_amplitude * omega * omega
+        return float(self.system.mass[self.system.load_node]) * self.base_amplitude * omega * omega
 
     def _load(self, omega: float):
         from ..loads import HarmonicLoad
@@ -174,37 +167,24 @@ class Shooting:
         return self._loads[omega]
 
     def run(self, s: np.ndarray, omega: float, half_periods: int = 1) -> tuple:
-        """``(state at the end, x at the step ends (M / 2 half_periods,))``: ``half_periods`` half periods of the
+        """``(state at the end, x at the step ends (M / 2 half_periods, n))``: ``half_periods`` half periods of the
         stepper from the unknowns ``s`` at t = 0 (the state at the end in the same unknowns, not turned)."""
-        from ..stepping import ElementError, _failure, integrate
+        raise NotImplementedError
 
-        h = 2.0 * math.pi / omega / self.M
-        x, v = float(s[0]), float(s[1]) * self.reference
-        u = None if self.branches == 0 else np.array(s[2:], dtype=float)
-        out = self._out if half_periods == 1 else np.empty((self.M // 2 * half_periods, 3))
-        load = self._load(omega)
-        try:
-            x, v, taken = integrate(self.loop, self.model, load, x, v, u, 0.0, 0, h, 1, out, None, None, None)
-        except ElementError as exc:
-            raise FrequencyError(f"{self.system.source}: at f = {omega / (2 * math.pi)!r} Hz: {exc}") from None
-        if taken < out.shape[0]:
-            raise FrequencyError(f"{self.system.source}: at f = {omega / (2 * math.pi)!r} Hz: "
-                                 f"{_failure(self.scene, self.stepper, load, taken * h, h, None)}")
-        end = np.empty(self.dimension)
-        end[0], end[1] = x, v / self.reference
-        if u is not None:
-            end[2:] = u
-        if not (np.all(np.isfinite(end)) and np.all(np.isfinite(out[:, 0]))):
-            raise FrequencyError(f"{self.system.source}: at f = {omega / (2 * math.pi)!r} Hz the motion is not "
-                                 "finite (an overflow)")
-        return end, out[:, 0].copy()
+    def _refuse(self, omega: float, why: str):
+        raise FrequencyError(f"{self.system.source}: at f = {omega / (2 * math.pi)!r} Hz: {why}")
+
+    def _checked(self, end: np.ndarray, xs: np.ndarray, omega: float) -> tuple:
+        if not (np.all(np.isfinite(end)) and np.all(np.isfinite(xs))):
+            self._refuse(omega, "the motion is not finite (an overflow)")
+        return end, xs
 
     def residual(self, s: np.ndarray, omega: float) -> np.ndarray:
         return -self.run(s, omega)[0] - s
 
     def size(self, s: np.ndarray, omega: float) -> float:
         """The orbit's size (m): its state's, or the force's static deflection, whichever is larger."""
-        stiff = max(self.stiffness, self.system.mass * omega * omega)
+        stiff = max(self.stiffness, float(self.system.mass[self.system.load_node]) * omega * omega, 1e-300)
         return max(float(np.max(np.abs(s))), self.amplitude_of_force(omega) / stiff)
 
     def jacobian(self, s: np.ndarray, omega: float, base: Optional[np.ndarray] = None) -> np.ndarray:
@@ -272,26 +252,26 @@ class Shooting:
     # ------------------------------------------------------------- what a point says
 
     def samples(self, s: np.ndarray, omega: float) -> np.ndarray:
-        """x over one period at t_j = j T / M, j = 0 ... M - 1 (relative under base excitation): the first half
-        run, the second its negative (the symmetry)."""
+        """x of every node over one period at t_j = j T / M, j = 0 ... M - 1, (n, M) (relative under base
+        excitation): the first half run, the second its negative (the symmetry)."""
         _, xs = self.run(s, omega)
-        half = np.concatenate(([s[0]], xs[:-1]))
-        return np.concatenate((half, -half))
+        half = np.concatenate((s[None, :self.system.n], xs[:-1]), axis=0).T
+        return np.concatenate((half, -half), axis=1)
 
     def coefficients(self, s: np.ndarray, omega: float) -> np.ndarray:
-        """The mean and H harmonics of x (absolute: y added under base excitation), (2 H + 1,), in the order
-        of the harmonic balance (a_0, a_1, b_1, ...)."""
-        spectrum = np.fft.rfft(self.samples(s, omega)) / self.M
-        out = np.empty(self.L)
-        out[0] = spectrum[0].real
-        out[1::2] = 2.0 * spectrum[1:self.H + 1].real
-        out[2::2] = -2.0 * spectrum[1:self.H + 1].imag
+        """The mean and H harmonics of x of every node (absolute: y added under base excitation), (n, 2 H + 1),
+        in the order of the harmonic balance (a_0, a_1, b_1, ...)."""
+        spectrum = np.fft.rfft(self.samples(s, omega), axis=1) / self.M
+        out = np.empty((self.system.n, self.L))
+        out[:, 0] = spectrum[:, 0].real
+        out[:, 1::2] = 2.0 * spectrum[:, 1:self.H + 1].real
+        out[:, 2::2] = -2.0 * spectrum[:, 1:self.H + 1].imag
         if self.base_amplitude is not None:
-            out[1] += self.base_amplitude
+            out[:, 1] += self.base_amplitude
         return out
 
-    def first_harmonic(self, s: np.ndarray, omega: float) -> complex:
-        c = self.coefficients(s, omega)
+    def first_harmonic(self, s: np.ndarray, omega: float, node: Optional[int] = None) -> complex:
+        c = self.coefficients(s, omega)[self.system.load_node if node is None else node]
         return complex(c[1], -c[2])
 
     def amplitude_at(self, s: np.ndarray, omega: float) -> float:
@@ -303,6 +283,48 @@ class Shooting:
         return np.linalg.eigvals(turn) ** 2
 
 
+class ElementShooting(Shooting):
+    """An element scene with friction on its mass: s = (x, v / omega_ref, u_1 ... u_n), its own stepper."""
+
+    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, stepper):
+        from ..compiled import compile_loop, compile_model
+        from ..loads import HarmonicLoad
+        from ..scene_tables import Solver
+
+        system = ShootingSystem(scene.name, scene.source, (ELEMENT_NODE,), np.array([float(scene.mass.m)]))
+        branches = 0 if scene.branches is None else int(scene.branches.n)
+        stiffness = (0.0 if scene.spring is None else float(scene.spring.k0)) + (
+            0.0 if scene.branches is None else float(np.sum(scene.branches.stiffness)))
+        super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
+                         2 + branches, stiffness)
+        self.scene = dataclasses.replace(scene, load=HarmonicLoad(1.0, reference),
+                                         solver=Solver(stepper, 1.0 / steps, 1.0, 1.0 / steps))
+        self.model = compile_model(self.scene, "play")
+        self.loop = compile_loop(self.scene, stepper)
+        self.branches = branches
+        self._out = np.empty((self.M // 2, 3))
+
+    def run(self, s: np.ndarray, omega: float, half_periods: int = 1) -> tuple:
+        from ..stepping import ElementError, _failure, integrate
+
+        h = 2.0 * math.pi / omega / self.M
+        x, v = float(s[0]), float(s[1]) * self.reference
+        u = None if self.branches == 0 else np.array(s[2:], dtype=float)
+        out = self._out if half_periods == 1 else np.empty((self.M // 2 * half_periods, 3))
+        load = self._load(omega)
+        try:
+            x, v, taken = integrate(self.loop, self.model, load, x, v, u, 0.0, 0, h, 1, out, None, None, None)
+        except ElementError as exc:
+            self._refuse(omega, str(exc))
+        if taken < out.shape[0]:
+            self._refuse(omega, _failure(self.scene, self.stepper, load, taken * h, h, None))
+        end = np.empty(self.dimension)
+        end[0], end[1] = x, v / self.reference
+        if u is not None:
+            end[2:] = u
+        return self._checked(end, out[:, :1].copy(), omega)
+
+
 # ----------------------------------------------------------------- the curve
 
 def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, harmonics: Optional[int] = None,
@@ -311,56 +333,107 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     """The forced response of an element scene with friction (see the module) as a ``curve.Curve``; the
     arguments are ``curve.harmonic_response``'s, checked there."""
     from .continuation import continue_curve
+
+    scene = prepared(scene)
+    make, system, steps, stepper = _shooting_of(scene, force_amplitude, base_amplitude, frequencies, harmonics,
+                                                load_node, samples)
+    where = system.node_index(node)
+    low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
+    count = int(np.unique(frequencies).size)
+    reference = math.sqrt(low * high)
+    changes = []
+    while True:
+        if steps * 2 > MAX_STEPS:
+            raise FrequencyError(f"{scene.source}: the first harmonic still changed by {changes[-1]:.3g} relative at "
+                                 f"{steps} steps per period of {stepper!r} (tolerance {tolerance:g}): give a "
+                                 "larger --tolerance")
+        shooting = make(steps, reference)
+        points = continue_curve(shooting, low, high, count)
+        ladder = (shooting, make(2 * steps, reference))
+        change, worst = 0.0, 0
+        for index in sorted({0, int(np.argmax([shooting.amplitude_at(s, w) for w, s, _ in points])),
+                             len(points) - 1}):
+            (w, s), (w_fine, s_fine) = _refined(ladder, points, index, low, high)
+            X = ladder[1].first_harmonic(s_fine, w_fine, where)
+            moved = abs(X - shooting.first_harmonic(s, w, where)) / max(abs(X), 1e-300)
+            if moved > change:
+                change, worst = moved, index
+        changes.append(change)
+        # the error at M: 4/3 of the change for an error like 1 / M^2, 2 for 1 / M
+        if change <= 0.5 * tolerance:
+            break
+        if len(changes) >= 2 and change > 0.75 * changes[-2]:  # not falling with h: no limit to converge to
+            raise FrequencyError(
+                f"{scene.source}: the first harmonic at f = {points[worst][0] / (2 * math.pi)!r} Hz does not converge "
+                f"as the steps are refined (it changed by {changes[-2]:.3g}, then {change:.3g} relative, at "
+                f"{steps // 2} and {steps} steps per period of {stepper!r}): a motion that is not periodic, or "
+                "grazing a stick there; leave that frequency out or see --method time")
+        steps *= 2
+    return _curve(shooting, points, where, stability, change)
+
+
+def _refined(ladder, points, index, low, high) -> list:
+    """``[(omega, s)]``: point ``index`` of the curve of ``ladder[0]`` (M steps) and the same point at each finer
+    resolution of ``ladder`` (2 M, ...): the corrector of the continuation on the hyperplane through the point
+    normal to its tangent (a fold moves with M: at a fixed omega near it the finer curve may have no point),
+    the ends at their frequencies. FrequencyError where a finer point is not found."""
+    from .continuation import _correct, _scaled, _tangent
+
+    omega, s, _ = points[index]
+    chain = [(omega, s)]
+    ends = index in (0, len(points) - 1)
+    span = high - low
+    scale = max(float(np.max(np.abs(s))), ladder[0].size(s, omega))
+    tangent = None if ends else _tangent(ladder[0], s, omega, None, scale, span)
+    for shooting in ladder[1:]:
+        w, previous = chain[-1]
+        found = None
+        if tangent is not None:
+            corrected = _correct(shooting, _scaled(previous, w, scale, low, span), tangent, scale, low, span, 1.0)
+            if corrected is not None:
+                found = (corrected[1], corrected[0])
+        if found is None:
+            solved = shooting._newton(w, previous)
+            found = None if solved is None else (w, solved)
+        if found is None:
+            raise FrequencyError(f"{shooting.system.source}: the point at f = {w / (2 * math.pi)!r} Hz was not found "
+                                 f"again at {shooting.M} steps per period (a fold or a kink that moves with the "
+                                 "steps): give --tolerance larger, or the frequencies around it")
+        chain.append(found)
+    return chain
+
+
+def _shooting_of(scene, force_amplitude, base_amplitude, frequencies, harmonics, load_node, samples) -> tuple:
+    """``(make(steps, reference) -> Shooting, system, first steps, stepper)`` for ``scene``."""
     from .response import FIRST_STEPS, FIRST_STEPS_DEFAULT, _forced, choose_stepper
     from ..stability import stability_problem
 
-    scene = prepared(scene)
-    system = ShootingSystem(scene.name, scene.source, float(scene.mass.m))
-    where = system.node_index(node)
+    H = DEFAULT_HARMONICS if harmonics is None else int(harmonics)
+    high = float(frequencies.max())
     if load_node is not None and load_node != ELEMENT_NODE:
         raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({ELEMENT_NODE})")
-    H = DEFAULT_HARMONICS if harmonics is None else int(harmonics)
-    low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
-    count = int(np.unique(frequencies).size)
     stepper = choose_stepper(_forced(scene, 1.0, float(frequencies[0])))
+
+    def make(steps, reference):
+        return ElementShooting(scene, force_amplitude, base_amplitude, steps, H, reference, stepper)
+
+    system = ShootingSystem(scene.name, scene.source, (ELEMENT_NODE,), np.array([float(scene.mass.m)]))
     steps = FIRST_STEPS.get(stepper, FIRST_STEPS_DEFAULT)
+    while stability_problem(_forced(scene, 1.0, high), stepper, 1.0 / high / steps) is not None \
+            and steps < MAX_STEPS:
+        steps *= 2  # an explicit stepper's limit (omega h < 2) at the highest frequency
     if samples is not None:
         steps = max(steps, int(samples) + int(samples) % 2)
-    steps = max(steps, 2 * (2 * H + 2))
-    while stability_problem(_forced(scene, 1.0, high / (2 * math.pi)), stepper, 2 * math.pi / high / steps) \
-            is not None and steps < MAX_STEPS:
-        steps *= 2  # an explicit stepper's limit (omega h < 2) at the highest frequency
-    reference = math.sqrt(low * high)
-    change = math.inf
-    while True:
-        shooting = Shooting(scene, force_amplitude, base_amplitude, steps, H, reference, stepper)
-        points = continue_curve(shooting, low, high, count)
-        first = np.array([shooting.first_harmonic(s, w) for w, s, _ in points])
-        if steps * 2 > MAX_STEPS:
-            raise FrequencyError(f"{scene.source}: the first harmonic still changed by {change:.3g} relative at "
-                                 f"{steps} steps per period of {stepper!r} (tolerance {tolerance:g}): give a "
-                                 "larger --tolerance")
-        finer = Shooting(scene, force_amplitude, base_amplitude, 2 * steps, H, reference, stepper)
-        change = 0.0
-        for index in sorted({0, int(np.argmax(np.abs(first))), len(points) - 1}):
-            w, s, _ = points[index]
-            solved = finer._newton(w, s)
-            if solved is None:
-                solved = finer.solve_at(w, s)
-            X = finer.first_harmonic(solved, w)
-            change = max(change, abs(X - first[index]) / max(abs(X), 1e-300))
-        if change <= 0.5 * tolerance:  # the error at M: 4/3 of the change for an error like 1 / M^2, 2 for 1 / M
-            break
-        steps *= 2
-    return _curve(shooting, points, where, stability, change)
+    return make, system, max(steps, 2 * (2 * H + 2)), stepper
 
 
 def _curve(shooting, points, where, stability, change):
     from .curve import Curve
     from .floquet import is_stable
 
+    system = shooting.system
     omega = np.array([p[0] for p in points])
-    coefficients = np.array([shooting.coefficients(s, w) for w, s, _ in points])[:, None, :]
+    coefficients = np.array([shooting.coefficients(s, w) for w, s, _ in points])
     X = coefficients[:, where, 1] - 1j * coefficients[:, where, 2]
     largest = np.full(len(points), np.nan)
     stable = None
@@ -370,8 +443,8 @@ def _curve(shooting, points, where, stability, change):
             values = shooting.multipliers(s, w)
             largest[index] = float(np.max(np.abs(values)))
             stable[index] = is_stable(values)
-    amplitudes = {ELEMENT_NODE: np.hypot(coefficients[:, 0, 1], coefficients[:, 0, 2])}
+    amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
-                 largest, amplitudes, coefficients, shooting.H, change, ELEMENT_NODE, shooting.force_amplitude,
-                 ELEMENT_NODE, shooting.base_amplitude)
+                 largest, amplitudes, coefficients, shooting.H, change, system.nodes[where], shooting.force_amplitude,
+                 system.nodes[system.load_node], shooting.base_amplitude)

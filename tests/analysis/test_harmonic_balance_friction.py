@@ -96,11 +96,11 @@ def test_the_orbit_is_periodic_over_the_whole_period():
     """The symmetry solved for over half a period is the motion's: one whole period of the stepper from a point's
     state comes back to it (to the Newton tolerance), on the damper with a branch besides the friction."""
     from prandtl_fmu.frequency.response import choose_stepper, _forced
-    from prandtl_fmu.frequency.shooting import Shooting, prepared
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
 
     scene = prepared(element(dict(DAMPED, branches={"k": [2.0], "alpha": [0.05]})))
     stepper = choose_stepper(_forced(scene, 1.0, 0.2))
-    shooting = Shooting(scene, 0.3, None, 512, 7, 1.0, stepper)
+    shooting = ElementShooting(scene, 0.3, None, 512, 7, 1.0, stepper)
     for omega in (0.5, 1.2, 2.0):
         s = shooting.solve_at(omega)
         end, _ = shooting.run(s, omega, 2)
@@ -116,7 +116,7 @@ def test_duffing_with_friction_has_two_folds_and_its_unstable_part_leaves_its_or
     from prandtl_fmu.frequency.curve import harmonic_response
     from prandtl_fmu.frequency.floquet import is_stable
     from prandtl_fmu.frequency.response import choose_stepper, _forced
-    from prandtl_fmu.frequency.shooting import Shooting, prepared
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
 
     curve = harmonic_response(element(DUFFING), 0.2, [0.5 / (2 * math.pi), 2.5 / (2 * math.pi)])
     assert curve.folds.size == 2
@@ -127,7 +127,7 @@ def test_duffing_with_friction_has_two_folds_and_its_unstable_part_leaves_its_or
     assert unstable.size >= 3 and first <= unstable.min() and unstable.max() <= second
     # the same curve's states, to integrate from
     scene = prepared(element(DUFFING))
-    shooting = Shooting(scene, 0.2, None, 1024, 7, 1.0, choose_stepper(_forced(scene, 1.0, 0.2)))
+    shooting = ElementShooting(scene, 0.2, None, 1024, 7, 1.0, choose_stepper(_forced(scene, 1.0, 0.2)))
     points = continue_curve(shooting, 0.5, 2.5, 2)
     stable = np.array([is_stable(shooting.multipliers(s, w)) for w, s, _ in points])
     folds = [i for i, p in enumerate(points) if p[2]]
