@@ -64,7 +64,8 @@ def add_parser(commands, scene_help: str) -> None:
                                "to the highest")
     describe.add_argument("--method", choices=METHODS,
                           help="of the frequency response: harmonic-balance (default: the periodic state solved "
-                               "for, continued through folds, its stability) or time (the time-integration sweep)")
+                               "for, continued through folds, its stability; with [friction] on the mass, by "
+                               "shooting on the exact stepper) or time (the time-integration sweep)")
     describe.add_argument("--harmonics", metavar="H",
                           help="harmonics of the harmonic balance (default: chosen by --tolerance)")
     describe.add_argument("--node", metavar="NAME",
