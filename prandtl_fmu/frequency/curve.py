@@ -6,6 +6,8 @@ not). Without ``harmonics`` H is chosen by the tolerance: curves with H = 1, 3, 
 the first harmonic of x at the node changes by at most ``tolerance`` relative from one H to the next, at the
 curve's peak and at both ends (the curve of the larger H is kept); past the last H of HARMONIC_STEPS it is
 refused with the change reached.
+An element with ``[friction]`` on its mass takes ``shooting.py`` instead (the periodic state by shooting on its own
+stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`.
 
 The first harmonic of x at a node, x_1 = a_1 cos(omega t) + b_1 sin(omega t) = amplitude cos(omega t + phase):
 amplitude = |a_1 - i b_1| (m), phase = arg(a_1 - i b_1) (rad), as the time sweep (``response.py``) defines
@@ -103,9 +105,9 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
-        return shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies, harmonics=harmonics,
-                                          node=node, load_node=load_node, tolerance=tolerance,
-                                          stability=stability, samples=samples)
+        return Curve(**shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
+                                                  harmonics=harmonics, node=node, load_node=load_node,
+                                                  tolerance=tolerance, stability=stability, samples=samples))
     system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())

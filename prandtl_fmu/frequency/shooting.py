@@ -330,8 +330,8 @@ class ElementShooting(Shooting):
 def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, harmonics: Optional[int] = None,
                       node: Optional[str] = None, load_node: Optional[str] = None,
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True, samples: Optional[int] = None):
-    """The forced response of an element scene with friction (see the module) as a ``curve.Curve``; the
-    arguments are ``curve.harmonic_response``'s, checked there."""
+    """The forced response of an element scene with friction (see the module): the fields of a ``curve.Curve``;
+    the arguments are ``curve.harmonic_response``'s, checked there."""
     from .continuation import continue_curve
 
     scene = prepared(scene)
@@ -427,8 +427,8 @@ def _shooting_of(scene, force_amplitude, base_amplitude, frequencies, harmonics,
     return make, system, max(steps, 2 * (2 * H + 2)), stepper
 
 
-def _curve(shooting, points, where, stability, change):
-    from .curve import Curve
+def _curve(shooting, points, where, stability, change) -> dict:
+    """The fields of ``curve.Curve`` (which curve.py builds: it imports this module)."""
     from .floquet import is_stable
 
     system = shooting.system
@@ -445,6 +445,8 @@ def _curve(shooting, points, where, stability, change):
             stable[index] = is_stable(values)
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
-    return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
-                 largest, amplitudes, coefficients, shooting.H, change, system.nodes[where], shooting.force_amplitude,
-                 system.nodes[system.load_node], shooting.base_amplitude)
+    return dict(frequency=omega / (2.0 * math.pi), amplitude=np.abs(X), phase=phase, stable=stable,
+                fold=np.array([p[2] for p in points], dtype=bool), multiplier=largest, amplitudes=amplitudes,
+                coefficients=coefficients, harmonics=shooting.H, change=change, node=system.nodes[where],
+                force_amplitude=shooting.force_amplitude, load_node=system.nodes[system.load_node],
+                base_amplitude=shooting.base_amplitude)
