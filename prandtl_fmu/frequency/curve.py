@@ -41,7 +41,8 @@ class Curve:
     every node with a mass; ``coefficients`` (points, n, 2 H + 1) of x; ``harmonics`` H; ``change`` the relative
     change of the first harmonic at the last increase of H (None when H was given); ``force_amplitude`` F0, or
     None under base excitation, whose ``base_amplitude`` Y0 it is (x then the absolute motion, see the
-    module)."""
+    module); ``method``: how the periodic states were found ("harmonic balance", or "shooting", whose
+    ``harmonics`` are only those kept in ``coefficients``)."""
 
     frequency: np.ndarray
     amplitude: np.ndarray
@@ -57,6 +58,7 @@ class Curve:
     force_amplitude: Optional[float]
     load_node: str
     base_amplitude: Optional[float] = None
+    method: str = "harmonic balance"  # or "shooting" (friction on the mass: shooting.py), as the figures say
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,

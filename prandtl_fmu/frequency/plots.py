@@ -148,7 +148,7 @@ def draw_curve(curves, axes, backbone=None) -> None:
     if several:
         amplitude_axes.plot([], [], "--", color="0.4", label="unstable")
     else:
-        amplitude_axes.plot([], [], "-", color="C0", label=f"stable (H = {first.harmonics})")
+        amplitude_axes.plot([], [], "-", color="C0", label=f"stable ({_how(first)})")
         amplitude_axes.plot([], [], "--", color="C0", label="unstable")
     if any(None in curve.stable.tolist() for curve in curves):
         amplitude_axes.plot([], [], ":", color="0.4", label="stability not computed")
@@ -166,8 +166,7 @@ def draw_curve(curves, axes, backbone=None) -> None:
     amplitude_axes.set_yscale("log")
     amplitude_axes.set_xlabel("frequency f (Hz)")
     amplitude_axes.set_ylabel(f"amplitude of x_{first.node} (m)")
-    amplitude_axes.set_title(f"harmonic balance (H = {first.harmonics})" if several
-                             else f"harmonic balance, {_excitation(first)}")
+    amplitude_axes.set_title(_how(first) if several else f"{first.method}, {_excitation(first)}")
     phase_axes.set_xlabel("frequency f (Hz)")
     phase_axes.set_ylabel("phase of x against " + ("the base's motion" if first.base_amplitude is not None
                                                    else "F") + " (degrees)")
@@ -176,6 +175,13 @@ def draw_curve(curves, axes, backbone=None) -> None:
         ax.grid(alpha=0.3, which="both")
         if ax.get_legend_handles_labels()[0]:  # the phase panel has labels only where something is drawn over
             ax.legend(fontsize=8)
+
+
+def _how(curve) -> str:
+    """How the curve was found, for a title: harmonic balance with its H, or shooting on the exact stepper."""
+    if curve.method == "harmonic balance":
+        return f"harmonic balance (H = {curve.harmonics})"
+    return f"{curve.method} on the scene's stepper"
 
 
 def _excitation(curve) -> str:
@@ -189,7 +195,8 @@ def plot_curve(curves, scene, path: str, backbone=None) -> None:
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     draw_curve(curves, axes, backbone)
-    fig.suptitle(f"{scene.name}: forced response by harmonic balance")
+    method = (curves[0] if isinstance(curves, (list, tuple)) else curves).method
+    fig.suptitle(f"{scene.name}: forced response by {method}")
     save_figure(fig, path)
 
 
