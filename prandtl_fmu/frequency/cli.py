@@ -3,7 +3,8 @@
     prandtl-fmu describe SCENE --amplitudes A1,A2,... [--frequency F] [--between I,J] [--tolerance TOL] [--out CSV]
                          [--plot PNG]
     prandtl-fmu describe SCENE (--force-amplitude F0[,F1,...] | --base-amplitude Y0[,Y1,...])
-                         --frequencies f1,f2,... [--harmonics H] [--node NAME] [--load-node NAME] [--tolerance TOL]
+                         --frequencies f1,f2,... [--harmonics H] [--harmonic-amplitudes K1,...] [--node NAME]
+                         [--load-node NAME] [--tolerance TOL]
                          [--scheduler ADDRESS | --workers N] [--out CSV] [--plot PNG]
     prandtl-fmu describe SCENE --force-amplitude F0 --frequencies f1,f2,... --method time [--sweep up|down|both]
                          [--stepper S] [--tolerance TOL] [--scheduler ADDRESS | --workers N] [--out CSV]
@@ -11,7 +12,8 @@
     prandtl-fmu describe SCENE --mode 1 --amplitudes A1,A2,... [--harmonics H] [--node NAME] [--out CSV]
 
 The first writes ``amplitude,stiffness,dissipation,loss_factor,method,error``; the second (harmonic balance,
-the default) ``frequency,amplitude,phase,stable``, ``amplitude_<node>`` for every node with a mass, ``fold`` and
+the default) ``frequency,amplitude,phase,stable``, ``amplitude_<node>`` for every node with a mass (then
+``amplitude_<node>_h<k>`` for each harmonic k of ``--harmonic-amplitudes``), ``fold`` and
 ``multiplier`` (with several amplitudes, one curve per amplitude, one after the other, and the column
 ``force_amplitude`` or ``base_amplitude`` after ``stable``; under base excitation x is the absolute motion);
 the third (the time sweep) ``frequency,amplitude,phase,sweep,steps_per_period,periods,error`` (phase in
@@ -29,7 +31,8 @@ _EPILOG = ("Output columns: amplitude (m), stiffness K(A) (N/m), dissipation D(A
            "method (exact, spectrum or quadrature), error (estimated relative error; 0: rounding only); or "
            "frequency (Hz), amplitude (m) and phase (radians, of x against F0 cos(2 pi f t): x = amplitude "
            "cos(2 pi f t + phase); with --base-amplitude, of the absolute x against the base's Y0 cos(2 pi f t)), "
-           "then stable, force_amplitude or base_amplitude (several amplitudes only), amplitude_<node>, fold, "
+           "then stable, force_amplitude or base_amplitude (several amplitudes only), amplitude_<node>, "
+           "amplitude_<node>_h<k> (--harmonic-amplitudes), fold, "
            "multiplier (harmonic balance) or sweep (up "
            "or down), steps_per_period, periods, error (--method time); or amplitude, frequency, damping_ratio "
            "(--mode). Exit status 2, one line, nothing written, on bad input and when a result cannot reach the "
@@ -68,6 +71,10 @@ def add_parser(commands, scene_help: str) -> None:
                                "shooting on the exact stepper) or time (the time-integration sweep)")
     describe.add_argument("--harmonics", metavar="H",
                           help="harmonics of the harmonic balance (default: chosen by --tolerance)")
+    describe.add_argument("--harmonic-amplitudes", metavar="K1,K2,...",
+                          help="of the frequency response (harmonic balance): the amplitudes of these higher "
+                               "harmonics (whole numbers >= 2) of x at every node with a mass, as columns "
+                               "amplitude_<node>_h<k> after amplitude_<node>")
     describe.add_argument("--node", metavar="NAME",
                           help="node whose first harmonic gives amplitude and phase (default: the first node with "
                                "a mass)")
@@ -131,7 +138,7 @@ def _check(args) -> dict:
         if args.method == "time":
             raise ValueError("--mode belongs to --method harmonic-balance, not to --method time")
         mode = _check_mode(_copy_args(args, force_amplitude=None, base_amplitude=None, frequencies=None,
-                                      load_node=None, scheduler=None, workers=None))
+                                      load_node=None, scheduler=None, workers=None, harmonic_amplitudes=None))
         args = _copy_args(args, amplitudes=None, mode=None)
         values = _check(args)
         values["backbone"] = mode
@@ -145,7 +152,7 @@ def _check(args) -> dict:
                               ("--stepper", args.stepper), ("--scheduler", args.scheduler),
                               ("--workers", args.workers), ("--method", args.method),
                               ("--harmonics", args.harmonics), ("--node", args.node),
-                              ("--load-node", args.load_node)):
+                              ("--load-node", args.load_node), ("--harmonic-amplitudes", args.harmonic_amplitudes)):
             if value is not None:
                 raise ValueError(f"{option} belongs to the frequency response (--force-amplitude or "
                                  "--base-amplitude), not to --amplitudes")
@@ -160,7 +167,7 @@ def _check(args) -> dict:
         method = args.method or "harmonic-balance"
         wrong = (("--sweep", args.sweep), ("--stepper", args.stepper)) if method == "harmonic-balance" else (
                  ("--harmonics", args.harmonics), ("--node", args.node), ("--load-node", args.load_node),
-                 ("--base-amplitude", args.base_amplitude))
+                 ("--base-amplitude", args.base_amplitude), ("--harmonic-amplitudes", args.harmonic_amplitudes))
         for option, value in wrong:
             if value is not None:
                 other = "time" if method == "harmonic-balance" else "harmonic-balance"
@@ -185,6 +192,9 @@ def _check(args) -> dict:
                              "harmonic-balance; --method time takes one")
         if args.harmonics is not None:
             values["harmonics"] = _whole(args.harmonics, "--harmonics", 1, 256)
+        if args.harmonic_amplitudes is not None:
+            values["orders"] = tuple(_whole(k, "--harmonic-amplitudes", 2, 256)
+                                     for k in args.harmonic_amplitudes.split(","))
         if args.workers is not None:
             if not args.workers.strip().isdigit() or int(args.workers) < 1:
                 raise ValueError(f"--workers: must be a whole number >= 1, got {args.workers!r}")
@@ -217,7 +227,8 @@ def _check_mode(args) -> dict:
                           ("--frequencies", args.frequencies),
                           ("--frequency", args.frequency), ("--sweep", args.sweep), ("--stepper", args.stepper),
                           ("--scheduler", args.scheduler), ("--workers", args.workers), ("--method", args.method),
-                          ("--load-node", args.load_node), ("--between", args.between)):
+                          ("--load-node", args.load_node), ("--between", args.between),
+                          ("--harmonic-amplitudes", args.harmonic_amplitudes)):
         if value is not None:
             raise ValueError(f"{option} does not belong to a nonlinear mode (--mode)")
     values = {"mode": _whole(args.mode, "--mode", 1, 10000), "amplitudes": _numbers(args.amplitudes, "--amplitudes"),
@@ -277,7 +288,8 @@ def run(args) -> int:
             curves = harmonic_responses(scene, values["frequencies"], **{key: values["load_amplitudes"]},
                                         harmonics=values.get("harmonics"), node=args.node,
                                         load_node=args.load_node, tolerance=values["tolerance"],
-                                        scheduler=args.scheduler, workers=values.get("workers"))
+                                        orders=values.get("orders", ()), scheduler=args.scheduler,
+                                        workers=values.get("workers"))
             result = curves.curves[0] if len(curves.curves) == 1 else curves
             if "backbone" in values:
                 from .modes import nonlinear_mode

@@ -59,10 +59,12 @@ class Curve:
     load_node: str
     base_amplitude: Optional[float] = None
     method: str = "harmonic balance"  # or "shooting" (friction on the mass: shooting.py), as the figures say
+    orders: tuple = ()  # the higher harmonics whose amplitudes the columns carry (amplitude_<node>_h<k>)
+    node_names: tuple = ()  # every node's name, in the order of the coefficients' second axis
 
     def columns(self) -> dict:
-        """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, fold,
-        multiplier. A curve computed without its stability (``stability=False``) has no such columns: it
+        """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, then
+        amplitude_<node>_h<k> per node with a mass and harmonic k of ``orders``, fold, multiplier. A curve computed without its stability (``stability=False``) has no such columns: it
         says nothing it did not compute."""
         if self.stable is None:
             raise ValueError("the curve was computed without its stability (stability=False): no stable column")
@@ -70,10 +72,18 @@ class Curve:
                "stable": [None if s is None else "true" if s else "false" for s in self.stable.tolist()]}
         for name, values in self.amplitudes.items():
             out[f"amplitude_{name}"] = values
+        for index, name in self._massive():
+            for k in self.orders:
+                out[f"amplitude_{name}_h{k}"] = np.hypot(self.coefficients[:, index, 2 * k - 1],
+                                                         self.coefficients[:, index, 2 * k])
         out["fold"] = ["true" if f else "false" for f in self.fold.tolist()]
         # an empty field where the multipliers were not computed (the point's stability is its neighbours')
         out["multiplier"] = [None if math.isnan(m) else m for m in self.multiplier.tolist()]
         return out
+
+    def _massive(self) -> list:
+        """(index among the coefficients' nodes, name) of every node with a mass, in the order of ``amplitudes``."""
+        return [(self.node_names.index(name), name) for name in self.amplitudes]
 
     @property
     def folds(self) -> np.ndarray:
@@ -84,7 +94,8 @@ class Curve:
 def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencies=None, *,
                       harmonics: Optional[int] = None, node: Optional[str] = None, load_node: Optional[str] = None,
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True,
-                      samples: Optional[int] = None, base_amplitude: Optional[float] = None) -> Curve:
+                      samples: Optional[int] = None, base_amplitude: Optional[float] = None,
+                      orders=()) -> Curve:
     """The forced response of ``scene`` (an element with ``[mass]`` or a network) to F0 cos(2 pi f t), or
     (``base_amplitude`` Y0 instead of ``force_amplitude``) to the base's motion Y0 cos(2 pi f t), from the
     lowest of ``frequencies`` (Hz) to the highest (see the module). ``node``: where amplitude and phase are
@@ -106,10 +117,14 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
         raise FrequencyError("frequencies: at least one value is needed")
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
+    orders = check_orders(orders, harmonics)
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
-        return Curve(**shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
-                                                  harmonics=harmonics, node=node, load_node=load_node,
-                                                  tolerance=tolerance, stability=stability, samples=samples))
+        fields = shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
+                                            harmonics=harmonics if harmonics is not None or not orders else
+                                            max(shooting.DEFAULT_HARMONICS, max(orders)),
+                                            node=node, load_node=load_node, tolerance=tolerance, stability=stability,
+                                            samples=samples)
+        return Curve(**fields, orders=orders)
     system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
@@ -120,8 +135,8 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
         change = None
     else:
         balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
-                                                    where, tolerance, samples)
-    return _curve(balance, points, where, stability, change)
+                                                    where, tolerance, samples, max(orders, default=1))
+    return _curve(balance, points, where, stability, change, orders)
 
 
 def _first_harmonic(balance, points, where) -> np.ndarray:
@@ -139,9 +154,12 @@ def _summary(balance, points, where) -> np.ndarray:
 
 
 def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,
-                      samples) -> tuple:
+                      samples, lowest: int = 1) -> tuple:
     previous, change = None, math.inf
-    for H in HARMONIC_STEPS:
+    if lowest > HARMONIC_STEPS[-1]:
+        raise FrequencyError(f"harmonic amplitudes: harmonic {lowest} is above the {HARMONIC_STEPS[-1]} harmonics "
+                             "--tolerance chooses from: give --harmonics")
+    for H in [h for h in HARMONIC_STEPS if h >= lowest]:
         balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
                                   base_amplitude)
         points = continue_curve(balance, low, high, count)
@@ -156,7 +174,7 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
                          "give --harmonics, or a larger --tolerance")
 
 
-def _curve(balance, points, where, stability, change) -> Curve:
+def _curve(balance, points, where, stability, change, orders=()) -> Curve:
     from .floquet import is_stable, multipliers
 
     system = balance.system
@@ -185,7 +203,25 @@ def _curve(balance, points, where, stability, change) -> Curve:
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return Curve(omega / (2.0 * math.pi), np.abs(X), phase, stable, np.array([p[2] for p in points], dtype=bool),
                  largest, amplitudes, coefficients, balance.H, change, system.nodes[where], balance.force_amplitude,
-                 system.nodes[system.load_node], balance.base_amplitude)
+                 system.nodes[system.load_node], balance.base_amplitude, orders=tuple(orders),
+                 node_names=tuple(system.nodes))
+
+
+def check_orders(orders, harmonics: Optional[int]) -> tuple:
+    """The harmonics whose amplitudes the columns carry (``orders``: whole numbers in [2, 256], each once, in
+    the order given); FrequencyError naming the culprit, or an order above the ``harmonics`` given."""
+    out = []
+    for k in orders:
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= 256:
+            raise FrequencyError(f"harmonic amplitudes: each must be a whole number in [2, 256] (the first "
+                                 f"harmonic is the amplitude column), got {k!r}")
+        if int(k) in out:
+            raise FrequencyError(f"harmonic amplitudes: {int(k)} is given twice")
+        if harmonics is not None and k > harmonics:
+            raise FrequencyError(f"harmonic amplitudes: harmonic {int(k)} is above the {harmonics} harmonics kept "
+                                 "(--harmonics): give more, or leave --harmonics out")
+        out.append(int(k))
+    return tuple(out)
 
 
 # ----------------------------------------------------------------- many curves: a parameter study

@@ -449,4 +449,4 @@ def _curve(shooting, points, where, stability, change) -> dict:
                 fold=np.array([p[2] for p in points], dtype=bool), multiplier=largest, amplitudes=amplitudes,
                 coefficients=coefficients, harmonics=shooting.H, change=change, node=system.nodes[where],
                 force_amplitude=shooting.force_amplitude, load_node=system.nodes[system.load_node],
-                base_amplitude=shooting.base_amplitude, method="shooting")
+                base_amplitude=shooting.base_amplitude, method="shooting", node_names=tuple(system.nodes))

@@ -164,3 +164,46 @@ def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables,
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists()
+
+
+def test_higher_harmonics_are_the_closed_form_orbit_s_and_the_balance_s(tmp_path):
+    """--harmonic-amplitudes 3,5: the columns amplitude_mass_h3 and _h5. By shooting (friction), the closed-form
+    non-stop orbit's third and fifth harmonics to 1e-7 (no truncation: the orbit's own); by harmonic balance
+    (the Duffing oscillator with H = 9), |a_3 - i b_3| of its coefficients, and the same to 1e-4 at H = 15."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    curve = harmonic_response(element(COULOMB), 1.0, [1.5 / (2 * math.pi), 2.5 / (2 * math.pi)], tolerance=1e-7,
+                              orders=(3, 5))
+    columns = curve.columns()
+    assert list(columns)[4:7] == ["amplitude_mass", "amplitude_mass_h3", "amplitude_mass_h5"]
+    for f, third, fifth in zip(curve.frequency, columns["amplitude_mass_h3"], columns["amplitude_mass_h5"]):
+        omega = 2 * math.pi * f
+        _, _, x, t = non_stop_orbit(1.0, 1.0, 0.1, 1.0, omega)
+        for k, value in ((3, third), (5, fifth)):
+            assert value == pytest.approx(abs(x @ np.exp(-1j * k * omega * t)) * 2.0 / t.size, rel=1e-6)
+    duffing = {key: value for key, value in DUFFING.items() if key != "friction"}
+    out = tmp_path / "duffing.csv"
+    for H in (9, 15):
+        assert main(["describe", write(tmp_path, duffing), "--force-amplitude", "0.2", "--frequencies", "0.1,0.15",
+                     "--harmonics", str(H), "--harmonic-amplitudes", "3", "--out", str(out)]) == 0
+        table = read_csv(out)
+        third = float(table["amplitude_mass_h3"][-1])
+        assert third > 1e-4 * float(table["amplitude"][-1])  # a cubic spring makes a third harmonic
+        if H == 15:
+            assert third == pytest.approx(previous, rel=1e-4)
+        previous = third
+
+
+@pytest.mark.parametrize("options, culprit", [
+    (["--harmonic-amplitudes", "1"], "[2, 256]"),
+    (["--harmonic-amplitudes", "3,3"], "twice"),
+    (["--harmonics", "3", "--harmonic-amplitudes", "5"], "above the 3 harmonics"),
+    (["--method", "time", "--harmonic-amplitudes", "3"], "--harmonic-amplitudes"),
+])
+def test_bad_harmonic_amplitudes_are_one_line(tmp_path, capsys, options, culprit):
+    out = tmp_path / "out.csv"
+    assert main(["describe", write(tmp_path, DAMPED), "--force-amplitude", "0.3", "--frequencies", "0.1,0.2",
+                 *options, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
