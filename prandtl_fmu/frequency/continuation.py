@@ -74,8 +74,9 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                 if step < MIN_STEP:
                     raise FrequencyError(
                         f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} Hz (first-"
-                        f"harmonic amplitude {balance.amplitude_at(q, omega)!r} m): the corrector does not converge even "
-                        f"with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the curve)")
+                        f"harmonic amplitude {balance.amplitude_at(q, omega)!r} m): the corrector does not "
+                        f"converge even with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the "
+                        "curve)")
         q_new, omega_new, iterations = new
         if omega_new < omega_min - 1e-9 * span:
             raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "

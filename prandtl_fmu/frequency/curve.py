@@ -64,8 +64,9 @@ class Curve:
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, then
-        amplitude_<node>_h<k> per node with a mass and harmonic k of ``orders``, fold, multiplier. A curve computed without its stability (``stability=False``) has no such columns: it
-        says nothing it did not compute."""
+        amplitude_<node>_h<k> per node with a mass and harmonic k of ``orders``, fold, multiplier. A curve
+        computed without its stability (``stability=False``) has no such columns: it says nothing it did not
+        compute."""
         if self.stable is None:
             raise ValueError("the curve was computed without its stability (stability=False): no stable column")
         out = {"frequency": self.frequency, "amplitude": self.amplitude, "phase": self.phase,

@@ -501,9 +501,9 @@ c = 0.02
 def test_every_point_of_a_finite_difference_curve_has_its_own_multipliers():
     """A joint behind a massless node (the finite differences of floquet.py, not the variational equation): every
     point's multipliers are computed (none inferred from its neighbours), and the largest agrees with the
-    monodromy at 8 and 16 times the steps where the verdict could turn. At the resonance peak, extrapolating the matrices (2 Phi_2M - Phi_M)
-    instead of the multipliers gave |mu| = 1.12 where both resolutions say 0.87 and 0.90 (a stable point called
-    unstable)."""
+    monodromy at 8 and 16 times the steps where the verdict could turn. At the resonance peak, extrapolating
+    the matrices (2 Phi_2M - Phi_M) instead of the multipliers gave |mu| = 1.12 where both resolutions say 0.87
+    and 0.90 (a stable point called unstable)."""
     from prandtl_fmu.frequency import floquet
     from prandtl_fmu.frequency.curve import harmonic_response
     from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system

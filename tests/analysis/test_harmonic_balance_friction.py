@@ -13,7 +13,7 @@ from tests.analysis.test_harmonic_balance import element
 
 COULOMB = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "friction": {"alpha": 0.1}}
 DAMPED = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02}, "friction": {"alpha": 0.1}}
-# a hardening spring with a dashpot and friction: two folds, an unstable part between them (verlet: the cubic)
+# a hardening spring with a dashpot (harmonic balance) and with friction besides (refused: no exact stepper)
 DUFFING = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05},
            "friction": {"alpha": 0.01}}
 
@@ -107,38 +107,28 @@ def test_the_orbit_is_periodic_over_the_whole_period():
         assert np.max(np.abs(end - s)) <= 1e-9 * np.max(np.abs(s))
 
 
-@pytest.mark.slow
-def test_duffing_with_friction_has_two_folds_and_its_unstable_part_leaves_its_orbit():
-    """Folds located (the frequency turns there), the points between them unstable, and integrated from 1e-6
-    off their orbit for 200 periods: an unstable point's motion leaves it (its first harmonic changes by more
-    than 1e-2 relative: here it lands on the upper branch), a stable one comes back (by less than 1e-8)."""
-    from prandtl_fmu.frequency.continuation import continue_curve
-    from prandtl_fmu.frequency.curve import harmonic_response
-    from prandtl_fmu.frequency.floquet import is_stable
-    from prandtl_fmu.frequency.response import choose_stepper, _forced
+@pytest.mark.parametrize("omega", [0.6, 2.0])
+def test_the_multipliers_are_the_non_stop_motion_s_monodromy_with_its_saltations(omega):
+    """Den Hartog's non-stop orbit (no dashpot): between reversals the perturbation obeys the linear oscillator,
+    exp(A T/2); at a reversal v crosses 0 and the friction jumps by 2 alpha, the saltation diag(1, a+ / a-)
+    (a- and a+ the accelerations before and after). The monodromy S_0 exp(A T/2) S_T/2 exp(A T/2), written out
+    here, has the multipliers shooting finds from its differences (to 1e-5)."""
     from prandtl_fmu.frequency.shooting import ElementShooting, prepared
 
-    curve = harmonic_response(element(DUFFING), 0.2, [0.5 / (2 * math.pi), 2.5 / (2 * math.pi)])
-    assert curve.folds.size == 2
-    first, second = curve.folds
-    f = curve.frequency
-    assert f[first - 1] < f[first] > f[first + 1] and f[second - 1] > f[second] < f[second + 1]
-    unstable = np.flatnonzero(~curve.stable)
-    assert unstable.size >= 3 and first <= unstable.min() and unstable.max() <= second
-    # the same curve's states, to integrate from
-    scene = prepared(element(DUFFING))
-    shooting = ElementShooting(scene, 0.2, None, 1024, 7, 1.0, choose_stepper(_forced(scene, 1.0, 0.2)))
-    points = continue_curve(shooting, 0.5, 2.5, 2)
-    stable = np.array([is_stable(shooting.multipliers(s, w)) for w, s, _ in points])
-    folds = [i for i, p in enumerate(points) if p[2]]
-    inside = np.flatnonzero(~stable)
-    assert len(folds) == 2 and inside.size and folds[0] <= inside.min() and inside.max() <= folds[1]
-    for index, leaves in ((inside[inside.size // 2], True), (folds[0] // 2, False)):
-        omega, s, _ = points[index]
-        amplitude = shooting.amplitude_at(s, omega)
-        end = shooting.run(s * (1.0 + 1e-6), omega, 2 * 200)[0]  # off the orbit by a little, 200 periods
-        moved = abs(shooting.amplitude_at(end, omega) - amplitude) / amplitude
-        assert (moved > 1e-2) if leaves else (moved < 1e-8), (index, moved)
+    m, k, alpha, F0 = 1.0, 1.0, 0.1, 1.0
+    X, phi, _, _ = non_stop_orbit(m, k, alpha, F0, omega)
+    half = math.pi / omega
+    wn = math.sqrt(k / m)
+    rotation = np.array([[math.cos(wn * half), math.sin(wn * half) / wn],
+                         [-wn * math.sin(wn * half), math.cos(wn * half)]])  # exp(A T/2), A = [[0, 1], [-k/m, 0]]
+    force_start, force_half = F0 * math.cos(phi), F0 * math.cos(omega * half + phi)
+    # at t = 0 (x = -X) v turns from - to +: the friction from +alpha to -alpha; at T/2 (x = X) the other way
+    start = np.diag([1.0, (force_start + k * X - alpha) / (force_start + k * X + alpha)])
+    middle = np.diag([1.0, (force_half - k * X + alpha) / (force_half - k * X - alpha)])
+    expected = np.sort_complex(np.linalg.eigvals(start @ rotation @ middle @ rotation))
+    shooting = ElementShooting(prepared(element(COULOMB)), F0, None, 256, 7, 1.0)
+    found = np.sort_complex(shooting.multipliers(shooting.solve_at(omega), omega))
+    assert found == pytest.approx(expected, abs=1e-5)
 
 
 def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
@@ -156,6 +146,8 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
     (dict(COULOMB, delay={"gain": 0.1, "tau": 0.5}), [], "[delay]"),
     (COULOMB, ["--node", "nowhere"], "'nowhere'"),
     (COULOMB, ["--mode", "1", "--amplitudes", "0.1"], "no nonlinear mode"),
+    (DUFFING, [], "exact stepper"),
+    (dict(COULOMB, friction={"alpha": 0.1, "alpha_kinetic": 0.07, "stribeck_velocity": 0.05}), [], "exact stepper"),
 ])
 def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables, options, culprit):
     out = tmp_path / "out.csv"
