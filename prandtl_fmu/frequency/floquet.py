@@ -108,12 +108,16 @@ def refined(at, steps: int):
     (from the pair before, or for the first pair from its value at 2 M), or that change is below MARGIN / 2; at
     most REFINEMENTS times (then the finest pair's). None where ``at`` gives none before a first pair (a delay's
     buffer too long), else the finest pair's where a finer one has none."""
+    fine = at(2 * steps)  # first: where the finer has none (a delay's buffer past its bound), nothing is run
+    if fine is None:
+        return None
     coarse = at(steps)
     if coarse is None:
         return None
     values, previous = None, None
     for level in range(1, REFINEMENTS + 1):
-        fine = at(steps * 2**level)
+        if level > 1:
+            fine = at(steps * 2**level)
         if fine is None:
             return values
         values = extrapolated(fine[np.argsort(-np.abs(fine))[:min(LARGEST, fine.size)]], coarse)

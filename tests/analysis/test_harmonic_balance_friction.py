@@ -69,6 +69,7 @@ def test_coulomb_friction_is_den_hartogs_non_stop_motion(band):
         assert phase == pytest.approx(np.angle(first), abs=1e-7)
 
 
+@pytest.mark.slow
 def test_the_friction_damper_agrees_with_the_time_sweep():
     """A mass on a spring and a dashpot with Coulomb friction through its resonance: stable everywhere, and at
     five of its points the exact stepper's time sweep (run to 1e-5) gives the same first harmonic to 1e-4."""
@@ -92,6 +93,7 @@ def test_a_mass_that_friction_holds_still_does_not_move():
     assert np.all(curve.amplitude == 0.0) and np.all(curve.phase == 0.0) and np.all(curve.stable)
 
 
+@pytest.mark.slow
 def test_the_orbit_is_periodic_over_the_whole_period():
     """The symmetry solved for over half a period is the motion's: one whole period of the stepper from a point's
     state comes back to it (to the Newton tolerance), on the damper with a branch besides the friction."""
@@ -107,6 +109,7 @@ def test_the_orbit_is_periodic_over_the_whole_period():
         assert np.max(np.abs(end - s)) <= 1e-9 * np.max(np.abs(s))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("omega", [0.6, 2.0])
 def test_the_multipliers_are_the_non_stop_motion_s_monodromy_with_its_saltations(omega):
     """Den Hartog's non-stop orbit (no dashpot): between reversals the perturbation obeys the linear oscillator,
@@ -158,6 +161,7 @@ def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables,
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_higher_harmonics_are_the_closed_form_orbit_s_and_the_balance_s(tmp_path):
     """--harmonic-amplitudes 3,5: the columns amplitude_mass_h3 and _h5. By shooting (friction), the closed-form
     non-stop orbit's third and fifth harmonics to 1e-7 (no truncation: the orbit's own); by harmonic balance
