@@ -1,16 +1,16 @@
 """The periodic state of an element with Coulomb friction on its mass (``[friction]``), by shooting on the
-scene's own stepper: the whole curve, its folds and the stability of every point.
+exact stepper: the whole curve, its folds and the stability of every point.
 
 Why not harmonic balance: the friction's force while the mass sticks is set by the balance of the other forces,
 not by the motion, so alternating frequency-time cannot sample it (a slider behind a spring, a Prandtl branch,
 is sampled exactly). The dynamic Lagrangian of the contact was tried and measured (docs/frequency.md): its root
 depends on its penalty at finite H and it stays 0.1 to 0.6 % off the time sweep at H = 63. The orbit itself has
-no such limit: the steppers that ``--method time`` runs integrate it exactly (``exact``: closed form between
-events, stick and slip located to rounding) or to a stated order, so the periodic state is found as the fixed
-point of the stepper's map over one period, and its harmonics are those of the orbit (never truncated).
+no such limit: the ``exact`` stepper that ``--method time`` runs integrates it exactly (closed form between
+events, stick and slip located to rounding), so the periodic state is found as the fixed point of the stepper's
+map over one period, and its harmonics are those of the orbit (never truncated).
 
-**Half a period, by symmetry.** Every force of such a scene is odd in (x, v, u) (springs, the cubic spring, the
-dashpot, the branches, Coulomb or Stribeck friction on a fixed ground) and the force F0 cos(omega t) turns sign
+**Half a period, by symmetry.** Every force of such a scene is odd in (x, v, u) (springs, the dashpot, the
+branches, Coulomb friction on a fixed ground) and the force F0 cos(omega t) turns sign
 over half a period, so the periodic state has x(t + T/2) = -x(t) (v and every u too). Shooting solves
 
     R(s, omega) = -Phi(s, omega) - s = 0,    s = (x, v / omega_ref, u_1 ... u_n) at t = 0,
