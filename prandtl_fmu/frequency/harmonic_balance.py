@@ -81,8 +81,30 @@ SPECTRUM_MAX_NODES = 1024
 SPECTRUM_AMPLITUDES = 25
 
 
+class Nodes:
+    """What a system of nodes says of them (its ``nodes`` names, ``mass`` array and ``source``): the periodic
+    system here and the shooting's (``shooting.py``)."""
+
+    @property
+    def n(self) -> int:
+        return len(self.nodes)
+
+    @property
+    def massive(self) -> list:
+        """The indices of the nodes with a mass."""
+        return [i for i in range(self.n) if self.mass[i] > 0]
+
+    def node_index(self, name: Optional[str], default: Optional[int] = None) -> int:
+        """The index of node ``name`` (None: ``default``, else the first node with a mass)."""
+        if name is None:
+            return self.massive[0] if default is None else default
+        if name not in self.nodes:
+            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({', '.join(self.nodes)})")
+        return self.nodes.index(name)
+
+
 @dataclass(frozen=True, eq=False)
-class PeriodicSystem:
+class PeriodicSystem(Nodes):
     """A scene as n nodes (see the module): ``nodes`` names, ``mass`` (n,), ``stiffness`` and ``damping``
     (n, n); the nonlinear elements as (count, 2) ``*_ends`` (-1: the ground), ``cubic_k3``, ``branch_k``,
     ``branch_eta``, each with the index of its pair of nodes in ``pairs``; ``load_node``; ``network``: the same
@@ -111,23 +133,6 @@ class PeriodicSystem:
     held: np.ndarray
     series: tuple = ()
     memory: Optional["MemoryEffects"] = None
-
-    @property
-    def n(self) -> int:
-        return len(self.nodes)
-
-    @property
-    def massive(self) -> list:
-        """The indices of the nodes with a mass."""
-        return [i for i in range(self.n) if self.mass[i] > 0]
-
-    def node_index(self, name: Optional[str], default: Optional[int] = None) -> int:
-        """The index of node ``name`` (None: ``default``, else the first node with a mass)."""
-        if name is None:
-            return self.massive[0] if default is None else default
-        if name not in self.nodes:
-            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({', '.join(self.nodes)})")
-        return self.nodes.index(name)
 
 
 @dataclass(frozen=True, eq=False)

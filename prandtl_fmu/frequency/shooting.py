@@ -62,7 +62,7 @@ from typing import Optional
 import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError
-from .harmonic_balance import ELEMENT_NODE, solve_linear
+from .harmonic_balance import ELEMENT_NODE, Nodes, solve_linear
 
 PERTURBATION = 1e-7
 NEWTON_ITERATIONS = 40
@@ -89,7 +89,7 @@ class StepFailed(FrequencyError):
 
 
 @dataclass(frozen=True, eq=False)
-class ShootingSystem:
+class ShootingSystem(Nodes):
     """The nodes of a scene, as ``harmonic_balance.PeriodicSystem`` names them to the curve and the continuation:
     ``nodes`` names, ``mass`` (n,) (0: massless), ``load_node`` the index of the node the force acts on."""
 
@@ -98,21 +98,6 @@ class ShootingSystem:
     nodes: tuple
     mass: np.ndarray
     load_node: int = 0
-
-    @property
-    def n(self) -> int:
-        return len(self.nodes)
-
-    @property
-    def massive(self) -> list:
-        return [i for i in range(self.n) if self.mass[i] > 0]
-
-    def node_index(self, name: Optional[str], default: Optional[int] = None) -> int:
-        if name is None:
-            return self.massive[0] if default is None else default
-        if name not in self.nodes:
-            raise FrequencyError(f"--node: {name!r} is not a node of {self.source} ({', '.join(self.nodes)})")
-        return self.nodes.index(name)
 
 
 def prepared(scene):
