@@ -194,9 +194,9 @@ def periodic_system(scene, load_node: Optional[str] = None, tolerance: float = D
     for element in network.elements:
         if element.kind == "slider":
             raise FrequencyError(f"{scene.source}: slider {element.name}: a slider's force is set-valued while it "
-                                 "sticks, which harmonic balance cannot sample (docs/frequency.md): model the joint "
-                                 "as branches (k, eta: a slider behind a spring), or integrate the network under "
-                                 "its harmonic [load] with prandtl-fmu run")
+                                 "sticks, which harmonic balance cannot sample (docs/frequency.md): the forced "
+                                 "response (--force-amplitude) is solved for by shooting on the network's motion; "
+                                 "else model the joint as branches (k, eta: a slider behind a spring)")
     if not np.any(network.mass > 0):
         raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one")
     n = network.n

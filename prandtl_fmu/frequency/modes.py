@@ -68,6 +68,12 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
                              "here: EPMC's negative damping would run the steppers outside the c >= 0 their events "
                              "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
                              "(--force-amplitude) is computed, or model the contact as a branch (k, alpha)")
+    sliders = [e.name for e in getattr(getattr(scene, "network", None), "elements", ()) if e.kind == "slider"]
+    if sliders:
+        raise FrequencyError(f"{scene.source}: slider {sliders[0]}: a network with rigid sliders has no nonlinear "
+                             "mode here: EPMC's negative damping would run its motion outside the c >= 0 its events "
+                             "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
+                             "(--force-amplitude) is computed, or model the joint as branches (k, eta)")
     system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:

@@ -78,10 +78,13 @@ FIRST_STEPS = 64
 
 
 def takes(scene) -> bool:
-    """Whether the forced response of ``scene`` is solved here: an element scene with ``[friction]``."""
+    """Whether the forced response of ``scene`` is solved here: an element scene with ``[friction]``, or a
+    network with sliders (the chain on a support among them)."""
     from ..network.model import NetworkScene
 
-    return not isinstance(scene, NetworkScene) and scene.friction is not None
+    if isinstance(scene, NetworkScene):
+        return bool(scene.network.of_kind("slider"))
+    return scene.friction is not None
 
 
 class StepFailed(FrequencyError):
@@ -104,6 +107,10 @@ def prepared(scene):
     """``scene`` as shooting runs it (a spectrum of branches as the harmonic balance's quadrature of branches);
     FrequencyError for what it does not take."""
     from ..effects import Branches
+    from ..network.model import NetworkScene
+
+    if isinstance(scene, NetworkScene):
+        return prepared_network(scene)
     from ..loads import HarmonicLoad
     from ..steppers import get_stepper
     from .harmonic_balance import spectrum_branches
@@ -128,6 +135,29 @@ def prepared(scene):
     except ValueError as exc:
         raise FrequencyError(f"{scene.source}: [friction] on the mass is solved for by shooting on the exact "
                              f"stepper, which does not take this scene ({exc}): use --method time") from None
+    return scene
+
+
+def prepared_network(scene):
+    """A network with sliders as :class:`NetworkShooting` runs it (``network_orbit.py``), or FrequencyError."""
+    network = scene.network
+    source = scene.source
+    massless = [node for node, m in zip(network.nodes, network.mass) if not m > 0]
+    if massless:
+        raise FrequencyError(f"{source}: node {massless[0]} is massless: the forced response of a network with "
+                             "sliders is solved for by shooting on its motion, which needs a mass at every node "
+                             "(a massless node on a slider is in equilibrium at every instant, a quasi-static "
+                             "problem): give it a mass, or integrate the network with prandtl-fmu run")
+    for element in network.elements:
+        if element.kind == "cubic":
+            raise FrequencyError(f"{source}: cubic {element.name}: the forced response of a network with sliders "
+                                 "(shooting on its motion, exact between events) takes springs, dashpots, sliders "
+                                 "and branches without series dashpots, not a cubic spring: integrate the network "
+                                 "with prandtl-fmu run")
+        if element.kind == "branch" and element.c > 0.0:
+            raise FrequencyError(f"{source}: branch {element.name}: the forced response of a network with sliders "
+                                 "(shooting on its motion, exact between events) takes branches without series "
+                                 "dashpots (c = 0): integrate the network with prandtl-fmu run")
     return scene
 
 
@@ -346,6 +376,79 @@ class ElementShooting(Shooting):
         return self._checked(end, out[:, :1].copy(), omega)
 
 
+class NetworkShooting(Shooting):
+    """A network with sliders: s = (x, v / omega_ref, u of the branches), the motion of ``network_orbit.py``
+    (every node with a mass; the force on the load's node, or under base excitation m_i Y0 omega^2 on every node
+    in coordinates relative to the ground)."""
+
+    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, load_node=None):
+        network = scene.network
+        n = network.n
+        load = network.load_node if load_node is None else network.nodes.index(load_node)
+        system = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float), load)
+
+        def row(element):
+            out = np.zeros(n)
+            p, q = element.between
+            out[p] += 1.0
+            if q >= 0:
+                out[q] -= 1.0
+            return out
+
+        self.stiffness_matrix = np.zeros((n, n))
+        self.damping = np.zeros((n, n))
+        sliders, branches = [], []
+        for element in network.elements:
+            d = row(element)
+            if element.kind == "spring":
+                self.stiffness_matrix += element.value * np.outer(d, d)
+            elif element.kind == "dashpot":
+                self.damping += element.value * np.outer(d, d)
+            elif element.kind == "slider":
+                sliders.append((d, element.value))
+            elif element.kind == "branch":
+                branches.append((d, element.value, element.eta))
+        self.rows = np.array([d for d, _ in sliders], dtype=float).reshape(len(sliders), n)
+        self.alpha = np.array([a for _, a in sliders], dtype=float)
+        self.brows = np.array([b[0] for b in branches], dtype=float).reshape(len(branches), n)
+        self.bk = np.array([b[1] for b in branches], dtype=float)
+        self.eta = np.array([b[2] for b in branches], dtype=float)
+        holding = self.stiffness_matrix + sum((k * np.outer(d, d) for d, k, _ in branches), np.zeros((n, n)))
+        super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, "exact",
+                         2 * n + len(branches), float(holding[load, load]))
+        self.force = np.zeros(n)
+        if base_amplitude is None:
+            self.force[load] = 1.0
+        else:
+            self.force[:] = system.mass
+        self.branches = len(branches)
+
+    def amplitude_of_force(self, omega: float) -> float:
+        if self.force_amplitude is not None:
+            return self.force_amplitude
+        return float(np.max(self.system.mass)) * self.base_amplitude * omega * omega
+
+    def run(self, s: np.ndarray, omega: float, half_periods: int = 1) -> tuple:
+        from .network_orbit import OK, explain, run
+
+        n = self.system.n
+        h = 2.0 * math.pi / omega / self.M
+        x = np.array(s[:n], dtype=float)
+        v = np.array(s[n:2 * n], dtype=float) * self.reference
+        u = np.clip(np.array(s[2 * n:], dtype=float), -self.eta, self.eta)
+        amplitude = self.force_amplitude if self.force_amplitude is not None else \
+            self.base_amplitude * omega * omega
+        steps = self.M // 2 * half_periods
+        out = np.empty((steps, n))
+        status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
+                            self.brows, self.bk, self.eta, self.force, float(amplitude), float(omega), x, v, u,
+                            h, steps, out)
+        if status != OK:
+            self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
+        end = np.concatenate((x, v / self.reference, u))
+        return self._checked(end, out, omega)
+
+
 # ----------------------------------------------------------------- the curve
 
 def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, harmonics: Optional[int] = None,
@@ -355,14 +458,20 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     the arguments are ``curve.harmonic_response``'s, checked there."""
     from .continuation import continue_curve
 
+    from ..network.model import NetworkScene
+
     scene = prepared(scene)
-    if load_node is not None and load_node != ELEMENT_NODE:
-        raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({ELEMENT_NODE})")
+    network = isinstance(scene, NetworkScene)
+    names = scene.network.nodes if network else (ELEMENT_NODE,)
+    if load_node is not None and load_node not in names:
+        raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({', '.join(names)})")
     H = DEFAULT_HARMONICS if harmonics is None else int(harmonics)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     reference = math.sqrt(low * high)
 
     def make(steps):
+        if network:
+            return NetworkShooting(scene, force_amplitude, base_amplitude, steps, H, reference, load_node)
         return ElementShooting(scene, force_amplitude, base_amplitude, steps, H, reference)
 
     shooting = make(max(FIRST_STEPS, 4 * H + 4 if samples is None else int(samples) + int(samples) % 2))

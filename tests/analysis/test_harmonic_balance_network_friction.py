@@ -1,0 +1,236 @@
+"""The forced response of a network with sliders (the chain on a support among them) by shooting on its motion,
+event by event and exact between events (``frequency/network_orbit.py``, ``frequency/shooting.py``): a node on
+a slider is Den Hartog's closed form, two masses that a slider locks together are one linear oscillator, random
+networks and a chain keep their orbit under the implicit stepper (its first-order error halves with the step
+towards it), stable points attract, the command line end to end, and what is refused."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.analysis.test_describe_cli import read_csv
+from tests.analysis.test_harmonic_balance_friction import non_stop_orbit
+
+
+SOLVER = '[solver]\nstepper = "implicit"\nstep = 0.001\nstop_time = 1.0\noutput_interval = 0.01\n'
+
+
+def network_text(nodes, mass, elements, load_node=None, name="net"):
+    """TOML of a network: ``elements`` a list of (kind, between, {key: value})."""
+    lines = [f'name = "{name}"', "[network]", "nodes = [" + ", ".join(f'"{n}"' for n in nodes) + "]",
+             "mass = [" + ", ".join(repr(float(m)) for m in mass) + "]"]
+    if load_node:
+        lines.append(f'load_node = "{load_node}"')
+    for kind, between, values in elements:
+        lines += [f"[[network.{kind}]]", "between = [" + ", ".join(f'"{b}"' for b in between) + "]"]
+        lines += [f"{key} = {float(value)!r}" for key, value in values.items()]
+    return "\n".join(lines) + "\n" + SOLVER
+
+
+def network(tmp_path, text, name="net.toml"):
+    from prandtl_fmu.scene import load_scene
+
+    path = tmp_path / name
+    path.write_text(text)
+    return load_scene(str(path))
+
+
+ONE_NODE = network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0}),
+                                       ("slider", ["a", "ground"], {"alpha": 0.1})])
+TWO_MASSES = "networks/two-masses-slider"
+
+
+def chain(n=4):
+    """The chain on a support of scenes/networks/chain-dynamic.toml, shortened to n nodes."""
+    return (f'name = "chain"\n[chain]\nn = {n}\nm = 0.1\nk = 1000.0\nalpha = 1.0\nc = 0.05\nk_wall = 1000.0\n' + SOLVER)
+
+
+def periodic_state(scene, force, f, steps=256):
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    omega = 2 * math.pi * f
+    shooting = NetworkShooting(scene, force, None, steps, 7, omega)
+    return shooting, shooting.solve_at(omega), omega
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("base", [False, True])
+def test_a_node_on_a_slider_is_den_hartogs_non_stop_motion(tmp_path, base):
+    """A mass on a spring and a slider to the ground, above its resonance: every point's first harmonic is the
+    closed-form orbit's to the tolerance asked (1e-7), stable; under base excitation Y0 cos(omega t) the same
+    orbit in coordinates relative to the ground, under m Y0 omega^2 cos(omega t), plus Y0."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene = network(tmp_path, ONE_NODE)
+    band = (1.3 / (2 * math.pi), 3.0 / (2 * math.pi))
+    if base:
+        curve = harmonic_response(scene, None, band, base_amplitude=0.5, tolerance=1e-7)
+    else:
+        curve = harmonic_response(scene, 1.0, band, tolerance=1e-7)
+    assert len(curve.frequency) >= 2 and np.all(curve.stable) and curve.method == "shooting"
+    for f, amplitude, phase in zip(curve.frequency, curve.amplitude, curve.phase):
+        omega = 2 * math.pi * f
+        X, phi, x, t = non_stop_orbit(1.0, 1.0, 0.1, 0.5 * omega * omega if base else 1.0, omega)
+        first = complex(x @ (np.exp(-1j * omega * t) * 2.0 / t.size)) * np.exp(-1j * phi)
+        if base:
+            first += 0.5
+        assert amplitude == pytest.approx(abs(first), rel=1e-7)
+        assert phase == pytest.approx(np.angle(first), abs=1e-7)
+
+
+@pytest.mark.slow
+def test_two_masses_a_slider_locks_together_are_one_linear_oscillator():
+    """Under a small force the slider between the two masses never slips (its tension stays below alpha): both
+    move as one mass m_a + m_b on the springs and the dashpot to the ground, in closed form."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.scene import load_scene
+
+    curve = harmonic_response(load_scene(TWO_MASSES), 0.05, [0.3, 1.2], tolerance=1e-9)
+    omega = 2 * math.pi * curve.frequency
+    locked = 0.05 / (500.0 - 3.0 * omega**2 + 0.5j * omega)
+    assert np.allclose(curve.amplitude, np.abs(locked), rtol=1e-9, atol=0)
+    assert np.allclose(curve.amplitudes["b"], np.abs(locked), rtol=1e-9, atol=0)
+    assert np.allclose(curve.phase, np.angle(locked), rtol=0, atol=1e-9)
+    assert np.all(curve.stable)
+
+
+def _implicit_errors(scene, shooting, s, omega, force, periods=1):
+    """The implicit stepper's motion from the periodic state at T / 4096 and T / 8192 per step: the largest
+    difference of x from the orbit's (relative), for each, and for their Richardson extrapolation (first order)."""
+    from prandtl_fmu.loads import HarmonicLoad
+    from prandtl_fmu.network.driver import simulate
+    from prandtl_fmu.scene_tables import Solver
+
+    n = scene.network.n
+    T = 2 * math.pi / omega
+    orbit = shooting.samples(s, omega)  # (n, M)
+    M = orbit.shape[1]
+    branches = iter(s[2 * n:])
+    elements = tuple(dataclasses.replace(e, u0=float(next(branches))) if e.kind == "branch" else e
+                     for e in scene.network.elements)
+    start = dataclasses.replace(scene.network, x0=np.array(s[:n]), v0=np.array(s[n:2 * n]) * shooting.reference,
+                                elements=elements)
+    runs = []
+    for steps in (4096, 8192):
+        run = dataclasses.replace(scene, network=start, load=HarmonicLoad(force, omega),
+                                  solver=Solver("implicit", T / steps, periods * T, T / M))
+        runs.append(simulate(run, progress=False).x[-M - 1:-1].T)
+    size = np.max(np.abs(orbit))
+    coarse, fine = (np.max(np.abs(x - orbit)) / size for x in runs)
+    extrapolated = np.max(np.abs(2 * runs[1] - runs[0] - orbit)) / size
+    return coarse, fine, extrapolated
+
+
+def random_network(seed):
+    """Two or three nodes with masses, springs to the ground, a dashpot, a slider between nodes or to the ground,
+    and a branch: TOML text and a force under which the sliders slip."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 4))
+    nodes = [f"n{i}" for i in range(n)]
+    elements = [("spring", [nodes[i], "ground"], {"k": rng.uniform(50, 400)}) for i in range(n)]
+    elements.append(("dashpot", [nodes[-1], "ground"], {"c": rng.uniform(0.2, 2.0)}))
+    elements.append(("slider", [nodes[0], nodes[1]], {"alpha": rng.uniform(0.5, 2.0)}))
+    elements.append(("slider", [nodes[-1], "ground"], {"alpha": rng.uniform(0.2, 1.0)}))
+    elements.append(("branch", [nodes[0], nodes[-1]], {"k": rng.uniform(20, 100), "eta": rng.uniform(0.005, 0.02)}))
+    return network_text(nodes, rng.uniform(0.5, 2.0, n), elements, load_node=nodes[0]), rng.uniform(3.0, 6.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["two masses", "chain", "random 1", "random 2", "random 3"])
+def test_the_implicit_stepper_converges_to_the_orbit(tmp_path, case):
+    """From the periodic state, one period of the implicit stepper (independent code: backward Euler with its
+    own stick and slip) differs from the orbit by its first-order error: halved when the step is halved, and
+    the Richardson extrapolation of the two is 10 times closer: the orbit is the time integration's limit."""
+    from prandtl_fmu.scene import load_scene
+
+    if case == "two masses":
+        scene, force, f = load_scene(TWO_MASSES), 2.0, 1.9
+    elif case == "chain":
+        scene, force, f = network(tmp_path, chain()), 6.0, 2.0
+    else:
+        text, force = random_network(int(case[-1]))
+        scene, f = network(tmp_path, text), 1.0
+    shooting, s, omega = periodic_state(scene, force, f)
+    assert np.max(np.abs(s[:scene.network.n])) > 0
+    coarse, fine, extrapolated = _implicit_errors(scene, shooting, s, omega, force)
+    assert 1.7 < coarse / fine < 2.3, (coarse, fine)
+    assert extrapolated < fine / 10, (fine, extrapolated)
+
+
+@pytest.mark.slow
+def test_a_stable_point_attracts_as_its_multipliers_say():
+    """A slipping point of the two masses: the multipliers inside the unit circle; the motion from a perturbed
+    state is the monodromy's prediction over six and twenty periods (the linearisation the multipliers come
+    from), and after twenty periods it is as near the orbit as the largest multiplier says (within a factor 5:
+    a complex pair of nearly the same size beats against it; a multiplier 0.1 off is a factor 40)."""
+    from prandtl_fmu.frequency.floquet import is_stable
+    from prandtl_fmu.scene import load_scene
+
+    shooting, s, omega = periodic_state(load_scene(TWO_MASSES), 2.0, 1.9, steps=64)
+    values = shooting.multipliers(s, omega)
+    assert is_stable(values)
+    largest = float(np.max(np.abs(values)))
+    assert 0.05 < largest < 0.95
+    turn = shooting.jacobian(s, omega) + np.eye(shooting.dimension)  # over half a period, turned
+    delta = np.zeros(shooting.dimension)
+    delta[0] = 1e-3 * np.max(np.abs(s))
+    state, distances = s + delta, []
+    for period in range(20):
+        state = shooting.run(state, omega, 2)[0]  # one whole period
+        distances.append(np.max(np.abs(state - s)))
+        if period == 5:
+            predicted = np.linalg.matrix_power(turn @ turn, 6) @ delta
+            assert np.max(np.abs(state - s - predicted)) < 1e-3 * np.max(np.abs(predicted))
+    # after 20 periods the prediction still holds, and the orbit is near at the largest multiplier's rate
+    predicted = np.linalg.matrix_power(turn @ turn, 20) @ delta
+    assert np.max(np.abs(state - s - predicted)) < 1e-2 * np.max(np.abs(predicted))
+    assert 0.2 * largest**20 < distances[19] / delta[0] < 5 * largest**20
+
+
+@pytest.mark.slow
+def test_the_chain_on_a_support_from_the_command_line(tmp_path):
+    """describe on a chain of four nodes on a support: the contract's columns, every node's amplitude, a
+    stable column of true or false, the figure."""
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "chain.toml"
+    path.write_text(chain())
+    out, plot = tmp_path / "curve.csv", tmp_path / "curve.png"
+    assert main(["describe", str(path), "--force-amplitude", "6", "--frequencies", "1,4", "--out", str(out),
+                 "--plot", str(plot)]) == 0
+    table = read_csv(out)
+    assert list(table)[:8] == ["frequency", "amplitude", "phase", "stable", "amplitude_n1", "amplitude_n2",
+                               "amplitude_n3", "amplitude_n4"]
+    f = np.array(table["frequency"], dtype=float)
+    assert f[0] == 1.0 and f[-1] == pytest.approx(4.0, rel=1e-12) and np.all(np.diff(f) != 0)
+    assert set(table["stable"]) <= {"true", "false"}
+    n1, n4 = (np.array(table[f"amplitude_{node}"], dtype=float) for node in ("n1", "n4"))
+    assert np.allclose(n1, np.array(table["amplitude"], dtype=float), rtol=1e-14, atol=0)  # the first node
+    assert np.all(n1 < n4)  # the load on n4: the slip front runs in from it, the far end moves least
+    assert "nan" not in out.read_text().lower()
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+
+
+MASSLESS_ON_A_SLIDER = network_text(["a", "b"], [1.0, 0.0], [
+    ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["a", "b"], {"k": 1.0}),
+    ("slider", ["b", "ground"], {"alpha": 0.1})], load_node="a")
+CUBIC = network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0}), ("cubic", ["a", "ground"], {"k3": 1.0}),
+                                    ("slider", ["a", "ground"], {"alpha": 0.1})])
+SERIES = network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0}),
+                                     ("branch", ["a", "ground"], {"k": 1.0, "eta": 0.1, "c": 0.5}),
+                                     ("slider", ["a", "ground"], {"alpha": 0.1})])
+
+
+@pytest.mark.parametrize("text, culprit", [(MASSLESS_ON_A_SLIDER, "node b is massless"), (CUBIC, "cubic_1"),
+                                           (SERIES, "branch_1")], ids=["massless", "cubic", "series dashpot"])
+def test_what_the_network_s_shooting_refuses_is_one_line(tmp_path, capsys, text, culprit):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    out = tmp_path / "out.csv"
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.1,0.2",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and "prandtl-fmu run" in err and len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err and not out.exists()
