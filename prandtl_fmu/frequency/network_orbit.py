@@ -247,7 +247,6 @@ def _constraints(mass, rows, stuck):
 @kernel
 def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t, x, v):
     """The nodes' force without the stuck sliders' tensions: load, springs, dashpots, sliding sliders, branches."""
-    n = x.shape[0]
     out = force * (amplitude * math.cos(omega * t))
     out -= _mv(stiffness, x)
     out -= _mv(damping, v)

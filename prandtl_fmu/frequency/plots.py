@@ -178,10 +178,10 @@ def draw_curve(curves, axes, backbone=None) -> None:
 
 
 def _how(curve) -> str:
-    """How the curve was found, for a title: harmonic balance with its H, or shooting on the exact stepper."""
+    """How the curve was found, for a title: harmonic balance with its H, or shooting on the exact motion."""
     if curve.method == "harmonic balance":
         return f"harmonic balance (H = {curve.harmonics})"
-    return f"{curve.method} on the scene's stepper"
+    return f"{curve.method} on the exact motion"
 
 
 def _excitation(curve) -> str:

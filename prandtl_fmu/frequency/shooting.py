@@ -456,6 +456,7 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True, samples: Optional[int] = None):
     """The forced response of an element scene with friction (see the module): the fields of a ``curve.Curve``;
     the arguments are ``curve.harmonic_response``'s, checked there."""
+    from ..stepping import _progress_bar
     from .continuation import continue_curve
 
     from ..network.model import NetworkScene
@@ -476,7 +477,12 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
 
     shooting = make(max(FIRST_STEPS, 4 * H + 4 if samples is None else int(samples) + int(samples) % 2))
     where = shooting.system.node_index(node)
-    points = continue_curve(shooting, low, high, int(np.unique(frequencies).size))
+    # a network's curve can take minutes (a Jacobian is 2 n + 1 runs of its motion): a bar on a terminal
+    bar = _progress_bar(None, total=None, label=f"{scene.name}: points of the curve")
+    try:
+        points = continue_curve(shooting, low, high, int(np.unique(frequencies).size), progress=bar)
+    finally:
+        bar.close()
     # the quadrature of the harmonics: the orbit is the exact stepper's whatever M, so only the samples change
     coefficients = np.array([shooting.coefficients(s, w) for w, s, _ in points])
     change = math.inf
@@ -505,11 +511,18 @@ def _curve(shooting, points, coefficients, where, stability, change) -> dict:
     largest = np.full(len(points), np.nan)
     stable = None
     if stability:
+        from ..stepping import _progress_bar
+
         stable = np.ones(len(points), dtype=bool)
-        for index, (w, s, _) in enumerate(points):
-            values = shooting.multipliers(s, w)
-            largest[index] = float(np.max(np.abs(values)))
-            stable[index] = is_stable(values)
+        bar = _progress_bar(None, total=len(points), label=f"{system.name}: stability")
+        try:
+            for index, (w, s, _) in enumerate(points):
+                values = shooting.multipliers(s, w)
+                largest[index] = float(np.max(np.abs(values)))
+                stable[index] = is_stable(values)
+                bar.update(1)
+        finally:
+            bar.close()
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return dict(frequency=omega / (2.0 * math.pi), amplitude=np.abs(X), phase=phase, stable=stable,
