@@ -36,8 +36,8 @@ matrix S is positive definite); a released slider's relative acceleration is the
 tension's sign, else the orbit is refused (NO_MODE). Stuck sliders that close a loop (S singular) are refused
 (LOOP).
 
-**Bounded work.** A run takes at most PHASES_PER_SAMPLE phases per sample (events that pile up, a Zeno motion,
-fail the run: PILED_UP), the walk of each function on each interval at most WALK_LIMIT intervals
+**Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + sliders + branches) phases per sample (a slip
+front through a chain is many events in one sample; events that pile up, a Zeno motion, fail the run: PILED_UP), the walk of each function on each interval at most WALK_LIMIT intervals
 (WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the release loop at most one pass per slider.
 """
 import math
@@ -74,8 +74,8 @@ PLASTIC = 5    # sigma e'_i: a sliding branch's elongation rate reaches 0
 def explain(status: int) -> str:
     """The run's failure in words."""
     return {
-        PILED_UP: f"more than {PHASES_PER_SAMPLE} stick and slip events within one sample of the orbit (events "
-                  "that pile up: a Zeno motion, or a stick that cannot be settled)",
+        PILED_UP: f"more than {PHASES_PER_SAMPLE} (1 + sliders + branches) stick and slip events within one "
+                  "sample of the orbit (events that pile up: a Zeno motion, or a stick that cannot be settled)",
         WALK_EXHAUSTED: f"an event search went past its bound of {WALK_LIMIT} intervals (an event function that "
                         "stays within rounding of its level)",
         NO_MODE: "no consistent stick-slip state: a released slider's relative acceleration opposes its tension",
@@ -672,7 +672,7 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
                 continue
             # an event: the physical state, then the new phase
             phases += 1
-            if phases > PHASES_PER_SAMPLE:
+            if phases > PHASES_PER_SAMPLE * (1 + ns + nb):
                 return PILED_UP, step
             t = t_phase + tau / rho
             for a in range(n):
