@@ -36,8 +36,10 @@ matrix S is positive definite); a released slider's relative acceleration is the
 tension's sign, else the orbit is refused (NO_MODE). Stuck sliders that close a loop (S singular) are refused
 (LOOP).
 
-**Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + sliders + branches) phases per sample (a slip
-front through a chain is many events in one sample; events that pile up, a Zeno motion, fail the run: PILED_UP), the walk of each function on each interval at most WALK_LIMIT intervals
+**Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + sliders + branches) max(samples, 256) phases,
+whatever the samples (a slip front through a chain, a light mass that chatters, are many events in a short time;
+events that pile up, a Zeno motion, fail the run: PILED_UP) and at most INTERVALS_PER_SAMPLE max(samples, 32)
+intervals (TOO_STIFF: a phase's fastest rate sets their length), the walk of each function on each interval at most WALK_LIMIT intervals
 (WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the release loop at most one pass per slider.
 """
 import math
@@ -51,7 +53,9 @@ REACH = 1.0
 WALK_LIMIT = 400
 REFINE_LIMIT = 200
 PHASES_PER_SAMPLE = 64
+INTERVALS_PER_SAMPLE = 32768
 EVENT_TOLERANCE = 1e-12
+PGS_SWEEPS = 200
 SETTLE_MARGIN = 1e-12
 _EPS = 2.220446049250313e-16
 
@@ -61,6 +65,7 @@ PILED_UP = 1
 WALK_EXHAUSTED = 2
 NO_MODE = 3
 LOOP = 4
+TOO_STIFF = 5
 
 # event functions' kinds
 STUCK_UP = 0   # alpha - T_j: a stuck slider's tension reaches +alpha
@@ -74,11 +79,14 @@ PLASTIC = 5    # sigma e'_i: a sliding branch's elongation rate reaches 0
 def explain(status: int) -> str:
     """The run's failure in words."""
     return {
-        PILED_UP: f"more than {PHASES_PER_SAMPLE} (1 + sliders + branches) stick and slip events within one "
-                  "sample of the orbit (events that pile up: a Zeno motion, or a stick that cannot be settled)",
+        PILED_UP: f"more than {PHASES_PER_SAMPLE} (1 + sliders + branches) max(samples, 256) stick and slip "
+                  "events in one run (events that pile up: a Zeno motion, or a stick that cannot be settled)",
         WALK_EXHAUSTED: f"an event search went past its bound of {WALK_LIMIT} intervals (an event function that "
                         "stays within rounding of its level)",
         NO_MODE: "no consistent stick-slip state: a released slider's relative acceleration opposes its tension",
+        TOO_STIFF: f"more than {INTERVALS_PER_SAMPLE} max(samples, 32) Taylor intervals in one run (an interval is about 1 / (3 rho) s, rho "
+                   "the fastest rate of the network's phases: sqrt(k / m) of its stiffest spring on its lightest "
+                   "mass): too stiff for shooting on its motion",
         LOOP: "stuck sliders close a loop (their tensions are not determined by the motion): the forced response "
               "does not take such a network",
     }.get(status, f"status {status}")
@@ -299,51 +307,131 @@ def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode,
                 for i in range(n):
                     v[i] -= rows[j, i] * lam[index] / mass[i]
                 index += 1
-    released = np.zeros(ns, dtype=np.bool_)
-    settled = False
-    for _ in range(ns + 1):
-        r, q, ok = _constraints(mass, rows, stuck)
-        if not ok:
-            return LOOP
-        f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega,
-                        t, x, v)
-        tension = _mv(r, f)
-        worst = -1
-        ratio = 1.0
-        index = 0
-        for j in range(ns):
-            if stuck[j]:
-                # beyond its threshold by more than rounding (the margin of its event function is 4 times this)
-                if abs(tension[index]) > alpha[j] + SETTLE_MARGIN * _tension_scale(r[index], f, alpha[j]) and \
-                        abs(tension[index]) > ratio * alpha[j]:
-                    ratio = abs(tension[index]) / alpha[j]
-                    worst = j
-                index += 1
-        if worst < 0:
-            settled = True
-            break
-        index = 0
-        for j in range(ns):
-            if stuck[j]:
-                if j == worst:
-                    mode[j] = 1 if tension[index] > 0.0 else -1
-                index += 1
-        stuck[worst] = False
-        released[worst] = True
-    if not settled:
-        return NO_MODE
-    # a released slider accelerates the way its tension pulls
-    r, q, ok = _constraints(mass, rows, stuck)
+    # which of them stick: the box-constrained problem of their tensions (see _friction_mode)
+    count = 0
+    for j in range(ns):
+        if stuck[j]:
+            count += 1
+    if count == 0:
+        return OK
+    candidates = np.empty(count, dtype=np.int64)
+    index = 0
+    for j in range(ns):
+        if stuck[j]:
+            candidates[index] = j
+            index += 1
     f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t,
                     x, v)
-    acceleration = _mv(q, f)
-    size = 0.0
-    for i in range(n):
-        size = max(size, abs(acceleration[i]))
-    for j in range(ns):
-        if released[j] and mode[j] * (_dot(rows[j], acceleration)) < -1e-9 * size:
-            return NO_MODE
+    s_matrix = np.empty((count, count))
+    b = np.empty(count)
+    limit = np.empty(count)
+    margin = np.empty(count)
+    for a in range(count):
+        ja = candidates[a]
+        total = 0.0
+        size = 0.0
+        for i in range(n):
+            total += rows[ja, i] * f[i] / mass[i]
+            size += abs(rows[ja, i] * f[i] / mass[i])
+        b[a] = total
+        for c in range(count):
+            jc = candidates[c]
+            entry = 0.0
+            for i in range(n):
+                entry += rows[ja, i] * rows[jc, i] / mass[i]
+            s_matrix[a, c] = entry
+        limit[a] = alpha[ja]
+        margin[a] = size  # the size of the terms of its relative acceleration
+    tension, status = _friction_mode(s_matrix, b, limit, margin)
+    if status != OK:
+        return status
+    for a in range(count):
+        if abs(tension[a]) >= limit[a]:
+            mode[candidates[a]] = 1 if tension[a] > 0.0 else -1
     return OK
+
+
+@kernel
+def _friction_mode(s_matrix, b, limit, margin):
+    """The tensions T of the candidate sliders (relative velocity 0): |T_j| <= alpha_j, the relative accelerations
+    e'' = b - S T zero where |T_j| < alpha_j (stuck) and of the sign of T_j where |T_j| = alpha_j (sliding the
+    way the tension pulls). S = G M^-1 G^T is symmetric positive definite, so these are the optimality conditions
+    of min 1/2 T S T - b T over the box: one solution. Projected Gauss-Seidel (at most PGS_SWEEPS) guesses which
+    tensions are at their bounds; then, at most count + 8 times, the tensions of the others solved exactly and
+    the guess corrected where the conditions fail (block principal pivoting). Returns (T, status): NO_MODE when
+    the conditions still fail (rounding: margins of 1e-9 of each acceleration's terms), LOOP when S is
+    singular."""
+    count = b.shape[0]
+    tension = np.zeros(count)
+    for sweep in range(PGS_SWEEPS):
+        change = 0.0
+        for a in range(count):
+            rest = b[a]
+            for c in range(count):
+                if c != a:
+                    rest -= s_matrix[a, c] * tension[c]
+            value = min(max(rest / s_matrix[a, a], -limit[a]), limit[a])
+            change = max(change, abs(value - tension[a]))
+            tension[a] = value
+        if change == 0.0:
+            break
+    bound = np.zeros(count, dtype=np.int64)  # -1, +1 at a bound, 0 free
+    for a in range(count):
+        if abs(tension[a]) >= limit[a] * (1.0 - 1e-9):
+            bound[a] = 1 if tension[a] > 0.0 else -1
+    for _ in range(count + 8):
+        free = 0
+        for a in range(count):
+            if bound[a] == 0:
+                free += 1
+        for a in range(count):
+            if bound[a] != 0:
+                tension[a] = bound[a] * limit[a]
+        if free > 0:
+            sub = np.empty((free, free))
+            rhs = np.empty((free, 1))
+            row = 0
+            for a in range(count):
+                if bound[a] == 0:
+                    total = b[a]
+                    for c in range(count):
+                        if bound[c] != 0:
+                            total -= s_matrix[a, c] * tension[c]
+                    rhs[row, 0] = total
+                    column = 0
+                    for c in range(count):
+                        if bound[c] == 0:
+                            sub[row, column] = s_matrix[a, c]
+                            column += 1
+                    row += 1
+            solved, ok = _solve(sub, rhs)
+            if not ok:
+                return tension, LOOP
+            row = 0
+            for a in range(count):
+                if bound[a] == 0:
+                    tension[a] = solved[row, 0]
+                    row += 1
+        changed = False
+        for a in range(count):
+            acceleration = b[a]
+            for c in range(count):
+                acceleration -= s_matrix[a, c] * tension[c]
+            slack = 1e-9 * (margin[a] + abs(b[a]))
+            if bound[a] == 0 and abs(tension[a]) > limit[a] * (1.0 + 1e-12):
+                bound[a] = 1 if tension[a] > 0.0 else -1  # beyond its threshold: it slides
+                changed = True
+            elif bound[a] != 0 and bound[a] * acceleration < -slack:
+                bound[a] = 0  # its tension pushes it back: it sticks
+                changed = True
+        if not changed:
+            for a in range(count):
+                if bound[a] == 0:
+                    tension[a] = min(max(tension[a], -limit[a]), limit[a])
+                    if abs(tension[a]) >= limit[a]:
+                        tension[a] *= 1.0 - 1e-15  # within rounding of its threshold: it holds
+            return tension, OK
+    return tension, NO_MODE
 
 
 @kernel
@@ -627,13 +715,19 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
     vectors = np.empty((terms, dim))
     c = np.empty(terms)
     shifted = np.empty(terms)
+    phases = 0
+    phase_limit = PHASES_PER_SAMPLE * (1 + ns + nb) * max(steps, 256)
+    intervals = 0
+    interval_limit = INTERVALS_PER_SAMPLE * max(steps, 32)
     for step in range(steps):
         target = (step + 1) * h
-        phases = 0
         while True:
             tau_target = (target - t_phase) * rho
             if tau >= tau_target:
                 break
+            intervals += 1
+            if intervals > interval_limit:
+                return TOO_STIFF, step
             span = min(tau_target - tau, REACH / max(norm, 1e-300))
             vectors[0] = y
             for k in range(1, terms):
@@ -672,7 +766,7 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
                 continue
             # an event: the physical state, then the new phase
             phases += 1
-            if phases > PHASES_PER_SAMPLE * (1 + ns + nb):
+            if phases > phase_limit:
                 return PILED_UP, step
             t = t_phase + tau / rho
             for a in range(n):

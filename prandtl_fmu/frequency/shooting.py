@@ -404,7 +404,7 @@ class NetworkShooting(Shooting):
                 self.stiffness_matrix += element.value * np.outer(d, d)
             elif element.kind == "dashpot":
                 self.damping += element.value * np.outer(d, d)
-            elif element.kind == "slider":
+            elif element.kind == "slider" and element.value > 0.0:  # alpha = 0 carries nothing
                 sliders.append((d, element.value))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
