@@ -29,18 +29,16 @@ the interval is halved (at the rounding level of s the signs decide: a zero that
 not an event). The first crossing of all the functions is refined by bisection on its polynomial to rounding.
 
 **A new phase** starts at each event, from the physical state: a slider whose relative velocity reached 0 is
-stuck (v projected on the constraints, the inelastic impulse of a rounding-sized relative velocity), then the
-stuck sliders' tensions are computed, and the one most beyond its threshold is released (sliding the way its
-tension pulls), again until all hold (the principal pivoting of the friction's complementarity problem, whose
-matrix S is positive definite); a released slider's relative acceleration is then checked to have its
-tension's sign, else the orbit is refused (NO_MODE). Stuck sliders that close a loop (S singular) are refused
-(LOOP).
+stuck (v projected on the constraints, the inelastic impulse of a rounding-sized relative velocity), then which
+of the stuck sliders hold is decided by their tensions (:func:`_friction_mode`: the box-constrained convex
+problem whose matrix S is positive definite, every condition checked; NO_MODE when they cannot all be met
+within rounding). Stuck sliders that close a loop (S singular) are refused (LOOP).
 
 **Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + sliders + branches) max(samples, 256) phases,
 whatever the samples (a slip front through a chain, a light mass that chatters, are many events in a short time;
 events that pile up, a Zeno motion, fail the run: PILED_UP) and at most INTERVALS_PER_SAMPLE max(samples, 32)
 intervals (TOO_STIFF: a phase's fastest rate sets their length), the walk of each function on each interval at most WALK_LIMIT intervals
-(WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the release loop at most one pass per slider.
+(WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the stick decision at most PGS_SWEEPS sweeps and count + 8 corrections.
 """
 import math
 
@@ -56,7 +54,7 @@ PHASES_PER_SAMPLE = 64
 INTERVALS_PER_SAMPLE = 32768
 EVENT_TOLERANCE = 1e-12
 PGS_SWEEPS = 200
-SETTLE_MARGIN = 1e-12
+SETTLE_MARGIN = 1e-12  # a stuck tension's rounding (its event waits for 4 times it)
 _EPS = 2.220446049250313e-16
 
 # run's status
@@ -83,7 +81,8 @@ def explain(status: int) -> str:
                   "events in one run (events that pile up: a Zeno motion, or a stick that cannot be settled)",
         WALK_EXHAUSTED: f"an event search went past its bound of {WALK_LIMIT} intervals (an event function that "
                         "stays within rounding of its level)",
-        NO_MODE: "no consistent stick-slip state: a released slider's relative acceleration opposes its tension",
+        NO_MODE: "no consistent stick-slip state: the stuck sliders' tensions could not meet their conditions "
+                 "within rounding",
         TOO_STIFF: f"more than {INTERVALS_PER_SAMPLE} max(samples, 32) Taylor intervals in one run (an interval is about 1 / (3 rho) s, rho "
                    "the fastest rate of the network's phases: sqrt(k / m) of its stiffest spring on its lightest "
                    "mass): too stiff for shooting on its motion",
