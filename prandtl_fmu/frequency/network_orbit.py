@@ -37,8 +37,9 @@ within rounding). Stuck sliders that close a loop (S singular) are refused (LOOP
 **Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + sliders + branches) max(samples, 256) phases,
 whatever the samples (a slip front through a chain, a light mass that chatters, are many events in a short time;
 events that pile up, a Zeno motion, fail the run: PILED_UP) and at most INTERVALS_PER_SAMPLE max(samples, 32)
-intervals (TOO_STIFF: a phase's fastest rate sets their length), the walk of each function on each interval at most WALK_LIMIT intervals
-(WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the stick decision at most PGS_SWEEPS sweeps and count + 8 corrections.
+intervals (TOO_STIFF: a phase's fastest rate sets their length), the walk of each function on each interval at
+most WALK_LIMIT intervals (WALK_EXHAUSTED), a refinement at most REFINE_LIMIT bisections, the stick decision at
+most PGS_SWEEPS sweeps and count + 8 corrections.
 """
 import math
 
@@ -83,8 +84,8 @@ def explain(status: int) -> str:
                         "stays within rounding of its level)",
         NO_MODE: "no consistent stick-slip state: the stuck sliders' tensions could not meet their conditions "
                  "within rounding",
-        TOO_STIFF: f"more than {INTERVALS_PER_SAMPLE} max(samples, 32) Taylor intervals in one run (an interval is about 1 / (3 rho) s, rho "
-                   "the fastest rate of the network's phases: sqrt(k / m) of its stiffest spring on its lightest "
+        TOO_STIFF: f"more than {INTERVALS_PER_SAMPLE} max(samples, 32) Taylor intervals in one run (an interval "
+                   "is about 1 / (3 rho) s, rho the fastest rate of the network's phases: sqrt(k / m) of its stiffest spring on its lightest "
                    "mass): too stiff for shooting on its motion",
         LOOP: "stuck sliders close a loop (their tensions are not determined by the motion): the forced response "
               "does not take such a network",
