@@ -85,8 +85,8 @@ def explain(status: int) -> str:
         NO_MODE: "no consistent stick-slip state: the stuck sliders' tensions could not meet their conditions "
                  "within rounding",
         TOO_STIFF: f"more than {INTERVALS_PER_SAMPLE} max(samples, 32) Taylor intervals in one run (an interval "
-                   "is about 1 / (3 rho) s, rho the fastest rate of the network's phases: sqrt(k / m) of its stiffest spring on its lightest "
-                   "mass): too stiff for shooting on its motion",
+                   "is about 1 / (3 rho) s, rho the fastest rate of the network's phases: sqrt(k / m) of its "
+                   "stiffest spring on its lightest mass): too stiff for shooting on its motion",
         LOOP: "stuck sliders close a loop (their tensions are not determined by the motion): the forced response "
               "does not take such a network",
     }.get(status, f"status {status}")
