@@ -4,13 +4,21 @@ The curve R(q, omega) = 0 is followed from omega_min to omega_max in scaled unkn
 (omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (2-norm; the scale is
 updated as the curve grows, the tangent rescaled with it):
 
-* tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised (the previous tangent's side kept: a
-  fold is passed, not turned back on);
+* tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised, and oriented so that the sign of
+  det [dR/dy; t^T] stays the one at the start (ahead in omega there): a fold is passed, not turned back on, and
+  at a kink of the curve (where a slip starts or stops, the Jacobians on its two sides differ) the way on is
+  kept even where the tangent turns by more than a right angle, which the side of the previous tangent would
+  turn back on;
 * predictor y + ds t; corrector: Newton on [R(y); t . (y - y_pred)] = 0 (the step's hyperplane), at most
   CORRECTOR_ITERATIONS iterations; a corrector that does not converge halves ds, down to MIN_STEP, then the
   curve is refused where it stopped (FrequencyError: the frequency, the amplitude and why); a corrector that
   moves further than DRIFT steps from its prediction (at a kink of the Jacobian, where a slip starts, Newton can
   leap to another part of the curve) counts as not converged;
+* kink: below CORNER of the largest step, a corrector that does not converge is tried again as a damped Newton
+  (each step halved while the residual grows), with omega fixed, then the tangent's largest unknown fixed, then
+  on the hyperplane (:func:`_damped`): at a kink Newton on the hyperplane can cycle between the Jacobians of the
+  two sides, where the curve parametrised by its frequency goes on; then on a sphere around the last point (a
+  fold on a kink, a corner);
 * step: ds grows or shrinks by the corrector's iterations against TARGET_ITERATIONS (at most doubled, at
   least halved), within [MIN_STEP, max_step]; max_step is ARC_ESTIMATE over the count of listed frequencies
   less one (a curve through one resonance gets about as many points as frequencies asked, more where it
@@ -24,6 +32,7 @@ updated as the curve grows, the tangent rescaled with it):
 from __future__ import annotations
 
 import math
+from typing import Optional
 
 import numpy as np
 
@@ -39,11 +48,17 @@ CONVERGED = 1e-10  # a corrector step below this (scaled max norm) has converged
 CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries the corner's sphere
 ARC_ESTIMATE = 6.0  # about the scaled arc length of a curve through one resonance and its folds
 DRIFT = 0.5  # a corrector may move at most this many arc-length steps from its prediction
+DAMPED_ITERATIONS = 30  # of each corrector over a kink (its steps halved while the residual grows)
+HALVINGS = 8  # of a step of those correctors
+DAMPED_REACH = 4.0  # their point is at most this many arc-length steps from the last point
+FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
 
 
-def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None) -> list:
+def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None,
+                   node: Optional[int] = None) -> list:
     """``[(omega, q_free, is_fold)]`` along the curve of ``balance`` (:class:`HarmonicBalance`) from
-    ``omega_min`` to ``omega_max`` (rad/s) (see the module); ``count``: the frequencies listed."""
+    ``omega_min`` to ``omega_max`` (rad/s) (see the module); ``count``: the frequencies listed; ``node``: the
+    index of the node whose amplitude a refusal names (the curve's ``amplitude``; default the load's node)."""
     span = omega_max - omega_min
     q = balance.solve_at(omega_min)
     points = [(omega_min, q, False)]
@@ -53,8 +68,9 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     max_step = ARC_ESTIMATE / max(count - 1, 8)
     step = max_step
     omega = omega_min
-    tangent = _tangent(balance, q, omega, None, scale, span)
-    if tangent is None:
+    start = _oriented(balance, q, omega, None, scale, span)
+    tangent, orientation = (None, None) if start is None else start
+    if tangent is None or orientation == 0:
         raise FrequencyError(f"{balance.system.source}: the curve cannot start at f = {_hz(omega)!r} Hz: the "
                              "Jacobian is singular there")
     while True:
@@ -66,28 +82,27 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         while new is None:
             predicted = _scaled(q, omega, scale, omega_min, span) + step * tangent
             new = _correct(balance, predicted, tangent, scale, omega_min, span, step)
-            if new is None and step < CORNER * max_step:
-                new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
+            if new is None and step < CORNER * max_step:  # a kink, then a corner (a fold on a kink)
+                new = _damped(balance, q, omega, tangent, scale, omega_min, span, step)
+                if new is None:
+                    new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
                 cornered = new is not None
             if new is None:
                 step *= 0.5
                 if step < MIN_STEP:
                     raise FrequencyError(
-                        f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} Hz (first-"
-                        f"harmonic amplitude {balance.amplitude_at(q, omega)!r} m): the corrector does not "
+                        f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} Hz ("
+                        f"{_where(balance, q, omega, node)}): the corrector does not "
                         f"converge even with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the "
                         "curve)")
         q_new, omega_new, iterations = new
         if omega_new < omega_min - 1e-9 * span:
             raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
-                                 f"(at amplitude {balance.amplitude_at(q_new, omega_new)!r} m): it does not reach "
+                                 f"({_where(balance, q_new, omega_new, node)}): it does not reach "
                                  f"{_hz(omega_max)!r} Hz from there")
         scale_new = max(scale, np.linalg.norm(q_new))
-        heading = tangent
-        if cornered:  # the way on is the chord from the corner, not the tangent before it
-            heading = _scaled(q_new, omega_new, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)
-            heading /= np.linalg.norm(heading)
-        tangent_new = _tangent(balance, q_new, omega_new, _rescaled(heading, scale, scale_new), scale_new, span)
+        tangent_new = _tangent(balance, q_new, omega_new, _rescaled(tangent, scale, scale_new), scale_new, span,
+                               orientation)
         if tangent_new is None:
             raise FrequencyError(f"{balance.system.source}: the curve cannot continue at f = {_hz(omega_new)!r} Hz: "
                                  "the Jacobian of the augmented system is singular there (a branch point)")
@@ -114,6 +129,13 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         step = min(max_step, max(MIN_STEP, step * factor))
 
 
+def _where(balance, q, omega, node) -> str:
+    """Where a curve stopped, as its CSV says it: the first harmonic's amplitude at the curve's node."""
+    index = balance.system.load_node if node is None else node
+    return (f"first-harmonic amplitude {balance.amplitude_at(q, omega, index)!r} m at node "
+            f"{balance.system.nodes[index]}")
+
+
 def _hz(omega: float) -> float:
     return float(omega) / (2.0 * math.pi)
 
@@ -137,13 +159,25 @@ def _augmented(balance, q, omega, scale, span):
     return residual, np.hstack((jacobian * scale, by_omega[:, None] * span))
 
 
-def _tangent(balance, q, omega, previous, scale, span):
+def _tangent(balance, q, omega, previous, scale, span, orientation=None):
+    """The unit tangent at (q, omega): oriented by ``orientation`` if given (the sign of det [dR/dy; t], kept
+    along the curve), else by ``previous`` (t . previous > 0), else ahead in omega."""
+    t = _oriented(balance, q, omega, previous, scale, span)
+    if t is None or orientation is None:
+        return None if t is None else t[0]
+    return t[0] if t[1] == orientation else -t[0]
+
+
+def _oriented(balance, q, omega, previous, scale, span):
+    """(t, sign of det [dR/dy; t]) at (q, omega), t as :func:`_tangent` without ``orientation``; or None."""
     _, matrix = _augmented(balance, q, omega, scale, span)
     row = previous if previous is not None else np.eye(matrix.shape[1])[-1]
     t = solve_linear(np.vstack((matrix, row)), np.eye(matrix.shape[1])[-1])
     if t is None:
         return None
-    return t / np.linalg.norm(t)
+    t = t / np.linalg.norm(t)
+    sign, _ = np.linalg.slogdet(np.vstack((matrix, t)))
+    return t, float(sign)
 
 
 def _correct(balance, predicted, tangent, scale, omega_min, span, step):
@@ -165,6 +199,63 @@ def _correct(balance, predicted, tangent, scale, omega_min, span, step):
                 np.max(np.abs(delta)) <= 1e-6:
             q, omega = _unscaled(y, scale, omega_min, span)
             return q, omega, iteration
+    return None
+
+
+def _damped(balance, q, omega, tangent, scale, omega_min, span, step):
+    """The point ahead of (q, omega) past a kink of the curve (a node that starts or stops slipping): there the
+    Jacobians on the two sides differ and Newton on the arc-length hyperplane can cycle between them. Tried in
+    turn, each a Newton's method whose steps are halved while max |R| grows (at most HALVINGS times, at most
+    DAMPED_ITERATIONS steps): with omega fixed at the prediction's (the curve parametrised by the frequency,
+    away from a fold: where a slip's onset flips the slope of the curve, the step ahead in omega is still
+    there); with the tangent's largest scaled unknown fixed at the prediction's; on the step's hyperplane. An
+    unknown is fixed only if its share of the tangent is at least FIXED_SHARE (so it moves ahead). The point
+    must lie within DAMPED_REACH steps of the last point (on the hyperplane: within 60 degrees of the tangent).
+    (q, omega, iterations) or None."""
+    start = _scaled(q, omega, scale, omega_min, span)
+    predicted = start + step * tangent
+    rows = []
+    for k in (tangent.size - 1, int(np.argmax(np.abs(tangent)))):
+        if abs(tangent[k]) >= FIXED_SHARE and not any(row[k] == 1.0 for row in rows):
+            rows.append(np.eye(tangent.size)[k])
+    for row in rows + [tangent]:
+        new = _damped_newton(balance, start, predicted, row, tangent, scale, omega_min, span, step)
+        if new is not None:
+            return new
+    return None
+
+
+def _damped_newton(balance, start, predicted, row, tangent, scale, omega_min, span, step):
+    """Newton on [R(y); row . (y - predicted)] = 0 from ``predicted``, steps halved while max |R| grows (see
+    :func:`_damped`): (q, omega, iterations) or None."""
+    y = predicted.copy()
+    q_y, omega_y = _unscaled(y, scale, omega_min, span)
+    residual, matrix = _augmented(balance, q_y, omega_y, scale, span)
+    for iteration in range(1, DAMPED_ITERATIONS + 1):
+        if not np.all(np.isfinite(residual)):
+            return None
+        delta = solve_linear(np.vstack((matrix, row)), -np.concatenate((residual, [row @ (y - predicted)])))
+        if delta is None:
+            return None
+        for _ in range(HALVINGS + 1):
+            moved = y + delta
+            q_y, omega_y = _unscaled(moved, scale, omega_min, span)
+            if omega_y <= 0:
+                return None
+            residual_moved, matrix_moved = _augmented(balance, q_y, omega_y, scale, span)
+            if np.max(np.abs(residual_moved)) <= np.max(np.abs(residual)):
+                break
+            delta = 0.5 * delta
+        y, residual, matrix = moved, residual_moved, matrix_moved
+        # within reach, and ahead: the fixed unknown is (the prediction's); on the hyperplane, the chord within 60
+        # degrees of the tangent (the hyperplane alone would take a point far to the side, even behind in omega)
+        chord = y - start
+        length = np.linalg.norm(chord)
+        if length > DAMPED_REACH * step or (row is tangent and chord @ tangent < 0.5 * length):
+            return None
+        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega_y) \
+                and np.max(np.abs(delta)) <= 1e-6:
+            return q_y, omega_y, iteration
     return None
 
 

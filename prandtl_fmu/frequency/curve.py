@@ -132,7 +132,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     count = int(np.unique(frequencies).size)
     if harmonics is not None:
         balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
-        points = continue_curve(balance, low, high, count)
+        points = continue_curve(balance, low, high, count, node=where)
         change = None
     else:
         balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
@@ -163,7 +163,7 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
     for H in [h for h in HARMONIC_STEPS if h >= lowest]:
         balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
                                   base_amplitude)
-        points = continue_curve(balance, low, high, count)
+        points = continue_curve(balance, low, high, count, node=where)
         summary = _summary(balance, points, where)
         if previous is not None:
             change = float(np.max(np.abs(summary - previous) / np.maximum(np.abs(summary), 1e-300)))

@@ -459,11 +459,12 @@ class HarmonicBalance:
         q[self.free] = free_values
         return q
 
-    def amplitude_at(self, free_values: np.ndarray, omega: float) -> float:
-        """The first harmonic's amplitude (m) of x at the load's node (what a refusal of the curve names)."""
+    def amplitude_at(self, free_values: np.ndarray, omega: float, node: Optional[int] = None) -> float:
+        """The first harmonic's amplitude (m) of x at ``node`` (default the load's; absolute under base
+        excitation, as the curve's columns): what a refusal of the curve names."""
         full = self.full(free_values)
-        at = self.system.load_node * self.L
-        return float(math.hypot(full[at + 1], full[at + 2]))
+        at = (self.system.load_node if node is None else node) * self.L
+        return float(math.hypot(full[at + 1] + (self.base_amplitude or 0.0), full[at + 2]))
 
     def samples(self, q: np.ndarray) -> np.ndarray:
         """x at the N samples of one period, (n, N), from all n L coefficients."""

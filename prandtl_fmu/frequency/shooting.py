@@ -323,8 +323,8 @@ class Shooting:
         c = self.coefficients(s, omega)[self.system.load_node if node is None else node]
         return complex(c[1], -c[2])
 
-    def amplitude_at(self, s: np.ndarray, omega: float) -> float:
-        return abs(self.first_harmonic(s, omega))
+    def amplitude_at(self, s: np.ndarray, omega: float, node: Optional[int] = None) -> float:
+        return abs(self.first_harmonic(s, omega, node))
 
     def multipliers(self, s: np.ndarray, omega: float) -> np.ndarray:
         """The Floquet multipliers of the whole period: the squares of the eigenvalues of dG/ds."""
@@ -480,7 +480,7 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     # a network's curve can take minutes (a Jacobian is 2 n + 1 runs of its motion): a bar on a terminal
     bar = _progress_bar(None, total=None, label=f"{scene.name}: points of the curve")
     try:
-        points = continue_curve(shooting, low, high, int(np.unique(frequencies).size), progress=bar)
+        points = continue_curve(shooting, low, high, int(np.unique(frequencies).size), progress=bar, node=where)
     finally:
         bar.close()
     # the quadrature of the harmonics: the orbit is the exact stepper's whatever M, so only the samples change

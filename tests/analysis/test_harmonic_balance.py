@@ -224,12 +224,37 @@ def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, m
 
     monkeypatch.setattr(continuation, "_correct", lambda *args: None)
     monkeypatch.setattr(continuation, "_around_corner", lambda *args: None)
+    monkeypatch.setattr(continuation, "_damped", lambda *args: None)
     out = tmp_path / "out.csv"
     status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.15,0.19",
                    "--harmonics", "3", "--out", str(out)])
     err = capsys.readouterr().err
     assert status == 2 and "cannot continue past f = 0.15 Hz" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_where_a_network_s_curve_stops_is_said_at_the_node_its_csv_reports(tmp_path, capsys, monkeypatch):
+    """A curve that cannot continue names the amplitude the CSV's ``amplitude`` column would hold: at --node
+    (here b, not the load's node a), absolute under base excitation."""
+    import re
+
+    from prandtl_fmu.frequency import continuation
+
+    for extra in ([], ["--base-amplitude", "0.01"]):
+        load = ["--force-amplitude", "1.0"] if not extra else extra
+        common = ["describe", "networks/two-mass-joint", *load, "--harmonics", "3", "--node", "b"]
+        out = tmp_path / "one.csv"
+        assert main(common + ["--frequencies", "0.5", "--out", str(out)]) == 0
+        expected = float(read_csv(out)["amplitude"][0])
+        with monkeypatch.context() as patch:
+            for name in ("_correct", "_around_corner", "_damped"):
+                patch.setattr(continuation, name, lambda *args: None)
+            capsys.readouterr()
+            assert main(common + ["--frequencies", "0.5,1.0", "--out", str(tmp_path / "two.csv")]) == 2
+        err = capsys.readouterr().err
+        said = re.search(r"first-harmonic amplitude (\S+) m at node (\w+)", err)
+        assert said and said.group(2) == "b", err
+        assert abs(float(said.group(1)) - expected) <= 1e-9 * expected, (said.group(1), expected)
 
 
 def test_a_network_joint_s_describing_function_is_its_elements_closed_forms(tmp_path, capsys):

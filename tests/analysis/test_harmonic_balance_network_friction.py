@@ -201,6 +201,42 @@ def test_a_stable_point_attracts_as_its_multipliers_say():
 
 
 @pytest.mark.slow
+def test_the_curve_steps_over_the_kinks_where_nodes_start_or_stop_slipping(tmp_path, monkeypatch):
+    """A chain of three at F0 = 2.5 N from 1 to 4 Hz: its nodes start and stop slipping along the curve, each a
+    kink where Newton on the arc-length hyperplane cycles between the Jacobians of the two sides (the curve
+    stopped at 1.52 Hz). Now the steps over the kinks are taken (counted here), the curve reaches 4 Hz going
+    ahead in frequency (its orientation kept by the sign of det [dR/dy; t], not by the tangent before the
+    kink, which flipped it back and forth), and the points on either side of every kink are the periodic state
+    that Newton finds at their frequency alone, from rest."""
+    from prandtl_fmu.frequency import continuation
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    taken = []
+    damped = continuation._damped
+
+    def counted(*args):
+        point = damped(*args)
+        if point is not None:
+            taken.append(point[1])
+        return point
+
+    monkeypatch.setattr(continuation, "_damped", counted)
+    scene = network(tmp_path, chain(3))
+    low, high = 2 * math.pi * 1.0, 2 * math.pi * 4.0
+    shooting = NetworkShooting(scene, 2.5, None, 64, 7, math.sqrt(low * high))
+    points = continuation.continue_curve(shooting, low, high, 2)
+    omega = np.array([w for w, _, _ in points])
+    assert omega[-1] == high and np.all(np.diff(omega) > 0)
+    assert len(taken) >= 3, f"the curve took {len(taken)} steps over a kink: this chain no longer tests them"
+    at = {w: s for w, s, _ in points}
+    for w in taken[:4]:
+        index = int(np.flatnonzero(omega == w)[0])
+        for near in (omega[index - 1], omega[index]):
+            alone = shooting.solve_at(near)
+            assert np.max(np.abs(alone - at[near])) <= 1e-8 * np.max(np.abs(alone)), near / (2 * math.pi)
+
+
+@pytest.mark.slow
 def test_the_chain_on_a_support_from_the_command_line(tmp_path):
     """describe on a chain of four nodes on a support: the contract's columns, every node's amplitude, a
     stable column of true or false, the figure."""
