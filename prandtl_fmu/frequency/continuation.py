@@ -76,7 +76,9 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     while True:
         if len(points) > MAX_POINTS:
             raise FrequencyError(f"{balance.system.source}: the curve did not reach f = {_hz(omega_max)!r} Hz "
-                                 f"within {MAX_POINTS} points (at f = {_hz(omega)!r} Hz)")
+                                 f"within {MAX_POINTS} points (at f = {_hz(omega)!r} Hz, "
+                                 f"{_where(balance, q, omega, node)}; an amplitude that grows without bound there "
+                                 "is a resonance that nothing limits)")
         new = None
         cornered = False
         while new is None:

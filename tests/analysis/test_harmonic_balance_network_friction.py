@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from prandtl_fmu.cli import main
+from prandtl_fmu.frequency import FrequencyError
 
 from tests.analysis.test_describe_cli import read_csv
 from tests.analysis.test_harmonic_balance_friction import non_stop_orbit
@@ -79,6 +80,28 @@ def test_a_node_on_a_slider_is_den_hartogs_non_stop_motion(tmp_path, base):
             first += 0.5
         assert amplitude == pytest.approx(abs(first), rel=1e-7)
         assert phase == pytest.approx(np.angle(first), abs=1e-7)
+
+
+@pytest.mark.slow
+def test_a_resonance_that_friction_cannot_hold_is_refused_with_its_growing_amplitude(tmp_path, monkeypatch):
+    """Den Hartog: a mass on a spring and a slider, forced beyond 4 / pi of the friction, has no bounded
+    periodic state at its natural frequency (the amplitude goes to infinity there). The curve from below
+    climbs towards it and is refused past its bound of points, saying where and at what amplitude (over 100 m:
+    ten times the linear response F0 / (k - m omega^2) at 0.95 of the natural frequency)."""
+    import re
+
+    from prandtl_fmu.frequency import continuation
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    monkeypatch.setattr(continuation, "MAX_POINTS", 400)
+    scene = network(tmp_path, ONE_NODE)
+    natural = 1 / (2 * math.pi)
+    with pytest.raises(FrequencyError) as refused:
+        harmonic_response(scene, 1.0, [0.5 * natural, 2 * natural], stability=False)
+    said = re.search(r"within 400 points \(at f = (\S+) Hz, first-harmonic amplitude (\S+) m at node a",
+                     str(refused.value))
+    assert said, refused.value
+    assert float(said.group(1)) == pytest.approx(natural, rel=1e-3) and float(said.group(2)) > 100.0
 
 
 @pytest.mark.slow
