@@ -45,7 +45,7 @@ MIN_STEP = 1e-7
 FOLD_ITERATIONS = 40
 MAX_POINTS = 20000
 CONVERGED = 1e-10  # a corrector step below this (scaled max norm) has converged
-CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries the corner's sphere
+CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries a kink's, then a corner's
 ARC_ESTIMATE = 6.0  # about the scaled arc length of a curve through one resonance and its folds
 DRIFT = 0.5  # a corrector may move at most this many arc-length steps from its prediction
 DAMPED_ITERATIONS = 30  # of each corrector over a kink (its steps halved while the residual grows)
@@ -88,7 +88,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                 new = _damped(balance, q, omega, tangent, scale, omega_min, span, step)
                 if new is None:
                     new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
-                cornered = new is not None
+                cornered = new is not None  # a fold met there is at this point (not located by the secant)
             if new is None:
                 step *= 0.5
                 if step < MIN_STEP:
