@@ -71,9 +71,10 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     sliders = [e.name for e in getattr(getattr(scene, "network", None), "elements", ()) if e.kind == "slider"]
     if sliders:
         raise FrequencyError(f"{scene.source}: slider {sliders[0]}: a network with rigid sliders has no nonlinear "
-                             "mode here: EPMC's negative damping would run its motion outside the c >= 0 its events "
-                             "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
-                             "(--force-amplitude) is computed, or model the joint as branches (k, eta)")
+                             "mode here: harmonic balance cannot sample a rigid slider, and the backbone by shooting "
+                             "on its motion turns back in amplitude where a slider starts to slip, a tangle not yet "
+                             "followed reliably (docs/frequency.md); its forced response (--force-amplitude) is "
+                             "computed, or model the joint as branches (k, eta)")
     system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:
