@@ -14,6 +14,9 @@ updated as the curve grows, the tangent rescaled with it):
   curve is refused where it stopped (FrequencyError: the frequency, the amplitude and why); a corrector that
   moves further than DRIFT steps from its prediction (at a kink of the Jacobian, where a slip starts, Newton can
   leap to another part of the curve) counts as not converged;
+* chord: where the Jacobian is costly (shooting: one run of the motion per unknown), the corrector first keeps
+  the Jacobian of the last point (the chord method, one run an iteration, at most CHORD_ITERATIONS), then
+  Newton's;
 * kink: below CORNER of the largest step, a corrector that does not converge is tried again as a damped Newton
   (each step halved while the residual grows), with omega fixed, then the tangent's largest unknown fixed, then
   on the hyperplane (:func:`_damped`): at a kink Newton on the hyperplane can cycle between the Jacobians of the
@@ -48,6 +51,8 @@ CONVERGED = 1e-10  # a corrector step below this (scaled max norm) has converged
 CORNER = 1e-2  # below this fraction of the largest step, a failing corrector tries a kink's, then a corner's
 ARC_ESTIMATE = 6.0  # about the scaled arc length of a curve through one resonance and its folds
 DRIFT = 0.5  # a corrector may move at most this many arc-length steps from its prediction
+CHORD_ITERATIONS = 24  # of the chord corrector (a costly Jacobian kept from the last point)
+CHORD_TARGET = 16  # its iterations that count as TARGET_ITERATIONS of Newton's for the step's size
 DAMPED_ITERATIONS = 30  # of each corrector over a kink (its steps halved while the residual grows)
 HALVINGS = 8  # of a step of those correctors
 DAMPED_REACH = 4.0  # their point is at most this many arc-length steps from the last point
@@ -69,7 +74,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     step = max_step
     omega = omega_min
     start = _oriented(balance, q, omega, None, scale, span)
-    tangent, orientation = (None, None) if start is None else start
+    tangent, orientation, chord = (None, None, None) if start is None else start
     if tangent is None or orientation == 0:
         raise FrequencyError(f"{balance.system.source}: the curve cannot start at f = {_hz(omega)!r} Hz: the "
                              "Jacobian is singular there")
@@ -83,7 +88,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         cornered = False
         while new is None:
             predicted = _scaled(q, omega, scale, omega_min, span) + step * tangent
-            new = _correct(balance, predicted, tangent, scale, omega_min, span, step)
+            new = _correct(balance, predicted, tangent, scale, omega_min, span, step, chord)
             if new is None and step < CORNER * max_step:  # a kink, then a corner (a fold on a kink)
                 new = _damped(balance, q, omega, tangent, scale, omega_min, span, step)
                 if new is None:
@@ -103,8 +108,9 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                                  f"({_where(balance, q_new, omega_new, node)}): it does not reach "
                                  f"{_hz(omega_max)!r} Hz from there")
         scale_new = max(scale, np.linalg.norm(q_new))
-        tangent_new = _tangent(balance, q_new, omega_new, _rescaled(tangent, scale, scale_new), scale_new, span,
-                               orientation)
+        found = _tangent_at(balance, q_new, omega_new, _rescaled(tangent, scale, scale_new), scale_new, span,
+                            orientation)
+        tangent_new, chord_new = (None, None) if found is None else found
         if tangent_new is None:
             raise FrequencyError(f"{balance.system.source}: the curve cannot continue at f = {_hz(omega_new)!r} Hz: "
                                  "the Jacobian of the augmented system is singular there (a branch point)")
@@ -126,7 +132,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         points.append((omega_new, q_new, False))
         if progress is not None:
             progress.update(1)
-        tangent, scale, q, omega = tangent_new, scale_new, q_new, omega_new
+        tangent, scale, q, omega, chord = tangent_new, scale_new, q_new, omega_new, chord_new
         factor = min(2.0, max(0.5, TARGET_ITERATIONS / max(iterations, 1)))
         step = min(max_step, max(MIN_STEP, step * factor))
 
@@ -164,14 +170,22 @@ def _augmented(balance, q, omega, scale, span):
 def _tangent(balance, q, omega, previous, scale, span, orientation=None):
     """The unit tangent at (q, omega): oriented by ``orientation`` if given (the sign of det [dR/dy; t], kept
     along the curve), else by ``previous`` (t . previous > 0), else ahead in omega."""
-    t = _oriented(balance, q, omega, previous, scale, span)
-    if t is None or orientation is None:
-        return None if t is None else t[0]
-    return t[0] if t[1] == orientation else -t[0]
+    found = _tangent_at(balance, q, omega, previous, scale, span, orientation)
+    return None if found is None else found[0]
+
+
+def _tangent_at(balance, q, omega, previous, scale, span, orientation=None):
+    """(the tangent of :func:`_tangent`, the scaled Jacobian [dR/dq dR/domega] there), or None."""
+    found = _oriented(balance, q, omega, previous, scale, span)
+    if found is None:
+        return None
+    t, sign, matrix = found
+    return (t if orientation is None or sign == orientation else -t), matrix
 
 
 def _oriented(balance, q, omega, previous, scale, span):
-    """(t, sign of det [dR/dy; t]) at (q, omega), t as :func:`_tangent` without ``orientation``; or None."""
+    """(t, sign of det [dR/dy; t], the scaled Jacobian) at (q, omega), t as :func:`_tangent` without
+    ``orientation``; or None."""
     _, matrix = _augmented(balance, q, omega, scale, span)
     row = previous if previous is not None else np.eye(matrix.shape[1])[-1]
     t = solve_linear(np.vstack((matrix, row)), np.eye(matrix.shape[1])[-1])
@@ -179,12 +193,18 @@ def _oriented(balance, q, omega, previous, scale, span):
         return None
     t = t / np.linalg.norm(t)
     sign, _ = np.linalg.slogdet(np.vstack((matrix, t)))
-    return t, float(sign)
+    return t, float(sign), matrix
 
 
-def _correct(balance, predicted, tangent, scale, omega_min, span, step):
+def _correct(balance, predicted, tangent, scale, omega_min, span, step, chord=None):
     """Newton on [R; t . (y - y_pred)] from the prediction ``step`` along the tangent: (q, omega, iterations),
-    or None (no convergence, or a corrector that went further than DRIFT steps from the prediction)."""
+    or None (no convergence, or a corrector that went further than DRIFT steps from the prediction). Where the
+    balance's Jacobian is costly (``costly_jacobian``: shooting, a run of the motion per unknown) and ``chord``
+    (the scaled Jacobian at the last point) is given, the chord method first (:func:`_chord`)."""
+    if chord is not None and getattr(balance, "costly_jacobian", False):
+        new = _chord(balance, predicted, tangent, scale, omega_min, span, step, chord)
+        if new is not None:
+            return new
     y = predicted.copy()
     for iteration in range(1, CORRECTOR_ITERATIONS + 1):
         q, omega = _unscaled(y, scale, omega_min, span)
@@ -201,6 +221,36 @@ def _correct(balance, predicted, tangent, scale, omega_min, span, step):
                 np.max(np.abs(delta)) <= 1e-6:
             q, omega = _unscaled(y, scale, omega_min, span)
             return q, omega, iteration
+    return None
+
+
+def _chord(balance, predicted, tangent, scale, omega_min, span, step, chord):
+    """The corrector of :func:`_correct` with the Jacobian of the last point kept (the chord method: one run of
+    the motion an iteration, not one per unknown), at most CHORD_ITERATIONS iterations, the same convergence and
+    drift; its iterations counted as Newton's would be for the step's size (TARGET_ITERATIONS for
+    CHORD_TARGET)."""
+    system = np.vstack((chord, tangent))
+    y = predicted.copy()
+    previous = math.inf
+    for iteration in range(1, CHORD_ITERATIONS + 1):
+        q, omega = _unscaled(y, scale, omega_min, span)
+        residual = balance.residual_at(q, omega)
+        if not np.all(np.isfinite(residual)):
+            return None
+        delta = solve_linear(system, -np.concatenate((residual, [tangent @ (y - predicted)])))
+        if delta is None:
+            return None
+        y = y + delta
+        if np.linalg.norm(y - predicted) > DRIFT * max(step, 1e-300) or _unscaled(y, scale, omega_min, span)[1] <= 0:
+            return None
+        size = float(np.max(np.abs(delta)))
+        # converged as Newton's, and contracting by half at least (the chord converges linearly: its error is
+        # below its last step then)
+        if (size <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega) and size <= 1e-6) \
+                and size <= 0.5 * previous:
+            q, omega = _unscaled(y, scale, omega_min, span)
+            return q, omega, max(1, math.ceil(iteration * TARGET_ITERATIONS / CHORD_TARGET))
+        previous = size
     return None
 
 

@@ -75,6 +75,8 @@ MAX_STEPS = 2**16
 # samples per period of the continuation (the orbit is exact: they set the quadrature only; each costs the exact
 # stepper a matrix exponential)
 FIRST_STEPS = 64
+# from this many unknowns on, the continuation's corrector keeps the last point's Jacobian (see costly_jacobian)
+CHORD_UNKNOWNS = 12
 
 
 def takes(scene) -> bool:
@@ -247,6 +249,21 @@ class Shooting:
         except StepFailed:
             nan = np.full(self.dimension, np.nan)
             return nan, np.full((self.dimension, self.dimension), np.nan), nan, None
+
+    @property
+    def costly_jacobian(self) -> bool:
+        """Whether the continuation's corrector keeps the Jacobian of the last point (the chord method): a
+        Jacobian is a run of the motion per unknown, a chord iteration one run; measured, the chord's 10 to 20
+        iterations a point cost more than Newton's 3 Jacobians below CHORD_UNKNOWNS unknowns (two masses: 5.8
+        s against 3.8 s for a curve)."""
+        return self.dimension >= CHORD_UNKNOWNS
+
+    def residual_at(self, s: np.ndarray, omega: float) -> np.ndarray:
+        """R at ``s`` and ``omega``, all NaN where the stepper refuses the trial state (as :meth:`evaluate`)."""
+        try:
+            return self.residual(np.asarray(s, dtype=float), omega)
+        except StepFailed:
+            return np.full(self.dimension, np.nan)
 
     def force_scale(self, omega: float) -> float:
         """The residual's scale (m): the force's static deflection, or its motion at omega."""

@@ -260,6 +260,34 @@ def test_the_curve_steps_over_the_kinks_where_nodes_start_or_stop_slipping(tmp_p
 
 
 @pytest.mark.slow
+def test_with_many_unknowns_the_corrector_keeps_its_jacobian_and_the_points_are_the_same(tmp_path, monkeypatch):
+    """A chain of six (12 unknowns): the continuation's corrector keeps the last point's Jacobian (the chord
+    method: a run of the motion an iteration, not 13), counted here; the points it gives are the periodic state
+    that Newton finds at their frequency alone, from rest, to 1e-8."""
+    from prandtl_fmu.frequency import continuation
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    kept = []
+    chord = continuation._chord
+
+    def counted(*args):
+        point = chord(*args)
+        kept.append(point is not None)
+        return point
+
+    monkeypatch.setattr(continuation, "_chord", counted)
+    scene = network(tmp_path, chain(6))
+    low, high = 2 * math.pi * 1.0, 2 * math.pi * 2.5
+    shooting = NetworkShooting(scene, 6.0, None, 64, 7, math.sqrt(low * high))
+    assert shooting.costly_jacobian
+    points = continuation.continue_curve(shooting, low, high, 2)
+    assert points[-1][0] == high and sum(kept) >= len(points) // 2, (sum(kept), len(kept), len(points))
+    for w, s, _ in points[1:-1:max(1, len(points) // 5)]:
+        alone = shooting.solve_at(w)
+        assert np.max(np.abs(alone - s)) <= 1e-8 * np.max(np.abs(alone)), w / (2 * math.pi)
+
+
+@pytest.mark.slow
 def test_the_chain_on_a_support_from_the_command_line(tmp_path):
     """describe on a chain of four nodes on a support: the contract's columns, every node's amplitude, a
     stable column of true or false, the figure."""
