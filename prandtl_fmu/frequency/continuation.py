@@ -4,11 +4,13 @@ The curve R(q, omega) = 0 is followed from omega_min to omega_max in scaled unkn
 (omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (2-norm; the scale is
 updated as the curve grows, the tangent rescaled with it):
 
-* tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised, and oriented so that the sign of
-  det [dR/dy; t^T] stays the one at the start (ahead in omega there): a fold is passed, not turned back on, and
-  at a kink of the curve (where a slip starts or stops, the Jacobians on its two sides differ) the way on is
-  kept even where the tangent turns by more than a right angle, which the side of the previous tangent would
-  turn back on;
+* tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised (the previous tangent's side kept: a
+  fold is passed, not turned back on; past a corner, the chord's side). The sign of det [dR/dy; t^T] is kept
+  along too: where the two disagree and the side would turn the curve back in omega, the determinant's is
+  taken. Along a smooth curve they agree (at a fold both turn); at a kink (a slip that starts or stops: the
+  Jacobians on its two sides differ) the tangent can turn by more than a right angle, where the side alone
+  turned the curve back (a chain on a support), while the determinant alone can flip at a kink of the sampled
+  forces without a fold (measured on two masses and a joint at H = 3), where the side goes on;
 * predictor y + ds t; corrector: Newton on [R(y); t . (y - y_pred)] = 0 (the step's hyperplane), at most
   CORRECTOR_ITERATIONS iterations; a corrector that does not converge halves ds, down to MIN_STEP, then the
   curve is refused where it stopped (FrequencyError: the frequency, the amplitude and why); a corrector that
@@ -82,8 +84,8 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         if len(points) > MAX_POINTS:
             raise FrequencyError(f"{balance.system.source}: the curve did not reach f = {_hz(omega_max)!r} Hz "
                                  f"within {MAX_POINTS} points (at f = {_hz(omega)!r} Hz, "
-                                 f"{_where(balance, q, omega, node)}; an amplitude that grows without bound there "
-                                 "is a resonance that nothing limits)")
+                                 f"{_where(balance, q, omega, node)}: if it grew without bound there, a resonance "
+                                 "that nothing limits)")
         new = None
         cornered = False
         while new is None:
@@ -93,7 +95,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                 new = _damped(balance, q, omega, tangent, scale, omega_min, span, step)
                 if new is None:
                     new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
-                cornered = new is not None  # a fold met there is at this point (not located by the secant)
+                    cornered = new is not None  # a fold met there is at this point (not located by the secant)
             if new is None:
                 step *= 0.5
                 if step < MIN_STEP:
@@ -108,12 +110,21 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                                  f"({_where(balance, q_new, omega_new, node)}): it does not reach "
                                  f"{_hz(omega_max)!r} Hz from there")
         scale_new = max(scale, np.linalg.norm(q_new))
-        found = _tangent_at(balance, q_new, omega_new, _rescaled(tangent, scale, scale_new), scale_new, span,
-                            orientation)
-        tangent_new, chord_new = (None, None) if found is None else found
-        if tangent_new is None:
+        heading = tangent
+        if cornered:  # the way on is the chord from the corner, not the tangent before it
+            heading = _scaled(q_new, omega_new, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)
+            heading /= np.linalg.norm(heading)
+        heading = _rescaled(heading, scale, scale_new)
+        found = _oriented(balance, q_new, omega_new, heading, scale_new, span)
+        if found is None:
             raise FrequencyError(f"{balance.system.source}: the curve cannot continue at f = {_hz(omega_new)!r} Hz: "
                                  "the Jacobian of the augmented system is singular there (a branch point)")
+        tangent_new, sign, chord_new = found
+        if not cornered and sign != orientation and tangent_new[-1] * heading[-1] < 0:
+            # the side of the heading and the determinant's orientation disagree, and the side would turn the curve
+            # back in omega: a kink where the tangent turned by more than a right angle (a fold passes both)
+            tangent_new, sign = -tangent_new, -sign
+        orientation = sign
         if omega_new >= omega_max:
             q_end = _fixed_frequency(balance, q, q_new, omega, omega_new, omega_max)
             if q_end is not None:
@@ -167,25 +178,14 @@ def _augmented(balance, q, omega, scale, span):
     return residual, np.hstack((jacobian * scale, by_omega[:, None] * span))
 
 
-def _tangent(balance, q, omega, previous, scale, span, orientation=None):
-    """The unit tangent at (q, omega): oriented by ``orientation`` if given (the sign of det [dR/dy; t], kept
-    along the curve), else by ``previous`` (t . previous > 0), else ahead in omega."""
-    found = _tangent_at(balance, q, omega, previous, scale, span, orientation)
+def _tangent(balance, q, omega, previous, scale, span):
+    """The unit tangent at (q, omega), on the side of ``previous`` (t . previous > 0), else ahead in omega."""
+    found = _oriented(balance, q, omega, previous, scale, span)
     return None if found is None else found[0]
 
 
-def _tangent_at(balance, q, omega, previous, scale, span, orientation=None):
-    """(the tangent of :func:`_tangent`, the scaled Jacobian [dR/dq dR/domega] there), or None."""
-    found = _oriented(balance, q, omega, previous, scale, span)
-    if found is None:
-        return None
-    t, sign, matrix = found
-    return (t if orientation is None or sign == orientation else -t), matrix
-
-
 def _oriented(balance, q, omega, previous, scale, span):
-    """(t, sign of det [dR/dy; t], the scaled Jacobian) at (q, omega), t as :func:`_tangent` without
-    ``orientation``; or None."""
+    """(t, sign of det [dR/dy; t], the scaled Jacobian) at (q, omega), t as :func:`_tangent`; or None."""
     _, matrix = _augmented(balance, q, omega, scale, span)
     row = previous if previous is not None else np.eye(matrix.shape[1])[-1]
     t = solve_linear(np.vstack((matrix, row)), np.eye(matrix.shape[1])[-1])

@@ -233,6 +233,29 @@ def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, m
     assert not out.exists()
 
 
+def test_a_kink_of_the_sampled_forces_does_not_turn_the_curve_back(tmp_path):
+    """networks/two-mass-joint at F0 = 0.5 N, H = 3: near 0.146 Hz a branch's slip puts a kink between two
+    samples, where det [dR/dy; t] changes sign without a fold (a rank-one change of the Jacobian; the tangent's
+    frequency share stays about +0.13 on both sides, and Newton at 0.1467 Hz from three guesses finds one
+    solution). Orienting the tangent by that determinant alone sent the curve back and forth (481 points, 196
+    false folds); kept on the side of the tangent before, it goes on: frequencies increasing, no fold, and the
+    points there are the balance's solution at their frequency alone."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene, _ = read_scene("networks/two-mass-joint", networks=True)
+    curve = harmonic_response(scene, 0.5, [0.05, 0.5], harmonics=3, stability=False)
+    assert np.all(np.diff(curve.frequency) > 0) and curve.folds.size == 0
+    balance = HarmonicBalance(periodic_system(scene), 3, 0.5)
+    near = np.flatnonzero(np.abs(curve.frequency - 0.146) < 0.003)
+    assert near.size >= 2
+    for index in near:
+        q = balance._newton(2 * math.pi * curve.frequency[index], curve.coefficients[index].reshape(-1)[balance.free]
+                            * 1.2)
+        assert q is not None
+        assert math.hypot(balance.full(q)[1], balance.full(q)[2]) == pytest.approx(curve.amplitude[index], rel=1e-9)
+
+
 def test_where_a_network_s_curve_stops_is_said_at_the_node_its_csv_reports(tmp_path, capsys, monkeypatch):
     """A curve that cannot continue names the amplitude the CSV's ``amplitude`` column would hold: at --node
     (here b, not the load's node a), absolute under base excitation."""
