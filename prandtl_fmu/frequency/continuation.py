@@ -217,11 +217,17 @@ def _correct(balance, predicted, tangent, scale, omega_min, span, step, chord=No
         y = y + delta
         if np.linalg.norm(y - predicted) > DRIFT * max(step, 1e-300) or _unscaled(y, scale, omega_min, span)[1] <= 0:
             return None  # gone far from the prediction: another part of the curve, or none; a shorter step
-        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega) and \
-                np.max(np.abs(delta)) <= 1e-6:
+        if _converged(balance, delta, residual, omega):
             q, omega = _unscaled(y, scale, omega_min, span)
             return q, omega, iteration
     return None
+
+
+def _converged(balance, delta, residual, omega) -> bool:
+    """Whether a corrector's step ``delta`` (scaled) from a point of residual ``residual`` ends it: below
+    CONVERGED, or the residual at rounding (1e-12 of the force's scale) and the step below 1e-6."""
+    size = float(np.max(np.abs(delta)))
+    return size <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega) and size <= 1e-6
 
 
 def _chord(balance, predicted, tangent, scale, omega_min, span, step, chord):
@@ -246,8 +252,7 @@ def _chord(balance, predicted, tangent, scale, omega_min, span, step, chord):
         size = float(np.max(np.abs(delta)))
         # converged as Newton's, and contracting by half at least (the chord converges linearly: its error is
         # below its last step then)
-        if (size <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega) and size <= 1e-6) \
-                and size <= 0.5 * previous:
+        if _converged(balance, delta, residual, omega) and size <= 0.5 * previous:
             q, omega = _unscaled(y, scale, omega_min, span)
             return q, omega, max(1, math.ceil(iteration * TARGET_ITERATIONS / CHORD_TARGET))
         previous = size
@@ -305,8 +310,7 @@ def _damped_newton(balance, start, predicted, row, tangent, scale, omega_min, sp
         length = np.linalg.norm(chord)
         if length > DAMPED_REACH * step or (row is tangent and chord @ tangent < 0.5 * length):
             return None
-        if np.max(np.abs(delta)) <= CONVERGED or np.max(np.abs(residual)) <= 1e-12 * balance.force_scale(omega_y) \
-                and np.max(np.abs(delta)) <= 1e-6:
+        if _converged(balance, delta, residual, omega_y):
             return q_y, omega_y, iteration
     return None
 
