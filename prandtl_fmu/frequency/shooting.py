@@ -254,8 +254,9 @@ class Shooting:
     def costly_jacobian(self) -> bool:
         """Whether the continuation's corrector keeps the Jacobian of the last point (the chord method): a
         Jacobian is a run of the motion per unknown, a chord iteration one run; measured, the chord's 10 to 20
-        iterations a point cost more than Newton's 3 Jacobians below CHORD_UNKNOWNS unknowns (two masses: 5.8
-        s against 3.8 s for a curve)."""
+        iterations a point cost more than Newton's 3 Jacobians below CHORD_UNKNOWNS unknowns (`prandtl-fmu
+        describe networks/two-masses-slider --force-amplitude 3 --frequencies 0.3,4`, 5 unknowns: 5.8 s with
+        the chord against 3.8 s); above, ``benchmarks/network_shooting.py``."""
         return self.dimension >= CHORD_UNKNOWNS
 
     def residual_at(self, s: np.ndarray, omega: float) -> np.ndarray:
