@@ -28,7 +28,11 @@ is ``continuation.py``'s, the unknowns s in place of the harmonics.
 
 **Stability** of every point: the monodromy of the whole period is (dG/ds)^2, G = -Phi (the symmetry), so the
 Floquet multipliers are the squares of the eigenvalues of dG/ds = dR/ds + I, from the same differences at the
-point. A branch stuck all along gives the neutral multiplier 1, as ``floquet.py`` says.
+point. A branch stuck all along gives the neutral multiplier 1, as ``floquet.py`` says. Every scene taken here
+is monotone (springs, dashpots, branches, sliders, Coulomb friction on a fixed ground), so the energy of the
+difference of two motions never grows and every multiplier has |mu| <= 1: no point is unstable, none folds
+(docs/frequency.md; the tests check the contraction on the steppers themselves). The multipliers are computed
+all the same: a check on the code, and the rate at which a point attracts.
 
 **Accuracy.** The stepper is ``exact`` (closed form between events, stick and slip located to rounding): the
 orbit is exact whatever the steps, and M samples per period only set the quadrature of the harmonics (the
