@@ -7,7 +7,9 @@ the first harmonic of x at the node changes by at most ``tolerance`` relative fr
 curve's peak and at both ends (the curve of the larger H is kept); past the last H of HARMONIC_STEPS it is
 refused with the change reached.
 An element with ``[friction]`` on its mass takes ``shooting.py`` instead (the periodic state by shooting on its own
-stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`.
+stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`. A range that holds a
+resonance friction cannot hold (``unbounded.py``: Den Hartog's bound) is refused before either curve starts,
+once the scene and the options are known to be taken.
 
 The first harmonic of x at a node, x_1 = a_1 cos(omega t) + b_1 sin(omega t) = amplitude cos(omega t + phase):
 amplitude = |a_1 - i b_1| (m), phase = arg(a_1 - i b_1) (rad), as the time sweep (``response.py``) defines
@@ -25,6 +27,7 @@ import numpy as np
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
+from .unbounded import refuse_unbounded
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
 
@@ -129,6 +132,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
+    refuse_unbounded(scene, force_amplitude, base_amplitude, low, high, load_node)
     count = int(np.unique(frequencies).size)
     if harmonics is not None:
         balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)

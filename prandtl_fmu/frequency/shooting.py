@@ -478,10 +478,10 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
                       tolerance: float = DEFAULT_TOLERANCE, stability: bool = True, samples: Optional[int] = None):
     """The forced response of an element scene with friction (see the module): the fields of a ``curve.Curve``;
     the arguments are ``curve.harmonic_response``'s, checked there."""
+    from ..network.model import NetworkScene
     from ..stepping import _progress_bar
     from .continuation import continue_curve
-
-    from ..network.model import NetworkScene
+    from .unbounded import refuse_unbounded
 
     scene = prepared(scene)
     network = isinstance(scene, NetworkScene)
@@ -499,6 +499,7 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
 
     shooting = make(max(FIRST_STEPS, 4 * H + 4 if samples is None else int(samples) + int(samples) % 2))
     where = shooting.system.node_index(node)
+    refuse_unbounded(scene, force_amplitude, base_amplitude, low, high, load_node)
     # a network's curve can take minutes (a Jacobian is 2 n + 1 runs of its motion): a bar on a terminal
     bar = _progress_bar(None, total=None, label=f"{scene.name}: points of the curve")
     try:

@@ -94,6 +94,32 @@ def test_a_mass_that_friction_holds_still_does_not_move():
     assert np.all(curve.amplitude == 0.0) and np.all(curve.phase == 0.0) and np.all(curve.stable)
 
 
+@pytest.mark.parametrize("tables, holds", [
+    (COULOMB, 0.1), (dict(COULOMB, branches={"k": [2.0, 5.0], "alpha": [0.05, 0.02]}), 0.17),
+    ({"mass": {"m": 2.0}, "spring": {"k0": 8.0}, "branches": {"k": [1.0, 3.0], "eta": [0.1, 0.2]}}, 0.7)],
+    ids=["coulomb", "coulomb and branches", "branches (harmonic balance)"])
+def test_an_undamped_element_forced_beyond_den_hartog_s_bound_is_refused(tmp_path, capsys, tables, holds):
+    """No dashpot: past 4 / pi of the friction's and the branches' forces (alpha, k_i eta_i: ``holds``, written
+    out) the amplitude at sqrt(k0 / m) grows without bound, by shooting or harmonic balance alike: refused
+    before the curve starts, in one line; below the bound, and with the resonance out of the band, not."""
+    from prandtl_fmu.frequency import FrequencyError
+    from prandtl_fmu.frequency.unbounded import refuse_unbounded
+
+    scene = element(tables)
+    natural = math.sqrt(tables["spring"]["k0"] / tables["mass"]["m"])  # rad/s
+    bound = 4 / math.pi * holds
+    refuse_unbounded(scene, 0.99 * bound, None, 0.5 * natural, 2 * natural)
+    refuse_unbounded(scene, 10 * bound, None, 1.01 * natural, 2 * natural)
+    with pytest.raises(FrequencyError, match=f"below {bound:.6g} N"):
+        refuse_unbounded(scene, 1.01 * bound, None, 0.5 * natural, 2 * natural)
+    out = write(tmp_path, tables)
+    csv = tmp_path / "curve.csv"
+    assert main(["describe", str(out), "--force-amplitude", repr(1.01 * bound), "--frequencies",
+                 f"{0.5 * natural / (2 * math.pi)!r},{2 * natural / (2 * math.pi)!r}", "--out", str(csv)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Den Hartog" in err and not csv.exists(), err
+
+
 @pytest.mark.slow
 def test_the_orbit_is_periodic_over_the_whole_period():
     """The symmetry solved for over half a period is the motion's: one whole period of the stepper from a point's

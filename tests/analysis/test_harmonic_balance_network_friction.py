@@ -83,26 +83,81 @@ def test_a_node_on_a_slider_is_den_hartogs_non_stop_motion(tmp_path, base):
         assert phase == pytest.approx(np.angle(first), abs=1e-7)
 
 
+# Den Hartog's bound along the springs' undamped mode, written out: the node alone on its spring (4 / pi of the
+# slider's 0.1 N); the two masses' mode a alone (b's dashpot damps b's mode), held by the slider (2 N) and the
+# branch (k eta = 1 N) between them
+ONE_NODE_BOUND, ONE_NODE_NATURAL = 4 / math.pi * 0.1, 1 / (2 * math.pi)
+TWO_MASSES_BOUND, TWO_MASSES_NATURAL = 4 / math.pi * (2.0 + 50.0 * 0.02), math.sqrt(100.0) / (2 * math.pi)
+
+
+@pytest.mark.parametrize("case", ["one node", "two masses", "two masses, base"])
+def test_a_resonance_that_friction_cannot_hold_is_refused_before_the_curve_starts(tmp_path, capsys, case):
+    """Den Hartog: a mass on a spring and a slider forced beyond 4 / pi of the friction has no periodic state at
+    its natural frequency (the amplitude grows without bound). So has any network on a mode of its springs that
+    no dashpot damps, forced beyond 4 / pi of its sliders' and branches' forces along the mode. A curve over that
+    frequency is refused before it starts (it used to climb the resonance for minutes), in one line that names
+    the frequency, the force that would do and the bound; a hair below the bound is not refused there."""
+    from prandtl_fmu.frequency.unbounded import refuse_unbounded
+    from prandtl_fmu.scene import load_scene
+
+    if case == "one node":
+        path, bound, natural = tmp_path / "one.toml", ONE_NODE_BOUND, ONE_NODE_NATURAL
+        path.write_text(ONE_NODE)
+        scene = network(tmp_path, ONE_NODE)
+    else:
+        path, bound, natural = TWO_MASSES, TWO_MASSES_BOUND, TWO_MASSES_NATURAL
+        scene = load_scene(TWO_MASSES)
+    band = (0.5 * 2 * math.pi * natural, 2 * 2 * math.pi * natural)  # rad/s
+    if case.endswith("base"):  # m_a Y0 omega^2 on the mode (b's share is 0)
+        option, limit = "--base-amplitude", bound / (2 * math.pi * natural) ** 2
+        refuse_unbounded(scene, None, 0.99 * limit, *band)
+    else:
+        option, limit = "--force-amplitude", bound
+        refuse_unbounded(scene, 0.99 * limit, None, *band)
+    refuse_unbounded(scene, 10 * bound, None, 1.01 * 2 * math.pi * natural, band[1])  # the resonance left out
+    out = tmp_path / "curve.csv"
+    assert main(["describe", str(path), option, repr(1.01 * limit), "--frequencies",
+                 f"{0.5 * natural!r},{2 * natural!r}", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err and not out.exists(), err
+    assert f"no periodic state at f = {natural:.6g} Hz" in err and "Den Hartog" in err, err
+    assert f"below {limit:.6g} " in err, err
+
+
 @pytest.mark.slow
-def test_a_resonance_that_friction_cannot_hold_is_refused_with_its_growing_amplitude(tmp_path, monkeypatch):
-    """Den Hartog: a mass on a spring and a slider, forced beyond 4 / pi of the friction, has no bounded
-    periodic state at its natural frequency (the amplitude goes to infinity there). The curve from below
-    climbs towards it and is refused past its bound of points, saying where and at what amplitude (over 100 m:
-    ten times the linear response F0 / (k - m omega^2) at 0.95 of the natural frequency)."""
+@pytest.mark.parametrize("case", ["one node", "two masses"])
+def test_just_below_den_hartog_s_bound_the_curve_passes_the_resonance(tmp_path, case):
+    """At 0.99 of the bound the curve goes through the springs' natural frequency, its amplitude bounded: the
+    bound is sharp, not a margin that refuses curves that exist."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.scene import load_scene
+
+    if case == "one node":
+        scene, bound, natural = network(tmp_path, ONE_NODE), ONE_NODE_BOUND, ONE_NODE_NATURAL
+    else:
+        scene, bound, natural = load_scene(TWO_MASSES), TWO_MASSES_BOUND, TWO_MASSES_NATURAL
+    curve = harmonic_response(scene, 0.99 * bound, [0.5 * natural, 2 * natural], stability=False)
+    assert curve.frequency[0] < natural < curve.frequency[-1] and np.all(np.diff(curve.frequency) > 0)
+    assert np.all(np.isfinite(curve.amplitude)) and np.max(curve.amplitude) < 1e3 * 0.99 * bound
+
+
+@pytest.mark.slow
+def test_a_curve_past_its_bound_of_points_says_where_it_stopped(tmp_path, monkeypatch):
+    """The continuation's bound of points (here lowered to 20): the refusal says the frequency and the
+    first-harmonic amplitude at --node where the curve stopped, within the band."""
     import re
 
     from prandtl_fmu.frequency import continuation
     from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.scene import load_scene
 
-    monkeypatch.setattr(continuation, "MAX_POINTS", 400)
-    scene = network(tmp_path, ONE_NODE)
-    natural = 1 / (2 * math.pi)
+    monkeypatch.setattr(continuation, "MAX_POINTS", 20)
     with pytest.raises(FrequencyError) as refused:
-        harmonic_response(scene, 1.0, [0.5 * natural, 2 * natural], stability=False)
-    said = re.search(r"within 400 points \(at f = (\S+) Hz, first-harmonic amplitude (\S+) m at node a",
+        harmonic_response(load_scene(TWO_MASSES), 3.5, [0.5, 3.0], stability=False, node="b")
+    said = re.search(r"within 20 points \(at f = (\S+) Hz, first-harmonic amplitude (\S+) m at node b",
                      str(refused.value))
     assert said, refused.value
-    assert float(said.group(1)) == pytest.approx(natural, rel=1e-3) and float(said.group(2)) > 100.0
+    assert 0.5 < float(said.group(1)) < 3.0 and float(said.group(2)) > 0
 
 
 @pytest.mark.slow

@@ -1,0 +1,166 @@
+"""A resonance that friction cannot hold: Den Hartog's bound, for any scene whose nonlinear forces are bounded.
+
+A mass on a spring and a Coulomb slider, forced by F0 cos(omega t) with F0 > 4 alpha / pi, has no periodic state
+at its natural frequency (Den Hartog 1931): the force's work per period, pi F0 A, outgrows what the slider can
+take, at most 4 alpha A. A curve from below climbs towards it without bound, so no curve passes that frequency.
+The same holds for a scene of nodes
+
+    M x'' + C x' + K x + g(t) = f cos(omega t),    |d_j . g| bounded element by element,
+
+K and C the linear springs and dashpots, g the forces of the elements whose force is bounded: a slider (alpha), a
+Prandtl branch (k eta: its spring's elongation stays within eta, also behind a series dashpot), Coulomb friction
+on the mass (its static threshold alpha). Let phi be a mode of the springs alone, K phi = omega_r^2 M phi, that
+no dashpot damps (C phi = 0). A periodic x at omega_r, projected on phi and weighed by cos(omega_r t) over a
+period, loses its linear part (phi' (M x'' + K x) = phi' M (x'' + omega_r^2 x) integrates to 0 against cos, and
+C phi = 0), so
+
+    phi' f T / 2 = integral of phi' g(t) cos(omega_r t) dt,   |right| <= sum_j b_j |d_j . phi| 2 T / pi,
+
+b_j the bound of element j's force and d_j its direction (x_p - x_q). Where |phi' f| > 4 / pi sum_j b_j
+|d_j . phi|, no periodic state (of any period that omega_r divides) exists at omega_r: not in time, and not by
+harmonic balance either (the same projection of its first harmonic). :func:`refuse_unbounded` refuses such a
+curve before it starts, in one line that says where, why and what to change. Under base excitation the force
+is M 1 Y0 omega^2 in coordinates relative to the ground.
+
+The bound is a proof of refusal only: below it a periodic state may or may not exist, and the continuation
+answers (a resonance it climbs without bound is refused past its bound of points, saying where). The check
+applies where every force besides springs and dashpots is bounded and every node has a mass (a cubic spring,
+a delay, a history, Dahl's law or a spectrum of branches: not checked). Repeated modes: each of the mode's
+vectors that no dashpot damps, and the one of them the force drives most, are checked.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+
+from . import FrequencyError
+
+CLUSTER = 1e-9  # modes within this relative distance of omega_r^2 are one repeated mode
+UNDAMPED = 1e-12  # C phi below this share of |C| |phi|: no dashpot damps the mode
+MARGIN = 1e-9  # the bound exceeded by more than rounding
+
+
+def _element_parts(scene) -> Optional[tuple]:
+    """``(M, K, C, rows, bounds, node names)`` of an element scene with [mass], or None where the check does not
+    apply (see the module)."""
+    if scene.mass is None or scene.cubic is not None or any(
+            getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
+        return None
+    rows, bounds = [], []
+    if scene.branches is not None:
+        if scene.branches.continuum:
+            return None
+        for k, eta in zip(scene.branches.stiffness.tolist(), scene.branches.yield_displacement.tolist()):
+            rows.append([1.0])
+            bounds.append(k * eta)
+    if scene.friction is not None:
+        rows.append([1.0])
+        bounds.append(max(scene.friction.alpha, scene.friction.alpha_kinetic))
+    k0 = 0.0 if scene.spring is None else float(scene.spring.k0)
+    c = float(scene.damper.c) if scene.has_dashpot else 0.0
+    return (np.array([float(scene.mass.m)]), np.array([[k0]]), np.array([[c]]), np.array(rows).reshape(-1, 1),
+            np.array(bounds), ("mass",))
+
+
+def _network_parts(network) -> Optional[tuple]:
+    """As :func:`_element_parts`, for a network."""
+    n = network.n
+    if np.any(np.asarray(network.mass) <= 0):
+        return None
+    K, C, rows, bounds = np.zeros((n, n)), np.zeros((n, n)), [], []
+    for element in network.elements:
+        d = np.zeros(n)
+        p, q = element.between
+        d[p] += 1.0
+        if q >= 0:
+            d[q] -= 1.0
+        if element.kind == "spring":
+            K += element.value * np.outer(d, d)
+        elif element.kind == "dashpot":
+            C += element.value * np.outer(d, d)
+        elif element.kind == "slider":
+            rows.append(d)
+            bounds.append(element.value)
+        elif element.kind == "branch":
+            rows.append(d)
+            bounds.append(element.value * element.eta)
+        else:  # a cubic spring: its force is not bounded
+            return None
+    return (np.array(network.mass, dtype=float), K, C, np.array(rows, dtype=float).reshape(-1, n),
+            np.array(bounds, dtype=float), tuple(network.nodes))
+
+
+def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Optional[float], low: float,
+                     high: float, load_node: Optional[str] = None) -> None:
+    """FrequencyError where a mode of the springs alone, undamped, lies in [low, high] (rad/s) and the force
+    drives it beyond what the bounded forces can take (see the module); else nothing."""
+    from ..network.model import NetworkScene
+
+    if isinstance(scene, NetworkScene):
+        if load_node is not None and load_node not in scene.network.nodes:
+            return  # refused where the load node is read, with the nodes listed
+        parts = _network_parts(scene.network)
+        load = scene.network.load_node if load_node is None else scene.network.nodes.index(load_node)
+    else:
+        parts = _element_parts(scene)
+        load = 0
+    if parts is None:
+        return
+    mass, K, C, rows, bounds, nodes = parts
+    scale = 1.0 / np.sqrt(mass)
+    values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
+    shapes = scale[:, None] * vectors  # K phi = lambda M phi
+    damping = float(np.max(np.abs(C)))
+    start = 0
+    while start < values.size:  # each mode, its repeated values together
+        stop = start + 1
+        while stop < values.size and values[stop] - values[start] <= CLUSTER * abs(values[start]):
+            stop += 1
+        value, cluster = float(values[start:stop].mean()), shapes[:, start:stop]
+        start = stop
+        if value <= 0 or not low * low * (1 - CLUSTER) <= value <= high * high * (1 + CLUSTER):
+            continue
+        free = _undamped(cluster, C, damping)
+        if free.shape[1] == 0:
+            continue
+        omega = math.sqrt(value)
+        if base_amplitude is None:
+            force = np.zeros(mass.size)
+            force[load] = force_amplitude
+        else:
+            force = mass * base_amplitude * omega * omega
+        # the mode's vectors, and the one among them the force drives most
+        for phi in [free[:, j] for j in range(free.shape[1])] + [free @ (free.T @ force)]:
+            if not np.any(phi):
+                continue
+            phi = phi / np.max(np.abs(phi))
+            drive = abs(float(phi @ force))
+            hold = 4.0 / math.pi * float(np.sum(bounds * np.abs(rows @ phi)))
+            if drive > hold * (1 + MARGIN):
+                _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude)
+
+
+def _undamped(cluster: np.ndarray, C: np.ndarray, damping: float) -> np.ndarray:
+    """The vectors of the mode (columns of ``cluster``) that no dashpot damps: a basis of those with C phi = 0."""
+    if damping == 0.0:
+        return cluster
+    _, sigma, right = np.linalg.svd(C @ cluster)
+    size = np.max(np.abs(cluster))
+    rank = int(np.sum(sigma > UNDAMPED * damping * size * math.sqrt(cluster.shape[0])))
+    return cluster @ right[rank:].T
+
+
+def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude) -> None:
+    f = omega / (2 * math.pi)
+    shape = ", ".join(f"{name} {value:.3g}" for name, value in zip(nodes, phi))
+    if base_amplitude is None:
+        what, cure = "the force", f"a force amplitude below {force_amplitude * hold / drive:.6g} N"
+    else:
+        what, cure = "the moving base (m Y0 omega^2)", f"a base amplitude below {base_amplitude * hold / drive:.6g} m"
+    raise FrequencyError(
+        f"{scene.source}: no periodic state at f = {f:.6g} Hz: no dashpot acts on the springs' mode there (shape "
+        f"{shape}), and {what} drives it with {drive:.6g} N, more than the most its sliders and branches can "
+        f"hold, {hold:.6g} N (4 / pi of their forces along the mode: Den Hartog's bound), so its amplitude grows "
+        f"without bound: leave {f:.6g} Hz out of the frequencies, or give {cure}, or a dashpot on that mode")
