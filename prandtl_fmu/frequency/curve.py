@@ -9,7 +9,8 @@ refused with the change reached.
 An element with ``[friction]`` on its mass takes ``shooting.py`` instead (the periodic state by shooting on its own
 stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`. A range that holds a
 resonance friction cannot hold (``unbounded.py``: Den Hartog's bound) is refused before either curve starts,
-once the scene and the options are known to be taken.
+once the scene and the options are known to be taken. Elements in series through a massless node are joined
+into one first (``series.py``: a spring and a slider with their node are a branch).
 
 The first harmonic of x at a node, x_1 = a_1 cos(omega t) + b_1 sin(omega t) = amplitude cos(omega t + phase):
 amplitude = |a_1 - i b_1| (m), phase = arg(a_1 - i b_1) (rad), as the time sweep (``response.py``) defines
@@ -27,6 +28,7 @@ import numpy as np
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
+from .series import joined
 from .unbounded import refuse_unbounded
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
@@ -122,6 +124,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
     orders = check_orders(orders, harmonics)
+    scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
         fields = shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
                                             harmonics=harmonics if harmonics is not None or not orders else

@@ -28,6 +28,7 @@ import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
 from .harmonic_balance import NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
+from .series import joined
 
 MAX_HALVINGS = 30
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
@@ -68,6 +69,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
                              "here: EPMC's negative damping would run the steppers outside the c >= 0 their events "
                              "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
                              "(--force-amplitude) is computed, or model the contact as a branch (k, alpha)")
+    scene = joined(scene, keep=(node,))  # a Jenkins element written with its massless node: a branch
     sliders = [e.name for e in getattr(getattr(scene, "network", None), "elements", ()) if e.kind == "slider"]
     if sliders:
         raise FrequencyError(f"{scene.source}: slider {sliders[0]}: a network with rigid sliders has no nonlinear "

@@ -541,6 +541,11 @@ between = ["j", "b"]
 k = 2.0
 eta = 0.05
 
+# a third element on j: a massless node between two elements would be joined into one (frequency/series.py)
+[[network.spring]]
+between = ["j", "ground"]
+k = 0.5
+
 [[network.dashpot]]
 between = ["a", "ground"]
 c = 0.02

@@ -443,9 +443,10 @@ def test_the_chain_on_a_support_from_the_command_line(tmp_path):
     assert plot.read_bytes()[:4] == b"\x89PNG"
 
 
+# node b joins three elements (a massless node between two is joined into one: test_series.py)
 MASSLESS_ON_A_SLIDER = network_text(["a", "b"], [1.0, 0.0], [
     ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["a", "b"], {"k": 1.0}),
-    ("slider", ["b", "ground"], {"alpha": 0.1})], load_node="a")
+    ("slider", ["b", "ground"], {"alpha": 0.1}), ("spring", ["b", "ground"], {"k": 0.5})], load_node="a")
 CUBIC = network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0}), ("cubic", ["a", "ground"], {"k3": 1.0}),
                                     ("slider", ["a", "ground"], {"alpha": 0.1})])
 SERIES = network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0}),

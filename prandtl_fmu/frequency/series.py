@@ -1,0 +1,89 @@
+"""Elements in series through a massless node, joined into one: a Jenkins element written with its node.
+
+A node without mass, without load and with exactly two elements, each a spring, a slider or a branch without a
+series dashpot, carries the same force through both at every instant (its balance has no inertia). In series
+the compliances add and the weakest slider slides first, so the two are one element of stiffness k and
+threshold alpha
+
+    1 / k = 1 / k_1 + 1 / k_2   (a slider: no compliance),    alpha = min(alpha_1, alpha_2)   (a spring: none),
+
+a spring (no threshold), a slider (no compliance) or a branch (k, eta = alpha / k) between the two other ends:
+exactly the same force on them, whatever the motion. So a joint written as springs and sliders with their
+nodes (an Iwan joint of Jenkins elements, each a spring to a massless node and a slider on from it) is the
+network of branches harmonic balance samples exactly, and one with rigid sliders elsewhere is one that shooting
+takes (it needs a mass at every node). Joined repeatedly, node by node, until no such node is left. Two elements
+whose other ends are the same node (or both the ground) act on nothing, and go. The node's own motion is not
+computed: a node named by ``--node`` or ``--load-node`` is kept as written.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+JOINED = ("spring", "slider", "branch")
+
+
+def joined(scene, keep=()):
+    """``scene`` with every massless, unloaded node between two elements in series joined (see the module); a
+    network scene only (an element scene is returned as is). ``keep``: node names not to join."""
+    from ..network.model import NetworkScene
+
+    if not isinstance(scene, NetworkScene):
+        return scene
+    network = scene.network
+    while True:
+        node = _joinable(network, keep)
+        if node is None:
+            return scene if network is scene.network else dataclasses.replace(scene, network=network)
+        network = _join(network, node)
+
+
+def _joinable(network, keep):
+    for node, name in enumerate(network.nodes):
+        if network.mass[node] > 0 or node == network.load_node or name in keep:
+            continue
+        touching = [e for e in network.elements if node in e.between]
+        if len(touching) == 2 and all(e.kind in JOINED and e.c == 0.0 for e in touching):
+            return node
+    return None
+
+
+def _stiffness_and_threshold(element) -> tuple:
+    if element.kind == "spring":
+        return element.value, math.inf
+    if element.kind == "slider":
+        return math.inf, element.value
+    return element.value, element.value * element.eta
+
+
+def _join(network, node):
+    from ..network.model import Element
+
+    first, second = (e for e in network.elements if node in e.between)
+    (k1, a1), (k2, a2) = _stiffness_and_threshold(first), _stiffness_and_threshold(second)
+    k = math.inf if math.isinf(k1) and math.isinf(k2) else 1.0 / (1.0 / k1 + 1.0 / k2)
+    alpha = min(a1, a2)
+    p, q = (e.between[1] if e.between[0] == node else e.between[0] for e in (first, second))
+    rest = [e for e in network.elements if e is not first and e is not second]
+    if p != q:
+        if p < 0:
+            p, q = q, p
+        name = f"{first.name}+{second.name}"
+        if math.isinf(alpha):
+            rest.append(Element("spring", name, (p, q), k))
+        elif math.isinf(k):
+            rest.append(Element("slider", name, (p, q), alpha))
+        else:
+            rest.append(Element("branch", name, (p, q), k, alpha / k, 0.0, 0.0))
+    # the node goes: the others' indices above it shift down by one
+    def shifted(index):
+        return index - 1 if index > node else index
+
+    elements = tuple(dataclasses.replace(e, between=tuple(shifted(i) for i in e.between)) for e in rest)
+    keep = [i for i in range(network.n) if i != node]
+    return dataclasses.replace(network, nodes=tuple(network.nodes[i] for i in keep),
+                               mass=np.asarray(network.mass)[keep], x0=np.asarray(network.x0)[keep],
+                               v0=np.asarray(network.v0)[keep], elements=elements,
+                               load_node=shifted(network.load_node))

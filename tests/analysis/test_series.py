@@ -1,0 +1,138 @@
+"""Elements in series through a massless node joined into one (``frequency/series.py``): the joined network moves
+as the one written with its nodes (the implicit stepper, which solves a massless node's balance at every step,
+is the independent check), and a joint written as springs and sliders with their nodes has the curve and the
+backbone of its branches, by harmonic balance and by shooting."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.analysis.test_describe_cli import read_csv
+from tests.analysis.test_harmonic_balance_network_friction import network, network_text
+
+ELEMENTS = {"spring": ("spring", {"k": 3.0}), "slider": ("slider", {"alpha": 0.4}),
+            "branch": ("branch", {"k": 5.0, "eta": 0.06})}
+# (stiffness, threshold) of each, as the series rules read them: a slider has no compliance, a spring no threshold
+RULES = {"spring": (3.0, math.inf), "slider": (math.inf, 0.4), "branch": (5.0, 0.3)}
+HELD = [("spring", ["a", "ground"], {"k": 2.0}), ("dashpot", ["a", "ground"], {"c": 0.1})]
+
+
+def _run(scene):
+    from prandtl_fmu.loads import HarmonicLoad
+    from prandtl_fmu.network.driver import simulate
+    from prandtl_fmu.scene_tables import Solver
+
+    run = dataclasses.replace(scene, load=HarmonicLoad(1.0, 1.3), solver=Solver("implicit", 1e-3, 30.0, 0.01))
+    return simulate(run, progress=False).x[:, 0]
+
+
+@pytest.mark.parametrize("pair", [("spring", "slider"), ("slider", "spring"), ("spring", "branch"),
+                                  ("slider", "branch"), ("branch", "branch"), ("spring", "spring")])
+def test_two_elements_in_series_through_a_massless_node_are_one(tmp_path, pair):
+    """A mass held to the ground by two elements in series through a massless node: joined, one element whose
+    stiffness and threshold are the series rule's (written out here), and the mass's motion under a harmonic
+    force is the one the implicit stepper gives the network as written (it solves the massless node's balance
+    at every step), to rounding."""
+    from prandtl_fmu.frequency.series import joined
+
+    first, second = (ELEMENTS[kind] for kind in pair)
+    if pair[0] == pair[1]:
+        second = (second[0], {key: 1.7 * value for key, value in second[1].items()})
+    text = network_text(["a", "j"], [1.0, 0.0], HELD + [(first[0], ["a", "j"], first[1]),
+                                                        (second[0], ["j", "ground"], second[1])], load_node="a")
+    scene = network(tmp_path, text)
+    one = joined(scene)
+    assert one.network.nodes == ("a",)
+    (k1, a1), (k2, a2) = RULES[pair[0]], RULES[pair[1]]
+    if pair[0] == pair[1]:
+        k2, a2 = 1.7 * k2, 1.7 * 1.7 * a2 if pair[0] == "branch" else 1.7 * a2
+    k = 1.0 / ((0.0 if math.isinf(k1) else 1.0 / k1) + (0.0 if math.isinf(k2) else 1.0 / k2))
+    alpha = min(a1, a2)
+    element = one.network.elements[-1]
+    assert element.between == (0, -1)
+    if math.isinf(alpha):
+        assert element.kind == "spring" and element.value == pytest.approx(k, rel=1e-15)
+    else:
+        assert element.kind == "branch" and element.value == pytest.approx(k, rel=1e-15)
+        assert element.value * element.eta == pytest.approx(alpha, rel=1e-15)
+    written, joined_motion = _run(scene), _run(one)
+    assert np.max(np.abs(written - joined_motion)) <= 1e-12 * np.max(np.abs(written))
+    assert np.max(np.abs(written)) > 0.5  # the force moves it, and the branch slips (alpha <= 0.4 < 1 N)
+
+
+def test_three_in_series_and_a_node_kept(tmp_path):
+    """Two massless nodes in a row (spring, branch, slider) join into one branch; the same network with the
+    first node named to be kept joins only the second."""
+    from prandtl_fmu.frequency.series import joined
+
+    text = network_text(["a", "j1", "j2"], [1.0, 0.0, 0.0], HELD + [
+        ("spring", ["a", "j1"], {"k": 4.0}), ("branch", ["j1", "j2"], {"k": 4.0, "eta": 0.1}),
+        ("slider", ["j2", "ground"], {"alpha": 0.25})], load_node="a")
+    scene = network(tmp_path, text)
+    one = joined(scene)
+    assert one.network.nodes == ("a",)
+    branch = one.network.elements[-1]
+    assert (branch.kind, branch.value, branch.value * branch.eta) == ("branch", pytest.approx(2.0), pytest.approx(0.25))
+    assert np.max(np.abs(_run(scene) - _run(one))) <= 1e-12 * np.max(np.abs(_run(scene)))
+    assert joined(scene, keep=("j1",)).network.nodes == ("a", "j1")
+
+
+IWAN_EXPLICIT = network_text(["a", "j1", "b", "j2"], [1.0, 0.0, 1.0, 0.0], [
+    ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+    ("dashpot", ["a", "ground"], {"c": 0.02}), ("dashpot", ["b", "ground"], {"c": 0.02}),
+    ("spring", ["a", "j1"], {"k": 2.0}), ("slider", ["j1", "b"], {"alpha": 0.1}),
+    ("slider", ["j2", "a"], {"alpha": 0.05}), ("spring", ["b", "j2"], {"k": 1.0})], load_node="a")
+IWAN_BRANCHES = network_text(["a", "b"], [1.0, 1.0], [
+    ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+    ("dashpot", ["a", "ground"], {"c": 0.02}), ("dashpot", ["b", "ground"], {"c": 0.02}),
+    ("branch", ["a", "b"], {"k": 2.0, "eta": 0.05}), ("branch", ["a", "b"], {"k": 1.0, "eta": 0.05})],
+    load_node="a")
+
+
+def test_a_joint_written_with_its_nodes_has_the_curve_and_backbone_of_its_branches(tmp_path):
+    """Two Jenkins elements between two masses, each written as a spring to a massless node and a slider on
+    from it (the slider was refused by harmonic balance, the massless node by shooting): from the command line
+    the curve of the network of two branches, point for point, and the same backbone."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    tables = {}
+    for name, text in (("explicit", IWAN_EXPLICIT), ("branches", IWAN_BRANCHES)):
+        path, out = tmp_path / f"{name}.toml", tmp_path / f"{name}.csv"
+        path.write_text(text)
+        assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.1,0.4",
+                     "--harmonics", "5", "--out", str(out)]) == 0
+        tables[name] = read_csv(out)
+    assert list(tables["explicit"]) == list(tables["branches"])
+    assert len(tables["explicit"]["frequency"]) == len(tables["branches"]["frequency"]) > 10
+    for column in ("frequency", "amplitude", "phase", "amplitude_a", "amplitude_b"):
+        assert np.allclose(np.array(tables["explicit"][column], float), np.array(tables["branches"][column], float),
+                           rtol=1e-9, atol=1e-12), column
+    assert tables["explicit"]["stable"] == tables["branches"]["stable"]
+    backbones = [nonlinear_mode(network(tmp_path, text, f"{i}.toml"), 1, [0.01, 0.05, 0.2], harmonics=5)
+                 for i, text in enumerate((IWAN_EXPLICIT, IWAN_BRANCHES))]
+    assert np.allclose(backbones[0].frequency, backbones[1].frequency, rtol=1e-9)
+    assert np.allclose(backbones[0].damping_ratio, backbones[1].damping_ratio, rtol=1e-7, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_a_jenkins_element_written_with_its_node_beside_a_rigid_slider_is_shot(tmp_path):
+    """A rigid slider between the masses (shooting) and a Jenkins element written with its massless node
+    (refused by shooting before): the curve is the one with the element as a branch."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    common = [("spring", ["a", "ground"], {"k": 100.0}), ("spring", ["b", "ground"], {"k": 400.0}),
+              ("slider", ["a", "b"], {"alpha": 2.0}), ("dashpot", ["b", "ground"], {"c": 0.5})]
+    explicit = network_text(["a", "j", "b"], [1.0, 0.0, 2.0], common + [
+        ("spring", ["a", "j"], {"k": 50.0}), ("slider", ["j", "b"], {"alpha": 1.0})], load_node="a")
+    branch = network_text(["a", "b"], [1.0, 2.0], common + [("branch", ["a", "b"], {"k": 50.0, "eta": 0.02})],
+                          load_node="a")
+    curves = [harmonic_response(network(tmp_path, text, f"{i}.toml"), 3.0, [1.0, 3.0], stability=False)
+              for i, text in enumerate((explicit, branch))]
+    assert curves[0].method == "shooting" and len(curves[0].frequency) == len(curves[1].frequency) > 10
+    # the same points up to the corrector's tolerance (the elements are summed in another order: the rounding
+    # moves the continuation's steps by 2e-8)
+    assert np.allclose(curves[0].frequency, curves[1].frequency, rtol=1e-6)
+    assert np.allclose(curves[0].amplitude, curves[1].amplitude, rtol=1e-6)
