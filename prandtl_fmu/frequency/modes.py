@@ -47,7 +47,7 @@ class Backbone:
     damping_ratio: np.ndarray
     mode: int
     node: str
-    harmonics: int
+    harmonics: Optional[int]  # None: a network with sliders, by shooting on its exact motion (nothing truncated)
     change: Optional[float]
     shape: np.ndarray  # (amplitudes, n) complex: the first harmonic a_1 - i b_1 of every node over the amplitude
     mass: np.ndarray  # (n,) the nodes' masses
@@ -65,18 +65,10 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     if getattr(scene, "friction", None) is not None:
-        raise FrequencyError(f"{scene.source}: [friction] (Coulomb friction of the mass) has no nonlinear mode "
-                             "here: EPMC's negative damping would run the steppers outside the c >= 0 their events "
-                             "rest on, and harmonic balance cannot sample a rigid slider; its forced response "
-                             "(--force-amplitude) is computed, or model the contact as a branch (k, alpha)")
+        scene = _friction_network(scene, tolerance)
     scene = joined(scene, keep=(node,))  # a Jenkins element written with its massless node: a branch
-    sliders = [e.name for e in getattr(getattr(scene, "network", None), "elements", ()) if e.kind == "slider"]
-    if sliders:
-        raise FrequencyError(f"{scene.source}: slider {sliders[0]}: a network with rigid sliders has no nonlinear "
-                             "mode here: harmonic balance cannot sample a rigid slider, and the backbone by shooting "
-                             "on its motion turns back in amplitude where a slider starts to slip, a tangle not yet "
-                             "followed reliably (docs/frequency.md); its forced response (--force-amplitude) is "
-                             "computed, or model the joint as branches (k, eta)")
+    if any(e.kind == "slider" for e in getattr(getattr(scene, "network", None), "elements", ())):
+        return _slider_mode(scene, mode, amplitudes, node, tolerance)
     system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:
@@ -100,6 +92,59 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
                     system.nodes[where], harmonics, change, shape, system.mass.copy(), system.nodes)
 
 
+def _friction_network(scene, tolerance: float):
+    """An element with ``[friction]`` on its mass as the network of one node ``mass`` (its spring, dashpot,
+    branches and a slider of the friction's alpha to the ground), whose modes ``slider_modes.py`` takes;
+    FrequencyError for what it does not take."""
+    from ..network.model import Element, Network, NetworkScene
+    from .harmonic_balance import ELEMENT_NODE, spectrum_branches
+
+    friction = scene.friction
+    why = None
+    if scene.mass is None:
+        why = "the nonlinear modes need [mass]"
+    elif friction.belt_velocity != 0.0:
+        why = "[friction] on a moving belt has no mode symmetric over half a period"
+    elif friction.alpha_kinetic != friction.alpha:
+        why = "[friction] with a Stribeck drop (alpha_kinetic < alpha) is not Coulomb's: its mode is not taken"
+    elif scene.cubic is not None or any(getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
+        why = "[friction] beside a cubic spring or an effect with memory: its mode is not taken"
+    if why is not None:
+        raise FrequencyError(f"{scene.source}: {why} (the modes of friction on the mass are solved for by shooting "
+                             "on the exact motion of a spring, a dashpot, branches and Coulomb friction); its "
+                             "forced response (--force-amplitude) is computed")
+    elements = [Element("slider", "friction", (0, -1), float(friction.alpha))]
+    if scene.spring is not None and scene.spring.k0 > 0:
+        elements.append(Element("spring", "k0", (0, -1), float(scene.spring.k0)))
+    if scene.has_dashpot:
+        elements.append(Element("dashpot", "c", (0, -1), float(scene.damper.c)))
+    if scene.branches is not None:
+        if scene.branches.continuum:
+            k, eta = spectrum_branches(scene.branches, tolerance, scene.source)
+        else:
+            k, eta = scene.branches.stiffness, scene.branches.yield_displacement
+        elements += [Element("branch", f"branch_{i + 1}", (0, -1), float(k_i), float(eta_i))
+                     for i, (k_i, eta_i) in enumerate(zip(np.asarray(k).tolist(), np.asarray(eta).tolist()))]
+    network = Network((ELEMENT_NODE,), np.array([float(scene.mass.m)]), np.zeros(1), np.zeros(1), tuple(elements), 0)
+    return NetworkScene(scene.name, network, scene.load, scene.solver, scene.source)
+
+
+def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], tolerance: float) -> Backbone:
+    """A network with rigid sliders: EPMC by shooting on its exact motion (``slider_modes.py``): no harmonics
+    are truncated (``harmonics`` None), ``change`` that of the samples' last doubling; where the backbone turns
+    back in amplitude, a listed amplitude has a row for each of its points there."""
+    from .shooting import ShootingSystem, prepared_network
+    from .slider_modes import slider_backbone
+
+    scene = prepared_network(scene)
+    network = scene.network
+    names = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float))
+    where = names.node_index(node)
+    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, where, tolerance)
+    return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
+                    network.nodes[where], None, change, shape, np.array(network.mass, float), tuple(network.nodes))
+
+
 def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[str] = None) -> tuple:
     """The forced response under F0 cos(Omega t) on ``load_node`` (default: the backbone's node) synthesised from
     the one nonlinear mode (single nonlinear mode synthesis): at each amplitude a of the backbone, with omega(a),
@@ -114,6 +159,10 @@ def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[st
     the upper side (amplitudes where the force cannot reach are left out)."""
     force_amplitude = float(positive_values([force_amplitude], "force amplitude")[0])
     where = backbone.nodes.index(load_node) if load_node is not None else backbone.nodes.index(backbone.node)
+    if np.unique(backbone.amplitude).size < backbone.amplitude.size:
+        raise FrequencyError(f"the backbone of mode {backbone.mode} has several points at one amplitude at node "
+                             f"{backbone.node} (it turns back in amplitude there): single nonlinear mode synthesis "
+                             "needs one per amplitude; take it at another --node, or compute the forced response")
     a = backbone.amplitude
     order = np.argsort(a)
     a = a[order]

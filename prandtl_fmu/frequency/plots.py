@@ -155,10 +155,13 @@ def draw_curve(curves, axes, backbone=None) -> None:
     if backbone is not None:
         from .modes import synthesis
 
-        amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-", color="C2" if not several else "k", lw=1,
-                            label=f"backbone, mode {backbone.mode}")
+        # several points at one amplitude (a backbone that turns back there, by shooting): points, no line through
+        # them in the order asked, and no synthesis (it needs one point per amplitude)
+        single = np.unique(backbone.amplitude).size == backbone.amplitude.size
+        amplitude_axes.plot(backbone.frequency, backbone.amplitude, "-" if single else "o", ms=3,
+                            color="C2" if not several else "k", lw=1, label=f"backbone, mode {backbone.mode}")
         for curve in curves:
-            if backbone.node == curve.node and curve.base_amplitude is None:
+            if single and backbone.node == curve.node and curve.base_amplitude is None:
                 f_s, a_s = synthesis(backbone, curve.force_amplitude, curve.load_node)
                 inside = (f_s >= curve.frequency.min()) & (f_s <= curve.frequency.max())
                 amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2" if not several else "k", lw=1,
@@ -204,11 +207,14 @@ def plot_backbone(backbone, scene, path: str) -> None:
     """Write the backbone (frequency and damping ratio against the amplitude) to ``path``."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
-    axes[0].semilogy(backbone.frequency, backbone.amplitude, "o-", ms=4, lw=1)
+    # several points at one amplitude (a backbone that turns back there): points only, no line in the order asked
+    style = "o-" if np.unique(backbone.amplitude).size == backbone.amplitude.size else "o"
+    axes[0].semilogy(backbone.frequency, backbone.amplitude, style, ms=4, lw=1)
     axes[0].set_xlabel("frequency f (Hz)")
     axes[0].set_ylabel(f"amplitude of x_{backbone.node} (m)")
-    axes[0].set_title(f"backbone of mode {backbone.mode} (H = {backbone.harmonics})")
-    axes[1].semilogx(backbone.amplitude, backbone.damping_ratio, "o-", ms=4, lw=1)
+    how = "shooting on the exact motion" if backbone.harmonics is None else f"H = {backbone.harmonics}"
+    axes[0].set_title(f"backbone of mode {backbone.mode} ({how})")
+    axes[1].semilogx(backbone.amplitude, backbone.damping_ratio, style, ms=4, lw=1)
     axes[1].set_xlabel(f"amplitude of x_{backbone.node} (m)")
     axes[1].set_ylabel("damping ratio")
     axes[1].set_title("modal damping")

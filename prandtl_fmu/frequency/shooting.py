@@ -53,8 +53,8 @@ cos(omega t), the friction on the relative velocity (the mass slides on the movi
 reported, as the harmonic balance does.
 
 What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), effects with
-memory beside the friction, a node other than the mass. Nonlinear modes (EPMC) of such a scene are refused by
-``modes.py``: see docs/frequency.md.
+memory beside the friction, a node other than the mass. Nonlinear modes (EPMC) of such a scene are solved for
+by ``slider_modes.py`` on the network of one node (``modes.py``).
 """
 from __future__ import annotations
 

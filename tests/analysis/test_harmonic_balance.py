@@ -195,10 +195,6 @@ def test_what_harmonic_balance_does_not_take_is_named(tmp_path, capsys):
     assert "massless" in err and "prandtl-fmu run" in err and len(err.strip().splitlines()) == 1
     assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--method", "time"]) == 2
     assert "element scene" in capsys.readouterr().err
-    # nonlinear modes of a network with sliders: refused, naming the slider and what is computed
-    assert main(["describe", "networks/two-masses-slider", "--mode", "1", "--amplitudes", "0.1"]) == 2
-    err = capsys.readouterr().err
-    assert "slider_1" in err and "--force-amplitude" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
 
 

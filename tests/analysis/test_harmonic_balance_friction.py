@@ -213,7 +213,10 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
     (dict(COULOMB, friction={"alpha": 0.1, "belt_velocity": 0.1}), [], "moving belt"),
     (dict(COULOMB, delay={"gain": 0.1, "tau": 0.5}), [], "[delay]"),
     (COULOMB, ["--node", "nowhere"], "'nowhere'"),
-    (COULOMB, ["--mode", "1", "--amplitudes", "0.1"], "no nonlinear mode"),
+    # below alpha / k the friction holds the mass still: no periodic motion, no mode there
+    (COULOMB, ["--mode", "1", "--amplitudes", "0.05"], "list larger amplitudes"),
+    (dict(COULOMB, friction={"alpha": 0.1, "alpha_kinetic": 0.07, "stribeck_velocity": 0.05}),
+     ["--mode", "1", "--amplitudes", "0.5"], "Stribeck"),
     (DUFFING, [], "exact stepper"),
     (dict(COULOMB, friction={"alpha": 0.1, "alpha_kinetic": 0.07, "stribeck_velocity": 0.05}), [], "exact stepper"),
 ])
@@ -224,6 +227,25 @@ def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables,
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_nonlinear_mode_of_friction_on_the_mass_is_its_closed_form(tmp_path):
+    """EPMC of a mass on a spring with Coulomb friction (the element as a network of one node: shooting on its
+    exact motion): at every amplitude A > alpha / k the closed-form orbit of
+    tests/analysis/test_nonlinear_modes_sliders.py (the frequency omega0 / sqrt(1 + r^2 / pi^2), the damping
+    ratio r / pi, r = ln((A + a) / (A - a))), to 1e-6, from the command line's columns."""
+    from tests.analysis.test_nonlinear_modes_sliders import slipping_mode
+
+    closed = [slipping_mode(A, 0.1, 1.0) for A in (0.15, 0.3, 1.0, 5.0)]
+    out = tmp_path / "mode.csv"
+    assert main(["describe", write(tmp_path, COULOMB), "--mode", "1", "--amplitudes",
+                 ",".join(repr(float(c[2])) for c in closed), "--tolerance", "1e-7", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert list(table) == ["amplitude", "frequency", "damping_ratio"] and len(table["amplitude"]) == len(closed)
+    for (omega_d, ratio, _), frequency, damping in zip(closed, table["frequency"], table["damping_ratio"]):
+        assert float(frequency) == pytest.approx(omega_d / (2 * math.pi), rel=1e-6)
+        assert float(damping) == pytest.approx(ratio, rel=1e-6)
 
 
 @pytest.mark.slow

@@ -1,0 +1,395 @@
+"""Nonlinear modes (EPMC) of a network with rigid sliders, by shooting on its motion (``network_orbit.py``).
+
+The free network with the extended periodic motion concept's negative viscous term,
+
+    M x'' + (C - xi M) x' + K x + (branches) + (sliders) = 0,
+
+is periodic for the mode's own xi. Harmonic balance cannot sample a rigid slider (its force while it sticks is
+set by the other forces, not by the motion: ``shooting.py`` says why), so the periodic state is solved for as
+in the forced response of such a network: the fixed point of the exact motion over half a period (every force
+is odd, so x(t + T/2) = -x(t)). The unknowns are s = (x, v / omega_ref, u of the branches) at t = 0, omega and
+xi; the equations
+
+    -Phi(s; omega, xi) - s = 0,     a_1 = A,     b_1 = 0,
+
+a_1, b_1 the first harmonic of x at the node (x_node = A cos(omega t) + higher harmonics: the amplitude sets
+the mode's size, b_1 = 0 its phase, which the free motion leaves open). The motion is the exact one between
+events whatever xi (the damping matrix C - xi M only changes the linear flow; which sliders hold is decided on
+the forces, as for c >= 0). The mode's frequency is omega / (2 pi), its damping ratio xi / (2 omega).
+
+Newton's method on (s, omega, xi), its Jacobian by forward differences (N + 2 runs of half a period), each
+step halved while the residual grows (at most HALVINGS times), at most NEWTON_ITERATIONS steps.
+
+**The backbone through its folds.** Where a slider starts to slip, the mode's family need not be a graph of
+the node's amplitude (measured on two masses and a joint, docs/frequency.md: every amplitude measure tried, the
+node's a_1, the mass-weighted first harmonic, the energy, turns back near slip onset; the node's a_1 can even stay
+bounded while the other mass's amplitude grows without bound). So the family is followed without an amplitude
+condition: pseudo-arclength continuation of the half-period map's fixed point with the phase condition b_1 = 0
+at the node, in (s, omega, xi), from the linear mode with every slider and branch sticking at half the amplitude
+where the first would slip (there the orbit is that mode's exactly), or, where the stuck sliders leave no mode,
+from the lowest amplitude with the sliders free and xi from the energy that each dissipates per cycle, until the
+largest node's first harmonic is FAMILY_BEYOND times the largest listed amplitude. At each listed amplitude, every
+point of the family where the node's a_1 is that amplitude (Newton from the curve's points on either side): one
+row each, in their order along the family, so a fold gives a listed amplitude several rows; an amplitude the
+family never reaches at the node is refused with the largest it reaches. Where the family is left, the node's
+a_1 may still be moving (on two masses and a joint it tends to a limit from below while the other mass's
+amplitude grows without bound, so an amplitude just below the limit has one more point far out): an amplitude
+within the node's move over the last doubling of the largest amplitude from where it was left is refused, not
+answered without that point (the move is assumed to shrink as the amplitude doubles, as it does there).
+
+The amplitude condition uses the trapezoid rule on M samples per period (x is C^1: an error like 1 / M^2): the
+backbone is followed at M = FIRST_STEPS, then its rows solved again with M doubled until the frequency and the
+damping ratio change by at most half the tolerance (relative; past MAX_STEPS refused with the change).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import FrequencyError
+from .harmonic_balance import solve_linear
+from .shooting import FIRST_STEPS, MAX_STEPS, PERTURBATION, NetworkShooting, StepFailed, prepared_network
+
+NEWTON_ITERATIONS = 40
+HALVINGS = 8
+CONVERGED = 1e-11  # a Newton step below this (relative to the orbit, or to omega) has converged
+
+
+class FreeShooting(NetworkShooting):
+    """The free network (no force) with damping C - xi M: :meth:`equations` of (s, omega, xi) at amplitude A."""
+
+    def __init__(self, scene, steps: int, reference: float, where: int):
+        super().__init__(scene, 0.0, None, steps, 7, reference)
+        self.viscous = self.damping.copy()
+        self.where = int(where)
+
+    def equations(self, z: np.ndarray, A: float) -> np.ndarray:
+        """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
+        N = self.dimension
+        s, omega, xi = z[:N], float(z[N]), float(z[N + 1])
+        if not omega > 0:
+            raise StepFailed(f"{self.system.source}: the mode's frequency left the positive axis")
+        self.damping = self.viscous - xi * np.diag(self.system.mass)
+        end, xs = self.run(s, omega)
+        half = np.concatenate(([s[self.where]], xs[:-1, self.where]))
+        full = np.concatenate((half, -half))
+        X = full @ np.exp(-2j * math.pi * np.arange(self.M) / self.M) * 2.0 / self.M
+        return np.concatenate((-end - s, [X.real - A, -X.imag]))
+
+    def jacobian_of(self, z: np.ndarray, A: float, residual: np.ndarray) -> np.ndarray:
+        """d equations / dz by forward differences (PERTURBATION of the orbit's size, of omega for omega and xi)."""
+        N = self.dimension
+        size = max(float(np.max(np.abs(z[:N]))), A)
+        steps = np.concatenate((np.full(N, PERTURBATION * size), [PERTURBATION * z[N]] * 2))
+        jacobian = np.empty((N + 2, N + 2))
+        for k in range(N + 2):
+            moved = z.copy()
+            moved[k] += steps[k]
+            jacobian[:, k] = (self.equations(moved, A) - residual) / steps[k]
+        return jacobian
+
+    def solve(self, z: np.ndarray, A: float):
+        """Newton from ``z`` at amplitude A (see the module): the solution, or None."""
+        N = self.dimension
+        z = np.array(z, dtype=float)
+        try:
+            residual = self.equations(z, A)
+            for _ in range(NEWTON_ITERATIONS):
+                size = max(float(np.max(np.abs(z[:N]))), A)
+                step = solve_linear(self.jacobian_of(z, A, residual), -residual)
+                if step is None:
+                    return None
+                for _ in range(HALVINGS + 1):
+                    trial = z + step
+                    try:
+                        new = self.equations(trial, A)
+                    except StepFailed:
+                        new = None
+                    if new is not None and np.max(np.abs(new)) <= np.max(np.abs(residual)):
+                        break
+                    step = 0.5 * step
+                if new is None:
+                    return None
+                z, residual = trial, new
+                if np.max(np.abs(step[:N])) <= CONVERGED * size and abs(step[N]) <= CONVERGED * z[N] and \
+                        abs(step[N + 1]) <= CONVERGED * z[N]:
+                    return z
+        except StepFailed:
+            return None
+        return None
+
+
+def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolerance: float) -> tuple:
+    """The backbone at ``amplitudes`` (see the module): (rows, 2): omega and xi of every point of the backbone at
+    each amplitude (the amplitudes in the order given; where the backbone turns back in amplitude, each of its
+    points at that amplitude, in their order along it), (rows, n) complex: the first harmonic of every node per
+    unit amplitude, (rows,) the amplitudes, the last relative change of M's doubling.
+
+    The family is followed without an amplitude condition (:func:`_follow_family`: the node's a_1 need not grow
+    along it; on two masses and a joint it saturates at 4 (alpha + k eta) / (pi |k_a - m_a omega_b^2|) while
+    the other mass's amplitude grows without bound), then each listed amplitude is solved for at every crossing
+    of the node's a_1; an amplitude that the family's a_1 at the node never reaches is refused, with the largest
+    it reaches."""
+    scene = prepared_network(scene)
+    free = FreeShooting(scene, FIRST_STEPS, 1.0, where)
+    low, high = float(np.min(amplitudes)), float(np.max(amplitudes))
+    omega0, shape, xi0, onset = _linear_start(free, mode, low)
+    free = FreeShooting(scene, FIRST_STEPS, omega0, where)
+    A0 = min(low, 0.5 * onset)
+    z = free.solve(_guess(free, shape, omega0, xi0, A0), A0)
+    if z is None and math.isinf(onset):  # started with the sliders slipping (stuck, they hold the mode still)
+        raise FrequencyError(f"{scene.source}: the nonlinear mode {mode} was not found at A = {A0!r} m, the "
+                             "smallest amplitude listed, with its sliders slipping: stuck they hold it still, and "
+                             "below the amplitude where the springs overcome them at the turning points (alpha / k "
+                             "for a mass on a spring k and a slider alpha to the ground) there is no periodic "
+                             "motion: list larger amplitudes")
+    if z is None:
+        raise FrequencyError(f"{scene.source}: the nonlinear mode {mode} was not found at A = {A0!r} m from its "
+                             "linear mode (every slider and branch sticking)")
+    points, measures, largest = _follow_family(free, z, high)
+    # where the family was left, the node's a_1 may still be moving (towards a limit, while the other nodes'
+    # amplitude grows): as much again as over the last doubling of the largest amplitude is its reach beyond
+    half = int(np.searchsorted(largest, 0.5 * largest[-1])) if np.all(np.diff(largest[-8:]) > 0) else 0
+    reach = float(np.max(np.abs(measures[half:] - measures[-1])))
+    rows, states = [], []
+    for index, A in enumerate(amplitudes.tolist()):
+        if abs(A - measures[-1]) <= reach:
+            raise FrequencyError(
+                f"{scene.source}: mode {mode} at A = {A!r} m at node {free.system.nodes[where]}: where the family "
+                f"was followed to (other nodes' amplitude {largest[-1]:.6g} m) node {free.system.nodes[where]}'s "
+                f"first harmonic is {measures[-1]:.6g} m and still moving by {reach:.3g} m, so the family may pass "
+                "that amplitude again further out: choose an amplitude farther from it, or another --node")
+        found = _family_crossings(free, points, measures, A)
+        if not found:
+            top = int(np.argmax(measures))
+            raise FrequencyError(
+                f"{scene.source}: mode {mode} does not reach A = {A!r} m at node {free.system.nodes[where]}: along "
+                f"the family its first harmonic there is at most {measures[top]:.6g} m (at "
+                f"{points[top][free.dimension] / (2 * math.pi):.6g} Hz) while the other nodes' amplitude grows "
+                "(choose another --node)")
+        for state in found:
+            rows.append(index)
+            states.append(state)
+    change = math.inf
+    while True:
+        if free.M * 2 > MAX_STEPS:
+            raise FrequencyError(f"{scene.source}: the mode's frequency and damping still changed by {change:.3g} "
+                                 f"relative from {free.M // 2} to {free.M} samples per period (tolerance "
+                                 f"{tolerance:g}): give a larger --tolerance")
+        finer = FreeShooting(scene, 2 * free.M, omega0, where)
+        refined = []
+        for index, z in zip(rows, states):
+            solved = finer.solve(z, float(amplitudes[index]))
+            if solved is None:
+                raise FrequencyError(f"{scene.source}: the nonlinear mode {mode} at A = {float(amplitudes[index])!r} "
+                                     f"m did not converge at {finer.M} samples per period")
+            refined.append(solved)
+        change = max(_change(a, b, free.dimension) for a, b in zip(states, refined))
+        free, states = finer, refined
+        if change <= 0.5 * tolerance:
+            break
+    N, n = free.dimension, free.system.n
+    values = np.empty((len(rows), 2))
+    shapes = np.empty((len(rows), n), dtype=complex)
+    for row, (index, z) in enumerate(zip(rows, states)):
+        values[row] = z[N], z[N + 1]
+        free.damping = free.viscous - z[N + 1] * np.diag(free.system.mass)
+        harmonics = free.coefficients(z[:N], z[N])
+        shapes[row] = (harmonics[:, 1] - 1j * harmonics[:, 2]) / float(amplitudes[index])
+    return values, shapes, amplitudes[np.array(rows, dtype=np.int64)], change
+
+
+FAMILY_STEP = 0.02       # the arc-length step's bound (unknowns scaled by the orbit's size and by omega)
+FAMILY_MIN_STEP = 1e-6
+FAMILY_POINTS = 20000
+FAMILY_BEYOND = 20.0     # follow until the largest node's a_1 is this many times the largest listed amplitude
+
+
+def _family_equations(free, z):
+    """The half-period map's residual and the phase condition b_1 = 0 at the node (no amplitude condition), and
+    the first harmonic of every node."""
+    N = free.dimension
+    s, omega, xi = z[:N], float(z[N]), float(z[N + 1])
+    if not omega > 0:
+        raise StepFailed(f"{free.system.source}: the mode's frequency left the positive axis")
+    free.damping = free.viscous - xi * np.diag(free.system.mass)
+    end, xs = free.run(s, omega)
+    half = np.vstack((s[None, :free.system.n], xs[:-1]))
+    X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ np.vstack((half, -half)) * 2.0 / free.M
+    return np.concatenate((-end - s, [-X[free.where].imag])), X
+
+
+def _family_jacobian(free, z, residual, scale):
+    N = free.dimension
+    J = np.empty((N + 1, N + 2))
+    for k in range(N + 2):
+        moved = z.copy()
+        moved[k] += PERTURBATION * scale[k]
+        J[:, k] = (_family_equations(free, moved)[0] - residual) / PERTURBATION
+    return J  # d residual / d (z / scale)
+
+
+def _follow_family(free, z, high):
+    """Pseudo-arclength continuation of the family through z in (s, omega, xi) with the phase condition only:
+    the points and the node's |a_1| at each, until the largest node's |a_1| passes FAMILY_BEYOND x high (the
+    node's own may turn back, so passing high is not the end), or FAMILY_POINTS points. Unknowns scaled by the orbit's size (so the steps grow with
+    the amplitude) and by omega; the tangent's sign kept by the secant where a kink (a slip starting or
+    stopping) flips the null vector."""
+    N = free.dimension
+
+    def scale_of(z):
+        return np.concatenate((np.full(N, max(float(np.max(np.abs(z[:N]))), 1e-12)), [z[N], z[N]]))
+
+    def tangent(z, scale, previous):
+        residual, _ = _family_equations(free, z)
+        _, _, vt = np.linalg.svd(_family_jacobian(free, z, residual, scale))
+        t = vt[-1]
+        return t if previous is None or t @ previous >= 0 else -t
+
+    scale = scale_of(z)
+    t = tangent(z, scale, None)
+    if t[free.where] * z[free.where] < 0:  # the amplitude's way up
+        t = -t
+    first = _family_equations(free, z)[1]
+    points, measures, largest = [z.copy()], [abs(first[free.where])], [float(np.max(np.abs(first)))]
+    step = FAMILY_STEP
+    while len(points) < FAMILY_POINTS:
+        y = z / scale
+        while True:
+            predicted = y + step * t
+            w = predicted.copy()
+            ok = False
+            try:
+                for _ in range(12):
+                    residual, _ = _family_equations(free, w * scale)
+                    J = _family_jacobian(free, w * scale, residual, scale)
+                    delta = solve_linear(np.vstack((J, t)), -np.concatenate((residual, [t @ (w - predicted)])))
+                    if delta is None:
+                        break
+                    w = w + delta
+                    if np.max(np.abs(delta)) < 1e-11:
+                        ok = np.linalg.norm(w - predicted) < 0.5 * step
+                        break
+            except StepFailed:
+                ok = False
+            if ok:
+                break
+            step *= 0.5
+            if step < FAMILY_MIN_STEP:
+                raise FrequencyError(f"{free.system.source}: the nonlinear mode's family could not be followed past "
+                                     f"{points[-1][N] / (2 * math.pi):.6g} Hz (node amplitude {measures[-1]:.6g} m)")
+        new = w * scale
+        secant = w - y
+        scale = scale_of(new)
+        t_new = tangent(new, scale, None)
+        if t_new @ secant < 0:
+            t_new = -t_new
+        z, t = new, t_new
+        _, X = _family_equations(free, z)
+        points.append(z.copy())
+        measures.append(abs(X[free.where]))
+        largest.append(float(np.max(np.abs(X))))
+        step = min(FAMILY_STEP, 1.5 * step)
+        if float(np.max(np.abs(X))) > FAMILY_BEYOND * high:
+            break
+    return points, np.array(measures), np.array(largest)
+
+
+def _family_crossings(free, points, measures, A: float) -> list:
+    """Every point of the family where the node's |a_1| is A: Newton at A from the interpolation between the
+    curve's points that bracket it (in their order along the family); solutions met twice kept once."""
+    out = []
+    for i in range(len(points) - 1):
+        m0, m1 = measures[i], measures[i + 1]
+        if i == 0 and abs(m0 - A) <= 1e-9 * A:  # the start (its A to rounding)
+            m0 = A
+        if (m0 - A) * (m1 - A) <= 0 and m0 != m1:
+            guess = points[i] + (A - m0) / (m1 - m0) * (points[i + 1] - points[i])
+            if guess[free.where] < 0:
+                guess = guess.copy()
+                guess[:free.dimension] = -guess[:free.dimension]
+            solved = free.solve(guess, A)
+            if solved is None:
+                raise FrequencyError(f"{free.system.source}: the nonlinear mode at A = {A!r} m was not found between "
+                                     "the points of its family on either side")
+            if not any(np.max(np.abs(solved - o) / np.maximum(np.abs(o), 1e-9)) < 1e-6 for o in out):
+                out.append(solved)
+    return out
+
+
+def _change(a: np.ndarray, b: np.ndarray, N: int) -> float:
+    """The relative change of the frequency and of the damping ratio (against 1e-6 at least) between two
+    solutions."""
+    frequency = abs(b[N] - a[N]) / abs(b[N])
+    ratio_a, ratio_b = a[N + 1] / (2 * a[N]), b[N + 1] / (2 * b[N])
+    return max(frequency, abs(ratio_b - ratio_a) / max(abs(ratio_b), 1e-6))
+
+
+def _guess(free, shape, omega, xi, A) -> np.ndarray:
+    """(s, omega, xi) of the linear mode ``shape`` at amplitude A: x = A shape at t = 0, at rest, every branch's
+    spring stretched by its ends."""
+    x = A * shape
+    return np.concatenate((x, np.zeros(free.system.n), np.clip(free.brows @ x, -free.eta, free.eta), [omega, xi]))
+
+
+def _linear_start(free, mode: int, A: float) -> tuple:
+    """(omega, shape with shape[where] = 1, xi, onset) of linear mode ``mode`` (1: the lowest) with every branch
+    and slider sticking, ``onset`` the amplitude where a slider's force (G^T lambda = (K - omega^2 M) x) reaches
+    its alpha or a branch's spring its eta; where the stuck sliders leave fewer modes, with the sliders free, xi
+    from the energy each dissipates over a cycle of amplitude A (4 alpha |d . shape| A against
+    pi xi omega A^2 shape' M shape), onset infinite (they slip at every amplitude)."""
+    source = free.system.source
+    stuck = free.stiffness_matrix + (free.brows.T * free.bk) @ free.brows
+    mass = np.diag(free.system.mass)
+    start = None
+    for held in (True, False):
+        rows = free.rows if held else free.rows[:0]
+        basis = _null_space(rows, free.system.n)
+        if basis.shape[1] < mode:
+            continue
+        omega, shape = _mode(basis.T @ stuck @ basis, basis.T @ mass @ basis, mode)
+        if omega is None:
+            continue
+        shape = basis @ shape
+        if abs(shape[free.where]) < 1e-9 * np.max(np.abs(shape)):
+            raise FrequencyError(f"--node: mode {mode} does not move node {free.system.nodes[free.where]}: its "
+                                 "amplitude cannot set the mode's (choose another --node)")
+        shape = shape / shape[free.where]
+        modal = float(shape @ mass @ shape)
+        xi = float(shape @ free.viscous @ shape) / modal
+        onset = math.inf
+        if held:
+            if rows.shape[0]:
+                force = np.linalg.lstsq(rows.T, (stuck - omega * omega * mass) @ shape, rcond=None)[0]
+                onset = min(onset, float(np.min(free.alpha / np.maximum(np.abs(force), 1e-300))))
+            if free.brows.shape[0]:
+                onset = min(onset, float(np.min(free.eta / np.maximum(np.abs(free.brows @ shape), 1e-300))))
+        else:
+            xi += float(np.sum(4.0 * free.alpha * np.abs(free.rows @ shape))) / (math.pi * omega * A * modal)
+        start = (omega, shape, xi, onset)
+        break
+    if start is None:
+        raise FrequencyError(f"--mode: {source} has fewer than {mode} mode(s) with a stiffness (every branch "
+                             f"sticking); got {mode}")
+    return start
+
+
+def _null_space(rows: np.ndarray, n: int) -> np.ndarray:
+    """An orthonormal basis (n, n - rank) of the motions that keep every row's relative displacement 0."""
+    if rows.shape[0] == 0:
+        return np.eye(n)
+    _, singular, vt = np.linalg.svd(rows)
+    rank = int(np.sum(singular > 1e-12 * singular[0]))
+    return vt[rank:].T
+
+
+def _mode(K: np.ndarray, M: np.ndarray, mode: int) -> tuple:
+    """(omega, shape) of the generalized eigenproblem K phi = omega^2 M phi, ``mode`` from the lowest; (None,
+    None) if it has no stiffness."""
+    lower = np.linalg.cholesky(M)
+    inverse = np.linalg.inv(lower)
+    values, vectors = np.linalg.eigh(inverse @ K @ inverse.T)
+    if values[mode - 1] <= 0:
+        return None, None
+    return math.sqrt(values[mode - 1]), inverse.T @ vectors[:, mode - 1]
