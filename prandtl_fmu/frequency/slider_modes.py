@@ -66,16 +66,8 @@ class FreeShooting(NetworkShooting):
 
     def equations(self, z: np.ndarray, A: float) -> np.ndarray:
         """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
-        N = self.dimension
-        s, omega, xi = z[:N], float(z[N]), float(z[N + 1])
-        if not omega > 0:
-            raise StepFailed(f"{self.system.source}: the mode's frequency left the positive axis")
-        self.damping = self.viscous - xi * np.diag(self.system.mass)
-        end, xs = self.run(s, omega)
-        half = np.concatenate(([s[self.where]], xs[:-1, self.where]))
-        full = np.concatenate((half, -half))
-        X = full @ np.exp(-2j * math.pi * np.arange(self.M) / self.M) * 2.0 / self.M
-        return np.concatenate((-end - s, [X.real - A, -X.imag]))
+        residual, X = _family_equations(self, z)
+        return np.concatenate((residual[:-1], [X[self.where].real - A], residual[-1:]))
 
     def jacobian_of(self, z: np.ndarray, A: float, residual: np.ndarray) -> np.ndarray:
         """d equations / dz by forward differences (PERTURBATION of the orbit's size, of omega for omega and xi)."""

@@ -234,23 +234,29 @@ TREE = network_text(["a", "b", "c"], [0.56, 2.9, 1.5], [
     ("slider", ["b", "c"], {"alpha": 0.79}), ("slider", ["c", "ground"], {"alpha": 0.84})], load_node="a")
 
 
+def _case(tmp_path, case, two_masses_force):
+    """``(scene, force, f)`` of a named case: the two masses (at ``two_masses_force``), a chain of four, the
+    slider tree, or a random network (``random N``; ``undamped N`` without its dashpot)."""
+    from prandtl_fmu.scene import load_scene
+
+    if case == "two masses":
+        return load_scene(TWO_MASSES), two_masses_force, 1.9
+    if case == "chain":
+        return network(tmp_path, chain()), 6.0, 2.0
+    if case == "slider tree":
+        return network(tmp_path, TREE), 6.0, 0.5
+    text, force = random_network(int(case[-1]), dashpot=case.startswith("random"))
+    return network(tmp_path, text), force, 1.0
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", ["two masses", "chain", "slider tree", "random 1", "random 2", "random 3"])
 def test_the_implicit_stepper_converges_to_the_orbit(tmp_path, case):
     """From the periodic state, one period of the implicit stepper (independent code: backward Euler with its
     own stick and slip) differs from the orbit by its first-order error: halved when the step is halved, and
     the Richardson extrapolation of the two is 10 times closer: the orbit is the time integration's limit."""
-    from prandtl_fmu.scene import load_scene
 
-    if case == "two masses":
-        scene, force, f = load_scene(TWO_MASSES), 2.0, 1.9
-    elif case == "chain":
-        scene, force, f = network(tmp_path, chain()), 6.0, 2.0
-    elif case == "slider tree":
-        scene, force, f = network(tmp_path, TREE), 6.0, 0.5
-    else:
-        text, force = random_network(int(case[-1]))
-        scene, f = network(tmp_path, text), 1.0
+    scene, force, f = _case(tmp_path, case, 2.0)
     shooting, s, omega = periodic_state(scene, force, f)
     assert np.max(np.abs(s[:scene.network.n])) > 0
     coarse, fine, extrapolated = _implicit_errors(scene, shooting, s, omega, force)
@@ -307,20 +313,12 @@ def test_the_motion_contracts_the_energy_of_the_difference_of_two_motions(tmp_pa
     the velocities' differences, each <= 0). So every Floquet multiplier is at most 1 in modulus. Checked on
     the orbit's code, event by event, from pairs of states near and far (sticking, slipping, the branches anywhere
     in their range), over a 200th of a period to three half periods, with and without dashpots: the energy of the
-    difference never grows beyond rounding (an energy with any one term off by a factor 2 grows here), and it
+    difference never grows beyond rounding (an energy with its springs' or masses' term off by a factor 2 grows
+    here), and it
     falls."""
     from prandtl_fmu.frequency.shooting import NetworkShooting
-    from prandtl_fmu.scene import load_scene
 
-    if case == "two masses":
-        scene, force, f = load_scene(TWO_MASSES), 3.0, 1.9
-    elif case == "chain":
-        scene, force, f = network(tmp_path, chain()), 6.0, 2.0
-    elif case == "slider tree":
-        scene, force, f = network(tmp_path, TREE), 6.0, 0.5
-    else:
-        text, force = random_network(int(case[-1]), dashpot=case.startswith("random"))
-        scene, f = network(tmp_path, text), 1.0
+    scene, force, f = _case(tmp_path, case, 3.0)
     n, rng = scene.network.n, np.random.default_rng(len(case))
     fell = []
     for faster in (1, 10, 100):  # the run over half a period of a faster force: a shorter time
