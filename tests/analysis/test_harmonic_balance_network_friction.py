@@ -255,7 +255,6 @@ def test_the_implicit_stepper_converges_to_the_orbit(tmp_path, case):
     """From the periodic state, one period of the implicit stepper (independent code: backward Euler with its
     own stick and slip) differs from the orbit by its first-order error: halved when the step is halved, and
     the Richardson extrapolation of the two is 10 times closer: the orbit is the time integration's limit."""
-
     scene, force, f = _case(tmp_path, case, 2.0)
     shooting, s, omega = periodic_state(scene, force, f)
     assert np.max(np.abs(s[:scene.network.n])) > 0
