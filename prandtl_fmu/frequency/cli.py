@@ -296,7 +296,8 @@ def run(args) -> int:
 
                 mode = values["backbone"]
                 backbone = nonlinear_mode(scene, mode["mode"], mode["amplitudes"], harmonics=mode.get("harmonics"),
-                                          node=args.node, tolerance=mode["tolerance"])
+                                          node=args.node, tolerance=mode["tolerance"],
+                                          load_node=None if values["base"] else curves.curves[0].load_node)
         elif "amplitudes" in values:
             from .describing import describe_amplitudes
 

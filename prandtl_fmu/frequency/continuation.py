@@ -2,7 +2,8 @@
 
 The curve R(q, omega) = 0 is followed from omega_min to omega_max in scaled unknowns y = (q / q_ref,
 (omega - omega_min) / (omega_max - omega_min)), q_ref the largest |q| met so far (2-norm; the scale is
-updated as the curve grows, the tangent rescaled with it):
+updated as the curve grows, the tangent rescaled with it; at least the balance's ``length_scale`` where it has
+one, for a curve that starts at rest):
 
 * tangent: t solves [dR/dq  dR/domega; t_prev] t = [0; 1], normalised (the previous tangent's side kept: a
   fold is passed, not turned back on; past a corner, the chord's side). The sign of det [dR/dy; t^T] is kept
@@ -71,7 +72,10 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     points = [(omega_min, q, False)]
     if span <= 0:
         return points
-    scale = max(np.linalg.norm(q), 1e-300)
+    # a curve that starts at rest (a mass stuck to its moving support) has q = 0: its scale is then the motion's
+    # natural size where the balance has one (``length_scale``), not the rounding floor that sent y to 1e286
+    floor = balance.length_scale(omega_min) if hasattr(balance, "length_scale") else 0.0
+    scale = max(np.linalg.norm(q), floor, 1e-300)
     max_step = ARC_ESTIMATE / max(count - 1, 8)
     step = max_step
     omega = omega_min

@@ -124,7 +124,12 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
     orders = check_orders(orders, harmonics)
-    scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
+    # a Jenkins element written with its massless node: a branch; the node the force acts on is kept (under base
+    # excitation none: the support moves, no node is loaded)
+    network = getattr(scene, "network", None)
+    loaded = (load_node if load_node is not None else None if network is None else
+              network.nodes[network.load_node]) if base_amplitude is None else None
+    scene = joined(scene, keep=(node, loaded))
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
         fields = shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
                                             harmonics=harmonics if harmonics is not None or not orders else

@@ -58,15 +58,17 @@ class Backbone:
 
 
 def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = None, node: Optional[str] = None,
-                   tolerance: float = DEFAULT_TOLERANCE, samples: Optional[int] = None) -> Backbone:
+                   tolerance: float = DEFAULT_TOLERANCE, samples: Optional[int] = None,
+                   load_node: Optional[str] = None) -> Backbone:
     """The backbone of nonlinear mode ``mode`` (1: the lowest) of ``scene`` at ``amplitudes`` (m, of x at
     ``node``; default the first node with a mass) (see the module); ``samples``: N of the AFT (default
-    ``harmonic_balance.sample_count``). FrequencyError names the culprit."""
+    ``harmonic_balance.sample_count``); ``load_node``: a node the synthesis will load (kept in the mode's shape
+    where a massless node would be joined away). FrequencyError names the culprit."""
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     if getattr(scene, "friction", None) is not None:
         scene = _friction_network(scene, tolerance)
-    scene = joined(scene, keep=(node,))  # a Jenkins element written with its massless node: a branch
+    scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
     if any(e.kind == "slider" for e in getattr(getattr(scene, "network", None), "elements", ())):
         return _slider_mode(scene, mode, amplitudes, node, tolerance)
     system = periodic_system(scene, tolerance=tolerance)

@@ -13,7 +13,8 @@ nodes (an Iwan joint of Jenkins elements, each a spring to a massless node and a
 network of branches harmonic balance samples exactly, and one with rigid sliders elsewhere is one that shooting
 takes (it needs a mass at every node). Joined repeatedly, node by node, until no such node is left. Two elements
 whose other ends are the same node (or both the ground) act on nothing, and go. The node's own motion is not
-computed: a node named by ``--node`` or ``--load-node`` is kept as written.
+computed: a node named by ``--node``, and the node a force acts on (``--load-node``, else the scene's
+``load_node``; none under base excitation), are kept as written (the callers name them in ``keep``).
 """
 from __future__ import annotations
 
@@ -26,8 +27,9 @@ JOINED = ("spring", "slider", "branch")
 
 
 def joined(scene, keep=()):
-    """``scene`` with every massless, unloaded node between two elements in series joined (see the module); a
-    network scene only (an element scene is returned as is). ``keep``: node names not to join."""
+    """``scene`` with every massless node between two elements in series joined (see the module); a network
+    scene only (an element scene is returned as is). ``keep``: node names not to join (the loaded node among
+    them: the scene's ``load_node`` is not kept unless named, as base excitation loads no node)."""
     from ..network.model import NetworkScene
 
     if not isinstance(scene, NetworkScene):
@@ -42,7 +44,7 @@ def joined(scene, keep=()):
 
 def _joinable(network, keep):
     for node, name in enumerate(network.nodes):
-        if network.mass[node] > 0 or node == network.load_node or name in keep:
+        if network.mass[node] > 0 or name in keep:
             continue
         touching = [e for e in network.elements if node in e.between]
         if len(touching) == 2 and all(e.kind in JOINED and e.c == 0.0 for e in touching):

@@ -276,6 +276,11 @@ class Shooting:
         """The residual's scale (m): the force's static deflection, or its motion at omega."""
         return self.size(np.zeros(1), omega)
 
+    def length_scale(self, omega: float) -> float:
+        """The continuation's least scale of s (m): the force's static deflection, or its motion at omega (an
+        orbit at rest, a mass stuck to its moving support, has s = 0)."""
+        return self.force_scale(omega)
+
     # ------------------------------------------------------------- solving at one frequency
 
     def _newton(self, omega: float, guess: np.ndarray) -> Optional[np.ndarray]:
@@ -392,7 +397,7 @@ class ElementShooting(Shooting):
         except ElementError as exc:
             self._refuse(omega, str(exc))
         if taken < out.shape[0]:
-            self._refuse(omega, _failure(self.scene, self.stepper, load, taken * h, h, None))
+            self._refuse(omega, str(_failure(self.scene, self.stepper, load, taken * h, h, None)))
         end = np.empty(self.dimension)
         end[0], end[1] = x, v / self.reference
         if u is not None:

@@ -35,7 +35,11 @@ a bracket. Everything rests on finding the *next* zero of v with certainty:
 * harmonic loads and table ramps: validated subdivision. On [a, a + L],
   |v^(p)(a + s)| <= |row 1 of A^p| e^(|A| L) |y(a)| (weighted max norms), and
   also <= |row 1 of A^(p-1)| e^(|A| L) |A y(a)| (the smaller is taken), so
-  |v(a)| > L max|v'| proves no zero, and |v'(a)| > L max|v''| proves v
+  |v(a)| > L max|v'| proves no zero, and so does v(a) + v'(a) L >
+  L^2 max|v''| / 2 with v(a) > 0 (v above its chord's lower parabola: the
+  test that passes a maximum of a small v, where v' is about 0 and the
+  first test alone halved its intervals down to rounding, 10^5 of them for
+  a slip a hair over the threshold), and |v'(a)| > L max|v''| proves v
   monotone (at most one zero: a sign test decides). Otherwise the interval
   is halved; an interval at the rounding level of t decides by its signs
   (a zero that touches without changing sign is not a reversal).
@@ -67,7 +71,8 @@ a reversal is then always an event. At rest the mass sticks (x, v and the
 branches frozen) while |F(t) - reaction| <= alpha; the phase ends when the
 load takes the net force out of that band, in closed form (a line for a
 piece of a table, an arccos for a harmonic load; a constant load holds it
-for ever), and the mass slides from there: the sliding phase starts with
+for ever; a harmonic load whose peak passes a bound by less than TOUCH of its
+amplitude only touches it, the mass stays), and the mass slides from there: the sliding phase starts with
 the net force exactly 0 (y2 = 0: v' = 0, v'' = F'/m outwards), not with
 the rounding of F - R - alpha, which had the mass reverse at once, stick,
 release, ... until the stall limit failed the step (issue 31, item 8). Stribeck's drop and a moving belt
@@ -403,6 +408,9 @@ def _book(energy, gramian, m, c, reaction, moved, k, eta, u, direction, alpha):
     energy[3] += alpha * abs(moved)
 
 
+TOUCH = 1e-12  # a harmonic load that passes a stick bound by less than TOUCH A only touches it
+
+
 @kernel
 def _stick_end(load, t, span, push, alpha):
     """How long a mass at rest stays stuck from t: the first tau in [0, span] where the net force F(t + tau) -
@@ -428,7 +436,7 @@ def _stick_end(load, t, span, push, alpha):
     best = span
     for level, outward in ((rest + alpha, 1.0), (rest - alpha, -1.0)):
         c = (level - offset) / amplitude
-        if abs(c) > 1.0:
+        if abs(c) > 1.0 - TOUCH:  # F only touches the level (at its peak, within rounding): the mass stays
             continue
         root = libm.acos(c)
         for theta in (root, 2.0 * math.pi - root):
@@ -605,8 +613,12 @@ def _walk_validated(a, y0, lo, hi, sign, level, rho, weights, norm, budget):
         second = spread * min(bound2 * size, bound1 * rate)  # bounds |v''|
         v = y[1]
         acc = ay[1]
-        if sign * v > 0.0 and abs(v) > length * first:
-            previous, lo = lo, b  # no zero in [lo, b]
+        if sign * v > 0.0 and (abs(v) > length * first
+                               or sign * (v + acc * length) > 0.5 * second * length * length):
+            # no zero in [lo, b]: |v'| <= first there, or (near a maximum of |v|, where v' is about 0 and the
+            # first bound alone would halve the interval down to rounding) |v''| <= second, which bounds v
+            # below by the chord of v + v' s - second s^2 / 2, positive at both ends
+            previous, lo = lo, b
             length = min(2.0 * length, longest)
             continue
         rounding = 8.0 * _EPS * (abs(lo) + 1.0 / rho)

@@ -94,6 +94,39 @@ def test_a_mass_that_friction_holds_still_does_not_move():
     assert np.all(curve.amplitude == 0.0) and np.all(curve.phase == 0.0) and np.all(curve.stable)
 
 
+def test_a_mass_stuck_to_its_moving_support_follows_it_until_it_slips():
+    """Base excitation Y0 cos(omega t): the mass moves with the support (amplitude Y0, phase 0, exactly) while
+    m Y0 omega^2 <= alpha, and slips beyond. The curve starts at rest in relative coordinates (s = 0), which
+    scaled the continuation's unknowns by 1e-300 and stopped it at the onset of slip; the exact stepper's run
+    there (the force's peak a hair above alpha) also ran out of its event search. Every slipping point is the
+    exact stepper's orbit from rest after 60 periods (first harmonic of z + y, 256 samples) to 1e-6."""
+    from prandtl_fmu import simulate
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from tests.conftest import make_scene
+
+    m, k, alpha, Y0 = 2.0, 8.0, 0.1, 0.0081
+    onset = math.sqrt(alpha / (m * Y0)) / (2 * math.pi)  # Hz
+    curve = harmonic_response(element({"mass": {"m": m}, "spring": {"k0": k}, "friction": {"alpha": alpha}}), None,
+                              [0.2, 0.5], base_amplitude=Y0, tolerance=1e-6)
+    stuck = curve.frequency <= onset
+    assert 0 < stuck.sum() < stuck.size and curve.frequency[-1] == 0.5 and np.all(curve.stable)
+    assert np.all(curve.amplitude[stuck] == Y0) and np.all(curve.phase[stuck] == 0.0)
+    rows = 256
+    for f, amplitude, phase in zip(curve.frequency[~stuck], curve.amplitude[~stuck], curve.phase[~stuck]):
+        omega = 2 * math.pi * f
+        period = 1.0 / f
+        scene = make_scene(mass={"m": m, "x0": 0.0, "v0": 0.0}, spring={"k0": k}, cubic=None, damper=None,
+                           branches=None, friction={"alpha": alpha},
+                           load={"kind": "harmonic", "amplitude": m * Y0 * omega**2, "omega": omega, "offset": 0.0},
+                           solver={"stepper": "exact", "step": period / rows, "stop_time": 60 * period,
+                                   "output_interval": period / rows})
+        run = simulate(scene)
+        t = run.time[-rows - 1:-1]
+        first = complex((run.x[-rows - 1:-1] + Y0 * np.cos(omega * t)) @ np.exp(-1j * omega * t)) * 2 / rows
+        assert amplitude < Y0 and amplitude == pytest.approx(abs(first), rel=1e-6)
+        assert phase == pytest.approx(np.angle(first), abs=1e-6)
+
+
 @pytest.mark.parametrize("tables, holds", [
     (COULOMB, 0.1), (dict(COULOMB, branches={"k": [2.0, 5.0], "alpha": [0.05, 0.02]}), 0.17),
     ({"mass": {"m": 2.0}, "spring": {"k0": 8.0}, "branches": {"k": [1.0, 3.0], "eta": [0.1, 0.2]}}, 0.7)],

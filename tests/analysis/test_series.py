@@ -136,3 +136,52 @@ def test_a_jenkins_element_written_with_its_node_beside_a_rigid_slider_is_shot(t
     # moves the continuation's steps by 2e-8)
     assert np.allclose(curves[0].frequency, curves[1].frequency, rtol=1e-6)
     assert np.allclose(curves[0].amplitude, curves[1].amplitude, rtol=1e-6)
+
+
+def test_the_scene_s_load_node_is_joined_where_no_force_acts_on_it(tmp_path):
+    """The explicit joint with its load_node on a massless node (j1): where the force acts elsewhere
+    (``--load-node a``) or the support moves instead (``--base-amplitude``), j1 carries no load and joins, and
+    the curve is the branches' (it was kept as the load's node, and harmonic balance refused its slider)."""
+    explicit = IWAN_EXPLICIT.replace('load_node = "a"', 'load_node = "j1"')
+    assert explicit != IWAN_EXPLICIT
+    for options in (["--force-amplitude", "0.1", "--load-node", "a"], ["--base-amplitude", "0.05"]):
+        tables = []
+        for name, text in (("explicit", explicit), ("branches", IWAN_BRANCHES)):
+            path, out = tmp_path / f"{name}.toml", tmp_path / f"{name}.csv"
+            path.write_text(text)
+            assert main(["describe", str(path), *options, "--frequencies", "0.1,0.4", "--harmonics", "3",
+                         "--out", str(out)]) == 0, options
+            tables.append(read_csv(out))
+        assert len(tables[0]["frequency"]) == len(tables[1]["frequency"]) > 10
+        for column in ("frequency", "amplitude", "phase", "amplitude_a", "amplitude_b"):
+            assert np.allclose(np.array(tables[0][column], float), np.array(tables[1][column], float),
+                               rtol=1e-9, atol=1e-12), (options, column)
+
+
+def test_a_massless_load_node_is_kept_in_the_backbone_its_synthesis_loads(tmp_path):
+    """The force on the massless node j of a spring and a branch in series: the forced curve keeps j, and so
+    must the backbone drawn over it, whose single-mode synthesis loads j (it was joined away there, and the
+    plot failed with an internal error after the CSV was written). The mode's shape at j is the series rule's
+    static split of the relative motion, (x_j - x_a) / (x_b - x_a) = k_branch / (k_spring + k_branch), while
+    the branch sticks (small amplitude)."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode, synthesis
+    from prandtl_fmu.frequency.series import joined
+
+    text = network_text(["a", "j", "b"], [1.0, 0.0, 1.0], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+        ("dashpot", ["a", "ground"], {"c": 0.02}), ("dashpot", ["b", "ground"], {"c": 0.02}),
+        ("spring", ["a", "j"], {"k": 5.0}), ("branch", ["j", "b"], {"k": 2.0, "eta": 0.05})], load_node="a")
+    scene = network(tmp_path, text)
+    assert joined(scene).network.nodes == ("a", "b")  # j joins unless it is kept
+    backbone = nonlinear_mode(scene, 2, [1e-3, 0.2], harmonics=1, load_node="j")  # a and b apart
+    assert backbone.nodes == ("a", "j", "b")
+    a, j, b = backbone.shape[0]
+    assert abs((j - a) / (b - a) - 2.0 / 7.0) <= 1e-9
+    frequency, amplitude = synthesis(backbone, 0.05, "j")
+    assert frequency.size and np.all(np.isfinite(frequency)) and np.all(amplitude > 0)
+    path, out, plot = tmp_path / "joint.toml", tmp_path / "curve.csv", tmp_path / "curve.png"
+    path.write_text(text)
+    assert main(["describe", str(path), "--force-amplitude", "0.05", "--frequencies", "0.1,0.2", "--load-node", "j",
+                 "--mode", "2", "--amplitudes", "0.1,0.2", "--harmonics", "1", "--out", str(out),
+                 "--plot", str(plot)]) == 0
+    assert plot.stat().st_size > 0 and len(read_csv(out)["frequency"]) > 2

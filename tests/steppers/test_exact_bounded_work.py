@@ -195,6 +195,30 @@ def test_the_issue_s_coulomb_oscillator_releases_and_runs_to_the_end():
     assert np.abs(run.x - reference.x).max() < 1e-4
 
 
+@pytest.mark.parametrize("excess", [0.0, 3.7e-8])
+def test_a_harmonic_load_that_peaks_at_the_friction_s_threshold_barely_moves_the_mass(excess):
+    """A mass at rest under F0 cos(omega t) with F0 = alpha (1 + excess): at F0 = alpha the force only touches
+    the threshold, and the mass stays at rest to the bit (exact refused: 'events piling up in time', a release
+    at the peak, a reversal at once, ...); a hair above, the slip lasts while cos(omega t) > alpha / F0 at
+    most, about 2 theta / omega with theta = arccos(alpha / F0), and moves the mass by at most (F0 - alpha) / m
+    times that squared (exact refused: the search for v's zero near its maximum, where v' is 0, halved its
+    intervals to rounding). Both run to the end."""
+    m, k0, alpha = 2.0, 8.0, 0.1
+    omega = math.sqrt(alpha / (m * 0.0081))
+    force = alpha * (1.0 + excess)
+    scene = make_scene(mass={"m": m, "x0": 0.0, "v0": 0.0}, spring={"k0": k0}, cubic=None, damper=None,
+                       branches=None, friction={"alpha": alpha},
+                       load={"kind": "harmonic", "amplitude": force, "omega": omega, "offset": 0.0},
+                       solver={"stepper": "exact", "step": 0.0395, "stop_time": 20.0, "output_interval": 0.0395})
+    run = simulate(scene)
+    assert run.time[-1] == 20.0
+    if excess == 0.0:
+        assert np.all(run.x == 0.0) and np.all(run.v == 0.0)
+    else:
+        window = 2.0 * math.acos(alpha / force) / omega
+        assert np.abs(run.x).max() <= (force - alpha) / m * window**2
+
+
 @pytest.mark.parametrize("seed", [3, 4])
 def test_random_coulomb_oscillators_release_exactly(seed):
     """Item 8: random such scenes run to the end; implicit converges to exact at order 1 as h halves; every
