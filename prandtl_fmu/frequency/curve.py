@@ -309,9 +309,21 @@ def _on_cluster(scene, frequencies, tasks, client, scheduler, workers) -> list:
     try:
         if client is None:
             client = _client(scheduler, workers, owned)
-        futures = [client.submit(harmonic_response, scene, frequencies=frequencies, pure=False, **task)
-                   for task in tasks]
-        return [future.result() for future in futures]
+        futures = [client.submit(_curve_or_refusal, scene, frequencies, task, pure=False) for task in tasks]
+        curves = [future.result() for future in futures]
     finally:
         for thing in reversed(owned):
             thing.close()
+    for curve in curves:
+        if isinstance(curve, FrequencyError):
+            raise curve
+    return curves
+
+
+def _curve_or_refusal(scene, frequencies, task):
+    """A cluster's task: the curve, or its refusal returned as a value (raised there, a worker logs it as a failed
+    compute, with its traceback, on the user's terminal; the caller raises it, one line as without a cluster)."""
+    try:
+        return harmonic_response(scene, frequencies=frequencies, **task)
+    except FrequencyError as refusal:
+        return refusal

@@ -157,6 +157,13 @@ def _undamped(cluster: np.ndarray, C: np.ndarray, damping: float) -> np.ndarray:
 def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude) -> None:
     f = omega / (2 * math.pi)
     shape = ", ".join(f"{name} {value:.3g}" for name, value in zip(nodes, phi))
+    if hold == 0.0:  # nothing bounded acts along the mode: an undamped linear resonance, whatever the force
+        raise FrequencyError(
+            f"{scene.source}: no periodic state at f = {f:.6g} Hz: no dashpot acts on the springs' mode there "
+            f"(shape {shape}), nor any slider, branch or friction, and "
+            f"{'the force' if base_amplitude is None else 'the moving base'} drives it, so its amplitude grows "
+            f"without bound (an undamped linear resonance): leave {f:.6g} Hz out of the frequencies, or put a "
+            "dashpot on that mode")
     if base_amplitude is None:
         what, cure = "the force", f"a force amplitude below {force_amplitude * hold / drive:.6g} N"
     else:

@@ -149,6 +149,23 @@ def test_the_curves_of_a_parameter_study_do_not_depend_on_the_cluster(tmp_path):
     assert (tmp_path / "curves.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
+def test_a_curve_refused_on_the_cluster_is_one_line(tmp_path):
+    """Of two curves on a LocalCluster, the one forced beyond Den Hartog's bound is refused in one line, as
+    in-process, exit 2: the workers log nothing (a refusal raised in a task was logged there as a failed compute,
+    with its traceback, on the user's terminal). Run as a user would, every process's stderr read."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("distributed")
+    path = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "friction": {"alpha": 0.1}})
+    done = subprocess.run([sys.executable, "-m", "prandtl_fmu", "describe", str(path), "--force-amplitude",
+                           "0.05,1", "--frequencies", "0.1,0.3", "--workers", "2"], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 2 and not done.stdout, done
+    assert len(done.stderr.strip().splitlines()) == 1 and "Den Hartog" in done.stderr, done.stderr
+
+
 @pytest.mark.parametrize("arguments, culprit", [
     (["--force-amplitude", "1", "--base-amplitude", "0.1", "--frequencies", "0.1"], "--base-amplitude"),
     (["--frequencies", "0.1"], "--force-amplitude"),

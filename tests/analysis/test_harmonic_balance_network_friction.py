@@ -124,6 +124,51 @@ def test_a_resonance_that_friction_cannot_hold_is_refused_before_the_curve_start
     assert f"below {limit:.6g} " in err, err
 
 
+@pytest.mark.parametrize("base", [False, True])
+def test_den_hartog_s_bound_along_coupled_modes_is_the_generalized_eigenproblem_s(tmp_path, base):
+    """Two unequal masses coupled by a spring and a slider between them, a slider from b to the ground, no dashpot:
+    both modes of the springs are coupled and undamped. For each, the bound written out from scipy's K phi =
+    omega^2 M phi: the force that the sliders hold is 4 / pi (0.2 |phi_a - phi_b| + 0.1 |phi_b|) over the force's
+    share |phi_a| (at a), or over |phi' M 1| omega^2 under base excitation. 1.01 of it is refused with that value
+    named, 0.99 of it is not (a shape not scaled by the masses, or an element's far end taken with the wrong sign,
+    moves the bound by far more than 1 %)."""
+    from scipy.linalg import eigh
+
+    from prandtl_fmu.frequency import FrequencyError
+    from prandtl_fmu.frequency.unbounded import refuse_unbounded
+
+    text = network_text(["a", "b"], [1.0, 3.0], [
+        ("spring", ["a", "ground"], {"k": 2.0}), ("spring", ["b", "ground"], {"k": 5.0}),
+        ("spring", ["a", "b"], {"k": 1.0}), ("slider", ["a", "b"], {"alpha": 0.2}),
+        ("slider", ["b", "ground"], {"alpha": 0.1})], load_node="a")
+    scene = network(tmp_path, text)
+    M, K = np.diag([1.0, 3.0]), np.array([[3.0, -1.0], [-1.0, 6.0]])
+    values, shapes = eigh(K, M)
+    assert np.all(np.abs(shapes[0]) > 0.1) and np.all(np.abs(shapes[1]) > 0.1)  # coupled: both nodes move
+    for value, phi in zip(values, shapes.T):
+        omega = math.sqrt(value)
+        hold = 4 / math.pi * (0.2 * abs(phi[0] - phi[1]) + 0.1 * abs(phi[1]))
+        limit = hold / (abs(phi @ M @ np.ones(2)) * value if base else abs(phi[0]))
+        band = (0.97 * omega, 1.03 * omega)  # this mode alone (the other is 1.9 times away)
+        forcing = (lambda amount: (None, amount)) if base else (lambda amount: (amount, None))
+        refuse_unbounded(scene, *forcing(0.99 * limit), *band)
+        with pytest.raises(FrequencyError, match=f"below {limit:.6g} ") as refusal:
+            refuse_unbounded(scene, *forcing(1.01 * limit), *band)
+        assert f"f = {omega / (2 * math.pi):.6g} Hz" in str(refusal.value)
+
+
+def test_an_undamped_linear_resonance_is_refused_as_such(tmp_path, capsys):
+    """A mass on a spring alone over its resonance: refused in one line that says nothing bounds the mode (it
+    offered a force 'below 0 N', held by sliders that are not there), under a force and under base excitation."""
+    path = tmp_path / "linear.toml"
+    path.write_text(network_text(["a"], [1.0], [("spring", ["a", "ground"], {"k": 1.0})], load_node="a"))
+    for option in ("--force-amplitude", "--base-amplitude"):
+        assert main(["describe", str(path), option, "0.1", "--frequencies", "0.1,0.3"]) == 2
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and "an undamped linear resonance" in err, err
+        assert " 0 N" not in err and "f = 0.159155 Hz" in err, err
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", ["one node", "two masses"])
 def test_just_below_den_hartog_s_bound_the_curve_passes_the_resonance(tmp_path, case):
