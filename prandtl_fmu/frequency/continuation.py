@@ -28,7 +28,10 @@ one, for a curve that starts at rest):
 * step: ds grows or shrinks by the corrector's iterations against TARGET_ITERATIONS (at most doubled, at
   least halved), within [MIN_STEP, max_step]; max_step is ARC_ESTIMATE over the count of listed frequencies
   less one (a curve through one resonance gets about as many points as frequencies asked, more where it
-  bends);
+  bends); a point where the tangent turned by more than 60 degrees (TURN) from the last is taken again at half
+  the step, down to CORNER of max_step: a tight fold gets its points, and a kink (where a node starts to slip,
+  whose turn does not shrink with the step) is located to that (the base-excited friction element went from
+  its stuck part to its slipping part in one step past the onset of slip, which the line between them hid);
 * fold: where the omega-component of the tangent changes sign between two points; located by the secant
   method on that component along the arc between them (at most FOLD_ITERATIONS correctors, to 1e-9 of the
   step) and kept as a point of its own, marked;
@@ -59,6 +62,7 @@ CHORD_TARGET = 16  # its iterations that count as TARGET_ITERATIONS of Newton's 
 DAMPED_ITERATIONS = 30  # of each corrector over a kink (its steps halved while the residual grows)
 HALVINGS = 8  # of a step of those correctors
 DAMPED_REACH = 4.0  # their point is at most this many arc-length steps from the last point
+TURN = 0.5  # a point whose tangent turned by more than 60 degrees from the last is taken again at half the step
 FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
 
 
@@ -128,6 +132,10 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
             # the side of the heading and the determinant's orientation disagree, and the side would turn the curve
             # back in omega: a kink where the tangent turned by more than a right angle (a fold passes both)
             tangent_new, sign = -tangent_new, -sign
+        if not cornered and step > CORNER * max_step and \
+                tangent_new @ _rescaled(tangent, scale, scale_new) < TURN:
+            step *= 0.5  # the tangent turned too far in one step (a kink, a tight fold): a shorter step shows it
+            continue
         orientation = sign
         if omega_new >= omega_max:
             q_end = _fixed_frequency(balance, q, q_new, omega, omega_new, omega_max)
