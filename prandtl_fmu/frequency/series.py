@@ -85,7 +85,8 @@ def _join(network, node):
 
     elements = tuple(dataclasses.replace(e, between=tuple(shifted(i) for i in e.between)) for e in rest)
     keep = [i for i in range(network.n) if i != node]
+    # the scene's load node joined (no force acts on it: the callers keep the node a force acts on): any node
+    load_node = 0 if network.load_node == node else shifted(network.load_node)
     return dataclasses.replace(network, nodes=tuple(network.nodes[i] for i in keep),
                                mass=np.asarray(network.mass)[keep], x0=np.asarray(network.x0)[keep],
-                               v0=np.asarray(network.v0)[keep], elements=elements,
-                               load_node=shifted(network.load_node))
+                               v0=np.asarray(network.v0)[keep], elements=elements, load_node=load_node)

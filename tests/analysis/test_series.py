@@ -139,10 +139,11 @@ def test_a_jenkins_element_written_with_its_node_beside_a_rigid_slider_is_shot(t
 
 
 def test_the_scene_s_load_node_is_joined_where_no_force_acts_on_it(tmp_path):
-    """The explicit joint with its load_node on a massless node (j1): where the force acts elsewhere
-    (``--load-node a``) or the support moves instead (``--base-amplitude``), j1 carries no load and joins, and
-    the curve is the branches' (it was kept as the load's node, and harmonic balance refused its slider)."""
-    explicit = IWAN_EXPLICIT.replace('load_node = "a"', 'load_node = "j1"')
+    """The explicit joint with its load_node on a massless node (j2, the last): where the force acts elsewhere
+    (``--load-node a``) or the support moves instead (``--base-amplitude``), j2 carries no load and joins, and
+    the curve is the branches' (it was kept as the load's node, and harmonic balance refused its slider; joined,
+    the network's load node pointed past its last node: an internal error)."""
+    explicit = IWAN_EXPLICIT.replace('load_node = "a"', 'load_node = "j2"')
     assert explicit != IWAN_EXPLICIT
     for options in (["--force-amplitude", "0.1", "--load-node", "a"], ["--base-amplitude", "0.05"]):
         tables = []
