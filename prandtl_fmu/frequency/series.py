@@ -11,8 +11,10 @@ a spring (no threshold), a slider (no compliance) or a branch (k, eta = alpha / 
 exactly the same force on them, whatever the motion. So a joint written as springs and sliders with their
 nodes (an Iwan joint of Jenkins elements, each a spring to a massless node and a slider on from it) is the
 network of branches harmonic balance samples exactly, and one with rigid sliders elsewhere is one that shooting
-takes (it needs a mass at every node). Joined repeatedly, node by node, until no such node is left. Two elements
-whose other ends are the same node (or both the ground) act on nothing, and go. The node's own motion is not
+takes (it needs a mass at every node). Two elements whose other ends are the same node (or both the ground) act
+on nothing, and go. A massless node held by three or more linear springs alone is their Schur complement (a
+spring between each pair of far ends, :func:`_star`); one with a single element carries no force through it
+(both go). Joined repeatedly, node by node, until no such node is left. The node's own motion is not
 computed: a node named by ``--node``, and the node a force acts on (``--load-node``, else the scene's
 ``load_node``; none under base excitation), are kept as written (the callers name them in ``keep``).
 """
@@ -36,19 +38,26 @@ def joined(scene, keep=()):
         return scene
     network = scene.network
     while True:
-        node = _joinable(network, keep)
-        if node is None:
+        found = _joinable(network, keep)
+        if found is None:
             return scene if network is scene.network else dataclasses.replace(scene, network=network)
-        network = _join(network, node)
+        node, how = found
+        network = how(network, node)
 
 
 def _joinable(network, keep):
+    """``(node, how)`` of the first massless node not in ``keep`` that goes (``how``: :func:`_join`,
+    :func:`_star` or :func:`_dangling`), or None."""
     for node, name in enumerate(network.nodes):
         if network.mass[node] > 0 or name in keep:
             continue
         touching = [e for e in network.elements if node in e.between]
+        if len(touching) == 1:
+            return node, _dangling
         if len(touching) == 2 and all(e.kind in JOINED and e.c == 0.0 for e in touching):
-            return node
+            return node, _join
+        if len(touching) > 2 and all(e.kind == "spring" for e in touching):
+            return node, _star
     return None
 
 
@@ -79,6 +88,42 @@ def _join(network, node):
             rest.append(Element("slider", name, (p, q), alpha))
         else:
             rest.append(Element("branch", name, (p, q), k, alpha / k, 0.0, 0.0))
+    return _without(network, node, rest)
+
+
+def _star(network, node):
+    """A massless node held by linear springs alone (three or more): its balance sum k_i (x - x_i) = 0 puts it at
+    the springs' weighted mean, and the forces on the far ends are those of a spring k_i k_j / K between each pair
+    of them (K = sum k_i: the Schur complement of the node in the stiffness), exactly; springs to one far end are
+    summed first, pairs on one end (or both on the ground) act on nothing."""
+    from ..network.model import Element
+
+    touching = [e for e in network.elements if node in e.between]
+    ends = {}
+    for e in touching:
+        end = e.between[1] if e.between[0] == node else e.between[0]
+        ends[end] = ends.get(end, 0.0) + e.value
+    total = sum(ends.values())
+    rest = [e for e in network.elements if node not in e.between]
+    far = sorted(ends, reverse=True)  # the ground (-1) last: an element between a node and the ground is (p, -1)
+    name = network.nodes[node]
+    for i, p in enumerate(far):
+        for q in far[i + 1:]:
+            if p >= 0:
+                other = "ground" if q < 0 else network.nodes[q]
+                rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q),
+                                    ends[p] * ends[q] / total))
+    return _without(network, node, rest)
+
+
+def _dangling(network, node):
+    """A massless node with one element: the node's balance holds that element's force at 0, whatever it is:
+    both go."""
+    return _without(network, node, [e for e in network.elements if node not in e.between])
+
+
+def _without(network, node, rest):
+    """The network without ``node``, its elements ``rest`` (indices as with the node)."""
     # the node goes: the others' indices above it shift down by one
     def shifted(index):
         return index - 1 if index > node else index

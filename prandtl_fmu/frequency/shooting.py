@@ -153,9 +153,9 @@ def prepared_network(scene):
         raise FrequencyError(f"{source}: node {massless[0]} is massless: the forced response of a network with "
                              "sliders is solved for by shooting on its motion, which needs a mass at every node "
                              "(a massless node on a slider is in equilibrium at every instant, a quasi-static "
-                             "problem; one between just two springs, sliders or branches, unloaded, is joined "
-                             "into one element, not this one): give it a mass, or integrate the network with "
-                             "prandtl-fmu run")
+                             "problem; one between just two springs, sliders or branches, or held by springs "
+                             "alone, unloaded, is joined into elements between its neighbours, not this one): give "
+                             "it a mass, or integrate the network with prandtl-fmu run")
     for element in network.elements:
         if element.kind == "cubic":
             raise FrequencyError(f"{source}: cubic {element.name}: the forced response of a network with sliders "

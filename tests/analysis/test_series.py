@@ -186,3 +186,33 @@ def test_a_massless_load_node_is_kept_in_the_backbone_its_synthesis_loads(tmp_pa
                  "--mode", "2", "--amplitudes", "0.1,0.2", "--harmonics", "1", "--out", str(out),
                  "--plot", str(plot)]) == 0
     assert plot.stat().st_size > 0 and len(read_csv(out)["frequency"]) > 2
+
+
+def test_a_massless_node_held_by_springs_alone_is_their_schur_complement(tmp_path):
+    """A massless node j held by three springs (to a, b and the ground) beside a rigid slider between a and b:
+    j sits at the springs' weighted mean, so the three are springs k_i k_j / K between each pair of far ends
+    (written out here: 1.5 N/m a-b, 0.6 a-ground, 1.0 b-ground), the motion the implicit stepper gives the
+    network as written (it solves j's balance at every step) to rounding; and the forced response by shooting
+    runs (it was refused: j is massless), the same as the hand-condensed network's. A node with one element
+    carries nothing and goes."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.series import joined
+
+    common = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 2.0}),
+              ("dashpot", ["a", "ground"], {"c": 0.05}), ("slider", ["a", "b"], {"alpha": 0.3})]
+    star = network_text(["a", "j", "b", "d"], [1.0, 0.0, 1.5, 0.0], common + [
+        ("spring", ["a", "j"], {"k": 3.0}), ("spring", ["j", "b"], {"k": 5.0}), ("spring", ["ground", "j"], {"k": 2.0}),
+        ("spring", ["b", "d"], {"k": 7.0})], load_node="a")
+    by_hand = network_text(["a", "b"], [1.0, 1.5], common + [
+        ("spring", ["a", "b"], {"k": 1.5}), ("spring", ["a", "ground"], {"k": 0.6}),
+        ("spring", ["b", "ground"], {"k": 1.0})], load_node="a")
+    scene, condensed = network(tmp_path, star, "star.toml"), network(tmp_path, by_hand, "hand.toml")
+    one = joined(scene)
+    assert one.network.nodes == ("a", "b")
+    springs = sorted((e.between, e.value) for e in one.network.elements if e.kind == "spring" and "(" in e.name)
+    assert springs == [((0, -1), pytest.approx(0.6)), ((1, -1), pytest.approx(1.0)), ((1, 0), pytest.approx(1.5))]
+    written = _run(scene)
+    assert np.max(np.abs(written - _run(one))) <= 1e-12 * np.max(np.abs(written))
+    curves = [harmonic_response(s, 1.0, [0.1, 0.4], stability=False) for s in (scene, condensed)]
+    assert curves[0].method == "shooting" and len(curves[0].frequency) == len(curves[1].frequency) > 5
+    assert np.allclose(curves[0].amplitude, curves[1].amplitude, rtol=1e-9)
