@@ -404,6 +404,24 @@ def test_stable_points_agree_with_the_time_sweep_on_a_mass_on_a_maxwell_branch()
     assert abs(plain.amplitude[-1] / curve.amplitude[picks[-1]] - 1) > 1e-2
 
 
+def test_a_maxwell_branch_that_never_slips_is_its_complex_stiffness():
+    """A branch with a series dashpot and an elastic range of 5e5 m (it never slips: a spring and a dashpot in
+    series, of complex stiffness k i omega c / (k + i omega c)): the curve is the linear closed form to the AFT's
+    stated quadrature, and it reaches the end in a few dozen points. Its cycle was converged to 1e-13 of the
+    elastic range (5e-8 m), the finite differences of its forces were 10 % off, and the continuation crept at
+    steps of 5e-7 for minutes (a fuzz run's find)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    m, k0, k, c, F0 = 2.947, 3.072, 0.1865, 0.1109, 0.1232
+    scene = element({"mass": {"m": m}, "spring": {"k0": k0}, "branches": {"k": [k], "alpha": [1e5], "c": [c]}})
+    curve = harmonic_response(scene, F0, [0.0549, 0.5175], harmonics=2)
+    assert curve.frequency[-1] == 0.5175 and len(curve.frequency) < 100 and np.all(curve.stable)
+    omega = 2 * math.pi * curve.frequency
+    X = F0 / (k0 - m * omega**2 + k * 1j * omega * c / (k + 1j * omega * c))
+    assert curve.amplitude == pytest.approx(np.abs(X), rel=2e-4)
+    assert curve.phase == pytest.approx(np.angle(X), abs=2e-4)
+
+
 @pytest.mark.slow
 def test_a_stiff_series_dashpot_is_the_plain_branch():
     """c -> infinity: the Maxwell branch (driven over periods, finite-difference Jacobian) is the Jenkins branch
