@@ -124,11 +124,14 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     frequencies = positive_values(frequencies, "frequencies")
     tolerance = check_tolerance(tolerance)
     orders = check_orders(orders, harmonics)
-    # a Jenkins element written with its massless node: a branch; the node the force acts on is kept (under base
-    # excitation none: the support moves, no node is loaded)
+    # a Jenkins element written with its massless node: a branch; the node the force acts on is kept
     network = getattr(scene, "network", None)
-    loaded = (load_node if load_node is not None else None if network is None else
-              network.nodes[network.load_node]) if base_amplitude is None else None
+    if base_amplitude is not None:
+        loaded = None  # the support moves: no node is loaded
+    elif load_node is not None or network is None:
+        loaded = load_node
+    else:
+        loaded = network.nodes[network.load_node]
     scene = joined(scene, keep=(node, loaded))
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)
         fields = shooting.shooting_response(scene, force_amplitude, base_amplitude, frequencies,
