@@ -204,6 +204,21 @@ def _check(args) -> dict:
     return values
 
 
+def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
+    """One ``warning:`` line on stderr for each harmonic balance curve whose first harmonic still changes by more
+    than the tolerance at the next number of harmonics (``Curve.change``): the H given truncates it by about
+    that much. The curve is written all the same (it is the H-harmonic balance asked for)."""
+    import sys
+
+    for curve in curves:
+        if curve.method == "harmonic balance" and curve.change is not None and curve.change > tolerance:
+            load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else
+                    f"Y0 = {curve.base_amplitude:g} m")
+            print(f"warning: with --harmonics {harmonics} ({load}) the first harmonic changes by {curve.change:.3g} "
+                  f"relative at the next number of harmonics (--tolerance {tolerance:g}): more harmonics, or none "
+                  "given (chosen by --tolerance)", file=sys.stderr)
+
+
 def _copy_args(args, **changes):
     """A copy of the parsed ``args`` with some options changed."""
     import argparse
@@ -291,6 +306,8 @@ def run(args) -> int:
                                         orders=values.get("orders", ()), scheduler=args.scheduler,
                                         workers=values.get("workers"))
             result = curves.curves[0] if len(curves.curves) == 1 else curves
+            if "harmonics" in values:
+                _warn_truncation(curves.curves, values["harmonics"], values["tolerance"])
             if "backbone" in values:
                 from .modes import nonlinear_mode
 

@@ -167,6 +167,33 @@ def _where(balance, q, omega, node) -> str:
             f"{balance.system.nodes[index]}")
 
 
+def across(balance, finer, lift, q, omega, omega_min: float, omega_max: float) -> Optional[tuple]:
+    """The point of ``finer``'s curve across the point (q, omega) of ``balance``'s: Newton's method on
+    [R_finer(y); t . (y - y0)] = 0 from y0, the point lifted into ``finer``'s unknowns (``lift``), t
+    ``balance``'s unit tangent there lifted alike: the other curve's point on the normal through it, well
+    posed at a fold (where the point at the same frequency may not exist). (q_finer, omega) or None (no tangent,
+    or no convergence in CORRECTOR_ITERATIONS)."""
+    span = omega_max - omega_min
+    scale = max(np.linalg.norm(q), 1e-300)
+    tangent = _tangent(balance, q, omega, None, scale, span)
+    if tangent is None:
+        return None
+    start = _scaled(lift(q), omega, scale, omega_min, span)
+    t = np.concatenate((lift(tangent[:-1]), tangent[-1:]))
+    t /= np.linalg.norm(t)
+    y = start.copy()
+    for _ in range(CORRECTOR_ITERATIONS):
+        q_y, omega_y = _unscaled(y, scale, omega_min, span)
+        residual, matrix = _augmented(finer, q_y, omega_y, scale, span)
+        delta = solve_linear(np.vstack((matrix, t)), -np.concatenate((residual, [t @ (y - start)])))
+        if delta is None or not np.all(np.isfinite(delta)):
+            return None
+        y = y + delta
+        if _converged(finer, delta, residual, omega_y):
+            return _unscaled(y, scale, omega_min, span)
+    return None
+
+
 def _hz(omega: float) -> float:
     return float(omega) / (2.0 * math.pi)
 

@@ -44,7 +44,8 @@ class Curve:
     ``multiplier`` the largest |Floquet multiplier| of each point (NaN where it was not computed: ``floquet.py``;
     an empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
     every node with a mass; ``coefficients`` (points, n, 2 H + 1) of x; ``harmonics`` H; ``change`` the relative
-    change of the first harmonic at the last increase of H (None when H was given); ``force_amplitude`` F0, or
+    change of the first harmonic at the last increase of H (H given: its change at the next H, None where
+    that was not found); ``force_amplitude`` F0, or
     None under base excitation, whose ``base_amplitude`` Y0 it is (x then the absolute motion, see the
     module); ``method``: how the periodic states were found ("harmonic balance", or "shooting", whose
     ``harmonics`` are only those kept in ``coefficients``)."""
@@ -148,7 +149,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     if harmonics is not None:
         balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
         points = continue_curve(balance, low, high, count, node=where)
-        change = None
+        change = _truncation(balance, points, where, samples)
     else:
         balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
                                                     where, tolerance, samples, max(orders, default=1))
@@ -167,6 +168,43 @@ def _summary(balance, points, where) -> np.ndarray:
     """The first harmonic at the peak and at both ends: what the choice of H compares."""
     X = _first_harmonic(balance, points, where)
     return np.array([X[0], X[np.argmax(np.abs(X))], X[-1]])
+
+
+def _truncation(balance, points, where, samples) -> Optional[float]:
+    """With H given: how much the first harmonic changes, relative, at the peak and at both ends, when H grows to
+    the next step of HARMONIC_STEPS (or 2 H + 1 past them): what the choice of H by the tolerance compares. The
+    ends at their frequencies; the peak by the larger balance's point on the normal through the curve's
+    (``continuation.across``: at a fold, where the peak may be, the point at the same frequency is ill-posed).
+    None where one is not found (no estimate)."""
+    from .continuation import across
+
+    H = balance.H
+    larger = next((h for h in HARMONIC_STEPS if h > H), 2 * H + 1)
+    finer = HarmonicBalance(balance.system, larger, balance.force_amplitude,
+                            None if samples is None else max(samples, 4 * larger), balance.base_amplitude)
+    n, L, L_finer = balance.system.n, balance.L, finer.L
+
+    def lift(free_values):  # the same harmonics, the new ones 0
+        padded = np.zeros((n, L_finer))
+        padded[:, :L] = balance.full(free_values).reshape(n, L)
+        return padded.reshape(-1)[finer.free]
+
+    X = _first_harmonic(balance, points, where)
+    low, high = points[0][0], points[-1][0]
+    changes = []
+    peak = int(np.argmax(np.abs(X)))
+    for index in sorted({0, peak, len(points) - 1}):
+        omega, q, _ = points[index]
+        if index in (0, len(points) - 1):  # an end: at its frequency
+            found = finer._newton(omega, lift(q))
+            found = None if found is None else (found, omega)
+        else:  # the peak, a fold's neighbour: on the normal
+            found = across(balance, finer, lift, q, omega, low, high)
+        if found is None:
+            return None
+        (finer_X,) = _first_harmonic(finer, [(found[1], found[0], False)], where)
+        changes.append(abs(finer_X - X[index]) / max(abs(finer_X), 1e-300))
+    return float(max(changes))
 
 
 def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,

@@ -592,3 +592,41 @@ def test_every_point_of_a_finite_difference_curve_has_its_own_multipliers():
         reference = np.max(np.abs(floquet.extrapolated(fine, coarse)))
         # to 5e-3, or within a quarter of its distance from 1 (what floquet.refined asks before it stops refining)
         assert abs(curve.multiplier[index] - reference) <= max(5e-3, 0.25 * abs(reference - 1.0)), index
+
+
+NEAR_RIGID = {"mass": {"m": 2.132}, "spring": {"k0": 0.247}, "damper": {"c": 0.04272},
+              "branches": {"k": [1e5, 1e-6], "alpha": [0.298, 0.05719]}}
+
+
+def test_a_given_number_of_harmonics_reports_its_truncation(tmp_path, capsys):
+    """With --harmonics H the curve is the H-harmonic balance asked for, and ``change`` says how far it is from
+    the next H: at the curve's ends, at least the change between the two balances solved there from scratch
+    (written out here). A near-rigid branch (eta = 3e-6 m: a slider) at H = 9 is 3 % off the time sweep (a fuzz
+    run's find, written without a word): the command line now prints one warning line with the change, and
+    still writes the curve; a smooth curve (Duffing's at H = 15) gets no warning."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene = element(NEAR_RIGID)
+    curve = harmonic_response(scene, 0.6246, [0.243439, 0.365158], harmonics=9, stability=False)
+    system = periodic_system(scene)
+    ends = []
+    for H in (9, 11):
+        balance = HarmonicBalance(system, H, 0.6246)
+        ends.append([complex(*balance.full(balance.solve_at(2 * math.pi * f))[1:3] * [1, -1])
+                     for f in (0.243439, 0.365158)])
+    apart = max(abs(b - a) / abs(b) for a, b in zip(*ends))
+    assert 1e-3 < apart <= curve.change * (1 + 1e-6), (apart, curve.change)
+    path, out = write(tmp_path, NEAR_RIGID), tmp_path / "curve.csv"
+    assert main(["describe", path, "--force-amplitude", "0.6246", "--frequencies", "0.243439,0.365158",
+                 "--harmonics", "9", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("warning: with --harmonics 9") and f"{curve.change:.3g}" in err[0]
+    assert len(read_csv(out)["frequency"]) > 2
+    duffing = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05}}
+    assert main(["describe", write(tmp_path, duffing), "--force-amplitude", "0.2", "--frequencies", "0.1,0.3",
+                 "--harmonics", "15", "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""
+    # found at its peak, which is its fold: by the next H's point on the normal there
+    smooth = harmonic_response(element(duffing), 0.2, [0.1, 0.3], harmonics=15, stability=False)
+    assert smooth.folds.size == 2 and smooth.change is not None and smooth.change < 1e-6
