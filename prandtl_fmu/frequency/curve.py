@@ -203,7 +203,10 @@ def _truncation(balance, points, where, samples) -> Optional[float]:
         if found is None:
             return None
         (finer_X,) = _first_harmonic(finer, [(found[1], found[0], False)], where)
-        changes.append(abs(finer_X - X[index]) / max(abs(finer_X), 1e-300))
+        # relative to the node's first harmonic, or to 1e-9 of the whole motion's coefficients where that is 0
+        # (a node that does not move: its rounding against its rounding is no change)
+        floor = 1e-9 * max(float(np.max(np.abs(q))), abs(balance.base_amplitude or 0.0), 1e-300)
+        changes.append(abs(finer_X - X[index]) / max(abs(finer_X), floor))
     return float(max(changes))
 
 

@@ -74,11 +74,14 @@ def _join(network, node):
 
     first, second = (e for e in network.elements if node in e.between)
     (k1, a1), (k2, a2) = _stiffness_and_threshold(first), _stiffness_and_threshold(second)
-    k = math.inf if math.isinf(k1) and math.isinf(k2) else 1.0 / (1.0 / k1 + 1.0 / k2)
+    if k1 == 0.0 or k2 == 0.0:
+        k = 0.0  # a spring of zero stiffness in series: the two carry no force
+    else:
+        k = math.inf if math.isinf(k1) and math.isinf(k2) else 1.0 / (1.0 / k1 + 1.0 / k2)
     alpha = min(a1, a2)
     p, q = (e.between[1] if e.between[0] == node else e.between[0] for e in (first, second))
     rest = [e for e in network.elements if e is not first and e is not second]
-    if p != q:
+    if p != q and k > 0.0 and alpha > 0.0:  # else they act on nothing (a zero spring or a zero threshold)
         if p < 0:
             p, q = q, p
         name = f"{first.name}+{second.name}"
@@ -105,6 +108,8 @@ def _star(network, node):
         ends[end] = ends.get(end, 0.0) + e.value
     total = sum(ends.values())
     rest = [e for e in network.elements if node not in e.between]
+    if total == 0.0:  # springs of zero stiffness: they carry no force
+        return _without(network, node, rest)
     far = sorted(ends, reverse=True)  # the ground (-1) last: an element between a node and the ground is (p, -1)
     name = network.nodes[node]
     for i, p in enumerate(far):

@@ -216,3 +216,39 @@ def test_a_massless_node_held_by_springs_alone_is_their_schur_complement(tmp_pat
     curves = [harmonic_response(s, 1.0, [0.1, 0.4], stability=False) for s in (scene, condensed)]
     assert curves[0].method == "shooting" and len(curves[0].frequency) == len(curves[1].frequency) > 5
     assert np.allclose(curves[0].amplitude, curves[1].amplitude, rtol=1e-9)
+
+
+@pytest.mark.parametrize("around", [[("a", 0.0), ("b", 0.0), ("ground", 0.0)], [("a", 0.0), ("b", 1.0)]],
+                         ids=["star of zero springs", "a zero spring in series"])
+def test_springs_of_zero_stiffness_at_a_massless_node_carry_nothing(tmp_path, around):
+    """A massless node j held by springs of which one or all have k = 0 (the scene reader takes k >= 0): the
+    springs carry no force, and j goes with them, leaving nothing between their far ends (the series rule
+    and the star's K = 0 divided by zero: an internal error, a review's find); the curve is the network's
+    without them."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.series import joined
+
+    common = [("spring", ["a", "ground"], {"k": 1.0}), ("dashpot", ["a", "ground"], {"c": 0.05}),
+              ("spring", ["b", "ground"], {"k": 1.0}), ("slider", ["a", "b"], {"alpha": 0.2})]
+    springs = [("spring", [end, "j"], {"k": k}) for end, k in around]
+    scene = network(tmp_path, network_text(["a", "b", "j"], [1.0, 1.0, 0.0], common + springs, load_node="a"),
+                    "with.toml")
+    bare = network(tmp_path, network_text(["a", "b"], [1.0, 1.0], common, load_node="a"), "without.toml")
+    one = joined(scene)
+    assert one.network.nodes == ("a", "b")
+    assert [(e.kind, e.between, e.value) for e in one.network.elements] == \
+        [(e.kind, e.between, e.value) for e in bare.network.elements]
+    curves = [harmonic_response(s, 0.1, [0.1, 0.3], stability=False) for s in (scene, bare)]
+    assert np.array_equal(curves[0].amplitude, curves[1].amplitude)
+
+
+def test_a_node_that_does_not_move_has_no_truncation_to_report(tmp_path):
+    """A free mass (held to a massless node by a spring and a dashpot, nothing to the ground) under base
+    excitation does not move: its first harmonic is rounding at every H, and its change from H = 3 to 5 is no
+    change (it read 5.75e17, relative, rounding over rounding, with a warning: a review's find)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene = network(tmp_path, network_text(["a", "j"], [1.0, 0.0], [
+        ("spring", ["a", "j"], {"k": 1.0}), ("dashpot", ["a", "j"], {"c": 0.05})], load_node="a"))
+    curve = harmonic_response(scene, None, [0.1, 0.3], base_amplitude=0.05, harmonics=3, stability=False)
+    assert np.all(curve.amplitude < 1e-15) and curve.change is not None and curve.change < 1e-6
