@@ -110,14 +110,12 @@ def _star(network, node):
     rest = [e for e in network.elements if node not in e.between]
     if total == 0.0:  # springs of zero stiffness: they carry no force
         return _without(network, node, rest)
-    far = sorted(ends, reverse=True)  # the ground (-1) last: an element between a node and the ground is (p, -1)
+    far = sorted(ends, reverse=True)  # the ground (-1) last, only ever q: an element to the ground is (p, -1)
     name = network.nodes[node]
     for i, p in enumerate(far):
         for q in far[i + 1:]:
-            if p >= 0:
-                other = "ground" if q < 0 else network.nodes[q]
-                rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q),
-                                    ends[p] * ends[q] / total))
+            other = "ground" if q < 0 else network.nodes[q]
+            rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
     return _without(network, node, rest)
 
 
