@@ -70,7 +70,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
         scene = _friction_network(scene, tolerance)
     scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
     if any(e.kind == "slider" for e in getattr(getattr(scene, "network", None), "elements", ())):
-        return _slider_mode(scene, mode, amplitudes, node, tolerance)
+        return _slider_mode(scene, mode, amplitudes, node, tolerance, load_node)
     system = periodic_system(scene, tolerance=tolerance)
     where = system.node_index(node)
     if harmonics is not None:
@@ -131,14 +131,15 @@ def _friction_network(scene, tolerance: float):
     return NetworkScene(scene.name, network, scene.load, scene.solver, scene.source)
 
 
-def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], tolerance: float) -> Backbone:
+def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], tolerance: float,
+                 load_node: Optional[str] = None) -> Backbone:
     """A network with rigid sliders: EPMC by shooting on its exact motion (``slider_modes.py``): no harmonics
     are truncated (``harmonics`` None), ``change`` that of the samples' last doubling; where the backbone turns
     back in amplitude, a listed amplitude has a row for each of its points there."""
     from .shooting import ShootingSystem, prepared_network
     from .slider_modes import slider_backbone
 
-    scene = prepared_network(scene)
+    scene = prepared_network(scene, node, load_node)  # massless nodes condensed: those two must have a mass
     network = scene.network
     names = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float))
     where = names.node_index(node)

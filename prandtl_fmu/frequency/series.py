@@ -17,15 +17,58 @@ spring between each pair of far ends, :func:`_star`); one with a single element 
 (both go). Joined repeatedly, node by node, until no such node is left. The node's own motion is not
 computed: a node named by ``--node``, and the node a force acts on (``--load-node``, else the scene's
 ``load_node``; none under base excitation), are kept as written (the callers name them in ``keep``).
+
+**Levers** (:func:`condensed`: shooting only, which needs a mass at every node). A massless node p held by
+springs k_i (to far ends i, S = sum k_i > 0) and by one threshold element (a slider, a branch, or a lever from a
+node condensed before) is in balance at every instant: sum_i k_i (x_i - x_p) = d_p T, T the element's tension
+and d_p its weight on p. So x_p = (sum_i k_i x_i - d_p T) / S, and in the element's elongation d . x the node's
+share is the springs' weighted mean of their far ends plus a compliance d_p^2 / S in series:
+
+    d'_i = d_i + d_p k_i / S,    1 / k' = 1 / k + d_p^2 / S,    alpha' = alpha,
+
+an element of threshold alpha on the elongation d' . x (a :class:`Lever`: a slider's play, now with a spring,
+between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of
+far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
+the motion. A massless node between two threshold elements (its position a play of two references), or with a
+dashpot (a first-order motion), is refused, one line; a massless node held by no spring carries no force
+through it (its elements go). Harmonic balance takes massless nodes as they are (their balance is one of its
+equations): it never sees a lever.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
+from . import FrequencyError
+
 JOINED = ("spring", "slider", "branch")
+THRESHOLDS = ("slider", "branch", "lever")
+
+
+@dataclass(frozen=True, eq=False)
+class Lever:
+    """A threshold element on the elongation sum_j weights_j x_{between_j} (ground terms dropped): a spring of
+    stiffness ``value`` (math.inf: rigid, a slider) in series with a slider of threshold ``alpha``; what
+    :func:`condensed` leaves of a massless node between springs and one slider or branch. Shooting's rows
+    (``shooting.NetworkShooting``) and the bound on the forces (``unbounded.py``) read it; nothing else does."""
+
+    name: str
+    between: tuple
+    weights: tuple
+    value: float
+    alpha: float
+    kind: str = "lever"
+    c: float = 0.0
+
+    def row(self, n: int) -> np.ndarray:
+        """Its elongation's row over the ``n`` nodes."""
+        out = np.zeros(n)
+        for node, weight in zip(self.between, self.weights):
+            out[node] += weight
+        return out
 
 
 def joined(scene, keep=()):
@@ -138,3 +181,112 @@ def _without(network, node, rest):
     return dataclasses.replace(network, nodes=tuple(network.nodes[i] for i in keep),
                                mass=np.asarray(network.mass)[keep], x0=np.asarray(network.x0)[keep],
                                v0=np.asarray(network.v0)[keep], elements=elements, load_node=load_node)
+
+
+def condensed(scene, named=None, loaded=None):
+    """``scene`` (a network) with every massless node gone (see the module: springs by their Schur complement,
+    a slider or a branch on the node by a :class:`Lever`), or FrequencyError naming the node that cannot go:
+    ``named`` (``--node``) and ``loaded`` (the node the force acts on) are reported, so they must have a mass."""
+    network = scene.network
+    if not np.any(np.asarray(network.mass) > 0):
+        raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one (a network of "
+                             "massless nodes is quasi-static: integrate it with prandtl-fmu run)")
+    while True:
+        node = next((i for i in range(network.n) if not network.mass[i] > 0), None)
+        if node is None:
+            return scene if network is scene.network else dataclasses.replace(scene, network=network)
+        network = _lever(network, node, scene.source, named, loaded)
+
+
+def _weights(element) -> dict:
+    """A threshold element's row as {node: weight} (the ground left out)."""
+    if element.kind == "lever":
+        return dict(zip(element.between, element.weights))
+    p, q = element.between
+    return {p: 1.0} if q < 0 else {p: 1.0, q: -1.0}
+
+
+def _lever(network, node, source, named, loaded):
+    """The network without massless ``node`` (see the module), or FrequencyError."""
+    from ..network.model import Element
+
+    name = network.nodes[node]
+    tail = "give it a mass, or integrate the network with prandtl-fmu run"
+    if name == loaded:
+        raise FrequencyError(f"{source}: node {name} is massless and the force acts on it: the forced response of "
+                             "a network with sliders is solved for by shooting on the motion of the nodes with a "
+                             f"mass: load a node with a mass (--load-node), {tail}")
+    if name == named:
+        raise FrequencyError(f"--node: {name} is massless: the forced response of a network with sliders is solved "
+                             "for by shooting on the motion of the nodes with a mass (a massless node's own motion "
+                             "is not computed): name one of them")
+    touching = [e for e in network.elements if node in e.between]
+    for e in touching:
+        if e.kind not in ("spring",) + THRESHOLDS:
+            raise FrequencyError(f"{source}: node {name} is massless, with {e.kind} {e.name} on it (a first-order "
+                                 "motion): the forced response of a network with sliders (shooting on its motion) "
+                                 f"takes a massless node held by springs and one slider or branch: {tail}")
+    thresholds = _parallel([e for e in touching if e.kind in THRESHOLDS])
+    if len(thresholds) > 1:
+        raise FrequencyError(f"{source}: node {name} is massless between {thresholds[0].name} and "
+                             f"{thresholds[1].name} (its position a play on two references): the forced response "
+                             "of a network with sliders (shooting on its motion) takes a massless node held by "
+                             f"springs and one slider or branch: {tail}")
+    rest = [e for e in network.elements if node not in e.between]
+    ends = {}
+    for e in touching:
+        if e.kind == "spring":
+            end = e.between[1] if e.between[0] == node else e.between[0]
+            ends[end] = ends.get(end, 0.0) + e.value
+    total = sum(ends.values())
+    if total == 0.0:  # nothing holds the node: its elements carry no force
+        return _without(network, node, rest)
+    far = sorted(ends, reverse=True)  # the ground (-1) last
+    for i, p in enumerate(far):
+        for q in far[i + 1:]:
+            other = "ground" if q < 0 else network.nodes[q]
+            rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+    if thresholds:
+        rest.extend(_levered(thresholds[0], node, ends, total))
+    return _without(network, node, rest)
+
+
+def _parallel(thresholds) -> list:
+    """Rigid sliders between the same two ends as one (their thresholds add: in parallel they stick together
+    and slide together); other thresholds as they are."""
+    out, sliders = [], {}
+    for e in thresholds:
+        if e.kind == "slider":
+            key = tuple(sorted(e.between))
+            if key in sliders:
+                first = out[sliders[key]]
+                out[sliders[key]] = dataclasses.replace(first, name=f"{first.name}+{e.name}",
+                                                        value=first.value + e.value)
+                continue
+            sliders[key] = len(out)
+        out.append(e)
+    return out
+
+
+def _levered(element, node, ends, total) -> list:
+    """The lever that threshold ``element`` on massless ``node`` becomes, the node held by springs to ``ends``
+    ({far end: stiffness}, ``total`` their sum > 0) (see the module); none where it carries nothing."""
+    if element.kind == "slider":
+        k, alpha = math.inf, element.value
+    elif element.kind == "branch":
+        k, alpha = element.value, element.value * element.eta
+    else:
+        k, alpha = element.value, element.alpha
+    if not alpha > 0.0 or not k > 0.0:  # it carries nothing
+        return []
+    weights = _weights(element)
+    share = weights.pop(node)
+    for end, stiffness in ends.items():
+        if end >= 0:
+            weights[end] = weights.get(end, 0.0) + share * stiffness / total
+    weights = {end: w for end, w in weights.items() if w != 0.0}
+    compliance = (0.0 if math.isinf(k) else 1.0 / k) + share * share / total
+    if not weights:  # it acts on nothing (every far end the ground)
+        return []
+    ordered = sorted(weights)
+    return [Lever(element.name, tuple(ordered), tuple(weights[i] for i in ordered), 1.0 / compliance, alpha)]

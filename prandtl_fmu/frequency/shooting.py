@@ -109,14 +109,15 @@ class ShootingSystem(Nodes):
     load_node: int = 0
 
 
-def prepared(scene):
-    """``scene`` as shooting runs it (a spectrum of branches as the harmonic balance's quadrature of branches);
+def prepared(scene, named=None, loaded=None):
+    """``scene`` as shooting runs it (a spectrum of branches as the harmonic balance's quadrature of branches; a
+    network's massless nodes condensed, ``named`` (--node) and ``loaded`` (the node a force acts on) kept);
     FrequencyError for what it does not take."""
     from ..effects import Branches
     from ..network.model import NetworkScene
 
     if isinstance(scene, NetworkScene):
-        return prepared_network(scene)
+        return prepared_network(scene, named, loaded)
     from ..loads import HarmonicLoad
     from ..steppers import get_stepper
     from .harmonic_balance import spectrum_branches
@@ -144,18 +145,14 @@ def prepared(scene):
     return scene
 
 
-def prepared_network(scene):
-    """A network with sliders as :class:`NetworkShooting` runs it (``network_orbit.py``), or FrequencyError."""
+def prepared_network(scene, named=None, loaded=None):
+    """A network with sliders as :class:`NetworkShooting` runs it (``network_orbit.py``): its massless nodes
+    condensed (``series.condensed``: springs and levers between the nodes with a mass; ``named`` and ``loaded``
+    must have one), or FrequencyError."""
+    from .series import condensed
+
     network = scene.network
     source = scene.source
-    massless = [node for node, m in zip(network.nodes, network.mass) if not m > 0]
-    if massless:
-        raise FrequencyError(f"{source}: node {massless[0]} is massless: the forced response of a network with "
-                             "sliders is solved for by shooting on its motion, which needs a mass at every node "
-                             "(a massless node on a slider is in equilibrium at every instant, a quasi-static "
-                             "problem; one between just two springs, sliders or branches, or held by springs "
-                             "alone, unloaded, is joined into elements between its neighbours, not this one): give "
-                             "it a mass, or integrate the network with prandtl-fmu run")
     for element in network.elements:
         if element.kind == "cubic":
             raise FrequencyError(f"{source}: cubic {element.name}: the forced response of a network with sliders "
@@ -166,7 +163,7 @@ def prepared_network(scene):
             raise FrequencyError(f"{source}: branch {element.name}: the forced response of a network with sliders "
                                  "(shooting on its motion, exact between events) takes branches without series "
                                  "dashpots (c = 0): integrate the network with prandtl-fmu run")
-    return scene
+    return condensed(scene, named, loaded)
 
 
 class Shooting:
@@ -413,10 +410,14 @@ class NetworkShooting(Shooting):
     def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, load_node=None):
         network = scene.network
         n = network.n
+        if not np.all(network.mass > 0):
+            raise ValueError("NetworkShooting: a network with a massless node (prepared_network condenses them)")
         load = network.load_node if load_node is None else network.nodes.index(load_node)
         system = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float), load)
 
         def row(element):
+            if element.kind == "lever":
+                return element.row(n)
             out = np.zeros(n)
             p, q = element.between
             out[p] += 1.0
@@ -437,6 +438,10 @@ class NetworkShooting(Shooting):
                 sliders.append((d, element.value))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
+            elif element.kind == "lever" and math.isinf(element.value):  # a massless node's slider (series.py)
+                sliders.append((d, element.alpha))
+            elif element.kind == "lever":
+                branches.append((d, element.value, element.alpha / element.value))
         self.rows = np.array([d for d, _ in sliders], dtype=float).reshape(len(sliders), n)
         self.alpha = np.array([a for _, a in sliders], dtype=float)
         self.brows = np.array([b[0] for b in branches], dtype=float).reshape(len(branches), n)
@@ -490,7 +495,10 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     from .continuation import continue_curve
     from .unbounded import refuse_unbounded
 
-    scene = prepared(scene)
+    loaded = None
+    if isinstance(scene, NetworkScene) and base_amplitude is None:
+        loaded = scene.network.nodes[scene.network.load_node] if load_node is None else load_node
+    scene = prepared(scene, node, loaded)
     network = isinstance(scene, NetworkScene)
     names = scene.network.nodes if network else (ELEMENT_NODE,)
     if load_node is not None and load_node not in names:

@@ -71,6 +71,10 @@ def _network_parts(network) -> Optional[tuple]:
         return None
     K, C, rows, bounds = np.zeros((n, n)), np.zeros((n, n)), [], []
     for element in network.elements:
+        if element.kind == "lever":  # a massless node's slider or branch (series.condensed)
+            rows.append(element.row(n))
+            bounds.append(element.alpha)
+            continue
         d = np.zeros(n)
         p, q = element.between
         d[p] += 1.0

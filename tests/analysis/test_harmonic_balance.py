@@ -185,8 +185,8 @@ def test_bad_input_is_one_line_and_exit_2_with_nothing_written(tmp_path, capsys,
 
 def test_what_harmonic_balance_does_not_take_is_named(tmp_path, capsys):
     out = tmp_path / "out.csv"
-    # (sliders and [friction] on the mass: the forced response by shooting, their own tests; a massless node
-    # on a slider: refused there, test_harmonic_balance_network_friction.py)
+    # (sliders and [friction] on the mass: the forced response by shooting, their own tests; massless nodes on
+    # sliders: levers there, or refused, test_series.py; here every node is massless)
     scene = "networks/chain-massless"
     assert main(["describe", scene, "--force-amplitude", "1", "--frequencies", "0.1", "--out", str(out)]) == 2
     err = capsys.readouterr().err

@@ -252,3 +252,119 @@ def test_a_node_that_does_not_move_has_no_truncation_to_report(tmp_path):
         ("spring", ["a", "j"], {"k": 1.0}), ("dashpot", ["a", "j"], {"c": 0.05})], load_node="a"))
     curve = harmonic_response(scene, None, [0.1, 0.3], base_amplitude=0.05, harmonics=3, stability=False)
     assert np.all(curve.amplitude < 1e-15) and curve.change is not None and curve.change < 1e-6
+
+
+# a massless node j between two masses, held by springs and one threshold element (series.condensed: a lever)
+LEVERED = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.5}),
+           ("dashpot", ["a", "ground"], {"c": 0.05}), ("dashpot", ["b", "ground"], {"c": 0.08})]
+ON_J = {"slider": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "b"], {"k": 1.0}),
+                   ("slider", ["j", "ground"], {"alpha": 0.3})],
+        "branch": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "b"], {"k": 1.0}),
+                   ("branch", ["j", "ground"], {"k": 4.0, "eta": 0.075})],
+        # j2 between j and b: condensed after j (node order), the lever then has a weight on j2
+        "two nodes": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "j2"], {"k": 3.0}),
+                      ("spring", ["j2", "b"], {"k": 1.5}), ("spring", ["j2", "ground"], {"k": 0.5}),
+                      ("slider", ["j", "ground"], {"alpha": 0.3})]}
+
+
+def _levered(tmp_path, case):
+    nodes, mass = (["a", "j", "b"], [1.0, 0.0, 2.0]) if case != "two nodes" else \
+        (["a", "j", "j2", "b"], [1.0, 0.0, 0.0, 2.0])
+    return network(tmp_path, network_text(nodes, mass, LEVERED + ON_J[case], load_node="a"), f"{case}.toml")
+
+
+def _harmonic(x, t, omega):
+    return 2.0 / len(t) * np.sum(x * np.exp(-1j * omega * t))
+
+
+@pytest.mark.parametrize("case", list(ON_J))
+def test_a_massless_node_on_a_slider_is_a_lever_and_moves_as_written(tmp_path, case):
+    """Shooting's periodic state of the network with its massless node condensed (``series.condensed``) against
+    the implicit stepper on the network as written (it solves the massless node's balance, with its slider, at
+    every step), run from rest to its steady state: the stepper's error in the first harmonic of both masses
+    halves with h (order 1, measured), and its Richardson extrapolation lands within 5 % of that error on the
+    shooting's (an error of the condensation's weights or compliance would leave a gap of its own)."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+    from prandtl_fmu.loads import HarmonicLoad
+    from prandtl_fmu.network.driver import simulate
+    from prandtl_fmu.scene_tables import Solver
+
+    scene = _levered(tmp_path, case)
+    lever = condensed(scene, None, "a")
+    assert lever.network.nodes == ("a", "b") and [e.kind for e in lever.network.elements].count("lever") == 1
+    if case == "slider":  # the closed form: weights k_i / S, stiffness S (a rigid slider), spring k_a k_b / S
+        element = next(e for e in lever.network.elements if e.kind == "lever")
+        assert element.weights == pytest.approx((2.0 / 3.0, 1.0 / 3.0), rel=1e-15)
+        assert (element.value, element.alpha) == (pytest.approx(3.0, rel=1e-15), 0.3)
+        assert next(e.value for e in lever.network.elements if e.name == "j(b,a)") == pytest.approx(2.0 / 3.0)
+    F, omega = 1.0, 1.3
+    shooting = NetworkShooting(lever, F, None, 1024, 7, omega)
+    s = shooting.solve_at(omega)
+    assert s is not None
+    X = shooting.coefficients(s, omega)[:, 1] - 1j * shooting.coefficients(s, omega)[:, 2]
+    period = 2.0 * math.pi / omega
+    harmonics = []
+    for per in (1000, 2000):
+        h = period / per
+        run = dataclasses.replace(scene, load=HarmonicLoad(F, omega), solver=Solver("implicit", h, 80 * period, h))
+        result = simulate(run, progress=False)
+        t = result.time[-per - 1:-1]
+        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in "ab"]))
+    coarse, fine = (np.abs(Y - X) for Y in harmonics)
+    assert np.all(fine > 0) and np.all(np.abs(coarse / fine - 2.0) < 0.1), (coarse, fine)
+    assert np.all(np.abs(2.0 * harmonics[1] - harmonics[0] - X) < 0.05 * fine), (harmonics, X)
+    assert np.min(np.abs(X)) > 0.3  # both masses move (the slider slips: 0.3 N against springs of 3 N/m)
+
+
+def test_a_massless_node_on_a_slider_with_springs_to_one_mass_is_its_branch(tmp_path):
+    """From the command line, a mass with a massless node on a slider (refused by shooting before): the curve's
+    every point is the periodic state of the mass with the branch worked out by hand (the node's springs 1 to
+    the mass and 0.5 to the ground: a spring 1/3 to the ground, and the slider through the lever 2/3: a branch
+    k = 2/3, eta = 0.1), which shooting solves for at the point's frequency; the backbone is the branch's."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared_network
+
+    common = [("spring", ["a", "ground"], {"k": 1.0}), ("dashpot", ["a", "ground"], {"c": 0.05})]
+    written = network_text(["a", "b"], [1.0, 0.0], common + [
+        ("spring", ["a", "b"], {"k": 1.0}), ("slider", ["b", "ground"], {"alpha": 0.1}),
+        ("spring", ["b", "ground"], {"k": 0.5})], load_node="a")
+    hand = network_text(["a"], [1.0], common + [
+        ("spring", ["a", "ground"], {"k": 1.0 / 3.0}), ("branch", ["a", "ground"], {"k": 2.0 / 3.0, "eta": 0.1}),
+        ("slider", ["a", "ground"], {"alpha": 0.0})], load_node="a")  # alpha 0: carries nothing
+    path, out = tmp_path / "written.toml", tmp_path / "written.csv"
+    path.write_text(written)
+    assert main(["describe", str(path), "--force-amplitude", "0.2", "--frequencies", "0.1,0.3",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    frequency, amplitude = (np.array(table[column], float) for column in ("frequency", "amplitude"))
+    assert len(frequency) > 10 and set(table["stable"]) == {"true"}
+    assert "amplitude_a" in table and "amplitude_b" not in table  # the massless node's motion is not computed
+    shooting = NetworkShooting(prepared_network(network(tmp_path, hand, "hand.toml")), 0.2, None, 1024, 7, 1.0)
+    for f, A in zip(frequency, amplitude):
+        omega = 2.0 * math.pi * f
+        s = shooting.solve_at(omega)
+        assert abs(abs(shooting.first_harmonic(s, omega)) - A) <= 1e-6 * A, f
+    assert np.max(amplitude) > 5 * amplitude[0]  # the resonance is on the curve
+    # and its nonlinear mode (EPMC by shooting, slider_modes.py) is the branch's
+    backbones = [nonlinear_mode(network(tmp_path, text, f"mode{i}.toml"), 1, [0.05, 0.2, 1.0])
+                 for i, text in enumerate((written, hand))]
+    assert np.allclose(backbones[0].frequency, backbones[1].frequency, rtol=1e-7)
+    assert np.allclose(backbones[0].damping_ratio, backbones[1].damping_ratio, rtol=1e-6)
+    assert backbones[0].nodes == ("a",) and np.ptp(backbones[0].frequency) > 0.1 * backbones[0].frequency[0]
+
+
+@pytest.mark.parametrize("elements, options, culprit", [
+    (ON_J["slider"] + [("slider", ["j", "b"], {"alpha": 0.2})], [], "node j is massless between slider_1 and"),
+    (ON_J["slider"] + [("dashpot", ["j", "b"], {"c": 0.2})], [], "node j is massless, with dashpot"),
+    (ON_J["slider"], ["--node", "j"], "--node: j is massless"),
+    (ON_J["slider"], ["--load-node", "j"], "node j is massless and the force acts on it")],
+    ids=["two sliders", "dashpot", "named", "loaded"])
+def test_what_a_massless_node_on_a_slider_cannot_be_is_one_line(tmp_path, capsys, elements, options, culprit):
+    path, out = tmp_path / "scene.toml", tmp_path / "out.csv"
+    path.write_text(network_text(["a", "j", "b"], [1.0, 0.0, 2.0], LEVERED + elements, load_node="a"))
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.1,0.2", "--out", str(out),
+                 *options]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert not out.exists()
