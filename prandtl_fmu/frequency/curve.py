@@ -67,6 +67,7 @@ class Curve:
     method: str = "harmonic balance"  # or "shooting" (friction on the mass: shooting.py), as the figures say
     orders: tuple = ()  # the higher harmonics whose amplitudes the columns carry (amplitude_<node>_h<k>)
     node_names: tuple = ()  # every node's name, in the order of the coefficients' second axis
+    orbit: str = "exact motion"  # what shooting shoots on: "exact motion", or "Taylor series" (element_orbit.py)
 
     def columns(self) -> dict:
         """frequency, amplitude, phase, stable (the contract), amplitude_<node> per node with a mass, then

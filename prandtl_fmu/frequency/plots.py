@@ -181,10 +181,11 @@ def draw_curve(curves, axes, backbone=None) -> None:
 
 
 def _how(curve) -> str:
-    """How the curve was found, for a title: harmonic balance with its H, or shooting on the exact motion."""
+    """How the curve was found, for a title: harmonic balance with its H, or shooting on the exact motion (on its
+    Taylor series where the forces are not linear between events)."""
     if curve.method == "harmonic balance":
         return f"harmonic balance (H = {curve.harmonics})"
-    return f"{curve.method} on the exact motion"
+    return f"{curve.method} on the {curve.orbit}"
 
 
 def _excitation(curve) -> str:

@@ -1,5 +1,6 @@
-"""The periodic state of an element with Coulomb friction on its mass (``[friction]``), by shooting on the
-exact stepper: the whole curve, its folds and the stability of every point.
+"""The periodic state of an element with friction on its mass (``[friction]``), by shooting on the exact
+stepper (or, for a cubic spring or Stribeck's drop, on the Taylor series of ``element_orbit.py``), and of a
+network with sliders (on ``network_orbit.py``): the whole curve, its folds and the stability of every point.
 
 Why not harmonic balance: the friction's force while the mass sticks is set by the balance of the other forces,
 not by the motion, so alternating frequency-time cannot sample it (a slider behind a spring, a Prandtl branch,
@@ -9,8 +10,8 @@ no such limit: the ``exact`` stepper that ``--method time`` runs integrates it e
 events, stick and slip located to rounding), so the periodic state is found as the fixed point of the stepper's
 map over one period, and its harmonics are those of the orbit (never truncated).
 
-**Half a period, by symmetry.** Every force of such a scene is odd in (x, v, u) (springs, the dashpot, the
-branches, Coulomb friction on a fixed ground) and the force F0 cos(omega t) turns sign
+**Half a period, by symmetry.** Every force of such a scene is odd in (x, v, u) (springs, cubic springs, the
+dashpot, the branches, friction on a fixed ground) and the force F0 cos(omega t) turns sign
 over half a period, so the periodic state has x(t + T/2) = -x(t) (v and every u too). Shooting solves
 
     R(s, omega) = -Phi(s, omega) - s = 0,    s = (x, v / omega_ref, u_1 ... u_n) at t = 0,
@@ -28,22 +29,24 @@ is ``continuation.py``'s, the unknowns s in place of the harmonics.
 
 **Stability** of every point: the monodromy of the whole period is (dG/ds)^2, G = -Phi (the symmetry), so the
 Floquet multipliers are the squares of the eigenvalues of dG/ds = dR/ds + I, from the same differences at the
-point. A branch stuck all along gives the neutral multiplier 1, as ``floquet.py`` says. Every scene taken here
-is monotone (springs, dashpots, branches, sliders, Coulomb friction on a fixed ground), so the energy of the
+point. A branch stuck all along gives the neutral multiplier 1, as ``floquet.py`` says. A scene of linear
+springs, dashpots, branches, sliders and Coulomb friction on a fixed ground is monotone, so the energy of the
 difference of two motions never grows and every multiplier has |mu| <= 1: no point is unstable, none folds
-(docs/frequency.md; the tests check the contraction on the steppers themselves). The multipliers are computed
-all the same: a check on the code, and the rate at which a point attracts.
+(docs/frequency.md; the tests check the contraction on the steppers themselves); there the multipliers are a
+check on the code, and the rate at which a point attracts. A cubic spring or Stribeck's drop is not monotone:
+their curves fold and have unstable parts, which the multipliers find.
 
 **Accuracy.** The stepper is ``exact`` (closed form between events, stick and slip located to rounding): the
 orbit is exact whatever the steps, and M samples per period only set the quadrature of the harmonics (the
 trapezoid rule over x, which is C^1: an error like 1 / M^2). The continuation runs at FIRST_STEPS samples; then
 M is doubled until the first harmonic of every point changes by at most half the tolerance (relative: the
 error at M is about 4/3 of that change), past MAX_STEPS refused with the change reached. Scenes the exact
-stepper does not take (a cubic spring, a Stribeck drop) are refused: with ``verlet`` the orbit's error comes
-in a staircase as the steps move across the stick and slip events (measured: a change of 3e-4 from M to 2 M
-where the error was 1.2e-3), and at a reversal the discrete orbit sticks for one step or not depending on M,
-which flips the multipliers' verdict from point to point (0.49 against 1.05 at neighbouring points of a
-Stribeck scene): no stated accuracy. The stepper's refusal of a trial state (its event search past its bound,
+stepper does not take (a cubic spring, a Stribeck drop) run on ``element_orbit.py``: event by event as the
+exact stepper, each smooth phase its Taylor series with the truncation at rounding (:func:`smooth`). Not on
+``verlet``: its orbit's error comes in a staircase as the steps move across the stick and slip events
+(measured: a change of 3e-4 from M to 2 M where the error was 1.2e-3), and at a reversal the discrete orbit
+sticks for one step or not depending on M, which flips the multipliers' verdict from point to point (0.49
+against 1.05 at neighbouring points of a Stribeck scene): no stated accuracy. The stepper's refusal of a trial state (its event search past its bound,
 at a force within a hair of the friction's threshold) counts as a corrector that did not converge. The
 harmonics reported are those of the orbit's samples (the curve's ``harmonics``: how many are kept in
 ``coefficients``, 7 unless given; they do not limit the accuracy).
@@ -53,7 +56,8 @@ cos(omega t), the friction on the relative velocity (the mass slides on the movi
 reported, as the harmonic balance does.
 
 What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), effects with
-memory beside the friction, a node other than the mass. Nonlinear modes (EPMC) of such a scene are solved for
+memory beside the friction, a cubic spring or Stribeck's drop beside branches with series dashpots, a node
+other than the mass. Nonlinear modes (EPMC) of such a scene are solved for
 by ``slider_modes.py`` on the network of one node (``modes.py``).
 """
 from __future__ import annotations
@@ -137,12 +141,24 @@ def prepared(scene, named=None, loaded=None):
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
+    if smooth(scene):
+        if scene.has_series_dashpots:
+            raise FrequencyError(f"{scene.source}: [friction] on the mass with [cubic] or Stribeck's drop is solved "
+                                 "for by shooting on its Taylor series (element_orbit.py), which takes branches "
+                                 "without series dashpots: use --method time")
+        return scene
     try:
         get_stepper("exact").loop_for(dataclasses.replace(scene, load=HarmonicLoad(1.0, 1.0)))
     except ValueError as exc:
         raise FrequencyError(f"{scene.source}: [friction] on the mass is solved for by shooting on the exact "
                              f"stepper, which does not take this scene ({exc}): use --method time") from None
     return scene
+
+
+def smooth(scene) -> bool:
+    """Whether the forces of an element scene with friction are not linear between events (a cubic spring,
+    Stribeck's drop): its orbit is ``element_orbit.py``'s Taylor series, not the exact stepper's."""
+    return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha
 
 
 def prepared_network(scene, named=None, loaded=None):
@@ -370,19 +386,34 @@ class ElementShooting(Shooting):
         branches = 0 if scene.branches is None else int(scene.branches.n)
         stiffness = (0.0 if scene.spring is None else float(scene.spring.k0)) + (
             0.0 if scene.branches is None else float(np.sum(scene.branches.stiffness)))
+        self.smooth = smooth(scene)
+        if self.smooth:
+            stepper = "taylor"  # element_orbit.py: the Taylor series of the smooth phases
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
                          2 + branches, stiffness)
+        self.branches = branches
+        self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
+        self._out = np.empty((self.M // 2, 3))
+        if self.smooth:
+            friction = scene.friction
+            self.parameters = (float(scene.mass.m), 0.0 if scene.spring is None else float(scene.spring.k0),
+                               float(scene.damper.c) if scene.has_dashpot else 0.0,
+                               0.0 if scene.cubic is None else float(scene.cubic.k3), float(friction.alpha),
+                               float(friction.alpha_kinetic),
+                               float(friction.stribeck_velocity) if friction.alpha_kinetic != friction.alpha else 0.0,
+                               np.zeros(0) if scene.branches is None else np.array(scene.branches.stiffness, float),
+                               self.eta)
+            return
         self.scene = dataclasses.replace(scene, load=HarmonicLoad(1.0, reference),
                                          solver=Solver(stepper, 1.0 / steps, 1.0, 1.0 / steps))
         self.model = compile_model(self.scene, "play")
         self.loop = compile_loop(self.scene, stepper)
-        self.branches = branches
-        self.eta = None if scene.branches is None else np.array(scene.branches.yield_displacement, dtype=float)
-        self._out = np.empty((self.M // 2, 3))
 
     def run(self, s: np.ndarray, omega: float, half_periods: int = 1) -> tuple:
         from ..stepping import ElementError, _failure, integrate
 
+        if self.smooth:
+            return self._run_smooth(s, omega, half_periods)
         h = 2.0 * math.pi / omega / self.M
         x, v = float(s[0]), float(s[1]) * self.reference
         # u within its elastic range (a Newton iterate may step past it; the orbit's u is within it)
@@ -400,6 +431,22 @@ class ElementShooting(Shooting):
         if u is not None:
             end[2:] = u
         return self._checked(end, out[:, :1].copy(), omega)
+
+    def _run_smooth(self, s: np.ndarray, omega: float, half_periods: int) -> tuple:
+        """:meth:`run` on ``element_orbit.py``'s Taylor series (a cubic spring, Stribeck's drop)."""
+        from .element_orbit import OK, explain, run
+
+        h = 2.0 * math.pi / omega / self.M
+        state = np.array([float(s[0]), float(s[1]) * self.reference])
+        u = np.clip(np.array(s[2:], dtype=float), -self.eta, self.eta)
+        steps = self.M // 2 * half_periods
+        out = np.empty(steps)
+        status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, h,
+                            steps, out)
+        if status != OK:
+            self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
+        end = np.concatenate(([state[0], state[1] / self.reference], u))
+        return self._checked(end, out[:, None].copy(), omega)
 
 
 class NetworkShooting(Shooting):
@@ -567,4 +614,5 @@ def _curve(shooting, points, coefficients, where, stability, change) -> dict:
                 fold=np.array([p[2] for p in points], dtype=bool), multiplier=largest, amplitudes=amplitudes,
                 coefficients=coefficients, harmonics=shooting.H, change=change, node=system.nodes[where],
                 force_amplitude=shooting.force_amplitude, load_node=system.nodes[system.load_node],
-                base_amplitude=shooting.base_amplitude, method="shooting", node_names=tuple(system.nodes))
+                base_amplitude=shooting.base_amplitude, method="shooting", node_names=tuple(system.nodes),
+                orbit="Taylor series" if getattr(shooting, "smooth", False) else "exact motion")

@@ -1,0 +1,331 @@
+"""The motion of an element with friction on its mass whose forces are not linear between events (a cubic spring,
+Stribeck's drop), event by event, by Taylor series: the orbit that ``shooting.py`` solves for where the exact
+stepper does not go.
+
+The mass under F cos(omega t) (x, v, the branches' u; every force of ``[spring]``, ``[damper]``, ``[cubic]``,
+``[branches]`` and ``[friction]`` on a fixed ground):
+
+    m v' = F cos(omega t) - k0 x - k3 x^3 - c v - sum_i k_i u_i - A(v),
+    A(v) = sigma (alpha_k + (alpha - alpha_k) exp(-|v| / v_s))   (sliding, sigma = sign v; Coulomb: alpha),
+
+while it sticks (v = 0) the friction holds whatever the other forces N(t) = F cos(omega t) - k0 x - k3 x^3 -
+sum_i k_i u_i ask while |N| <= alpha. The motion is smooth between events: a slide of fixed direction sigma
+ends where v reaches 0 (the mass sticks if |N| <= alpha there, else it turns back); a stick ends where N leaves
+[-alpha, alpha]; a sticking branch starts to slide where its u reaches +-eta in the direction of motion; a
+sliding branch sticks where v reaches 0 (the slide's end). So the orbit is a chain of smooth phases:
+
+* **A slide** is the solution of an ODE whose right-hand side is a polynomial in (x, v), an exponential of v
+  and a cosine of t: its Taylor series about the phase's start follows from the recurrences of products and of
+  the exponential (k E_k = -(sigma / v_s) sum_j j v_j E_(k-j)) to TERMS terms, in time scaled by the phase's
+  fastest rate rho (so that every coefficient is a length). The step is chosen by the coefficients' decay
+  (Jorba & Zou's rule: the last two terms below TRUNCATION of the state), the state at its end summed; not a
+  proven bound, as the linear phases of the exact stepper and ``network_orbit.py`` have, but the series'
+  truncation kept at rounding. The tests measure it against the exact stepper where both apply (linear
+  forces: to 1e-12) and against an independent integration written in the test.
+* **A stick** is x fixed and N(t) a cosine plus a constant: its Taylor series on intervals of omega tau <= 1
+  has a proven remainder ((omega tau)^TERMS / TERMS! e^(omega tau) F).
+
+**Events** are found as ``network_orbit.py`` finds them (its validated subdivision of each event function's
+polynomial, the first crossing refined by bisection): the event functions are sigma v (a slide's end), eta_i -
+sigma u_i (a branch's level) and alpha -+ N (a stick's end), each crossing below -tol, tol EVENT_TOLERANCE of
+its size, so an event that starts at its level (a slide from rest, a branch just at its level) waits for the
+motion to leave it by more than rounding. At a slide's end v is set to 0 and the sliding branches stick.
+
+**Bounded work.** A run takes at most PHASES_PER_SAMPLE (1 + branches) max(samples, 256) phases (PILED_UP),
+at most STEPS_PER_SAMPLE max(samples, 32) Taylor steps (TOO_STIFF), each event search at most WALK_LIMIT
+intervals (WALK_EXHAUSTED) and each refinement REFINE_LIMIT bisections (network_orbit.py's).
+"""
+import math
+
+import numpy as np
+
+from .._jit import kernel
+from .network_orbit import _crossing, _horner
+
+TERMS = 28
+TRUNCATION = 1e-17  # each of the last two terms of a step's series, relative to the state
+EVENT_TOLERANCE = 1e-12
+WALK_LIMIT = 400
+PHASES_PER_SAMPLE = 64
+STEPS_PER_SAMPLE = 8192
+
+OK = 0
+PILED_UP = 1
+WALK_EXHAUSTED = 2
+TOO_STIFF = 5
+
+
+def explain(status: int) -> str:
+    """The run's failure in words."""
+    return {
+        PILED_UP: f"more than {PHASES_PER_SAMPLE} (1 + branches) max(samples, 256) stick and slip events in one "
+                  "run (events that pile up: a Zeno motion)",
+        WALK_EXHAUSTED: f"an event search went past its bound of {WALK_LIMIT} intervals (an event function that "
+                        "stays within rounding of its level)",
+        TOO_STIFF: f"more than {STEPS_PER_SAMPLE} max(samples, 32) Taylor steps in one run (too stiff, or a "
+                   "motion too fast for its samples)",
+    }.get(status, f"status {status}")
+
+
+@kernel
+def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, constant, amplitude,
+                  omega, X, V):
+    """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
+    t0), in a slide of direction ``sigma``: m v' = F cos(omega t) - stiffness x - k3 x^3 - damping v + constant
+    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha)."""
+    terms = X.shape[0]
+    square = np.zeros(terms)
+    cube = np.zeros(terms)
+    exponential = np.zeros(terms)
+    X[0] = x0
+    V[0] = v0 / rho
+    zr = amplitude * math.cos(omega * t0)
+    zi = amplitude * math.sin(omega * t0)
+    rate = omega / rho
+    scale = 1.0 / (mass * rho * rho)  # a force over m rho^2: a length
+    stribeck = vs > 0.0 and alpha > alpha_k
+    if stribeck:
+        exponential[0] = math.exp(-sigma * v0 / vs)
+    for k in range(terms - 1):
+        # x^2 and x^3 at order k (Cauchy products)
+        total = 0.0
+        for j in range(k + 1):
+            total += X[j] * X[k - j]
+        square[k] = total
+        total = 0.0
+        for j in range(k + 1):
+            total += square[j] * X[k - j]
+        cube[k] = total
+        if stribeck and k > 0:
+            total = 0.0
+            for j in range(1, k + 1):
+                total += j * V[j] * exponential[k - j]
+            exponential[k] = -sigma * rho / vs * total / k
+        force = zr - stiffness * X[k] - k3 * cube[k] - damping * rho * V[k]
+        if stribeck:
+            force -= sigma * (alpha - alpha_k) * exponential[k]
+        if k == 0:
+            force += constant - sigma * (alpha_k if stribeck else alpha)
+        V[k + 1] = force * scale / (k + 1)
+        X[k + 1] = V[k] / (k + 1)
+        # the cosine's next coefficient: z (i omega / rho) / (k + 1)
+        zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
+
+
+@kernel
+def _cosine_series(t0, amplitude, omega, rho, constant, out):
+    """The Taylor coefficients of F cos(omega t) + constant about t0 in s = rho (t - t0)."""
+    zr = amplitude * math.cos(omega * t0)
+    zi = amplitude * math.sin(omega * t0)
+    rate = omega / rho
+    for k in range(out.shape[0]):
+        out[k] = zr
+        zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
+    out[0] += constant
+
+
+@kernel
+def _held(x, k0, k3, bk, beta, bmode, u, amplitude, omega, t):
+    """N: the force on the mass at rest (v = 0) without the friction."""
+    total = amplitude * math.cos(omega * t) - k0 * x - k3 * x * x * x
+    for i in range(bk.shape[0]):
+        total -= bk[i] * (bmode[i] * beta[i] if bmode[i] != 0 else u[i])
+    return total
+
+
+@kernel
+def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, state, u, h, steps, out):
+    """``steps`` steps of h from ``state`` = (x, v) and the branches' ``u`` at t = 0 (updated in place to the
+    end), x at each step's end in ``out`` (steps,); returns (status, steps taken)."""
+    nb = bk.shape[0]
+    terms = TERMS
+    x = state[0]
+    v = state[1]
+    bmode = np.zeros(nb, dtype=np.int64)
+    for i in range(nb):
+        u[i] = min(max(u[i], -beta[i]), beta[i])
+    X = np.empty(terms)
+    V = np.empty(terms)
+    c = np.empty(terms)
+    shifted = np.empty(terms)
+    budget = np.zeros(1, dtype=np.int64)
+    factorial = 1.0
+    for k in range(1, terms + 1):
+        factorial *= k
+    size_force = amplitude + alpha + k0 * abs(x) + k3 * abs(x) ** 3
+    for i in range(nb):
+        size_force += bk[i] * beta[i]
+    t = 0.0
+    sigma = 0
+    decide = True  # the phase's direction to be decided from the state
+    x_phase = x
+    u_phase = u.copy()
+    phases = 0
+    phase_limit = PHASES_PER_SAMPLE * (1 + nb) * max(steps, 256)
+    taylor_steps = 0
+    step_limit = STEPS_PER_SAMPLE * max(steps, 32)
+    step = 0
+    while step < steps:
+        if decide:
+            decide = False
+            phases += 1
+            if phases > phase_limit:
+                return PILED_UP, step
+            if v > 0.0:
+                sigma = 1
+            elif v < 0.0:
+                sigma = -1
+            else:
+                # at rest: the branches stick; the mass slides where the other forces exceed alpha
+                for i in range(nb):
+                    if bmode[i] != 0:
+                        u[i] = bmode[i] * beta[i]
+                        bmode[i] = 0
+                held = _held(x, k0, k3, bk, beta, bmode, u, amplitude, omega, t)
+                sigma = 0
+                if held > alpha:
+                    sigma = 1
+                elif held < -alpha:
+                    sigma = -1
+            # the branches at their level in the direction of motion slide
+            for i in range(nb):
+                if sigma != 0 and bmode[i] == 0 and sigma * u[i] >= beta[i]:
+                    u[i] = sigma * beta[i]
+                    bmode[i] = sigma
+            x_phase = x
+            u_phase = u.copy()
+        taylor_steps += 1
+        if taylor_steps > step_limit:
+            return TOO_STIFF, step
+        target = (step + 1) * h
+        if sigma == 0:
+            # a stick: x fixed, N(t) a cosine and a constant
+            rho = max(abs(omega), 1e-300)
+            constant = -k0 * x - k3 * x * x * x
+            for i in range(nb):
+                constant -= bk[i] * u[i]
+            span = min((target - t) * rho, 1.0)
+            _cosine_series(t, amplitude, omega, rho, constant, X)
+            rest0 = span ** terms / factorial * math.exp(span) * amplitude
+            rest1 = span ** (terms - 1) / factorial * terms * math.exp(span) * amplitude
+            tol = EVENT_TOLERANCE * size_force
+            first = -1.0
+            event = 0
+            for side in (1, -1):
+                for k in range(terms):
+                    c[k] = -side * X[k]
+                c[0] += alpha + tol
+                budget[0] = WALK_LIMIT
+                s = _crossing(c, span if first < 0.0 else first, rest0, rest1, budget, shifted)
+                if math.isnan(s):
+                    return WALK_EXHAUSTED, step
+                if s >= 0.0 and (first < 0.0 or s < first):
+                    first = s
+                    event = side
+            stop = span if first < 0.0 else first
+            t_end = t + stop / rho
+            if first < 0.0 and (target - t) * rho <= span:
+                t_end = target
+            t = t_end
+            if first >= 0.0:
+                sigma = event
+                decide = False
+                phases += 1
+                if phases > phase_limit:
+                    return PILED_UP, step
+                for i in range(nb):
+                    if bmode[i] == 0 and sigma * u[i] >= beta[i]:
+                        u[i] = sigma * beta[i]
+                        bmode[i] = sigma
+                x_phase = x
+                u_phase = u.copy()
+        else:
+            # a slide of direction sigma: its Taylor series in s = rho (t - t0)
+            stiffness = k0
+            constant = 0.0
+            for i in range(nb):
+                if bmode[i] == 0:  # u = u_phase + x - x_phase
+                    stiffness += bk[i]
+                    constant -= bk[i] * (u_phase[i] - x_phase)
+                else:
+                    constant -= bk[i] * bmode[i] * beta[i]
+            curvature = stiffness + 3.0 * k3 * x * x
+            rho = max(math.sqrt(curvature / mass), damping / mass, abs(omega), 1e-300)
+            if vs > 0.0 and alpha > alpha_k:
+                rho = max(rho, (alpha - alpha_k) / (mass * vs))
+            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, constant,
+                          amplitude, omega, X, V)
+            size = max(abs(X[0]), abs(V[0]), 1e-300)
+            for i in range(nb):
+                size = max(size, beta[i])
+            # Jorba & Zou: the last two terms below TRUNCATION of the state
+            span = math.inf
+            for k in (terms - 2, terms - 1):
+                top = max(abs(X[k]), abs(V[k]))
+                if top > 0.0:
+                    span = min(span, (TRUNCATION * size / top) ** (1.0 / k))
+            span = min(span, 1.0 if math.isinf(span) else span, (target - t) * rho)
+            reach = span
+            rest = (abs(X[terms - 1]) + abs(V[terms - 1])) * reach ** (terms - 1)
+            first = -1.0
+            event = -1
+            # the slide's end: sigma v crosses below -tol
+            for k in range(terms):
+                c[k] = sigma * V[k]
+            c[0] += EVENT_TOLERANCE * size
+            budget[0] = WALK_LIMIT
+            s = _crossing(c, span, rest, rest * terms / max(span, 1e-300), budget, shifted)
+            if math.isnan(s):
+                return WALK_EXHAUSTED, step
+            if s >= 0.0:
+                first = s
+            # a sticking branch's level: sigma u = sigma (u_phase + x - x_phase) crosses eta
+            for i in range(nb):
+                if bmode[i] != 0:
+                    continue
+                for k in range(terms):
+                    c[k] = -sigma * X[k]
+                c[0] += beta[i] - sigma * (u_phase[i] - x_phase) + EVENT_TOLERANCE * size
+                budget[0] = WALK_LIMIT
+                s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
+                              shifted)
+                if math.isnan(s):
+                    return WALK_EXHAUSTED, step
+                if s >= 0.0 and (first < 0.0 or s < first):
+                    first = s
+                    event = i
+            stop = span if first < 0.0 else first
+            x = _horner(X, stop)
+            v = _horner(V, stop) * rho
+            t_end = t + stop / rho
+            if first < 0.0 and stop >= (target - t) * rho:
+                t_end = target
+            t = t_end
+            if first >= 0.0:
+                for i in range(nb):
+                    if bmode[i] == 0:
+                        u[i] = min(max(u_phase[i] + x - x_phase, -beta[i]), beta[i])
+                if event < 0:  # the slide ends: v = 0, the mass sticks or turns back
+                    v = 0.0
+                    decide = True
+                else:  # the branch slides; the phase goes on with it
+                    u[event] = sigma * beta[event]
+                    bmode[event] = sigma
+                    phases += 1
+                    if phases > phase_limit:
+                        return PILED_UP, step
+                    for i in range(nb):
+                        if bmode[i] == 0:
+                            u_phase[i] = u[i]
+                    x_phase = x
+        if t == target:
+            out[step] = x
+            step += 1
+    # the end state
+    if sigma != 0:
+        for i in range(nb):
+            if bmode[i] == 0:
+                u[i] = min(max(u_phase[i] + x - x_phase, -beta[i]), beta[i])
+    state[0] = x
+    state[1] = v
+    return OK, steps

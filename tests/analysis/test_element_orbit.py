@@ -1,0 +1,265 @@
+"""The orbit of an element with friction on its mass whose forces are not linear between events (a cubic
+spring, Stribeck's drop) by Taylor series (``frequency/element_orbit.py``), and the forced response that shooting
+solves for on it: the exact stepper's orbit where both apply, an independent integration written here (scipy's
+DOP853 with its event location, phase by phase) on random scenes, and the Duffing oscillator with friction's
+curve with both folds, whose unstable points leave their orbit."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.analysis.test_describe_cli import read_csv, write
+from tests.analysis.test_harmonic_balance import element
+
+DUFFING_FRICTION = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.02},
+                    "friction": {"alpha": 0.05}}
+STRIBECK = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05},
+            "friction": {"alpha": 0.1, "alpha_kinetic": 0.06, "stribeck_velocity": 0.05}}
+
+
+def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_end):
+    """The motion written straightforwardly: each slide an ODE for scipy's DOP853 (rtol 1e-12, steps of at most
+    T / 50) stopped at its events (v = 0; a sticking branch's u at +-eta), each stick until |N(t)| > alpha,
+    the mass at rest sticking where |N| <= alpha, else sliding the way N pushes. Returns (x, v, u) at t_end."""
+    from scipy.integrate import solve_ivp
+
+    nb = len(bk)
+    u = np.clip(np.array(u, float), -eta, eta)
+    bmode = np.zeros(nb, int)
+    t = 0.0
+    largest = 0.02 * 2.0 * math.pi / omega
+
+    def branch_force(x, x0, u0):
+        return sum(bk[i] * (u0[i] + x - x0 if bmode[i] == 0 else bmode[i] * eta[i]) for i in range(nb))
+
+    while t < t_end:
+        if v == 0.0:
+            bmode[:] = 0
+            held = F * math.cos(omega * t) - k0 * x - k3 * x**3 - float(np.dot(bk, u))
+            sigma = 1 if held > alpha else -1 if held < -alpha else 0
+            if sigma == 0:
+                constant = held - F * math.cos(omega * t)
+                ends = [lambda s, y, side=side: alpha + 1e-12 - side * (F * math.cos(omega * s) + constant)
+                        for side in (1, -1)]
+                for end in ends:
+                    end.terminal, end.direction = True, -1
+                solution = solve_ivp(lambda s, y: [0.0], (t, t_end), [x], events=ends, rtol=1e-12, atol=1e-15,
+                                     method="DOP853", max_step=largest)
+                if solution.status != 1:
+                    return x, v, u
+                sigma = 1 if len(solution.t_events[0]) else -1
+                t = float(solution.t_events[0 if sigma == 1 else 1][0])
+        else:
+            sigma = 1 if v > 0 else -1
+        for i in range(nb):
+            if bmode[i] == 0 and sigma * u[i] >= eta[i]:
+                bmode[i], u[i] = sigma, sigma * eta[i]
+        x0, u0 = x, u.copy()
+        while True:
+            elastic = [i for i in range(nb) if bmode[i] == 0]
+
+            def rhs(s, y):
+                slide = alpha if vs == 0.0 else alpha_k + (alpha - alpha_k) * math.exp(-sigma * y[1] / vs)
+                force = F * math.cos(omega * s) - k0 * y[0] - k3 * y[0] ** 3 - c * y[1] - sigma * slide
+                return [y[1], (force - branch_force(y[0], x0, u0)) / m]
+
+            events = [lambda s, y: sigma * y[1] + 1e-13]
+            events += [lambda s, y, i=i: eta[i] - sigma * (u0[i] + y[0] - x0) for i in elastic]
+            for event in events:
+                event.terminal, event.direction = True, -1
+            solution = solve_ivp(rhs, (t, t_end), [x, v], events=events, rtol=1e-12, atol=1e-15, method="DOP853",
+                                 max_step=largest)
+            x, v, t = float(solution.y[0, -1]), float(solution.y[1, -1]), float(solution.t[-1])
+            for i in elastic:
+                u[i] = min(max(u0[i] + x - x0, -eta[i]), eta[i])
+            if solution.status != 1:
+                return x, v, u
+            which = next(j for j, times in enumerate(solution.t_events) if len(times))
+            if which == 0:
+                v = 0.0
+                break
+            i = elastic[which - 1]
+            bmode[i], u[i] = sigma, sigma * eta[i]
+            x0, u0 = x, u.copy()
+    return x, v, u
+
+
+def _random_scene(rng, smooth=True):
+    m, k0, c = rng.uniform(0.5, 2.0), rng.uniform(0.5, 3.0), rng.uniform(0.0, 0.2)
+    k3 = rng.uniform(0.1, 3.0) if smooth and rng.random() < 0.6 else 0.0
+    alpha = rng.uniform(0.1, 0.5)
+    stribeck = smooth and (k3 == 0.0 or rng.random() < 0.5)
+    alpha_k, vs = (alpha * rng.uniform(0.3, 0.9), rng.uniform(0.05, 0.5)) if stribeck else (alpha, 0.0)
+    nb = int(rng.integers(0, 3))
+    bk, eta = rng.uniform(0.3, 2.0, nb), rng.uniform(0.05, 0.3, nb)
+    return m, k0, c, k3, alpha, alpha_k, vs, bk, eta, rng.uniform(0.3, 2.0), rng.uniform(0.5, 3.0)
+
+
+def _taylor(parameters, x, v, u, h, steps):
+    from prandtl_fmu.frequency.element_orbit import OK, run
+
+    state, u, out = np.array([x, v]), np.array(u, float).copy(), np.empty(steps)
+    status, taken = run(*parameters, state, u, h, steps, out)
+    assert status == OK and taken == steps
+    return state, u, out
+
+
+def test_the_taylor_orbit_is_the_exact_stepper_s_where_both_apply(tmp_path):
+    """Coulomb friction, a spring, a dashpot and branches (linear between events): the Taylor orbit over two
+    periods, sticks, slips and the branches' events included, is the exact stepper's (through shooting's own
+    map) to 1e-11 of the motion, at every sample."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 2.0}, "damper": {"c": 0.05}, "friction": {"alpha": 0.3},
+              "branches": {"k": [1.0, 0.5], "alpha": [0.1, 0.2]}}
+    scene = prepared(element(tables))
+    eta = np.array(scene.branches.yield_displacement, float)
+    M = 128
+    for F, omega in ((1.0, 1.3), (0.5, 0.7), (2.0, 3.0)):
+        exact = ElementShooting(scene, F, None, M, 7, 1.0)
+        for start in ([0.0, 0.0, 0.0, 0.0], [0.3, -0.2, 0.05, -0.1], [0.8, 0.5, 0.1, 0.4]):
+            end, xs = exact.run(np.array(start), omega, 4)
+            parameters = (1.0, 2.0, 0.05, 0.0, 0.3, 0.3, 0.0, np.array([1.0, 0.5]), eta, F, omega)
+            state, u, out = _taylor(parameters, start[0], start[1], np.clip(start[2:], -eta, eta),
+                                    2 * math.pi / omega / M, 2 * M)
+            size = float(np.max(np.abs(xs)))
+            assert np.max(np.abs(out - xs[:, 0])) <= 1e-11 * size
+            assert np.max(np.abs(np.concatenate((state, u)) - end)) <= 1e-11 * max(size, float(np.max(np.abs(end))))
+
+
+def test_the_taylor_orbit_is_an_independent_integration_s_on_random_scenes():
+    """Random scenes with a cubic spring and/or Stribeck's drop, branches or none, from random states over two
+    periods and a half: the end state is the one the straightforward integration above reaches, to 1e-9 (its
+    tolerance 1e-12 and its events' 1e-13 compound over the stick and slip events)."""
+    rng = np.random.default_rng(20261203)
+    worst = 0.0
+    for _ in range(16):
+        parameters = _random_scene(rng)
+        m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega = parameters
+        x, v, u = rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), np.clip(rng.uniform(-0.3, 0.3, len(bk)), -eta, eta)
+        period, M = 2.0 * math.pi / omega, 64
+        state, u_end, _ = _taylor(parameters, x, v, u, period / M, 5 * M // 2)
+        rx, rv, ru = reference(*parameters, x, v, u, 2.5 * period)
+        size = max(1.0, abs(rx), abs(rv))
+        error = max(abs(state[0] - rx), abs(state[1] - rv), *np.abs(u_end - ru)) / size
+        worst = max(worst, error)
+    assert worst <= 1e-9, worst
+
+
+@pytest.fixture(scope="module")
+def duffing_curve(tmp_path_factory):
+    tmp_path = tmp_path_factory.mktemp("duffing")
+    out, plot = tmp_path / "curve.csv", tmp_path / "curve.png"
+    assert main(["describe", write(tmp_path, DUFFING_FRICTION), "--force-amplitude", "0.3", "--frequencies",
+                 "0.1,0.8", "--out", str(out), "--plot", str(plot)]) == 0
+    return read_csv(out), plot
+
+
+def test_a_duffing_oscillator_with_friction_has_both_folds_and_its_middle_unstable(duffing_curve):
+    """A hardening spring with Coulomb friction (refused before: no exact stepper): from the command line the
+    curve goes up the resonance to its upper fold, back along the unstable middle to the lower fold and on
+    down: two folds, every point between them unstable, every other stable; the figure is drawn."""
+    table, plot = duffing_curve
+    frequency = np.array(table["frequency"], float)
+    fold = np.array(table["fold"]) == "true"
+    stable = np.array(table["stable"]) == "true"
+    folds = np.flatnonzero(fold)
+    assert len(folds) == 2 and frequency[folds[0]] > frequency[folds[1]]  # the upper fold first, at the higher f
+    between = np.arange(folds[0] + 1, folds[1])
+    assert len(between) >= 3 and not np.any(stable[between])
+    outside = np.r_[np.arange(0, folds[0]), np.arange(folds[1] + 1, len(frequency))]
+    assert np.all(stable[outside])
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    assert "nan" not in " ".join(table["amplitude"]).lower()
+
+
+def test_the_duffing_curve_s_points_are_periodic_orbits_and_the_unstable_ones_leave(duffing_curve):
+    """Shooting's states at the curve's rows are periodic orbits of the independent integration (back to
+    themselves after a period, to 1e-8 of the motion); moved by 1e-6 of the motion and integrated on for 30
+    periods, a stable point comes back towards its orbit while a point marked unstable leaves it (by more than
+    10 % of the motion)."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    table, _ = duffing_curve
+    frequency = np.array(table["frequency"], float)
+    stable = np.array(table["stable"]) == "true"
+    unstable = np.flatnonzero(~stable)
+    shooting = ElementShooting(prepared(element(DUFFING_FRICTION)), 0.3, None, 512, 7, 1.0)  # the rows' quadrature
+    parameters = (1.0, 1.0, 0.02, 0.5, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), 0.3)
+    for pick in (0, int(unstable[len(unstable) // 2]), len(frequency) - 1):
+        omega = 2.0 * math.pi * frequency[pick]
+        # the point of the curve's branch the row is on: Newton from the row's first harmonic
+        A, phase = float(table["amplitude"][pick]), float(table["phase"][pick])
+        s = shooting._newton(omega, np.array([A * math.cos(phase), -A * omega * math.sin(phase)]))
+        assert s is not None and abs(shooting.amplitude_at(s, omega) - A) <= 1e-6 * A
+        x, v = s[0], s[1] * shooting.reference
+        period = 2.0 * math.pi / omega
+        rx, rv, _ = reference(*parameters, omega, x, v, [], period)
+        assert max(abs(rx - x), abs(rv - v) / omega) <= 1e-8 * A
+        rx, rv, _ = reference(*parameters, omega, x + 1e-6 * A, v, [], 30 * period)
+        moved = max(abs(rx - x), abs(rv - v) / omega) / A
+        assert (moved < 1e-6) if stable[pick] else (moved > 0.1), (pick, stable[pick], moved)
+
+
+def test_stribeck_s_drop_has_its_curve_and_its_orbits(tmp_path):
+    """Friction with Stribeck's drop (refused before): the curve runs through the resonance; its points are
+    periodic orbits of the independent integration (back to themselves after a period, to 1e-8); and at the
+    lowest frequencies, where the mass turns slowly through the drop's negative slope, the symmetric orbit is
+    unstable (Coulomb friction's cannot be: docs/frequency.md), which that integration confirms (moved by 1e-6 of
+    the motion it leaves over 30 periods; at the peak it comes back)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    scene = element(STRIBECK)
+    curve = harmonic_response(scene, 0.3, [0.08, 0.25])
+    assert curve.method == "shooting" and curve.orbit == "Taylor series" and len(curve.frequency) > 10
+    peak = int(np.argmax(curve.amplitude))
+    assert 0.12 < curve.frequency[peak] < 0.2 and curve.amplitude[peak] > 3 * curve.amplitude[0]
+    assert not curve.stable[0] and curve.stable[peak] and curve.stable[-1]
+    shooting = ElementShooting(prepared(scene), 0.3, None, 512, 7, 1.0)
+    parameters = (1.0, 1.0, 0.05, 0.0, 0.1, 0.06, 0.05, np.zeros(0), np.zeros(0), 0.3)
+    for pick in (0, peak, len(curve.frequency) - 1):
+        omega, A = 2.0 * math.pi * curve.frequency[pick], curve.amplitude[pick]
+        s = shooting.solve_at(omega)
+        # the curve's samples were doubled until its first harmonic changed by half its tolerance (1e-6)
+        assert abs(shooting.amplitude_at(s, omega) - A) <= 3e-6 * A
+        x, v = s[0], s[1] * shooting.reference
+        period = 2.0 * math.pi / omega
+        rx, rv, _ = reference(*parameters, omega, x, v, [], period)
+        assert max(abs(rx - x), abs(rv - v) / omega) <= 1e-8 * A
+        if pick != len(curve.frequency) - 1:
+            rx, rv, _ = reference(*parameters, omega, x + 1e-6 * A, v, [], 30 * period)
+            moved = max(abs(rx - x), abs(rv - v) / omega) / A
+            assert (moved < 1e-6) if curve.stable[pick] else (moved > 0.1), (pick, moved)
+
+
+def test_series_dashpots_beside_a_smooth_force_are_refused_in_one_line(tmp_path, capsys):
+    tables = dict(STRIBECK, branches={"k": [1.0], "alpha": [0.05], "c": [0.5]})
+    out = tmp_path / "out.csv"
+    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "1", "--frequencies", "0.1,0.2",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "series dashpots" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+@pytest.mark.parametrize("k0, c, k3, x0, expected", [
+    (1e10, 0.02, 0.0, 0.0, "PILED_UP"), (1.0, 0.02, 1e14, 1.0, "PILED_UP"), (1e12, 2e6, 0.0, 0.0, "TOO_STIFF")],
+    ids=["stick-slip at 1e5 rad/s", "a stiff cubic at large amplitude", "overdamped at 1e6 1/s"])
+def test_the_taylor_orbit_s_work_is_bounded(k0, c, k3, x0, expected):
+    """Motions the samples cannot follow end with their status after a bounded amount of work, never a hang: a
+    spring of 1e10 N/m with Coulomb friction sticks and slips at every fast period, as does a cubic spring of
+    1e14 N/m^3 from 1 m (events that pile up); a dashpot that relaxes the stiff spring at 1e6 1/s takes steps
+    of its time scale (more Taylor steps than the bound)."""
+    import time
+
+    from prandtl_fmu.frequency import element_orbit
+
+    state, out = np.array([x0, 0.0]), np.empty(64)
+    start = time.perf_counter()
+    status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), 0.3, 0.6,
+                                      state, np.zeros(0), 2 * math.pi / 0.6 / 64, 64, out)
+    assert status == getattr(element_orbit, expected) and taken < 64
+    assert time.perf_counter() - start < 30.0
+    assert element_orbit.explain(status) != f"status {status}"
