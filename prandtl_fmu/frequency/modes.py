@@ -109,17 +109,19 @@ def _friction_network(scene, tolerance: float):
         why = "[friction] on a moving belt has no mode symmetric over half a period"
     elif friction.alpha_kinetic != friction.alpha:
         why = "[friction] with a Stribeck drop (alpha_kinetic < alpha) is not Coulomb's: its mode is not taken"
-    elif scene.cubic is not None or any(getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
-        why = "[friction] beside a cubic spring or an effect with memory: its mode is not taken"
+    elif any(getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
+        why = "[friction] beside an effect with memory: its mode is not taken"
     if why is not None:
         raise FrequencyError(f"{scene.source}: {why} (the modes of friction on the mass are solved for by shooting "
-                             "on the exact motion of a spring, a dashpot, branches and Coulomb friction); its "
-                             "forced response (--force-amplitude) is computed")
+                             "on the motion of a spring, a cubic spring, a dashpot, branches and Coulomb friction); "
+                             "its forced response (--force-amplitude) is computed")
     elements = [Element("slider", "friction", (0, -1), float(friction.alpha))]
     if scene.spring is not None and scene.spring.k0 > 0:
         elements.append(Element("spring", "k0", (0, -1), float(scene.spring.k0)))
     if scene.has_dashpot:
         elements.append(Element("dashpot", "c", (0, -1), float(scene.damper.c)))
+    if scene.cubic is not None and scene.cubic.k3 > 0:
+        elements.append(Element("cubic", "k3", (0, -1), float(scene.cubic.k3)))
     if scene.branches is not None:
         if scene.branches.continuum:
             k, eta = spectrum_branches(scene.branches, tolerance, scene.source)
@@ -139,7 +141,8 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     from .shooting import ShootingSystem, prepared_network
     from .slider_modes import slider_backbone
 
-    scene = prepared_network(scene, node, load_node)  # massless nodes condensed: those two must have a mass
+    # massless nodes condensed: those two must have a mass
+    scene = prepared_network(scene, node, load_node, "the nonlinear modes")
     network = scene.network
     names = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float))
     where = names.node_index(node)

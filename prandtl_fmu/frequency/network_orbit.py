@@ -18,6 +18,12 @@ its Taylor series of TERMS terms, with the remainder bounded by (|A| L)^TERMS / 
 |y| at REACH = 1): the motion to rounding, and every event function g = w . y + offset is a polynomial on the
 interval with a proven bound of the rest.
 
+**Cubic springs** (``crows``, ``ck3``: k3 (d . x)^3 along their row d) make a phase nonlinear: each interval's
+series then takes their force by its recurrence (:func:`_cubic_order`: the elongation's square and cube by
+Cauchy products, through Q into the velocities' rows, and R of it into the stuck sliders' tensions), and the
+interval's length is Jorba and Zou's (the last two terms below TRUNCATION of the state), the rest estimated by
+those terms: the truncation at rounding, not a proven bound (the element's ``element_orbit.py`` does the same).
+
 **No event is missed.** The events are: a sliding slider's relative velocity reaching 0 (it may stick), a stuck
 one's tension reaching +-alpha (it slides), a sticking branch's u reaching +-eta (it slides), a sliding
 branch's elongation rate reaching 0 (it sticks). Each is the first point where its function crosses below
@@ -49,6 +55,7 @@ from .._jit import kernel
 
 TERMS = 24
 REACH = 1.0
+TRUNCATION = 1e-17  # with cubic springs: each of the last two terms of an interval's series, relative to the state
 WALK_LIMIT = 400
 REFINE_LIMIT = 200
 PHASES_PER_SAMPLE = 64
@@ -253,11 +260,16 @@ def _constraints(mass, rows, stuck):
 
 
 @kernel
-def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t, x, v):
-    """The nodes' force without the stuck sliders' tensions: load, springs, dashpots, sliding sliders, branches."""
+def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
+                t, x, v):
+    """The nodes' force without the stuck sliders' tensions: load, springs, cubic springs, dashpots, sliding
+    sliders, branches."""
     out = force * (amplitude * math.cos(omega * t))
     out -= _mv(stiffness, x)
     out -= _mv(damping, v)
+    for c in range(crows.shape[0]):
+        e = _dot(crows[c], x)
+        out -= crows[c] * (ck3[c] * e * e * e)
     for j in range(rows.shape[0]):
         if mode[j] != 0:
             out -= rows[j] * (alpha[j] * mode[j])
@@ -268,8 +280,8 @@ def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u
 
 
 @kernel
-def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t,
-            x, v):
+def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
+            omega, t, x, v):
     """The phase that starts at (x, v, u, t), modes updated in place (see the module); returns the status."""
     n = x.shape[0]
     ns = rows.shape[0]
@@ -320,8 +332,8 @@ def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode,
         if stuck[j]:
             candidates[index] = j
             index += 1
-    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t,
-                    x, v)
+    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
+                    omega, t, x, v)
     s_matrix = np.empty((count, count))
     b = np.empty(count)
     limit = np.empty(count)
@@ -468,8 +480,10 @@ def _solve_s(mass, rows, stuck, rhs):
 
 
 @kernel
-def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t, x, v):
-    """The phase's (A, y0, rho, W, offset, kinds, which, tol, status): see the module."""
+def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
+           t, x, v):
+    """The phase's (A, y0, rho, W, offset, kinds, which, tol, status, R, Q): see the module (A, W: the linear
+    part; a cubic spring's force enters the series by its own recurrence, ``run``)."""
     n = x.shape[0]
     ns = rows.shape[0]
     nb = brows.shape[0]
@@ -493,6 +507,14 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
                     k_phase[a, b] += bk[i] * brows[i, a] * brows[i, b]
             constant -= brows[i] * (bk[i] * (u[i] - _dot(brows[i], x)))
     qk = _mm(q, k_phase)
+    # the cubic springs' tangent stiffness at x: the phase's fastest rate, not its matrix
+    k_tangent = k_phase.copy()
+    for c in range(crows.shape[0]):
+        e = _dot(crows[c], x)
+        for a in range(n):
+            for b in range(n):
+                k_tangent[a, b] += 3.0 * ck3[c] * e * e * crows[c, a] * crows[c, b]
+    qt = _mm(q, k_tangent)
     qc = _mm(q, damping)
     qconst = _mv(q, constant)
     qforce = _mv(q, force)
@@ -502,7 +524,7 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
         row_k = 0.0
         row_c = 0.0
         for b in range(n):
-            row_k += abs(qk[a, b])
+            row_k += abs(qt[a, b])
             row_c += abs(qc[a, b])
         norm_k = max(norm_k, row_k)
         norm_c = max(norm_c, row_c)
@@ -585,8 +607,8 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
     ysize = 0.0
     for a in range(dim):
         ysize = max(ysize, abs(y[a]))
-    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t,
-                    x, v)
+    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
+                    omega, t, x, v)
     for e in range(count):
         total = abs(offset[e])
         for a in range(dim):
@@ -599,7 +621,7 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
                     stuck_index += 1
             tol[e] = max(tol[e], 4.0 * SETTLE_MARGIN * _tension_scale(r[stuck_index], f, alpha[which[e]]))
     status = OK if ok else LOOP
-    return a_matrix, y, rho, w, offset, kinds, which, tol, status
+    return a_matrix, y, rho, w, offset, kinds, which, tol, status, r, q
 
 
 @kernel
@@ -676,9 +698,48 @@ def _refine(c, lo, hi):
 
 
 @kernel
-def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude, omega, x, v, u, h, steps, out):
+def _stuck_rows(mode, which, kinds):
+    """For each event function, the row of R (the stuck sliders' tensions) it reads, or -1."""
+    out = np.full(which.shape[0], -1, dtype=np.int64)
+    for e in range(which.shape[0]):
+        if kinds[e] == STUCK_UP or kinds[e] == STUCK_DOWN:
+            index = 0
+            for j in range(which[e]):
+                if mode[j] == 0:
+                    index += 1
+            out[e] = index
+    return out
+
+
+@kernel
+def _cubic_order(crows, ck3, vectors, k, n, e_series, square, cube, cubic):
+    """The cubic springs' node force at order k of the series (``cubic[k]``), from the x rows of ``vectors``
+    up to order k: each spring's elongation e = crows_c x, e^2 and e^3 by Cauchy products."""
+    for a in range(n):
+        cubic[k, a] = 0.0
+    for c in range(crows.shape[0]):
+        total = 0.0
+        for a in range(n):
+            total += crows[c, a] * vectors[k, a]
+        e_series[c, k] = total
+        total = 0.0
+        for j in range(k + 1):
+            total += e_series[c, j] * e_series[c, k - j]
+        square[c, k] = total
+        total = 0.0
+        for j in range(k + 1):
+            total += square[c, j] * e_series[c, k - j]
+        cube[c, k] = total
+        for a in range(n):
+            cubic[k, a] -= crows[c, a] * ck3[c] * total
+
+
+@kernel
+def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, force, amplitude, omega, x, v, u, h, steps,
+        out):
     """``steps`` steps of h from (x, v, u) at t = 0 (arrays updated in place to the end), x at each step's end
-    in ``out`` (steps, n); returns (status, steps taken)."""
+    in ``out`` (steps, n); returns (status, steps taken). ``crows`` (cubic springs, n), ``ck3``: the cubic
+    springs (none: the linear phases' proven remainder; some: their recurrence and Jorba and Zou's step)."""
     n = x.shape[0]
     ns = rows.shape[0]
     nb = brows.shape[0]
@@ -698,12 +759,13 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
     for k in range(1, terms + 1):
         factorial *= k
     t = 0.0
-    status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude,
-                     omega, t, x, v)
+    status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force,
+                     amplitude, omega, t, x, v)
     if status != OK:
         return status, 0
-    a_matrix, y, rho, w, offset, kinds, which, tol, status = _phase(
-        mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t, x, v)
+    a_matrix, y, rho, w, offset, kinds, which, tol, status, r, q = _phase(
+        mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
+        t, x, v)
     if status != OK:
         return status, 0
     a_start, a_column, a_value = _csr(a_matrix)
@@ -713,6 +775,12 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
     x_phase = x.copy()
     tau = 0.0
     vectors = np.empty((terms, dim))
+    nc = crows.shape[0]
+    e_series = np.zeros((nc, terms))
+    square = np.zeros((nc, terms))
+    cube = np.zeros((nc, terms))
+    cubic = np.zeros((terms, n))  # the cubic springs' node force, order by order
+    stuck_of = _stuck_rows(mode, which, kinds)
     c = np.empty(terms)
     shifted = np.empty(terms)
     phases = 0
@@ -733,12 +801,34 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
             for k in range(1, terms):
                 for a in range(dim):
                     vectors[k, a] = _csr_row(a_start, a_column, a_value, a, vectors[k - 1]) / k
+                if nc > 0:  # the cubic springs' force at order k - 1, through Q, in the velocities' rows
+                    _cubic_order(crows, ck3, vectors, k - 1, n, e_series, square, cube, cubic)
+                    for a in range(n):
+                        vectors[k, n + a] += _dot(q[a], cubic[k - 1]) / (rho * rho * k)
             ysize = 0.0
             for a in range(dim):
                 ysize = max(ysize, abs(y[a]))
-            reach = norm * span
-            rest0 = reach ** terms / factorial * math.exp(reach) * ysize
-            rest1 = norm * reach ** (terms - 1) / factorial * terms * math.exp(reach) * ysize
+            if nc == 0:
+                reach = norm * span
+                rest0 = reach ** terms / factorial * math.exp(reach) * ysize
+                rest1 = norm * reach ** (terms - 1) / factorial * terms * math.exp(reach) * ysize
+            else:
+                _cubic_order(crows, ck3, vectors, terms - 1, n, e_series, square, cube, cubic)
+                # Jorba and Zou: the last two terms below TRUNCATION of the state
+                for k in (terms - 2, terms - 1):
+                    top = 0.0
+                    for a in range(dim):
+                        top = max(top, abs(vectors[k, a]))
+                    if top > 0.0:
+                        span = min(span, (TRUNCATION * ysize / top) ** (1.0 / k))
+                rest0 = 0.0
+                rest1 = 0.0
+                for k in (terms - 2, terms - 1):
+                    top = 0.0
+                    for a in range(dim):
+                        top = max(top, abs(vectors[k, a]))
+                    rest0 += top * span ** k
+                    rest1 += k * top * span ** (k - 1)
             # the first event on [0, span]
             first = -1.0
             event = -1
@@ -746,6 +836,10 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
                 weight = weights[e]
                 for k in range(terms):
                     c[k] = _csr_row(w_start, w_column, w_value, e, vectors[k])
+                if nc > 0 and stuck_of[e] >= 0:  # a stuck slider's tension carries the cubic springs' force
+                    sign = 1.0 if kinds[e] == STUCK_UP else -1.0
+                    for k in range(terms):
+                        c[k] -= sign * _dot(r[stuck_of[e]], cubic[k])
                 c[0] += offset[e] + tol[e]
                 limit = span if first < 0.0 else first
                 budget[0] = WALK_LIMIT
@@ -787,15 +881,16 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, force, amplitude
             else:
                 u[j] = bmode[j] * beta[j]
                 bmode[j] = 0
-            status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force,
-                             amplitude, omega, t, x, v)
+            status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3,
+                             force, amplitude, omega, t, x, v)
             if status != OK:
                 return status, step
-            a_matrix, y, rho, w, offset, kinds, which, tol, status = _phase(
-                mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, force, amplitude, omega, t,
-                x, v)
+            a_matrix, y, rho, w, offset, kinds, which, tol, status, r, q = _phase(
+                mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
+                omega, t, x, v)
             if status != OK:
                 return status, step
+            stuck_of = _stuck_rows(mode, which, kinds)
             a_start, a_column, a_value = _csr(a_matrix)
             w_start, w_column, w_value = _csr(w)
             norm, weights = _norms(a_matrix, w)

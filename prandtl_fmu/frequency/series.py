@@ -51,9 +51,10 @@ THRESHOLDS = ("slider", "branch", "lever")
 @dataclass(frozen=True, eq=False)
 class Lever:
     """A threshold element on the elongation sum_j weights_j x_{between_j} (ground terms dropped): a spring of
-    stiffness ``value`` (math.inf: rigid, a slider) in series with a slider of threshold ``alpha``; what
-    :func:`condensed` leaves of a massless node between springs and one slider or branch. Shooting's rows
-    (``shooting.NetworkShooting``) and the bound on the forces (``unbounded.py``) read it; nothing else does."""
+    stiffness ``value`` (finite: the node's compliance d_p^2 / S is in series) with a slider of threshold
+    ``alpha``; what :func:`condensed` leaves of a massless node between springs and one slider or branch.
+    Shooting's rows (``shooting.NetworkShooting``) and the bound on the forces (``unbounded.py``) read it;
+    nothing else does."""
 
     name: str
     between: tuple
@@ -62,6 +63,7 @@ class Lever:
     alpha: float
     kind: str = "lever"
     c: float = 0.0
+    through: tuple = ()  # the massless nodes it was passed through, in order (for the refusals)
 
     def row(self, n: int) -> np.ndarray:
         """Its elongation's row over the ``n`` nodes."""
@@ -183,19 +185,20 @@ def _without(network, node, rest):
                                v0=np.asarray(network.v0)[keep], elements=elements, load_node=load_node)
 
 
-def condensed(scene, named=None, loaded=None):
+def condensed(scene, named=None, loaded=None, purpose="the forced response"):
     """``scene`` (a network) with every massless node gone (see the module: springs by their Schur complement,
     a slider or a branch on the node by a :class:`Lever`), or FrequencyError naming the node that cannot go:
-    ``named`` (``--node``) and ``loaded`` (the node the force acts on) are reported, so they must have a mass."""
+    ``named`` (``--node``) and ``loaded`` (the node the force acts on) are reported, so they must have a mass;
+    ``purpose`` ("the forced response", "the nonlinear modes") for the refusals."""
     network = scene.network
     if not np.any(np.asarray(network.mass) > 0):
-        raise FrequencyError(f"{scene.source}: no node has a mass: the forced response needs one (a network of "
-                             "massless nodes is quasi-static: integrate it with prandtl-fmu run)")
+        raise FrequencyError(f"{scene.source}: no node has a mass: {purpose} needs one (a network of massless "
+                             "nodes is quasi-static: integrate it with prandtl-fmu run)")
     while True:
         node = next((i for i in range(network.n) if not network.mass[i] > 0), None)
         if node is None:
             return scene if network is scene.network else dataclasses.replace(scene, network=network)
-        network = _lever(network, node, scene.source, named, loaded)
+        network = _lever(network, node, scene.source, named, loaded, purpose)
 
 
 def _weights(element) -> dict:
@@ -206,32 +209,43 @@ def _weights(element) -> dict:
     return {p: 1.0} if q < 0 else {p: 1.0, q: -1.0}
 
 
-def _lever(network, node, source, named, loaded):
+def _carries_nothing(element) -> bool:
+    """A dashpot of c = 0, a slider of alpha = 0: on a massless node they change nothing, and go."""
+    return element.kind in ("dashpot", "slider") and element.value == 0.0
+
+
+def _called(element) -> str:
+    """An element's name for a refusal: a lever says through which massless nodes it reaches this one."""
+    if element.kind == "lever" and element.through:
+        return f"{element.name} (through massless {', '.join(element.through)})"
+    return element.name
+
+
+def _lever(network, node, source, named, loaded, purpose):
     """The network without massless ``node`` (see the module), or FrequencyError."""
     from ..network.model import Element
 
     name = network.nodes[node]
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
+    how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
     if name == loaded:
-        raise FrequencyError(f"{source}: node {name} is massless and the force acts on it: the forced response of "
-                             "a network with sliders is solved for by shooting on the motion of the nodes with a "
-                             f"mass: load a node with a mass (--load-node), {tail}")
+        raise FrequencyError(f"{source}: node {name} is massless and the force acts on it: {how}: load a node "
+                             f"with a mass (--load-node), {tail}")
     if name == named:
-        raise FrequencyError(f"--node: {name} is massless: the forced response of a network with sliders is solved "
-                             "for by shooting on the motion of the nodes with a mass (a massless node's own motion "
-                             "is not computed): name one of them")
-    touching = [e for e in network.elements if node in e.between]
+        raise FrequencyError(f"--node: {name} is massless: {how} (a massless node's own motion is not computed): "
+                             "name one of them")
+    touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
     for e in touching:
         if e.kind not in ("spring",) + THRESHOLDS:
-            raise FrequencyError(f"{source}: node {name} is massless, with {e.kind} {e.name} on it (a first-order "
-                                 "motion): the forced response of a network with sliders (shooting on its motion) "
-                                 f"takes a massless node held by springs and one slider or branch: {tail}")
+            why = "a first-order motion" if e.kind == "dashpot" else "its position a root of a cubic"
+            raise FrequencyError(f"{source}: node {name} is massless, with {e.kind} {e.name} on it ({why}): {how}, "
+                                 f"which takes a massless node held by linear springs and one slider or branch: "
+                                 f"{tail}")
     thresholds = _parallel([e for e in touching if e.kind in THRESHOLDS])
     if len(thresholds) > 1:
-        raise FrequencyError(f"{source}: node {name} is massless between {thresholds[0].name} and "
-                             f"{thresholds[1].name} (its position a play on two references): the forced response "
-                             "of a network with sliders (shooting on its motion) takes a massless node held by "
-                             f"springs and one slider or branch: {tail}")
+        raise FrequencyError(f"{source}: node {name} is massless between {_called(thresholds[0])} and "
+                             f"{_called(thresholds[1])} (its position a play on two references): {how}, which "
+                             f"takes a massless node held by linear springs and one slider or branch: {tail}")
     rest = [e for e in network.elements if node not in e.between]
     ends = {}
     for e in touching:
@@ -247,7 +261,7 @@ def _lever(network, node, source, named, loaded):
             other = "ground" if q < 0 else network.nodes[q]
             rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
     if thresholds:
-        rest.extend(_levered(thresholds[0], node, ends, total))
+        rest.extend(_levered(thresholds[0], node, name, ends, total))
     return _without(network, node, rest)
 
 
@@ -268,7 +282,7 @@ def _parallel(thresholds) -> list:
     return out
 
 
-def _levered(element, node, ends, total) -> list:
+def _levered(element, node, name, ends, total) -> list:
     """The lever that threshold ``element`` on massless ``node`` becomes, the node held by springs to ``ends``
     ({far end: stiffness}, ``total`` their sum > 0) (see the module); none where it carries nothing."""
     if element.kind == "slider":
@@ -281,12 +295,20 @@ def _levered(element, node, ends, total) -> list:
         return []
     weights = _weights(element)
     share = weights.pop(node)
+    size = dict.fromkeys(weights, 0.0)
+    for end, w in weights.items():
+        size[end] = abs(w)
     for end, stiffness in ends.items():
         if end >= 0:
             weights[end] = weights.get(end, 0.0) + share * stiffness / total
-    weights = {end: w for end, w in weights.items() if w != 0.0}
+            size[end] = size.get(end, 0.0) + abs(share * stiffness / total)
+    # a weight that cancels (a cluster of massless nodes hung from one node passes it no force) is 0, not its
+    # rounding: which decides whether that node is refused for two thresholds
+    weights = {end: w for end, w in weights.items() if abs(w) > 1e-12 * size[end]}
     compliance = (0.0 if math.isinf(k) else 1.0 / k) + share * share / total
     if not weights:  # it acts on nothing (every far end the ground)
         return []
     ordered = sorted(weights)
-    return [Lever(element.name, tuple(ordered), tuple(weights[i] for i in ordered), 1.0 / compliance, alpha)]
+    through = (element.through if element.kind == "lever" else ()) + (name,)
+    return [Lever(element.name, tuple(ordered), tuple(weights[i] for i in ordered), 1.0 / compliance, alpha,
+                  through=through)]

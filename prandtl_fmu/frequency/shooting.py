@@ -46,8 +46,9 @@ exact stepper, each smooth phase its Taylor series with the truncation at roundi
 ``verlet``: its orbit's error comes in a staircase as the steps move across the stick and slip events
 (measured: a change of 3e-4 from M to 2 M where the error was 1.2e-3), and at a reversal the discrete orbit
 sticks for one step or not depending on M, which flips the multipliers' verdict from point to point (0.49
-against 1.05 at neighbouring points of a Stribeck scene): no stated accuracy. The stepper's refusal of a trial state (its event search past its bound,
-at a force within a hair of the friction's threshold) counts as a corrector that did not converge. The
+against 1.05 at neighbouring points of a Stribeck scene): no stated accuracy. The stepper's refusal of a
+trial state (its event search past its bound, at a force within a hair of the friction's threshold) counts as
+a corrector that did not converge. The
 harmonics reported are those of the orbit's samples (the curve's ``harmonics``: how many are kept in
 ``coefficients``, 7 unless given; they do not limit the accuracy).
 
@@ -161,25 +162,23 @@ def smooth(scene) -> bool:
     return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha
 
 
-def prepared_network(scene, named=None, loaded=None):
+def prepared_network(scene, named=None, loaded=None, purpose="the forced response"):
     """A network with sliders as :class:`NetworkShooting` runs it (``network_orbit.py``): its massless nodes
     condensed (``series.condensed``: springs and levers between the nodes with a mass; ``named`` and ``loaded``
-    must have one), or FrequencyError."""
+    must have one), or FrequencyError (``purpose``: what it is for, as the refusals say)."""
     from .series import condensed
 
     network = scene.network
     source = scene.source
+    for option, name in (("--node", named), ("--load-node", loaded)):
+        if name is not None and name not in network.nodes:  # every node as written (some may be condensed)
+            raise FrequencyError(f"{option}: {name!r} is not a node of {source} ({', '.join(network.nodes)})")
     for element in network.elements:
-        if element.kind == "cubic":
-            raise FrequencyError(f"{source}: cubic {element.name}: the forced response of a network with sliders "
-                                 "(shooting on its motion, exact between events) takes springs, dashpots, sliders "
-                                 "and branches without series dashpots, not a cubic spring: integrate the network "
-                                 "with prandtl-fmu run")
         if element.kind == "branch" and element.c > 0.0:
             raise FrequencyError(f"{source}: branch {element.name}: the forced response of a network with sliders "
                                  "(shooting on its motion, exact between events) takes branches without series "
                                  "dashpots (c = 0): integrate the network with prandtl-fmu run")
-    return condensed(scene, named, loaded)
+    return condensed(scene, named, loaded, purpose)
 
 
 class Shooting:
@@ -474,10 +473,12 @@ class NetworkShooting(Shooting):
 
         self.stiffness_matrix = np.zeros((n, n))
         self.damping = np.zeros((n, n))
-        sliders, branches = [], []
+        sliders, branches, cubic = [], [], []
         for element in network.elements:
             d = row(element)
-            if element.kind == "spring":
+            if element.kind == "cubic":  # its force k3 (d . x)^3 along d (network_orbit.py: by its recurrence)
+                cubic.append((d, element.value))
+            elif element.kind == "spring":
                 self.stiffness_matrix += element.value * np.outer(d, d)
             elif element.kind == "dashpot":
                 self.damping += element.value * np.outer(d, d)
@@ -485,15 +486,16 @@ class NetworkShooting(Shooting):
                 sliders.append((d, element.value))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
-            elif element.kind == "lever" and math.isinf(element.value):  # a massless node's slider (series.py)
-                sliders.append((d, element.alpha))
-            elif element.kind == "lever":
+            elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
                 branches.append((d, element.value, element.alpha / element.value))
         self.rows = np.array([d for d, _ in sliders], dtype=float).reshape(len(sliders), n)
         self.alpha = np.array([a for _, a in sliders], dtype=float)
         self.brows = np.array([b[0] for b in branches], dtype=float).reshape(len(branches), n)
         self.bk = np.array([b[1] for b in branches], dtype=float)
         self.eta = np.array([b[2] for b in branches], dtype=float)
+        self.smooth = bool(cubic)  # its phases by their recurrence (network_orbit.py), as the figures say
+        self.crows = np.array([d for d, _ in cubic], dtype=float).reshape(len(cubic), n)
+        self.ck3 = np.array([k3 for _, k3 in cubic], dtype=float)
         holding = self.stiffness_matrix + sum((k * np.outer(d, d) for d, k, _ in branches), np.zeros((n, n)))
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, "exact",
                          2 * n + len(branches), float(holding[load, load]))
@@ -522,8 +524,8 @@ class NetworkShooting(Shooting):
         steps = self.M // 2 * half_periods
         out = np.empty((steps, n))
         status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
-                            self.brows, self.bk, self.eta, self.force, float(amplitude), float(omega), x, v, u,
-                            h, steps, out)
+                            self.brows, self.bk, self.eta, self.crows, self.ck3, self.force, float(amplitude),
+                            float(omega), x, v, u, h, steps, out)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
         end = np.concatenate((x, v / self.reference, u))

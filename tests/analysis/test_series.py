@@ -368,3 +368,50 @@ def test_what_a_massless_node_on_a_slider_cannot_be_is_one_line(tmp_path, capsys
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("ka, kb", [(1.0, 2.0), (0.7, 1.3), (0.1, 0.2), (3.0, 0.3)])
+def test_a_cluster_of_massless_nodes_hung_from_one_passes_it_no_force_whatever_its_springs(ka, kb):
+    """Massless j0 and j1 (a slider between them) hang from massless j2 alone: they pass it no force, so j2 is
+    held by its springs and its own slider only, whatever the cluster's springs (the lever of the inner slider
+    had a weight of rounding on j2, 1e-17, which refused some stiffnesses for two thresholds: a review's find).
+    j2's slider is then the lever of weights k_i / S on a and b."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.network.model import Element, Network, NetworkScene
+
+    elements = (Element("spring", "ka", (2, 3), ka), Element("spring", "kb", (2, 4), kb),
+                Element("slider", "inner", (2, 3), 0.2), Element("spring", "kc", (3, 4), 1.0),
+                Element("spring", "s2a", (4, 0), 1.0), Element("spring", "s2b", (4, 1), 1.5),
+                Element("slider", "outer", (4, -1), 0.3), Element("spring", "ga", (0, -1), 1.0),
+                Element("spring", "gb", (1, -1), 1.0))
+    written = Network(("a", "b", "j0", "j1", "j2"), np.array([1.0, 2.0, 0.0, 0.0, 0.0]), np.zeros(5), np.zeros(5),
+                      elements, 0)
+    levers = [e for e in condensed(NetworkScene("x", written, None, None, "x.toml")).network.elements
+              if e.kind == "lever"]
+    assert [lever.name for lever in levers] == ["outer"]
+    assert levers[0].between == (0, 1) and levers[0].weights == pytest.approx((0.4, 0.6), rel=1e-15)
+
+
+CHAIN_OF_TWO = network_text(["a", "j", "j2", "b"], [1.0, 0.0, 0.0, 2.0], HELD + [
+    ("spring", ["b", "ground"], {"k": 1.0}), ("spring", ["a", "j"], {"k": 1.0}), ("spring", ["j", "j2"], {"k": 1.0}),
+    ("spring", ["j2", "b"], {"k": 1.0}), ("slider", ["j", "ground"], {"alpha": 0.3}),
+    ("slider", ["j2", "ground"], {"alpha": 0.3}), ("slider", ["j", "b"], {"alpha": 0.0})], load_node="a")
+
+
+@pytest.mark.parametrize("options, culprit", [
+    (["--force-amplitude", "1", "--frequencies", "0.1,0.2"],
+     "node j2 is massless between slider_2 and slider_1 (through massless j)"),
+    (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--node", "zz"], "scene.toml (a, j, j2, b)"),
+    (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--load-node", "zz"], "(a, j, j2, b)"),
+    (["--mode", "1", "--amplitudes", "0.1", "--node", "j"], "--node: j is massless: the nonlinear modes of")],
+    ids=["a lever through a node", "--node", "--load-node", "modes"])
+def test_a_massless_node_s_refusals_name_what_the_scene_wrote(tmp_path, capsys, options, culprit):
+    """A second slider that reaches a massless node through another is named with that node; an unknown node is
+    listed against every node written (the condensed ones too); a refusal of the modes says modes. The slider of
+    alpha = 0 on j carries nothing and is not counted (review items)."""
+    path, out = tmp_path / "scene.toml", tmp_path / "out.csv"
+    path.write_text(CHAIN_OF_TWO)
+    assert main(["describe", str(path), *options, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert not out.exists()
