@@ -2,15 +2,16 @@
 Stribeck's drop), event by event, by Taylor series: the orbit that ``shooting.py`` solves for where the exact
 stepper does not go.
 
-The mass under F cos(omega t) (x, v, the branches' u; every force of ``[spring]``, ``[damper]``, ``[cubic]``,
-``[branches]`` and ``[friction]`` on a fixed ground):
+The mass under F cos(omega t) (x, v, the branches' u, the history's z; every force of ``[spring]``,
+``[damper]``, ``[cubic]``, ``[branches]``, ``[history]`` and ``[friction]`` on a fixed ground):
 
-    m v' = F cos(omega t) - k0 x - k3 x^3 - c v - sum_i k_i u_i - A(v),
+    m v' = F cos(omega t) - k0 x - k3 x^3 - c v - sum_i k_i u_i - sum_j w_j z_j - A(v),
+    z_j' = -r_j z_j + y   (y = x, or v),
     A(v) = sigma (alpha_k + (alpha - alpha_k) exp(-|v| / v_s))   (sliding, sigma = sign v; Coulomb: alpha),
 
 while it sticks (v = 0) the friction holds whatever the other forces N(t) = F cos(omega t) - k0 x - k3 x^3 -
-sum_i k_i u_i ask while |N| <= alpha. The motion is smooth between events: a slide of fixed direction sigma
-ends where v reaches 0 (the mass sticks if |N| <= alpha there, else it turns back); a stick ends where N leaves
+sum_i k_i u_i - sum_j w_j z_j(t) ask while |N| <= alpha. The motion is smooth between events: a slide of
+fixed direction sigma ends where v reaches 0 (the mass sticks if |N| <= alpha there, else it turns back); a stick ends where N leaves
 [-alpha, alpha]; a sticking branch starts to slide where its u reaches +-eta in the direction of motion; a
 sliding branch sticks where v reaches 0 (the slide's end). So the orbit is a chain of smooth phases:
 
@@ -22,8 +23,9 @@ sliding branch sticks where v reaches 0 (the slide's end). So the orbit is a cha
   proven bound, as the linear phases of the exact stepper and ``network_orbit.py`` have, but the series'
   truncation kept at rounding. The tests measure it against the exact stepper where both apply (linear
   forces: to 1e-12) and against an independent integration written in the test.
-* **A stick** is x fixed and N(t) a cosine plus a constant: its Taylor series on intervals of omega tau <= 1
-  has a proven remainder ((omega tau)^TERMS / TERMS! e^(omega tau) F).
+* **A stick** is x fixed and N(t) a cosine, a constant and the history's exponentials: its Taylor series on
+  intervals of rho tau <= 1 (rho the larger of omega and the rates) has a proven remainder ((rho tau)^TERMS /
+  TERMS! e^(rho tau) times F and the exponentials' amplitudes).
 
 **Events** are found as ``network_orbit.py`` finds them (its validated subdivision of each event function's
 polynomial, the first crossing refined by bisection): the event functions are sigma v (a slide's end), eta_i -
@@ -68,11 +70,12 @@ def explain(status: int) -> str:
 
 
 @kernel
-def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, constant, amplitude,
-                  omega, X, V):
+def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z0,
+                  constant, amplitude, omega, X, V, Z):
     """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
     t0), in a slide of direction ``sigma``: m v' = F cos(omega t) - stiffness x - k3 x^3 - damping v + constant
-    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha)."""
+    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
+    those of the history's z_j' = -hr_j z_j + y (y = v if ``on_v``, else x) from z0."""
     terms = X.shape[0]
     square = np.zeros(terms)
     cube = np.zeros(terms)
@@ -86,6 +89,8 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
     stribeck = vs > 0.0 and alpha > alpha_k
     if stribeck:
         exponential[0] = math.exp(-sigma * v0 / vs)
+    for j in range(hw.shape[0]):
+        Z[j, 0] = z0[j]
     for k in range(terms - 1):
         # x^2 and x^3 at order k (Cauchy products)
         total = 0.0
@@ -102,12 +107,17 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
                 total += j * V[j] * exponential[k - j]
             exponential[k] = -sigma * rho / vs * total / k
         force = zr - stiffness * X[k] - k3 * cube[k] - damping * rho * V[k]
+        for j in range(hw.shape[0]):
+            force -= hw[j] * Z[j, k]
         if stribeck:
             force -= sigma * (alpha - alpha_k) * exponential[k]
         if k == 0:
             force += constant - sigma * (alpha_k if stribeck else alpha)
         V[k + 1] = force * scale / (k + 1)
         X[k + 1] = V[k] / (k + 1)
+        y = V[k] * rho if on_v else X[k]
+        for j in range(hw.shape[0]):
+            Z[j, k + 1] = (y - hr[j] * Z[j, k]) / (rho * (k + 1))
         # the cosine's next coefficient: z (i omega / rho) / (k + 1)
         zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
 
@@ -125,19 +135,35 @@ def _cosine_series(t0, amplitude, omega, rho, constant, out):
 
 
 @kernel
-def _held(x, k0, k3, bk, beta, bmode, u, amplitude, omega, t):
+def _stuck_history(z0, y, hr, rho, Z):
+    """The Taylor coefficients Z[j, k] of the history's z_j' = -hr_j z_j + y (y constant: x of a stuck mass, or
+    its v = 0) about the stick's start, in s = rho (t - t0)."""
+    for j in range(hr.shape[0]):
+        Z[j, 0] = z0[j]
+        for k in range(Z.shape[1] - 1):
+            Z[j, k + 1] = ((y if k == 0 else 0.0) - hr[j] * Z[j, k]) / (rho * (k + 1))
+
+
+@kernel
+def _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, t):
     """N: the force on the mass at rest (v = 0) without the friction."""
     total = amplitude * math.cos(omega * t) - k0 * x - k3 * x * x * x
+    for j in range(hw.shape[0]):
+        total -= hw[j] * z[j]
     for i in range(bk.shape[0]):
         total -= bk[i] * (bmode[i] * beta[i] if bmode[i] != 0 else u[i])
     return total
 
 
 @kernel
-def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, state, u, h, steps, out):
-    """``steps`` steps of h from ``state`` = (x, v) and the branches' ``u`` at t = 0 (updated in place to the
-    end), x at each step's end in ``out`` (steps,); returns (status, steps taken)."""
+def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, amplitude, omega, state, u, z, h, steps,
+        out):
+    """``steps`` steps of h from ``state`` = (x, v), the branches' ``u`` and the history's ``z`` (weights ``hw``,
+    rates ``hr``, on v if ``on_v``, else on x; none: empty) at t = 0 (updated in place to the end), x at each
+    step's end in ``out`` (steps,); returns (status, steps taken)."""
     nb = bk.shape[0]
+    nz = hw.shape[0]
+    Z = np.empty((nz, TERMS))
     terms = TERMS
     x = state[0]
     v = state[1]
@@ -155,6 +181,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
     size_force = amplitude + alpha + k0 * abs(x) + k3 * abs(x) ** 3
     for i in range(nb):
         size_force += bk[i] * beta[i]
+    for j in range(nz):
+        size_force += abs(hw[j] * z[j])
     t = 0.0
     sigma = 0
     decide = True  # the phase's direction to be decided from the state
@@ -181,7 +209,7 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
                     if bmode[i] != 0:
                         u[i] = bmode[i] * beta[i]
                         bmode[i] = 0
-                held = _held(x, k0, k3, bk, beta, bmode, u, amplitude, omega, t)
+                held = _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, t)
                 sigma = 0
                 if held > alpha:
                     sigma = 1
@@ -201,13 +229,24 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
         if sigma == 0:
             # a stick: x fixed, N(t) a cosine and a constant
             rho = max(abs(omega), 1e-300)
+            for j in range(nz):
+                rho = max(rho, hr[j])
             constant = -k0 * x - k3 * x * x * x
             for i in range(nb):
                 constant -= bk[i] * u[i]
             span = min((target - t) * rho, 1.0)
             _cosine_series(t, amplitude, omega, rho, constant, X)
-            rest0 = span ** terms / factorial * math.exp(span) * amplitude
-            rest1 = span ** (terms - 1) / factorial * terms * math.exp(span) * amplitude
+            # the history's z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
+            held_y = 0.0 if on_v else x
+            _stuck_history(z, held_y, hr, rho, Z)
+            reach = amplitude
+            for j in range(nz):
+                for k in range(terms):
+                    X[k] -= hw[j] * Z[j, k]
+                if hr[j] > 0.0:
+                    reach += abs(hw[j] * (z[j] - held_y / hr[j]))
+            rest0 = span ** terms / factorial * math.exp(span) * reach
+            rest1 = span ** (terms - 1) / factorial * terms * math.exp(span) * reach
             tol = EVENT_TOLERANCE * size_force
             first = -1.0
             event = 0
@@ -223,6 +262,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
                     first = s
                     event = side
             stop = span if first < 0.0 else first
+            for j in range(nz):
+                z[j] = _horner(Z[j], stop)
             t_end = t + stop / rho
             if first < 0.0 and (target - t) * rho <= span:
                 t_end = target
@@ -253,15 +294,19 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
             rho = max(math.sqrt(curvature / mass), damping / mass, abs(omega), 1e-300)
             if vs > 0.0 and alpha > alpha_k:
                 rho = max(rho, (alpha - alpha_k) / (mass * vs))
-            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, constant,
-                          amplitude, omega, X, V)
+            for j in range(nz):
+                rho = max(rho, hr[j], math.sqrt(abs(hw[j]) / mass))
+            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z,
+                          constant, amplitude, omega, X, V, Z)
             size = max(abs(X[0]), abs(V[0]), 1e-300)
             for i in range(nb):
                 size = max(size, beta[i])
-            # Jorba & Zou: the last two terms below TRUNCATION of the state
+            # Jorba & Zou: the last two terms below TRUNCATION of the state (z_j weighed by its force, as a length)
             span = math.inf
             for k in (terms - 2, terms - 1):
                 top = max(abs(X[k]), abs(V[k]))
+                for j in range(nz):
+                    top = max(top, abs(hw[j] * Z[j, k]) / (mass * rho * rho))
                 if top > 0.0:
                     span = min(span, (TRUNCATION * size / top) ** (1.0 / k))
             span = min(span, 1.0 if math.isinf(span) else span, (target - t) * rho)
@@ -297,6 +342,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, amplitude, omega, s
             stop = span if first < 0.0 else first
             x = _horner(X, stop)
             v = _horner(V, stop) * rho
+            for j in range(nz):
+                z[j] = _horner(Z[j], stop)
             t_end = t + stop / rho
             if first < 0.0 and stop >= (target - t) * rho:
                 t_end = target

@@ -56,10 +56,11 @@ Base excitation (Y0 cos(omega t) of the ground): in relative coordinates z = x -
 cos(omega t), the friction on the relative velocity (the mass slides on the moving support); x = z + y
 reported, as the harmonic balance does.
 
-What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), effects with
-memory beside the friction, a cubic spring or Stribeck's drop beside branches with series dashpots, a node
-other than the mass. Nonlinear modes (EPMC) of such a scene are solved for
-by ``slider_modes.py`` on the network of one node (``modes.py``).
+What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), ``[delay]`` or
+``[dahl]`` beside the friction (``[history]`` is taken: its states are unknowns of ``element_orbit.py``), a
+cubic spring, Stribeck's drop or a history beside branches with series dashpots, a node other than the mass.
+Nonlinear modes (EPMC) of such a scene are solved for by ``slider_modes.py`` on the network of one node
+(``modes.py``).
 """
 from __future__ import annotations
 
@@ -134,11 +135,12 @@ def prepared(scene, named=None, loaded=None):
         raise FrequencyError(f"{scene.source}: [friction] on a moving belt (belt_velocity != 0) has no periodic "
                              "state symmetric over half a period, which the frequency response of friction on the "
                              "mass solves for: use --method time")
-    memory = [name for name in ("delay", "history", "dahl") if getattr(scene, name) is not None]
+    memory = [name for name in ("delay", "dahl") if getattr(scene, name) is not None]
     if memory:
+        why = ("a delay's state is the motion over the last tau, not a finite vector" if memory[0] == "delay" else
+               "Dahl's law beside the Coulomb friction is not taken")
         raise FrequencyError(f"{scene.source}: [friction] with [{memory[0]}] is not taken by the frequency response "
-                             "of friction on the mass (shooting over half a period has no state for the memory): "
-                             "use --method time")
+                             f"of friction on the mass (shooting on the motion: {why}): use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
@@ -157,9 +159,11 @@ def prepared(scene, named=None, loaded=None):
 
 
 def smooth(scene) -> bool:
-    """Whether the forces of an element scene with friction are not linear between events (a cubic spring,
-    Stribeck's drop): its orbit is ``element_orbit.py``'s Taylor series, not the exact stepper's."""
-    return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha
+    """Whether an element scene with friction is not the exact stepper's (a cubic spring, Stribeck's drop: not
+    linear between events; ``[history]``: states of its own): its orbit is ``element_orbit.py``'s Taylor
+    series."""
+    return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha or \
+        scene.history is not None
 
 
 def prepared_network(scene, named=None, loaded=None, purpose="the forced response"):
@@ -388,8 +392,10 @@ class ElementShooting(Shooting):
         self.smooth = smooth(scene)
         if self.smooth:
             stepper = "taylor"  # element_orbit.py: the Taylor series of the smooth phases
+        history = scene.history
+        self.history = 0 if history is None else len(history.weight)  # its z_j: unknowns after the branches' u
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
-                         2 + branches, stiffness)
+                         2 + branches + self.history, stiffness)
         self.branches = branches
         self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
         self._out = np.empty((self.M // 2, 3))
@@ -401,7 +407,9 @@ class ElementShooting(Shooting):
                                float(friction.alpha_kinetic),
                                float(friction.stribeck_velocity) if friction.alpha_kinetic != friction.alpha else 0.0,
                                np.zeros(0) if scene.branches is None else np.array(scene.branches.stiffness, float),
-                               self.eta)
+                               self.eta, np.array(history.weight if history else (), float),
+                               np.array(history.rate if history else (), float),
+                               bool(history is not None and history.acts_on == "v"))
             return
         self.scene = dataclasses.replace(scene, load=HarmonicLoad(1.0, reference),
                                          solver=Solver(stepper, 1.0 / steps, 1.0, 1.0 / steps))
@@ -437,14 +445,15 @@ class ElementShooting(Shooting):
 
         h = 2.0 * math.pi / omega / self.M
         state = np.array([float(s[0]), float(s[1]) * self.reference])
-        u = np.clip(np.array(s[2:], dtype=float), -self.eta, self.eta)
+        u = np.clip(np.array(s[2:2 + self.branches], dtype=float), -self.eta, self.eta)
+        z = np.array(s[2 + self.branches:], dtype=float)
         steps = self.M // 2 * half_periods
         out = np.empty(steps)
-        status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, h,
+        status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, z, h,
                             steps, out)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
-        end = np.concatenate(([state[0], state[1] / self.reference], u))
+        end = np.concatenate(([state[0], state[1] / self.reference], u, z))
         return self._checked(end, out[:, None].copy(), omega)
 
 

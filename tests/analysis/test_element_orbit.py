@@ -19,14 +19,17 @@ STRIBECK = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05},
             "friction": {"alpha": 0.1, "alpha_kinetic": 0.06, "stribeck_velocity": 0.05}}
 
 
-def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_end):
+def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_end, history=None, z=()):
     """The motion written straightforwardly: each slide an ODE for scipy's DOP853 (rtol 1e-12, steps of at most
     T / 50) stopped at its events (v = 0; a sticking branch's u at +-eta), each stick until |N(t)| > alpha,
-    the mass at rest sticking where |N| <= alpha, else sliding the way N pushes. Returns (x, v, u) at t_end."""
+    the mass at rest sticking where |N| <= alpha, else sliding the way N pushes; ``history`` (weights, rates,
+    on_v): its z_j' = -rate_j z_j + y integrated along. Returns (x, v, u) at t_end, and z with a history."""
     from scipy.integrate import solve_ivp
 
     nb = len(bk)
     u = np.clip(np.array(u, float), -eta, eta)
+    weights, rates, on_v = (np.zeros(0), np.zeros(0), False) if history is None else history
+    z = np.array(z, float)
     bmode = np.zeros(nb, int)
     t = 0.0
     largest = 0.02 * 2.0 * math.pi / omega
@@ -34,21 +37,29 @@ def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_en
     def branch_force(x, x0, u0):
         return sum(bk[i] * (u0[i] + x - x0 if bmode[i] == 0 else bmode[i] * eta[i]) for i in range(nb))
 
+    def done():
+        return (x, v, u) if history is None else (x, v, u, z)
+
     while t < t_end:
         if v == 0.0:
             bmode[:] = 0
-            held = F * math.cos(omega * t) - k0 * x - k3 * x**3 - float(np.dot(bk, u))
+            held = F * math.cos(omega * t) - k0 * x - k3 * x**3 - float(np.dot(bk, u)) - float(np.dot(weights, z))
             sigma = 1 if held > alpha else -1 if held < -alpha else 0
             if sigma == 0:
-                constant = held - F * math.cos(omega * t)
-                ends = [lambda s, y, side=side: alpha + 1e-12 - side * (F * math.cos(omega * s) + constant)
+                constant = held - F * math.cos(omega * t) + float(np.dot(weights, z))
+                y_held = 0.0 if on_v else x
+                # (y[0] a clock: scipy needs a state, and a history may have none)
+                ends = [lambda s, y, side=side: alpha + 1e-12 - side * (F * math.cos(omega * s) + constant
+                                                                        - float(np.dot(weights, y[1:])))
                         for side in (1, -1)]
                 for end in ends:
                     end.terminal, end.direction = True, -1
-                solution = solve_ivp(lambda s, y: [0.0], (t, t_end), [x], events=ends, rtol=1e-12, atol=1e-15,
+                solution = solve_ivp(lambda s, y: np.concatenate(([1.0], y_held - rates * y[1:])), (t, t_end),
+                                     np.concatenate(([t], z)), events=ends, rtol=1e-12, atol=1e-15,
                                      method="DOP853", max_step=largest)
+                z = solution.y[1:, -1].copy()
                 if solution.status != 1:
-                    return x, v, u
+                    return done()
                 sigma = 1 if len(solution.t_events[0]) else -1
                 t = float(solution.t_events[0 if sigma == 1 else 1][0])
         else:
@@ -63,19 +74,22 @@ def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_en
             def rhs(s, y):
                 slide = alpha if vs == 0.0 else alpha_k + (alpha - alpha_k) * math.exp(-sigma * y[1] / vs)
                 force = F * math.cos(omega * s) - k0 * y[0] - k3 * y[0] ** 3 - c * y[1] - sigma * slide
-                return [y[1], (force - branch_force(y[0], x0, u0)) / m]
+                force -= float(np.dot(weights, y[2:]))
+                rates_of_z = (y[1] if on_v else y[0]) - rates * y[2:]
+                return np.concatenate(([y[1], (force - branch_force(y[0], x0, u0)) / m], rates_of_z))
 
             events = [lambda s, y: sigma * y[1] + 1e-13]
             events += [lambda s, y, i=i: eta[i] - sigma * (u0[i] + y[0] - x0) for i in elastic]
             for event in events:
                 event.terminal, event.direction = True, -1
-            solution = solve_ivp(rhs, (t, t_end), [x, v], events=events, rtol=1e-12, atol=1e-15, method="DOP853",
-                                 max_step=largest)
+            solution = solve_ivp(rhs, (t, t_end), np.concatenate(([x, v], z)), events=events, rtol=1e-12,
+                                 atol=1e-15, method="DOP853", max_step=largest)
             x, v, t = float(solution.y[0, -1]), float(solution.y[1, -1]), float(solution.t[-1])
+            z = solution.y[2:, -1].copy()
             for i in elastic:
                 u[i] = min(max(u0[i] + x - x0, -eta[i]), eta[i])
             if solution.status != 1:
-                return x, v, u
+                return done()
             which = next(j for j, times in enumerate(solution.t_events) if len(times))
             if which == 0:
                 v = 0.0
@@ -83,7 +97,7 @@ def reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega, x, v, u, t_en
             i = elastic[which - 1]
             bmode[i], u[i] = sigma, sigma * eta[i]
             x0, u0 = x, u.copy()
-    return x, v, u
+    return done()
 
 
 def _random_scene(rng, smooth=True):
@@ -97,13 +111,17 @@ def _random_scene(rng, smooth=True):
     return m, k0, c, k3, alpha, alpha_k, vs, bk, eta, rng.uniform(0.3, 2.0), rng.uniform(0.5, 3.0)
 
 
-def _taylor(parameters, x, v, u, h, steps):
+NO_HISTORY = (np.zeros(0), np.zeros(0), False)
+
+
+def _taylor(parameters, x, v, u, h, steps, history=NO_HISTORY, z=()):
     from prandtl_fmu.frequency.element_orbit import OK, run
 
-    state, u, out = np.array([x, v]), np.array(u, float).copy(), np.empty(steps)
-    status, taken = run(*parameters, state, u, h, steps, out)
+    m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega = parameters
+    state, u, out, z = np.array([x, v]), np.array(u, float).copy(), np.empty(steps), np.array(z, float)
+    status, taken = run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, *history, F, omega, state, u, z, h, steps, out)
     assert status == OK and taken == steps
-    return state, u, out
+    return (state, u, out) if history is NO_HISTORY and not len(z) else (state, u, out, z)
 
 
 def test_the_taylor_orbit_is_the_exact_stepper_s_where_both_apply(tmp_path):
@@ -130,20 +148,32 @@ def test_the_taylor_orbit_is_the_exact_stepper_s_where_both_apply(tmp_path):
 
 
 def test_the_taylor_orbit_is_an_independent_integration_s_on_random_scenes():
-    """Random scenes with a cubic spring and/or Stribeck's drop, branches or none, from random states over two
-    periods and a half: the end state is the one the straightforward integration above reaches, to 1e-9 (its
-    tolerance 1e-12 and its events' 1e-13 compound over the stick and slip events)."""
+    """Random scenes with a cubic spring and/or Stribeck's drop, branches or none, a history (one or two terms,
+    on x or on v, rates 0 among them) or none, from random states over two periods and a half: the end state
+    is the one the straightforward integration above reaches, to 1e-9 (its tolerance 1e-12 and its events'
+    1e-13 compound over the stick and slip events)."""
     rng = np.random.default_rng(20261203)
     worst = 0.0
-    for _ in range(16):
+    for _ in range(24):
         parameters = _random_scene(rng)
         m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega = parameters
         x, v, u = rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), np.clip(rng.uniform(-0.3, 0.3, len(bk)), -eta, eta)
         period, M = 2.0 * math.pi / omega, 64
-        state, u_end, _ = _taylor(parameters, x, v, u, period / M, 5 * M // 2)
-        rx, rv, ru = reference(*parameters, x, v, u, 2.5 * period)
+        history, z = NO_HISTORY, np.zeros(0)
+        if rng.random() < 0.5:  # a history of one or two terms, on x or on v, some of rate 0
+            terms = int(rng.integers(1, 3))
+            history = (rng.uniform(-0.3, 0.5, terms) * rng.choice([1.0, 0.0], terms, p=[0.8, 0.2]) + 0.1,
+                       rng.choice([0.0, 0.3, 2.0], terms), bool(rng.random() < 0.5))
+            z = rng.uniform(-0.2, 0.2, terms)
+        state, u_end, _, z_end = _taylor(parameters, x, v, u, period / M, 5 * M // 2, history, z) \
+            if history is not NO_HISTORY else (*_taylor(parameters, x, v, u, period / M, 5 * M // 2), z)
+        if history is NO_HISTORY:
+            rx, rv, ru = reference(*parameters, x, v, u, 2.5 * period)
+            rz = z_end
+        else:
+            rx, rv, ru, rz = reference(*parameters, x, v, u, 2.5 * period, history, z)
         size = max(1.0, abs(rx), abs(rv))
-        error = max(abs(state[0] - rx), abs(state[1] - rv), *np.abs(u_end - ru)) / size
+        error = max(abs(state[0] - rx), abs(state[1] - rv), *np.abs(u_end - ru), *np.abs(z_end - rz)) / size
         worst = max(worst, error)
     assert worst <= 1e-9, worst
 
@@ -258,8 +288,57 @@ def test_the_taylor_orbit_s_work_is_bounded(k0, c, k3, x0, expected):
 
     state, out = np.array([x0, 0.0]), np.empty(64)
     start = time.perf_counter()
-    status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), 0.3, 0.6,
-                                      state, np.zeros(0), 2 * math.pi / 0.6 / 64, 64, out)
+    status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), *NO_HISTORY, 0.3,
+                                      0.6, state, np.zeros(0), np.zeros(0), 2 * math.pi / 0.6 / 64, 64, out)
     assert status == getattr(element_orbit, expected) and taken < 64
     assert time.perf_counter() - start < 30.0
     assert element_orbit.explain(status) != f"status {status}"
+
+
+@pytest.mark.parametrize("acts_on", ["x", "v"])
+def test_friction_beside_a_history_is_the_linear_closed_form_where_the_friction_vanishes(acts_on):
+    """[friction] with [history] (refused before: shooting had no state for the memory; the z_j of its
+    exponential terms are now unknowns of the shooting): with a friction of 1e-9 N against a force of 1 N the
+    curve is the linear oscillator's with the history's transfer function, X = F / (k - m w^2 + i c w +
+    sum_j w_j g_j / (r_j + i w)) (g_j = 1 on x, i w on v; a rate 0 among them: a plain integral), to 1e-7 in
+    amplitude and phase."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from tests.analysis.test_harmonic_balance import element
+
+    weights, rates = [0.3, 0.1], [0.5, 0.0]
+    scene = element({"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05},
+                     "friction": {"alpha": 1e-9}, "history": {"weight": weights, "rate": rates, "acts_on": acts_on}})
+    curve = harmonic_response(scene, 1.0, [0.05, 0.4], tolerance=1e-9)
+    assert curve.method == "shooting" and curve.orbit == "Taylor series" and len(curve.frequency) > 10
+    omega = 2.0 * math.pi * curve.frequency
+    gain = np.ones_like(omega) if acts_on == "x" else 1j * omega
+    memory = sum(w * gain / (r + 1j * omega) for w, r in zip(weights, rates))
+    X = 1.0 / (1.0 - omega**2 + 0.05j * omega + memory)
+    assert np.allclose(curve.amplitude, np.abs(X), rtol=1e-7, atol=0)
+    assert np.allclose(curve.phase, np.angle(X), rtol=0, atol=1e-7)
+
+
+def test_friction_beside_a_history_has_its_periodic_orbits(tmp_path):
+    """With a friction that matters (the mass sticks at low frequency), from the command line: the curve's
+    states are periodic orbits of the independent integration (history included) to 1e-8."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+    from tests.analysis.test_harmonic_balance import element
+
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05}, "friction": {"alpha": 0.1},
+              "history": {"weight": [0.3], "rate": [0.5]}}
+    out = tmp_path / "curve.csv"
+    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "0.3", "--frequencies", "0.05,0.4",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    shooting = ElementShooting(prepared(element(tables)), 0.3, None, 512, 7, 1.0)
+    assert shooting.dimension == 3
+    frequency = np.array(table["frequency"], float)
+    for pick in (0, len(frequency) // 2, len(frequency) - 1):
+        omega = 2.0 * math.pi * frequency[pick]
+        s = shooting.solve_at(omega)
+        A = float(table["amplitude"][pick])
+        assert abs(shooting.amplitude_at(s, omega) - A) <= 3e-6 * A
+        x, v, z = s[0], s[1] * shooting.reference, s[2:]
+        rx, rv, _, rz = reference(1.0, 1.0, 0.05, 0.0, 0.1, 0.1, 0.0, np.zeros(0), np.zeros(0), 0.3, omega, x, v, [],
+                                  2.0 * math.pi / omega, (np.array([0.3]), np.array([0.5]), False), z)
+        assert max(abs(rx - x), abs(rv - v) / omega, *np.abs(rz - z) / omega) <= 1e-8 * A
