@@ -13,7 +13,8 @@ while it sticks (v = 0) the friction holds whatever the other forces N(t) = F co
 sum_i k_i u_i - sum_j w_j z_j(t) ask while |N| <= alpha. The motion is smooth between events: a slide of
 fixed direction sigma ends where v reaches 0 (the mass sticks if |N| <= alpha there, else it turns back); a
 stick ends where N leaves [-alpha, alpha]; a sticking branch starts to slide where its u reaches +-eta in the
-direction of motion; a sliding branch sticks where v reaches 0 (the slide's end). So the orbit is a chain of smooth phases:
+direction of motion; a sliding branch sticks where v reaches 0 (the slide's end). So the orbit is a chain of
+smooth phases:
 
 * **A slide** is the solution of an ODE whose right-hand side is a polynomial in (x, v), an exponential of v
   and a cosine of t: its Taylor series about the phase's start follows from the recurrences of products and of
