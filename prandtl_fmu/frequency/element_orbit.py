@@ -299,7 +299,9 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                 rho = max(rho, hr[j], math.sqrt(abs(hw[j]) / mass))
             _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z,
                           constant, amplitude, omega, X, V, Z)
-            size = max(abs(X[0]), abs(V[0]), 1e-300)
+            # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
+            # compare with and took steps of 0 until refused: a review's find)
+            size = max(abs(X[0]), abs(V[0]), size_force / (mass * rho * rho), 1e-300)
             for i in range(nb):
                 size = max(size, beta[i])
             # Jorba & Zou: the last two terms below TRUNCATION of the state (z_j weighed by its force, as a length)
@@ -311,6 +313,14 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                 if top > 0.0:
                     span = min(span, (TRUNCATION * size / top) ** (1.0 / k))
             span = min(span, 1.0 if math.isinf(span) else span, (target - t) * rho)
+            if vs > 0.0 and alpha > alpha_k:
+                # the drop's exp(-sigma v / vs): its coefficients carry its value at the start, which the last terms
+                # hide where the slide is fast (1e-33) and the step then crosses the drop with the series' 1e-11
+                # (a review's find: v_s = 0.003 m/s, 3e-4 off at 128 samples a period). The step changes the
+                # exponent by at most 2, unless the slide is still fast at its end (exp(-40): nothing to see)
+                exponent_rate = abs(V[1]) * rho / vs
+                if span * exponent_rate > 2.0 and sigma * _horner(V, span) * rho < 40.0 * vs:
+                    span = 2.0 / exponent_rate
             reach = span
             rest = (abs(X[terms - 1]) + abs(V[terms - 1])) * reach ** (terms - 1)
             first = -1.0
