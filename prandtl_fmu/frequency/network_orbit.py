@@ -2,7 +2,7 @@
 that ``shooting.py`` solves for the periodic state of a network whose sliders stick.
 
 A network with masses at every node, linear springs and dashpots, rigid sliders (Coulomb, between two nodes or
-a node and the ground) and Prandtl branches without series dashpots is linear between events: the set of
+a node and the ground) and Prandtl branches (with series dashpots: below) is linear between events: the set of
 stuck sliders, of sliding ones (tension alpha sigma) and of sliding branches (tension k eta sigma) is fixed,
 and the stuck sliders are constraints D_j v = 0 whose tensions T = S^-1 G M^-1 F keep them (G the rows D_j of
 the stuck sliders, S = G M^-1 G^T, F the nodes' force without them). The acceleration is then Q F with
@@ -23,6 +23,11 @@ series then takes their force by its recurrence (:func:`_cubic_order`: the elong
 Cauchy products, through Q into the velocities' rows, and R of it into the stuck sliders' tensions), and the
 interval's length is Jorba and Zou's (the last two terms below TRUNCATION of the state), the rest estimated by
 those terms: the truncation at rounding, not a proven bound (the element's ``element_orbit.py`` does the same).
+
+**Branches with series dashpots** (``series``: rows (d, k, eta, lambda = k / c)) carry their u as states of
+the phase (y grows by one each): sticking, u' = d . v - lambda u; sliding, u = +-eta while the inflow
+d . v - lambda u pushes outwards. Their events: a sticking one's u reaching +-eta, a sliding one's inflow
+reaching 0 (``exact_series.py``'s for the element).
 
 **No event is missed.** The events are: a sliding slider's relative velocity reaching 0 (it may stick), a stuck
 one's tension reaching +-alpha (it slides), a sticking branch's u reaching +-eta (it slides), a sliding
@@ -80,6 +85,9 @@ SLIDING = 2    # sigma e'_j: a sliding slider's relative velocity reaches 0
 LEVEL_UP = 3   # eta - u_i: a sticking branch reaches +eta
 LEVEL_DOWN = 4  # eta + u_i
 PLASTIC = 5    # sigma e'_i: a sliding branch's elongation rate reaches 0
+SERIES_UP = 6  # eta - u_i: a sticking branch with a series dashpot reaches +eta
+SERIES_DOWN = 7
+INFLOW = 8     # sigma (e'_i - lambda_i u_i): a sliding one's inflow reaches 0
 
 
 def explain(status: int) -> str:
@@ -260,11 +268,14 @@ def _constraints(mass, rows, stuck):
 
 
 @kernel
-def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
-                t, x, v):
+def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, force,
+                amplitude, omega, t, x, v):
     """The nodes' force without the stuck sliders' tensions: load, springs, cubic springs, dashpots, sliding
-    sliders, branches."""
+    sliders, branches, branches with series dashpots (``series`` rows (row, k, eta, lambda), ``su`` their u)."""
     out = force * (amplitude * math.cos(omega * t))
+    n = x.shape[0]
+    for i in range(series.shape[0]):
+        out -= series[i, :n] * (series[i, n] * su[i])
     out -= _mv(stiffness, x)
     out -= _mv(damping, v)
     for c in range(crows.shape[0]):
@@ -280,11 +291,24 @@ def _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u
 
 
 @kernel
-def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
-            omega, t, x, v):
+def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, smode,
+            force, amplitude, omega, t, x, v):
     """The phase that starts at (x, v, u, t), modes updated in place (see the module); returns the status."""
     n = x.shape[0]
     ns = rows.shape[0]
+    # branches with series dashpots: at a level with their inflow e' - lambda u outwards slide, sliding ones
+    # whose inflow turned stick (u stays at the level)
+    for i in range(series.shape[0]):
+        eta = series[i, n + 1]
+        inflow = _dot(series[i, :n], v) - series[i, n + 2] * su[i]
+        if smode[i] == 0 and abs(su[i]) >= eta:
+            sigma = 1.0 if su[i] > 0.0 else -1.0
+            su[i] = sigma * eta
+            if sigma * inflow > 0.0:
+                smode[i] = int(sigma)
+        elif smode[i] != 0 and smode[i] * inflow < 0.0:
+            su[i] = smode[i] * eta
+            smode[i] = 0
     # branches: at a level moving outwards slide, sliding ones whose rate turned stick
     for i in range(brows.shape[0]):
         rate = _dot(brows[i], v)
@@ -332,8 +356,8 @@ def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode,
         if stuck[j]:
             candidates[index] = j
             index += 1
-    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
-                    omega, t, x, v)
+    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, force,
+                    amplitude, omega, t, x, v)
     s_matrix = np.empty((count, count))
     b = np.empty(count)
     limit = np.empty(count)
@@ -480,14 +504,15 @@ def _solve_s(mass, rows, stuck, rhs):
 
 
 @kernel
-def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
-           t, x, v):
+def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, smode,
+           force, amplitude, omega, t, x, v):
     """The phase's (A, y0, rho, W, offset, kinds, which, tol, status, R, Q): see the module (A, W: the linear
     part; a cubic spring's force enters the series by its own recurrence, ``run``)."""
     n = x.shape[0]
     ns = rows.shape[0]
     nb = brows.shape[0]
-    dim = 2 * n + 3
+    ms = series.shape[0]
+    dim = 2 * n + 3 + ms  # (x, v / rho, q0, qc, qs, the series branches' u)
     stuck = np.zeros(ns, dtype=np.bool_)
     for j in range(ns):
         stuck[j] = mode[j] == 0
@@ -514,6 +539,10 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
         for a in range(n):
             for b in range(n):
                 k_tangent[a, b] += 3.0 * ck3[c] * e * e * crows[c, a] * crows[c, b]
+    for i in range(ms):  # a series branch's spring acts on the nodes through its u
+        for a in range(n):
+            for b in range(n):
+                k_tangent[a, b] += series[i, n] * series[i, a] * series[i, b]
     qt = _mm(q, k_tangent)
     qc = _mm(q, damping)
     qconst = _mv(q, constant)
@@ -529,6 +558,8 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
         norm_k = max(norm_k, row_k)
         norm_c = max(norm_c, row_c)
     rho = max(math.sqrt(norm_k), norm_c, abs(omega))
+    for i in range(ms):
+        rho = max(rho, series[i, n + 2])  # lambda = k / c, its relaxation rate
     a_matrix = np.zeros((dim, dim))
     y = np.zeros(dim)
     size_const = 0.0
@@ -555,12 +586,24 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
     y[2 * n + 2] = qf * math.sin(omega * t)
     a_matrix[2 * n + 1, 2 * n + 2] = -omega / rho
     a_matrix[2 * n + 2, 2 * n + 1] = omega / rho
+    for i in range(ms):
+        at = 2 * n + 3 + i
+        y[at] = su[i]
+        # its tension k u on the nodes, through Q: d(v / rho)/d tau = -Q row k u / rho^2
+        for a in range(n):
+            a_matrix[n + a, at] = -_dot(q[a], series[i, :n]) * series[i, n] / (rho * rho)
+        if smode[i] == 0:  # sticking: u' = e' - lambda u, in tau: d u / d tau = row . (v / rho) - (lambda / rho) u
+            for b in range(n):
+                a_matrix[at, n + b] = series[i, b]
+            a_matrix[at, at] = -series[i, n + 2] / rho
     # the event functions g = W y + offset (event where g crosses below -tol)
     count = 0
     for j in range(ns):
         count += 2 if mode[j] == 0 else 1
     for i in range(nb):
         count += 2 if bmode[i] == 0 else 1
+    for i in range(ms):
+        count += 2 if smode[i] == 0 else 1
     w = np.zeros((count, dim))
     offset = np.zeros(count)
     kinds = np.zeros(count, dtype=np.int64)
@@ -577,6 +620,8 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
                 offset[index] = alpha[j] - sign * (_dot(r[stuck_index], constant))
                 if qf > 0.0:
                     w[index, 2 * n + 1] = -sign * (_dot(r[stuck_index], force)) * amplitude / qf
+                for i in range(ms):  # T carries -R row k u of each series branch
+                    w[index, 2 * n + 3 + i] = sign * _dot(r[stuck_index], series[i, :n]) * series[i, n]
                 kinds[index] = STUCK_UP if sign > 0.0 else STUCK_DOWN
                 which[index] = j
                 index += 1
@@ -603,12 +648,28 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
             kinds[index] = PLASTIC
             which[index] = i
             index += 1
+    for i in range(ms):
+        at = 2 * n + 3 + i
+        if smode[i] == 0:
+            for sign in (1.0, -1.0):
+                w[index, at] = -sign
+                offset[index] = series[i, n + 1]
+                kinds[index] = SERIES_UP if sign > 0.0 else SERIES_DOWN
+                which[index] = i
+                index += 1
+        else:  # sigma (row . v - lambda u), u = sigma eta
+            for b in range(n):
+                w[index, n + b] = smode[i] * rho * series[i, b]
+            offset[index] = -series[i, n + 2] * series[i, n + 1]
+            kinds[index] = INFLOW
+            which[index] = i
+            index += 1
     tol = np.empty(count)
     ysize = 0.0
     for a in range(dim):
         ysize = max(ysize, abs(y[a]))
-    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
-                    omega, t, x, v)
+    f = _node_force(stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, force,
+                    amplitude, omega, t, x, v)
     for e in range(count):
         total = abs(offset[e])
         for a in range(dim):
@@ -735,15 +796,19 @@ def _cubic_order(crows, ck3, vectors, k, n, e_series, square, cube, cubic):
 
 
 @kernel
-def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, force, amplitude, omega, x, v, u, h, steps,
-        out):
+def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, series, force, amplitude, omega, x, v, u,
+        su, h, steps, out):
     """``steps`` steps of h from (x, v, u) at t = 0 (arrays updated in place to the end), x at each step's end
     in ``out`` (steps, n); returns (status, steps taken). ``crows`` (cubic springs, n), ``ck3``: the cubic
     springs (none: the linear phases' proven remainder; some: their recurrence and Jorba and Zou's step)."""
     n = x.shape[0]
     ns = rows.shape[0]
     nb = brows.shape[0]
-    dim = 2 * n + 3
+    ms = series.shape[0]
+    dim = 2 * n + 3 + ms
+    smode = np.zeros(ms, dtype=np.int64)
+    for i in range(ms):
+        su[i] = min(max(su[i], -series[i, n + 1]), series[i, n + 1])
     mode = np.zeros(ns, dtype=np.int64)
     for j in range(ns):
         rate = _dot(rows[j], v)
@@ -759,13 +824,13 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, forc
     for k in range(1, terms + 1):
         factorial *= k
     t = 0.0
-    status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force,
-                     amplitude, omega, t, x, v)
+    status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su,
+                     smode, force, amplitude, omega, t, x, v)
     if status != OK:
         return status, 0
     a_matrix, y, rho, w, offset, kinds, which, tol, status, r, q = _phase(
-        mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude, omega,
-        t, x, v)
+        mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, smode, force,
+        amplitude, omega, t, x, v)
     if status != OK:
         return status, 0
     a_start, a_column, a_value = _csr(a_matrix)
@@ -869,6 +934,8 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, forc
             for i in range(nb):
                 if bmode[i] == 0:
                     u[i] = u[i] + _dot(brows[i], x - x_phase)
+            for i in range(ms):
+                su[i] = y[2 * n + 3 + i]
             kind = kinds[event]
             j = which[event]
             if kind == STUCK_UP or kind == STUCK_DOWN:
@@ -878,16 +945,22 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, forc
             elif kind == LEVEL_UP or kind == LEVEL_DOWN:
                 bmode[j] = 1 if kind == LEVEL_UP else -1
                 u[j] = bmode[j] * beta[j]
+            elif kind == SERIES_UP or kind == SERIES_DOWN:
+                smode[j] = 1 if kind == SERIES_UP else -1
+                su[j] = smode[j] * series[j, n + 1]
+            elif kind == INFLOW:
+                su[j] = smode[j] * series[j, n + 1]
+                smode[j] = 0
             else:
                 u[j] = bmode[j] * beta[j]
                 bmode[j] = 0
             status = _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3,
-                             force, amplitude, omega, t, x, v)
+                             series, su, smode, force, amplitude, omega, t, x, v)
             if status != OK:
                 return status, step
             a_matrix, y, rho, w, offset, kinds, which, tol, status, r, q = _phase(
-                mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, force, amplitude,
-                omega, t, x, v)
+                mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, u, crows, ck3, series, su, smode,
+                force, amplitude, omega, t, x, v)
             if status != OK:
                 return status, step
             stuck_of = _stuck_rows(mode, which, kinds)
@@ -906,4 +979,6 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, forc
     for i in range(nb):
         if bmode[i] == 0:
             u[i] = u[i] + _dot(brows[i], x - x_phase)
+    for i in range(ms):
+        su[i] = y[2 * n + 3 + i]
     return OK, steps

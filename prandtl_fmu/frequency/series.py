@@ -236,8 +236,8 @@ def _lever(network, node, source, named, loaded, purpose):
                              "name one of them")
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
     for e in touching:
-        if e.kind not in ("spring",) + THRESHOLDS:
-            why = "a first-order motion" if e.kind == "dashpot" else "its position a root of a cubic"
+        if e.kind not in ("spring",) + THRESHOLDS or e.c > 0.0:
+            why = "its position a root of a cubic" if e.kind == "cubic" else "a first-order motion"
             raise FrequencyError(f"{source}: node {name} is massless, with {e.kind} {e.name} on it ({why}): {how}, "
                                  f"which takes a massless node held by linear springs and one slider or branch: "
                                  f"{tail}")

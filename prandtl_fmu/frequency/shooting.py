@@ -177,11 +177,6 @@ def prepared_network(scene, named=None, loaded=None, purpose="the forced respons
     for option, name in (("--node", named), ("--load-node", loaded)):
         if name is not None and name not in network.nodes:  # every node as written (some may be condensed)
             raise FrequencyError(f"{option}: {name!r} is not a node of {source} ({', '.join(network.nodes)})")
-    for element in network.elements:
-        if element.kind == "branch" and element.c > 0.0:
-            raise FrequencyError(f"{source}: branch {element.name}: the forced response of a network with sliders "
-                                 "(shooting on its motion, exact between events) takes branches without series "
-                                 "dashpots (c = 0): integrate the network with prandtl-fmu run")
     return condensed(scene, named, loaded, purpose)
 
 
@@ -482,7 +477,7 @@ class NetworkShooting(Shooting):
 
         self.stiffness_matrix = np.zeros((n, n))
         self.damping = np.zeros((n, n))
-        sliders, branches, cubic = [], [], []
+        sliders, branches, cubic, series = [], [], [], []
         for element in network.elements:
             d = row(element)
             if element.kind == "cubic":  # its force k3 (d . x)^3 along d (network_orbit.py: by its recurrence)
@@ -493,6 +488,8 @@ class NetworkShooting(Shooting):
                 self.damping += element.value * np.outer(d, d)
             elif element.kind == "slider" and element.value > 0.0:  # alpha = 0 carries nothing
                 sliders.append((d, element.value))
+            elif element.kind == "branch" and element.c > 0.0:  # a series dashpot: its u relaxes (network_orbit)
+                series.append(np.concatenate((d, [element.value, element.eta, element.value / element.c])))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
             elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
@@ -503,11 +500,13 @@ class NetworkShooting(Shooting):
         self.bk = np.array([b[1] for b in branches], dtype=float)
         self.eta = np.array([b[2] for b in branches], dtype=float)
         self.smooth = bool(cubic)  # its phases by their recurrence (network_orbit.py), as the figures say
+        self.series = np.array(series, dtype=float).reshape(len(series), n + 3)
         self.crows = np.array([d for d, _ in cubic], dtype=float).reshape(len(cubic), n)
         self.ck3 = np.array([k3 for _, k3 in cubic], dtype=float)
-        holding = self.stiffness_matrix + sum((k * np.outer(d, d) for d, k, _ in branches), np.zeros((n, n)))
+        holding = self.stiffness_matrix + sum((k * np.outer(d, d) for d, k, _ in branches), np.zeros((n, n))) + \
+            sum((row[n] * np.outer(row[:n], row[:n]) for row in series), np.zeros((n, n)))
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, "exact",
-                         2 * n + len(branches), float(holding[load, load]))
+                         2 * n + len(branches) + len(series), float(holding[load, load]))
         self.force = np.zeros(n)
         if base_amplitude is None:
             self.force[load] = 1.0
@@ -527,17 +526,18 @@ class NetworkShooting(Shooting):
         h = 2.0 * math.pi / omega / self.M
         x = np.array(s[:n], dtype=float)
         v = np.array(s[n:2 * n], dtype=float) * self.reference
-        u = np.clip(np.array(s[2 * n:], dtype=float), -self.eta, self.eta)
+        u = np.clip(np.array(s[2 * n:2 * n + self.branches], dtype=float), -self.eta, self.eta)
+        su = np.array(s[2 * n + self.branches:], dtype=float)  # the series branches' u (run clips them)
         amplitude = self.force_amplitude if self.force_amplitude is not None else \
             self.base_amplitude * omega * omega
         steps = self.M // 2 * half_periods
         out = np.empty((steps, n))
         status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
-                            self.brows, self.bk, self.eta, self.crows, self.ck3, self.force, float(amplitude),
-                            float(omega), x, v, u, h, steps, out)
+                            self.brows, self.bk, self.eta, self.crows, self.ck3, self.series, self.force,
+                            float(amplitude), float(omega), x, v, u, su, h, steps, out)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
-        end = np.concatenate((x, v / self.reference, u))
+        end = np.concatenate((x, v / self.reference, u, su))
         return self._checked(end, out, omega)
 
 

@@ -169,3 +169,71 @@ def test_the_mode_of_a_duffing_oscillator_with_a_hair_of_friction_is_the_conserv
     assert backbone.frequency[0] == pytest.approx(frequency, rel=1e-6)
     assert frequency > 1.04 / (2 * math.pi)  # hardening: above the linear frequency by 4 % at least
     assert 0 < backbone.damping_ratio[0] < 1e-3
+
+
+# ----------------------------------------------------------------- branches with series dashpots beside sliders
+
+def test_a_node_with_series_dashpot_branches_and_a_slider_is_the_element_s_exact_orbit(tmp_path):
+    """Branches with series dashpots (their u relaxes, u' = e' - (k / c) u, while they stick: states of the
+    network's phases now; refused before) beside a rigid slider, on one node: the element's exact stepper
+    (``exact_series.py``: friction and series branches, closed form between events) to 1e-11 over two periods,
+    from rest and from moving states."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, NetworkShooting, prepared, prepared_network
+    from tests.analysis.test_harmonic_balance import element
+
+    text = network_text(["a"], [1.0], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("dashpot", ["a", "ground"], {"c": 0.02}),
+        ("slider", ["a", "ground"], {"alpha": 0.1}), ("branch", ["a", "ground"], {"k": 0.7, "eta": 0.2, "c": 0.5}),
+        ("branch", ["a", "ground"], {"k": 0.4, "eta": 0.1, "c": 0.8})], load_node="a")
+    network_shooting = NetworkShooting(prepared_network(network(tmp_path, text), None, "a"), 0.3, None, 128, 7, 1.0)
+    exact = ElementShooting(prepared(element({
+        "mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02}, "friction": {"alpha": 0.1},
+        "branches": {"k": [0.7, 0.4], "eta": [0.2, 0.1], "c": [0.5, 0.8]}})), 0.3, None, 128, 7, 1.0)
+    assert network_shooting.dimension == exact.dimension == 4
+    for omega in (0.5, 1.0, 2.0):
+        for start in ([0.0, 0.0, 0.0, 0.0], [0.5, -0.3, 0.05, -0.02], [1.5, 1.0, -0.2, 0.1]):
+            end, xs = network_shooting.run(np.array(start), omega, 4)
+            end_exact, xs_exact = exact.run(np.array(start), omega, 4)
+            size = max(1.0, float(np.max(np.abs(xs_exact))))
+            assert np.max(np.abs(xs[:, 0] - xs_exact[:, 0])) <= 1e-11 * size
+            assert np.max(np.abs(end - end_exact)) <= 1e-11 * size
+
+
+MAXWELL_JOINT = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.5}),
+                 ("dashpot", ["a", "ground"], {"c": 0.02}), ("dashpot", ["b", "ground"], {"c": 0.02}),
+                 ("branch", ["a", "b"], {"k": 0.8, "eta": 0.1, "c": 0.3}), ("slider", ["b", "ground"], {"alpha": 0.03})]
+
+
+def test_two_masses_with_a_maxwell_branch_and_a_slider_move_as_the_implicit_stepper_runs_them(tmp_path):
+    """Two masses joined by a branch with a series dashpot, one of them on a slider: shooting's first harmonic of
+    both against the implicit stepper's steady state at h and h / 2 (order 1, Richardson within 5 % of its
+    error), and the curve from the command line through the resonances."""
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared_network
+    from prandtl_fmu.loads import HarmonicLoad
+    from prandtl_fmu.network.driver import simulate
+    from prandtl_fmu.scene_tables import Solver
+
+    text = network_text(["a", "b"], [1.0, 0.5], MAXWELL_JOINT, load_node="a")
+    scene = network(tmp_path, text)
+    F, omega = 0.3, 2 * math.pi * 0.08  # below the resonances: the stepper's error is first order there
+    shooting = NetworkShooting(prepared_network(scene, None, "a"), F, None, 1024, 7, omega)
+    s = shooting.solve_at(omega)
+    coefficients = shooting.coefficients(s, omega)
+    X = coefficients[:, 1] - 1j * coefficients[:, 2]
+    period = 2.0 * math.pi / omega
+    harmonics = []
+    for per in (1000, 2000):
+        h = period / per
+        run = dataclasses.replace(scene, load=HarmonicLoad(F, omega), solver=Solver("implicit", h, 60 * period, h))
+        result = simulate(run, progress=False)
+        t = result.time[-per - 1:-1]
+        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in "ab"]))
+    coarse, fine = (np.abs(Y - X) for Y in harmonics)
+    assert np.all(np.abs(coarse / fine - 2.0) < 0.15), (coarse, fine)
+    assert np.all(np.abs(2.0 * harmonics[1] - harmonics[0] - X) < 0.05 * fine), (harmonics, X)
+    path, out = tmp_path / "maxwell.toml", tmp_path / "maxwell.csv"
+    path.write_text(text)
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.05,0.4", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert len(table["frequency"]) > 10 and set(table["stable"]) == {"true"}
+    assert "nan" not in " ".join(table["amplitude_b"]).lower()
