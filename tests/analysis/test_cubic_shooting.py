@@ -13,6 +13,7 @@ from prandtl_fmu.cli import main
 
 from tests.analysis.test_describe_cli import read_csv
 from tests.analysis.test_harmonic_balance_network_friction import network, network_text
+from tests.analysis.test_series import implicit_agrees
 
 ONE_NODE = [("spring", ["a", "ground"], {"k": 1.0}), ("cubic", ["a", "ground"], {"k3": 0.5}),
             ("dashpot", ["a", "ground"], {"c": 0.02}), ("slider", ["a", "ground"], {"alpha": 0.05}),
@@ -46,36 +47,16 @@ def test_a_node_with_a_cubic_spring_and_a_slider_is_the_element_s_taylor_orbit(t
             assert np.max(np.abs(end - np.r_[state, u])) <= 1e-11 * size
 
 
-def _harmonic(x, t, omega):
-    return 2.0 / len(t) * np.sum(x * np.exp(-1j * omega * t))
-
-
 def test_two_masses_with_a_cubic_spring_and_a_slider_move_as_the_implicit_stepper_runs_them(tmp_path):
     """At a frequency of one stable state (below the first mode), shooting's first harmonic of both masses
     against the implicit stepper's steady state at h and h / 2: the stepper's error halves (order 1) and its
     Richardson extrapolation lands within 5 % of that error on shooting's."""
     from prandtl_fmu.frequency.shooting import NetworkShooting, prepared_network
-    from prandtl_fmu.loads import HarmonicLoad
-    from prandtl_fmu.network.driver import simulate
-    from prandtl_fmu.scene_tables import Solver
 
     scene = network(tmp_path, network_text(["a", "b"], [1.0, 0.5], TWO_MASSES, load_node="a"))
     F, omega = 0.3, 2 * math.pi * 0.1
     shooting = NetworkShooting(prepared_network(scene, None, "a"), F, None, 1024, 7, omega)
-    s = shooting.solve_at(omega)
-    coefficients = shooting.coefficients(s, omega)
-    X = coefficients[:, 1] - 1j * coefficients[:, 2]
-    period = 2.0 * math.pi / omega
-    harmonics = []
-    for per in (1000, 2000):
-        h = period / per
-        run = dataclasses.replace(scene, load=HarmonicLoad(F, omega), solver=Solver("implicit", h, 40 * period, h))
-        result = simulate(run, progress=False)
-        t = result.time[-per - 1:-1]
-        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in "ab"]))
-    coarse, fine = (np.abs(Y - X) for Y in harmonics)
-    assert np.all(np.abs(coarse / fine - 2.0) < 0.15), (coarse, fine)
-    assert np.all(np.abs(2.0 * harmonics[1] - harmonics[0] - X) < 0.05 * fine), (harmonics, X)
+    X = implicit_agrees(scene, shooting, F, omega, 40, ratio=0.15)
     assert np.min(np.abs(X)) > 0.1
 
 
@@ -209,28 +190,12 @@ def test_two_masses_with_a_maxwell_branch_and_a_slider_move_as_the_implicit_step
     both against the implicit stepper's steady state at h and h / 2 (order 1, Richardson within 5 % of its
     error), and the curve from the command line through the resonances."""
     from prandtl_fmu.frequency.shooting import NetworkShooting, prepared_network
-    from prandtl_fmu.loads import HarmonicLoad
-    from prandtl_fmu.network.driver import simulate
-    from prandtl_fmu.scene_tables import Solver
 
     text = network_text(["a", "b"], [1.0, 0.5], MAXWELL_JOINT, load_node="a")
     scene = network(tmp_path, text)
     F, omega = 0.3, 2 * math.pi * 0.08  # below the resonances: the stepper's error is first order there
     shooting = NetworkShooting(prepared_network(scene, None, "a"), F, None, 1024, 7, omega)
-    s = shooting.solve_at(omega)
-    coefficients = shooting.coefficients(s, omega)
-    X = coefficients[:, 1] - 1j * coefficients[:, 2]
-    period = 2.0 * math.pi / omega
-    harmonics = []
-    for per in (1000, 2000):
-        h = period / per
-        run = dataclasses.replace(scene, load=HarmonicLoad(F, omega), solver=Solver("implicit", h, 60 * period, h))
-        result = simulate(run, progress=False)
-        t = result.time[-per - 1:-1]
-        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in "ab"]))
-    coarse, fine = (np.abs(Y - X) for Y in harmonics)
-    assert np.all(np.abs(coarse / fine - 2.0) < 0.15), (coarse, fine)
-    assert np.all(np.abs(2.0 * harmonics[1] - harmonics[0] - X) < 0.05 * fine), (harmonics, X)
+    implicit_agrees(scene, shooting, F, omega, 60, ratio=0.15)
     path, out = tmp_path / "maxwell.toml", tmp_path / "maxwell.csv"
     path.write_text(text)
     assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.05,0.4", "--out", str(out)]) == 0
