@@ -342,6 +342,10 @@ def run(args) -> int:
                                         sweep=args.sweep, scheduler=args.scheduler, workers=values.get("workers"))
             _warn_friction_error(scene, result.stepper)
     except (FrequencyError, SceneError, ValueError) as exc:
+        import numpy as np
+
+        if isinstance(exc, np.linalg.LinAlgError):  # numpy's, not a refusal of ours: the top level's internal
+            raise  # error (it once said "error: Array must not contain infs or NaNs" as if the input were bad)
         print(f"error: {exc}", file=sys.stderr)
         return 2
     text = csv_text(result.columns())

@@ -233,7 +233,7 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
 
 
 def _curve(balance, points, where, stability, change, orders=()) -> Curve:
-    from .floquet import is_stable, multipliers
+    from .floquet import is_stable, monotone, multipliers
 
     system = balance.system
     L = balance.L
@@ -245,11 +245,12 @@ def _curve(balance, points, where, stability, change, orders=()) -> Curve:
     largest = np.full(len(points), np.nan)
     stable = np.ones(len(points), dtype=bool)
     known = np.ones(len(points), dtype=bool)
+    proven = stability and monotone(system)
     if stability:  # every point's own multipliers: a verdict is never inferred from the neighbours'
         for index, (w, q, _) in enumerate(points):
             values = multipliers(balance, q, w)
-            if values is None:  # not computed (floquet.py says where): unknown, never a guess
-                known[index] = False
+            if values is None:  # not computed (floquet.py says where): unknown, never a guess, unless the
+                known[index] = proven  # scene is monotone: every periodic state stable, by the energy
                 continue
             largest[index] = float(np.max(np.abs(values)))
             stable[index] = is_stable(values)

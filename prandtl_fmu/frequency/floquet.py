@@ -47,6 +47,16 @@ sizes: the LARGEST multipliers at 2 M are extrapolated.
 
 A point is ``stable`` when every multiplier has |mu| <= 1 + MARGIN (MARGIN covers the finite differences and
 the extrapolation; a fold, where one multiplier crosses 1, is stable to either side within it).
+
+**Bounded work.** A monodromy costs the state's size squared times the steps of a period: with many sliding
+branches (the packaged ``many-branches``: 100 000 of them, a matrix of 74.5 GiB) that is out of reach. Each
+point's cost is held against WORK_LIMIT multiply-adds before it runs (``variational.work``; for the finite
+differences, a period per state of its steps over every element); past it the multipliers are not computed.
+Then the verdict comes from the scene where it can (:func:`monotone`): linear springs and dashpots with positive
+semi-definite matrices, branches (with or without series dashpots) and sliders are monotone, so the energy of
+the difference of two motions, 1/2 dv' M dv + 1/2 dx' K dx + 1/2 sum k_b du_b^2, never grows: every multiplier
+has |mu| <= 1, every point is stable, proven rather than measured (the curve's ``largest`` multiplier is NaN
+there). Elsewhere (a cubic spring, memory) the point's stability is unknown: an empty field, never a guess.
 """
 from __future__ import annotations
 
@@ -61,6 +71,8 @@ PERTURBATION = 1e-6
 MAX_DELAY_STATES = 1024
 REFINEMENTS = 4  # of the steps per period of the finite differences: at most STEPS 2^4
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
+# the multiply-adds one point's monodromy may cost (a few seconds); past it the multipliers are not computed
+WORK_LIMIT = 4e9
 
 
 def orbit_start(balance, q_free, omega) -> tuple:
@@ -90,13 +102,20 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
     the orbit of ``balance`` at ``omega`` (rad/s); None where they are not computed (a delay past
     MAX_DELAY_STATES)."""
     if variational(balance.system):
-        return np.linalg.eigvals(variational_monodromy(balance, q_free, omega))
-    if balance.system.memory is not None:
+        monodromy = variational_monodromy(balance, q_free, omega)
+        return None if monodromy is None else np.linalg.eigvals(monodromy)
+    system = balance.system
+    _, states = _branch_states(balance, q_free)
+    if system.memory is not None:
         def at(count):
             monodromy = _memory_monodromy(balance, q_free, omega, count)
             return None if monodromy is None else np.linalg.eigvals(monodromy)
     else:
         def at(count):
+            # 2 n + states + 1 periods of count steps, each step over every node and element
+            cost = (2.0 * system.n + states.size + 1) * count * (system.n + len(system.network.elements)) * 64
+            if cost > WORK_LIMIT:
+                return None
             return np.linalg.eigvals(_monodromy(balance, q_free, omega, count))
     return refined(at, steps)
 
@@ -138,11 +157,11 @@ def extrapolated(fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
     return np.array([2.0 * mu - coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()])
 
 
-def variational_monodromy(balance, q_free, omega) -> np.ndarray:
+def variational_monodromy(balance, q_free, omega):
     """The monodromy over x, v and the u of the branches that slide on the orbit of ``balance`` at ``omega``
     (a stuck branch's u moves with x: ``variational.py``), from its variational equation on the balance's N
-    samples."""
-    from .variational import monodromy
+    samples; None where its work would pass WORK_LIMIT."""
+    from .variational import fastest_rate, monodromy, substeps, work
 
     system = balance.system
     full = balance.full(q_free)
@@ -158,6 +177,14 @@ def variational_monodromy(balance, q_free, omega) -> np.ndarray:
     n, nb = system.n, system.branch_k.shape[0]
     e = relative(x, system.branch_ends)
     sliding = np.flatnonzero(_slides(system, x))
+    cubic_e = relative(x, system.cubic_ends)
+    period = 2.0 * math.pi / omega
+    velocity = relative(v, system.branch_ends)
+    steps = substeps(fastest_rate(system, np.max(np.abs(cubic_e), axis=1, initial=0.0)), period, balance.N)
+    # each reversal of a sliding branch: at most a turn and a threshold
+    switches = 2 * int(np.sum(np.diff(np.sign(velocity[sliding]), axis=1) != 0)) + 2 * sliding.size
+    if work(balance.N, steps, 2 * n + nb, 2 * n + sliding.size, switches) > WORK_LIMIT:
+        return None
     # the columns: unit x and v, a stuck branch's u moving with x (du = B dx); unit u of each sliding branch
     z = np.zeros((2 * n + nb, 2 * n + sliding.size))
     z[np.arange(2 * n), np.arange(2 * n)] = 1.0
@@ -167,14 +194,31 @@ def variational_monodromy(balance, q_free, omega) -> np.ndarray:
             if r >= 0:
                 z[2 * n + b, r] = -1.0
     z[2 * n + sliding, 2 * n + np.arange(sliding.size)] = 1.0
-    monodromy(2.0 * math.pi / omega, balance.N, 1.0 / system.mass, system.damping, system.stiffness,
-              system.cubic_ends, system.cubic_k3, relative(x, system.cubic_ends), system.branch_ends,
-              system.branch_k, system.branch_eta, e, relative(v, system.branch_ends), balance.elongations.copy(), z)
+    monodromy(period, balance.N, 1.0 / system.mass, system.damping, system.stiffness, system.cubic_ends,
+              system.cubic_k3, cubic_e, system.branch_ends, system.branch_k, system.branch_eta, e, velocity,
+              balance.elongations.copy(), steps, z)
     return z[np.concatenate((np.arange(2 * n), 2 * n + sliding))]
 
 
 def is_stable(values: np.ndarray) -> bool:
     return bool(np.max(np.abs(values)) <= 1.0 + MARGIN)
+
+
+def monotone(system) -> bool:
+    """Whether every periodic state of ``system`` is stable whatever its multipliers, by the energy of the
+    difference of two motions (see the module): linear springs and dashpots whose matrices are positive
+    semi-definite, Prandtl branches (with or without series dashpots) and sliders, no cubic spring, no effect
+    with memory."""
+    if system.memory is not None or np.any(system.cubic_k3 != 0.0):
+        return False
+    if np.any(system.branch_k < 0.0):
+        return False
+    for matrix in (system.stiffness, system.damping):
+        symmetric = 0.5 * (matrix + matrix.T)
+        scale = float(np.max(np.abs(symmetric), initial=0.0))
+        if scale > 0.0 and float(np.min(np.linalg.eigvalsh(symmetric))) < -1e-12 * scale:
+            return False
+    return True
 
 
 def _memory_monodromy(balance, q_free, omega, steps):

@@ -13,25 +13,66 @@ that stops sliding (slip to stick, where its elongation turns) starts from du_b 
 continuous there (v = 0). The orbit is the balance's: x and v from its harmonics at the N samples of ``aft.py``
 (linear between samples), u from the same play operator on the samples, the switches located inside each
 sample interval (a threshold where the sampled elongation reaches it, a turn where the velocity changes sign).
-The equation is integrated with the classical Runge-Kutta method of order 4, SUBSTEPS step per sample interval
-cut at the switches, from each unit perturbation in turn: Phi, the monodromy over the state (x, v, u). A branch
+The equation is integrated with the classical Runge-Kutta method of order 4, ``substeps`` steps per sample interval
+(:func:`substeps`: as many as the fastest rate of the stuck network asks, see below), cut at the switches, from
+each unit perturbation in turn: Phi, the monodromy over the state (x, v, u). A branch
 that never slides on the orbit keeps any offset: du - B dx is constant for it, a multiplier 1 whatever the
 motion does (the family of stuck positions, neutral). Its u is therefore not a state of its own: a perturbation
 moves it with x (du = B dx, the invariant subspace du - B dx = 0), and Phi is taken over x, v and the u of the
 branches that slide (``floquet.variational_monodromy``).
 
-Its error: that of the orbit's samples (the switch instants within O(h^2) of the sampled model's) and RK4's
-O((omega_n h)^4) per step; no backward Euler's damping to extrapolate away, and one pass instead of
-4 n + 2 periods of the stepper: about a hundredth of the cost, which is what lets every point of a curve get its
-multipliers.
+Its error: that of the orbit's samples (the switch instants within O(h^2) of the sampled model's) and RK4's.
+RK4 shrinks an undamped oscillation of phase theta per step by about theta^6 / 144, so over a period whose
+fastest rate r (the stuck network's highest frequency, bounded by Gershgorin's rows of M^-1 K with every branch
+stuck and every cubic spring at its steepest, or a dashpot's rate) turns a phase r T, the steps keep theta <=
+(144 ACCURACY / (r T))^(1/5) (and <= 1/2): a multiplier off by at most about ACCURACY = MARGIN / 20. One step
+per sample where the orbit is slow beside its samples (the usual case); many where a stiff branch rings far
+above the forcing (1e6 N/m on 1 kg driven at 0.1 Hz: 1414 rad/s over 10 s; one step per sample there was
+unstable, and the multipliers came out NaN: a packaged scene's find). Bounded: :func:`work` is the cost, which
+``floquet.py`` holds against its budget before it runs. No backward Euler's damping to extrapolate away, and one
+pass instead of 4 n + 2 periods of the stepper: about a hundredth of the cost, which is what lets every point of
+a curve get its multipliers.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from .._jit import kernel
 
-SUBSTEPS = 1
+ACCURACY = 1e-4  # a multiplier's error from RK4 over one period (floquet.MARGIN / 20)
+
+
+def fastest_rate(system, cubic_elongation: np.ndarray) -> float:
+    """A bound on the fastest rate (1/s) of the variational equation of ``system``: Gershgorin's rows of
+    M^-1 (K + every branch stuck + every cubic spring at 3 k3 e^2, e its largest |elongation|
+    ``cubic_elongation``) under a square root, or a dashpot's rows of M^-1 C."""
+    n = system.n
+    rows = np.abs(system.stiffness).sum(axis=1)
+    damping = np.abs(system.damping).sum(axis=1)
+    for ends, k in ((system.branch_ends, np.abs(system.branch_k)),
+                    (system.cubic_ends, 3.0 * np.abs(system.cubic_k3) * np.asarray(cubic_elongation) ** 2)):
+        for (p, q), value in zip(ends.tolist(), k.tolist()):
+            for end in (p, q):
+                if 0 <= end < n:
+                    rows[end] += 2.0 * value
+    return float(max(np.max(np.sqrt(rows / system.mass)), np.max(damping / system.mass), 0.0))
+
+
+def substeps(rate: float, period: float, samples: int) -> int:
+    """RK4 steps per sample interval for an error of about ACCURACY on the multipliers over one period whose
+    fastest rate is ``rate`` (see the module)."""
+    turn = rate * period
+    if turn <= 0.0:
+        return 1
+    theta = min(0.5, (144.0 * ACCURACY / turn) ** 0.2)
+    return max(1, math.ceil(turn / samples / theta))
+
+
+def work(samples: int, steps: int, rows: int, columns: int, switches: int) -> float:
+    """The cost of :func:`monodromy` in multiply-adds (four stages of rows x columns per RK4 step)."""
+    return 4.0 * (samples * steps + switches) * rows * columns
 
 
 @kernel
@@ -113,11 +154,12 @@ def _step(out, z, slope, span, rows, columns):
 
 @kernel
 def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_samples, branch_ends, branch_k,
-              branch_eta, e, velocity, u0, z):
+              branch_eta, e, velocity, u0, steps, z):
     """z (2 n + nb, columns), in place: the perturbations (x, v, u) at t = 0 in, at t = T out (see the module),
     over one period of ``samples`` intervals; ``e`` and ``velocity`` (nb, samples): the branches' elongations and
     their rates at the samples; ``u0`` (nb,): u at sample 0; ``cubic_samples`` (nc, samples): the cubic springs'
-    elongations."""
+    elongations; ``steps``: RK4 steps per sample interval (:func:`substeps`), a piece of it cut at a switch
+    taking its share."""
     n = inverse_mass.shape[0]
     nb = branch_k.shape[0]
     h = period / samples
@@ -152,8 +194,9 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
                     first, which = events[b], b
             span = (first - start) * h
             if span > 0.0:
-                for piece in range(SUBSTEPS):
-                    _advance(z, span / SUBSTEPS, start + piece * (first - start) / SUBSTEPS, h, inverse_mass, C, K,
+                pieces = max(1, int(math.ceil(steps * (first - start))))
+                for piece in range(pieces):
+                    _advance(z, span / pieces, start + piece * (first - start) / pieces, h, inverse_mass, C, K,
                              cubic_ends, cubic_k3, cubic_samples, j, branch_ends, branch_k, sticking, stages,
                              cubic_e, samples)
             if which < 0:

@@ -507,6 +507,51 @@ def test_the_variational_monodromy_of_a_stuck_branch_is_the_linear_oscillator_s(
     assert np.max(np.abs(got - wanted)) <= 1e-8, (got, wanted)
 
 
+def test_a_stiff_stuck_branch_far_above_the_forcing_has_the_linear_oscillator_s_multipliers():
+    """A branch of 1e6 N/m on 1 kg stuck under 0.1 Hz (the packaged hard/stiff-branches: the stuck network rings
+    at 1000 rad/s, 10 000 radians a period): the variational equation's RK4 takes as many steps as that rate asks
+    (one a sample was unstable: NaN multipliers), so |mu| is the linear oscillator's exp(-c T / 2 m) to 2e-4
+    (variational.ACCURACY is 1e-4)."""
+    from prandtl_fmu.frequency import floquet
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    c = 1e-3
+    system = periodic_system(element({"mass": {"m": 1.0}, "damper": {"c": c},
+                                      "branches": {"k": [1.0e6], "eta": [1.0e-4]}}))
+    omega = 2 * math.pi * 0.1
+    stuck = HarmonicBalance(system, 3, 0.01)  # |x| ~ 1e-8: the branch never reaches 1e-4
+    q = stuck.solve_at(omega)
+    got = np.abs(np.linalg.eigvals(floquet.variational_monodromy(stuck, q, omega)))
+    wanted = math.exp(-c / 2 * 2 * math.pi / omega)
+    assert np.all(np.isfinite(got))
+    assert np.max(np.abs(got - wanted)) <= 2e-4, (got, wanted)
+
+
+def test_a_monodromy_past_its_work_bound_is_not_computed_and_a_monotone_scene_is_stable_by_its_energy(
+        tmp_path, monkeypatch):
+    """Past floquet.WORK_LIMIT (0 here; 100 000 branches reach it) no multiplier is computed: a friction damper
+    (linear spring, dashpot, branch: monotone) is stable at every point by the energy of the difference (its
+    multiplier cell empty), a Duffing oscillator's stability is unknown (empty cells, never a guess); with the
+    bound in place the damper's points are stable by their multipliers, which are written."""
+    from prandtl_fmu.frequency import floquet
+    from prandtl_fmu.frequency.harmonic_balance import periodic_system
+
+    assert floquet.monotone(periodic_system(element(DAMPER)))
+    assert not floquet.monotone(periodic_system(element(DUFFING)))
+    arguments = ["--force-amplitude", "0.2", "--frequencies", "0.1,0.3", "--harmonics", "3"]
+    damper, duffing = write(tmp_path, DAMPER, "damper.toml"), write(tmp_path, DUFFING, "duffing.toml")
+    assert main(["describe", damper, *arguments, "--out", str(tmp_path / "measured.csv")]) == 0
+    measured = read_csv(tmp_path / "measured.csv")
+    assert set(measured["stable"]) == {"true"} and all(float(m) <= 1.0 for m in measured["multiplier"])
+    monkeypatch.setattr(floquet, "WORK_LIMIT", 0.0)
+    assert main(["describe", damper, *arguments, "--out", str(tmp_path / "proven.csv")]) == 0
+    proven = read_csv(tmp_path / "proven.csv")
+    assert set(proven["stable"]) == {"true"} and set(proven["multiplier"]) == {""}
+    assert main(["describe", duffing, *arguments, "--out", str(tmp_path / "unknown.csv")]) == 0
+    unknown = read_csv(tmp_path / "unknown.csv")
+    assert set(unknown["stable"]) == {""} and set(unknown["multiplier"]) == {""}
+
+
 @pytest.mark.slow
 def test_the_variational_monodromy_of_a_sliding_branch_is_the_full_finite_differences():
     """Under a force that slips the friction damper's branch: the eigenvalues of floquet.variational_monodromy
