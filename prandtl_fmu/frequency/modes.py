@@ -308,7 +308,7 @@ def _newton(balance, q, omega, xi, fixed, keep, A):
         xi += step[-1]
         if not omega > 0:
             return None
-        small = np.max(np.abs(step[:-2])) <= 1e-10 * np.max(np.abs(q)) and abs(step[-2]) <= 1e-10 * omega and \
+        small = np.max(np.abs(step[:-2]), initial=0.0) <= 1e-10 * np.max(np.abs(q)) and abs(step[-2]) <= 1e-10 * omega and \
             abs(step[-1]) <= 1e-10 * max(abs(xi), 1e-6 * omega)
         if small:
             return q, omega, xi

@@ -85,6 +85,22 @@ def test_one_harmonic_nonlinear_mode_of_a_jenkins_element_is_its_describing_func
     assert errors[1] <= 1e-4 and errors[1] < errors[0] / 4  # the trapezoid rule over a kinked cycle: ~ 1 / N^2
 
 
+def test_the_mode_of_branches_without_a_spring_starts_from_one_harmonic(tmp_path):
+    """Branches alone (k0 = 0, as the paper's section 8: no mean among the unknowns) at one harmonic, where the
+    amplitude fixes both of the node's unknowns: Newton's step over the others is empty (it stopped on numpy's
+    "zero-size array" for 14 of the packaged scenes). Below every threshold the mode is the linear one,
+    sqrt(sum k / m), undamped; above the lowest, K(A) of the elastic-perfectly-plastic closed form."""
+    m, k, eta = 2.0, [1.0, 3.0], [0.1, 0.2]
+    path = write(tmp_path, {"mass": {"m": m}, "branches": {"k": k, "eta": eta}})
+    out = tmp_path / "mode.csv"
+    assert main(["describe", path, "--mode", "1", "--amplitudes", "0.05,0.15", "--out", str(out)]) == 0
+    rows = read_csv(out)
+    assert float(rows["frequency"][0]) == pytest.approx(math.sqrt(sum(k) / m) / (2 * math.pi), rel=1e-9)
+    assert abs(float(rows["damping_ratio"][0])) <= 1e-9
+    K = k[1] + epp(k[0], eta[0], 0.15)[0]
+    assert float(rows["frequency"][1]) == pytest.approx(math.sqrt(K / m) / (2 * math.pi), rel=2e-3)
+
+
 @pytest.mark.slow
 def test_stable_points_agree_with_the_time_sweep_on_a_friction_damper():
     from prandtl_fmu.frequency.curve import harmonic_response
