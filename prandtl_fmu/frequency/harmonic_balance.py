@@ -263,8 +263,8 @@ def _element_network(scene, tolerance: float = DEFAULT_TOLERANCE):
     from ..network.model import Element, Network
 
     if scene.mass is None:
-        raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
-                             "resonance: describe it with --amplitudes)")
+        raise FrequencyError(f"{scene.source}: the frequency response and the nonlinear modes need [mass] (the "
+                             "element alone has no resonance: describe it with --amplitudes)")
     if scene.friction is not None:
         raise FrequencyError(f"{scene.source}: [friction] (Coulomb friction of the mass: set-valued while it sticks) "
                              "is not taken by harmonic balance: use --method time")

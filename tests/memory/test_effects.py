@@ -278,6 +278,30 @@ def test_dahl_follows_its_closed_form_under_monotone_motion(exponent):
     np.testing.assert_allclose(r["reaction"] - 2.0 * x - r["v"], 0.5 * (1.0 - y), rtol=0, atol=2e-14)
 
 
+@pytest.mark.parametrize("exponent", [1.0, 2.0, 0.5])
+def test_dahl_s_move_keeps_the_digits_of_a_small_force(exponent):
+    """A thousand moves of 1e-9 F_c / sigma from F_d = 1e-6 F_c, composed: F_d as the closed form of the monotone
+    motion (exponent 1: y = y0 exp(-d); 2: y0 / (1 + d y0); 1/2: (sqrt(y0) - d / 2)^2) in 40 digits, to 1e-13
+    relative. 1 - y1 computed after y1 kept F_c's rounding each move (1e-16 F_c, 1e-10 of this F_d, a thousand
+    times): the harmonic balance's Dahl cycle jumped by 1e-12 between Newton iterations."""
+    import mpmath
+
+    from prandtl_fmu.memory.dahl import after
+
+    sigma, level = 400.0, 1.5
+    part = ((sigma, level, exponent), np.zeros(1))
+    f0, dx, moves = 1e-6 * level, 1e-9 * level / sigma, 1000
+    f = f0
+    for _ in range(moves):
+        f, _slope = after(part, f, dx)
+    mpmath.mp.dps = 40
+    y0 = 1 - mpmath.mpf(f0) / level
+    d = mpmath.mpf(sigma) * mpmath.mpf(dx) * moves / level
+    y = {1.0: y0 * mpmath.exp(-d), 2.0: y0 / (1 + d * y0), 0.5: (mpmath.sqrt(y0) - d / 2) ** 2}[exponent]
+    wanted = float(level * (1 - y))
+    assert abs(f - wanted) <= 1e-13 * abs(wanted), (f, wanted)
+
+
 DAHL_OSCILLATOR = """
 [mass]
 m = 1.0
