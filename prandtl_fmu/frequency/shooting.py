@@ -56,8 +56,9 @@ Base excitation (Y0 cos(omega t) of the ground): in relative coordinates z = x -
 cos(omega t), the friction on the relative velocity (the mass slides on the moving support); x = z + y
 reported, as the harmonic balance does.
 
-What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), ``[delay]`` or
-``[dahl]`` beside the friction (``[history]`` is taken: its states are unknowns of ``element_orbit.py``), a
+What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), ``[delay]``
+beside the friction (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
+unknowns of ``element_orbit.py``), a
 cubic spring, Stribeck's drop or a history beside branches with series dashpots, a node other than the mass.
 Nonlinear modes (EPMC) of such a scene are solved for by ``slider_modes.py`` on the network of one node
 (``modes.py``).
@@ -135,12 +136,10 @@ def prepared(scene, named=None, loaded=None):
         raise FrequencyError(f"{scene.source}: [friction] on a moving belt (belt_velocity != 0) has no periodic "
                              "state symmetric over half a period, which the frequency response of friction on the "
                              "mass solves for: use --method time")
-    memory = [name for name in ("delay", "dahl") if getattr(scene, name) is not None]
-    if memory:
-        why = ("a delay's state is the motion over the last tau, not a finite vector" if memory[0] == "delay" else
-               "Dahl's law beside the Coulomb friction is not taken")
-        raise FrequencyError(f"{scene.source}: [friction] with [{memory[0]}] is not taken by the frequency response "
-                             f"of friction on the mass (shooting on the motion: {why}): use --method time")
+    if scene.delay is not None:  # ([dahl] with [friction] the scene itself refuses: two laws of one friction)
+        raise FrequencyError(f"{scene.source}: [friction] with [delay] is not taken by the frequency response of "
+                             "friction on the mass (shooting on the motion: a delay's state is the motion over the "
+                             "last tau, not a finite vector): use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))

@@ -42,9 +42,10 @@ UNDAMPED = 1e-12  # C phi below this share of |C| |phi|: no dashpot damps the mo
 MARGIN = 1e-9  # the bound exceeded by more than rounding
 
 
-def _element_parts(scene) -> Optional[tuple]:
+def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
     """``(M, K, C, rows, bounds, node names)`` of an element scene with [mass], or None where the check does not
-    apply (see the module)."""
+    apply (see the module); ``kinetic``: the friction's bound its sliding level at large speed (alpha_kinetic of
+    Stribeck's drop), that of a large motion (:func:`refuse_unbounded`)."""
     if scene.mass is None or scene.cubic is not None or any(
             getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
         return None
@@ -57,7 +58,8 @@ def _element_parts(scene) -> Optional[tuple]:
             bounds.append(k * eta)
     if scene.friction is not None:
         rows.append([1.0])
-        bounds.append(max(scene.friction.alpha, scene.friction.alpha_kinetic))
+        friction = scene.friction
+        bounds.append(friction.alpha_kinetic if kinetic else max(friction.alpha, friction.alpha_kinetic))
     k0 = 0.0 if scene.spring is None else float(scene.spring.k0)
     c = float(scene.damper.c) if scene.has_dashpot else 0.0
     return (np.array([float(scene.mass.m)]), np.array([[k0]]), np.array([[c]]), np.array(rows).reshape(-1, 1),
@@ -112,6 +114,17 @@ def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Op
         load = 0
     if parts is None:
         return
+    _check(scene, parts, load, force_amplitude, base_amplitude, low, high, False)
+    friction = getattr(scene, "friction", None)
+    if not isinstance(scene, NetworkScene) and friction is not None and friction.alpha_kinetic < friction.alpha:
+        # Stribeck's drop: a large motion slides at speeds where the friction is alpha_kinetic (the drop's
+        # exp(-|v| / v_s) is left only over the turns, a share that shrinks as 1 / amplitude): Den Hartog's bound
+        # with alpha_kinetic is that of the curve's large amplitudes, which climb without bound towards the mode
+        _check(scene, _element_parts(scene, kinetic=True), load, force_amplitude, base_amplitude, low, high, True)
+
+
+def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinetic) -> None:
+    """:func:`refuse_unbounded` on ``parts`` (``kinetic``: the bounds of a large motion)."""
     mass, K, C, rows, bounds, nodes = parts
     scale = 1.0 / np.sqrt(mass)
     values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
@@ -145,7 +158,7 @@ def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Op
             # a force orthogonal to the mode up to rounding does not drive it (its states are a family, not an
             # unbounded growth): only a drive above the rounding of phi . f counts
             if drive > hold * (1 + MARGIN) and drive > 1e-9 * float(np.sum(np.abs(force))):
-                _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude)
+                _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude, kinetic)
 
 
 def _undamped(cluster: np.ndarray, C: np.ndarray, damping: float) -> np.ndarray:
@@ -158,10 +171,10 @@ def _undamped(cluster: np.ndarray, C: np.ndarray, damping: float) -> np.ndarray:
     return cluster @ right[rank:].T
 
 
-def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude) -> None:
+def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude, kinetic=False) -> None:
     f = omega / (2 * math.pi)
     shape = ", ".join(f"{name} {value:.3g}" for name, value in zip(nodes, phi))
-    if hold == 0.0:  # nothing bounded acts along the mode: an undamped linear resonance, whatever the force
+    if hold == 0.0 and not kinetic:  # nothing bounded acts along the mode: an undamped linear resonance
         raise FrequencyError(
             f"{scene.source}: no periodic state at f = {f:.6g} Hz: no dashpot acts on the springs' mode there "
             f"(shape {shape}), nor any slider, branch or friction, and "
@@ -172,6 +185,14 @@ def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitu
         what, cure = "the force", f"a force amplitude below {force_amplitude * hold / drive:.6g} N"
     else:
         what, cure = "the moving base (m Y0 omega^2)", f"a base amplitude below {base_amplitude * hold / drive:.6g} m"
+    if kinetic:
+        raise FrequencyError(
+            f"{scene.source}: the curve climbs without bound towards f = {f:.6g} Hz: no dashpot acts on the "
+            f"springs' mode there (shape {shape}), and at large amplitude the friction slides at its kinetic level "
+            f"alpha_kinetic = {scene.friction.alpha_kinetic:g} N (Stribeck's drop), so {what} drives it with "
+            f"{drive:.6g} N, more than the most its friction and branches can hold at large amplitude, {hold:.6g} N "
+            f"(Den Hartog's bound): leave {f:.6g} Hz out of the frequencies, or give {cure}, or a dashpot on that "
+            "mode")
     raise FrequencyError(
         f"{scene.source}: no periodic state at f = {f:.6g} Hz: no dashpot acts on the springs' mode there (shape "
         f"{shape}), and {what} drives it with {drive:.6g} N, more than the most its sliders and branches can "

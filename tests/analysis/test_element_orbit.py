@@ -390,3 +390,16 @@ def test_a_run_from_exact_rest_takes_its_steps(F, k3):
     rx, rv, _ = reference(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), F, omega, 0.0, 0.0, [],
                           2 * math.pi / omega)
     assert abs(state[0] - rx) <= 1e-8 * max(1.0, abs(rx)) and abs(state[1] - rv) <= 1e-8 * max(1.0, abs(rv))
+
+
+def test_a_fast_slide_through_a_narrow_drop_is_the_independent_integration_s():
+    """A slide at 1e9 Stribeck velocities (v_s = 1 mm/s, v = 1e6 m/s): the steps go at their own length to where
+    the drop starts to show (40 v_s), then in pieces of 2 in its exponent (cut to those pieces from where a step
+    would reach the stop, a slide took (its speed there) / (2 v_s) steps: 42 000 a half period at the 3e5 m of
+    the packaged breakaway-ramp's climb, 80 ms a run, measured; this test checks the orbit, not the cost). The
+    orbit is the independent integration's to 1e-9 of its swing."""
+    parameters = (1.0, 1.0, 0.0, 0.0, 0.5, 0.1, 1e-3, np.zeros(0), np.zeros(0), 2.0, 1.0)
+    period = 2.0 * math.pi
+    state, _, _ = _taylor(parameters, 0.0, 1e6, [], period / 64, 64)
+    rx, rv, _ = reference(*parameters, 0.0, 1e6, [], period)
+    assert abs(state[0] - rx) <= 1e-9 * 1e6 and abs(state[1] - rv) <= 1e-9 * 1e6, (state, rx, rv)  # of the swing
