@@ -36,7 +36,11 @@ one, for a curve that starts at rest):
   method on that component along the arc between them (at most FOLD_ITERATIONS correctors, to 1e-9 of the
   step) and kept as a point of its own, marked;
 * end: the point past omega_max is replaced by the point at omega_max (the corrector with omega fixed). At
-  most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused.
+  most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused;
+* behind: a corrector that lands back in omega while both tangents point ahead (no fold between) has landed
+  on another part of the curve (a linear oscillator from just above its resonance: the predictor overshot
+  past q = 0 and the corrector found the curve below the resonance, which was refused as turned back): the
+  step is taken again at half the length, down to MIN_STEP.
 """
 from __future__ import annotations
 
@@ -113,10 +117,6 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                         f"converge even with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the "
                         "curve)")
         q_new, omega_new, iterations = new
-        if omega_new < omega_min - 1e-9 * span:
-            raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
-                                 f"({_where(balance, q_new, omega_new, node)}): it does not reach "
-                                 f"{_hz(omega_max)!r} Hz from there")
         scale_new = max(scale, np.linalg.norm(q_new))
         heading = tangent
         if cornered:  # the way on is the chord from the corner, not the tangent before it
@@ -132,6 +132,19 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
             # the side of the heading and the determinant's orientation disagree, and the side would turn the curve
             # back in omega: a kink where the tangent turned by more than a right angle (a fold passes both)
             tangent_new, sign = -tangent_new, -sign
+        if not cornered and (omega_new - omega) * heading[-1] < 0 and tangent_new[-1] * heading[-1] > 0:
+            # back in omega though both tangents point ahead (no fold between): the corrector landed on another
+            # part of the curve (past a resonance the predictor overshot: a linear oscillator from 0.17 Hz, just
+            # above its 0.159 Hz, went from q = -1.8e-12 at 0.199 Hz to +3.6e-12 at 0.135 Hz): a shorter step
+            step *= 0.5
+            if step < MIN_STEP:
+                raise FrequencyError(f"{balance.system.source}: the curve cannot continue past f = {_hz(omega)!r} "
+                                     f"Hz ({_where(balance, q, omega, node)}): every step lands behind it")
+            continue
+        if omega_new < omega_min - 1e-9 * span:
+            raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
+                                 f"({_where(balance, q_new, omega_new, node)}): it does not reach "
+                                 f"{_hz(omega_max)!r} Hz from there")
         if not cornered and step > CORNER * max_step and \
                 tangent_new @ _rescaled(tangent, scale, scale_new) < TURN:
             step *= 0.5  # the tangent turned too far in one step (a kink, a tight fold): a shorter step shows it

@@ -198,3 +198,75 @@ def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitu
         f"{shape}), and {what} drives it with {drive:.6g} N, more than the most its sliders and branches can "
         f"hold, {hold:.6g} N (4 / pi of their forces along the mode: Den Hartog's bound), so its amplitude grows "
         f"without bound: leave {f:.6g} Hz out of the frequencies, or give {cure}, or a dashpot on that mode")
+
+
+# a resonance of the stuck branches held only by the first slip: refused where the top of its curve, a plateau
+# within this relative height of the amplitude the first branch slips at, is finer than the sampled slip resolves
+PLATEAU = 0.05
+
+
+def refuse_slip_limited(system, force_amplitude: Optional[float], base_amplitude: Optional[float], low: float,
+                        high: float) -> None:
+    """FrequencyError where a mode of the system with every branch stuck (springs and branches' k), undamped,
+    lies in [low, high] (rad/s), driven, and held only by the slip of its branches, with a top too flat for
+    harmonic balance: at modal amplitude a* the first branch (i) slips, and the work of the force per period,
+    pi (phi . f) a, is taken by its slip, 4 k_i eta_i (e_i a - eta_i) (e_i = |d_i . phi|), at
+    a = a* (1 + h), h = pi (phi . f) a* / (4 sum k_i eta_i^2): the curve's top is a plateau of relative height h
+    over a band |omega_r^2 - omega^2| < (phi . f) / (phi' M phi a*) on which the phase turns by pi. The sampled
+    slip (``aft.py``: the turning points between the samples, off by up to pi^2 / (2 N^2) of the excursion)
+    turns it into a staircase of kinks: below h = PLATEAU the continuation folds back and forth on it (F0 = 300 N
+    on hard/large-forces, h = 0.03: 266 folds; F0 = 1000 N, h = 0.1: 36; none with N = 16384) or stops (h < 0.02).
+    The check applies to a system of masses, springs, dashpots and branches without series dashpots."""
+    if system.cubic_k3.size or system.series or system.memory is not None or not system.branch_k.size or \
+            np.any(system.mass <= 0):
+        return
+    n = system.n
+    rows = np.zeros((system.branch_k.size, n))
+    for j, (p, q) in enumerate(system.branch_ends.tolist()):
+        rows[j, p] += 1.0
+        if q >= 0:
+            rows[j, q] -= 1.0
+    K = system.stiffness + rows.T @ (system.branch_k[:, None] * rows)
+    C, mass = system.damping, system.mass
+    scale = 1.0 / np.sqrt(mass)
+    values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
+    shapes = scale[:, None] * vectors
+    damping = float(np.max(np.abs(C)))
+    for value, phi in zip(values.tolist(), shapes.T):
+        if value <= 0 or not low * low <= value <= high * high:
+            continue
+        if _undamped(phi[:, None], C, damping).shape[1] == 0:
+            continue
+        omega = math.sqrt(value)
+        if base_amplitude is None:
+            force = np.zeros(n)
+            force[system.load_node] = force_amplitude
+        else:
+            force = mass * base_amplitude * value
+        phi = phi / np.max(np.abs(phi))
+        drive = abs(float(phi @ force))
+        e = np.abs(rows @ phi)
+        acting = e > 1e-9
+        if drive <= 1e-9 * float(np.sum(np.abs(force))) or not np.any(acting):
+            continue  # not driven; or no branch along the mode: refuse_unbounded's undamped linear resonance
+        onset = system.branch_eta[acting] / e[acting]
+        first = float(np.min(onset))
+        held = onset <= first * (1 + 1e-9)
+        eta, k = system.branch_eta[acting][held], system.branch_k[acting][held]
+        h = math.pi * drive * first / (4.0 * float(np.sum(k * eta * eta)))
+        if h >= PLATEAU:
+            continue
+        modal = float(phi @ (mass * phi))
+        band = drive / (modal * first)  # of omega^2 on either side of omega_r
+        f = omega / (2 * math.pi)
+        below, above = math.sqrt(max(value - band, 0.0)) / (2 * math.pi), math.sqrt(value + band) / (2 * math.pi)
+        i = int(np.argmax(np.abs(phi)))
+        what = "a force amplitude" if base_amplitude is None else "a base amplitude"
+        given = force_amplitude if base_amplitude is None else base_amplitude
+        raise FrequencyError(
+            f"{system.source}: at f = {f:.6g} Hz the branches, stuck, resonate with no dashpot on the mode, held "
+            f"only by the slip of the first branch: the top of the curve is a plateau at {first:.6g} m at node "
+            f"{system.nodes[i]} (within {h:.3g} relative), {above - below:.3g} Hz wide, finer than harmonic balance's "
+            f"sampled slip resolves: leave {below!r} to {above!r} Hz out of the frequencies (the curve "
+            f"either side of it is the stuck, linear response), or give {what} of at least "
+            f"{given * PLATEAU / h:.3g}, or a dashpot on that mode")

@@ -691,3 +691,85 @@ def test_a_given_number_of_harmonics_reports_its_truncation(tmp_path, capsys):
     # found at its peak, which is its fold: by the next H's point on the normal there
     smooth = harmonic_response(element(duffing), 0.2, [0.1, 0.3], harmonics=15, stability=False)
     assert smooth.folds.size == 2 and smooth.change is not None and smooth.change < 1e-6
+
+
+def test_a_curve_that_starts_just_above_a_resonance_goes_on(tmp_path):
+    """A linear oscillator from 0.17 Hz, just above its 0.159 Hz: the first steps' predictor overshoots past
+    q = 0 and its corrector landed on the other side of the resonance (at 0.135 Hz, within its drift), which
+    was refused as "turned back below 0.17 Hz"; a step that goes back in omega while both tangents point ahead
+    is now taken again shorter. Every point is the closed form F0 / (k - m omega^2 + i c omega)."""
+    m, k, c, F0 = 1.0, 1.0, 0.01, 0.5
+    path = write(tmp_path, {"mass": {"m": m}, "spring": {"k0": k}, "damper": {"c": c}})
+    out = tmp_path / "curve.csv"
+    assert main(["describe", path, "--force-amplitude", repr(F0), "--frequencies", "0.17,2", "--harmonics", "1",
+                 "--out", str(out)]) == 0
+    rows = read_csv(out)
+    omega = 2 * math.pi * np.array([float(f) for f in rows["frequency"]])
+    assert omega[0] == pytest.approx(2 * math.pi * 0.17) and omega[-1] == pytest.approx(2 * math.pi * 2)
+    assert np.all(np.diff(omega) > 0)
+    wanted = F0 / np.abs(k - m * omega**2 + 1j * c * omega)
+    got = np.array([float(a) for a in rows["amplitude"]])
+    assert np.max(np.abs(got - wanted) / wanted) <= 1e-9
+
+
+def test_newton_cycling_between_two_slip_patterns_is_damped():
+    """The packaged masing-bilinear (one branch k = 90, eta = 0.01 beside k0 = 10) at its own force, 2 N, with 7
+    harmonics at 0.1 Hz: full Newton steps flip between two states (max |R| 2.161, 2.162, 2.161, ... for 40
+    iterations: "did not converge"); where the full iteration fails, a step that would raise the residual is
+    halved, and the balance is solved to its tolerance."""
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene, _ = read_scene("masing-bilinear")
+    balance = HarmonicBalance(periodic_system(scene), 7, 2.0)
+    omega = 2 * math.pi * 0.1
+    q = balance.solve_at(omega)
+    residual = balance.evaluate(q, omega)[0]
+    assert np.max(np.abs(residual)) <= 1e-9 * balance.force_scale(omega)
+    assert 0.13 < balance.amplitude_at(q, omega, 0) < 0.15  # time integration: 0.1385
+
+
+def test_a_resonance_held_only_by_a_first_slip_too_flat_to_resolve_is_refused_with_its_band(tmp_path, capsys):
+    """Branches without a spring or a dashpot (as hard/large-forces, at unit scale): stuck, they resonate
+    undamped at sqrt(sum k / m), held only by the first branch's slip, whose plateau (relative height
+    h = pi F0 eta_1 / (4 k_1 eta_1^2)) is finer than the sampled slip resolves: the curve stopped at its corner
+    or folded hundreds of times. Refused in one line that gives the band to leave out; either side of it the
+    curve is the stuck, linear response F0 / |K - m omega^2|."""
+    m, k, eta, F0 = 1.0, [0.5, 0.5], [0.1, 0.2], 1e-4
+    path = write(tmp_path, {"mass": {"m": m}, "branches": {"k": k, "eta": eta}})
+    out = tmp_path / "curve.csv"
+    natural = math.sqrt(sum(k) / m) / (2 * math.pi)
+    assert main(["describe", path, "--force-amplitude", repr(F0), "--frequencies",
+                 f"{0.5 * natural!r},{2 * natural!r}", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "plateau" in err[0] and not out.exists(), err
+    below, above = (float(word) for word in err[0].split("leave ")[1].split(" Hz")[0].split(" to "))
+    assert below < natural < above
+    # (not from exactly half the resonance: undamped, the second harmonic's operator is singular there)
+    for low, high in ((0.6 * natural, 0.999 * below), (1.001 * above, 2 * natural)):
+        assert main(["describe", path, "--force-amplitude", repr(F0), "--frequencies", f"{low!r},{high!r}",
+                     "--out", str(out)]) == 0
+        rows = read_csv(out)
+        omega = 2 * math.pi * np.array([float(f) for f in rows["frequency"]])
+        wanted = F0 / np.abs(sum(k) - m * omega**2)
+        got = np.array([float(a) for a in rows["amplitude"]])
+        assert np.max(np.abs(got - wanted) / wanted) <= 1e-6
+
+
+@pytest.mark.slow
+def test_the_harmonics_are_chosen_by_the_change_at_the_same_points():
+    """The packaged masing-bilinear at 1 N: the chooser compared the two curves' own peaks, which fall at
+    different frequencies where the phase turns fast (H = 21 at 0.775 Hz, 31 at 0.755 Hz: 0.0515 apart, "still
+    changed" and refused); the same point solved with more harmonics changes by 1e-4. Now the last curve's ends
+    and peak are solved again at the next H: the curve is chosen, and agrees with the time sweep where both
+    are computed (to the tolerance)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.response import frequency_response
+
+    scene, _ = read_scene("masing-bilinear")
+    curve = harmonic_response(scene, 1.0, [0.1, 2.0])
+    assert curve.change <= 1e-3
+    swept = frequency_response(scene, 1.0, [0.1, 2.0], sweep="up", progress=False)
+    for f, amplitude in zip(swept.frequency.tolist(), swept.amplitude.tolist()):
+        index = int(np.argmin(np.abs(curve.frequency - f)))
+        assert abs(curve.frequency[index] - f) <= 1e-9 * f
+        assert curve.amplitude[index] == pytest.approx(amplitude, rel=1e-3)
