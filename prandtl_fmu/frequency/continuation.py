@@ -144,7 +144,8 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         if omega_new < omega_min - 1e-9 * span:
             raise FrequencyError(f"{balance.system.source}: the curve turned back below f = {_hz(omega_min)!r} Hz "
                                  f"({_where(balance, q_new, omega_new, node)}): it does not reach "
-                                 f"{_hz(omega_max)!r} Hz from there")
+                                 f"{_hz(omega_max)!r} Hz from there (it folds below the range: a superharmonic "
+                                 "resonance's loop, or a curve bent over the start): start the frequencies lower")
         if not cornered and step > CORNER * max_step and \
                 tangent_new @ _rescaled(tangent, scale, scale_new) < TURN:
             step *= 0.5  # the tangent turned too far in one step (a kink, a tight fold): a shorter step shows it
