@@ -183,7 +183,7 @@ def variational_monodromy(balance, q_free, omega):
     steps = substeps(fastest_rate(system, np.max(np.abs(cubic_e), axis=1, initial=0.0)), period, balance.N)
     # each reversal of a sliding branch: at most a turn and a threshold
     switches = 2 * int(np.sum(np.diff(np.sign(velocity[sliding]), axis=1) != 0)) + 2 * sliding.size
-    if work(balance.N, steps, 2 * n + nb, 2 * n + sliding.size, switches) > WORK_LIMIT:
+    if work(balance.N, steps, n, 2 * n + nb, 2 * n + sliding.size, switches) > WORK_LIMIT:
         return None
     # the columns: unit x and v, a stuck branch's u moving with x (du = B dx); unit u of each sliding branch
     z = np.zeros((2 * n + nb, 2 * n + sliding.size))

@@ -157,7 +157,10 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
             hold = 4.0 / math.pi * float(np.sum(bounds * np.abs(rows @ phi)))
             # a force orthogonal to the mode up to rounding does not drive it (its states are a family, not an
             # unbounded growth): only a drive above the rounding of phi . f counts
-            if drive > hold * (1 + MARGIN) and drive > 1e-9 * float(np.sum(np.abs(force))):
+            # at the kinetic level: a force that never passes the static level alpha (the element has one node)
+            # leaves the mass at rest, a periodic state at every frequency (a review's find: refused before)
+            static = kinetic and drive <= float(scene.friction.alpha) * (1 + MARGIN)
+            if drive > hold * (1 + MARGIN) and drive > 1e-9 * float(np.sum(np.abs(force))) and not static:
                 _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitude, kinetic)
 
 
@@ -233,7 +236,7 @@ def refuse_slip_limited(system, force_amplitude: Optional[float], base_amplitude
     shapes = scale[:, None] * vectors
     damping = float(np.max(np.abs(C)))
     for value, phi in zip(values.tolist(), shapes.T):
-        if value <= 0 or not low * low <= value <= high * high:
+        if value <= 0 or value + value < low * low:  # (the band's overlap with the range is checked below)
             continue
         if _undamped(phi[:, None], C, damping).shape[1] == 0:
             continue
@@ -260,6 +263,8 @@ def refuse_slip_limited(system, force_amplitude: Optional[float], base_amplitude
         band = drive / (modal * first)  # of omega^2 on either side of omega_r
         f = omega / (2 * math.pi)
         below, above = math.sqrt(max(value - band, 0.0)) / (2 * math.pi), math.sqrt(value + band) / (2 * math.pi)
+        if above * 2 * math.pi < low or below * 2 * math.pi > high:  # the plateau's band outside the range
+            continue
         i = int(np.argmax(np.abs(phi)))
         what = "a force amplitude" if base_amplitude is None else "a base amplitude"
         given = force_amplitude if base_amplitude is None else base_amplitude
@@ -269,4 +274,12 @@ def refuse_slip_limited(system, force_amplitude: Optional[float], base_amplitude
             f"{system.nodes[i]} (within {h:.3g} relative), {above - below:.3g} Hz wide, finer than harmonic balance's "
             f"sampled slip resolves: leave {below!r} to {above!r} Hz out of the frequencies (the curve "
             f"either side of it is the stuck, linear response), or give {what} of at least "
-            f"{given * PLATEAU / h:.3g}, or a dashpot on that mode")
+            f"{_up(given * PLATEAU / h)}, or a dashpot on that mode")
+
+
+def _up(value: float) -> str:
+    """``value`` to 3 significant digits, rounded up (a suggested least force that the check then passes)."""
+    if value <= 0:
+        return f"{value:.3g}"
+    exponent = math.floor(math.log10(value)) - 2
+    return f"{math.ceil(value / 10**exponent * (1 - 1e-12)) * 10**exponent:.3g}"

@@ -70,9 +70,10 @@ def substeps(rate: float, period: float, samples: int) -> int:
     return max(1, math.ceil(turn / samples / theta))
 
 
-def work(samples: int, steps: int, rows: int, columns: int, switches: int) -> float:
-    """The cost of :func:`monodromy` in multiply-adds (four stages of rows x columns per RK4 step)."""
-    return 4.0 * (samples * steps + switches) * rows * columns
+def work(samples: int, steps: int, n: int, rows: int, columns: int, switches: int) -> float:
+    """The cost of :func:`monodromy` in multiply-adds: four stages per RK4 step, each rows x columns and the
+    dense K and C of the n nodes (2 n^2) per column."""
+    return 4.0 * (samples * steps + switches) * (rows + 2.0 * n * n) * columns
 
 
 @kernel

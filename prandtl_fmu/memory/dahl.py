@@ -105,7 +105,8 @@ def after(part, fd, dx):
     if y1 >= 2.0 or y == 0.0:  # F_d past -s F_c (or at s F_c): as the law's bound [0, 2] on y says
         y1 = min(y1, 2.0)
         return s * level * (1.0 - y1), sigma * _power(y1, exponent)
-    return fd + s * level * y * shrink, sigma * _power(y1, exponent)
+    # within [-F_c, F_c]: the sum can round one ulp past it, a state set_state then refuses (a review's find)
+    return min(max(fd + s * level * y * shrink, -level), level), sigma * _power(y1, exponent)
 
 
 @inline_kernel
