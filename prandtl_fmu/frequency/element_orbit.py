@@ -3,7 +3,8 @@ Stribeck's drop), event by event, by Taylor series: the orbit that ``shooting.py
 stepper does not go.
 
 The mass under F cos(omega t) (x, v, the branches' u, the history's z; every force of ``[spring]``,
-``[damper]``, ``[cubic]``, ``[branches]``, ``[history]`` and ``[friction]`` on a fixed ground):
+``[damper]``, ``[cubic]``, ``[branches]`` (with series dashpots or without), ``[history]`` and ``[friction]`` on
+a fixed ground):
 
     m v' = F cos(omega t) - k0 x - k3 x^3 - c v - sum_i k_i u_i - sum_j w_j z_j - A(v),
     z_j' = -r_j z_j + y   (y = x, or v),
@@ -27,6 +28,12 @@ smooth phases:
 * **A stick** is x fixed and N(t) a cosine, a constant and the history's exponentials: its Taylor series on
   intervals of rho tau <= 1 (rho the larger of omega and the rates) has a proven remainder ((rho tau)^TERMS /
   TERMS! e^(rho tau) times F and the exponentials' amplitudes).
+
+**Branches behind series dashpots** (rate lambda_i = k_i / c_i): a sticking one relaxes, u_i' = v - lambda_i
+u_i, so it is a term of the history's form on v (weight k_i, rate lambda_i) in both phases (in a stick, v = 0:
+it decays); a sliding one holds u_i = +-eta_i, a constant force, while its inflow v - lambda_i u_i pushes
+outwards. Its events, in a slide of the mass: a sticking u_i reaches +-eta_i (either way), a sliding one's
+inflow +-v - lambda_i eta_i reaches 0; at rest every inflow, -lambda_i u_i, turns inwards: they all stick.
 
 **Events** are found as ``network_orbit.py`` finds them (its validated subdivision of each event function's
 polynomial, the first crossing refined by bisection): the event functions are sigma v (a slide's end), eta_i -
@@ -76,7 +83,7 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
     """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
     t0), in a slide of direction ``sigma``: m v' = F cos(omega t) - stiffness x - k3 x^3 - damping v + constant
     - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
-    those of the history's z_j' = -hr_j z_j + y (y = v if ``on_v``, else x) from z0."""
+    those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0."""
     terms = X.shape[0]
     square = np.zeros(terms)
     cube = np.zeros(terms)
@@ -116,8 +123,8 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
             force += constant - sigma * (alpha_k if stribeck else alpha)
         V[k + 1] = force * scale / (k + 1)
         X[k + 1] = V[k] / (k + 1)
-        y = V[k] * rho if on_v else X[k]
         for j in range(hw.shape[0]):
+            y = V[k] * rho if on_v[j] != 0.0 else X[k]
             Z[j, k + 1] = (y - hr[j] * Z[j, k]) / (rho * (k + 1))
         # the cosine's next coefficient: z (i omega / rho) / (k + 1)
         zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
@@ -137,12 +144,12 @@ def _cosine_series(t0, amplitude, omega, rho, constant, out):
 
 @kernel
 def _stuck_history(z0, y, hr, rho, Z):
-    """The Taylor coefficients Z[j, k] of the history's z_j' = -hr_j z_j + y (y constant: x of a stuck mass, or
+    """The Taylor coefficients Z[j, k] of the terms z_j' = -hr_j z_j + y_j (y_j constant: x of a stuck mass, or
     its v = 0) about the stick's start, in s = rho (t - t0)."""
     for j in range(hr.shape[0]):
         Z[j, 0] = z0[j]
         for k in range(Z.shape[1] - 1):
-            Z[j, k + 1] = ((y if k == 0 else 0.0) - hr[j] * Z[j, k]) / (rho * (k + 1))
+            Z[j, k + 1] = ((y[j] if k == 0 else 0.0) - hr[j] * Z[j, k]) / (rho * (k + 1))
 
 
 @kernel
@@ -157,20 +164,59 @@ def _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, t):
 
 
 @kernel
-def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, amplitude, omega, state, u, z, h, steps,
-        out):
+def _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz):
+    """The terms z_j' = -R_j z_j + y of a phase (weights W, on v where Y_j is 1): the history's, then the series
+    branches' (weight k_i while the branch sticks, 0 while it slides at smode_i eta_i, which the phase's
+    constant carries; rate lambda_i, on v). Their values into ``zz`` from z and u (a sliding branch at its
+    level); returns the sliding branches' force."""
+    nz = hw.shape[0]
+    slid = 0.0
+    for j in range(nz):
+        W[j] = hw[j]
+        R[j] = hr[j]
+        Y[j] = 1.0 if on_v else 0.0
+        zz[j] = z[j]
+    for i in range(lam.shape[0]):
+        R[nz + i] = lam[i]
+        Y[nz + i] = 1.0
+        if smode[i] == 0:
+            W[nz + i] = bk[i]
+        else:
+            W[nz + i] = 0.0
+            zz[nz + i] = smode[i] * beta[i]
+            slid += bk[i] * smode[i] * beta[i]
+    return slid
+
+
+@kernel
+def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, state, u, z, h,
+        steps, out):
     """``steps`` steps of h from ``state`` = (x, v), the branches' ``u`` and the history's ``z`` (weights ``hw``,
     rates ``hr``, on v if ``on_v``, else on x; none: empty) at t = 0 (updated in place to the end), x at each
-    step's end in ``out`` (steps,); returns (status, steps taken)."""
+    step's end in ``out`` (steps,); returns (status, steps taken). ``lam`` (n,): the branches' relaxation rates
+    k_i / c_i through series dashpots (empty: Prandtl branches)."""
     nb = bk.shape[0]
     nz = hw.shape[0]
-    Z = np.empty((nz, TERMS))
+    series = lam.shape[0] > 0
+    plain = 0 if series else nb  # the Prandtl branches (without series dashpots)
+    nt = nz + (nb if series else 0)  # the terms: the history's z, then the series branches' u
+    Z = np.empty((nt, TERMS))
+    W = np.empty(nt)
+    R = np.empty(nt)
+    Y = np.empty(nt)
+    zz = np.empty(nt)
+    held_y = np.empty(nt)
+    smode = np.zeros(nb if series else 0, dtype=np.int64)
     terms = TERMS
     x = state[0]
     v = state[1]
-    bmode = np.zeros(nb, dtype=np.int64)
+    bmode = np.zeros(plain, dtype=np.int64)
     for i in range(nb):
         u[i] = min(max(u[i], -beta[i]), beta[i])
+    for j in range(nz):
+        zz[j] = z[j]
+    for i in range(nt - nz):
+        zz[nz + i] = u[i]
     X = np.empty(terms)
     V = np.empty(terms)
     c = np.empty(terms)
@@ -206,46 +252,56 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                 sigma = -1
             else:
                 # at rest: the branches stick; the mass slides where the other forces exceed alpha
-                for i in range(nb):
+                for i in range(plain):
                     if bmode[i] != 0:
                         u[i] = bmode[i] * beta[i]
                         bmode[i] = 0
-                held = _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, t)
+                for i in range(smode.shape[0]):  # a series branch's inflow at rest, -lambda u, turns inwards
+                    smode[i] = 0
+                _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
+                held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, t)
                 sigma = 0
                 if held > alpha:
                     sigma = 1
                 elif held < -alpha:
                     sigma = -1
             # the branches at their level in the direction of motion slide
-            for i in range(nb):
+            for i in range(plain):
                 if sigma != 0 and bmode[i] == 0 and sigma * u[i] >= beta[i]:
                     u[i] = sigma * beta[i]
                     bmode[i] = sigma
+            # a series branch at its level slides where its inflow v - lambda u pushes out
+            for i in range(smode.shape[0]):
+                level = zz[nz + i]
+                if smode[i] == 0 and abs(level) >= beta[i] and level * (v - lam[i] * level) > 0.0:
+                    smode[i] = 1 if level > 0.0 else -1
             x_phase = x
             u_phase = u.copy()
         taylor_steps += 1
         if taylor_steps > step_limit:
             return TOO_STIFF, step
         target = (step + 1) * h
+        slid = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
         if sigma == 0:
             # a stick: x fixed, N(t) a cosine and a constant
             rho = max(abs(omega), 1e-300)
-            for j in range(nz):
-                rho = max(rho, hr[j])
+            for j in range(nt):
+                rho = max(rho, R[j])
             constant = -k0 * x - k3 * x * x * x
-            for i in range(nb):
+            for i in range(plain):
                 constant -= bk[i] * u[i]
             span = min((target - t) * rho, 1.0)
             _cosine_series(t, amplitude, omega, rho, constant, X)
-            # the history's z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
-            held_y = 0.0 if on_v else x
-            _stuck_history(z, held_y, hr, rho, Z)
+            # the terms' z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
+            for j in range(nt):
+                held_y[j] = 0.0 if Y[j] != 0.0 else x
+            _stuck_history(zz, held_y, R, rho, Z)
             reach = amplitude
-            for j in range(nz):
+            for j in range(nt):
                 for k in range(terms):
-                    X[k] -= hw[j] * Z[j, k]
-                if hr[j] > 0.0:
-                    reach += abs(hw[j] * (z[j] - held_y / hr[j]))
+                    X[k] -= W[j] * Z[j, k]
+                if R[j] > 0.0:
+                    reach += abs(W[j] * (zz[j] - held_y[j] / R[j]))
             rest0 = span ** terms / factorial * math.exp(span) * reach
             rest1 = span ** (terms - 1) / factorial * terms * math.exp(span) * reach
             tol = EVENT_TOLERANCE * size_force
@@ -263,8 +319,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                     first = s
                     event = side
             stop = span if first < 0.0 else first
-            for j in range(nz):
-                z[j] = _horner(Z[j], stop)
+            for j in range(nt):
+                zz[j] = _horner(Z[j], stop)
             t_end = t + stop / rho
             if first < 0.0 and (target - t) * rho <= span:
                 t_end = target
@@ -275,7 +331,7 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                 phases += 1
                 if phases > phase_limit:
                     return PILED_UP, step
-                for i in range(nb):
+                for i in range(plain):
                     if bmode[i] == 0 and sigma * u[i] >= beta[i]:
                         u[i] = sigma * beta[i]
                         bmode[i] = sigma
@@ -284,8 +340,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
         else:
             # a slide of direction sigma: its Taylor series in s = rho (t - t0)
             stiffness = k0
-            constant = 0.0
-            for i in range(nb):
+            constant = -slid
+            for i in range(plain):
                 if bmode[i] == 0:  # u = u_phase + x - x_phase
                     stiffness += bk[i]
                     constant -= bk[i] * (u_phase[i] - x_phase)
@@ -295,9 +351,9 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
             rho = max(math.sqrt(curvature / mass), damping / mass, abs(omega), 1e-300)
             if vs > 0.0 and alpha > alpha_k:
                 rho = max(rho, (alpha - alpha_k) / (mass * vs))
-            for j in range(nz):
-                rho = max(rho, hr[j], math.sqrt(abs(hw[j]) / mass))
-            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z,
+            for j in range(nt):
+                rho = max(rho, R[j], math.sqrt(abs(W[j]) / mass))
+            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, W, R, Y, zz,
                           constant, amplitude, omega, X, V, Z)
             # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
             # compare with and took steps of 0 until refused: a review's find)
@@ -308,8 +364,10 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
             span = math.inf
             for k in (terms - 2, terms - 1):
                 top = max(abs(X[k]), abs(V[k]))
-                for j in range(nz):
-                    top = max(top, abs(hw[j] * Z[j, k]) / (mass * rho * rho))
+                for j in range(nt):
+                    top = max(top, abs(W[j] * Z[j, k]) / (mass * rho * rho))
+                for j in range(nz, nt):  # a series branch's u: a length of its own
+                    top = max(top, abs(Z[j, k]))
                 if top > 0.0:
                     span = min(span, (TRUNCATION * size / top) ** (1.0 / k))
             span = min(span, 1.0 if math.isinf(span) else span, (target - t) * rho)
@@ -339,6 +397,8 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                     span = limit
             reach = span
             rest = (abs(X[terms - 1]) + abs(V[terms - 1])) * reach ** (terms - 1)
+            for j in range(nz, nt):
+                rest += abs(Z[j, terms - 1]) * reach ** (terms - 1)
             first = -1.0
             event = -1
             # the slide's end: sigma v crosses below -tol
@@ -352,7 +412,7 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
             if s >= 0.0:
                 first = s
             # a sticking branch's level: sigma u = sigma (u_phase + x - x_phase) crosses eta
-            for i in range(nb):
+            for i in range(plain):
                 if bmode[i] != 0:
                     continue
                 for k in range(terms):
@@ -366,40 +426,80 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, hw, hr, on_v, ampli
                 if s >= 0.0 and (first < 0.0 or s < first):
                     first = s
                     event = i
+            # a series branch: sticking, its u crosses +-eta (either way: it relaxes too); sliding, its inflow
+            # smode (v - lambda smode eta) crosses 0 (it sticks again at its level)
+            side_of = 0
+            for i in range(smode.shape[0]):
+                for side in (1, -1):
+                    if smode[i] == 0:
+                        for k in range(terms):
+                            c[k] = -side * Z[nz + i, k]
+                        c[0] += beta[i] + EVENT_TOLERANCE * size
+                    elif side == smode[i]:
+                        for k in range(terms):
+                            c[k] = side * V[k]
+                        c[0] += -lam[i] * beta[i] / rho + EVENT_TOLERANCE * size
+                    else:
+                        continue
+                    budget[0] = WALK_LIMIT
+                    s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300),
+                                  budget, shifted)
+                    if math.isnan(s):
+                        return WALK_EXHAUSTED, step
+                    if s >= 0.0 and (first < 0.0 or s < first):
+                        first = s
+                        event = i
+                        side_of = side
             stop = span if first < 0.0 else first
             x = _horner(X, stop)
             v = _horner(V, stop) * rho
-            for j in range(nz):
-                z[j] = _horner(Z[j], stop)
+            for j in range(nt):
+                zz[j] = _horner(Z[j], stop)
+            for i in range(smode.shape[0]):
+                if smode[i] != 0:
+                    zz[nz + i] = smode[i] * beta[i]
+                else:
+                    zz[nz + i] = min(max(zz[nz + i], -beta[i]), beta[i])
             t_end = t + stop / rho
             if first < 0.0 and stop >= (target - t) * rho:
                 t_end = target
             t = t_end
             if first >= 0.0:
-                for i in range(nb):
+                for i in range(plain):
                     if bmode[i] == 0:
                         u[i] = min(max(u_phase[i] + x - x_phase, -beta[i]), beta[i])
                 if event < 0:  # the slide ends: v = 0, the mass sticks or turns back
                     v = 0.0
                     decide = True
-                else:  # the branch slides; the phase goes on with it
-                    u[event] = sigma * beta[event]
-                    bmode[event] = sigma
+                else:
                     phases += 1
                     if phases > phase_limit:
                         return PILED_UP, step
-                    for i in range(nb):
-                        if bmode[i] == 0:
-                            u_phase[i] = u[i]
-                    x_phase = x
+                    if series:  # a series branch reaches its level (it slides) or its inflow stops (it sticks)
+                        if smode[event] == 0:
+                            smode[event] = side_of
+                            zz[nz + event] = side_of * beta[event]
+                        else:
+                            smode[event] = 0
+                    else:  # the branch slides; the phase goes on with it
+                        u[event] = sigma * beta[event]
+                        bmode[event] = sigma
+                        for i in range(nb):
+                            if bmode[i] == 0:
+                                u_phase[i] = u[i]
+                        x_phase = x
+        for j in range(nz):
+            z[j] = zz[j]
         if t == target:
             out[step] = x
             step += 1
     # the end state
     if sigma != 0:
-        for i in range(nb):
+        for i in range(plain):
             if bmode[i] == 0:
                 u[i] = min(max(u_phase[i] + x - x_phase, -beta[i]), beta[i])
+    for i in range(nt - nz):
+        u[i] = zz[nz + i]
     state[0] = x
     state[1] = v
     return OK, steps

@@ -58,8 +58,7 @@ reported, as the harmonic balance does.
 
 What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), ``[delay]``
 beside the friction (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
-unknowns of ``element_orbit.py``), a
-cubic spring, Stribeck's drop or a history beside branches with series dashpots, a node other than the mass.
+unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots), a node other than the mass.
 Nonlinear modes (EPMC) of such a scene are solved for by ``slider_modes.py`` on the network of one node
 (``modes.py``).
 """
@@ -144,10 +143,6 @@ def prepared(scene, named=None, loaded=None):
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
     if smooth(scene):
-        if scene.has_series_dashpots:
-            raise FrequencyError(f"{scene.source}: [friction] on the mass with [cubic] or Stribeck's drop is solved "
-                                 "for by shooting on its Taylor series (element_orbit.py), which takes branches "
-                                 "without series dashpots: use --method time")
         return scene
     try:
         get_stepper("exact").loop_for(dataclasses.replace(scene, load=HarmonicLoad(1.0, 1.0)))
@@ -401,7 +396,8 @@ class ElementShooting(Shooting):
                                float(friction.alpha_kinetic),
                                float(friction.stribeck_velocity) if friction.alpha_kinetic != friction.alpha else 0.0,
                                np.zeros(0) if scene.branches is None else np.array(scene.branches.stiffness, float),
-                               self.eta, np.array(history.weight if history else (), float),
+                               self.eta, _relaxation(scene.branches),
+                               np.array(history.weight if history else (), float),
                                np.array(history.rate if history else (), float),
                                bool(history is not None and history.acts_on == "v"))
             return
@@ -449,6 +445,13 @@ class ElementShooting(Shooting):
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
         end = np.concatenate(([state[0], state[1] / self.reference], u, z))
         return self._checked(end, out[:, None].copy(), omega)
+
+
+def _relaxation(branches) -> np.ndarray:
+    """The branches' rates lambda_i = k_i / c_i through their series dashpots (empty: none, Prandtl branches)."""
+    if branches is None or branches.damping is None:
+        return np.zeros(0)
+    return np.array(branches.stiffness, float) / np.array(branches.damping, float)
 
 
 class NetworkShooting(Shooting):

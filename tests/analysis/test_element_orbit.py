@@ -11,6 +11,7 @@ import pytest
 from prandtl_fmu.cli import main
 
 from tests.analysis.test_describe_cli import read_csv, write
+from prandtl_fmu.frequency import element_orbit
 from tests.analysis.test_harmonic_balance import element
 
 DUFFING_FRICTION = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.02},
@@ -122,7 +123,8 @@ def _taylor(parameters, x, v, u, h, steps, history=NO_HISTORY, z=()):
 
     m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega = parameters
     state, u, out, z = np.array([x, v]), np.array(u, float).copy(), np.empty(steps), np.array(z, float)
-    status, taken = run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, *history, F, omega, state, u, z, h, steps, out)
+    status, taken = run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, np.zeros(0), *history, F, omega, state, u, z, h,
+                        steps, out)
     assert status == OK and taken == steps
     return (state, u, out) if history is NO_HISTORY and not len(z) else (state, u, out, z)
 
@@ -268,13 +270,152 @@ def test_stribeck_s_drop_has_its_curve_and_its_orbits(tmp_path):
             assert (moved < 1e-6) if curve.stable[pick] else (moved > 0.1), (pick, moved)
 
 
-def test_series_dashpots_beside_a_smooth_force_are_refused_in_one_line(tmp_path, capsys):
-    tables = dict(STRIBECK, branches={"k": [1.0], "alpha": [0.05], "c": [0.5]})
-    out = tmp_path / "out.csv"
-    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "1", "--frequencies", "0.1,0.2",
-                 "--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "series dashpots" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+def series_reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, F, omega, x, v, u, t_end):
+    """The motion with branches behind series dashpots, written straightforwardly: a branch that sticks relaxes,
+    u' = v - lam u, and slides at +-eta while its inflow v - lam u pushes outwards; the mass sticks while the
+    other forces stay within alpha. Each phase an ODE for scipy's DOP853 stopped at its events (v = 0; a
+    sticking branch's u at +-eta; a sliding branch's inflow at 0; a stuck mass's force at +-alpha).
+    Returns (x, v, u) at t_end."""
+    from scipy.integrate import solve_ivp
+
+    nb = len(bk)
+    u = np.clip(np.array(u, float), -eta, eta)
+    mode = np.zeros(nb, int)
+    t = 0.0
+    largest = 0.02 * 2.0 * math.pi / omega
+    while t < t_end:
+        if v == 0.0:
+            mode[:] = 0  # at rest every inflow, -lam u, turns inwards
+
+            def held(s, y):
+                return F * math.cos(omega * s) - k0 * x - k3 * x**3 - float(np.dot(bk, y))
+
+            ends = [lambda s, y, side=side: alpha + 1e-12 - side * held(s, y) for side in (1, -1)]
+            for end in ends:
+                end.terminal, end.direction = True, -1
+            if abs(held(t, u)) > alpha:
+                sigma = 1 if held(t, u) > 0 else -1
+            else:
+                solution = solve_ivp(lambda s, y: -lam * y, (t, t_end), u, events=ends, rtol=1e-12, atol=1e-15,
+                                     method="DOP853", max_step=0.05 * largest)
+                u, t = solution.y[:, -1].copy(), float(solution.t[-1])
+                if solution.status != 1:
+                    return x, v, u
+                sigma = 1 if len(solution.t_events[0]) else -1
+        else:
+            sigma = 1 if v > 0 else -1
+        while True:
+            sticking = [i for i in range(nb) if mode[i] == 0]
+            sliding = [i for i in range(nb) if mode[i] != 0]
+
+            def rhs(s, y):
+                slide = alpha if vs == 0.0 else alpha_k + (alpha - alpha_k) * math.exp(min(-sigma * y[1] / vs, 0.0))
+                force = F * math.cos(omega * s) - k0 * y[0] - k3 * y[0] ** 3 - c * y[1] - sigma * slide
+                force -= float(np.dot(bk, y[2:]))
+                rates = np.where(mode == 0, y[1] - lam * y[2:], 0.0)
+                return np.concatenate(([y[1], force / m], rates))
+
+            events = [lambda s, y: sigma * y[1] + 1e-13]
+            events += [lambda s, y, i=i, side=side: eta[i] - side * y[2 + i] for i in sticking for side in (1, -1)]
+            events += [lambda s, y, i=i: mode[i] * y[1] - lam[i] * eta[i] + 1e-13 for i in sliding]
+            for event in events:
+                event.terminal, event.direction = True, -1
+            solution = solve_ivp(rhs, (t, t_end), np.concatenate(([x, v], u)), events=events, rtol=1e-12,
+                                 atol=1e-15, method="DOP853", max_step=largest)
+            x, v, t = float(solution.y[0, -1]), float(solution.y[1, -1]), float(solution.t[-1])
+            u = np.clip(solution.y[2:, -1].copy(), -eta, eta)
+            if solution.status != 1:
+                return x, v, u
+            which = next(j for j, times in enumerate(solution.t_events) if len(times))
+            if which == 0:
+                v = 0.0
+                break
+            if which <= 2 * len(sticking):
+                i, side = sticking[(which - 1) // 2], (1, -1)[(which - 1) % 2]
+                mode[i], u[i] = side, side * eta[i]
+            else:
+                mode[sliding[which - 1 - 2 * len(sticking)]] = 0
+    return x, v, u
+
+
+def test_the_taylor_orbit_with_series_dashpots_is_the_exact_stepper_s_where_both_apply():
+    """Branches behind series dashpots (the series model) with Coulomb friction, linear between events: the
+    Taylor orbit over two periods (the branches relax while they stick, slide at their levels, stick again when
+    their inflow stops; the mass sticks and slides) is the exact stepper's (``exact_series.py``, through
+    shooting's own map) to 1e-11 of the motion at every sample."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 2.0}, "damper": {"c": 0.05}, "friction": {"alpha": 0.3},
+              "branches": {"k": [1.0, 0.5], "alpha": [0.1, 0.2], "c": [2.0, 0.5]}}
+    scene = prepared(element(tables))
+    assert scene.has_series_dashpots
+    eta = np.array(scene.branches.yield_displacement, float)
+    lam = np.array([1.0 / 2.0, 0.5 / 0.5])
+    M = 128
+    for F, omega in ((1.0, 1.3), (0.5, 0.7), (2.0, 3.0)):
+        exact = ElementShooting(scene, F, None, M, 7, 1.0)
+        assert not exact.smooth
+        for start in ([0.0, 0.0, 0.0, 0.0], [0.3, -0.2, 0.05, -0.1], [0.8, 0.5, 0.1, 0.4]):
+            end, xs = exact.run(np.array(start), omega, 4)
+            state, u, out = np.array(start[:2]), np.clip(start[2:], -eta, eta), np.empty(2 * M)
+            status, taken = element_orbit.run(1.0, 2.0, 0.05, 0.0, 0.3, 0.3, 0.0, np.array([1.0, 0.5]), eta, lam,
+                                              *NO_HISTORY, F, omega, state, u, np.zeros(0), 2 * math.pi / omega / M,
+                                              2 * M, out)
+            assert status == element_orbit.OK and taken == 2 * M
+            size = float(np.max(np.abs(xs)))
+            assert np.max(np.abs(out - xs[:, 0])) <= 1e-11 * size
+            assert np.max(np.abs(np.concatenate((state, u)) - end)) <= 1e-11 * max(size, float(np.max(np.abs(end))))
+
+
+def test_the_taylor_orbit_with_series_dashpots_is_the_independent_integration_s_on_random_scenes():
+    """Random scenes with a cubic spring and/or Stribeck's drop and one to three branches behind series dashpots
+    (relaxation rates 0.05 to 5 per second), from random states over two periods and a half: the end state is
+    the straightforward integration's above to 1e-9."""
+    rng = np.random.default_rng(20261204)
+    worst = 0.0
+    for _ in range(16):
+        m, k0, c, k3, alpha, alpha_k, vs, _, _, F, omega = _random_scene(rng)
+        nb = int(rng.integers(1, 4))
+        bk, eta, lam = rng.uniform(0.3, 2.0, nb), rng.uniform(0.05, 0.3, nb), 10.0 ** rng.uniform(-1.3, 0.7, nb)
+        x, v, u = rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), np.clip(rng.uniform(-0.3, 0.3, nb), -eta, eta)
+        period, M = 2.0 * math.pi / omega, 64
+        state, u_end, out = np.array([x, v]), u.copy(), np.empty(5 * M // 2)
+        status, taken = element_orbit.run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, *NO_HISTORY, F, omega,
+                                          state, u_end, np.zeros(0), period / M, 5 * M // 2, out)
+        assert status == element_orbit.OK and taken == 5 * M // 2
+        rx, rv, ru = series_reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, F, omega, x, v, u,
+                                      2.5 * period)
+        size = max(1.0, abs(rx), abs(rv))
+        worst = max(worst, max(abs(state[0] - rx), abs(state[1] - rv), *np.abs(u_end - ru)) / size)
+    assert worst <= 1e-9, worst
+
+
+def test_series_dashpots_beside_a_smooth_force_have_their_curve_and_its_orbits(tmp_path):
+    """A cubic spring and Coulomb friction beside a branch behind a series dashpot (refused before), from the
+    command line: the curve bends over the resonance with its two folds, and its points where the orbit is the
+    only one (below the lower fold, above the upper) are periodic orbits of the independent integration above
+    (back to themselves after a period, to 1e-8 of the motion)."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    tables = dict(DUFFING_FRICTION, branches={"k": [1.0], "alpha": [0.05], "c": [0.5]})
+    out = tmp_path / "curve.csv"
+    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "0.3", "--frequencies", "0.1,0.5",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    frequency, amplitude = np.array(table["frequency"], float), np.array(table["amplitude"], float)
+    fold = np.array(table["fold"]) == "true"
+    assert len(frequency) > 10 and np.max(amplitude) > 3 * amplitude[0] and np.sum(fold) == 2
+    shooting = ElementShooting(prepared(element(tables)), 0.3, None, 512, 7, 1.0)
+    assert shooting.smooth and shooting.dimension == 3
+    below = np.flatnonzero(frequency < 0.99 * np.min(frequency[fold]))
+    for pick in (0, below[np.argmax(amplitude[below])], len(frequency) - 1):
+        omega, A = 2.0 * math.pi * frequency[pick], amplitude[pick]
+        s = shooting.solve_at(omega)
+        assert abs(shooting.amplitude_at(s, omega) - A) <= 3e-6 * A
+        x, v, u = s[0], s[1] * shooting.reference, s[2:]
+        rx, rv, ru = series_reference(1.0, 1.0, 0.02, 0.5, 0.05, 0.05, 0.0, np.array([1.0]), np.array([0.05]),
+                                      np.array([2.0]), 0.3, omega, x, v, u, 2.0 * math.pi / omega)
+        assert max(abs(rx - x), abs(rv - v) / omega, *np.abs(ru - u)) <= 1e-8 * A
 
 
 @pytest.mark.parametrize("k0, c, k3, x0, expected", [
@@ -291,8 +432,9 @@ def test_the_taylor_orbit_s_work_is_bounded(k0, c, k3, x0, expected):
 
     state, out = np.array([x0, 0.0]), np.empty(64)
     start = time.perf_counter()
-    status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), *NO_HISTORY, 0.3,
-                                      0.6, state, np.zeros(0), np.zeros(0), 2 * math.pi / 0.6 / 64, 64, out)
+    status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), np.zeros(0),
+                                      *NO_HISTORY, 0.3, 0.6, state, np.zeros(0), np.zeros(0), 2 * math.pi / 0.6 / 64,
+                                      64, out)
     assert status == getattr(element_orbit, expected) and taken < 64
     assert time.perf_counter() - start < 30.0
     assert element_orbit.explain(status) != f"status {status}"
@@ -384,8 +526,9 @@ def test_a_run_from_exact_rest_takes_its_steps(F, k3):
 
     omega = 2.0 * math.pi * 0.1
     state, out = np.zeros(2), np.empty(64)
-    status, taken = element_orbit.run(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), *NO_HISTORY, F,
-                                      omega, state, np.zeros(0), np.zeros(0), 2 * math.pi / omega / 64, 64, out)
+    status, taken = element_orbit.run(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), np.zeros(0),
+                                      *NO_HISTORY, F, omega, state, np.zeros(0), np.zeros(0),
+                                      2 * math.pi / omega / 64, 64, out)
     assert status == element_orbit.OK and taken == 64 and np.all(np.isfinite(out))
     rx, rv, _ = reference(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), F, omega, 0.0, 0.0, [],
                           2 * math.pi / omega)
