@@ -79,20 +79,18 @@ def explain(status: int) -> str:
 
 @kernel
 def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z0,
-                  constant, amplitude, omega, X, V, Z):
+                  constant, G, X, V, Z):
     """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
-    t0), in a slide of direction ``sigma``: m v' = F cos(omega t) - stiffness x - k3 x^3 - damping v + constant
+    t0), in a slide of direction ``sigma``: m v' = f(t) - stiffness x - k3 x^3 - damping v + constant
     - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
-    those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0."""
+    those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0; G[k] those of the
+    force f(t) (:func:`_forcing_series`)."""
     terms = X.shape[0]
     square = np.zeros(terms)
     cube = np.zeros(terms)
     exponential = np.zeros(terms)
     X[0] = x0
     V[0] = v0 / rho
-    zr = amplitude * math.cos(omega * t0)
-    zi = amplitude * math.sin(omega * t0)
-    rate = omega / rho
     scale = 1.0 / (mass * rho * rho)  # a force over m rho^2: a length
     stribeck = vs > 0.0 and alpha > alpha_k
     if stribeck:
@@ -114,7 +112,7 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
             for j in range(1, k + 1):
                 total += j * V[j] * exponential[k - j]
             exponential[k] = -sigma * rho / vs * total / k
-        force = zr - stiffness * X[k] - k3 * cube[k] - damping * rho * V[k]
+        force = G[k] - stiffness * X[k] - k3 * cube[k] - damping * rho * V[k]
         for j in range(hw.shape[0]):
             force -= hw[j] * Z[j, k]
         if stribeck:
@@ -126,20 +124,37 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
         for j in range(hw.shape[0]):
             y = V[k] * rho if on_v[j] != 0.0 else X[k]
             Z[j, k + 1] = (y - hr[j] * Z[j, k]) / (rho * (k + 1))
-        # the cosine's next coefficient: z (i omega / rho) / (k + 1)
-        zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
 
 
 @kernel
-def _cosine_series(t0, amplitude, omega, rho, constant, out):
-    """The Taylor coefficients of F cos(omega t) + constant about t0 in s = rho (t - t0)."""
-    zr = amplitude * math.cos(omega * t0)
-    zi = amplitude * math.sin(omega * t0)
-    rate = omega / rho
+def _forcing_series(t0, amplitude, omega, extra, rho, constant, out):
+    """The Taylor coefficients of f(t) + constant about t0 in s = rho (t - t0), f(t) = F cos(omega t) + sum_r
+    (a_r cos(p_r omega t) + b_r sin(p_r omega t)), the rows of ``extra`` (p_r, a_r, b_r): each term Re(w e^(i p
+    omega t)), w = a - i b, whose k-th coefficient is Re(w e^(i p omega t0) (i p omega / rho)^k / k!)."""
     for k in range(out.shape[0]):
-        out[k] = zr
-        zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
+        out[k] = 0.0
+    for r in range(-1, extra.shape[0]):
+        if r < 0:
+            rate, zr, zi = omega / rho, amplitude * math.cos(omega * t0), amplitude * math.sin(omega * t0)
+        else:
+            p, a, b = extra[r, 0], extra[r, 1], extra[r, 2]
+            c, s = math.cos(p * omega * t0), math.sin(p * omega * t0)
+            rate, zr, zi = p * omega / rho, a * c + b * s, a * s - b * c
+        for k in range(out.shape[0]):
+            out[k] += zr
+            zr, zi = -zi * rate / (k + 1), zr * rate / (k + 1)
     out[0] += constant
+
+
+@kernel
+def _forcing_size(amplitude, omega, extra):
+    """(the sum of the forcing's amplitudes, its fastest angular frequency)."""
+    size = abs(amplitude)
+    fastest = abs(omega)
+    for r in range(extra.shape[0]):
+        size += abs(extra[r, 1]) + abs(extra[r, 2])
+        fastest = max(fastest, abs(extra[r, 0] * omega))
+    return size, fastest
 
 
 @kernel
@@ -153,9 +168,11 @@ def _stuck_history(z0, y, hr, rho, Z):
 
 
 @kernel
-def _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, t):
+def _held(x, k0, k3, bk, beta, bmode, u, hw, z, amplitude, omega, extra, t):
     """N: the force on the mass at rest (v = 0) without the friction."""
     total = amplitude * math.cos(omega * t) - k0 * x - k3 * x * x * x
+    for r in range(extra.shape[0]):
+        total += extra[r, 1] * math.cos(extra[r, 0] * omega * t) + extra[r, 2] * math.sin(extra[r, 0] * omega * t)
     for j in range(hw.shape[0]):
         total -= hw[j] * z[j]
     for i in range(bk.shape[0]):
@@ -194,7 +211,16 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
     """``steps`` steps of h from ``state`` = (x, v), the branches' ``u`` and the history's ``z`` (weights ``hw``,
     rates ``hr``, on v if ``on_v``, else on x; none: empty) at t = 0 (updated in place to the end), x at each
     step's end in ``out`` (steps,); returns (status, steps taken). ``lam`` (n,): the branches' relaxation rates
-    k_i / c_i through series dashpots (empty: Prandtl branches)."""
+    k_i / c_i through series dashpots (empty: Prandtl branches). The force F cos(omega t) (``amplitude``)."""
+    return run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega,
+                      np.zeros((0, 3)), state, u, z, h, steps, out)
+
+
+@kernel
+def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, extra, state,
+               u, z, h, steps, out):
+    """:func:`run` under F cos(omega t) and the harmonics of ``extra``, rows (p, a, b): a cos(p omega t) + b
+    sin(p omega t) (a delay's force on the periodic orbit, ``shooting.py``)."""
     nb = bk.shape[0]
     nz = hw.shape[0]
     series = lam.shape[0] > 0
@@ -225,7 +251,9 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
     factorial = 1.0
     for k in range(1, terms + 1):
         factorial *= k
-    size_force = amplitude + alpha + k0 * abs(x) + k3 * abs(x) ** 3
+    forcing, fastest = _forcing_size(amplitude, omega, extra)
+    G = np.empty(terms)
+    size_force = forcing + alpha + k0 * abs(x) + k3 * abs(x) ** 3
     for i in range(nb):
         size_force += bk[i] * beta[i]
     for j in range(nz):
@@ -259,7 +287,7 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
                 for i in range(smode.shape[0]):  # a series branch's inflow at rest, -lambda u, turns inwards
                     smode[i] = 0
                 _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
-                held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, t)
+                held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, extra, t)
                 sigma = 0
                 if held > alpha:
                     sigma = 1
@@ -284,19 +312,19 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
         slid = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
         if sigma == 0:
             # a stick: x fixed, N(t) a cosine and a constant
-            rho = max(abs(omega), 1e-300)
+            rho = max(fastest, 1e-300)
             for j in range(nt):
                 rho = max(rho, R[j])
             constant = -k0 * x - k3 * x * x * x
             for i in range(plain):
                 constant -= bk[i] * u[i]
             span = min((target - t) * rho, 1.0)
-            _cosine_series(t, amplitude, omega, rho, constant, X)
+            _forcing_series(t, amplitude, omega, extra, rho, constant, X)
             # the terms' z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
             for j in range(nt):
                 held_y[j] = 0.0 if Y[j] != 0.0 else x
             _stuck_history(zz, held_y, R, rho, Z)
-            reach = amplitude
+            reach = forcing
             for j in range(nt):
                 for k in range(terms):
                     X[k] -= W[j] * Z[j, k]
@@ -348,13 +376,14 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
                 else:
                     constant -= bk[i] * bmode[i] * beta[i]
             curvature = stiffness + 3.0 * k3 * x * x
-            rho = max(math.sqrt(curvature / mass), damping / mass, abs(omega), 1e-300)
+            rho = max(math.sqrt(curvature / mass), damping / mass, fastest, 1e-300)
             if vs > 0.0 and alpha > alpha_k:
                 rho = max(rho, (alpha - alpha_k) / (mass * vs))
             for j in range(nt):
                 rho = max(rho, R[j], math.sqrt(abs(W[j]) / mass))
+            _forcing_series(t, amplitude, omega, extra, rho, 0.0, G)
             _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, W, R, Y, zz,
-                          constant, amplitude, omega, X, V, Z)
+                          constant, G, X, V, Z)
             # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
             # compare with and took steps of 0 until refused: a review's find)
             size = max(abs(X[0]), abs(V[0]), size_force / (mass * rho * rho), 1e-300)

@@ -135,10 +135,6 @@ def prepared(scene, named=None, loaded=None):
         raise FrequencyError(f"{scene.source}: [friction] on a moving belt (belt_velocity != 0) has no periodic "
                              "state symmetric over half a period, which the frequency response of friction on the "
                              "mass solves for: use --method time")
-    if scene.delay is not None:  # ([dahl] with [friction] the scene itself refuses: two laws of one friction)
-        raise FrequencyError(f"{scene.source}: [friction] with [delay] is not taken by the frequency response of "
-                             "friction on the mass (shooting on the motion: a delay's state is the motion over the "
-                             "last tau, not a finite vector): use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
@@ -157,7 +153,7 @@ def smooth(scene) -> bool:
     linear between events; ``[history]``: states of its own): its orbit is ``element_orbit.py``'s Taylor
     series."""
     return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha or \
-        scene.history is not None
+        scene.history is not None or scene.delay is not None
 
 
 def prepared_network(scene, named=None, loaded=None, purpose="the forced response"):
@@ -369,7 +365,8 @@ class Shooting:
 class ElementShooting(Shooting):
     """An element scene with friction on its mass: s = (x, v / omega_ref, u_1 ... u_n), its own stepper."""
 
-    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, stepper="exact"):
+    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, stepper="exact",
+                 delay_harmonics: Optional[int] = None):
         from ..compiled import compile_loop, compile_model
         from ..loads import HarmonicLoad
         from ..scene_tables import Solver
@@ -383,8 +380,14 @@ class ElementShooting(Shooting):
             stepper = "taylor"  # element_orbit.py: the Taylor series of the smooth phases
         history = scene.history
         self.history = 0 if history is None else len(history.weight)  # its z_j: unknowns after the branches' u
+        # the delay's force on the periodic orbit, its odd harmonics up to delay_harmonics: unknowns after the z_j
+        self.delay = scene.delay
+        self.delay_harmonics = 0 if self.delay is None else int(delay_harmonics or harmonics)
+        if self.delay is not None and not (self.delay_harmonics % 2 and self.delay_harmonics < steps // 2):
+            raise ValueError(f"delay_harmonics: odd and below steps / 2, got {self.delay_harmonics!r}")
+        self.delay_unknowns = self.delay_harmonics + 1 if self.delay is not None else 0
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
-                         2 + branches + self.history, stiffness)
+                         2 + branches + self.history + self.delay_unknowns, stiffness)
         self.branches = branches
         self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
         self._out = np.empty((self.M // 2, 3))
@@ -431,20 +434,69 @@ class ElementShooting(Shooting):
 
     def _run_smooth(self, s: np.ndarray, omega: float, half_periods: int) -> tuple:
         """:meth:`run` on ``element_orbit.py``'s Taylor series (a cubic spring, Stribeck's drop)."""
-        from .element_orbit import OK, explain, run
+        from .element_orbit import OK, explain, run, run_forced
 
         h = 2.0 * math.pi / omega / self.M
         state = np.array([float(s[0]), float(s[1]) * self.reference])
         u = np.clip(np.array(s[2:2 + self.branches], dtype=float), -self.eta, self.eta)
-        z = np.array(s[2 + self.branches:], dtype=float)
+        z = np.array(s[2 + self.branches:2 + self.branches + self.history], dtype=float)
         steps = self.M // 2 * half_periods
         out = np.empty(steps)
-        status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, z, h,
-                            steps, out)
+        if self.delay is None:
+            status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, z,
+                                h, steps, out)
+        else:
+            delayed = np.array(s[self.dimension - self.delay_unknowns:], dtype=float)
+            extra = np.empty((delayed.size // 2, 3))
+            extra[:, 0] = np.arange(1, self.delay_harmonics + 1, 2)
+            extra[:, 1:] = self._delay_scale() * delayed.reshape(-1, 2)
+            status, taken = run_forced(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), extra,
+                                       state, u, z, h, steps, out)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
         end = np.concatenate(([state[0], state[1] / self.reference], u, z))
+        if self.delay is not None:
+            # the residual -end - s asks the delay's force to be the one the half period's orbit gives (its
+            # symmetric continuation over the whole period); run on (several half periods), it is kept
+            if half_periods == 1:
+                follows = -self._delayed(np.concatenate(([s[0]], out[:-1])), omega)
+            else:
+                follows = (-1.0) ** half_periods * delayed
+            end = np.concatenate((end, follows))
         return self._checked(end, out[:, None].copy(), omega)
+
+    def _delay_scale(self) -> float:
+        """The delay's unknowns are its force over this (N/m): lengths, as the rest of s."""
+        gain = max(abs(self.delay.gain), 1e-300)
+        return gain * (self.reference if self.delay.acts_on == "v" else 1.0)
+
+    def _delayed(self, half: np.ndarray, omega: float) -> np.ndarray:
+        """The delay's force -g y(t - tau) on the orbit whose first half period has the samples ``half`` of x
+        (M / 2, at t_j = j T / M; the second half their negative): its odd harmonics up to delay_harmonics, (a_1,
+        b_1, a_3, b_3, ...) of a cos(p omega t) + b sin(p omega t), over the scale :meth:`_delay_scale`. The
+        harmonics of x by the trapezoid rule (x is C^1: aliasing like 1 / M^2), those of v = x' as i p omega
+        times them."""
+        spectrum = np.fft.rfft(np.concatenate((half, -half))) / self.M
+        p = np.arange(1, self.delay_harmonics + 1, 2)
+        X = 2.0 * spectrum[p]
+        Y = X * (1j * p * omega) if self.delay.acts_on == "v" else X
+        C = -self.delay.gain * Y * np.exp(-1j * p * omega * self.delay.tau)
+        out = np.empty(2 * p.size)
+        out[0::2], out[1::2] = C.real, -C.imag
+        return out / self._delay_scale()
+
+    def multipliers(self, s: np.ndarray, omega: float):
+        """As :meth:`Shooting.multipliers`; None with a delay (unknown: the map of s is not the delay equation's,
+        whose state is the motion over the last tau: see docs/frequency.md)."""
+        if self.delay is not None:
+            return None
+        return super().multipliers(s, omega)
+
+    def padded(self, s: np.ndarray, finer: "ElementShooting") -> np.ndarray:
+        """``s`` as the unknowns of ``finer`` (more of the delay's harmonics: the new ones 0)."""
+        out = np.zeros(finer.dimension)
+        out[:self.dimension] = s
+        return out
 
 
 def _relaxation(branches) -> np.ndarray:
@@ -567,10 +619,11 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     reference = math.sqrt(low * high)
 
-    def make(steps):
+    def make(steps, delay_harmonics=None):
         if network:
             return NetworkShooting(scene, force_amplitude, base_amplitude, steps, H, reference, load_node)
-        return ElementShooting(scene, force_amplitude, base_amplitude, steps, H, reference)
+        return ElementShooting(scene, force_amplitude, base_amplitude, steps, H, reference,
+                               delay_harmonics=delay_harmonics or H + 1 - H % 2)
 
     shooting = make(max(FIRST_STEPS, 4 * H + 4 if samples is None else int(samples) + int(samples) % 2))
     where = shooting.system.node_index(node)
@@ -582,14 +635,20 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     finally:
         bar.close()
     # the quadrature of the harmonics: the orbit is the exact stepper's whatever M, so only the samples change
+    # (with a delay the state changes too: its force's harmonics, twice as many and more samples, solved again)
     coefficients = np.array([shooting.coefficients(s, w) for w, s, _ in points])
     change = math.inf
+    delayed = getattr(shooting, "delay", None) is not None
     while True:
         if shooting.M * 2 > MAX_STEPS:
             raise FrequencyError(f"{scene.source}: the first harmonic still changed by {change:.3g} relative from "
                                  f"{shooting.M // 2} to {shooting.M} samples per period (tolerance {tolerance:g}): "
                                  "give a larger --tolerance")
-        finer = make(2 * shooting.M)
+        if delayed:
+            finer = make(2 * shooting.M, 2 * shooting.delay_harmonics + 1)
+            points = [(w, _solved_again(finer, shooting.padded(s, finer), w), fold) for w, s, fold in points]
+        else:
+            finer = make(2 * shooting.M)
         refined = np.array([finer.coefficients(s, w) for w, s, _ in points])
         X, X_fine = (c[:, where, 1] - 1j * c[:, where, 2] for c in (coefficients, refined))
         change = float(np.max(np.abs(X_fine - X) / np.maximum(np.abs(X_fine), 1e-300)))
@@ -597,6 +656,17 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
         if change <= 0.5 * tolerance:  # the error at M is about 4/3 of the change (the trapezoid rule: 1 / M^2)
             break
     return _curve(shooting, points, coefficients, where, stability, change)
+
+
+def _solved_again(shooting, guess, omega):
+    """The point at ``omega`` of a finer ``shooting`` (more samples, more of a delay's harmonics) by Newton from
+    the coarser one's ``guess``; FrequencyError where it does not converge."""
+    solved = shooting._newton(omega, guess)
+    if solved is None:
+        raise FrequencyError(f"{shooting.system.source}: at f = {omega / (2 * math.pi)!r} Hz the periodic state with "
+                             f"{shooting.delay_harmonics} harmonics of the delay's force and {shooting.M} samples per "
+                             "period was not found from the coarser one's: see --method time")
+    return solved
 
 
 def _curve(shooting, points, coefficients, where, stability, change) -> dict:
@@ -612,15 +682,21 @@ def _curve(shooting, points, coefficients, where, stability, change) -> dict:
         from ..stepping import _progress_bar
 
         stable = np.ones(len(points), dtype=bool)
+        known = np.ones(len(points), dtype=bool)
         bar = _progress_bar(None, total=len(points), label=f"{system.name}: stability")
         try:
             for index, (w, s, _) in enumerate(points):
                 values = shooting.multipliers(s, w)
-                largest[index] = float(np.max(np.abs(values)))
-                stable[index] = is_stable(values)
+                if values is None:  # not computed (a delay: ElementShooting.multipliers): unknown, never a guess
+                    known[index] = False
+                else:
+                    largest[index] = float(np.max(np.abs(values)))
+                    stable[index] = is_stable(values)
                 bar.update(1)
         finally:
             bar.close()
+        if not np.all(known):
+            stable = np.ma.MaskedArray(stable, mask=~known)
     amplitudes = {system.nodes[i]: np.hypot(coefficients[:, i, 1], coefficients[:, i, 2]) for i in system.massive}
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return dict(frequency=omega / (2.0 * math.pi), amplitude=np.abs(X), phase=phase, stable=stable,

@@ -1,0 +1,88 @@
+"""Friction on the mass beside ``[delay]`` (refused before): shooting on the Taylor orbit with the delay's force
+on the periodic orbit as unknowns, its odd harmonics (``frequency/shooting.py``, ``ElementShooting``). Checked
+against the linear closed form where the friction vanishes, against the time sweep where it sticks and slides,
+and the harmonics of the delay's force as they converge."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+
+from tests.analysis.test_describe_cli import read_csv, write
+from tests.analysis.test_harmonic_balance import element
+
+DELAYED = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05}, "friction": {"alpha": 0.1},
+           "delay": {"gain": -0.2, "tau": 0.5}}
+
+
+@pytest.mark.parametrize("acts_on, gain", [("x", -0.2), ("v", 0.1)])
+def test_friction_beside_a_delay_is_the_linear_closed_form_where_the_friction_vanishes(acts_on, gain):
+    """With a friction of 1e-9 N against a force of 1 N every point of the curve is the linear oscillator's with
+    the delay's transfer function, X = F / (k - m w^2 + i c w + g e^(-i w tau) (1 on x, i w on v)), to 1e-7 in
+    amplitude and phase."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    tau = 0.5
+    scene = element(dict(DELAYED, friction={"alpha": 1e-9}, delay={"gain": gain, "tau": tau, "acts_on": acts_on}))
+    curve = harmonic_response(scene, 1.0, [0.05, 0.4], tolerance=1e-9)
+    assert curve.method == "shooting" and curve.orbit == "Taylor series" and len(curve.frequency) > 10
+    omega = 2.0 * math.pi * curve.frequency
+    y = np.ones_like(omega) if acts_on == "x" else 1j * omega
+    X = 1.0 / (1.0 - omega**2 + 0.05j * omega + gain * y * np.exp(-1j * omega * tau))
+    assert np.allclose(curve.amplitude, np.abs(X), rtol=1e-7, atol=0)
+    assert np.allclose(curve.phase, np.angle(X), rtol=0, atol=1e-7)
+
+
+def test_friction_beside_a_delay_is_the_time_sweep_s_curve(tmp_path):
+    """Where the mass sticks for part of each period (0.1 Hz) and where it slides through (0.3 Hz), from the
+    command line: the curve's ends are the time sweep's first harmonic (implicit, to 1e-4) within 2e-4 in
+    amplitude and phase; the curve has no `stable` verdict (see the module of shooting.py), never a guess."""
+    scene = write(tmp_path, DELAYED)
+    curve, sweep = tmp_path / "curve.csv", tmp_path / "sweep.csv"
+    assert main(["describe", scene, "--force-amplitude", "0.3", "--frequencies", "0.1,0.3", "--tolerance", "1e-5",
+                 "--out", str(curve)]) == 0
+    assert main(["describe", scene, "--force-amplitude", "0.3", "--frequencies", "0.1,0.3", "--method", "time",
+                 "--tolerance", "1e-4", "--out", str(sweep)]) == 0
+    table, reference = read_csv(curve), read_csv(sweep)
+    assert set(table["stable"]) == {""} and set(table["multiplier"]) == {""}
+    for row in (0, -1):
+        f = float(table["frequency"][row])
+        at = [i for i, g in enumerate(reference["frequency"]) if float(g) == f][0]
+        A, B = float(table["amplitude"][row]), float(reference["amplitude"][at])
+        assert abs(A - B) <= 2e-4 * B, (f, A, B)
+        assert abs(float(table["phase"][row]) - float(reference["phase"][at])) <= 2e-4, f
+
+
+def test_the_delay_s_force_is_the_orbit_s_and_its_harmonics_converge():
+    """At a point where the mass sticks: the unknowns of the delay's force are the odd harmonics of -g x(t - tau)
+    of the orbit they drive (the residual's last block is their difference, 0 at the solution); with 7, 15, 31
+    and 63 of them (and 64 to 512 samples) the first harmonic of x converges, each change at most half the one
+    before."""
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    scene = prepared(element(DELAYED))
+    omega = 2.0 * math.pi * 0.1
+    amplitudes, s, coarse = [], None, None
+    for harmonics, steps in ((7, 64), (15, 128), (31, 256), (63, 512)):
+        shooting = ElementShooting(scene, 0.3, None, steps, 7, 1.0, delay_harmonics=harmonics)
+        assert shooting.dimension == 2 + harmonics + 1
+        s = shooting.solve_at(omega) if s is None else shooting._newton(omega, coarse.padded(s, shooting))
+        _, xs = shooting.run(s, omega)
+        half = np.concatenate(([s[0]], xs[:-1, 0]))
+        period = np.concatenate((half, -half))
+        t = np.arange(steps) * 2.0 * math.pi / omega / steps
+        p = np.arange(1, harmonics + 1, 2)
+        # -g x(t - tau), its harmonics written out (a rectangle rule over the samples: x periodic, C^1)
+        delayed = np.interp((t - 0.5) % (2.0 * math.pi / omega), np.append(t, 2.0 * math.pi / omega),
+                            np.append(period, period[0]))
+        a = 2.0 / steps * np.array([np.sum(0.2 * delayed * np.cos(q * omega * t)) for q in p])
+        b = 2.0 / steps * np.array([np.sum(0.2 * delayed * np.sin(q * omega * t)) for q in p])
+        unknowns = s[2:] * 0.2
+        assert np.max(np.abs(unknowns[0::2] - a)) <= 0.02 * np.max(np.abs(a))  # the interpolation's error
+        assert np.max(np.abs(unknowns[1::2] - b)) <= 0.02 * np.max(np.abs(a))
+        assert np.max(np.abs(shooting.residual(s, omega))) <= 1e-9 * shooting.size(s, omega)
+        amplitudes.append(shooting.amplitude_at(s, omega))
+        coarse = shooting
+    changes = np.abs(np.diff(amplitudes))
+    assert np.all(changes[1:] <= 0.5 * changes[:-1]), amplitudes
