@@ -56,9 +56,16 @@ Base excitation (Y0 cos(omega t) of the ground): in relative coordinates z = x -
 cos(omega t), the friction on the relative velocity (the mass slides on the moving support); x = z + y
 reported, as the harmonic balance does.
 
-What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), ``[delay]``
-beside the friction (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
-unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots), a node other than the mass.
+A ``[delay]`` beside the friction: its force on the periodic orbit, -g y(t - tau), is the orbit's own, odd
+over half a period; its odd harmonics up to delay_harmonics are unknowns after the history's z_j, the Taylor
+orbit runs under them (``element_orbit.run_forced``), and the residual asks them to be those of the orbit's
+half period continued by the symmetry (:meth:`ElementShooting._delayed`). They are doubled with the samples
+until the first harmonic settles (``shooting_response``). The stability of such a point is not computed
+(:meth:`ElementShooting.multipliers`: docs/frequency.md says what was tried).
+
+What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), a node other
+than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
+unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
 Nonlinear modes (EPMC) of such a scene are solved for by ``slider_modes.py`` on the network of one node
 (``modes.py``).
 """
