@@ -213,14 +213,30 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
     step's end in ``out`` (steps,); returns (status, steps taken). ``lam`` (n,): the branches' relaxation rates
     k_i / c_i through series dashpots (empty: Prandtl branches). The force F cos(omega t) (``amplitude``)."""
     return run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega,
-                      np.zeros((0, 3)), state, u, z, h, steps, out)
+                      np.zeros((0, 3)), np.zeros(0), np.zeros(0), state, u, z, h, steps, out)
 
 
 @kernel
-def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, extra, state,
-               u, z, h, steps, out):
+def _delayed_force(t, step, h, delay, ybuf):
+    """(value at t, slope) of the delay's force -g y(t - tau) in the piece of step ``step`` that holds t: y
+    between the grid points of ``ybuf`` (y at t_k = k h, k = -(N + 1) ... at ybuf[k + N + 1]) linearly
+    interpolated; tau = N h + delta, ``delay`` = (g, N, delta, on v)."""
+    gain, lag, delta = delay[0], int(delay[1]), delay[2]
+    before = step - lag - 1 if t < step * h + delta else step - lag
+    ya, yb = ybuf[before + lag + 1], ybuf[before + lag + 2]
+    fraction = (t - lag * h - delta - before * h) / h
+    return -gain * (ya + (yb - ya) * fraction), -gain * (yb - ya) / h
+
+
+@kernel
+def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, extra, delay,
+               ybuf, state, u, z, h, steps, out):
     """:func:`run` under F cos(omega t) and the harmonics of ``extra``, rows (p, a, b): a cos(p omega t) + b
-    sin(p omega t) (a delay's force on the periodic orbit, ``shooting.py``)."""
+    sin(p omega t) (a delay's force on the periodic orbit, ``shooting.py``); and, where ``delay`` = (g, N, delta,
+    on v) is given (else empty), the delay's force -g y(t - tau), tau = N h + delta (N >= 1), from y at the grid
+    points t_k = k h: ``ybuf`` (N + 2 + steps,) holds k = -(N + 1) ... 0 on entry and gets y (x, or v where
+    delay[3] is 1) at each step's end (the semi-discretisation of the delay equation: y linear between grid
+    points, so each step has a knot at t_k + delta where t - tau passes one; the stability of shooting.py)."""
     nb = bk.shape[0]
     nz = hw.shape[0]
     series = lam.shape[0] > 0
@@ -253,7 +269,12 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
         factorial *= k
     forcing, fastest = _forcing_size(amplitude, omega, extra)
     G = np.empty(terms)
+    delayed = delay.shape[0] > 0
+    lag = int(delay[1]) if delayed else 0
     size_force = forcing + alpha + k0 * abs(x) + k3 * abs(x) ** 3
+    if delayed:
+        for i in range(lag + 2):
+            size_force = max(size_force, forcing + abs(delay[0] * ybuf[i]))
     for i in range(nb):
         size_force += bk[i] * beta[i]
     for j in range(nz):
@@ -288,6 +309,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     smode[i] = 0
                 _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
                 held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, extra, t)
+                if delayed:
+                    held += _delayed_force(t, step, h, delay, ybuf)[0]
                 sigma = 0
                 if held > alpha:
                     sigma = 1
@@ -309,6 +332,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
         if taylor_steps > step_limit:
             return TOO_STIFF, step
         target = (step + 1) * h
+        stop_at = target  # a step's end, or the delay's knot within it
+        if delayed and t < step * h + delay[2]:
+            stop_at = step * h + delay[2]
+        lagged, lagged_slope = _delayed_force(t, step, h, delay, ybuf) if delayed else (0.0, 0.0)
         slid = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
         if sigma == 0:
             # a stick: x fixed, N(t) a cosine and a constant
@@ -318,8 +345,9 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             constant = -k0 * x - k3 * x * x * x
             for i in range(plain):
                 constant -= bk[i] * u[i]
-            span = min((target - t) * rho, 1.0)
-            _forcing_series(t, amplitude, omega, extra, rho, constant, X)
+            span = min((stop_at - t) * rho, 1.0)
+            _forcing_series(t, amplitude, omega, extra, rho, constant + lagged, X)
+            X[1] += lagged_slope / rho
             # the terms' z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
             for j in range(nt):
                 held_y[j] = 0.0 if Y[j] != 0.0 else x
@@ -350,8 +378,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             for j in range(nt):
                 zz[j] = _horner(Z[j], stop)
             t_end = t + stop / rho
-            if first < 0.0 and (target - t) * rho <= span:
-                t_end = target
+            if first < 0.0 and (stop_at - t) * rho <= span:
+                t_end = stop_at
             t = t_end
             if first >= 0.0:
                 sigma = event
@@ -381,7 +409,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 rho = max(rho, (alpha - alpha_k) / (mass * vs))
             for j in range(nt):
                 rho = max(rho, R[j], math.sqrt(abs(W[j]) / mass))
-            _forcing_series(t, amplitude, omega, extra, rho, 0.0, G)
+            _forcing_series(t, amplitude, omega, extra, rho, lagged, G)
+            G[1] += lagged_slope / rho
             _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, W, R, Y, zz,
                           constant, G, X, V, Z)
             # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
@@ -399,7 +428,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     top = max(top, abs(Z[j, k]))
                 if top > 0.0:
                     span = min(span, (TRUNCATION * size / top) ** (1.0 / k))
-            span = min(span, 1.0 if math.isinf(span) else span, (target - t) * rho)
+            span = min(span, 1.0 if math.isinf(span) else span, (stop_at - t) * rho)
             if vs > 0.0 and alpha > alpha_k:
                 # the drop's exp(-sigma v / vs): its coefficients carry its value at the start, which the last terms
                 # hide where the slide is fast (1e-33) and the step then crosses the drop with the series' 1e-11
@@ -490,8 +519,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 else:
                     zz[nz + i] = min(max(zz[nz + i], -beta[i]), beta[i])
             t_end = t + stop / rho
-            if first < 0.0 and stop >= (target - t) * rho:
-                t_end = target
+            if first < 0.0 and stop >= (stop_at - t) * rho:
+                t_end = stop_at
             t = t_end
             if first >= 0.0:
                 for i in range(plain):
@@ -521,6 +550,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             z[j] = zz[j]
         if t == target:
             out[step] = x
+            if delayed:
+                ybuf[lag + 2 + step] = v if delay[3] != 0.0 else x
             step += 1
     # the end state
     if sigma != 0:

@@ -60,8 +60,8 @@ A ``[delay]`` beside the friction: its force on the periodic orbit, -g y(t - tau
 over half a period; its odd harmonics up to delay_harmonics are unknowns after the history's z_j, the Taylor
 orbit runs under them (``element_orbit.run_forced``), and the residual asks them to be those of the orbit's
 half period continued by the symmetry (:meth:`ElementShooting._delayed`). They are doubled with the samples
-until the first harmonic settles (``shooting_response``). The stability of such a point is not computed
-(:meth:`ElementShooting.multipliers`: docs/frequency.md says what was tried).
+until the first harmonic settles (``shooting_response``). The stability of such a point is the delay
+equation's, semi-discretised on the same Taylor orbit (:meth:`ElementShooting._delay_monodromy`).
 
 What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), a node other
 than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
@@ -92,6 +92,9 @@ MAX_STEPS = 2**16
 # samples per period of the continuation (the orbit is exact: they set the quadrature only; each costs the exact
 # stepper a matrix exponential)
 FIRST_STEPS = 64
+# the stability beside a delay: steps per period of its semi-discretisation, and how often they are doubled
+DELAY_STEPS = 256
+DELAY_REFINEMENTS = 3
 # from this many unknowns on, the continuation's corrector keeps the last point's Jacobian (see costly_jacobian)
 CHORD_UNKNOWNS = 12
 
@@ -396,6 +399,7 @@ class ElementShooting(Shooting):
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
                          2 + branches + self.history + self.delay_unknowns, stiffness)
         self.branches = branches
+        self.element = scene  # as prepared (the stability beside a delay builds finer ones)
         self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
         self._out = np.empty((self.M // 2, 3))
         if self.smooth:
@@ -458,7 +462,7 @@ class ElementShooting(Shooting):
             extra[:, 0] = np.arange(1, self.delay_harmonics + 1, 2)
             extra[:, 1:] = self._delay_scale() * delayed.reshape(-1, 2)
             status, taken = run_forced(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), extra,
-                                       state, u, z, h, steps, out)
+                                       np.zeros(0), np.zeros(0), state, u, z, h, steps, out)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
         end = np.concatenate(([state[0], state[1] / self.reference], u, z))
@@ -493,11 +497,90 @@ class ElementShooting(Shooting):
         return out / self._delay_scale()
 
     def multipliers(self, s: np.ndarray, omega: float):
-        """As :meth:`Shooting.multipliers`; None with a delay (unknown: the map of s is not the delay equation's,
-        whose state is the motion over the last tau: see docs/frequency.md)."""
-        if self.delay is not None:
+        """As :meth:`Shooting.multipliers`; with a delay (the map of s is not the delay equation's, whose state is
+        the motion over the last tau) those of :meth:`_delay_monodromy` at DELAY_STEPS steps per period, doubled
+        while the verdict is in doubt (the largest |mu| nearer 1 than four times its change), at most
+        DELAY_REFINEMENTS times; None where the buffer passes floquet.MAX_DELAY_STATES values (unknown)."""
+        if self.delay is None:
+            return super().multipliers(s, omega)
+        s = np.asarray(s, dtype=float)
+        period = 2.0 * math.pi / omega
+        # steps of at most tau (the buffer's grid), and more than twice the delay's harmonics
+        steps = max(DELAY_STEPS, 2 * self.delay_harmonics + 2, 2 * math.ceil(period / self.delay.tau / 2.0))
+        values, previous = None, None
+        for _ in range(DELAY_REFINEMENTS + 1):
+            monodromy = self._delay_monodromy(s, omega, steps)
+            if monodromy is None:
+                return values
+            values = np.linalg.eigvals(monodromy)
+            top = float(np.max(np.abs(values)))
+            if previous is not None and abs(top - 1.0) > 4.0 * abs(top - previous):
+                return values
+            previous, steps = top, 2 * steps
+        return values
+
+    def _delay_monodromy(self, s: np.ndarray, omega: float, steps: int) -> Optional[np.ndarray]:
+        """The monodromy of the delay equation about the orbit of ``s`` (None past floquet.MAX_DELAY_STATES).
+
+        Its state is x, v, the branches' u, the history's z and the buffer: y at the grid points t_k = k h, k =
+        -(N + 1) ... 0 (h = T / steps, tau = N h + delta), between which y is taken linear (the semi-discretisation
+        of Insperger and Stepan: an error like h^2 in the delayed force), on ``element_orbit.run_forced``'s Taylor
+        orbit, events exact. The buffer is first the orbit's y (v by the samples' spectral derivative), then two
+        periods of that equation make the point its own; each component is perturbed in turn (PERTURBATION of
+        the motion), one period each: 2 + n + n_z + N + 2 runs. Measured on the friction damper with a delay: a
+        finite-difference monodromy on the implicit stepper, the buffer's values as states (``floquet.py``'s for
+        a delay without friction) called a point unstable (|mu| = 1.27) whose time sweep settles in 8 periods:
+        its stick and slip move by a step between perturbed runs. Here they move with the perturbation."""
+        from .element_orbit import OK, explain, run_forced
+        from .floquet import MAX_DELAY_STATES
+
+        period = 2.0 * math.pi / omega
+        h = period / steps
+        lag = int(math.floor(self.delay.tau / h))
+        delta = max(self.delay.tau - lag * h, 0.0)
+        if lag + 2 > MAX_DELAY_STATES:
             return None
-        return super().multipliers(s, omega)
+        on_v = self.delay.acts_on == "v"
+        fine = ElementShooting(self.element, self.force_amplitude, self.base_amplitude, steps, self.H,
+                               self.reference, delay_harmonics=self.delay_harmonics)
+        _, xs = fine.run(s, omega)
+        half = np.concatenate(([s[0]], xs[:-1, 0]))
+        y = np.concatenate((half, -half))
+        if on_v:
+            spectrum = np.fft.rfft(y)
+            y = np.fft.irfft(spectrum * (1j * omega * np.arange(spectrum.size)), n=steps)
+        nb, nz = self.branches, self.history
+        start = np.concatenate(([s[0], float(s[1]) * self.reference],
+                                np.clip(s[2:2 + nb], -self.eta, self.eta), s[2 + nb:2 + nb + nz],
+                                y[np.arange(-(lag + 1), 1) % steps]))
+        delay = np.array([self.delay.gain, float(lag), delta, 1.0 if on_v else 0.0])
+        amplitude = float(self.amplitude_of_force(omega))
+
+        def run(values, periods=1):
+            count = steps * periods
+            state, u, z = values[:2].copy(), values[2:2 + nb].copy(), values[2 + nb:2 + nb + nz].copy()
+            buffer = np.empty(lag + 2 + count)
+            buffer[:lag + 2] = values[2 + nb + nz:]
+            status, taken = run_forced(*self.parameters, amplitude, float(omega), np.zeros((0, 3)), delay, buffer,
+                                       state, u, z, h, count, np.empty(count))
+            if status != OK:
+                self._refuse(omega, f"the stability's run stopped at t = {taken * h!r} s: {explain(status)}")
+            return np.concatenate((state, u, z, buffer[count:]))
+
+        base_state = run(start, 2)
+        size = max(float(np.max(np.abs(half))), abs(float(base_state[1])) / omega, 1e-300)
+        scales = np.full(base_state.size, PERTURBATION * size)
+        scales[1] *= omega
+        if on_v:
+            scales[2 + nb + nz:] *= omega
+        base = run(base_state)
+        columns = []
+        for k in range(base_state.size):
+            moved = base_state.copy()
+            moved[k] += scales[k]
+            columns.append((run(moved) - base) / scales[k])
+        monodromy = np.array(columns).T
+        return monodromy if np.all(np.isfinite(monodromy)) else None
 
     def padded(self, s: np.ndarray, finer: "ElementShooting") -> np.ndarray:
         """``s`` as the unknowns of ``finer`` (more of the delay's harmonics: the new ones 0)."""
