@@ -127,8 +127,11 @@ def _friction_network(scene, tolerance: float):
             k, eta = spectrum_branches(scene.branches, tolerance, scene.source)
         else:
             k, eta = scene.branches.stiffness, scene.branches.yield_displacement
-        elements += [Element("branch", f"branch_{i + 1}", (0, -1), float(k_i), float(eta_i))
-                     for i, (k_i, eta_i) in enumerate(zip(np.asarray(k).tolist(), np.asarray(eta).tolist()))]
+        # their series dashpots too (they were left out: the mode of the branches without them, silently)
+        c = np.zeros(len(k)) if scene.branches.damping is None else np.asarray(scene.branches.damping, float)
+        elements += [Element("branch", f"branch_{i + 1}", (0, -1), float(k_i), float(eta_i), float(c_i))
+                     for i, (k_i, eta_i, c_i) in enumerate(zip(np.asarray(k).tolist(), np.asarray(eta).tolist(),
+                                                                c.tolist()))]
     network = Network((ELEMENT_NODE,), np.array([float(scene.mass.m)]), np.zeros(1), np.zeros(1), tuple(elements), 0)
     return NetworkScene(scene.name, network, scene.load, scene.solver, scene.source)
 

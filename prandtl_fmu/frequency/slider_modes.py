@@ -322,7 +322,9 @@ def _guess(free, shape, omega, xi, A) -> np.ndarray:
     """(s, omega, xi) of the linear mode ``shape`` at amplitude A: x = A shape at t = 0, at rest, every branch's
     spring stretched by its ends."""
     x = A * shape
-    return np.concatenate((x, np.zeros(free.system.n), np.clip(free.brows @ x, -free.eta, free.eta), [omega, xi]))
+    s = np.concatenate((x, np.zeros(free.system.n), np.clip(free.brows @ x, -free.eta, free.eta)))
+    # the states after them (series dashpots' u, a history's z) start at 0
+    return np.concatenate((s, np.zeros(free.dimension - s.size), [omega, xi]))
 
 
 def _linear_start(free, mode: int, A: float) -> tuple:

@@ -358,3 +358,20 @@ def test_bad_harmonic_amplitudes_are_one_line(tmp_path, capsys, options, culprit
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists()
+
+
+def test_the_mode_of_friction_beside_series_dashpots_keeps_the_dashpots():
+    """Friction on the mass beside a branch behind a series dashpot: the mode (shooting on the network of one
+    node) took the branch without its dashpot, silently (its damping ratio 0.116 where the dashpot makes it
+    0.120 at 0.5 m). With a friction of 1e-9 N it is the mode of the scene without friction, which the harmonic
+    balance computes with the dashpot (frequency and damping ratio to 1e-3)."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "branches": {"k": [1.0], "alpha": [0.05], "c": [0.5]}}
+    balance = nonlinear_mode(element(tables), 1, [0.5, 1.0])
+    shot = nonlinear_mode(element(dict(tables, friction={"alpha": 1e-9})), 1, [0.5, 1.0])
+    assert np.allclose(shot.frequency, balance.frequency, rtol=1e-3, atol=0)
+    assert np.allclose(shot.damping_ratio, balance.damping_ratio, rtol=1e-3, atol=0)
+    without = nonlinear_mode(element(dict(tables, friction={"alpha": 1e-9},
+                                          branches={"k": [1.0], "alpha": [0.05]})), 1, [0.5, 1.0])
+    assert np.all(np.abs(without.damping_ratio / balance.damping_ratio - 1.0) > 0.01)
