@@ -67,6 +67,8 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     if getattr(scene, "friction", None) is not None:
+        if _friction_taylor(scene):  # a Stribeck drop, a history or a delay: the element on its Taylor orbit
+            return _slider_mode(scene, mode, amplitudes, node, tolerance, load_node)
         scene = _friction_network(scene, tolerance)
     scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
     if any(e.kind == "slider" for e in getattr(getattr(scene, "network", None), "elements", ())):
@@ -94,6 +96,15 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
                     system.nodes[where], harmonics, change, shape, system.mass.copy(), system.nodes)
 
 
+def _friction_taylor(scene) -> bool:
+    """Whether the modes of an element with ``[friction]`` are solved for on its own Taylor orbit
+    (``slider_modes.FreeElement``): a Stribeck drop, a history or a delay beside the friction (the network of one
+    node, ``_friction_network``, takes a spring, a cubic spring, a dashpot, branches and Coulomb friction)."""
+    friction = scene.friction
+    return scene.mass is not None and friction.belt_velocity == 0.0 and (
+        friction.alpha_kinetic != friction.alpha or scene.history is not None or scene.delay is not None)
+
+
 def _friction_network(scene, tolerance: float):
     """An element with ``[friction]`` on its mass as the network of one node ``mass`` (its spring, dashpot,
     branches and a slider of the friction's alpha to the ground), whose modes ``slider_modes.py`` takes;
@@ -102,19 +113,12 @@ def _friction_network(scene, tolerance: float):
     from .harmonic_balance import ELEMENT_NODE, spectrum_branches
 
     friction = scene.friction
-    why = None
     if scene.mass is None:
-        why = "the nonlinear modes need [mass]"
-    elif friction.belt_velocity != 0.0:
-        why = "[friction] on a moving belt has no mode symmetric over half a period"
-    elif friction.alpha_kinetic != friction.alpha:
-        why = "[friction] with a Stribeck drop (alpha_kinetic < alpha) is not Coulomb's: its mode is not taken"
-    elif any(getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
-        why = "[friction] beside an effect with memory: its mode is not taken"
-    if why is not None:
-        raise FrequencyError(f"{scene.source}: {why} (the modes of friction on the mass are solved for by shooting "
-                             "on the motion of a spring, a cubic spring, a dashpot, branches and Coulomb friction); "
-                             "its forced response (--force-amplitude) is computed")
+        raise FrequencyError(f"{scene.source}: the nonlinear modes need [mass]")
+    if friction.belt_velocity != 0.0:
+        raise FrequencyError(f"{scene.source}: [friction] on a moving belt has no mode symmetric over half a period, "
+                             "which the modes of friction on the mass are solved for (its motion: --method time)")
+    # (a Stribeck drop, a history or a delay: _friction_taylor; [dahl] with [friction] the scene refuses)
     elements = [Element("slider", "friction", (0, -1), float(friction.alpha))]
     if scene.spring is not None and scene.spring.k0 > 0:
         elements.append(Element("spring", "k0", (0, -1), float(scene.spring.k0)))
@@ -141,17 +145,23 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     """A network with rigid sliders: EPMC by shooting on its exact motion (``slider_modes.py``): no harmonics
     are truncated (``harmonics`` None), ``change`` that of the samples' last doubling; where the backbone turns
     back in amplitude, a listed amplitude has a row for each of its points there."""
+    from ..network.model import NetworkScene
+    from .harmonic_balance import ELEMENT_NODE
     from .shooting import ShootingSystem, prepared_network
     from .slider_modes import slider_backbone
 
-    # massless nodes condensed: those two must have a mass
-    scene = prepared_network(scene, node, load_node, "the nonlinear modes")
-    network = scene.network
-    names = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float))
-    where = names.node_index(node)
+    if isinstance(scene, NetworkScene):
+        # massless nodes condensed: those two must have a mass
+        scene = prepared_network(scene, node, load_node, "the nonlinear modes")
+        nodes, mass = tuple(scene.network.nodes), np.array(scene.network.mass, float)
+    else:  # an element with friction on its Taylor orbit (_friction_taylor)
+        nodes, mass = (ELEMENT_NODE,), np.array([float(scene.mass.m)])
+        if load_node is not None and load_node != ELEMENT_NODE:
+            raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({ELEMENT_NODE})")
+    where = ShootingSystem(scene.name, scene.source, nodes, mass).node_index(node)
     values, shape, rows, change = slider_backbone(scene, mode, amplitudes, where, tolerance)
     return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
-                    network.nodes[where], None, change, shape, np.array(network.mass, float), tuple(network.nodes))
+                    nodes[where], None, change, shape, mass, nodes)
 
 
 def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[str] = None) -> tuple:

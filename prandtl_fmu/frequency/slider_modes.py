@@ -49,20 +49,17 @@ import numpy as np
 
 from . import FrequencyError
 from .harmonic_balance import solve_linear
-from .shooting import FIRST_STEPS, MAX_STEPS, PERTURBATION, NetworkShooting, StepFailed, prepared_network
+from .shooting import FIRST_STEPS, MAX_STEPS, PERTURBATION, ElementShooting, NetworkShooting, StepFailed, \
+    prepared_network
 
 NEWTON_ITERATIONS = 40
 HALVINGS = 8
 CONVERGED = 1e-11  # a Newton step below this (relative to the orbit, or to omega) has converged
 
 
-class FreeShooting(NetworkShooting):
-    """The free network (no force) with damping C - xi M: :meth:`equations` of (s, omega, xi) at amplitude A."""
-
-    def __init__(self, scene, steps: int, reference: float, where: int):
-        super().__init__(scene, 0.0, None, steps, 7, reference)
-        self.viscous = self.damping.copy()
-        self.where = int(where)
+class _Free:
+    """The free system (no force) with damping C - xi M: :meth:`equations` of (s, omega, xi) at amplitude A, and
+    Newton's method on them; a shooting's ``run`` and ``coefficients``, and ``damping`` that the equations set."""
 
     def equations(self, z: np.ndarray, A: float) -> np.ndarray:
         """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
@@ -112,6 +109,56 @@ class FreeShooting(NetworkShooting):
         return None
 
 
+class FreeShooting(_Free, NetworkShooting):
+    """The free network with sliders (``network_orbit.py``)."""
+
+    def __init__(self, scene, steps: int, reference: float, where: int):
+        super().__init__(scene, 0.0, None, steps, 7, reference)
+        self.viscous = self.damping.copy()
+        self.where = int(where)
+
+
+class FreeElement(_Free, ElementShooting):
+    """The free element with friction on its mass whose orbit is ``element_orbit.py``'s Taylor series (a Stribeck
+    drop, a history, a delay: the delay's harmonics are unknowns of s, as in the forced response), presented as
+    a network of one node: its spring and stuck branches (the linear start's stiffness), the friction a slider
+    to the ground; ``damping`` (1, 1) is the Taylor orbit's c, which the equations set to c - xi m."""
+
+    def __init__(self, scene, steps: int, reference: float, where: int = 0):
+        super().__init__(scene, 0.0, None, steps, 7, reference)
+        if not self.smooth:
+            raise ValueError("FreeElement: an element whose orbit is the Taylor series (shooting.smooth)")
+        self.where = 0
+        self.stiffness_matrix = np.array([[self.parameters[1]]])
+        self.viscous = np.array([[self.parameters[2]]])
+        self.rows = np.ones((1, 1))
+        self.alpha = np.array([float(scene.friction.alpha)])
+        self.bk = np.array(self.parameters[7], float)
+        self.brows = np.ones((self.bk.size, 1))
+
+    @property
+    def damping(self) -> np.ndarray:
+        return np.array([[self.parameters[2]]])
+
+    @damping.setter
+    def damping(self, value) -> None:
+        self.parameters = (self.parameters[0], self.parameters[1], float(np.asarray(value)[0, 0]),
+                           *self.parameters[3:])
+
+
+def _free_systems(scene, where: int):
+    """``(scene, make(steps, reference))``: the free system of ``scene`` at M = steps: the element with friction
+    on its Taylor orbit (:class:`FreeElement`), else the network (massless nodes condensed: FreeShooting)."""
+    from ..network.model import NetworkScene
+    from .shooting import prepared
+
+    if isinstance(scene, NetworkScene):
+        scene = prepared_network(scene)
+        return scene, lambda steps, reference: FreeShooting(scene, steps, reference, where)
+    scene = prepared(scene)
+    return scene, lambda steps, reference: FreeElement(scene, steps, reference)
+
+
 def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolerance: float) -> tuple:
     """The backbone at ``amplitudes`` (see the module): (rows, 2): omega and xi of every point of the backbone at
     each amplitude (the amplitudes in the order given; where the backbone turns back in amplitude, each of its
@@ -123,11 +170,11 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolera
     the other mass's amplitude grows without bound), then each listed amplitude is solved for at every crossing
     of the node's a_1; an amplitude that the family's a_1 at the node never reaches is refused, with the largest
     it reaches."""
-    scene = prepared_network(scene)
-    free = FreeShooting(scene, FIRST_STEPS, 1.0, where)
+    scene, make = _free_systems(scene, where)
+    free = make(FIRST_STEPS, 1.0)
     low, high = float(np.min(amplitudes)), float(np.max(amplitudes))
     omega0, shape, xi0, onset = _linear_start(free, mode, low)
-    free = FreeShooting(scene, FIRST_STEPS, omega0, where)
+    free = make(FIRST_STEPS, omega0)
     A0 = min(low, 0.5 * onset)
     z = free.solve(_guess(free, shape, omega0, xi0, A0), A0)
     if z is None and math.isinf(onset):  # started with the sliders slipping (stuck, they hold the mode still)
@@ -169,7 +216,7 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolera
             raise FrequencyError(f"{scene.source}: the mode's frequency and damping still changed by {change:.3g} "
                                  f"relative from {free.M // 2} to {free.M} samples per period (tolerance "
                                  f"{tolerance:g}): give a larger --tolerance")
-        finer = FreeShooting(scene, 2 * free.M, omega0, where)
+        finer = make(2 * free.M, omega0)
         refined = []
         for index, z in zip(rows, states):
             solved = finer.solve(z, float(amplitudes[index]))
