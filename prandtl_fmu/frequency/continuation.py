@@ -231,6 +231,14 @@ def _augmented(balance, q, omega, scale, span):
     return residual, np.hstack((jacobian * scale, by_omega[:, None] * span))
 
 
+def _residual(balance, q, omega) -> np.ndarray:
+    """R alone at (q, omega): one run of the motion for shooting (``residual_at``), where :func:`_augmented`
+    costs a Jacobian (2 n + 2 runs); the harmonic balance's from its evaluation."""
+    if hasattr(balance, "residual_at"):
+        return balance.residual_at(q, omega)
+    return balance.evaluate(q, omega)[0]
+
+
 def _tangent(balance, q, omega, previous, scale, span):
     """The unit tangent at (q, omega), on the side of ``previous`` (t . previous > 0), else ahead in omega."""
     found = _oriented(balance, q, omega, previous, scale, span)
@@ -347,16 +355,22 @@ def _damped_newton(balance, start, predicted, row, tangent, scale, omega_min, sp
         delta = solve_linear(np.vstack((matrix, row)), -np.concatenate((residual, [row @ (y - predicted)])))
         if delta is None:
             return None
+        # each trial by its residual alone, the Jacobian at the step taken: a Jacobian at every trial cost a
+        # network's shooting up to 11 000 runs of its motion (220 s) for one call (networks/chain-dynamic at 5 N
+        # near 0.1 Hz, where the curve has a kink every 4e-5 Hz: a helper's measurement)
         for _ in range(HALVINGS + 1):
             moved = y + delta
             q_y, omega_y = _unscaled(moved, scale, omega_min, span)
             if omega_y <= 0:
                 return None
-            residual_moved, matrix_moved = _augmented(balance, q_y, omega_y, scale, span)
+            residual_moved = _residual(balance, q_y, omega_y)
             if np.max(np.abs(residual_moved)) <= np.max(np.abs(residual)):
                 break
             delta = 0.5 * delta
-        y, residual, matrix = moved, residual_moved, matrix_moved
+        else:
+            return None  # no descent even at 1 / 2^HALVINGS of the step: a stall (the other ways are tried next)
+        y, residual = moved, residual_moved
+        matrix = _augmented(balance, q_y, omega_y, scale, span)[1]
         # within reach, and ahead: the fixed unknown is (the prediction's); on the hyperplane, the chord within 60
         # degrees of the tangent (the hyperplane alone would take a point far to the side, even behind in omega)
         chord = y - start

@@ -217,12 +217,14 @@ def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, 
 
 
 @kernel
-def _delayed_force(t, step, h, delay, ybuf):
-    """(value at t, slope) of the delay's force -g y(t - tau) in the piece of step ``step`` that holds t: y
-    between the grid points of ``ybuf`` (y at t_k = k h, k = -(N + 1) ... at ybuf[k + N + 1]) linearly
-    interpolated; tau = N h + delta, ``delay`` = (g, N, delta, on v)."""
+def _delayed_force(t, start, h, delay, ybuf):
+    """(value at t, slope) of the delay's force -g y(t - tau) in the piece that holds t of the step that starts
+    at ``start`` (= step h; a float: an int argument typed as a literal compiled a copy per constant): y between
+    the grid points of ``ybuf`` (y at t_k = k h, k = -(N + 1) ... at ybuf[k + N + 1]) linearly interpolated;
+    tau = N h + delta, ``delay`` = (g, N, delta, on v)."""
     gain, lag, delta = delay[0], int(delay[1]), delay[2]
-    before = step - lag - 1 if t < step * h + delta else step - lag
+    step = int(start / h + 0.5)
+    before = step - lag - 1 if t < start + delta else step - lag
     ya, yb = ybuf[before + lag + 1], ybuf[before + lag + 2]
     fraction = (t - lag * h - delta - before * h) / h
     return -gain * (ya + (yb - ya) * fraction), -gain * (yb - ya) / h
@@ -310,7 +312,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
                 held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, extra, t)
                 if delayed:
-                    held += _delayed_force(t, step, h, delay, ybuf)[0]
+                    held += _delayed_force(t, step * h, h, delay, ybuf)[0]
                 sigma = 0
                 if held > alpha:
                     sigma = 1
@@ -335,7 +337,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
         stop_at = target  # a step's end, or the delay's knot within it
         if delayed and t < step * h + delay[2]:
             stop_at = step * h + delay[2]
-        lagged, lagged_slope = _delayed_force(t, step, h, delay, ybuf) if delayed else (0.0, 0.0)
+        lagged, lagged_slope = _delayed_force(t, step * h, h, delay, ybuf) if delayed else (0.0, 0.0)
         slid = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
         if sigma == 0:
             # a stick: x fixed, N(t) a cosine and a constant
