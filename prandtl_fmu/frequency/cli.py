@@ -219,6 +219,22 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
                   "given (chosen by --tolerance)", file=sys.stderr)
 
 
+def _warn_unknown_stability(curves) -> None:
+    """One ``warning:`` line for each curve with points whose stability is not computed (``stable`` empty there:
+    a monodromy past its work bound on a scene not proven monotone, a delay's buffer past its bound), so that an
+    empty field is never read as a verdict."""
+    import numpy as np
+
+    for curve in curves:
+        unknown = int(np.sum(np.ma.getmaskarray(curve.stable))) if curve.stable is not None else 0
+        if unknown:
+            load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else
+                    f"Y0 = {curve.base_amplitude:g} m")
+            print(f"warning: ({load}) the stability of {unknown} of {len(curve.frequency)} points is not computed "
+                  "(their stable field is empty: a monodromy past its work bound, or a delay's buffer past its "
+                  "bound; docs/frequency.md)", file=sys.stderr)
+
+
 def _warn_friction_error(scene, stepper: str) -> None:
     """One ``warning:`` line where the time sweep's stated error cannot be trusted: friction on the mass run by a
     stepper other than ``exact``. The friction's jump at each reversal puts the discrete orbit's error in a
@@ -322,6 +338,7 @@ def run(args) -> int:
             result = curves.curves[0] if len(curves.curves) == 1 else curves
             if "harmonics" in values:
                 _warn_truncation(curves.curves, values["harmonics"], values["tolerance"])
+            _warn_unknown_stability(curves.curves)
             if "backbone" in values:
                 from .modes import nonlinear_mode
 

@@ -417,9 +417,9 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                           constant, G, X, V, Z)
             # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
             # compare with and took steps of 0 until refused: a review's find)
+            # (not the branches' ranges: a range far larger than the motion made the slide's end overshoot v = 0
+            # by 1e-12 eta rho, and with a delay's harmonics in rho the error grew with them: a review's find)
             size = max(abs(X[0]), abs(V[0]), size_force / (mass * rho * rho), 1e-300)
-            for i in range(nb):
-                size = max(size, beta[i])
             # Jorba & Zou: the last two terms below TRUNCATION of the state (z_j weighed by its force, as a length)
             span = math.inf
             for k in (terms - 2, terms - 1):
@@ -477,7 +477,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     continue
                 for k in range(terms):
                     c[k] = -sigma * X[k]
-                c[0] += beta[i] - sigma * (u_phase[i] - x_phase) + EVENT_TOLERANCE * size
+                c[0] += beta[i] - sigma * (u_phase[i] - x_phase) + EVENT_TOLERANCE * max(size, beta[i])
                 budget[0] = WALK_LIMIT
                 s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
                               shifted)
@@ -494,7 +494,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     if smode[i] == 0:
                         for k in range(terms):
                             c[k] = -side * Z[nz + i, k]
-                        c[0] += beta[i] + EVENT_TOLERANCE * size
+                        c[0] += beta[i] + EVENT_TOLERANCE * max(size, beta[i])
                     elif side == smode[i]:
                         for k in range(terms):
                             c[k] = side * V[k]

@@ -95,6 +95,7 @@ FIRST_STEPS = 64
 # the stability beside a delay: steps per period of its semi-discretisation, and how often they are doubled
 DELAY_STEPS = 256
 DELAY_REFINEMENTS = 3
+DELAY_MAX_STEPS = 2**14
 # from this many unknowns on, the continuation's corrector keeps the last point's Jacobian (see costly_jacobian)
 CHORD_UNKNOWNS = 12
 
@@ -505,10 +506,15 @@ class ElementShooting(Shooting):
             return super().multipliers(s, omega)
         s = np.asarray(s, dtype=float)
         period = 2.0 * math.pi / omega
-        # steps of at most tau (the buffer's grid), and more than twice the delay's harmonics
+        # steps of at most tau (the buffer's grid), and more than twice the delay's harmonics; past
+        # DELAY_MAX_STEPS (a delay shorter than T / DELAY_MAX_STEPS) not computed: unknown
         steps = max(DELAY_STEPS, 2 * self.delay_harmonics + 2, 2 * math.ceil(period / self.delay.tau / 2.0))
+        if steps > DELAY_MAX_STEPS:
+            return None
         values, previous = None, None
         for _ in range(DELAY_REFINEMENTS + 1):
+            if steps > DELAY_MAX_STEPS:
+                return values
             monodromy = self._delay_monodromy(s, omega, steps)
             if monodromy is None:
                 return values
@@ -536,7 +542,7 @@ class ElementShooting(Shooting):
 
         period = 2.0 * math.pi / omega
         h = period / steps
-        lag = int(math.floor(self.delay.tau / h))
+        lag = max(int(math.floor(self.delay.tau / h)), 1)  # h <= tau (multipliers): 0 only by rounding
         delta = max(self.delay.tau - lag * h, 0.0)
         if lag + 2 > MAX_DELAY_STATES:
             return None
@@ -581,6 +587,12 @@ class ElementShooting(Shooting):
             columns.append((run(moved) - base) / scales[k])
         monodromy = np.array(columns).T
         return monodromy if np.all(np.isfinite(monodromy)) else None
+
+    def delay_tail(self, s: np.ndarray) -> float:
+        """The highest kept harmonic of the delay's force relative to its first, at ``s``."""
+        pairs = np.asarray(s[self.dimension - self.delay_unknowns:], dtype=float).reshape(-1, 2)
+        size = np.hypot(pairs[:, 0], pairs[:, 1])
+        return float(size[-1] / max(size[0], 1e-300)) if size.size > 1 else math.inf
 
     def padded(self, s: np.ndarray, finer: "ElementShooting") -> np.ndarray:
         """``s`` as the unknowns of ``finer`` (more of the delay's harmonics: the new ones 0)."""
@@ -735,7 +747,11 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
                                  f"{shooting.M // 2} to {shooting.M} samples per period (tolerance {tolerance:g}): "
                                  "give a larger --tolerance")
         if delayed:
-            finer = make(2 * shooting.M, 2 * shooting.delay_harmonics + 1)
+            # the delay's harmonics doubled while the highest kept carries more than a tenth of the tolerance of
+            # the first (a review's find: doubled with every M, each level cost 8 times the last)
+            tail = max(shooting.delay_tail(s) for _, s, _ in points)
+            grown = 2 * shooting.delay_harmonics + 1 if tail > 0.1 * tolerance else shooting.delay_harmonics
+            finer = make(2 * shooting.M, grown)
             points = [(w, _solved_again(finer, shooting.padded(s, finer), w), fold) for w, s, fold in points]
         else:
             finer = make(2 * shooting.M)
