@@ -117,7 +117,11 @@ def _system(m, k0, c, k, rate, load, t, x, v, u, direction, alpha, stuck, slippi
 def _events(k, eta, rate, m, alpha, direction, stuck, slipping, size):
     """The phase's event functionals: rows of ``ell`` with their ``level``, ``what`` happens and to which
     branch (``whom``)."""
-    n = k.shape[0]
+    # with the mass stuck (v = 0) every branch sticks and relaxes, u_i' = -lambda_i u_i: |u_i| never grows, so no
+    # level can be reached before the mass moves (its release is the phase's event). A branch of range 0 sits
+    # exactly on both levels there, its functionals identically 0, which no walk can decide: the search ran out
+    # of its 100 000 intervals (a review's find: friction beside a branch k = 1, eta = 0, c = 2)
+    n = 0 if stuck else k.shape[0]
     count = 0
     for i in range(n):
         count += 1 if slipping[i] else 2
@@ -148,7 +152,7 @@ def _events(k, eta, rate, m, alpha, direction, stuck, slipping, size):
             for sign in (1.0, -1.0):
                 ell[j, LOAD_VARYING] = sign
                 ell[j, LOAD_CONSTANT] = sign
-                for i in range(n):
+                for i in range(k.shape[0]):
                     ell[j, BRANCH0 + i] = -sign * k[i] / m
                 level[j] = alpha / m
                 what[j] = RELEASE

@@ -62,6 +62,16 @@ relaxing = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, spring=None, cubic=
                       solver={"stepper": "exact", "step": 0.1, "stop_time": 5.0, "output_interval": 0.1})
 run = simulate(relaxing, states=True, energy=True)
 out["relaxing"] = [float(np.abs(run.x).max()), float(np.abs(run.u[:, 0] - 0.5 * np.exp(-0.5 * run.time)).max())]
+# a series branch of range 0 beside friction on the mass, as the mass sticks (its levels identically 0 in the stuck
+# phase: the search ran out of its 100 000 intervals at t = 4.97 s); against implicit at h and h / 2
+zero_stuck = make_scene(mass={"m": 1.0, "x0": 0.0, "v0": 0.0}, spring={"k0": 2.0}, cubic=None, damper={"c": 0.05},
+                        branches={"k": [1.0, 0.5], "eta": [0.0, 0.4], "c": [2.0, 0.5]}, friction={"alpha": 0.3},
+                        load={"kind": "harmonic", "amplitude": 1.0, "omega": 0.6283185307179586},
+                        solver={"stepper": "exact", "step": 0.15625, "stop_time": 20.0, "output_interval": 0.3125})
+runs = [simulate(zero_stuck).x] + [simulate(zero_stuck.with_solver(step=h), "implicit").x
+                                    for h in (3.125e-4, 1.5625e-4)]
+out["zero_stuck"] = [float(np.abs(runs[0] - runs[1]).max()), float(np.abs(runs[0] - runs[2]).max()),
+                     float(np.abs(runs[0] - (2 * runs[2] - runs[1])).max()), float(np.abs(runs[0]).max())]
 print(json.dumps(out))
 '''
 _EXTREMES = _HEADER + r'''
@@ -110,6 +120,15 @@ def test_a_series_branch_of_elastic_range_zero_slips_from_the_start_and_carries_
     np.testing.assert_allclose(x, 0.1 * np.array(time), rtol=0, atol=1e-14)
     assert np.all(np.array(v) == 0.1) and u_max == 0.0
     assert spinners["zero_range"] <= 1e-12
+
+
+def test_a_series_branch_of_range_zero_beside_friction_lets_the_mass_stick(spinners):
+    """A branch k = 1, eta = 0, c = 2 beside Coulomb friction: where the mass sticks, the branch sits on both its
+    levels at once (u = 0) and the event search ran out of its bound (refused at t = 4.97 s). While the mass
+    sticks no branch can reach a level (each relaxes, |u| shrinks), so those functionals are left out: the run
+    ends, and implicit converges to it at first order (its error halves with h; Richardson within 5e-5)."""
+    coarse, fine, extrapolated, size = spinners["zero_stuck"]
+    assert size > 0.3 and 1.7 < coarse / fine < 2.3 and extrapolated <= 5e-5 * max(size, 1.0)
 
 
 @pytest.mark.parametrize("force", [0.5, 0.49999999999999994, 0.5000000000000001])
