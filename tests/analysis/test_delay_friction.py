@@ -16,7 +16,11 @@ DELAYED = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.05}, "fr
            "delay": {"gain": -0.2, "tau": 0.5}}
 
 
-@pytest.mark.parametrize("acts_on, gain, stuck", [("x", -0.2, 0.0), ("v", 0.1, 0.0), ("x", 0.2, 0.5)])
+SLOW = pytest.mark.slow  # the quick suite keeps one case of each (its time on a cold cache: README)
+
+
+@pytest.mark.parametrize("acts_on, gain, stuck", [("x", -0.2, 0.0), pytest.param("v", 0.1, 0.0, marks=SLOW),
+                                                  pytest.param("x", 0.2, 0.5, marks=SLOW)])
 def test_friction_beside_a_delay_is_the_linear_closed_form_where_the_friction_vanishes(acts_on, gain, stuck):
     """With a friction of 1e-9 N against a force of 1 N every point of the curve is the linear oscillator's with
     the delay's transfer function, X = F / (k - m w^2 + i c w + g e^(-i w tau) (1 on x, i w on v)), to 1e-7 in
@@ -38,6 +42,7 @@ def test_friction_beside_a_delay_is_the_linear_closed_form_where_the_friction_va
     assert np.allclose(curve.phase, np.angle(X), rtol=0, atol=1e-7)
 
 
+@SLOW
 def test_friction_beside_a_delay_is_the_time_sweep_s_curve(tmp_path):
     """Where the mass sticks for part of each period (0.1 Hz) and where it slides through (0.3 Hz), from the
     command line: the curve's ends are the time sweep's first harmonic (implicit, to 1e-4) within 2e-4 in
@@ -58,7 +63,8 @@ def test_friction_beside_a_delay_is_the_time_sweep_s_curve(tmp_path):
         assert abs(float(table["phase"][row]) - float(reference["phase"][at])) <= 2e-4, f
 
 
-@pytest.mark.parametrize("gain, acts_on", [(-0.2, "x"), (0.2, "x"), (0.1, "v"), (-0.1, "v")])
+@pytest.mark.parametrize("gain, acts_on", [(-0.2, "x"), pytest.param(0.2, "x", marks=SLOW),
+                                           pytest.param(0.1, "v", marks=SLOW), pytest.param(-0.1, "v", marks=SLOW)])
 def test_the_multipliers_beside_a_delay_are_the_delay_equation_s_where_the_friction_vanishes(gain, acts_on):
     """With a friction of 1e-9 N the perturbations obey the linear delay equation m x'' + c x' + k x + g y(t -
     tau) = 0, whose largest Floquet multiplier over a period T is exp(Re(lambda) T), lambda its rightmost root
@@ -135,6 +141,7 @@ def test_the_delay_s_force_is_the_orbit_s_and_its_harmonics_converge():
     assert np.all(changes[1:] <= 0.5 * changes[:-1]), amplitudes
 
 
+@SLOW
 def test_a_delay_too_short_for_the_stability_s_grid_leaves_it_unknown_and_says_so(tmp_path, capsys):
     """tau = 1e-6 s at 0.1 Hz: the semi-discretised delay would need 1e7 steps a period (its grid at most tau):
     past its bound (shooting.DELAY_MAX_STEPS) the stability is not computed, quickly: every `stable` empty, and

@@ -338,6 +338,7 @@ def series_reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, F, omega, x
     return x, v, u
 
 
+@pytest.mark.slow  # (compiles the exact stepper with series dashpots for shooting: 17 s on a cold cache)
 def test_the_taylor_orbit_with_series_dashpots_is_the_exact_stepper_s_where_both_apply():
     """Branches behind series dashpots (the series model) with Coulomb friction, linear between events: the
     Taylor orbit over two periods (the branches relax while they stick, slide at their levels, stick again when

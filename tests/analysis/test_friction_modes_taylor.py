@@ -25,8 +25,12 @@ def _linear_mode(memory):
     return omega / (2.0 * math.pi), xi / (2.0 * omega)
 
 
-@pytest.mark.parametrize("acts_on", ["x", "v"])
-@pytest.mark.parametrize("kind", ["delay", "history"])
+SLOW = pytest.mark.slow  # the quick suite keeps one case (its time on a cold cache: README)
+
+
+@pytest.mark.parametrize("kind, acts_on", [("delay", "x"), pytest.param("delay", "v", marks=SLOW),
+                                           pytest.param("history", "x", marks=SLOW),
+                                           pytest.param("history", "v", marks=SLOW)])
 def test_the_mode_beside_a_memory_is_its_closed_form_where_the_friction_vanishes(kind, acts_on):
     """A delay g y(t - tau) (transfer g e^(-i w tau) (1, or i w)) or a history sum_j w_j (1, or i w) / (r_j + i w),
     on x and on v, with a friction of 1e-9 N: at two amplitudes the mode's frequency and damping ratio are the
@@ -47,6 +51,7 @@ def test_the_mode_beside_a_memory_is_its_closed_form_where_the_friction_vanishes
     assert np.allclose(backbone.damping_ratio, ratio, rtol=1e-6, atol=0)
 
 
+@SLOW
 def test_the_mode_with_a_narrow_stribeck_drop_is_coulomb_s_at_the_kinetic_level(tmp_path):
     """Stribeck's drop from 0.1 N to 0.06 N over 1 mm/s, from the command line: the mass turns through the drop
     in a blink, so its mode is Coulomb friction's at 0.06 N (solved on the network of one node, exact between
