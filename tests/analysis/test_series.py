@@ -188,6 +188,7 @@ def test_a_massless_load_node_is_kept_in_the_backbone_its_synthesis_loads(tmp_pa
     assert plot.stat().st_size > 0 and len(read_csv(out)["frequency"]) > 2
 
 
+@pytest.mark.slow  # (43 s on a cold cache: the README's command stays within its 10 minutes)
 def test_a_massless_node_held_by_springs_alone_is_their_schur_complement(tmp_path):
     """A massless node j held by three springs (to a, b and the ground) beside a rigid slider between a and b:
     j sits at the springs' weighted mean, so the three are springs k_i k_j / K between each pair of far ends

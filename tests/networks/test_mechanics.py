@@ -91,8 +91,8 @@ def massless_chain(n, k, alpha, force_max, k_wall, steps_per_second=512):
     return parse_scene(text)
 
 
-@pytest.mark.parametrize("case", ["n6", "random"])
-@pytest.mark.parametrize("wall", [True, False])
+@pytest.mark.parametrize("case, wall", [pytest.param("n6", True, marks=pytest.mark.slow),  # (56 s cold: slow)
+                                        ("n6", False), ("random", True), ("random", False)])
 def test_massless_chain_virgin_curve_and_masing(case, wall):
     if case == "n6":
         n, k, alpha = 6, 2.0, 0.5
