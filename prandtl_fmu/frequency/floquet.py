@@ -227,7 +227,11 @@ def _memory_monodromy(balance, q_free, omega, steps):
     period = _memory_period(balance, q_free, omega, steps)
     if period is None:
         return None
-    run, state, scales = period
+    return differences(*period)
+
+
+def differences(run, state: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """The Jacobian of ``run`` (a period's map) at ``state`` by forward differences, ``scales`` each step."""
     base = run(state)
     columns = []
     for k in range(state.size):

@@ -538,7 +538,7 @@ class ElementShooting(Shooting):
         a delay without friction) called a point unstable (|mu| = 1.27) whose time sweep settles in 8 periods:
         its stick and slip move by a step between perturbed runs. Here they move with the perturbation."""
         from .element_orbit import OK, explain, run_forced
-        from .floquet import MAX_DELAY_STATES
+        from .floquet import MAX_DELAY_STATES, differences
 
         period = 2.0 * math.pi / omega
         h = period / steps
@@ -579,13 +579,7 @@ class ElementShooting(Shooting):
         scales[1] *= omega
         if on_v:
             scales[2 + nb + nz:] *= omega
-        base = run(base_state)
-        columns = []
-        for k in range(base_state.size):
-            moved = base_state.copy()
-            moved[k] += scales[k]
-            columns.append((run(moved) - base) / scales[k])
-        monodromy = np.array(columns).T
+        monodromy = differences(run, base_state, scales)
         return monodromy if np.all(np.isfinite(monodromy)) else None
 
     def delay_tail(self, s: np.ndarray) -> float:
