@@ -402,10 +402,13 @@ def _check_memory_rules(scene) -> None:
     # solves nothing: its motion is given)
     if scene.delay is not None and scene.delay.gain < 0 and scene.causality == "force" \
             and (quasi_static or scene.delay.tau < scene.solver.step):
-        why = "on a massless element without a dashpot" if quasi_static else \
-            f"with tau = {scene.delay.tau!r} s below the step {scene.solver.step!r} s"
+        if quasi_static:
+            why, fix = "on a massless element without a dashpot", "add [mass] or a [damper]"
+        else:  # (a mass or a dashpot does not make that step's equation monotone: the step does)
+            why = f"with tau = {scene.delay.tau!r} s below the step {scene.solver.step!r} s"
+            fix = "a [solver] step no longer than tau, or a longer tau"
         raise SceneError(f"{scene.source}: [delay] gain: a negative gain {why} makes the implicit equation of a "
-                         "step non-monotone (no unique solution): add [mass] or a [damper], or a longer tau")
+                         f"step non-monotone (no unique solution): {fix}")
     from .memory.dahl import MAX_EXPONENT
 
     if scene.dahl is not None and scene.dahl.exponent > MAX_EXPONENT:

@@ -66,7 +66,7 @@ def scene_of_document(doc: dict, source: str, networks: bool = False):
 
     if networks and isinstance(doc, dict) and ("network" in doc or "chain" in doc):
         if "solver" not in doc:
-            doc = dict(doc, solver=dict(_NO_SOLVER, stepper="implicit"))
+            doc = dict(doc, solver=dict(_no_solver(doc), stepper="implicit"))
         return scene_from_document(doc, source, check_stepper=False), None
     if isinstance(doc, dict) and ("network" in doc or "chain" in doc):
         raise FrequencyError(f"{source}: this takes an element scene ([mass], [spring], [branches], ...), not a "
@@ -76,9 +76,20 @@ def scene_of_document(doc: dict, source: str, networks: bool = False):
     if isinstance(doc, dict) and isinstance(doc.get("solver"), dict) and "stepper" in doc["solver"]:
         named = doc["solver"]["stepper"]
     if isinstance(doc, dict) and "solver" not in doc:
-        doc = dict(doc, solver=dict(_NO_SOLVER))
+        doc = dict(doc, solver=_no_solver(doc))
     scene = scene_from_document(doc, source, check_stepper=False)
     return scene, (scene.solver.stepper if named is not None else None)
+
+
+def _no_solver(doc: dict) -> dict:
+    """The ``[solver]`` a scene without one is read with: _NO_SOLVER, its step no longer than a ``[delay]``'s tau
+    (the scene's rules judge a negative gain by the step: a step the user never wrote must not refuse it)."""
+    solver = dict(_NO_SOLVER)
+    delay = doc.get("delay")
+    tau = delay.get("tau") if isinstance(delay, dict) else None
+    if isinstance(tau, (int, float)) and not isinstance(tau, bool) and 0.0 < tau < solver["step"]:
+        solver.update(step=float(tau), output_interval=float(tau))
+    return solver
 
 
 def positive_values(values, name: str):

@@ -154,6 +154,7 @@ def test_the_mode_of_a_duffing_oscillator_with_a_hair_of_friction_is_the_conserv
 
 # ----------------------------------------------------------------- branches with series dashpots beside sliders
 
+@pytest.mark.slow  # exact's series dashpots compile for it alone (the quick suite's cold budget, README)
 def test_a_node_with_series_dashpot_branches_and_a_slider_is_the_element_s_exact_orbit(tmp_path):
     """Branches with series dashpots (their u relaxes, u' = e' - (k / c) u, while they stick: states of the
     network's phases now; refused before) beside a rigid slider, on one node: the element's exact stepper

@@ -174,3 +174,18 @@ def test_the_figures_are_written(tmp_path):
         assert main(["describe", scene, *arguments, "--plot", str(plot), "--out", str(tmp_path / "o.csv")]) == 0
         assert plot.read_bytes()[:4] == b"\x89PNG"
         plot.unlink()
+
+
+def test_a_negative_delay_gain_with_a_short_tau_is_described_without_a_solver_table(tmp_path):
+    # the scene has no [solver]: the step a time run would need is not the user's, and must not refuse the scene
+    # (it did: "tau = 1e-06 s below the step 0.001 s"); the response is the linear closed form
+    # F0 / |k0 + g e^(-i w tau) - m w^2 + i c w|
+    path = tmp_path / "delay.toml"
+    path.write_text("[mass]\nm = 1.0\n[spring]\nk0 = 1.0\n[damper]\nc = 0.1\n[delay]\ngain = -0.2\ntau = 1e-6\n")
+    out = tmp_path / "curve.csv"
+    assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.1,0.2", "--out",
+                 str(out)]) == 0
+    rows = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    w = 2 * math.pi * rows["frequency"]
+    closed = 0.1 / np.abs(1.0 - 0.2 * np.exp(-1j * w * 1e-6) - w * w + 0.1j * w)
+    assert np.allclose(rows["amplitude"], closed, rtol=1e-6)

@@ -354,6 +354,7 @@ def _free_port():
         return s.getsockname()[1]
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_a_scheduler_and_workers_in_separate_processes_give_the_same_file(cluster, sweep_files, tmp_path):
     scene, spec, _ = sweep_files
     reference = sweep(scene, spec, cluster[1])
@@ -464,6 +465,7 @@ def test_bad_input_to_the_sweep_command_is_one_line_and_exit_2(write_scene, tmp_
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and message in done.stderr, done.stderr
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_the_amplitude_example_draws_its_heat_map(tmp_path):
     out = tmp_path / "map.png"
     done = subprocess.run([sys.executable, str(ROOT / "examples" / "sweep_amplitude.py"), "--quick", "--workers", "2",

@@ -110,6 +110,7 @@ def test_an_existing_output_is_untouched_by_a_failed_run(write_scene, tmp_path, 
     assert out.read_text() == "precious\n"
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_output_streams_in_bounded_memory(write_scene, tmp_path, capsys, monkeypatch):
     """10 000 rows x 204 columns (16 MB as doubles, 40 MB as text) go to the file a chunk at a time: with chunks
     of 10 000 values (2 000 000 in use) the peak is about 1 MB, a chunk's doubles and text, not the table's
@@ -272,6 +273,7 @@ def test_a_fit_basis_too_large_for_memory_is_one_line_before_any_work(tmp_path, 
     assert status == 2 and "memory" in lines[0] and "--branches" in lines[0], lines
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_reading_a_large_csv_takes_the_memory_of_its_numbers_only(tmp_path):
     """fit's reader peaked at 31 times the file (a list of every row's strings); the named columns alone, as
     doubles, are 16 bytes a row here."""

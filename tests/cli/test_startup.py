@@ -94,6 +94,7 @@ def test_a_second_process_compiles_nothing_and_gets_the_same_numbers(tmp_path):
     assert shared.name.startswith("prandtl_fmu-")
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_the_cache_folder_follows_the_sources(tmp_path):
     """An edit of a source file that compiled code can reach gives another cache folder (numba alone would miss
     an edit of a callee in another file): a kernel's module, and a module a kernel module imports (libm.py, whose

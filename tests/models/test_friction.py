@@ -205,6 +205,7 @@ def series_reference(m, k0, k, eta, c, amplitude, omega, times):
     return np.array(out_t), np.array(out_x)
 
 
+@pytest.mark.slow  # exact's series dashpots compile for it alone (the quick suite's cold budget, README)
 def test_exact_follows_a_mass_on_a_maxwell_branch_to_rounding():
     tables = {"mass": {"m": 1.5}, "spring": {"k0": 0.5},
               "branches": {"k": [2.0], "eta": [1e6], "c": [0.8]}, "load": {"kind": "constant", "value": 1.0},

@@ -178,6 +178,7 @@ def test_step_load():
         assert np.abs(result.x[before]).max() < 5.0
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_long_horizon_in_constant_memory():
     scene = hard("long-horizon")
     steps = round(scene.solver.stop_time / scene.solver.step)

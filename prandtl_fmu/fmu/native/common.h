@@ -382,13 +382,14 @@ static const char* memory_problem(const double* mp, char* buffer, size_t size)
     if (HAS_DELAY && !CONNECTOR && mp[0] < 0 && (QUASI_STATIC || mp[1] < DELAY_GRID)) { /* (the connector solves
                                                                                          nothing: its motion is given) */
         char why[128];
+        const char* fix = QUASI_STATIC ? "add [mass] or a [damper]" : "a [solver] step no longer than tau, or a longer tau";
         if (QUASI_STATIC)
             snprintf(why, sizeof why, "on a massless element without a dashpot");
         else
             snprintf(why, sizeof why, "with tau = %s s below the step %s s", python_repr(mp[1], a, sizeof a),
                      python_repr(DELAY_GRID, b, sizeof b));
         snprintf(buffer, size, "parameter delay_gain: a negative gain %s makes the implicit equation of a step "
-                 "non-monotone (no unique solution): add [mass] or a [damper], or a longer tau", why);
+                 "non-monotone (no unique solution): %s", why, fix);
         return buffer;
     }
     if (HAS_DAHL && mp[MEM_DAHL_AT + 2] > DAHL_MAX_EXPONENT) {

@@ -259,6 +259,7 @@ def test_a_state_whose_memory_stack_parameters_are_not_the_scene_s_is_refused(fm
         slave.close()
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_with_scene_load_the_native_fmu_reproduces_simulate_with_each_stepper_it_holds(held):
     """The friction FMU holds projected and implicit (build --steppers): each is the library's run, bit for bit
     (the library keeps the energy account, as the FMU's element does: one compiled loop for both)."""
@@ -568,6 +569,7 @@ class CompiledAnyway(Exception):
     """Raised by a compile_kernels that a build must not call."""
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_the_native_kernels_call_the_library_s_loops_not_copies_for_writable_arrays():
     """The C functions hand the branches' coefficients typed read-only and the rows they do not record as arrays
     with no column, as the library does (fmu/native/kernels.py): numba then compiles no second loop for them."""
@@ -779,6 +781,7 @@ def test_the_fmi3_fmu_steps_as_the_library_and_refuses_a_tampered_state(fmus3):
         slave.freeInstance()
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_the_toolbox_checker_finds_nothing_in_the_native_fmus(fmus, fmus3, connectors):
     """The FMU Manipulation Toolbox's checker (fmutool -check: the FMI schemas and the semantic rules of causality,
     variability, initial, start and the model structure) on the element and the connector, FMI 2.0 and 3.0."""

@@ -427,6 +427,7 @@ print(rss_bytes() - before)
 """
 
 
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_instantiate_free_cycles_do_not_grow_memory(fmus):
     """Measured in a process of its own, so that nothing else the tests do is counted."""
     import subprocess
@@ -547,7 +548,8 @@ def library_runs(scene_paths_and_columns):
             for path, column in scene_paths_and_columns]
 
 
-@pytest.mark.parametrize("second", ["damper-only", pytest.param("network", marks=pytest.mark.slow)])
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README): a second library compiles for the FMU
+@pytest.mark.parametrize("second", ["damper-only", "network"])
 def test_fmus_of_one_library_share_it_whatever_their_scenes(fmus, tmp_path, second):
     """The FMUs built from the same sources import one library under one name (fmu/python/entry.py), so their
     kernels compile once, and a second FMU runs after the first one's extraction folder is gone (a mass on a

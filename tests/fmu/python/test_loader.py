@@ -63,6 +63,7 @@ def test_the_prebuilt_library_is_built_from_the_sources_in_the_repository():
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="no g++ on this machine: the prebuilt library is used as is")
+@pytest.mark.slow  # a long check (the quick suite's cold budget, README)
 def test_the_sources_compile_without_a_warning(tmp_path):
     """What ``python -m prandtl_fmu.fmu.python.loader`` does, into a scratch file: -Wall is silent."""
     import sysconfig
