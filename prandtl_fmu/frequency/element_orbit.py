@@ -78,11 +78,11 @@ def explain(status: int) -> str:
 
 
 @kernel
-def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, hw, hr, on_v, z0,
-                  constant, G, X, V, Z):
+def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, belt, hw, hr, on_v,
+                  z0, constant, G, X, V, Z):
     """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
     t0), in a slide of direction ``sigma``: m v' = f(t) - stiffness x - k3 x^3 - damping v + constant
-    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma v / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
+    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma (v - belt) / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
     those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0; G[k] those of the
     force f(t) (:func:`_forcing_series`)."""
     terms = X.shape[0]
@@ -94,7 +94,7 @@ def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, a
     scale = 1.0 / (mass * rho * rho)  # a force over m rho^2: a length
     stribeck = vs > 0.0 and alpha > alpha_k
     if stribeck:
-        exponential[0] = math.exp(-sigma * v0 / vs)
+        exponential[0] = math.exp(-sigma * (v0 - belt) / vs)
     for j in range(hw.shape[0]):
         Z[j, 0] = z0[j]
     for k in range(terms - 1):
@@ -207,13 +207,14 @@ def _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz):
 
 @kernel
 def run(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, state, u, z, h,
-        steps, out):
+        steps, out, belt):
     """``steps`` steps of h from ``state`` = (x, v), the branches' ``u`` and the history's ``z`` (weights ``hw``,
     rates ``hr``, on v if ``on_v``, else on x; none: empty) at t = 0 (updated in place to the end), x at each
     step's end in ``out`` (steps,); returns (status, steps taken). ``lam`` (n,): the branches' relaxation rates
-    k_i / c_i through series dashpots (empty: Prandtl branches). The force F cos(omega t) (``amplitude``)."""
+    k_i / c_i through series dashpots (empty: Prandtl branches). The force F cos(omega t) (``amplitude``); the
+    friction on the slip v - ``belt`` (a moving belt: see the module)."""
     return run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega,
-                      np.zeros((0, 3)), np.zeros(0), np.zeros(0), state, u, z, h, steps, out)
+                      np.zeros((0, 3)), np.zeros(0), np.zeros(0), state, u, z, h, steps, out, belt)
 
 
 @kernel
@@ -232,13 +233,15 @@ def _delayed_force(t, start, h, delay, ybuf):
 
 @kernel
 def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr, on_v, amplitude, omega, extra, delay,
-               ybuf, state, u, z, h, steps, out):
+               ybuf, state, u, z, h, steps, out, belt):
     """:func:`run` under F cos(omega t) and the harmonics of ``extra``, rows (p, a, b): a cos(p omega t) + b
     sin(p omega t) (a delay's force on the periodic orbit, ``shooting.py``); and, where ``delay`` = (g, N, delta,
     on v) is given (else empty), the delay's force -g y(t - tau), tau = N h + delta (N >= 1), from y at the grid
     points t_k = k h: ``ybuf`` (N + 2 + steps,) holds k = -(N + 1) ... 0 on entry and gets y (x, or v where
     delay[3] is 1) at each step's end (the semi-discretisation of the delay equation: y linear between grid
-    points, so each step has a knot at t_k + delta where t - tau passes one; the stability of shooting.py)."""
+    points, so each step has a knot at t_k + delta where t - tau passes one; the stability of shooting.py).
+    ``belt``: the friction's support moves at this speed (the module's belt: Prandtl branches only beside it, no
+    series dashpots, history nor delay; shooting.py refuses them)."""
     nb = bk.shape[0]
     nz = hw.shape[0]
     series = lam.shape[0] > 0
@@ -273,7 +276,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
     G = np.empty(terms)
     delayed = delay.shape[0] > 0
     lag = int(delay[1]) if delayed else 0
-    size_force = forcing + alpha + k0 * abs(x) + k3 * abs(x) ** 3
+    size_force = forcing + alpha + k0 * abs(x) + k3 * abs(x) ** 3 + damping * abs(belt)
+    ahead = 1 if belt > 0.0 else (-1 if belt < 0.0 else 0)  # the direction a stuck mass moves in
     if delayed:
         for i in range(lag + 2):
             size_force = max(size_force, forcing + abs(delay[0] * ybuf[i]))
@@ -297,14 +301,15 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             phases += 1
             if phases > phase_limit:
                 return PILED_UP, step
-            if v > 0.0:
+            if v > belt:
                 sigma = 1
-            elif v < 0.0:
+            elif v < belt:
                 sigma = -1
             else:
-                # at rest: the branches stick; the mass slides where the other forces exceed alpha
+                # at rest on its support: the branches stick (on a belt those at their level ahead go on sliding);
+                # the mass slides where the other forces exceed alpha
                 for i in range(plain):
-                    if bmode[i] != 0:
+                    if bmode[i] != 0 and bmode[i] != ahead:
                         u[i] = bmode[i] * beta[i]
                         bmode[i] = 0
                 for i in range(smode.shape[0]):  # a series branch's inflow at rest, -lambda u, turns inwards
@@ -313,16 +318,18 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, extra, t)
                 if delayed:
                     held += _delayed_force(t, step * h, h, delay, ybuf)[0]
+                held -= damping * belt
                 sigma = 0
                 if held > alpha:
                     sigma = 1
                 elif held < -alpha:
                     sigma = -1
-            # the branches at their level in the direction of motion slide
+            # the branches at their level in the direction of motion (of v: on a belt, not the slip's) slide
+            moving = sigma if v == 0.0 else (1 if v > 0.0 else -1)
             for i in range(plain):
-                if sigma != 0 and bmode[i] == 0 and sigma * u[i] >= beta[i]:
-                    u[i] = sigma * beta[i]
-                    bmode[i] = sigma
+                if moving != 0 and bmode[i] == 0 and moving * u[i] >= beta[i]:
+                    u[i] = moving * beta[i]
+                    bmode[i] = moving
             # a series branch at its level slides where its inflow v - lambda u pushes out
             for i in range(smode.shape[0]):
                 level = zz[nz + i]
@@ -340,16 +347,30 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
         lagged, lagged_slope = _delayed_force(t, step * h, h, delay, ybuf) if delayed else (0.0, 0.0)
         slid = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
         if sigma == 0:
-            # a stick: x fixed, N(t) a cosine and a constant
+            # a stick: x fixed (on a belt x moving with it, a polynomial in t), N(t) a cosine and a polynomial
             rho = max(fastest, 1e-300)
             for j in range(nt):
                 rho = max(rho, R[j])
-            constant = -k0 * x - k3 * x * x * x
+            constant = -k0 * x - k3 * x * x * x - damping * belt
             for i in range(plain):
                 constant -= bk[i] * u[i]
-            span = min((stop_at - t) * rho, 1.0)
+            to_target = (stop_at - t) * rho
+            span = min(to_target, 1.0)
             _forcing_series(t, amplitude, omega, extra, rho, constant + lagged, X)
             X[1] += lagged_slope / rho
+            reached = -1  # on a belt: the first sticking branch to reach its level ahead (u moves with x), exactly
+            if ahead != 0:
+                slope = belt / rho  # x's in the scaled time
+                X[1] -= (k0 + 3.0 * k3 * x * x) * slope
+                X[2] -= 3.0 * k3 * x * slope * slope
+                X[3] -= k3 * slope * slope * slope
+                for i in range(plain):
+                    if bmode[i] == 0:
+                        X[1] -= bk[i] * slope
+                        level = max(beta[i] - ahead * u[i], 0.0) / abs(belt) * rho
+                        if level < span:
+                            span = level
+                            reached = i
             # the terms' z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
             for j in range(nt):
                 held_y[j] = 0.0 if Y[j] != 0.0 else x
@@ -380,19 +401,31 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             for j in range(nt):
                 zz[j] = _horner(Z[j], stop)
             t_end = t + stop / rho
-            if first < 0.0 and (stop_at - t) * rho <= span:
+            if first < 0.0 and to_target <= span:
                 t_end = stop_at
+            if ahead != 0:  # the mass and the sticking branches move with the belt
+                x += belt * (t_end - t)
+                for i in range(plain):
+                    if bmode[i] == 0:
+                        u[i] = min(max(u[i] + belt * (t_end - t), -beta[i]), beta[i])
             t = t_end
+            if first < 0.0 and reached >= 0 and to_target > span:  # a branch at its level: it slides on
+                phases += 1
+                if phases > phase_limit:
+                    return PILED_UP, step
+                u[reached] = ahead * beta[reached]
+                bmode[reached] = ahead
             if first >= 0.0:
                 sigma = event
                 decide = False
                 phases += 1
                 if phases > phase_limit:
                     return PILED_UP, step
+                moving = ahead if ahead != 0 else sigma
                 for i in range(plain):
-                    if bmode[i] == 0 and sigma * u[i] >= beta[i]:
-                        u[i] = sigma * beta[i]
-                        bmode[i] = sigma
+                    if bmode[i] == 0 and moving * u[i] >= beta[i]:
+                        u[i] = moving * beta[i]
+                        bmode[i] = moving
                 x_phase = x
                 u_phase = u.copy()
         else:
@@ -413,7 +446,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 rho = max(rho, R[j], math.sqrt(abs(W[j]) / mass))
             _forcing_series(t, amplitude, omega, extra, rho, lagged, G)
             G[1] += lagged_slope / rho
-            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, W, R, Y, zz,
+            _slide_series(x, v, t, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, belt, W, R, Y, zz,
                           constant, G, X, V, Z)
             # the state's size, at least the forces' length (from rest, x = v = 0, the truncation test had 0 to
             # compare with and took steps of 0 until refused: a review's find)
@@ -461,23 +494,46 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 rest += abs(Z[j, terms - 1]) * reach ** (terms - 1)
             first = -1.0
             event = -1
-            # the slide's end: sigma v crosses below -tol
+            # the slide's end: the slip sigma (v - belt) crosses below -tol
             for k in range(terms):
                 c[k] = sigma * V[k]
-            c[0] += EVENT_TOLERANCE * size
+            c[0] += EVENT_TOLERANCE * size - sigma * belt / rho
             budget[0] = WALK_LIMIT
             s = _crossing(c, span, rest, rest * terms / max(span, 1e-300), budget, shifted)
             if math.isnan(s):
                 return WALK_EXHAUSTED, step
             if s >= 0.0:
                 first = s
-            # a sticking branch's level: sigma u = sigma (u_phase + x - x_phase) crosses eta
+            # a sticking branch's level: side u = side (u_phase + x - x_phase) crosses eta, side sigma (on a belt
+            # v may turn within the slide: either side)
+            side_of = 0
             for i in range(plain):
                 if bmode[i] != 0:
                     continue
+                for side in (1, -1):
+                    if ahead == 0 and side != sigma:
+                        continue
+                    for k in range(terms):
+                        c[k] = -side * X[k]
+                    c[0] += beta[i] - side * (u_phase[i] - x_phase) + EVENT_TOLERANCE * max(size, beta[i])
+                    budget[0] = WALK_LIMIT
+                    s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
+                                  shifted)
+                    if math.isnan(s):
+                        return WALK_EXHAUSTED, step
+                    if s >= 0.0 and (first < 0.0 or s < first):
+                        first = s
+                        event = i
+                        side_of = side
+            # on a belt, v turning within the slide: the sliding branches (all at their level ahead of v) stick
+            turning = 0
+            for i in range(plain):
+                if bmode[i] != 0:
+                    turning = bmode[i]
+            if ahead != 0 and turning != 0:
                 for k in range(terms):
-                    c[k] = -sigma * X[k]
-                c[0] += beta[i] - sigma * (u_phase[i] - x_phase) + EVENT_TOLERANCE * max(size, beta[i])
+                    c[k] = turning * V[k]
+                c[0] += EVENT_TOLERANCE * size
                 budget[0] = WALK_LIMIT
                 s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
                               shifted)
@@ -485,10 +541,9 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     return WALK_EXHAUSTED, step
                 if s >= 0.0 and (first < 0.0 or s < first):
                     first = s
-                    event = i
+                    event = -2
             # a series branch: sticking, its u crosses +-eta (either way: it relaxes too); sliding, its inflow
             # smode (v - lambda smode eta) crosses 0 (it sticks again at its level)
-            side_of = 0
             for i in range(smode.shape[0]):
                 for side in (1, -1):
                     if smode[i] == 0:
@@ -528,9 +583,20 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 for i in range(plain):
                     if bmode[i] == 0:
                         u[i] = min(max(u_phase[i] + x - x_phase, -beta[i]), beta[i])
-                if event < 0:  # the slide ends: v = 0, the mass sticks or turns back
-                    v = 0.0
+                if event == -1:  # the slide ends: v = belt, the mass sticks or turns back
+                    v = belt
                     decide = True
+                elif event == -2:  # v turns: the sliding branches stick at their level
+                    phases += 1
+                    if phases > phase_limit:
+                        return PILED_UP, step
+                    v = 0.0
+                    for i in range(plain):
+                        if bmode[i] != 0:
+                            u[i] = bmode[i] * beta[i]
+                            bmode[i] = 0
+                        u_phase[i] = u[i]
+                    x_phase = x
                 else:
                     phases += 1
                     if phases > phase_limit:
@@ -542,8 +608,8 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                         else:
                             smode[event] = 0
                     else:  # the branch slides; the phase goes on with it
-                        u[event] = sigma * beta[event]
-                        bmode[event] = sigma
+                        u[event] = side_of * beta[event]
+                        bmode[event] = side_of
                         for i in range(nb):
                             if bmode[i] == 0:
                                 u_phase[i] = u[i]

@@ -63,8 +63,18 @@ half period continued by the symmetry (:meth:`ElementShooting._delayed`). They a
 until the first harmonic settles (``shooting_response``). The stability of such a point is the delay
 equation's, semi-discretised on the same Taylor orbit (:meth:`ElementShooting._delay_monodromy`).
 
-What is refused, one line each: a moving belt (not odd: the orbit has no half-period symmetry), a node other
-than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
+**A moving belt** (``[friction] belt_velocity`` V != 0) is not odd: the friction acts on the slip v - V, so
+the orbit has no half period's symmetry, and its mean is not zero (the belt drags the mass). Shooting then
+solves R(s, omega) = Phi_T(s) - s over the whole period (M steps), the multipliers are the eigenvalues of
+dPhi_T/ds, and the orbit is ``element_orbit.py``'s (the mass stuck to the belt moves with it, x a polynomial
+in t, the branches it carries sliding at their levels ahead; a slide ends where the slip does). Beside a spring,
+a dashpot, a cubic spring, Prandtl branches and a Stribeck drop; where the periodic state is a family (an
+undamped slide that never sticks, a branch that never slides) the Jacobian is singular and the point is not
+found, said in one line. Refused with a belt, one line each: series dashpots, ``[history]``, ``[delay]`` (their
+orbits on a belt are not written) and base excitation (whether the belt rides on the moving support is not
+said).
+
+What is refused, one line each: a node other than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
 unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
 Nonlinear modes (EPMC) of such a scene are solved for by ``slider_modes.py`` on the network of one node
 (``modes.py``).
@@ -143,9 +153,13 @@ def prepared(scene, named=None, loaded=None):
         raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
                              "resonance: describe it with --amplitudes)")
     if scene.friction.belt_velocity != 0.0:
-        raise FrequencyError(f"{scene.source}: [friction] on a moving belt (belt_velocity != 0) has no periodic "
-                             "state symmetric over half a period, which the frequency response of friction on the "
-                             "mass solves for: use --method time")
+        beside = [name for name, present in (
+            ("series dashpots in [branches]", scene.branches is not None and scene.branches.damping is not None),
+            ("[history]", scene.history is not None), ("[delay]", scene.delay is not None)) if present]
+        if beside:
+            raise FrequencyError(f"{scene.source}: [friction] on a moving belt beside {' and '.join(beside)}: the "
+                                 "frequency response on a belt takes a spring, a dashpot, a cubic spring, Prandtl "
+                                 "branches and a Stribeck drop: use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
@@ -164,7 +178,7 @@ def smooth(scene) -> bool:
     linear between events; ``[history]``: states of its own): its orbit is ``element_orbit.py``'s Taylor
     series."""
     return scene.cubic is not None or scene.friction.alpha_kinetic != scene.friction.alpha or \
-        scene.history is not None or scene.delay is not None
+        scene.history is not None or scene.delay is not None or scene.friction.belt_velocity != 0.0
 
 
 def prepared_network(scene, named=None, loaded=None, purpose="the forced response"):
@@ -201,6 +215,7 @@ class Shooting:
         self.dimension = int(dimension)
         self.stiffness = float(stiffness)  # what holds the load's node when everything sticks: the motion's size
         self._loads = {}
+        self.symmetric = True  # the half period's symmetry (see the module); a belt breaks it: the whole period
 
     # ------------------------------------------------------------- the stepper's map
 
@@ -235,7 +250,9 @@ class Shooting:
         return end, xs
 
     def residual(self, s: np.ndarray, omega: float) -> np.ndarray:
-        return -self.run(s, omega)[0] - s
+        if self.symmetric:
+            return -self.run(s, omega)[0] - s
+        return self.run(s, omega, 2)[0] - s
 
     def size(self, s: np.ndarray, omega: float) -> float:
         """The orbit's size (m): its state's, or the force's static deflection, whichever is larger."""
@@ -343,10 +360,10 @@ class Shooting:
 
     def samples(self, s: np.ndarray, omega: float) -> np.ndarray:
         """x of every node over one period at t_j = j T / M, j = 0 ... M - 1, (n, M) (relative under base
-        excitation): the first half run, the second its negative (the symmetry)."""
-        _, xs = self.run(s, omega)
+        excitation): the first half run, the second its negative (the symmetry; without it, the whole period)."""
+        _, xs = self.run(s, omega, 1 if self.symmetric else 2)
         half = np.concatenate((s[None, :self.system.n], xs[:-1]), axis=0).T
-        return np.concatenate((half, -half), axis=1)
+        return np.concatenate((half, -half), axis=1) if self.symmetric else half
 
     def coefficients(self, s: np.ndarray, omega: float) -> np.ndarray:
         """The mean and H harmonics of x of every node (absolute: y added under base excitation), (n, 2 H + 1),
@@ -368,9 +385,10 @@ class Shooting:
         return abs(self.first_harmonic(s, omega, node))
 
     def multipliers(self, s: np.ndarray, omega: float) -> np.ndarray:
-        """The Floquet multipliers of the whole period: the squares of the eigenvalues of dG/ds."""
+        """The Floquet multipliers of the whole period: the squares of the eigenvalues of dG/ds (without the
+        symmetry: the eigenvalues of dPhi/ds over the period)."""
         turn = self.jacobian(np.asarray(s, dtype=float), omega) + np.eye(self.dimension)
-        return np.linalg.eigvals(turn) ** 2
+        return np.linalg.eigvals(turn) ** (2 if self.symmetric else 1)
 
 
 class ElementShooting(Shooting):
@@ -401,6 +419,12 @@ class ElementShooting(Shooting):
                          2 + branches + self.history + self.delay_unknowns, stiffness)
         self.branches = branches
         self.element = scene  # as prepared (the stability beside a delay builds finer ones)
+        self.belt = float(scene.friction.belt_velocity)
+        self.symmetric = self.belt == 0.0
+        if not self.symmetric and base_amplitude is not None:
+            raise FrequencyError(f"{scene.source}: [friction] on a moving belt under base excitation (is the belt on "
+                                 "the moving support or on the ground?): load the mass with --force-amplitude, or use "
+                                 "--method time")
         self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
         self._out = np.empty((self.M // 2, 3))
         if self.smooth:
@@ -456,14 +480,14 @@ class ElementShooting(Shooting):
         out = np.empty(steps)
         if self.delay is None:
             status, taken = run(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), state, u, z,
-                                h, steps, out)
+                                h, steps, out, self.belt)
         else:
             delayed = np.array(s[self.dimension - self.delay_unknowns:], dtype=float)
             extra = np.empty((delayed.size // 2, 3))
             extra[:, 0] = np.arange(1, self.delay_harmonics + 1, 2)
             extra[:, 1:] = self._delay_scale() * delayed.reshape(-1, 2)
             status, taken = run_forced(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), extra,
-                                       np.zeros(0), np.zeros(0), state, u, z, h, steps, out)
+                                       np.zeros(0), np.zeros(0), state, u, z, h, steps, out, self.belt)
         if status != OK:
             self._refuse(omega, f"the motion from the trial state stopped at t = {taken * h!r} s: {explain(status)}")
         end = np.concatenate(([state[0], state[1] / self.reference], u, z))
@@ -476,6 +500,36 @@ class ElementShooting(Shooting):
                 follows = (-1.0) ** half_periods * delayed
             end = np.concatenate((end, follows))
         return self._checked(end, out[:, None].copy(), omega)
+
+    def family(self, s: np.ndarray, omega: float) -> Optional[str]:
+        """Why the periodic state ``s`` on a belt is one of a family (whose Jacobian is singular: Newton lands on a
+        member as its rounding falls), or None. A branch that never slides over the period keeps any preload
+        (u - x is constant along the orbit: every offset within its range is as periodic); without a dashpot, a
+        Stribeck drop or a branch that slides, a mass that never sticks to the belt is a linear oscillator under a
+        constant force, any free oscillation added (the sticking seen at the samples: a stick shorter than a
+        sample is taken for none, and refused, never a wrong number). None without a belt (the symmetry fixes
+        the offsets)."""
+        if self.symmetric:
+            return None
+        end, xs = self.run(s, omega, 2)
+        x = np.concatenate(([s[0]], xs[:, 0]))
+        size = max(float(np.max(np.abs(x))), 1e-300)
+        u0 = np.clip(np.asarray(s[2:2 + self.branches], dtype=float), -self.eta, self.eta)
+        slides = False
+        for i in range(self.branches):
+            along = u0[i] + x - x[0]
+            if abs(end[2 + i] - along[-1]) <= 1e-12 * max(size, self.eta[i]) and \
+                    float(np.max(np.abs(along))) < self.eta[i] * (1.0 - 1e-9):
+                return (f"branch {i + 1} never slides over the period, so its preload is free (u - x stays the same "
+                        "all along: every offset within its range is as periodic)")
+            slides = True
+        h = 2.0 * math.pi / omega / self.M
+        sticks = bool(np.any(np.abs(np.diff(x) - self.belt * h) <= 1e-12 * size))
+        damped = self.parameters[2] > 0.0 or self.parameters[6] > 0.0
+        if not (sticks or damped or slides):
+            return ("the mass never sticks to the belt and nothing damps its slide (no dashpot, no Stribeck drop, "
+                    "no branch): any free oscillation added to it is as periodic")
+        return None
 
     def _delay_scale(self) -> float:
         """The delay's unknowns are its force over this (N/m): lengths, as the rest of s."""
@@ -568,7 +622,7 @@ class ElementShooting(Shooting):
             buffer = np.empty(lag + 2 + count)
             buffer[:lag + 2] = values[2 + nb + nz:]
             status, taken = run_forced(*self.parameters, amplitude, float(omega), np.zeros((0, 3)), delay, buffer,
-                                       state, u, z, h, count, np.empty(count))
+                                       state, u, z, h, count, np.empty(count), 0.0)
             if status != OK:
                 self._refuse(omega, f"the stability's run stopped at t = {taken * h!r} s: {explain(status)}")
             return np.concatenate((state, u, z, buffer[count:]))

@@ -41,7 +41,7 @@ def test_a_node_with_a_cubic_spring_and_a_slider_is_the_element_s_taylor_orbit(t
             state, u, out = np.array(start[:2]), np.array(start[2:]), np.empty(2 * M)
             status, _ = element_orbit.run(1.0, 1.0, 0.02, 0.5, 0.05, 0.05, 0.0, np.array([0.7]), np.array([0.1]),
                                           np.zeros(0), np.zeros(0), np.zeros(0), False, F, omega, state, u, np.zeros(0),
-                                          2 * math.pi / omega / M, 2 * M, out)
+                                          2 * math.pi / omega / M, 2 * M, out, 0.0)
             size = max(1.0, float(np.max(np.abs(out))))
             assert status == element_orbit.OK and np.max(np.abs(out - xs[:, 0])) <= 1e-11 * size
             assert np.max(np.abs(end - np.r_[state, u])) <= 1e-11 * size

@@ -124,7 +124,7 @@ def _taylor(parameters, x, v, u, h, steps, history=NO_HISTORY, z=()):
     m, k0, c, k3, alpha, alpha_k, vs, bk, eta, F, omega = parameters
     state, u, out, z = np.array([x, v]), np.array(u, float).copy(), np.empty(steps), np.array(z, float)
     status, taken = run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, np.zeros(0), *history, F, omega, state, u, z, h,
-                        steps, out)
+                        steps, out, 0.0)
     assert status == OK and taken == steps
     return (state, u, out) if history is NO_HISTORY and not len(z) else (state, u, out, z)
 
@@ -361,7 +361,7 @@ def test_the_taylor_orbit_with_series_dashpots_is_the_exact_stepper_s_where_both
             state, u, out = np.array(start[:2]), np.clip(start[2:], -eta, eta), np.empty(2 * M)
             status, taken = element_orbit.run(1.0, 2.0, 0.05, 0.0, 0.3, 0.3, 0.0, np.array([1.0, 0.5]), eta, lam,
                                               *NO_HISTORY, F, omega, state, u, np.zeros(0), 2 * math.pi / omega / M,
-                                              2 * M, out)
+                                              2 * M, out, 0.0)
             assert status == element_orbit.OK and taken == 2 * M
             size = float(np.max(np.abs(xs)))
             assert np.max(np.abs(out - xs[:, 0])) <= 1e-11 * size
@@ -382,7 +382,7 @@ def test_the_taylor_orbit_with_series_dashpots_is_the_independent_integration_s_
         period, M = 2.0 * math.pi / omega, 64
         state, u_end, out = np.array([x, v]), u.copy(), np.empty(5 * M // 2)
         status, taken = element_orbit.run(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, *NO_HISTORY, F, omega,
-                                          state, u_end, np.zeros(0), period / M, 5 * M // 2, out)
+                                          state, u_end, np.zeros(0), period / M, 5 * M // 2, out, 0.0)
         assert status == element_orbit.OK and taken == 5 * M // 2
         rx, rv, ru = series_reference(m, k0, c, k3, alpha, alpha_k, vs, bk, eta, lam, F, omega, x, v, u,
                                       2.5 * period)
@@ -435,7 +435,7 @@ def test_the_taylor_orbit_s_work_is_bounded(k0, c, k3, x0, expected):
     start = time.perf_counter()
     status, taken = element_orbit.run(1.0, k0, c, k3, 0.05, 0.05, 0.0, np.zeros(0), np.zeros(0), np.zeros(0),
                                       *NO_HISTORY, 0.3, 0.6, state, np.zeros(0), np.zeros(0), 2 * math.pi / 0.6 / 64,
-                                      64, out)
+                                      64, out, 0.0)
     assert status == getattr(element_orbit, expected) and taken < 64
     assert time.perf_counter() - start < 30.0
     assert element_orbit.explain(status) != f"status {status}"
@@ -529,7 +529,7 @@ def test_a_run_from_exact_rest_takes_its_steps(F, k3):
     state, out = np.zeros(2), np.empty(64)
     status, taken = element_orbit.run(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), np.zeros(0),
                                       *NO_HISTORY, F, omega, state, np.zeros(0), np.zeros(0),
-                                      2 * math.pi / omega / 64, 64, out)
+                                      2 * math.pi / omega / 64, 64, out, 0.0)
     assert status == element_orbit.OK and taken == 64 and np.all(np.isfinite(out))
     rx, rv, _ = reference(1.0, 1.0, 0.1, k3, 0.5, 0.5, 0.0, np.zeros(0), np.zeros(0), F, omega, 0.0, 0.0, [],
                           2 * math.pi / omega)

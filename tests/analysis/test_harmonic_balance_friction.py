@@ -277,7 +277,12 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
 
 
 @pytest.mark.parametrize("tables, options, culprit", [
-    (dict(COULOMB, friction={"alpha": 0.1, "belt_velocity": 0.1}), [], "moving belt"),
+    # a belt is taken (test_belt_shooting.py) beside springs, a dashpot, branches and a Stribeck drop; not beside a
+    # memory, nor under base excitation (which of the belt and the support moves is not said)
+    (dict(DAMPED, friction={"alpha": 0.1, "belt_velocity": 0.1}, history={"weight": [0.1], "rate": [1.0]}), [],
+     "moving belt beside [history]"),
+    (dict(DAMPED, friction={"alpha": 0.1, "belt_velocity": 0.1}), ["--base-amplitude", "0.1"],
+     "moving belt under base excitation"),
     # (the forced response and the modes beside [delay], [history] or a Stribeck drop are taken:
     # test_delay_friction.py, test_friction_modes_taylor.py)
     (COULOMB, ["--node", "nowhere"], "'nowhere'"),
@@ -290,7 +295,9 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
 ])
 def test_what_friction_on_the_mass_refuses_is_one_line(tmp_path, capsys, tables, options, culprit):
     out = tmp_path / "out.csv"
-    arguments = options if "--mode" in options else ["--force-amplitude", "1", "--frequencies", "0.1,0.2", *options]
+    arguments = options if "--mode" in options else ["--frequencies", "0.1,0.2", *options]
+    if "--mode" not in options and "--base-amplitude" not in options:
+        arguments = ["--force-amplitude", "1", *arguments]
     assert main(["describe", write(tmp_path, tables), *arguments, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
