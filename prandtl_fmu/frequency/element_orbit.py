@@ -158,13 +158,14 @@ def _forcing_size(amplitude, omega, extra):
 
 
 @kernel
-def _stuck_history(z0, y, hr, rho, Z):
-    """The Taylor coefficients Z[j, k] of the terms z_j' = -hr_j z_j + y_j (y_j constant: x of a stuck mass, or
-    its v = 0) about the stick's start, in s = rho (t - t0)."""
+def _stuck_history(z0, y, slope, hr, rho, Z):
+    """The Taylor coefficients Z[j, k] of the terms z_j' = -hr_j z_j + y_j + slope_j (t - t0) (x of a stuck mass,
+    moving with its belt, or its v: 0, or the belt's speed) about the stick's start, in s = rho (t - t0)."""
     for j in range(hr.shape[0]):
         Z[j, 0] = z0[j]
         for k in range(Z.shape[1] - 1):
-            Z[j, k + 1] = ((y[j] if k == 0 else 0.0) - hr[j] * Z[j, k]) / (rho * (k + 1))
+            drive = y[j] if k == 0 else (slope[j] / rho if k == 1 else 0.0)
+            Z[j, k + 1] = (drive - hr[j] * Z[j, k]) / (rho * (k + 1))
 
 
 @kernel
@@ -240,8 +241,9 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
     points t_k = k h: ``ybuf`` (N + 2 + steps,) holds k = -(N + 1) ... 0 on entry and gets y (x, or v where
     delay[3] is 1) at each step's end (the semi-discretisation of the delay equation: y linear between grid
     points, so each step has a knot at t_k + delta where t - tau passes one; the stability of shooting.py).
-    ``belt``: the friction's support moves at this speed (the module's belt: Prandtl branches only beside it, no
-    series dashpots, history nor delay; shooting.py refuses them)."""
+    ``belt``: the friction's support moves at this speed: the friction acts on the slip v - belt, a stuck mass
+    moves with it (x a polynomial in t, its branches, series branches and history driven by it), and within a
+    slide v may turn (the sliding branches stick there). Not with a delay (shooting.py refuses it)."""
     nb = bk.shape[0]
     nz = hw.shape[0]
     series = lam.shape[0] > 0
@@ -253,6 +255,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
     Y = np.empty(nt)
     zz = np.empty(nt)
     held_y = np.empty(nt)
+    held_slope = np.empty(nt)
     smode = np.zeros(nb if series else 0, dtype=np.int64)
     terms = TERMS
     x = state[0]
@@ -312,10 +315,12 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     if bmode[i] != 0 and bmode[i] != ahead:
                         u[i] = bmode[i] * beta[i]
                         bmode[i] = 0
-                for i in range(smode.shape[0]):  # a series branch's inflow at rest, -lambda u, turns inwards
-                    smode[i] = 0
-                _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
+                for i in range(smode.shape[0]):  # a series branch's inflow at rest, belt - lambda u, turns inwards
+                    if smode[i] * belt - lam[i] * beta[i] <= 0.0:  # (unless the belt pushes it on)
+                        smode[i] = 0
+                slid_at_rest = _terms(hw, hr, on_v, z, bk, beta, lam, smode, W, R, Y, zz)
                 held = _held(x, k0, k3, bk[:plain], beta[:plain], bmode, u[:plain], W, zz, amplitude, omega, extra, t)
+                held -= slid_at_rest
                 if delayed:
                     held += _delayed_force(t, step * h, h, delay, ybuf)[0]
                 held -= damping * belt
@@ -351,7 +356,7 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
             rho = max(fastest, 1e-300)
             for j in range(nt):
                 rho = max(rho, R[j])
-            constant = -k0 * x - k3 * x * x * x - damping * belt
+            constant = -k0 * x - k3 * x * x * x - damping * belt - slid
             for i in range(plain):
                 constant -= bk[i] * u[i]
             to_target = (stop_at - t) * rho
@@ -371,16 +376,19 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                         if level < span:
                             span = level
                             reached = i
-            # the terms' z_j(t) = y / r_j + (z_j - y / r_j) exp(-r_j (t - t0)) (r_j = 0: z_j + y (t - t0))
+            # the terms' z_j(t) = p(t) + (z_j - p(t0)) exp(-r_j (t - t0)), p the particular solution (y + y' (t -
+            # t0) driving: p = (y - y' / r_j) / r_j + y' / r_j (t - t0); r_j = 0: a polynomial), y = x (moving with
+            # the belt) or v (the belt's speed)
             for j in range(nt):
-                held_y[j] = 0.0 if Y[j] != 0.0 else x
-            _stuck_history(zz, held_y, R, rho, Z)
+                held_y[j] = belt if Y[j] != 0.0 else x
+                held_slope[j] = 0.0 if Y[j] != 0.0 else belt
+            _stuck_history(zz, held_y, held_slope, R, rho, Z)
             reach = forcing
             for j in range(nt):
                 for k in range(terms):
                     X[k] -= W[j] * Z[j, k]
                 if R[j] > 0.0:
-                    reach += abs(W[j] * (zz[j] - held_y[j] / R[j]))
+                    reach += abs(W[j] * (zz[j] - (held_y[j] - held_slope[j] / R[j]) / R[j]))
             rest0 = span ** terms / factorial * math.exp(span) * reach
             rest1 = span ** (terms - 1) / factorial * terms * math.exp(span) * reach
             tol = EVENT_TOLERANCE * size_force
@@ -397,9 +405,34 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 if s >= 0.0 and (first < 0.0 or s < first):
                     first = s
                     event = side
+            # on a belt a sticking series branch relaxes towards belt / lambda, which may be beyond its level: its
+            # u crossing +-eta (it slides)
+            series_event = -1
+            series_side = 0
+            for i in range(smode.shape[0] if ahead != 0 else 0):
+                if smode[i] != 0:
+                    continue
+                j = nz + i
+                amplitude_z = abs(zz[j] - (held_y[j] - held_slope[j] / R[j]) / R[j]) if R[j] > 0.0 else 0.0
+                rest_z = span ** terms / factorial * math.exp(span) * amplitude_z
+                for side in (1, -1):
+                    for k in range(terms):
+                        c[k] = -side * Z[j, k]
+                    c[0] += beta[i] + EVENT_TOLERANCE * max(beta[i], abs(zz[j]))
+                    budget[0] = WALK_LIMIT
+                    s = _crossing(c, span if first < 0.0 else first, rest_z, rest_z * terms / max(span, 1e-300),
+                                  budget, shifted)
+                    if math.isnan(s):
+                        return WALK_EXHAUSTED, step
+                    if s >= 0.0 and (first < 0.0 or s < first):
+                        first = s
+                        series_event = i
+                        series_side = side
             stop = span if first < 0.0 else first
             for j in range(nt):
                 zz[j] = _horner(Z[j], stop)
+            for i in range(smode.shape[0]):  # within its range (a sliding one at its level)
+                zz[nz + i] = smode[i] * beta[i] if smode[i] != 0 else min(max(zz[nz + i], -beta[i]), beta[i])
             t_end = t + stop / rho
             if first < 0.0 and to_target <= span:
                 t_end = stop_at
@@ -415,6 +448,13 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     return PILED_UP, step
                 u[reached] = ahead * beta[reached]
                 bmode[reached] = ahead
+            if series_event >= 0:  # the series branch slides at its level; the stick goes on
+                phases += 1
+                if phases > phase_limit:
+                    return PILED_UP, step
+                smode[series_event] = series_side
+                zz[nz + series_event] = series_side * beta[series_event]
+                first = -1.0
             if first >= 0.0:
                 sigma = event
                 decide = False
@@ -470,16 +510,16 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 # (a review's find: v_s = 0.003 m/s, 3e-4 off at 128 samples a period). The step changes the
                 # exponent by at most 2, unless the slide is still fast at its end (exp(-40): nothing to see)
                 exponent_rate = abs(V[1]) * rho / vs
-                if span * exponent_rate > 2.0 and sigma * _horner(V, span) * rho < 40.0 * vs:
+                if span * exponent_rate > 2.0 and sigma * (_horner(V, span) * rho - belt) < 40.0 * vs:
                     limit = 2.0 / exponent_rate
-                    if sigma * V[0] * rho > 40.0 * vs:
+                    if sigma * (V[0] * rho - belt) > 40.0 * vs:
                         # fast at the start (the drop below exp(-40)): the step goes on to where sigma v falls to
                         # 40 vs, then by steps of 2 in the exponent. Cut at 2 / rate all along, a slide of speed v
                         # took v / (2 vs) steps to its end (measured: 42 000 a half period at 2e5 m, linear in the
                         # amplitude)
                         for k in range(terms):
                             c[k] = sigma * V[k]
-                        c[0] -= 40.0 * vs / rho
+                        c[0] -= (40.0 * vs + sigma * belt) / rho  # (the slip: on a belt, a review's find)
                         rest = (abs(X[terms - 1]) + abs(V[terms - 1])) * span ** (terms - 1)
                         budget[0] = WALK_LIMIT
                         s = _crossing(c, span, rest, rest * terms / max(span, 1e-300), budget, shifted)

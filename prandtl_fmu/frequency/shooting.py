@@ -67,12 +67,12 @@ equation's, semi-discretised on the same Taylor orbit (:meth:`ElementShooting._d
 the orbit has no half period's symmetry, and its mean is not zero (the belt drags the mass). Shooting then
 solves R(s, omega) = Phi_T(s) - s over the whole period (M steps), the multipliers are the eigenvalues of
 dPhi_T/ds, and the orbit is ``element_orbit.py``'s (the mass stuck to the belt moves with it, x a polynomial
-in t, the branches it carries sliding at their levels ahead; a slide ends where the slip does). Beside a spring,
-a dashpot, a cubic spring, Prandtl branches and a Stribeck drop; where the periodic state is a family (an
-undamped slide that never sticks, a branch that never slides) the Jacobian is singular and the point is not
-found, said in one line. Refused with a belt, one line each: series dashpots, ``[history]``, ``[delay]`` (their
-orbits on a belt are not written) and base excitation (whether the belt rides on the moving support is not
-said).
+in t, the branches it carries sliding at their levels ahead, a series branch and a history driven by it; a
+slide ends where the slip does). Beside a spring, a dashpot, a cubic spring, branches (with series dashpots or
+not), ``[history]`` and a Stribeck drop; where the periodic state is a family (a branch that never slides keeps
+any preload) the Jacobian is singular: said in one line (:meth:`ElementShooting.family`). Refused with a belt,
+one line each: ``[delay]`` (its harmonics as unknowns rest on the symmetry) and base excitation (whether the
+belt rides on the moving support is not said).
 
 What is refused, one line each: a node other than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
 unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
@@ -153,13 +153,10 @@ def prepared(scene, named=None, loaded=None):
         raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
                              "resonance: describe it with --amplitudes)")
     if scene.friction.belt_velocity != 0.0:
-        beside = [name for name, present in (
-            ("series dashpots in [branches]", scene.branches is not None and scene.branches.damping is not None),
-            ("[history]", scene.history is not None), ("[delay]", scene.delay is not None)) if present]
-        if beside:
-            raise FrequencyError(f"{scene.source}: [friction] on a moving belt beside {' and '.join(beside)}: the "
-                                 "frequency response on a belt takes a spring, a dashpot, a cubic spring, Prandtl "
-                                 "branches and a Stribeck drop: use --method time")
+        if scene.delay is not None:
+            raise FrequencyError(f"{scene.source}: [friction] on a moving belt beside [delay]: the frequency response "
+                                 "on a belt takes a spring, a dashpot, a cubic spring, branches (with series dashpots "
+                                 "or not), [history] and a Stribeck drop: use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
@@ -503,32 +500,23 @@ class ElementShooting(Shooting):
 
     def family(self, s: np.ndarray, omega: float) -> Optional[str]:
         """Why the periodic state ``s`` on a belt is one of a family (whose Jacobian is singular: Newton lands on a
-        member as its rounding falls), or None. A branch that never slides over the period keeps any preload
-        (u - x is constant along the orbit: every offset within its range is as periodic); without a dashpot, a
-        Stribeck drop or a branch that slides, a mass that never sticks to the belt is a linear oscillator under a
-        constant force, any free oscillation added (the sticking seen at the samples: a stick shorter than a
-        sample is taken for none, and refused, never a wrong number). None without a belt (the symmetry fixes
-        the offsets)."""
+        member as its rounding falls), or None: a branch that never slides over the period keeps any preload (u -
+        x is constant along the orbit: every offset within its range is as periodic; a slide shorter than a
+        sample is seen in the end state's offset). None without a belt (the symmetry fixes the offsets). (An
+        undamped slide that never sticks is no family: forced at T, a free oscillation added is not T-periodic
+        off its resonances; a review's find, refused here before.)"""
         if self.symmetric:
             return None
         end, xs = self.run(s, omega, 2)
         x = np.concatenate(([s[0]], xs[:, 0]))
         size = max(float(np.max(np.abs(x))), 1e-300)
         u0 = np.clip(np.asarray(s[2:2 + self.branches], dtype=float), -self.eta, self.eta)
-        slides = False
         for i in range(self.branches):
             along = u0[i] + x - x[0]
             if abs(end[2 + i] - along[-1]) <= 1e-12 * max(size, self.eta[i]) and \
                     float(np.max(np.abs(along))) < self.eta[i] * (1.0 - 1e-9):
                 return (f"branch {i + 1} never slides over the period, so its preload is free (u - x stays the same "
                         "all along: every offset within its range is as periodic)")
-            slides = True
-        h = 2.0 * math.pi / omega / self.M
-        sticks = bool(np.any(np.abs(np.diff(x) - self.belt * h) <= 1e-12 * size))
-        damped = self.parameters[2] > 0.0 or self.parameters[6] > 0.0
-        if not (sticks or damped or slides):
-            return ("the mass never sticks to the belt and nothing damps its slide (no dashpot, no Stribeck drop, "
-                    "no branch): any free oscillation added to it is as periodic")
         return None
 
     def _delay_scale(self) -> float:
