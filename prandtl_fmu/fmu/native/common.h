@@ -382,7 +382,8 @@ static const char* memory_problem(const double* mp, char* buffer, size_t size)
     if (HAS_DELAY && !CONNECTOR && mp[0] < 0 && (QUASI_STATIC || mp[1] < DELAY_GRID)) { /* (the connector solves
                                                                                          nothing: its motion is given) */
         char why[128];
-        const char* fix = QUASI_STATIC ? "add [mass] or a [damper]" : "a [solver] step no longer than tau, or a longer tau";
+        const char* fix = QUASI_STATIC ? "add [mass] or a [damper]"
+                                       : "a [solver] step no longer than tau, or a longer tau";
         if (QUASI_STATIC)
             snprintf(why, sizeof why, "on a massless element without a dashpot");
         else

@@ -96,7 +96,8 @@ static const char* memory_step_problem(const double* mp, double step, char* buff
     if (!(HAS_DELAY && !QUASI_STATIC && mp[0] < 0 && mp[1] < step))
         return NULL;
     snprintf(buffer, size, "parameter step = %s: a negative gain with tau = %s s below the step %s s makes the implicit "
-             "equation of a step non-monotone (no unique solution): a step no longer than tau, or a longer tau",
+             "equation of a step non-monotone (no unique solution): a [solver] step no longer than tau, "
+             "or a longer tau",
              python_repr(step, a, sizeof a), python_repr(mp[1], b, sizeof b), python_repr(step, c, sizeof c));
     return buffer;
 }
