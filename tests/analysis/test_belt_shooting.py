@@ -363,3 +363,42 @@ def test_a_steep_stribeck_drop_on_a_fast_belt_is_stepped_across_on_the_slip():
         rx, rv, _ = belt_reference(1.0, 1.0, 0.1, 0.0, 0.3, 0.15, 0.003, belt, np.zeros(0), np.zeros(0), 1.5, 1.0,
                                    0.0, 0.0, np.zeros(0), 2.5 * 2.0 * math.pi, max_step=1e-3)
         assert max(abs(state[0] - rx), abs(state[1] - rv)) <= 1e-9 * max(1.0, abs(rx), abs(rv)), (belt, state, rx)
+
+
+@pytest.mark.slow  # a curve and twenty periods of the straightforward integration, twice
+def test_on_a_belt_the_points_marked_unstable_leave_their_orbit_and_the_stable_ones_return():
+    """A hardening spring, a branch and a Stribeck drop on a belt running backwards: the curve folds twice and
+    its middle is marked unstable (largest multiplier up to 1.8). From a point of the middle nudged by 1e-6 of
+    its size, the straightforward integration above moves away (more than 100 times the nudge after 10
+    periods); from a stable point nudged alike, it comes back (within the nudge); unnudged, both come back to
+    themselves after a period to 1e-8."""
+    from prandtl_fmu.frequency.continuation import continue_curve
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    tables = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05},
+              "branches": {"k": [0.3], "alpha": [0.02]},
+              "friction": {"alpha": 0.05, "alpha_kinetic": 0.03, "stribeck_velocity": 0.05, "belt_velocity": -0.1}}
+    scene = prepared(element(tables))
+    low, high = 2.0 * math.pi * 0.1, 2.0 * math.pi * 0.4
+    shooting = ElementShooting(scene, 0.3, None, 128, 7, math.sqrt(low * high))
+    points = continue_curve(shooting, low, high, 2)
+    assert sum(fold for _, _, fold in points) == 2
+    largest = [float(np.max(np.abs(shooting.multipliers(s, w)))) for w, s, _ in points]
+    unstable = max(range(len(points)), key=lambda i: largest[i])
+    stable = min(range(len(points)), key=lambda i: abs(points[i][0] - points[unstable][0]) + 1e3 * (largest[i] > 0.9))
+    assert largest[unstable] > 1.5 and largest[stable] < 0.9
+    k, eta = np.array(scene.branches.stiffness, float), np.array(scene.branches.yield_displacement, float)
+    for index, leaves in ((unstable, True), (stable, False)):
+        omega, s, _ = points[index]
+        period = 2.0 * math.pi / omega
+        size = float(np.max(np.abs(shooting.samples(s, omega))))
+
+        def after(periods, start):
+            x, v, u = belt_reference(1.0, 1.0, 0.05, 0.5, 0.05, 0.03, 0.05, -0.1, k, eta, 0.3, omega, start[0],
+                                     start[1] * shooting.reference, start[2:], periods * period)
+            return np.concatenate(([x, v / shooting.reference], u))
+
+        assert np.max(np.abs(after(1, s) - s)) <= 1e-8 * size
+        nudge = 1e-6 * size
+        distance = float(np.max(np.abs(after(10, s + np.array([nudge, 0.0, 0.0])) - s)))
+        assert (distance > 100.0 * nudge) if leaves else (distance < nudge), (index, distance / nudge)
