@@ -155,6 +155,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         if omega_new >= omega_max:
             q_end = _fixed_frequency(balance, q, q_new, omega, omega_new, omega_max)
             if q_end is not None:
+                _isolated(balance, q_end, omega_max)
                 points.append((omega_max, q_end, False))
                 if progress is not None:
                     progress.update(1)
