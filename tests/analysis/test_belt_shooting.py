@@ -379,7 +379,7 @@ def test_on_a_belt_the_points_marked_unstable_leave_their_orbit_and_the_stable_o
               "branches": {"k": [0.3], "alpha": [0.02]},
               "friction": {"alpha": 0.05, "alpha_kinetic": 0.03, "stribeck_velocity": 0.05, "belt_velocity": -0.1}}
     scene = prepared(element(tables))
-    low, high = 2.0 * math.pi * 0.1, 2.0 * math.pi * 0.4
+    low, high = 2.0 * math.pi * 0.1, 2.0 * math.pi * 0.35  # (by 0.4 Hz the branch no longer slides: a family)
     shooting = ElementShooting(scene, 0.3, None, 128, 7, math.sqrt(low * high))
     points = continue_curve(shooting, low, high, 2)
     assert sum(fold for _, _, fold in points) == 2
