@@ -78,12 +78,24 @@ def explain(status: int) -> str:
 
 
 @kernel
+def _earlier(c, span, first, r0, r1, budget, shifted):
+    """The first crossing of the event function c (its rest bounded by r0, its derivative's by r1) before the
+    earliest event found so far, ``first`` (-1: none yet, the search goes to ``span``), with a fresh walk budget:
+    its time, -1 where there is none earlier, NaN past the walk's bound (network_orbit._crossing)."""
+    budget[0] = WALK_LIMIT
+    s = _crossing(c, span if first < 0.0 else first, r0, r1, budget, shifted)
+    if s >= 0.0 and first >= 0.0 and not s < first:
+        return -1.0
+    return s
+
+
+@kernel
 def _slide_series(x0, v0, t0, sigma, rho, mass, stiffness, damping, k3, alpha, alpha_k, vs, belt, hw, hr, on_v,
                   z0, constant, G, X, V, Z):
     """The Taylor coefficients X[k], V[k] (k < TERMS) of x and v / rho about t0 in the scaled time s = rho (t -
     t0), in a slide of direction ``sigma``: m v' = f(t) - stiffness x - k3 x^3 - damping v + constant
-    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma (v - belt) / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j, and Z[j, k]
-    those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0; G[k] those of the
+    - sigma (alpha_k + (alpha - alpha_k) exp(-sigma (v - belt) / vs)) (vs 0: Coulomb, alpha) - sum_j hw_j z_j,
+    and Z[j, k] those of the terms z_j' = -hr_j z_j + y (y = v where ``on_v[j]`` is 1, else x) from z0; G[k] those of the
     force f(t) (:func:`_forcing_series`)."""
     terms = X.shape[0]
     square = np.zeros(terms)
@@ -398,11 +410,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 for k in range(terms):
                     c[k] = -side * X[k]
                 c[0] += alpha + tol
-                budget[0] = WALK_LIMIT
-                s = _crossing(c, span if first < 0.0 else first, rest0, rest1, budget, shifted)
+                s = _earlier(c, span, first, rest0, rest1, budget, shifted)
                 if math.isnan(s):
                     return WALK_EXHAUSTED, step
-                if s >= 0.0 and (first < 0.0 or s < first):
+                if s >= 0.0:
                     first = s
                     event = side
             # on a belt a sticking series branch relaxes towards belt / lambda, which may be beyond its level: its
@@ -419,12 +430,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     for k in range(terms):
                         c[k] = -side * Z[j, k]
                     c[0] += beta[i] + EVENT_TOLERANCE * max(beta[i], abs(zz[j]))
-                    budget[0] = WALK_LIMIT
-                    s = _crossing(c, span if first < 0.0 else first, rest_z, rest_z * terms / max(span, 1e-300),
-                                  budget, shifted)
+                    s = _earlier(c, span, first, rest_z, rest_z * terms / max(span, 1e-300), budget, shifted)
                     if math.isnan(s):
                         return WALK_EXHAUSTED, step
-                    if s >= 0.0 and (first < 0.0 or s < first):
+                    if s >= 0.0:
                         first = s
                         series_event = i
                         series_side = side
@@ -556,12 +565,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                     for k in range(terms):
                         c[k] = -side * X[k]
                     c[0] += beta[i] - side * (u_phase[i] - x_phase) + EVENT_TOLERANCE * max(size, beta[i])
-                    budget[0] = WALK_LIMIT
-                    s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
-                                  shifted)
+                    s = _earlier(c, span, first, rest, rest * terms / max(span, 1e-300), budget, shifted)
                     if math.isnan(s):
                         return WALK_EXHAUSTED, step
-                    if s >= 0.0 and (first < 0.0 or s < first):
+                    if s >= 0.0:
                         first = s
                         event = i
                         side_of = side
@@ -574,12 +581,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                 for k in range(terms):
                     c[k] = turning * V[k]
                 c[0] += EVENT_TOLERANCE * size
-                budget[0] = WALK_LIMIT
-                s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300), budget,
-                              shifted)
+                s = _earlier(c, span, first, rest, rest * terms / max(span, 1e-300), budget, shifted)
                 if math.isnan(s):
                     return WALK_EXHAUSTED, step
-                if s >= 0.0 and (first < 0.0 or s < first):
+                if s >= 0.0:
                     first = s
                     event = -2
             # a series branch: sticking, its u crosses +-eta (either way: it relaxes too); sliding, its inflow
@@ -596,12 +601,10 @@ def run_forced(mass, k0, damping, k3, alpha, alpha_k, vs, bk, beta, lam, hw, hr,
                         c[0] += -lam[i] * beta[i] / rho + EVENT_TOLERANCE * size
                     else:
                         continue
-                    budget[0] = WALK_LIMIT
-                    s = _crossing(c, span if first < 0.0 else first, rest, rest * terms / max(span, 1e-300),
-                                  budget, shifted)
+                    s = _earlier(c, span, first, rest, rest * terms / max(span, 1e-300), budget, shifted)
                     if math.isnan(s):
                         return WALK_EXHAUSTED, step
-                    if s >= 0.0 and (first < 0.0 or s < first):
+                    if s >= 0.0:
                         first = s
                         event = i
                         side_of = side
