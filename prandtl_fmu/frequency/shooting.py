@@ -69,10 +69,13 @@ solves R(s, omega) = Phi_T(s) - s over the whole period (M steps), the multiplie
 dPhi_T/ds, and the orbit is ``element_orbit.py``'s (the mass stuck to the belt moves with it, x a polynomial
 in t, the branches it carries sliding at their levels ahead, a series branch and a history driven by it; a
 slide ends where the slip does). Beside a spring, a dashpot, a cubic spring, branches (with series dashpots or
-not), ``[history]`` and a Stribeck drop; where the periodic state is a family (a branch that never slides keeps
-any preload) the Jacobian is singular: said in one line (:meth:`ElementShooting.family`). Refused with a belt,
-one line each: ``[delay]`` (its harmonics as unknowns rest on the symmetry) and base excitation (whether the
-belt rides on the moving support is not said).
+not), ``[history]`` and a Stribeck drop. A Prandtl branch that never slides over the period keeps any preload
+(u - x is conserved: a family of periodic states, R singular along it); its row of R is then replaced by a
+convention that picks the member whose elongation is centred in its range, the one continuous with the branch
+sliding both ways (:meth:`ElementShooting._centred`), and that member's neutral multiplier (1) is left out of
+its stability. Refused with a belt, one line each: nothing holding the mass's position (every translation of a
+periodic state is one too), ``[delay]`` (its harmonics as unknowns rest on the symmetry) and base excitation
+(whether the belt rides on the moving support is not said).
 
 What is refused, one line each: a node other than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
 unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
@@ -418,6 +421,18 @@ class ElementShooting(Shooting):
         self.element = scene  # as prepared (the stability beside a delay builds finer ones)
         self.belt = float(scene.friction.belt_velocity)
         self.symmetric = self.belt == 0.0
+        # what holds the mass's position on a belt: a spring, a cubic spring or a history on x (a translation
+        # changes its force); without any, every translation of a periodic state is one too
+        held = (scene.spring is not None and float(scene.spring.k0) != 0.0) or scene.cubic is not None or (
+            history is not None and history.acts_on == "x" and any(w != 0.0 for w in history.weight))
+        if self.belt != 0.0 and not held:
+            raise FrequencyError(f"{scene.source}: [friction] on a moving belt with nothing that holds the mass's "
+                                 "position (no [spring] k0, [cubic] or [history] on x): every translation of a "
+                                 "periodic state is one too: give it a [spring], or use --method time")
+        lam = _relaxation(scene.branches)
+        # the Prandtl branches (no series dashpot): their offsets are what a belt's family leaves free
+        self.series = np.isfinite(lam) if lam.size else np.zeros(branches, dtype=bool)
+        self._plain = False  # the residual without the family's conventions (the multipliers' monodromy)
         if not self.symmetric and base_amplitude is not None:
             raise FrequencyError(f"{scene.source}: [friction] on a moving belt under base excitation (is the belt on "
                                  "the moving support or on the ground?): load the mass with --force-amplitude, or use "
@@ -498,26 +513,71 @@ class ElementShooting(Shooting):
             end = np.concatenate((end, follows))
         return self._checked(end, out[:, None].copy(), omega)
 
-    def family(self, s: np.ndarray, omega: float) -> Optional[str]:
-        """Why the periodic state ``s`` on a belt is one of a family (whose Jacobian is singular: Newton lands on a
-        member as its rounding falls), or None: a branch that never slides over the period keeps any preload (u -
-        x is constant along the orbit: every offset within its range is as periodic; a slide shorter than a
-        sample is seen in the end state's offset). None without a belt (the symmetry fixes the offsets). (An
-        undamped slide that never sticks is no family: forced at T, a free oscillation added is not T-periodic
-        off its resonances; a review's find, refused here before.)"""
+    def residual(self, s: np.ndarray, omega: float) -> np.ndarray:
+        """As :meth:`Shooting.residual`; on a belt, each Prandtl branch's row the family's convention
+        (:meth:`_centred`)."""
         if self.symmetric:
-            return None
+            return super().residual(s, omega)
+        end, xs = self.run(s, omega, 2)
+        residual = end - s
+        if not self._plain:
+            self._centred(s, residual, np.concatenate(([s[0]], xs[:, 0])))
+        return residual
+
+    def _centred(self, s: np.ndarray, residual: np.ndarray, x: np.ndarray) -> None:
+        """The rows of the Prandtl branches on a belt, in place (see the module): a branch that never slides keeps
+        any preload (its offset o = u - x is conserved: every o that keeps u within its range is as periodic,
+        and its row u(T) - u(0) is x(T) - x(0) again), so its row is the slide over the period, -(R_u - R_x),
+        plus, while x's extremes leave room (their spread below 2 eta), the offset's distance from the centred
+        one, clip(o, -eta - min x, eta - max x) + (max x + min x) / 2: zero at a periodic state only where the
+        branch's elongation is centred in its range (the member continuous with the branch sliding both ways,
+        which is centred: at its onset only the centred member is in range); continuous in s (at the family's
+        edges the slide starts from 0 and the clip holds; as the spread reaches 2 eta the term vanishes), and a
+        row operation on the plain rows (R_u - R_x) where the branch slides both ways. The extremes are those
+        of the periodic cubic through the samples (:func:`periodic_extremes`)."""
+        low, high = periodic_extremes(x[:-1])
+        room = 2.0 * self.eta - (high - low)
+        for i in range(self.branches):
+            if self.series[i]:
+                continue
+            row = residual[0] - residual[2 + i]
+            if room[i] > 0.0:
+                offset = float(np.clip(s[2 + i], -self.eta[i], self.eta[i])) - s[0]
+                row += min(max(offset, -self.eta[i] - low), self.eta[i] - high) + 0.5 * (low + high)
+            residual[2 + i] = row
+
+    def _stuck(self, s: np.ndarray, omega: float) -> int:
+        """How many branches never slide over the period run from ``s`` (u - x the same all along (a slide
+        shorter than a sample is seen in the end state's offset), within the range)."""
         end, xs = self.run(s, omega, 2)
         x = np.concatenate(([s[0]], xs[:, 0]))
         size = max(float(np.max(np.abs(x))), 1e-300)
         u0 = np.clip(np.asarray(s[2:2 + self.branches], dtype=float), -self.eta, self.eta)
+        count = 0
         for i in range(self.branches):
             along = u0[i] + x - x[0]
-            if abs(end[2 + i] - along[-1]) <= 1e-12 * max(size, self.eta[i]) and \
+            if not self.series[i] and abs(end[2 + i] - along[-1]) <= 1e-12 * max(size, self.eta[i]) and \
                     float(np.max(np.abs(along))) < self.eta[i] * (1.0 - 1e-9):
-                return (f"branch {i + 1} never slides over the period, so its preload is free (u - x stays the same "
-                        "all along: every offset within its range is as periodic)")
-        return None
+                count += 1
+        return count
+
+    def multipliers(self, s: np.ndarray, omega: float):
+        """As :meth:`Shooting.multipliers`; on a belt those of the plain monodromy dPhi_T/ds, less one 1 per branch
+        that never slides (a neighbouring member of the family: its offset is conserved, neutral, see
+        :meth:`_centred`), the nearest to 1; with a delay, :meth:`_delay_multipliers`."""
+        if self.delay is not None:
+            return self._delay_multipliers(s, omega)
+        if self.symmetric:
+            return super().multipliers(s, omega)
+        s = np.asarray(s, dtype=float)
+        self._plain = True
+        try:
+            values = super().multipliers(s, omega)
+        finally:
+            self._plain = False
+        for _ in range(self._stuck(s, omega)):
+            values = np.delete(values, int(np.argmin(np.abs(values - 1.0))))
+        return values
 
     def _delay_scale(self) -> float:
         """The delay's unknowns are its force over this (N/m): lengths, as the rest of s."""
@@ -539,13 +599,11 @@ class ElementShooting(Shooting):
         out[0::2], out[1::2] = C.real, -C.imag
         return out / self._delay_scale()
 
-    def multipliers(self, s: np.ndarray, omega: float):
-        """As :meth:`Shooting.multipliers`; with a delay (the map of s is not the delay equation's, whose state is
-        the motion over the last tau) those of :meth:`_delay_monodromy` at DELAY_STEPS steps per period, doubled
-        while the verdict is in doubt (the largest |mu| nearer 1 than four times its change), at most
-        DELAY_REFINEMENTS times; None where the buffer passes floquet.MAX_DELAY_STATES values (unknown)."""
-        if self.delay is None:
-            return super().multipliers(s, omega)
+    def _delay_multipliers(self, s: np.ndarray, omega: float):
+        """With a delay (the map of s is not the delay equation's, whose state is the motion over the last tau)
+        the multipliers of :meth:`_delay_monodromy` at DELAY_STEPS steps per period, doubled while the verdict
+        is in doubt (the largest |mu| nearer 1 than four times its change), at most DELAY_REFINEMENTS times;
+        None where the buffer passes floquet.MAX_DELAY_STATES values (unknown)."""
         s = np.asarray(s, dtype=float)
         period = 2.0 * math.pi / omega
         # steps of at most tau (the buffer's grid), and more than twice the delay's harmonics; past
@@ -635,6 +693,28 @@ class ElementShooting(Shooting):
         out = np.zeros(finer.dimension)
         out[:self.dimension] = s
         return out
+
+
+def periodic_extremes(x: np.ndarray) -> tuple:
+    """``(min, max)`` of the periodic cubic through the samples ``x`` (one period, equally spaced: Catmull-Rom,
+    the slopes the centred differences), its extremes within each interval among them: continuous in the
+    samples (a max of continuous functions), off the function's by a term like h^3 where it is smooth."""
+    p0, p1, p2, p3 = np.roll(x, 1), x, np.roll(x, -1), np.roll(x, -2)
+    m1, m2 = 0.5 * (p2 - p0), 0.5 * (p3 - p1)
+    b = 3.0 * (p2 - p1) - 2.0 * m1 - m2
+    a = 2.0 * (p1 - p2) + m1 + m2
+    values = [x]
+    # c'(t) = m1 + 2 b t + 3 a t^2 on (0, 1): its roots where real (a linear one where a is 0)
+    disc = np.maximum(b * b - 3.0 * a * m1, 0.0)
+    real = b * b - 3.0 * a * m1 >= 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for sign in (1.0, -1.0):
+            root = np.where(a != 0.0, (-b + sign * np.sqrt(disc)) / (3.0 * a), -m1 / (2.0 * b))
+            inside = real & np.isfinite(root) & (root > 0.0) & (root < 1.0)
+            t = np.where(inside, root, 0.0)
+            values.append(np.where(inside, p1 + t * (m1 + t * (b + t * a)), x))
+    values = np.concatenate(values)
+    return float(np.min(values)), float(np.max(values))
 
 
 def _relaxation(branches) -> np.ndarray:

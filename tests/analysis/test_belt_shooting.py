@@ -4,6 +4,7 @@ at their levels ahead) and the slides on the slip v - V, and shooting over the w
 half period's symmetry). Checked against a straightforward hybrid integration written here (scipy's DOP853 with
 its event location, mode by mode), on random scenes and at the points of a curve."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from tests.analysis.test_describe_cli import read_csv, write
 from tests.analysis.test_element_orbit import NO_HISTORY
 from tests.analysis.test_harmonic_balance import element
 
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 BELT = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.1}, "friction": {"alpha": 0.3,
                                                                                       "belt_velocity": 0.2}}
 
@@ -322,20 +324,99 @@ def test_the_curve_on_a_belt_from_the_command_line_is_the_settled_motion(tmp_pat
         assert float(table["amplitude"][row]) == pytest.approx(first, rel=1e-6)
 
 
-@pytest.mark.parametrize("tables, F, culprit", [
-    # a branch far from its level: it never slides, any preload within its range is as periodic
-    (dict(BELT, branches={"k": [0.5, 0.3], "alpha": [0.05, 5.0]}), 0.5, "branch 2 never slides over the period"),
-    # (an undamped slide that never sticks is no family: test_an_undamped_slide_on_a_belt_is_its_closed_form)
-])
-def test_a_family_of_periodic_states_on_a_belt_is_said_in_one_line(tmp_path, capsys, tables, F, culprit):
-    """Where the periodic state on a belt is not isolated (its Jacobian singular: Newton lands on a member as the
-    rounding falls, and the continuation went on to say the curve "turned back", which it had not), one line
-    names why, and nothing is written."""
+def _centred_offset(shooting, s, omega, branch) -> float:
+    """(max u + min u) / 2 of ``branch``'s elongation over the orbit from ``s``, u = u(0) + x - x(0) (it never
+    slides), x's extremes from 16 times the shooting's samples (their largest, off by like h^2 / 8)."""
+    from prandtl_fmu.frequency.shooting import ElementShooting
+
+    finer = ElementShooting(shooting.element, shooting.force_amplitude, None, 16 * shooting.M, shooting.H,
+                            shooting.reference)
+    x = finer.samples(s, omega)[0]
+    return s[2 + branch] - s[0] + 0.5 * (float(np.max(x)) + float(np.min(x)))
+
+
+def test_a_family_of_periodic_states_on_a_belt_is_its_centred_member(tmp_path):
+    """A branch that never slides keeps any preload (refused before as "not a curve"): the curve takes the member
+    whose elongation is centred in its range. At three points the state comes back to itself after a period
+    under the integration above (to 1e-8 of the motion), the stuck branch is centred (to 1e-4 of the motion's
+    spread, against x sampled 16 times finer), its neutral multiplier is left out (three of four, both inside
+    the unit circle: Coulomb friction with a dashpot is monotone); and the amplitude from the command line is
+    the motion's settled from rest after 60 periods (another member: the amplitude is every member's, the
+    motion only shifted) to 1e-6."""
+    from prandtl_fmu.frequency.continuation import continue_curve
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    tables = dict(BELT, branches={"k": [0.5, 0.3], "alpha": [0.05, 5.0]})
+    scene = prepared(element(tables))
+    low, high = 2.0 * math.pi * 0.05, 2.0 * math.pi * 0.1
+    shooting = ElementShooting(scene, 0.5, None, 128, 7, math.sqrt(low * high))
+    points = continue_curve(shooting, low, high, 2)
+    k, eta = np.array(scene.branches.stiffness, float), np.array(scene.branches.yield_displacement, float)
+    for omega, s, _ in (points[0], points[len(points) // 2], points[-1]):
+        x, v, u = belt_reference(1.0, 1.0, 0.1, 0.0, 0.3, 0.3, 0.0, 0.2, k, eta, 0.5, omega, s[0],
+                                 s[1] * shooting.reference, s[2:], 2.0 * math.pi / omega)
+        spread = float(np.ptp(shooting.samples(s, omega)))
+        assert max(abs(x - s[0]), abs(v / shooting.reference - s[1]), *np.abs(u - s[2:])) <= 1e-8 * spread
+        assert shooting._stuck(s, omega) == 1
+        assert abs(_centred_offset(shooting, s, omega, 1)) <= 1e-4 * spread
+        values = shooting.multipliers(s, omega)
+        assert len(values) == 3 and np.max(np.abs(values)) < 1.0
     out = tmp_path / "curve.csv"
-    assert main(["describe", write(tmp_path, tables), "--force-amplitude", str(F), "--frequencies", "0.05,0.1",
+    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "0.5", "--frequencies", "0.05,0.1",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert set(table["stable"]) == {"true"}
+    f = float(table["frequency"][-1])
+    omega, periods, M = 2.0 * math.pi * f, 60, 128
+    period = 2.0 * math.pi / omega
+    x, v, u = belt_reference(1.0, 1.0, 0.1, 0.0, 0.3, 0.3, 0.0, 0.2, k, eta, 0.5, omega, 0.0, 0.0, np.zeros(2),
+                             (periods - 1) * period)
+    samples = []
+    for j in range(M):
+        samples.append(x)
+        start = (periods - 1) * period + j * period / M
+        x, v, u = belt_reference(1.0, 1.0, 0.1, 0.0, 0.3, 0.3, 0.0, 0.2, k, eta, 0.5, omega, x, v, u,
+                                 start + period / M, start)
+    assert float(table["amplitude"][-1]) == pytest.approx(2.0 * abs(np.fft.rfft(samples)[1]) / M, rel=1e-6)
+
+
+def test_a_curve_on_a_belt_passes_where_its_branch_starts_to_slide():
+    """The packaged stick-slip scene forced at its static friction: from 0.2 to 1 Hz its branch slides, then
+    sticks (a family, refused before), through two folds. The curve goes through (it crawled along the family's
+    edge, 20000 points, with each branch's row the plain one), and on either side of the onset the state comes
+    back to itself under the integration above to 1e-8 of the motion, the stuck side centred."""
+    from prandtl_fmu.frequency import parse_scene
+    from prandtl_fmu.frequency.continuation import continue_curve
+    from prandtl_fmu.frequency.shooting import ElementShooting, prepared
+
+    with open(SCENES / "hard" / "belt-stick-slip.toml") as handle:
+        scene = prepared(parse_scene(handle.read(), "belt-stick-slip")[0])
+    low, high = 2.0 * math.pi * 0.2, 2.0 * math.pi * 1.0
+    shooting = ElementShooting(scene, 1.0, None, 64, 7, math.sqrt(low * high))
+    points = continue_curve(shooting, low, high, 2)
+    assert len(points) < 200 and sum(fold for _, _, fold in points) == 2
+    stuck = [shooting._stuck(s, omega) for omega, s, _ in points]
+    onset = next(i for i in range(1, len(points)) if stuck[i] and not stuck[i - 1])
+    k, eta = np.array(scene.branches.stiffness, float), np.array(scene.branches.yield_displacement, float)
+    for omega, s, _ in points[onset - 1:onset + 1]:
+        x, v, u = belt_reference(1.0, 1.0, 0.0, 0.0, 1.0, 0.5, 0.05, 0.1, k, eta, 1.0, omega, s[0],
+                                 s[1] * shooting.reference, s[2:], 2.0 * math.pi / omega)
+        spread = float(np.ptp(shooting.samples(s, omega)))
+        assert max(abs(x - s[0]), abs(v / shooting.reference - s[1]), *np.abs(u - s[2:])) <= 1e-8 * spread
+    omega, s, _ = points[onset]
+    assert abs(_centred_offset(shooting, s, omega, 0)) <= 1e-4 * float(np.ptp(shooting.samples(s, omega)))
+
+
+def test_a_mass_that_nothing_holds_on_a_belt_is_refused_in_one_line(tmp_path, capsys):
+    """No spring, cubic spring or history on x: every translation of a periodic state is one too (a singular
+    Jacobian at every point): one line, nothing written."""
+    tables = {"mass": {"m": 1.0}, "damper": {"c": 0.1}, "branches": {"k": [0.5], "alpha": [0.05]},
+              "friction": {"alpha": 0.3, "belt_velocity": 0.2}}
+    out = tmp_path / "curve.csv"
+    assert main(["describe", write(tmp_path, tables), "--force-amplitude", "0.5", "--frequencies", "0.05,0.1",
                  "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert culprit in err and "at f = 0.05 Hz" in err and len(err.strip().splitlines()) == 1
+    assert "nothing that holds the mass's position" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
 
 
