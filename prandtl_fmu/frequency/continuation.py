@@ -178,7 +178,7 @@ def _where(balance, q, omega, node) -> str:
     """Where a curve stopped, as its CSV says it: the first harmonic's amplitude at the curve's node."""
     index = balance.system.load_node if node is None else node
     return (f"first-harmonic amplitude {balance.amplitude_at(q, omega, index)!r} m at node "
-            f"{balance.system.nodes[index]}")
+            f"{getattr(balance, 'names', balance.system.nodes)[index]}")
 
 
 def across(balance, finer, lift, q, omega, omega_min: float, omega_max: float) -> Optional[tuple]:

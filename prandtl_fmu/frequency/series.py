@@ -31,7 +31,9 @@ between weighted means of nodes), and the springs are their Schur complement (k_
 far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
 the motion. A massless node between two threshold elements (its position a play of two references), or with a
 dashpot (a first-order motion), is refused, one line; a massless node held by no spring carries no force
-through it (its elements go). Harmonic balance takes massless nodes as they are (their balance is one of its
+through it (its elements go). The node named and the node loaded, and each massless node their motion or
+force passes through, are condensed where springs alone hold them (:class:`Observed` says how: the force
+passed on as k_i / S of it, the motion the springs' weighted mean plus F / S); else refused, one line. Harmonic balance takes massless nodes as they are (their balance is one of its
 equations): it never sees a lever.
 """
 from __future__ import annotations
@@ -185,20 +187,105 @@ def _without(network, node, rest):
                                v0=np.asarray(network.v0)[keep], elements=elements, load_node=load_node)
 
 
-def condensed(scene, named=None, loaded=None, purpose="the forced response"):
+@dataclass(frozen=True)
+class Observed:
+    """What :func:`condensed` leaves of the node named and the node loaded: ``load`` {node with a mass: share}
+    of the unit force (the loaded node's own, or passed on through massless nodes held by springs alone: k_i /
+    S of it to each far end i; the ground's share is the support's), ``views`` {massless node named: (weights,
+    gain)}, its motion x_p = sum_i weights[i] x_i + gain F(t) (i a node with a mass, or None: the ground's
+    motion, under base excitation; gain 1 / S where the force acts on it)."""
+
+    load: dict
+    views: dict
+
+
+def condensed(scene, named=None, loaded=None, purpose="the forced response", observe=False):
     """``scene`` (a network) with every massless node gone (see the module: springs by their Schur complement,
     a slider or a branch on the node by a :class:`Lever`), or FrequencyError naming the node that cannot go:
-    ``named`` (``--node``) and ``loaded`` (the node the force acts on) are reported, so they must have a mass;
-    ``purpose`` ("the forced response", "the nonlinear modes") for the refusals."""
+    ``named`` (``--node``) and ``loaded`` (the node the force acts on) may be massless where springs alone hold
+    them (and each massless node their force or motion passes through): ``observe`` returns ``(scene,``
+    :class:`Observed` ``)``, which says how; else they must have a mass. ``purpose`` ("the forced response",
+    "the nonlinear modes") for the refusals."""
     network = scene.network
     if not np.any(np.asarray(network.mass) > 0):
         raise FrequencyError(f"{scene.source}: no node has a mass: {purpose} needs one (a network of massless "
                              "nodes is quasi-static: integrate it with prandtl-fmu run)")
+    load = {} if loaded is None else {loaded: 1.0}
+    views = {} if named is None else {named: ({named: 1.0}, 0.0)}
     while True:
         node = next((i for i in range(network.n) if not network.mass[i] > 0), None)
         if node is None:
-            return scene if network is scene.network else dataclasses.replace(scene, network=network)
-        network = _lever(network, node, scene.source, named, loaded, purpose)
+            out = scene if network is scene.network else dataclasses.replace(scene, network=network)
+            if not observe:
+                return out
+            return out, Observed(load, {name: view for name, view in views.items() if name not in network.nodes})
+        name = network.nodes[node]
+        if name in load or any(name in weights for weights, _ in views.values()):
+            if not observe:
+                _refuse_unobserved(name, scene.source, loaded, purpose)
+            _pass_through(network, node, load, views, scene.source, named, loaded, purpose)
+        network = _lever(network, node, scene.source, purpose)
+
+
+def _pass_through(network, node, load, views, source, named, loaded, purpose) -> None:
+    """``load`` and ``views`` (see :class:`Observed`) with massless ``node`` held by springs alone condensed: its
+    balance sum_i k_i (x_i - x_p) + share F = 0 puts it at x_p = (sum_i k_i x_i + share F) / S, and its share of
+    the force goes to its far ends as k_i / S of it; else FrequencyError (:func:`_refuse_observed`)."""
+    name = network.nodes[node]
+    touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
+    holding = next((e for e in touching if e.kind != "spring"), None)
+    ends = {}
+    for e in touching:
+        end = e.between[1] if e.between[0] == node else e.between[0]
+        ends[end] = ends.get(end, 0.0) + e.value
+    total = sum(ends.values())
+    if holding is not None or total == 0.0:
+        _refuse_observed(network, node, source, named, loaded, purpose, holding, name in load)
+    share = load.pop(name, 0.0)
+    for view, (weights, gain) in list(views.items()):
+        weight = weights.pop(name, 0.0)
+        if weight == 0.0:
+            continue
+        for end, stiffness in ends.items():
+            key = None if end < 0 else network.nodes[end]
+            weights[key] = weights.get(key, 0.0) + weight * stiffness / total
+        views[view] = (weights, gain + weight * share / total)
+    for end, stiffness in ends.items():
+        if end >= 0 and share:
+            key = network.nodes[end]
+            load[key] = load.get(key, 0.0) + share * stiffness / total
+
+
+def _refuse_unobserved(name, source, loaded, purpose) -> None:
+    """FrequencyError for massless node ``name``, the one loaded or named, where the caller cannot take it."""
+    how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
+    if name == loaded:
+        raise FrequencyError(f"{source}: node {name} is massless and the force acts on it: {how}: load a node "
+                             "with a mass (--load-node), give it a mass, or integrate the network with prandtl-fmu "
+                             "run")
+    raise FrequencyError(f"--node: {name} is massless: {how} (a massless node's own motion is not computed): "
+                         "name one of them")
+
+
+def _refuse_observed(network, node, source, named, loaded, purpose, holding, forced) -> None:
+    """FrequencyError for massless ``node``, which the force acts on (``forced``: the node ``loaded``, or a node
+    its force passes through) or whose motion ``named`` moves with, and which springs alone do not hold
+    (``holding``: the element that is not a spring; None: no spring holds it)."""
+    name = network.nodes[node]
+    how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
+    if holding is None:
+        why = "held by no spring" if any(node in e.between for e in network.elements) else "held by nothing"
+    else:
+        why = f"with {holding.kind} {_called(holding)} on it"
+    taken = "(a massless node is taken there where springs alone hold it)"
+    if forced:
+        raise FrequencyError(f"{source}: node {name} is massless, {why}, and the force acts on it"
+                             f"{'' if name == loaded else f' (through it from {loaded})'}: {how} {taken}: load a "
+                             "node with a mass (--load-node), give it a mass, or integrate the network with "
+                             "prandtl-fmu run")
+    raise FrequencyError(f"--node: {name if name == named else named} is massless"
+                         f"{'' if name == named else f' and moves with massless {name}'}, {why}: {how} {taken}: "
+                         "name a node with a mass, or one held by springs")
 
 
 def _weights(element) -> dict:
@@ -221,19 +308,13 @@ def _called(element) -> str:
     return element.name
 
 
-def _lever(network, node, source, named, loaded, purpose):
+def _lever(network, node, source, purpose):
     """The network without massless ``node`` (see the module), or FrequencyError."""
     from ..network.model import Element
 
     name = network.nodes[node]
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
-    if name == loaded:
-        raise FrequencyError(f"{source}: node {name} is massless and the force acts on it: {how}: load a node "
-                             f"with a mass (--load-node), {tail}")
-    if name == named:
-        raise FrequencyError(f"--node: {name} is massless: {how} (a massless node's own motion is not computed): "
-                             "name one of them")
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
     for e in touching:
         if e.kind not in ("spring",) + THRESHOLDS or e.c > 0.0:

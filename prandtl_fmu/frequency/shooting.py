@@ -139,15 +139,18 @@ class ShootingSystem(Nodes):
     load_node: int = 0
 
 
-def prepared(scene, named=None, loaded=None):
+def prepared(scene, named=None, loaded=None, observe=False):
     """``scene`` as shooting runs it (a spectrum of branches as the harmonic balance's quadrature of branches; a
-    network's massless nodes condensed, ``named`` (--node) and ``loaded`` (the node a force acts on) kept);
-    FrequencyError for what it does not take."""
+    network's massless nodes condensed, ``named`` (--node) and ``loaded`` (the node a force acts on) with them
+    where ``observe``, which returns ``(scene, series.Observed or None)``); FrequencyError for what it does not
+    take."""
     from ..effects import Branches
     from ..network.model import NetworkScene
 
     if isinstance(scene, NetworkScene):
-        return prepared_network(scene, named, loaded)
+        return prepared_network(scene, named, loaded, observe=observe)
+    if observe:
+        return prepared(scene, named, loaded), None
     from ..loads import HarmonicLoad
     from ..steppers import get_stepper
     from .harmonic_balance import spectrum_branches
@@ -181,10 +184,11 @@ def smooth(scene) -> bool:
         scene.history is not None or scene.delay is not None or scene.friction.belt_velocity != 0.0
 
 
-def prepared_network(scene, named=None, loaded=None, purpose="the forced response"):
+def prepared_network(scene, named=None, loaded=None, purpose="the forced response", observe=False):
     """A network with sliders as :class:`NetworkShooting` runs it (``network_orbit.py``): its massless nodes
     condensed (``series.condensed``: springs and levers between the nodes with a mass; ``named`` and ``loaded``
-    must have one), or FrequencyError (``purpose``: what it is for, as the refusals say)."""
+    must have one, or, where ``observe``, be held by springs alone: then ``(scene, series.Observed)``), or
+    FrequencyError (``purpose``: what it is for, as the refusals say)."""
     from .series import condensed
 
     network = scene.network
@@ -192,7 +196,7 @@ def prepared_network(scene, named=None, loaded=None, purpose="the forced respons
     for option, name in (("--node", named), ("--load-node", loaded)):
         if name is not None and name not in network.nodes:  # every node as written (some may be condensed)
             raise FrequencyError(f"{option}: {name!r} is not a node of {source} ({', '.join(network.nodes)})")
-    return condensed(scene, named, loaded, purpose)
+    return condensed(scene, named, loaded, purpose, observe)
 
 
 class Shooting:
@@ -729,12 +733,30 @@ class NetworkShooting(Shooting):
     (every node with a mass; the force on the load's node, or under base excitation m_i Y0 omega^2 on every node
     in coordinates relative to the ground)."""
 
-    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, load_node=None):
+    def __init__(self, scene, force_amplitude, base_amplitude, steps, harmonics, reference, load_node=None,
+                 observed=None):
         network = scene.network
         n = network.n
         if not np.all(network.mass > 0):
             raise ValueError("NetworkShooting: a network with a massless node (prepared_network condenses them)")
-        load = network.load_node if load_node is None else network.nodes.index(load_node)
+        # the force's shares over the nodes (a massless node loaded passes it on: series.Observed), and the
+        # massless node named (its motion a sum of theirs, ``views``)
+        shares = np.zeros(n)
+        if observed is not None and observed.load:
+            for name, share in observed.load.items():
+                shares[network.nodes.index(name)] = share
+            load = int(np.argmax(np.abs(shares)))
+        else:
+            load = network.load_node if load_node is None else network.nodes.index(load_node)
+            shares[load] = 1.0
+        self.load_name = load_node if load_node is not None else network.nodes[load]
+        self.views = []  # (name, weights over the nodes, weight of the ground's motion, gain of the force)
+        for name, (weights, gain) in ({} if observed is None else observed.views).items():
+            row = np.zeros(n)
+            for node, weight in weights.items():
+                if node is not None:
+                    row[network.nodes.index(node)] = weight
+            self.views.append((name, row, weights.get(None, 0.0), gain))
         system = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float), load)
 
         def row(element):
@@ -779,12 +801,33 @@ class NetworkShooting(Shooting):
             sum((row[n] * np.outer(row[:n], row[:n]) for row in series), np.zeros((n, n)))
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, "exact",
                          2 * n + len(branches) + len(series), float(holding[load, load]))
-        self.force = np.zeros(n)
-        if base_amplitude is None:
-            self.force[load] = 1.0
-        else:
-            self.force[:] = system.mass
+        self.force = shares if base_amplitude is None else np.array(system.mass, float)
         self.branches = len(branches)
+
+    @property
+    def names(self) -> tuple:
+        """The nodes of :meth:`coefficients`: those with a mass, then the massless one named (``views``)."""
+        return tuple(self.system.nodes) + tuple(view[0] for view in self.views)
+
+    def node_index(self, name: Optional[str]) -> int:
+        """The index among :attr:`names` of node ``name`` (None: the first node with a mass)."""
+        if name is not None and name in self.names:
+            return self.names.index(name)
+        return self.system.node_index(name)
+
+    def coefficients(self, s: np.ndarray, omega: float) -> np.ndarray:
+        """As :meth:`Shooting.coefficients`, then a row for the massless node named: x_p = sum_i w_i x_i + w_g y
+        + gain F0 cos(omega t) (series.Observed)."""
+        out = super().coefficients(s, omega)
+        rows = []
+        for _, weights, ground, gain in self.views:
+            row = weights @ out
+            if self.base_amplitude is not None:
+                row[1] += ground * self.base_amplitude
+            else:
+                row[1] += gain * self.force_amplitude
+            rows.append(row)
+        return np.vstack([out] + rows) if rows else out
 
     def amplitude_of_force(self, omega: float) -> float:
         if self.force_amplitude is not None:
@@ -828,24 +871,24 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     loaded = None
     if isinstance(scene, NetworkScene) and base_amplitude is None:
         loaded = scene.network.nodes[scene.network.load_node] if load_node is None else load_node
-    scene = prepared(scene, node, loaded)
+    scene, observed = prepared(scene, node, loaded, observe=True)
     network = isinstance(scene, NetworkScene)
-    names = scene.network.nodes if network else (ELEMENT_NODE,)
-    if load_node is not None and load_node not in names:
-        raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({', '.join(names)})")
+    if not network and load_node is not None and load_node != ELEMENT_NODE:
+        raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({ELEMENT_NODE})")
     H = DEFAULT_HARMONICS if harmonics is None else int(harmonics)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
     reference = math.sqrt(low * high)
 
     def make(steps, delay_harmonics=None):
         if network:
-            return NetworkShooting(scene, force_amplitude, base_amplitude, steps, H, reference, load_node)
+            return NetworkShooting(scene, force_amplitude, base_amplitude, steps, H, reference, loaded, observed)
         return ElementShooting(scene, force_amplitude, base_amplitude, steps, H, reference,
                                delay_harmonics=delay_harmonics or H + 1 - H % 2)
 
     shooting = make(max(FIRST_STEPS, 4 * H + 4 if samples is None else int(samples) + int(samples) % 2))
-    where = shooting.system.node_index(node)
-    refuse_unbounded(scene, force_amplitude, base_amplitude, low, high, load_node)
+    where = shooting.node_index(node) if network else shooting.system.node_index(node)
+    refuse_unbounded(scene, force_amplitude, base_amplitude, low, high, load_node,
+                     None if observed is None else observed.load)
     # a network's curve can take minutes (a Jacobian is 2 n + 1 runs of its motion): a bar on a terminal
     bar = _progress_bar(None, total=None, label=f"{scene.name}: points of the curve")
     try:
@@ -896,6 +939,7 @@ def _curve(shooting, points, coefficients, where, stability, change) -> dict:
     from .floquet import is_stable
 
     system = shooting.system
+    names = tuple(getattr(shooting, "names", system.nodes))
     omega = np.array([p[0] for p in points])
     X = coefficients[:, where, 1] - 1j * coefficients[:, where, 2]
     largest = np.full(len(points), np.nan)
@@ -923,7 +967,8 @@ def _curve(shooting, points, coefficients, where, stability, change) -> dict:
     phase = np.where(np.abs(X) > 0, np.angle(X), 0.0)
     return dict(frequency=omega / (2.0 * math.pi), amplitude=np.abs(X), phase=phase, stable=stable,
                 fold=np.array([p[2] for p in points], dtype=bool), multiplier=largest, amplitudes=amplitudes,
-                coefficients=coefficients, harmonics=shooting.H, change=change, node=system.nodes[where],
-                force_amplitude=shooting.force_amplitude, load_node=system.nodes[system.load_node],
-                base_amplitude=shooting.base_amplitude, method="shooting", node_names=tuple(system.nodes),
+                coefficients=coefficients, harmonics=shooting.H, change=change, node=names[where],
+                force_amplitude=shooting.force_amplitude,
+                load_node=getattr(shooting, "load_name", system.nodes[system.load_node]),
+                base_amplitude=shooting.base_amplitude, method="shooting", node_names=names,
                 orbit="Taylor series" if getattr(shooting, "smooth", False) else "exact motion")

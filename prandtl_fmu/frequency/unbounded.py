@@ -99,19 +99,27 @@ def _network_parts(network) -> Optional[tuple]:
 
 
 def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Optional[float], low: float,
-                     high: float, load_node: Optional[str] = None) -> None:
+                     high: float, load_node: Optional[str] = None, shares: Optional[dict] = None) -> None:
     """FrequencyError where a mode of the springs alone, undamped, lies in [low, high] (rad/s) and the force
-    drives it beyond what the bounded forces can take (see the module); else nothing."""
+    drives it beyond what the bounded forces can take (see the module); else nothing. ``shares``: {node: share}
+    of the force where a massless node loaded passes it on (``series.Observed``), else it acts on
+    ``load_node``."""
     from ..network.model import NetworkScene
 
     if isinstance(scene, NetworkScene):
-        if load_node is not None and load_node not in scene.network.nodes:
+        nodes = scene.network.nodes
+        load = np.zeros(len(nodes))
+        if shares:
+            for name, share in shares.items():
+                load[nodes.index(name)] = share
+        elif load_node is not None and load_node not in nodes:
             return  # refused where the load node is read, with the nodes listed
+        else:
+            load[scene.network.load_node if load_node is None else nodes.index(load_node)] = 1.0
         parts = _network_parts(scene.network)
-        load = scene.network.load_node if load_node is None else scene.network.nodes.index(load_node)
     else:
         parts = _element_parts(scene)
-        load = 0
+        load = np.ones(1)
     if parts is None:
         return
     _check(scene, parts, load, force_amplitude, base_amplitude, low, high, False)
@@ -144,8 +152,7 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
             continue
         omega = math.sqrt(value)
         if base_amplitude is None:
-            force = np.zeros(mass.size)
-            force[load] = force_amplitude
+            force = force_amplitude * load
         else:
             force = mass * base_amplitude * omega * omega
         # the mode's vectors, and the one among them the force drives most

@@ -278,8 +278,8 @@ def _harmonic(x, t, omega):
     return 2.0 / len(t) * np.sum(x * np.exp(-1j * omega * t))
 
 
-def implicit_agrees(scene, shooting, F, omega, periods, ratio=0.1):
-    """Shooting's first harmonic of nodes a and b at omega against the implicit stepper on ``scene`` (the network
+def implicit_agrees(scene, shooting, F, omega, periods, ratio=0.1, nodes="ab"):
+    """Shooting's first harmonic of ``nodes`` (a and b) at omega against the implicit stepper on ``scene`` (the network
     as written) run ``periods`` periods from rest at 1000 and 2000 steps a period: the stepper's error halves
     with h (order 1, within ``ratio``) and its Richardson extrapolation lands within 5 % of that error on
     shooting's. Returns shooting's first harmonics."""
@@ -290,7 +290,7 @@ def implicit_agrees(scene, shooting, F, omega, periods, ratio=0.1):
     s = shooting.solve_at(omega)
     assert s is not None
     coefficients = shooting.coefficients(s, omega)
-    X = coefficients[:, 1] - 1j * coefficients[:, 2]
+    X = (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in nodes]]
     period = 2.0 * math.pi / omega
     harmonics = []
     for per in (1000, 2000):
@@ -299,7 +299,7 @@ def implicit_agrees(scene, shooting, F, omega, periods, ratio=0.1):
                                   solver=Solver("implicit", h, periods * period, h))
         result = simulate(run, progress=False)
         t = result.time[-per - 1:-1]
-        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in "ab"]))
+        harmonics.append(np.array([_harmonic(result.column(f"x_{n}")[-per - 1:-1], t, omega) for n in nodes]))
     coarse, fine = (np.abs(Y - X) for Y in harmonics)
     assert np.all(fine > 0) and np.all(np.abs(coarse / fine - 2.0) < ratio), (coarse, fine)
     assert np.all(np.abs(2.0 * harmonics[1] - harmonics[0] - X) < 0.05 * fine), (harmonics, X)
@@ -370,11 +370,21 @@ def test_a_massless_node_on_a_slider_with_springs_to_one_mass_is_its_branch(tmp_
     (ON_J["slider"] + [("slider", ["j", "b"], {"alpha": 0.2})], [], "node j is massless between slider_1 and"),
     (ON_J["slider"] + [("dashpot", ["j", "b"], {"c": 0.2})], [], "node j is massless, with dashpot"),
     (ON_J["slider"], ["--node", "j"], "--node: j is massless"),
-    (ON_J["slider"], ["--load-node", "j"], "node j is massless and the force acts on it")],
-    ids=["two sliders", "dashpot", "named", "loaded"])
+    (ON_J["slider"], ["--load-node", "j"], "node j is massless, with slider slider_1 on it, and the force acts on it"),
+    (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("spring", ["k", "b"], {"k": 1.0})], ["--load-node", "k"],
+     "node j is massless, with slider slider_1 on it, and the force acts on it (through it from k)"),
+    (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("spring", ["k", "b"], {"k": 1.0})], ["--node", "k"],
+     "--node: k is massless and moves with massless j, with slider slider_1 on it"),
+    (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("slider", ["k", "b"], {"alpha": 0.1})], ["--node", "k"],
+     "--node: k is massless, with slider slider_2 on it")],
+    ids=["two sliders", "dashpot", "named", "loaded", "loaded through", "named through", "named on a slider"])
 def test_what_a_massless_node_on_a_slider_cannot_be_is_one_line(tmp_path, capsys, elements, options, culprit):
+    """A massless node loaded or named is taken where springs alone hold it, and each massless node its force
+    or motion passes through: where a slider holds one of them, one line names it (and the node it came from)."""
     path, out = tmp_path / "scene.toml", tmp_path / "out.csv"
-    path.write_text(network_text(["a", "j", "b"], [1.0, 0.0, 2.0], LEVERED + elements, load_node="a"))
+    through = any("k" in e[1] for e in elements)  # k before j: condensed first, springs alone hold it
+    nodes, mass = (["a", "k", "j", "b"], [1.0, 0.0, 0.0, 2.0]) if through else (["a", "j", "b"], [1.0, 0.0, 2.0])
+    path.write_text(network_text(nodes, mass, LEVERED + elements, load_node="a"))
     assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.1,0.2", "--out", str(out),
                  *options]) == 2
     err = capsys.readouterr().err
@@ -427,3 +437,79 @@ def test_a_massless_node_s_refusals_name_what_the_scene_wrote(tmp_path, capsys, 
     err = capsys.readouterr().err
     assert culprit in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert not out.exists()
+
+
+# the force on massless j, held by springs alone (to a, b and the ground), beside a rigid slider between a and b
+STAR = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 2.0}),
+        ("dashpot", ["a", "ground"], {"c": 0.05}), ("dashpot", ["b", "ground"], {"c": 0.05}),
+        ("slider", ["a", "b"], {"alpha": 0.3}), ("spring", ["a", "j"], {"k": 3.0}),
+        ("spring", ["j", "b"], {"k": 5.0}), ("spring", ["ground", "j"], {"k": 2.0})]
+
+
+def test_a_massless_node_held_by_springs_may_be_loaded_and_named(tmp_path):
+    """The force on massless j, held by springs alone, and j's motion asked for (both refused before: shooting
+    needs a mass at every node): j's balance puts it at (3 x_a + 5 x_b + F) / 10 and passes 3/10 of the force to
+    a and 5/10 to b. Shooting's first harmonics of a, b and j are the implicit stepper's on the network as written
+    (which solves j's balance at every step) by Richardson extrapolation; from the command line the curve's
+    amplitude and phase are j's, its load node j."""
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+
+    scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, 0.0, 1.5], STAR, load_node="j"), "star.toml")
+    condensed, observed = prepared(scene, "j", "j", observe=True)
+    assert condensed.network.nodes == ("a", "b")
+    assert observed.load == {"a": pytest.approx(0.3), "b": pytest.approx(0.5)}
+    weights, gain = observed.views["j"]
+    assert weights == {"a": pytest.approx(0.3), "b": pytest.approx(0.5), None: pytest.approx(0.2)}
+    assert gain == pytest.approx(0.1)
+    F, omega = 1.0, 2.0 * math.pi * 0.2
+    shooting = NetworkShooting(condensed, F, None, 1024, 7, omega, "j", observed)
+    X = implicit_agrees(scene, shooting, F, omega, 80, nodes="abj")
+    out = tmp_path / "star.csv"
+    assert main(["describe", str(tmp_path / "star.toml"), "--force-amplitude", str(F), "--frequencies", "0.2",
+                 "--node", "j", "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert float(table["amplitude"][0]) == pytest.approx(abs(X[2]), rel=1e-6)
+    assert float(table["phase"][0]) == pytest.approx(float(np.angle(X[2])), abs=1e-6)
+    assert "amplitude_j" not in table and "amplitude_a" in table
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_what_a_cluster_of_massless_nodes_held_by_springs_passes_on_is_its_schur_complement(seed):
+    """Random springs among two nodes with a mass, three massless ones and the ground, the force on one massless
+    node and the motion of another asked for: the shares of the force on the nodes with a mass and the named
+    node's weights and gain are those of the Schur complement, written here with numpy: with K the stiffness
+    over (masses m, massless z), z = K_zz^-1 (f_z - K_zm x_m), the force K_mz K_zz^-1 f_z passed on."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.network.model import Element, Network, NetworkScene
+
+    rng = np.random.default_rng(seed)
+    names = ("a", "b", "j0", "j1", "j2")
+    elements, K = [], np.zeros((6, 6))  # the ground last
+    for p in range(5):
+        for q in list(range(p + 1, 5)) + [-1]:
+            if (p < 2 and 0 <= q < 2) or rng.random() < 0.4:  # no spring between the masses, a share of none
+                continue
+            k = float(rng.uniform(0.5, 3.0))
+            elements.append(Element("spring", f"s{p}{q}", (p, q), k))
+            for i, j in ((p, p), (q, q), (p, q), (q, p)):
+                K[i, j] += k if i == j else -k
+    for z in range(2, 5):  # every massless node held: a spring to the ground at least
+        if K[z, z] == 0.0:
+            elements.append(Element("spring", f"g{z}", (z, -1), 1.0))
+            K[z, z] += 1.0
+            K[z, 5] -= 1.0
+            K[5, z] -= 1.0
+            K[5, 5] += 1.0
+    elements += [Element("slider", "rub", (0, 1), 0.2), Element("spring", "ga", (0, -1), 1.0)]
+    written = Network(names, np.array([1.0, 2.0, 0.0, 0.0, 0.0]), np.zeros(5), np.zeros(5), tuple(elements), 2)
+    _, observed = condensed(NetworkScene("x", written, None, None, "x.toml"), "j1", "j0", observe=True)
+    m, z = [0, 1], [2, 3, 4]
+    inverse = np.linalg.inv(K[np.ix_(z, z)])
+    passed = -K[np.ix_(m, z)] @ inverse[:, 0]  # of a unit force on j0
+    for node, share in zip("ab", passed):
+        assert observed.load.get(node, 0.0) == pytest.approx(share, rel=1e-12, abs=1e-15)
+    weights, gain = observed.views["j1"]
+    row = -inverse[1] @ K[np.ix_(z, m + [5])]  # j1's weights on a, b and the ground
+    for node, weight in zip(["a", "b", None], row):
+        assert weights.get(node, 0.0) == pytest.approx(weight, rel=1e-12, abs=1e-15)
+    assert gain == pytest.approx(inverse[1, 0], rel=1e-12)
