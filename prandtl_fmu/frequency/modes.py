@@ -150,18 +150,29 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     from .shooting import ShootingSystem, prepared_network
     from .slider_modes import slider_backbone
 
+    extra = {}  # massless nodes named or loaded, held by springs alone: their x as weights over the nodes
     if isinstance(scene, NetworkScene):
-        # massless nodes condensed: those two must have a mass
-        scene = prepared_network(scene, node, load_node, "the nonlinear modes")
+        # massless nodes condensed (series.condensed); the node named and the node loaded kept as weights
+        scene, observed = prepared_network(scene, node, load_node, "the nonlinear modes", observe=True)
         nodes, mass = tuple(scene.network.nodes), np.array(scene.network.mass, float)
+        for name, (weights, _) in observed.views.items():
+            extra[name] = np.array([weights.get(other, 0.0) for other in nodes])
+        if load_node is not None and load_node not in nodes:  # its force passes on as its weights: x_p's
+            extra[load_node] = np.array([observed.load.get(other, 0.0) for other in nodes])
     else:  # an element with friction on its Taylor orbit (_friction_taylor)
         nodes, mass = (ELEMENT_NODE,), np.array([float(scene.mass.m)])
         if load_node is not None and load_node != ELEMENT_NODE:
             raise FrequencyError(f"--load-node: {load_node!r} is not a node of {scene.source} ({ELEMENT_NODE})")
-    where = ShootingSystem(scene.name, scene.source, nodes, mass).node_index(node)
-    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, where, tolerance)
-    return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
-                    nodes[where], None, change, shape, mass, nodes)
+    if node in extra:
+        probe, name = extra[node], node
+    else:
+        where = ShootingSystem(scene.name, scene.source, nodes, mass).node_index(node)
+        probe, name = np.eye(len(nodes))[where], nodes[where]
+    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, probe, name, tolerance)
+    # the massless nodes' columns: their weighted means of the shape (massless: no share of the modal mass)
+    shape = np.hstack([shape] + [(shape @ weights)[:, None] for weights in extra.values()])
+    return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode, name, None,
+                    change, shape, np.concatenate((mass, np.zeros(len(extra)))), nodes + tuple(extra))
 
 
 def synthesis(backbone: Backbone, force_amplitude: float, load_node: Optional[str] = None) -> tuple:

@@ -64,7 +64,7 @@ class _Free:
     def equations(self, z: np.ndarray, A: float) -> np.ndarray:
         """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
         residual, X = _family_equations(self, z)
-        return np.concatenate((residual[:-1], [X[self.where].real - A], residual[-1:]))
+        return np.concatenate((residual[:-1], [(self.probe @ X).real - A], residual[-1:]))
 
     def jacobian_of(self, z: np.ndarray, A: float, residual: np.ndarray) -> np.ndarray:
         """d equations / dz by forward differences (PERTURBATION of the orbit's size, of omega for omega and xi)."""
@@ -112,10 +112,11 @@ class _Free:
 class FreeShooting(_Free, NetworkShooting):
     """The free network with sliders (``network_orbit.py``)."""
 
-    def __init__(self, scene, steps: int, reference: float, where: int):
+    def __init__(self, scene, steps: int, reference: float, probe: np.ndarray, name: str):
         super().__init__(scene, 0.0, None, steps, 7, reference)
         self.viscous = self.damping.copy()
-        self.where = int(where)
+        self.probe = np.asarray(probe, dtype=float)  # the node's x as weights over the nodes (see _free_systems)
+        self.name = name
 
 
 class FreeElement(_Free, ElementShooting):
@@ -124,11 +125,12 @@ class FreeElement(_Free, ElementShooting):
     a network of one node: its spring and stuck branches (the linear start's stiffness), the friction a slider
     to the ground; ``damping`` (1, 1) is the Taylor orbit's c, which the equations set to c - xi m."""
 
-    def __init__(self, scene, steps: int, reference: float, where: int = 0):
+    def __init__(self, scene, steps: int, reference: float):
         super().__init__(scene, 0.0, None, steps, 7, reference)
         if not self.smooth:
             raise ValueError("FreeElement: an element whose orbit is the Taylor series (shooting.smooth)")
-        self.where = 0
+        self.probe = np.ones(1)
+        self.name = self.system.nodes[0]
         self.stiffness_matrix = np.array([[self.parameters[1]]])
         self.viscous = np.array([[self.parameters[2]]])
         self.rows = np.ones((1, 1))
@@ -146,20 +148,22 @@ class FreeElement(_Free, ElementShooting):
                            *self.parameters[3:])
 
 
-def _free_systems(scene, where: int):
+def _free_systems(scene, probe: np.ndarray, name: str):
     """``(scene, make(steps, reference))``: the free system of ``scene`` at M = steps: the element with friction
-    on its Taylor orbit (:class:`FreeElement`), else the network (massless nodes condensed: FreeShooting)."""
+    on its Taylor orbit (:class:`FreeElement`), else the network (massless nodes condensed: FreeShooting, the
+    amplitude that of x = probe . x over its nodes: a node's own, or a massless node's weighted mean)."""
     from ..network.model import NetworkScene
     from .shooting import prepared
 
     if isinstance(scene, NetworkScene):
         scene = prepared_network(scene)
-        return scene, lambda steps, reference: FreeShooting(scene, steps, reference, where)
+        return scene, lambda steps, reference: FreeShooting(scene, steps, reference, probe, name)
     scene = prepared(scene)
     return scene, lambda steps, reference: FreeElement(scene, steps, reference)
 
 
-def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolerance: float) -> tuple:
+def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray, name: str,
+                    tolerance: float) -> tuple:
     """The backbone at ``amplitudes`` (see the module): (rows, 2): omega and xi of every point of the backbone at
     each amplitude (the amplitudes in the order given; where the backbone turns back in amplitude, each of its
     points at that amplitude, in their order along it), (rows, n) complex: the first harmonic of every node per
@@ -170,7 +174,7 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolera
     the other mass's amplitude grows without bound), then each listed amplitude is solved for at every crossing
     of the node's a_1; an amplitude that the family's a_1 at the node never reaches is refused, with the largest
     it reaches."""
-    scene, make = _free_systems(scene, where)
+    scene, make = _free_systems(scene, probe, name)
     free = make(FIRST_STEPS, 1.0)
     low, high = float(np.min(amplitudes)), float(np.max(amplitudes))
     omega0, shape, xi0, onset = _linear_start(free, mode, low)
@@ -195,15 +199,15 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, where: int, tolera
     for index, A in enumerate(amplitudes.tolist()):
         if abs(A - measures[-1]) <= reach:
             raise FrequencyError(
-                f"{scene.source}: mode {mode} at A = {A!r} m at node {free.system.nodes[where]}: where the family "
-                f"was followed to (other nodes' amplitude {largest[-1]:.6g} m) node {free.system.nodes[where]}'s "
+                f"{scene.source}: mode {mode} at A = {A!r} m at node {free.name}: where the family "
+                f"was followed to (other nodes' amplitude {largest[-1]:.6g} m) node {free.name}'s "
                 f"first harmonic is {measures[-1]:.6g} m and still moving by {reach:.3g} m, so the family may pass "
                 "that amplitude again further out: choose an amplitude farther from it, or another --node")
         found = _family_crossings(free, points, measures, A)
         if not found:
             top = int(np.argmax(measures))
             raise FrequencyError(
-                f"{scene.source}: mode {mode} does not reach A = {A!r} m at node {free.system.nodes[where]}: along "
+                f"{scene.source}: mode {mode} does not reach A = {A!r} m at node {free.name}: along "
                 f"the family its first harmonic there is at most {measures[top]:.6g} m (at "
                 f"{points[top][free.dimension] / (2 * math.pi):.6g} Hz) while the other nodes' amplitude grows "
                 "(choose another --node)")
@@ -256,7 +260,7 @@ def _family_equations(free, z):
     end, xs = free.run(s, omega)
     half = np.vstack((s[None, :free.system.n], xs[:-1]))
     X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ np.vstack((half, -half)) * 2.0 / free.M
-    return np.concatenate((-end - s, [-X[free.where].imag])), X
+    return np.concatenate((-end - s, [-(free.probe @ X).imag])), X
 
 
 def _family_jacobian(free, z, residual, scale):
@@ -288,10 +292,11 @@ def _follow_family(free, z, high):
 
     scale = scale_of(z)
     t = tangent(z, scale, None)
-    if t[free.where] * z[free.where] < 0:  # the amplitude's way up
+    n = free.system.n
+    if (free.probe @ t[:n]) * (free.probe @ z[:n]) < 0:  # the amplitude's way up
         t = -t
     first = _family_equations(free, z)[1]
-    points, measures, largest = [z.copy()], [abs(first[free.where])], [float(np.max(np.abs(first)))]
+    points, measures, largest = [z.copy()], [abs(free.probe @ first)], [float(np.max(np.abs(first)))]
     step = FAMILY_STEP
     while len(points) < FAMILY_POINTS:
         y = z / scale
@@ -327,7 +332,7 @@ def _follow_family(free, z, high):
         z, t = new, t_new
         _, X = _family_equations(free, z)
         points.append(z.copy())
-        measures.append(abs(X[free.where]))
+        measures.append(abs(free.probe @ X))
         largest.append(float(np.max(np.abs(X))))
         step = min(FAMILY_STEP, 1.5 * step)
         if float(np.max(np.abs(X))) > FAMILY_BEYOND * high:
@@ -345,7 +350,7 @@ def _family_crossings(free, points, measures, A: float) -> list:
             m0 = A
         if (m0 - A) * (m1 - A) <= 0 and m0 != m1:
             guess = points[i] + (A - m0) / (m1 - m0) * (points[i + 1] - points[i])
-            if guess[free.where] < 0:
+            if free.probe @ guess[:free.system.n] < 0:
                 guess = guess.copy()
                 guess[:free.dimension] = -guess[:free.dimension]
             solved = free.solve(guess, A)
@@ -375,7 +380,7 @@ def _guess(free, shape, omega, xi, A) -> np.ndarray:
 
 
 def _linear_start(free, mode: int, A: float) -> tuple:
-    """(omega, shape with shape[where] = 1, xi, onset) of linear mode ``mode`` (1: the lowest) with every branch
+    """(omega, shape with probe . shape = 1, xi, onset) of linear mode ``mode`` (1: the lowest) with every branch
     and slider sticking, ``onset`` the amplitude where a slider's force (G^T lambda = (K - omega^2 M) x) reaches
     its alpha or a branch's spring its eta; where the stuck sliders leave fewer modes, with the sliders free, xi
     from the energy each dissipates over a cycle of amplitude A (4 alpha |d . shape| A against
@@ -393,10 +398,10 @@ def _linear_start(free, mode: int, A: float) -> tuple:
         if omega is None:
             continue
         shape = basis @ shape
-        if abs(shape[free.where]) < 1e-9 * np.max(np.abs(shape)):
-            raise FrequencyError(f"--node: mode {mode} does not move node {free.system.nodes[free.where]}: its "
+        if abs(free.probe @ shape) < 1e-9 * np.max(np.abs(shape)):
+            raise FrequencyError(f"--node: mode {mode} does not move node {free.name}: its "
                                  "amplitude cannot set the mode's (choose another --node)")
-        shape = shape / shape[free.where]
+        shape = shape / (free.probe @ shape)
         modal = float(shape @ mass @ shape)
         xi = float(shape @ free.viscous @ shape) / modal
         onset = math.inf

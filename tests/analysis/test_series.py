@@ -425,7 +425,7 @@ CHAIN_OF_TWO = network_text(["a", "j", "j2", "b"], [1.0, 0.0, 0.0, 2.0], HELD + 
      "node j2 is massless between slider_2 and slider_1 (through massless j)"),
     (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--node", "zz"], "scene.toml (a, j, j2, b)"),
     (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--load-node", "zz"], "(a, j, j2, b)"),
-    (["--mode", "1", "--amplitudes", "0.1", "--node", "j"], "--node: j is massless: the nonlinear modes of")],
+    (["--mode", "1", "--amplitudes", "0.1", "--node", "j"], "--node: j is massless, with slider slider_1 on it: the nonlinear modes of")],
     ids=["a lever through a node", "--node", "--load-node", "modes"])
 def test_a_massless_node_s_refusals_name_what_the_scene_wrote(tmp_path, capsys, options, culprit):
     """A second slider that reaches a massless node through another is named with that node; an unknown node is
@@ -513,3 +513,26 @@ def test_what_a_cluster_of_massless_nodes_held_by_springs_passes_on_is_its_schur
     for node, weight in zip(["a", "b", None], row):
         assert weights.get(node, 0.0) == pytest.approx(weight, rel=1e-12, abs=1e-15)
     assert gain == pytest.approx(inverse[1, 0], rel=1e-12)
+
+
+def test_the_backbone_at_a_massless_node_held_by_springs_is_the_mode_s_at_its_weighted_mean(tmp_path):
+    """The nonlinear mode (EPMC by shooting) asked for at massless j, held by springs alone (refused before):
+    the backbone at node a at amplitudes where the slider sticks and slips, then at j at the amplitudes j has on
+    those points (x_j = 0.3 x_a + 0.5 x_b, worked out by hand from the springs): the same frequencies and damping
+    ratios, to 1e-9, and j's column of the shape is 1 (its amplitude). From the command line too."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+
+    text = network_text(["a", "j", "b"], [1.0, 0.0, 1.5], STAR, load_node="j")
+    scene = network(tmp_path, text, "star.toml")
+    amplitudes = np.array([0.5, 2.0, 5.0])
+    at_a = nonlinear_mode(scene, 1, amplitudes, node="a")
+    assert np.ptp(at_a.damping_ratio) > 0.1 * at_a.damping_ratio[0]  # the slider slips on some of them
+    at_j = nonlinear_mode(scene, 1, np.abs(0.3 * at_a.shape[:, 0] + 0.5 * at_a.shape[:, 1]) * amplitudes, node="j")
+    assert at_j.node == "j" and at_j.nodes == ("a", "b", "j")
+    assert np.allclose(at_j.frequency, at_a.frequency, rtol=1e-9, atol=0.0)
+    assert np.allclose(at_j.damping_ratio, at_a.damping_ratio, rtol=1e-9, atol=0.0)
+    assert np.allclose(np.abs(at_j.shape[:, 2]), 1.0, rtol=1e-12)
+    out = tmp_path / "mode.csv"
+    assert main(["describe", str(tmp_path / "star.toml"), "--mode", "1", "--amplitudes", "0.4,1.5", "--node", "j",
+                 "--out", str(out)]) == 0
+    assert len(read_csv(out)["frequency"]) == 2
