@@ -155,7 +155,12 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
         # massless nodes condensed (series.condensed); the node named and the node loaded kept as weights
         scene, observed = prepared_network(scene, node, load_node, "the nonlinear modes", observe=True)
         nodes, mass = tuple(scene.network.nodes), np.array(scene.network.mass, float)
-        for name, (weights, _) in observed.views.items():
+        for name, (weights, _, tensions) in observed.views.items():
+            if tensions:
+                raise FrequencyError(f"--node: {name} is massless, with slider or branch {', '.join(tensions)} "
+                                     "on it: the nonlinear modes take a massless node held by springs alone (its "
+                                     "motion would need that element's tension along the mode): name a node with a "
+                                     "mass, or one held by springs")
             extra[name] = np.array([weights.get(other, 0.0) for other in nodes])
         if load_node is not None and load_node not in nodes:  # its force passes on as its weights: x_p's
             extra[load_node] = np.array([observed.load.get(other, 0.0) for other in nodes])

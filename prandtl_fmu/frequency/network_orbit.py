@@ -799,7 +799,7 @@ def _cubic_order(crows, ck3, vectors, k, n, e_series, square, cube, cubic):
 def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, series, force, amplitude, omega, x, v, u,
         su, h, steps, out):
     """``steps`` steps of h from (x, v, u) at t = 0 (arrays updated in place to the end), x at each step's end
-    in ``out`` (steps, n); returns (status, steps taken). ``crows`` (cubic springs, n), ``ck3``: the cubic
+    in ``out`` (steps, n), or x and the branches' u (steps, n + branches); returns (status, steps taken). ``crows`` (cubic springs, n), ``ck3``: the cubic
     springs (none: the linear phases' proven remainder; some: their recurrence and Jorba and Zou's step)."""
     n = x.shape[0]
     ns = rows.shape[0]
@@ -972,6 +972,15 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, seri
             tau = 0.0
         for a in range(n):
             out[step, a] = y[a]
+        if out.shape[1] > n:  # the branches' u too (the tension of a massless node's lever: shooting's views)
+            for i in range(nb):
+                if bmode[i] != 0:
+                    out[step, n + i] = bmode[i] * beta[i]
+                else:
+                    elongation = 0.0
+                    for a in range(n):
+                        elongation += brows[i, a] * (y[a] - x_phase[a])
+                    out[step, n + i] = u[i] + elongation
     # the end state
     for a in range(n):
         x[a] = y[a]

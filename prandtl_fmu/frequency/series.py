@@ -32,8 +32,9 @@ far ends, as :func:`_star`): the force on every other node is the one the node p
 the motion. A massless node between two threshold elements (its position a play of two references), or with a
 dashpot (a first-order motion), is refused, one line; a massless node held by no spring carries no force
 through it (its elements go). The node named and the node loaded, and each massless node their motion or
-force passes through, are condensed where springs alone hold them (:class:`Observed` says how: the force
-passed on as k_i / S of it, the motion the springs' weighted mean plus F / S); else refused, one line. Harmonic balance takes massless nodes as they are (their balance is one of its
+force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
+slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
+weighted mean plus F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance takes massless nodes as they are (their balance is one of its
 equations): it never sees a lever.
 """
 from __future__ import annotations
@@ -192,8 +193,9 @@ class Observed:
     """What :func:`condensed` leaves of the node named and the node loaded: ``load`` {node with a mass: share}
     of the unit force (the loaded node's own, or passed on through massless nodes held by springs alone: k_i /
     S of it to each far end i; the ground's share is the support's), ``views`` {massless node named: (weights,
-    gain)}, its motion x_p = sum_i weights[i] x_i + gain F(t) (i a node with a mass, or None: the ground's
-    motion, under base excitation; gain 1 / S where the force acts on it)."""
+    gain, tensions)}, its motion x_p = sum_i weights[i] x_i + gain F(t) + sum_e tensions[e] T_e(t) (i a node
+    with a mass, or None: the ground's motion, under base excitation; gain 1 / S where the force acts on it;
+    T_e the tension of lever e, -d_p / S where p's slider or branch became it)."""
 
     load: dict
     views: dict
@@ -211,7 +213,7 @@ def condensed(scene, named=None, loaded=None, purpose="the forced response", obs
         raise FrequencyError(f"{scene.source}: no node has a mass: {purpose} needs one (a network of massless "
                              "nodes is quasi-static: integrate it with prandtl-fmu run)")
     load = {} if loaded is None else {loaded: 1.0}
-    views = {} if named is None else {named: ({named: 1.0}, 0.0)}
+    views = {} if named is None else {named: ({named: 1.0}, 0.0, {})}
     while True:
         node = next((i for i in range(network.n) if not network.mass[i] > 0), None)
         if node is None:
@@ -220,7 +222,7 @@ def condensed(scene, named=None, loaded=None, purpose="the forced response", obs
                 return out
             return out, Observed(load, {name: view for name, view in views.items() if name not in network.nodes})
         name = network.nodes[node]
-        if name in load or any(name in weights for weights, _ in views.values()):
+        if name in load or any(name in view[0] for view in views.values()):
             if not observe:
                 _refuse_unobserved(name, scene.source, loaded, purpose)
             _pass_through(network, node, load, views, scene.source, named, loaded, purpose)
@@ -228,28 +230,45 @@ def condensed(scene, named=None, loaded=None, purpose="the forced response", obs
 
 
 def _pass_through(network, node, load, views, source, named, loaded, purpose) -> None:
-    """``load`` and ``views`` (see :class:`Observed`) with massless ``node`` held by springs alone condensed: its
-    balance sum_i k_i (x_i - x_p) + share F = 0 puts it at x_p = (sum_i k_i x_i + share F) / S, and its share of
-    the force goes to its far ends as k_i / S of it; else FrequencyError (:func:`_refuse_observed`)."""
+    """``load`` and ``views`` (see :class:`Observed`) with massless ``node`` condensed, held by springs alone
+    (and, where no force acts on it, by one slider or branch, which becomes a lever of tension T): its balance
+    sum_i k_i (x_i - x_p) - d_p T + share F = 0 puts it at x_p = (sum_i k_i x_i - d_p T + share F) / S, and its
+    share of the force goes to its far ends as k_i / S of it; else FrequencyError (:func:`_refuse_observed`)."""
     name = network.nodes[node]
+    forced = name in load
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
-    holding = next((e for e in touching if e.kind != "spring"), None)
+    thresholds = _parallel([e for e in touching if e.kind in THRESHOLDS])
+    springs = [e for e in touching if e.kind == "spring"]
     ends = {}
-    for e in touching:
+    for e in springs:
         end = e.between[1] if e.between[0] == node else e.between[0]
         ends[end] = ends.get(end, 0.0) + e.value
     total = sum(ends.values())
-    if holding is not None or total == 0.0:
-        _refuse_observed(network, node, source, named, loaded, purpose, holding, name in load)
+    others = [e for e in touching if e.kind != "spring" and (e.kind not in THRESHOLDS or e.c > 0.0)]
+    why = None
+    if others or (thresholds and forced):
+        holding = (others + thresholds)[0]
+        why = f"with {holding.kind} {_called(holding)} on it"
+    elif len(thresholds) > 1:
+        why = f"between {_called(thresholds[0])} and {_called(thresholds[1])}"
+    elif total == 0.0:
+        why = "held by no spring"
+    if why is not None:
+        _refuse_observed(network, node, source, named, loaded, purpose, why, forced)
+    tension = {}  # the lever p's threshold becomes (none where it carries nothing: T = 0)
+    if thresholds and _levered(thresholds[0], node, name, ends, total):
+        tension[thresholds[0].name] = -_weights(thresholds[0])[node] / total
     share = load.pop(name, 0.0)
-    for view, (weights, gain) in list(views.items()):
+    for view, (weights, gain, tensions) in list(views.items()):
         weight = weights.pop(name, 0.0)
         if weight == 0.0:
             continue
         for end, stiffness in ends.items():
             key = None if end < 0 else network.nodes[end]
             weights[key] = weights.get(key, 0.0) + weight * stiffness / total
-        views[view] = (weights, gain + weight * share / total)
+        for lever, value in tension.items():
+            tensions[lever] = tensions.get(lever, 0.0) + weight * value
+        views[view] = (weights, gain + weight * share / total, tensions)
     for end, stiffness in ends.items():
         if end >= 0 and share:
             key = network.nodes[end]
@@ -267,17 +286,14 @@ def _refuse_unobserved(name, source, loaded, purpose) -> None:
                          "name one of them")
 
 
-def _refuse_observed(network, node, source, named, loaded, purpose, holding, forced) -> None:
+def _refuse_observed(network, node, source, named, loaded, purpose, why, forced) -> None:
     """FrequencyError for massless ``node``, which the force acts on (``forced``: the node ``loaded``, or a node
-    its force passes through) or whose motion ``named`` moves with, and which springs alone do not hold
-    (``holding``: the element that is not a spring; None: no spring holds it)."""
+    its force passes through) or whose motion ``named`` moves with, and which is not held as it must be
+    (``why``)."""
     name = network.nodes[node]
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
-    if holding is None:
-        why = "held by no spring" if any(node in e.between for e in network.elements) else "held by nothing"
-    else:
-        why = f"with {holding.kind} {_called(holding)} on it"
-    taken = "(a massless node is taken there where springs alone hold it)"
+    taken = ("(a massless node is taken there where springs alone hold it)" if forced else
+             "(a massless node is taken there where springs hold it, and one slider or branch at most)")
     if forced:
         raise FrequencyError(f"{source}: node {name} is massless, {why}, and the force acts on it"
                              f"{'' if name == loaded else f' (through it from {loaded})'}: {how} {taken}: load a "

@@ -372,13 +372,18 @@ class Shooting:
     def coefficients(self, s: np.ndarray, omega: float) -> np.ndarray:
         """The mean and H harmonics of x of every node (absolute: y added under base excitation), (n, 2 H + 1),
         in the order of the harmonic balance (a_0, a_1, b_1, ...)."""
-        spectrum = np.fft.rfft(self.samples(s, omega), axis=1) / self.M
-        out = np.empty((self.system.n, self.L))
+        out = self._harmonics(self.samples(s, omega))
+        if self.base_amplitude is not None:
+            out[:, 1] += self.base_amplitude
+        return out
+
+    def _harmonics(self, samples: np.ndarray) -> np.ndarray:
+        """(a_0, a_1, b_1, ... a_H, b_H) of each row of ``samples`` over one period (rows, M)."""
+        spectrum = np.fft.rfft(samples, axis=1) / self.M
+        out = np.empty((samples.shape[0], self.L))
         out[:, 0] = spectrum[:, 0].real
         out[:, 1::2] = 2.0 * spectrum[:, 1:self.H + 1].real
         out[:, 2::2] = -2.0 * spectrum[:, 1:self.H + 1].imag
-        if self.base_amplitude is not None:
-            out[:, 1] += self.base_amplitude
         return out
 
     def first_harmonic(self, s: np.ndarray, omega: float, node: Optional[int] = None) -> complex:
@@ -750,13 +755,7 @@ class NetworkShooting(Shooting):
             load = network.load_node if load_node is None else network.nodes.index(load_node)
             shares[load] = 1.0
         self.load_name = load_node if load_node is not None else network.nodes[load]
-        self.views = []  # (name, weights over the nodes, weight of the ground's motion, gain of the force)
-        for name, (weights, gain) in ({} if observed is None else observed.views).items():
-            row = np.zeros(n)
-            for node, weight in weights.items():
-                if node is not None:
-                    row[network.nodes.index(node)] = weight
-            self.views.append((name, row, weights.get(None, 0.0), gain))
+        self._observed = observed
         system = ShootingSystem(scene.name, scene.source, tuple(network.nodes), np.array(network.mass, float), load)
 
         def row(element):
@@ -771,7 +770,7 @@ class NetworkShooting(Shooting):
 
         self.stiffness_matrix = np.zeros((n, n))
         self.damping = np.zeros((n, n))
-        sliders, branches, cubic, series = [], [], [], []
+        sliders, branches, cubic, series, named = [], [], [], [], []
         for element in network.elements:
             d = row(element)
             if element.kind == "cubic":  # its force k3 (d . x)^3 along d (network_orbit.py: by its recurrence)
@@ -786,8 +785,10 @@ class NetworkShooting(Shooting):
                 series.append(np.concatenate((d, [element.value, element.eta, element.value / element.c])))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
+                named.append(element.name)
             elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
                 branches.append((d, element.value, element.alpha / element.value))
+                named.append(element.name)
         self.rows = np.array([d for d, _ in sliders], dtype=float).reshape(len(sliders), n)
         self.alpha = np.array([a for _, a in sliders], dtype=float)
         self.brows = np.array([b[0] for b in branches], dtype=float).reshape(len(branches), n)
@@ -803,6 +804,17 @@ class NetworkShooting(Shooting):
                          2 * n + len(branches) + len(series), float(holding[load, load]))
         self.force = shares if base_amplitude is None else np.array(system.mass, float)
         self.branches = len(branches)
+        # the massless node named: (name, weights over the nodes, weight of the ground's motion, gain of the
+        # force, weights over the branches' tensions k u) (series.Observed)
+        self.views = []
+        for name, (weights, gain, tensions) in ({} if observed is None else observed.views).items():
+            row, pulls = np.zeros(n), np.zeros(len(branches))
+            for node, weight in weights.items():
+                if node is not None:
+                    row[network.nodes.index(node)] = weight
+            for lever, weight in tensions.items():
+                pulls[named.index(lever)] = weight
+            self.views.append((name, row, weights.get(None, 0.0), gain, pulls))
 
     @property
     def names(self) -> tuple:
@@ -817,17 +829,44 @@ class NetworkShooting(Shooting):
 
     def coefficients(self, s: np.ndarray, omega: float) -> np.ndarray:
         """As :meth:`Shooting.coefficients`, then a row for the massless node named: x_p = sum_i w_i x_i + w_g y
-        + gain F0 cos(omega t) (series.Observed)."""
+        + gain F0 cos(omega t) + sum_e c_e k_e u_e(t) (series.Observed; u the branches' along the orbit)."""
         out = super().coefficients(s, omega)
         rows = []
-        for _, weights, ground, gain in self.views:
+        pulled = any(np.any(view[4]) for view in self.views)
+        tensions = self._harmonics(self._tensions(s, omega)) if pulled else None
+        for _, weights, ground, gain, pulls in self.views:
             row = weights @ out
             if self.base_amplitude is not None:
                 row[1] += ground * self.base_amplitude
             else:
                 row[1] += gain * self.force_amplitude
+            if pulled:
+                row = row + pulls @ tensions
             rows.append(row)
         return np.vstack([out] + rows) if rows else out
+
+    def _tensions(self, s: np.ndarray, omega: float) -> np.ndarray:
+        """The branches' tensions k u over one period at t_j = j T / M, (branches, M): a run that writes u too
+        (``network_orbit.run``), the second half period the first's negative (the symmetry)."""
+        from .network_orbit import OK, explain, run
+
+        n, nb = self.system.n, self.branches
+        h = 2.0 * math.pi / omega / self.M
+        x = np.array(s[:n], dtype=float)
+        v = np.array(s[n:2 * n], dtype=float) * self.reference
+        u = np.clip(np.array(s[2 * n:2 * n + nb], dtype=float), -self.eta, self.eta)
+        start = u.copy()
+        su = np.array(s[2 * n + nb:], dtype=float)
+        amplitude = self.force_amplitude if self.force_amplitude is not None else \
+            self.base_amplitude * omega * omega
+        out = np.empty((self.M // 2, n + nb))
+        status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
+                            self.brows, self.bk, self.eta, self.crows, self.ck3, self.series, self.force,
+                            float(amplitude), float(omega), x, v, u, su, h, self.M // 2, out)
+        if status != OK:
+            self._refuse(omega, f"the motion from the state stopped at t = {taken * h!r} s: {explain(status)}")
+        half = np.concatenate((start[None, :], out[:-1, n:]), axis=0).T * self.bk[:, None]
+        return np.concatenate((half, -half), axis=1)
 
     def amplitude_of_force(self, omega: float) -> float:
         if self.force_amplitude is not None:

@@ -369,18 +369,16 @@ def test_a_massless_node_on_a_slider_with_springs_to_one_mass_is_its_branch(tmp_
 @pytest.mark.parametrize("elements, options, culprit", [
     (ON_J["slider"] + [("slider", ["j", "b"], {"alpha": 0.2})], [], "node j is massless between slider_1 and"),
     (ON_J["slider"] + [("dashpot", ["j", "b"], {"c": 0.2})], [], "node j is massless, with dashpot"),
-    (ON_J["slider"], ["--node", "j"], "--node: j is massless"),
     (ON_J["slider"], ["--load-node", "j"], "node j is massless, with slider slider_1 on it, and the force acts on it"),
     (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("spring", ["k", "b"], {"k": 1.0})], ["--load-node", "k"],
      "node j is massless, with slider slider_1 on it, and the force acts on it (through it from k)"),
-    (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("spring", ["k", "b"], {"k": 1.0})], ["--node", "k"],
-     "--node: k is massless and moves with massless j, with slider slider_1 on it"),
     (ON_J["slider"] + [("spring", ["j", "k"], {"k": 1.0}), ("slider", ["k", "b"], {"alpha": 0.1})], ["--node", "k"],
-     "--node: k is massless, with slider slider_2 on it")],
-    ids=["two sliders", "dashpot", "named", "loaded", "loaded through", "named through", "named on a slider"])
+     "--node: k is massless and moves with massless j, between slider_1 and slider_2 (through massless k)")],
+    ids=["two sliders", "dashpot", "loaded", "loaded through", "named through two sliders"])
 def test_what_a_massless_node_on_a_slider_cannot_be_is_one_line(tmp_path, capsys, elements, options, culprit):
-    """A massless node loaded or named is taken where springs alone hold it, and each massless node its force
-    or motion passes through: where a slider holds one of them, one line names it (and the node it came from)."""
+    """A massless node loaded is taken where springs alone hold it, one named where springs and one slider or
+    branch at most do, and each massless node their force or motion passes through: else one line names it
+    (and the node it came from)."""
     path, out = tmp_path / "scene.toml", tmp_path / "out.csv"
     through = any("k" in e[1] for e in elements)  # k before j: condensed first, springs alone hold it
     nodes, mass = (["a", "k", "j", "b"], [1.0, 0.0, 0.0, 2.0]) if through else (["a", "j", "b"], [1.0, 0.0, 2.0])
@@ -425,8 +423,12 @@ CHAIN_OF_TWO = network_text(["a", "j", "j2", "b"], [1.0, 0.0, 0.0, 2.0], HELD + 
      "node j2 is massless between slider_2 and slider_1 (through massless j)"),
     (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--node", "zz"], "scene.toml (a, j, j2, b)"),
     (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--load-node", "zz"], "(a, j, j2, b)"),
-    (["--mode", "1", "--amplitudes", "0.1", "--node", "j"], "--node: j is massless, with slider slider_1 on it: the nonlinear modes of")],
-    ids=["a lever through a node", "--node", "--load-node", "modes"])
+    (["--mode", "1", "--amplitudes", "0.1", "--node", "j"],
+     "--node: j is massless and moves with massless j2, between slider_2 and slider_1 (through massless j): the "
+     "nonlinear modes of"),
+    (["--force-amplitude", "1", "--frequencies", "0.1,0.2", "--node", "j", "--load-node", "j"],
+     "node j is massless, with slider slider_1 on it, and the force acts on it")],
+    ids=["a lever through a node", "--node", "--load-node", "modes", "loaded on a slider"])
 def test_a_massless_node_s_refusals_name_what_the_scene_wrote(tmp_path, capsys, options, culprit):
     """A second slider that reaches a massless node through another is named with that node; an unknown node is
     listed against every node written (the condensed ones too); a refusal of the modes says modes. The slider of
@@ -458,9 +460,9 @@ def test_a_massless_node_held_by_springs_may_be_loaded_and_named(tmp_path):
     condensed, observed = prepared(scene, "j", "j", observe=True)
     assert condensed.network.nodes == ("a", "b")
     assert observed.load == {"a": pytest.approx(0.3), "b": pytest.approx(0.5)}
-    weights, gain = observed.views["j"]
+    weights, gain, tensions = observed.views["j"]
     assert weights == {"a": pytest.approx(0.3), "b": pytest.approx(0.5), None: pytest.approx(0.2)}
-    assert gain == pytest.approx(0.1)
+    assert gain == pytest.approx(0.1) and tensions == {}
     F, omega = 1.0, 2.0 * math.pi * 0.2
     shooting = NetworkShooting(condensed, F, None, 1024, 7, omega, "j", observed)
     X = implicit_agrees(scene, shooting, F, omega, 80, nodes="abj")
@@ -508,11 +510,11 @@ def test_what_a_cluster_of_massless_nodes_held_by_springs_passes_on_is_its_schur
     passed = -K[np.ix_(m, z)] @ inverse[:, 0]  # of a unit force on j0
     for node, share in zip("ab", passed):
         assert observed.load.get(node, 0.0) == pytest.approx(share, rel=1e-12, abs=1e-15)
-    weights, gain = observed.views["j1"]
+    weights, gain, tensions = observed.views["j1"]
     row = -inverse[1] @ K[np.ix_(z, m + [5])]  # j1's weights on a, b and the ground
     for node, weight in zip(["a", "b", None], row):
         assert weights.get(node, 0.0) == pytest.approx(weight, rel=1e-12, abs=1e-15)
-    assert gain == pytest.approx(inverse[1, 0], rel=1e-12)
+    assert gain == pytest.approx(inverse[1, 0], rel=1e-12) and tensions == {}
 
 
 def test_the_backbone_at_a_massless_node_held_by_springs_is_the_mode_s_at_its_weighted_mean(tmp_path):
@@ -536,3 +538,21 @@ def test_the_backbone_at_a_massless_node_held_by_springs_is_the_mode_s_at_its_we
     assert main(["describe", str(tmp_path / "star.toml"), "--mode", "1", "--amplitudes", "0.4,1.5", "--node", "j",
                  "--out", str(out)]) == 0
     assert len(read_csv(out)["frequency"]) == 2
+
+
+# (each case is 80 periods of the implicit stepper twice: the one through two massless nodes in the quick suite)
+@pytest.mark.parametrize("case", [pytest.param(case, marks=pytest.mark.slow) if case != "two nodes" else case
+                                  for case in ON_J])
+def test_a_massless_node_on_a_slider_named_moves_as_written(tmp_path, case):
+    """--node j, massless and held by springs and a slider or a branch (refused before): its motion is its
+    springs' weighted mean less the lever's tension times d_j / S, the tension k u of the lever's branch along
+    the orbit (``network_orbit.run`` writes u too); j's first harmonic, with a's and b's, is the implicit
+    stepper's on the network as written by Richardson extrapolation (through a second massless node too)."""
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+
+    scene = _levered(tmp_path, case)
+    F, omega = 1.0, 2.0 * math.pi * 0.2
+    condensed, observed = prepared(scene, "j", "a", observe=True)
+    assert list(observed.views["j"][2]) == ["slider_1" if case != "branch" else "branch_1"]
+    implicit_agrees(scene, NetworkShooting(condensed, F, None, 1024, 7, omega, "a", observed), F, omega, 80,
+                    nodes="abj")
