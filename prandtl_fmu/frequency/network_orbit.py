@@ -799,8 +799,9 @@ def _cubic_order(crows, ck3, vectors, k, n, e_series, square, cube, cubic):
 def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, series, force, amplitude, omega, x, v, u,
         su, h, steps, out):
     """``steps`` steps of h from (x, v, u) at t = 0 (arrays updated in place to the end), x at each step's end
-    in ``out`` (steps, n), or x and the branches' u (steps, n + branches); returns (status, steps taken). ``crows`` (cubic springs, n), ``ck3``: the cubic
-    springs (none: the linear phases' proven remainder; some: their recurrence and Jorba and Zou's step)."""
+    in ``out`` (steps, n), or x and the branches' u (steps, n + branches); returns (status, steps taken).
+    ``crows`` (cubic springs, n), ``ck3``: the cubic springs (none: the linear phases' proven remainder; some:
+    their recurrence and Jorba and Zou's step)."""
     n = x.shape[0]
     ns = rows.shape[0]
     nb = brows.shape[0]

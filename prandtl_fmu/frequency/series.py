@@ -34,8 +34,8 @@ dashpot (a first-order motion), is refused, one line; a massless node held by no
 through it (its elements go). The node named and the node loaded, and each massless node their motion or
 force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
 slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
-weighted mean plus F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance takes massless nodes as they are (their balance is one of its
-equations): it never sees a lever.
+weighted mean plus F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance
+takes massless nodes as they are (their balance is one of its equations): it never sees a lever.
 """
 from __future__ import annotations
 
