@@ -77,6 +77,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     index of the node whose amplitude a refusal names (the curve's ``amplitude``; default the load's node)."""
     span = omega_max - omega_min
     q = balance.solve_at(omega_min)
+    _isolated(balance, q, omega_min)
     points = [(omega_min, q, False)]
     if span <= 0:
         return points
@@ -154,6 +155,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         if omega_new >= omega_max:
             q_end = _fixed_frequency(balance, q, q_new, omega, omega_new, omega_max)
             if q_end is not None:
+                _isolated(balance, q_end, omega_max)
                 points.append((omega_max, q_end, False))
                 if progress is not None:
                     progress.update(1)
@@ -166,12 +168,23 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                 points.append((fold[1], fold[0], True))
             else:  # a corner: the fold is the point the curve turns at
                 points[-1] = (points[-1][0], points[-1][1], True)
+        _isolated(balance, q_new, omega_new)
         points.append((omega_new, q_new, False))
         if progress is not None:
             progress.update(1)
         tangent, scale, q, omega, chord = tangent_new, scale_new, q_new, omega_new, chord_new
         factor = min(2.0, max(0.5, TARGET_ITERATIONS / max(iterations, 1)))
         step = min(max_step, max(MIN_STEP, step * factor))
+
+
+def _isolated(balance, q, omega) -> None:
+    """FrequencyError where the point (q, omega) is one of a family of periodic states (``balance.family``, where
+    it has one: a free offset the unknowns do not fix), which no continuation follows: said, not continued."""
+    family = getattr(balance, "family", None)
+    why = None if family is None else family(q, omega)
+    if why is not None:
+        raise FrequencyError(f"{balance.system.source}: at f = {_hz(omega)!r} Hz {why}: the curve is not a curve "
+                             "there; use --method time (the state the motion reaches from the scene's)")
 
 
 def _where(balance, q, omega, node) -> str:

@@ -69,13 +69,14 @@ solves R(s, omega) = Phi_T(s) - s over the whole period (M steps), the multiplie
 dPhi_T/ds, and the orbit is ``element_orbit.py``'s (the mass stuck to the belt moves with it, x a polynomial
 in t, the branches it carries sliding at their levels ahead, a series branch and a history driven by it; a
 slide ends where the slip does). Beside a spring, a dashpot, a cubic spring, branches (with series dashpots or
-not), ``[history]`` and a Stribeck drop. A Prandtl branch that never slides over the period keeps any preload
-(u - x is conserved: a family of periodic states, R singular along it); its row of R is then replaced by a
-convention that picks the member whose elongation is centred in its range, the one continuous with the branch
-sliding both ways (:meth:`ElementShooting._centred`), and that member's neutral multiplier (1) is left out of
-its stability. Refused with a belt, one line each: nothing holding the mass's position (every translation of a
-periodic state is one too), ``[delay]`` (its harmonics as unknowns rest on the symmetry) and base excitation
-(whether the belt rides on the moving support is not said).
+not), ``[history]``, ``[delay]`` (its mean and every harmonic as unknowns) and a Stribeck drop. A Prandtl
+branch that never slides over the period keeps any preload (u - x is conserved: a family of periodic states, R
+singular along it); its row of R is then replaced by a convention that picks the member whose elongation is
+centred in its range, the one continuous with the branch sliding both ways (:meth:`ElementShooting._centred`),
+and that member's neutral multiplier (1) is left out of its stability. Refused with a belt, one line each:
+nothing holding the mass's position (every translation of a periodic state is one too), a family beside a cubic
+spring (its amplitudes depend on the member: :meth:`ElementShooting.family`) and base excitation (whether the
+belt rides on the moving support is not said).
 
 What is refused, one line each: a node other than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
 unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
@@ -158,11 +159,6 @@ def prepared(scene, named=None, loaded=None, observe=False):
     if scene.mass is None:
         raise FrequencyError(f"{scene.source}: the frequency response needs [mass] (the element alone has no "
                              "resonance: describe it with --amplitudes)")
-    if scene.friction.belt_velocity != 0.0:
-        if scene.delay is not None:
-            raise FrequencyError(f"{scene.source}: [friction] on a moving belt beside [delay]: the frequency response "
-                                 "on a belt takes a spring, a dashpot, a cubic spring, branches (with series dashpots "
-                                 "or not), [history] and a Stribeck drop: use --method time")
     if scene.branches is not None and scene.branches.continuum:
         k, eta = spectrum_branches(scene.branches, DEFAULT_TOLERANCE, scene.source)
         scene = dataclasses.replace(scene, branches=Branches(k, eta, np.zeros(k.shape[0])))
@@ -423,21 +419,31 @@ class ElementShooting(Shooting):
         self.delay_harmonics = 0 if self.delay is None else int(delay_harmonics or harmonics)
         if self.delay is not None and not (self.delay_harmonics % 2 and self.delay_harmonics < steps // 2):
             raise ValueError(f"delay_harmonics: odd and below steps / 2, got {self.delay_harmonics!r}")
-        self.delay_unknowns = self.delay_harmonics + 1 if self.delay is not None else 0
+        # (on a belt no symmetry: the mean and every harmonic up to delay_harmonics, 2 K + 1 unknowns)
+        on_belt = scene.friction.belt_velocity != 0.0
+        self.delay_unknowns = 0 if self.delay is None else \
+            (2 * self.delay_harmonics + 1 if on_belt else self.delay_harmonics + 1)
         super().__init__(system, force_amplitude, base_amplitude, steps, harmonics, reference, stepper,
                          2 + branches + self.history + self.delay_unknowns, stiffness)
         self.branches = branches
         self.element = scene  # as prepared (the stability beside a delay builds finer ones)
         self.belt = float(scene.friction.belt_velocity)
         self.symmetric = self.belt == 0.0
-        # what holds the mass's position on a belt: a spring, a cubic spring or a history on x (a translation
-        # changes its force); without any, every translation of a periodic state is one too
-        held = (scene.spring is not None and float(scene.spring.k0) != 0.0) or scene.cubic is not None or (
-            history is not None and history.acts_on == "x" and any(w != 0.0 for w in history.weight))
+        # what holds the mass's position on a belt: a static stiffness (the spring's, a history's on x, sum w / r,
+        # a delay's on x), a history's integral (a rate 0) or a cubic spring (a translation changes their force);
+        # without any, every translation of a periodic state is one too
+        static = (0.0 if scene.spring is None else float(scene.spring.k0)) + (
+            0.0 if self.delay is None or self.delay.acts_on != "x" else float(self.delay.gain))
+        integral = False
+        if history is not None and history.acts_on == "x":
+            static += sum(w / r for w, r in zip(history.weight, history.rate) if r > 0.0)
+            integral = any(w != 0.0 and r == 0.0 for w, r in zip(history.weight, history.rate))
+        held = static != 0.0 or integral or scene.cubic is not None
         if self.belt != 0.0 and not held:
             raise FrequencyError(f"{scene.source}: [friction] on a moving belt with nothing that holds the mass's "
-                                 "position (no [spring] k0, [cubic] or [history] on x): every translation of a "
-                                 "periodic state is one too: give it a [spring], or use --method time")
+                                 "position (no static stiffness of [spring], [history] or [delay] on x, nor a "
+                                 "[cubic]): every translation of a periodic state is one too: give it a [spring], "
+                                 "or use --method time")
         lam = _relaxation(scene.branches)
         # the Prandtl branches (no series dashpot): their offsets are what a belt's family leaves free
         self.series = np.isfinite(lam) if lam.size else np.zeros(branches, dtype=bool)
@@ -504,9 +510,15 @@ class ElementShooting(Shooting):
                                 h, steps, out, self.belt)
         else:
             delayed = np.array(s[self.dimension - self.delay_unknowns:], dtype=float)
-            extra = np.empty((delayed.size // 2, 3))
-            extra[:, 0] = np.arange(1, self.delay_harmonics + 1, 2)
-            extra[:, 1:] = self._delay_scale() * delayed.reshape(-1, 2)
+            if self.symmetric:  # its odd harmonics
+                extra = np.empty((delayed.size // 2, 3))
+                extra[:, 0] = np.arange(1, self.delay_harmonics + 1, 2)
+                extra[:, 1:] = self._delay_scale() * delayed.reshape(-1, 2)
+            else:  # its mean, then every harmonic
+                extra = np.zeros((self.delay_harmonics + 1, 3))
+                extra[:, 0] = np.arange(self.delay_harmonics + 1)
+                extra[0, 1] = self._delay_scale() * delayed[0]
+                extra[1:, 1:] = self._delay_scale() * delayed[1:].reshape(-1, 2)
             status, taken = run_forced(*self.parameters, float(self.amplitude_of_force(omega)), float(omega), extra,
                                        np.zeros(0), np.zeros(0), state, u, z, h, steps, out, self.belt)
         if status != OK:
@@ -515,8 +527,10 @@ class ElementShooting(Shooting):
         if self.delay is not None:
             # the residual -end - s asks the delay's force to be the one the half period's orbit gives (its
             # symmetric continuation over the whole period); run on (several half periods), it is kept
-            if half_periods == 1:
+            if half_periods == 1 and self.symmetric:
                 follows = -self._delayed(np.concatenate(([s[0]], out[:-1])), omega)
+            elif half_periods == 2 and not self.symmetric:  # the whole period's orbit, on a belt
+                follows = self._delayed(np.concatenate(([s[0]], out[:-1])), omega)
             else:
                 follows = (-1.0) ** half_periods * delayed
             end = np.concatenate((end, follows))
@@ -543,7 +557,8 @@ class ElementShooting(Shooting):
         which is centred: at its onset only the centred member is in range); continuous in s (at the family's
         edges the slide starts from 0 and the clip holds; as the spread reaches 2 eta the term vanishes), and a
         row operation on the plain rows (R_u - R_x) where the branch slides both ways. The extremes are those
-        of the periodic cubic through the samples (:func:`periodic_extremes`)."""
+        of the periodic cubic through the samples (:func:`periodic_extremes`): within a window of their error
+        at the onset the row may vanish off a periodic state (u back off by 1.7e-6 of the spread, measured)."""
         low, high = periodic_extremes(x[:-1])
         room = 2.0 * self.eta - (high - low)
         for i in range(self.branches):
@@ -570,20 +585,33 @@ class ElementShooting(Shooting):
                 count += 1
         return count
 
+    def family(self, s: np.ndarray, omega: float) -> Optional[str]:
+        """Why the periodic state ``s`` is one of a family whose amplitudes depend on the member (no curve: the
+        continuation says so in one line), or None: on a belt a branch that never slides keeps any preload, which
+        :meth:`_centred` fixes by a convention; with a cubic spring the orbit is not a shift of another member's
+        (the amplitudes move with the preload: ±15 % measured), so the convention would be the number."""
+        if self.symmetric or self.element.cubic is None or not self._stuck(s, omega):
+            return None
+        return ("a branch never slides over the period, so its preload is free (every offset within its range is "
+                "as periodic), and beside [cubic] the amplitudes depend on it")
+
     def multipliers(self, s: np.ndarray, omega: float):
         """As :meth:`Shooting.multipliers`; on a belt those of the plain monodromy dPhi_T/ds, less one 1 per branch
         that never slides (a neighbouring member of the family: its offset is conserved, neutral, see
         :meth:`_centred`), the nearest to 1; with a delay, :meth:`_delay_multipliers`."""
-        if self.delay is not None:
-            return self._delay_multipliers(s, omega)
         if self.symmetric:
-            return super().multipliers(s, omega)
+            return super().multipliers(s, omega) if self.delay is None else self._delay_multipliers(s, omega)
         s = np.asarray(s, dtype=float)
-        self._plain = True
-        try:
-            values = super().multipliers(s, omega)
-        finally:
-            self._plain = False
+        if self.delay is not None:
+            values = self._delay_multipliers(s, omega)
+            if values is None:
+                return None
+        else:
+            self._plain = True
+            try:
+                values = super().multipliers(s, omega)
+            finally:
+                self._plain = False
         for _ in range(self._stuck(s, omega)):
             values = np.delete(values, int(np.argmin(np.abs(values - 1.0))))
         return values
@@ -599,13 +627,21 @@ class ElementShooting(Shooting):
         b_1, a_3, b_3, ...) of a cos(p omega t) + b sin(p omega t), over the scale :meth:`_delay_scale`. The
         harmonics of x by the trapezoid rule (x is C^1: aliasing like 1 / M^2), those of v = x' as i p omega
         times them."""
-        spectrum = np.fft.rfft(np.concatenate((half, -half))) / self.M
-        p = np.arange(1, self.delay_harmonics + 1, 2)
-        X = 2.0 * spectrum[p]
+        if not self.symmetric:  # on a belt: ``half`` is the whole period; its mean and every harmonic
+            spectrum = np.fft.rfft(half) / self.M
+            p = np.arange(0, self.delay_harmonics + 1)
+            X = 2.0 * spectrum[p]
+            X[0] *= 0.5
+        else:
+            spectrum = np.fft.rfft(np.concatenate((half, -half))) / self.M
+            p = np.arange(1, self.delay_harmonics + 1, 2)
+            X = 2.0 * spectrum[p]
         Y = X * (1j * p * omega) if self.delay.acts_on == "v" else X
         C = -self.delay.gain * Y * np.exp(-1j * p * omega * self.delay.tau)
         out = np.empty(2 * p.size)
         out[0::2], out[1::2] = C.real, -C.imag
+        if not self.symmetric:
+            out = np.delete(out, 1)  # the mean's (a_0, no b_0)
         return out / self._delay_scale()
 
     def _delay_multipliers(self, s: np.ndarray, omega: float):
@@ -658,9 +694,9 @@ class ElementShooting(Shooting):
         on_v = self.delay.acts_on == "v"
         fine = ElementShooting(self.element, self.force_amplitude, self.base_amplitude, steps, self.H,
                                self.reference, delay_harmonics=self.delay_harmonics)
-        _, xs = fine.run(s, omega)
+        _, xs = fine.run(s, omega, 1 if self.symmetric else 2)
         half = np.concatenate(([s[0]], xs[:-1, 0]))
-        y = np.concatenate((half, -half))
+        y = np.concatenate((half, -half)) if self.symmetric else half
         if on_v:
             spectrum = np.fft.rfft(y)
             y = np.fft.irfft(spectrum * (1j * omega * np.arange(spectrum.size)), n=steps)
@@ -677,7 +713,7 @@ class ElementShooting(Shooting):
             buffer = np.empty(lag + 2 + count)
             buffer[:lag + 2] = values[2 + nb + nz:]
             status, taken = run_forced(*self.parameters, amplitude, float(omega), np.zeros((0, 3)), delay, buffer,
-                                       state, u, z, h, count, np.empty(count), 0.0)
+                                       state, u, z, h, count, np.empty(count), self.belt)
             if status != OK:
                 self._refuse(omega, f"the stability's run stopped at t = {taken * h!r} s: {explain(status)}")
             return np.concatenate((state, u, z, buffer[count:]))
@@ -693,7 +729,8 @@ class ElementShooting(Shooting):
 
     def delay_tail(self, s: np.ndarray) -> float:
         """The highest kept harmonic of the delay's force relative to its first, at ``s``."""
-        pairs = np.asarray(s[self.dimension - self.delay_unknowns:], dtype=float).reshape(-1, 2)
+        pairs = np.asarray(s[self.dimension - self.delay_unknowns + (0 if self.symmetric else 1):],
+                           dtype=float).reshape(-1, 2)
         size = np.hypot(pairs[:, 0], pairs[:, 1])
         return float(size[-1] / max(size[0], 1e-300)) if size.size > 1 else math.inf
 

@@ -407,16 +407,28 @@ def test_a_curve_on_a_belt_passes_where_its_branch_starts_to_slide():
     assert abs(_centred_offset(shooting, s, omega, 0)) <= 1e-4 * float(np.ptp(shooting.samples(s, omega)))
 
 
-def test_a_mass_that_nothing_holds_on_a_belt_is_refused_in_one_line(tmp_path, capsys):
-    """No spring, cubic spring or history on x: every translation of a periodic state is one too (a singular
-    Jacobian at every point): one line, nothing written."""
-    tables = {"mass": {"m": 1.0}, "damper": {"c": 0.1}, "branches": {"k": [0.5], "alpha": [0.05]},
-              "friction": {"alpha": 0.3, "belt_velocity": 0.2}}
+NOTHING_HOLDS = {"mass": {"m": 1.0}, "damper": {"c": 0.1}, "branches": {"k": [0.5], "alpha": [0.05]},
+                 "friction": {"alpha": 0.3, "belt_velocity": 0.2}}
+
+
+@pytest.mark.parametrize("tables, culprit", [
+    (NOTHING_HOLDS, "nothing that holds the mass's position"),
+    # a history on x whose static stiffness sum w / r is 0 holds nothing either (a review's find: taken, then
+    # "not found" after 2040 periods)
+    (dict(NOTHING_HOLDS, history={"weight": [0.2, -0.1], "rate": [0.5, 0.25]}),
+     "nothing that holds the mass's position"),
+    # a branch that never slides beside a cubic spring: the members' amplitudes differ (by 15 %, a review's
+    # measure), so the centred one would be a convention's number
+    (dict(BELT, cubic={"k3": 0.5}, branches={"k": [0.5, 0.3], "alpha": [0.05, 5.0]}),
+     "beside [cubic] the amplitudes depend on it")], ids=["no spring", "history of no stiffness", "cubic family"])
+def test_a_belt_s_state_that_no_convention_fixes_is_refused_in_one_line(tmp_path, capsys, tables, culprit):
+    """Nothing holds the mass's position (every translation of a periodic state is one too: a singular Jacobian
+    at every point), or a family whose amplitudes depend on the member: one line, nothing written."""
     out = tmp_path / "curve.csv"
     assert main(["describe", write(tmp_path, tables), "--force-amplitude", "0.5", "--frequencies", "0.05,0.1",
                  "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "nothing that holds the mass's position" in err and len(err.strip().splitlines()) == 1
+    assert culprit in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
 
 
@@ -483,3 +495,53 @@ def test_on_a_belt_the_points_marked_unstable_leave_their_orbit_and_the_stable_o
         nudge = 1e-6 * size
         distance = float(np.max(np.abs(after(10, s + np.array([nudge, 0.0, 0.0])) - s)))
         assert (distance > 100.0 * nudge) if leaves else (distance < nudge), (index, distance / nudge)
+
+
+@pytest.mark.parametrize("acts_on, gain", [("x", -0.2), pytest.param("v", 0.1, marks=pytest.mark.slow)])
+def test_a_delay_beside_friction_on_a_belt_is_the_linear_closed_form_while_the_mass_slides_one_way(acts_on, gain):
+    """A belt at 2 m/s and a small force (refused before: the delay's harmonics as unknowns rested on the half
+    period's symmetry; on a belt they are its mean and every harmonic): the mass never catches the belt, so the
+    friction is +alpha all along and the motion is the linear delay oscillator's about alpha / (k + g (on x)):
+    X = F / (k - m w^2 + i c w + g e^(-i w tau) (1 on x, i w on v)), to 1e-9 in amplitude and phase, the mean to
+    1e-9; the largest multiplier is the linear delay equation's, exp(Re(lambda) T), to 1e-3."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    tau, F = 0.5, 0.02
+    tables = dict(BELT, damper={"c": 0.05}, friction={"alpha": 0.1, "belt_velocity": 2.0},
+                  delay={"gain": gain, "tau": tau, "acts_on": acts_on})
+    curve = harmonic_response(element(tables), F, [0.05, 0.4], tolerance=1e-9)
+    assert curve.method == "shooting" and len(curve.frequency) > 10
+    omega = 2.0 * math.pi * curve.frequency
+    y = np.ones_like(omega) if acts_on == "x" else 1j * omega
+    X = F / (1.0 - omega**2 + 0.05j * omega + gain * y * np.exp(-1j * omega * tau))
+    assert np.allclose(curve.amplitude, np.abs(X), rtol=1e-9, atol=0)
+    assert np.allclose(curve.phase, np.angle(X), rtol=0, atol=1e-9)
+    mean = 0.1 / (1.0 + (gain if acts_on == "x" else 0.0))
+    assert np.allclose(curve.coefficients[:, 0, 0], mean, rtol=1e-9, atol=0)
+    root = -0.025 + 1j * math.sqrt(1.0 - 0.025**2)
+    for _ in range(50):
+        y0, dy = (1.0, 0.0) if acts_on == "x" else (root, 1.0)
+        root -= (root**2 + 0.05 * root + 1.0 + gain * y0 * np.exp(-root * tau)) / \
+            (2.0 * root + 0.05 + gain * (dy - tau * y0) * np.exp(-root * tau))
+    assert np.allclose(curve.multiplier, np.exp(root.real / curve.frequency), rtol=1e-3, atol=0)
+
+
+@pytest.mark.slow  # the delay's stability, on the Taylor orbit, at each point (a minute)
+def test_a_delay_beside_stick_slip_on_a_belt_is_the_time_sweep_s(tmp_path):
+    """Stick-slip on a belt with a branch and a delay: the curve's ends are the time sweep's first harmonic
+    (implicit, its error column under 1e-3) within 1e-3 in amplitude and phase, and stable (the sweep settles)."""
+    tables = dict(BELT, branches={"k": [0.5], "alpha": [0.05]}, delay={"gain": -0.2, "tau": 0.5})
+    scene = write(tmp_path, tables)
+    curve, sweep = tmp_path / "curve.csv", tmp_path / "sweep.csv"
+    assert main(["describe", scene, "--force-amplitude", "0.5", "--frequencies", "0.06,0.12", "--tolerance", "1e-5",
+                 "--out", str(curve)]) == 0
+    assert main(["describe", scene, "--force-amplitude", "0.5", "--frequencies", "0.06,0.12", "--method", "time",
+                 "--tolerance", "1e-3", "--out", str(sweep)]) == 0
+    table, reference = read_csv(curve), read_csv(sweep)
+    assert set(table["stable"]) == {"true"}
+    for row in (0, -1):
+        f = float(table["frequency"][row])
+        at = [i for i, g in enumerate(reference["frequency"]) if abs(float(g) - f) <= 1e-12 * f][0]
+        A, B = float(table["amplitude"][row]), float(reference["amplitude"][at])
+        assert abs(A - B) <= 1e-3 * B, (f, A, B)
+        assert abs(float(table["phase"][row]) - float(reference["phase"][at])) <= 1e-3, f
