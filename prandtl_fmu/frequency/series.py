@@ -150,11 +150,7 @@ def _star(network, node):
     from ..network.model import Element
 
     touching = [e for e in network.elements if node in e.between]
-    ends = {}
-    for e in touching:
-        end = e.between[1] if e.between[0] == node else e.between[0]
-        ends[end] = ends.get(end, 0.0) + e.value
-    total = sum(ends.values())
+    ends, total = _spring_ends(touching, node)
     rest = [e for e in network.elements if node not in e.between]
     if total == 0.0:  # springs of zero stiffness: they carry no force
         return _without(network, node, rest)
@@ -238,12 +234,7 @@ def _pass_through(network, node, load, views, source, named, loaded, purpose) ->
     forced = name in load
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
     thresholds = _parallel([e for e in touching if e.kind in THRESHOLDS])
-    springs = [e for e in touching if e.kind == "spring"]
-    ends = {}
-    for e in springs:
-        end = e.between[1] if e.between[0] == node else e.between[0]
-        ends[end] = ends.get(end, 0.0) + e.value
-    total = sum(ends.values())
+    ends, total = _spring_ends(touching, node)
     others = [e for e in touching if e.kind != "spring" and (e.kind not in THRESHOLDS or e.c > 0.0)]
     why = None
     if others or (thresholds and forced):
@@ -344,12 +335,7 @@ def _lever(network, node, source, purpose):
                              f"{_called(thresholds[1])} (its position a play on two references): {how}, which "
                              f"takes a massless node held by linear springs and one slider or branch: {tail}")
     rest = [e for e in network.elements if node not in e.between]
-    ends = {}
-    for e in touching:
-        if e.kind == "spring":
-            end = e.between[1] if e.between[0] == node else e.between[0]
-            ends[end] = ends.get(end, 0.0) + e.value
-    total = sum(ends.values())
+    ends, total = _spring_ends(touching, node)
     if total == 0.0:  # nothing holds the node: its elements carry no force
         return _without(network, node, rest)
     far = sorted(ends, reverse=True)  # the ground (-1) last
@@ -360,6 +346,17 @@ def _lever(network, node, source, purpose):
     if thresholds:
         rest.extend(_levered(thresholds[0], node, name, ends, total))
     return _without(network, node, rest)
+
+
+def _spring_ends(touching, node) -> tuple:
+    """``({far end: stiffness}, their sum)`` of the springs among ``touching`` on ``node`` (the ground -1;
+    springs to one far end summed)."""
+    ends = {}
+    for e in touching:
+        if e.kind == "spring":
+            end = e.between[1] if e.between[0] == node else e.between[0]
+            ends[end] = ends.get(end, 0.0) + e.value
+    return ends, sum(ends.values())
 
 
 def _parallel(thresholds) -> list:

@@ -885,23 +885,9 @@ class NetworkShooting(Shooting):
     def _tensions(self, s: np.ndarray, omega: float) -> np.ndarray:
         """The branches' tensions k u over one period at t_j = j T / M, (branches, M): a run that writes u too
         (``network_orbit.run``), the second half period the first's negative (the symmetry)."""
-        from .network_orbit import OK, explain, run
-
         n, nb = self.system.n, self.branches
-        h = 2.0 * math.pi / omega / self.M
-        x = np.array(s[:n], dtype=float)
-        v = np.array(s[n:2 * n], dtype=float) * self.reference
-        u = np.clip(np.array(s[2 * n:2 * n + nb], dtype=float), -self.eta, self.eta)
-        start = u.copy()
-        su = np.array(s[2 * n + nb:], dtype=float)
-        amplitude = self.force_amplitude if self.force_amplitude is not None else \
-            self.base_amplitude * omega * omega
-        out = np.empty((self.M // 2, n + nb))
-        status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
-                            self.brows, self.bk, self.eta, self.crows, self.ck3, self.series, self.force,
-                            float(amplitude), float(omega), x, v, u, su, h, self.M // 2, out)
-        if status != OK:
-            self._refuse(omega, f"the motion from the state stopped at t = {taken * h!r} s: {explain(status)}")
+        _, out = self.run(s, omega, with_u=True)
+        start = np.clip(np.array(s[2 * n:2 * n + nb], dtype=float), -self.eta, self.eta)
         half = np.concatenate((start[None, :], out[:-1, n:]), axis=0).T * self.bk[:, None]
         return np.concatenate((half, -half), axis=1)
 
@@ -910,7 +896,8 @@ class NetworkShooting(Shooting):
             return self.force_amplitude
         return float(np.max(self.system.mass)) * self.base_amplitude * omega * omega
 
-    def run(self, s: np.ndarray, omega: float, half_periods: int = 1) -> tuple:
+    def run(self, s: np.ndarray, omega: float, half_periods: int = 1, with_u: bool = False) -> tuple:
+        """As :meth:`Shooting.run`; ``with_u``: the branches' u at the step ends too, after x's columns."""
         from .network_orbit import OK, explain, run
 
         n = self.system.n
@@ -922,7 +909,7 @@ class NetworkShooting(Shooting):
         amplitude = self.force_amplitude if self.force_amplitude is not None else \
             self.base_amplitude * omega * omega
         steps = self.M // 2 * half_periods
-        out = np.empty((steps, n))
+        out = np.empty((steps, n + (self.branches if with_u else 0)))
         status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
                             self.brows, self.bk, self.eta, self.crows, self.ck3, self.series, self.force,
                             float(amplitude), float(omega), x, v, u, su, h, steps, out)
