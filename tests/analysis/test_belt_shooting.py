@@ -12,6 +12,7 @@ import pytest
 from prandtl_fmu.cli import main
 from prandtl_fmu.frequency import element_orbit
 
+from tests.analysis.test_delay_friction import ends_are_the_time_sweep_s, rightmost_root
 from tests.analysis.test_describe_cli import read_csv, write
 from tests.analysis.test_element_orbit import NO_HISTORY
 from tests.analysis.test_harmonic_balance import element
@@ -518,11 +519,7 @@ def test_a_delay_beside_friction_on_a_belt_is_the_linear_closed_form_while_the_m
     assert np.allclose(curve.phase, np.angle(X), rtol=0, atol=1e-9)
     mean = 0.1 / (1.0 + (gain if acts_on == "x" else 0.0))
     assert np.allclose(curve.coefficients[:, 0, 0], mean, rtol=1e-9, atol=0)
-    root = -0.025 + 1j * math.sqrt(1.0 - 0.025**2)
-    for _ in range(50):
-        y0, dy = (1.0, 0.0) if acts_on == "x" else (root, 1.0)
-        root -= (root**2 + 0.05 * root + 1.0 + gain * y0 * np.exp(-root * tau)) / \
-            (2.0 * root + 0.05 + gain * (dy - tau * y0) * np.exp(-root * tau))
+    root = rightmost_root(gain, tau, acts_on)
     assert np.allclose(curve.multiplier, np.exp(root.real / curve.frequency), rtol=1e-3, atol=0)
 
 
@@ -531,17 +528,5 @@ def test_a_delay_beside_stick_slip_on_a_belt_is_the_time_sweep_s(tmp_path):
     """Stick-slip on a belt with a branch and a delay: the curve's ends are the time sweep's first harmonic
     (implicit, its error column under 1e-3) within 1e-3 in amplitude and phase, and stable (the sweep settles)."""
     tables = dict(BELT, branches={"k": [0.5], "alpha": [0.05]}, delay={"gain": -0.2, "tau": 0.5})
-    scene = write(tmp_path, tables)
-    curve, sweep = tmp_path / "curve.csv", tmp_path / "sweep.csv"
-    assert main(["describe", scene, "--force-amplitude", "0.5", "--frequencies", "0.06,0.12", "--tolerance", "1e-5",
-                 "--out", str(curve)]) == 0
-    assert main(["describe", scene, "--force-amplitude", "0.5", "--frequencies", "0.06,0.12", "--method", "time",
-                 "--tolerance", "1e-3", "--out", str(sweep)]) == 0
-    table, reference = read_csv(curve), read_csv(sweep)
+    table = ends_are_the_time_sweep_s(tmp_path, tables, "0.5", "0.06,0.12", "1e-3", 1e-3)
     assert set(table["stable"]) == {"true"}
-    for row in (0, -1):
-        f = float(table["frequency"][row])
-        at = [i for i, g in enumerate(reference["frequency"]) if abs(float(g) - f) <= 1e-12 * f][0]
-        A, B = float(table["amplitude"][row]), float(reference["amplitude"][at])
-        assert abs(A - B) <= 1e-3 * B, (f, A, B)
-        assert abs(float(table["phase"][row]) - float(reference["phase"][at])) <= 1e-3, f
