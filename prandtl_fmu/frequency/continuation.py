@@ -84,7 +84,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     # a curve that starts at rest (a mass stuck to its moving support) has q = 0: its scale is then the motion's
     # natural size where the balance has one (``length_scale``), not the rounding floor that sent y to 1e286
     floor = balance.length_scale(omega_min) if hasattr(balance, "length_scale") else 0.0
-    scale = max(np.linalg.norm(q), floor, 1e-300)
+    scale = max(_size(balance, q, omega_min), floor, 1e-300)
     max_step = ARC_ESTIMATE / max(count - 1, 8)
     step = max_step
     omega = omega_min
@@ -118,7 +118,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
                         f"converge even with an arc-length step of {MIN_STEP:g} (a bifurcation or a kink of the "
                         "curve)")
         q_new, omega_new, iterations = new
-        scale_new = max(scale, np.linalg.norm(q_new))
+        scale_new = max(scale, _size(balance, q_new, omega_new))
         heading = tangent
         if cornered:  # the way on is the chord from the corner, not the tangent before it
             heading = _scaled(q_new, omega_new, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)
@@ -185,6 +185,14 @@ def _isolated(balance, q, omega) -> None:
     if why is not None:
         raise FrequencyError(f"{balance.system.source}: at f = {_hz(omega)!r} Hz {why}: the curve is not a curve "
                              "there; use --method time (the state the motion reaches from the scene's)")
+
+
+def _size(balance, q, omega) -> float:
+    """The size of the unknowns q that scales the arc length: their norm, or the balance's ``size_of`` where
+    their norm is not the motion's (on a belt the drag's offset of the mean can dwarf the oscillation: a curve
+    scaled by it stepped from 0.05 Hz over the resonance to 0.31 Hz in one step)."""
+    size_of = getattr(balance, "size_of", None)
+    return float(np.linalg.norm(q)) if size_of is None else float(size_of(q, omega))
 
 
 def _where(balance, q, omega, node) -> str:

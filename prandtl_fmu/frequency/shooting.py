@@ -73,10 +73,11 @@ not), ``[history]``, ``[delay]`` (its mean and every harmonic as unknowns) and a
 branch that never slides over the period keeps any preload (u - x is conserved: a family of periodic states, R
 singular along it); its row of R is then replaced by a convention that picks the member whose elongation is
 centred in its range, the one continuous with the branch sliding both ways (:meth:`ElementShooting._centred`),
-and that member's neutral multiplier (1) is left out of its stability. Refused with a belt, one line each:
-nothing holding the mass's position (every translation of a periodic state is one too), a family beside a cubic
-spring (its amplitudes depend on the member: :meth:`ElementShooting.family`) and base excitation (whether the
-belt rides on the moving support is not said).
+and that member's neutral multiplier (1) is left out of its stability. Under base excitation the belt rides on
+the support, as the friction does (its slip the relative velocity less V). The continuation's arc length is
+scaled by the state less the drag's offset of x (:meth:`ElementShooting.size_of`). Refused with a belt, one
+line each: nothing holding the mass's position (every translation of a periodic state is one too) and a family
+beside a cubic spring (its amplitudes depend on the member: :meth:`ElementShooting.family`).
 
 What is refused, one line each: a node other than the mass (``[dahl]`` with ``[friction]`` the scene refuses; ``[history]`` is taken: its states are
 unknowns of ``element_orbit.py``, as are the u of branches behind series dashpots).
@@ -448,10 +449,6 @@ class ElementShooting(Shooting):
         # the Prandtl branches (no series dashpot): their offsets are what a belt's family leaves free
         self.series = np.isfinite(lam) if lam.size else np.zeros(branches, dtype=bool)
         self._plain = False  # the residual without the family's conventions (the multipliers' monodromy)
-        if not self.symmetric and base_amplitude is not None:
-            raise FrequencyError(f"{scene.source}: [friction] on a moving belt under base excitation (is the belt on "
-                                 "the moving support or on the ground?): load the mass with --force-amplitude, or use "
-                                 "--method time")
         self.eta = np.zeros(0) if scene.branches is None else np.array(scene.branches.yield_displacement, float)
         self._out = np.empty((self.M // 2, 3))
         if self.smooth:
@@ -546,6 +543,20 @@ class ElementShooting(Shooting):
         if not self._plain:
             self._centred(s, residual, np.concatenate(([s[0]], xs[:, 0])))
         return residual
+
+    def size_of(self, s: np.ndarray, omega: float) -> float:
+        """The size of ``s`` that scales the continuation's arc length (``continuation._size``): its norm, less the
+        mean of x over the orbit from x(0) on a belt (the drag's offset, which can dwarf the oscillation)."""
+        s = np.asarray(s, dtype=float)
+        if self.symmetric:
+            return float(np.linalg.norm(s))
+        try:
+            mean = float(np.mean(self.samples(s, omega)[0]))
+        except StepFailed:
+            return float(np.linalg.norm(s))
+        moved = s.copy()
+        moved[0] -= mean
+        return float(np.linalg.norm(moved))
 
     def _centred(self, s: np.ndarray, residual: np.ndarray, x: np.ndarray) -> None:
         """The rows of the Prandtl branches on a belt, in place (see the module): a branch that never slides keeps

@@ -278,9 +278,7 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
 
 @pytest.mark.parametrize("tables, options, culprit", [
     # a belt is taken (test_belt_shooting.py) beside springs, a dashpot, branches, a history, a delay and a
-    # Stribeck drop; not under base excitation (which of the belt and the support moves is not said)
-    (dict(DAMPED, friction={"alpha": 0.1, "belt_velocity": 0.1}), ["--base-amplitude", "0.1"],
-     "moving belt under base excitation"),
+    # Stribeck drop, under a force or base excitation
     # (the forced response and the modes beside [delay], [history] or a Stribeck drop are taken:
     # test_delay_friction.py, test_friction_modes_taylor.py)
     (COULOMB, ["--node", "nowhere"], "'nowhere'"),
