@@ -427,3 +427,31 @@ def test_bad_output_derivative_requests_are_refused_with_a_logged_reason_never_a
     for words in ("order 0", "order 3", "the reaction's derivative of order 2 is not given",
                   "not an output whose derivatives"):
         assert run.said(words), (words, run.logs)
+
+
+# ------------------------------------------------------------------ a negative delay gain against the step
+
+DELAYED = base_tables(cubic=None, solver=SOLVER, delay={"gain": -0.3, "tau": 0.01})
+
+
+@pytest.fixture(scope="module")
+def delayed(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("trust_delay")
+    return {fmi: (compile_trust_host(folder, fmi), built_native("delayed", DELAYED, fmi, folder)) for fmi in (2, 3)}
+
+
+@both
+@pytest.mark.parametrize("logging", [False, True], ids=["logging off", "logging on"])
+@pytest.mark.parametrize("setting, named", [("delay_tau:0.0005", "parameter delay_gain"),
+                                            ("step:0.05", "parameter step = 0.05")], ids=["tau", "step"])
+def test_a_negative_delay_gain_with_tau_below_the_step_is_refused_with_the_library_s_remedy(delayed, fmi, logging,
+                                                                                          setting, named):
+    """A tau below the step (or a step above tau) with a negative delay gain, set in initialization: exiting it is
+    an error whose logged reason names the parameter and the library's remedy word for word (a [solver] step no
+    longer than tau, or a longer tau: scene.py), logging off or on, and the host ends by itself, no sanitizer
+    speaking; a step after it is refused too."""
+    host, fmu = delayed[fmi]
+    run = ran(run_trust(host, fmu, ["setup:0", "enter", f"setr:{setting}", "exit", "step:0:0.01"], logging=logging))
+    assert run.status("exit") == ERROR and run.status("step:0:0.01") == ERROR
+    said = run.said("a [solver] step no longer than tau, or a longer tau")
+    assert len(said) == 1 and named in said[0] and "non-monotone" in said[0], run.logs
