@@ -256,3 +256,30 @@ def test_a_one_harmonic_nonlinear_mode_on_dahl_is_its_describing_function():
     omega = np.sqrt(K / 1.0)
     assert backbone.frequency == pytest.approx(omega / (2 * math.pi), rel=1e-5)
     assert backbone.damping_ratio == pytest.approx(D / (2 * math.pi * K * A * A) + 0.02 / (2 * omega), rel=1e-4)
+
+
+def test_a_narrow_fold_pair_is_found_whatever_frequencies_are_listed():
+    """A belt with a history at F0 = 0.5 N has two narrow loops between 0.07 and 0.12 Hz (folds 0.0902 and
+    0.0895 Hz, 0.4 m; 0.10281 and 0.10279 Hz, 0.5 m). Asked for 0.07 and 0.12 Hz alone, the continuation's largest
+    step was 0.75 of scaled arc length: it went from 0.07 to 0.103 Hz in one step, no fold, every point stable,
+    while a listing of 41 frequencies found both loops. The curve must not depend on the listing: the same folds
+    either way, and the points between each pair of folds (the middle branch) unstable, the others stable."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene = element({"mass": {"m": 1.0}, "spring": {"k0": 1.3}, "damper": {"c": 0.1},
+                     "friction": {"alpha": 0.3, "belt_velocity": 0.2}, "branches": {"k": [0.5], "alpha": [0.05]},
+                     "history": {"weight": [0.2], "rate": [0.5]}})
+    curves = [harmonic_response(scene, 0.5, listing) for listing in ([0.07, 0.12], np.linspace(0.07, 0.12, 41))]
+    for curve in curves:
+        assert curve.folds.size == 4
+        inside = np.zeros(curve.frequency.size, bool)
+        for first, second in curve.folds.reshape(2, 2):
+            inside[first + 1:second] = True
+        assert np.all(~curve.stable[inside])
+        outside = ~inside
+        outside[curve.folds] = False  # a fold's multiplier is 1 to rounding
+        assert np.all(curve.stable[outside])
+    coarse, fine = curves
+    assert coarse.frequency[coarse.folds] == pytest.approx(fine.frequency[fine.folds], rel=1e-9)
+    assert coarse.amplitude[coarse.folds] == pytest.approx(fine.amplitude[fine.folds], rel=1e-7)
+    assert 0.0895 < coarse.frequency[coarse.folds[1]] < coarse.frequency[coarse.folds[0]] < 0.0902
