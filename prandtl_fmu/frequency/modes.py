@@ -101,8 +101,8 @@ def _friction_taylor(scene) -> bool:
     (``slider_modes.FreeElement``): a Stribeck drop, a history or a delay beside the friction (the network of one
     node, ``_friction_network``, takes a spring, a cubic spring, a dashpot, branches and Coulomb friction)."""
     friction = scene.friction
-    return scene.mass is not None and friction.belt_velocity == 0.0 and (
-        friction.alpha_kinetic != friction.alpha or scene.history is not None or scene.delay is not None)
+    return scene.mass is not None and (friction.belt_velocity != 0.0 or friction.alpha_kinetic != friction.alpha
+                                       or scene.history is not None or scene.delay is not None)
 
 
 def _friction_network(scene, tolerance: float):
@@ -115,9 +115,6 @@ def _friction_network(scene, tolerance: float):
     friction = scene.friction
     if scene.mass is None:
         raise FrequencyError(f"{scene.source}: the nonlinear modes need [mass]")
-    if friction.belt_velocity != 0.0:
-        raise FrequencyError(f"{scene.source}: [friction] on a moving belt has no mode symmetric over half a period, "
-                             "which the modes of friction on the mass are solved for (its motion: --method time)")
     # (a Stribeck drop, a history or a delay: _friction_taylor; [dahl] with [friction] the scene refuses)
     elements = [Element("slider", "friction", (0, -1), float(friction.alpha))]
     if scene.spring is not None and scene.spring.k0 > 0:

@@ -440,6 +440,7 @@ class ElementShooting(Shooting):
             static += sum(w / r for w, r in zip(history.weight, history.rate) if r > 0.0)
             integral = any(w != 0.0 and r == 0.0 for w, r in zip(history.weight, history.rate))
         held = static != 0.0 or integral or scene.cubic is not None
+        self.static_stiffness = static  # (N/m) what holds x's mean against a constant force
         if self.belt != 0.0 and not held:
             raise FrequencyError(f"{scene.source}: [friction] on a moving belt with nothing that holds the mass's "
                                  "position (no static stiffness of [spring], [history] or [delay] on x, nor a "

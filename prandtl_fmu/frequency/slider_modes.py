@@ -37,6 +37,15 @@ amplitude grows without bound, so an amplitude just below the limit has one more
 within the node's move over the last doubling of the largest amplitude from where it was left is refused, not
 answered without that point (the move is assumed to shrink as the amplitude doubles, as it does there).
 
+**On a moving belt** (an element whose friction acts on the slip v - V) no half-period symmetry holds: the map
+is the whole period's, x(T) = x(0), the Prandtl branches' rows the forced response's convention
+(``ElementShooting._centred``), a_1 and b_1 over the whole period. While A omega < |V| the mass slides one way
+and the mode is the linear one about the drag's offset (its damping c less the Stribeck drop's slope there, which
+can make it negative: steady sliding excites itself); where it first reaches the belt's speed the family has a
+kink that the arc-length corrector does not pass (Newton cycled between the two sides' Jacobians), and is
+passed at a fixed amplitude just above (:func:`_past_kink`). Where the damping ratio is 0 the orbit is the
+scene's own stick-slip limit cycle (the tests: its period and amplitude from an independent integration).
+
 The amplitude condition uses the trapezoid rule on M samples per period (x is C^1: an error like 1 / M^2): the
 backbone is followed at M = FIRST_STEPS, then its rows solved again with M doubled until the frequency and the
 damping ratio change by at most half the tolerance (relative; past MAX_STEPS refused with the change).
@@ -137,6 +146,24 @@ class FreeElement(_Free, ElementShooting):
         self.alpha = np.array([float(scene.friction.alpha)])
         self.bk = np.array(self.parameters[7], float)
         self.brows = np.ones((self.bk.size, 1))
+        if not self.symmetric:  # on a belt the friction slips at small amplitudes: no slider holds the mass
+            self.rows = np.zeros((0, 1))
+
+    def belt_start(self, omega: float) -> tuple:
+        """On a belt, what the linear start (:func:`_linear_start`) takes from the friction: (the mean friction
+        force's static deflection x_0 (m), the friction's linear damping d (N s/m), the amplitude where the mass
+        first reaches the belt's speed, |V| / omega). At a slip V - v of the belt's sign the friction is
+        f(|V - v|) = alpha_k + (alpha - alpha_k) exp(-|V - v| / v_s) along V: about v = 0, f(|V|) and the
+        damping d = f'(|V|) (negative on a Stribeck drop: the drop feeds the motion); x_0 = sign(V) f(|V|) / k
+        over the static stiffness k (the spring's, a history's and a delay's on x)."""
+        m, k0, c, k3, alpha, alpha_k, vs = self.parameters[:7]
+        V = self.belt
+        drop = alpha - alpha_k if vs > 0.0 else 0.0
+        force = alpha_k + drop * math.exp(-abs(V) / vs) if vs > 0.0 else alpha
+        slope = -drop / vs * math.exp(-abs(V) / vs) if vs > 0.0 else 0.0
+        static = self.static_stiffness
+        offset = math.copysign(force, V) / static if static > 0.0 else 0.0
+        return offset, slope, abs(V) / omega
 
     @property
     def damping(self) -> np.ndarray:
@@ -245,6 +272,10 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray,
 
 FAMILY_STEP = 0.02       # the arc-length step's bound (unknowns scaled by the orbit's size and by omega)
 FAMILY_MIN_STEP = 1e-6
+FAMILY_KINK_STEP = 1e-4  # below this step a converged corrector past a kink is taken (see _follow_family)
+FAMILY_KINK_REACH = 4.0
+FAMILY_KINK_ITERATIONS = 30
+KINK_AMPLITUDE_STEPS = (1e-4, 1e-3, 1e-2)  # relative steps of the node's amplitude past a kink (_past_kink)
 FAMILY_POINTS = 20000
 FAMILY_BEYOND = 20.0     # follow until the largest node's a_1 is this many times the largest listed amplitude
 
@@ -257,6 +288,13 @@ def _family_equations(free, z):
     if not omega > 0:
         raise StepFailed(f"{free.system.source}: the mode's frequency left the positive axis")
     free.damping = free.viscous - xi * np.diag(free.system.mass)
+    if not getattr(free, "symmetric", True):  # on a belt: the whole period, x(T) = x(0) (and the branches' rows)
+        end, xs = free.run(s, omega, 2)
+        residual = end - s
+        whole = np.vstack((s[None, :free.system.n], xs[:-1]))
+        free._centred(s, residual, np.concatenate(([s[0]], xs[:, 0])))
+        X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ whole * 2.0 / free.M
+        return np.concatenate((residual, [-(free.probe @ X).imag])), X
     end, xs = free.run(s, omega)
     half = np.vstack((s[None, :free.system.n], xs[:-1]))
     X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ np.vstack((half, -half)) * 2.0 / free.M
@@ -293,9 +331,14 @@ def _follow_family(free, z, high):
     scale = scale_of(z)
     t = tangent(z, scale, None)
     n = free.system.n
-    if (free.probe @ t[:n]) * (free.probe @ z[:n]) < 0:  # the amplitude's way up
-        t = -t
     first = _family_equations(free, z)[1]
+    if getattr(free, "symmetric", True):
+        if (free.probe @ t[:n]) * (free.probe @ z[:n]) < 0:  # the amplitude's way up
+            t = -t
+    else:  # on a belt x(0) carries the drag's offset: the way up is where the node's |a_1| grows
+        ahead = _family_equations(free, z + FAMILY_STEP * 1e-3 * t * scale)[1]
+        if abs(free.probe @ ahead) < abs(free.probe @ first):
+            t = -t
     points, measures, largest = [z.copy()], [abs(free.probe @ first)], [float(np.max(np.abs(first)))]
     step = FAMILY_STEP
     while len(points) < FAMILY_POINTS:
@@ -304,16 +347,32 @@ def _follow_family(free, z, high):
             predicted = y + step * t
             w = predicted.copy()
             ok = False
+            # below FAMILY_KINK_STEP, Newton's step is halved while the residual grows (at most HALVINGS times),
+            # for up to FAMILY_KINK_ITERATIONS: at a kink (on a belt where the mass first reaches the belt's
+            # speed) plain Newton cycled between the Jacobians of its two sides, a step of 2e-5 each way
+            kink = step <= FAMILY_KINK_STEP
             try:
-                for _ in range(12):
-                    residual, _ = _family_equations(free, w * scale)
+                residual, _ = _family_equations(free, w * scale)
+                for _ in range(FAMILY_KINK_ITERATIONS if kink else 12):
                     J = _family_jacobian(free, w * scale, residual, scale)
+                    size = np.max(np.abs(residual))
                     delta = solve_linear(np.vstack((J, t)), -np.concatenate((residual, [t @ (w - predicted)])))
                     if delta is None:
                         break
-                    w = w + delta
+                    for _ in range(HALVINGS + 1 if kink else 1):
+                        trial = w + delta
+                        new_residual, _ = _family_equations(free, trial * scale)
+                        if np.max(np.abs(new_residual)) <= size:
+                            break
+                        delta = 0.5 * delta
+                    w, residual = trial, new_residual
                     if np.max(np.abs(delta)) < 1e-11:
-                        ok = np.linalg.norm(w - predicted) < 0.5 * step
+                        drift = np.linalg.norm(w - predicted)
+                        # near the prediction; or, past a kink whose turn does not shrink with the step (on a belt
+                        # a branch's onset of sliding, where its row leaves the centred convention), ahead of
+                        # the last point and within FAMILY_KINK_REACH steps of it, once the step is that small
+                        ok = drift < 0.5 * step or (step <= FAMILY_KINK_STEP and (w - y) @ t > 0.0 and
+                                                    np.linalg.norm(w - y) <= FAMILY_KINK_REACH * step)
                         break
             except StepFailed:
                 ok = False
@@ -321,6 +380,9 @@ def _follow_family(free, z, high):
                 break
             step *= 0.5
             if step < FAMILY_MIN_STEP:
+                w = _past_kink(free, z, measures[-1], scale)
+                if w is not None:
+                    break
                 raise FrequencyError(f"{free.system.source}: the nonlinear mode's family could not be followed past "
                                      f"{points[-1][N] / (2 * math.pi):.6g} Hz (node amplitude {measures[-1]:.6g} m)")
         new = w * scale
@@ -340,6 +402,24 @@ def _follow_family(free, z, high):
     return points, np.array(measures), np.array(largest)
 
 
+def _past_kink(free, z, measure: float, scale):
+    """The family's next point (scaled) past a kink where the arc-length corrector fails at every step (on a belt,
+    where the mass first reaches the belt's speed: Newton on the hyperplane stalled at a residual of 1.5e-7 while
+    Newton at a fixed amplitude, its step halved while the residual grows, goes through): :meth:`_Free.solve` at
+    the node's amplitude KINK_AMPLITUDE_STEPS larger, the first whose solution is within FAMILY_KINK_REACH
+    FAMILY_STEPs (the way on is the amplitude's: there the tangent turned by more than a right angle, xi's share
+    from -0.25 to +0.97); or None (the family turns back in the node's amplitude there)."""
+    y = z / scale
+    for share in KINK_AMPLITUDE_STEPS:
+        solved = free.solve(z, measure * (1.0 + share))
+        if solved is None:
+            continue
+        w = solved / scale
+        if np.linalg.norm(w - y) <= FAMILY_KINK_REACH * FAMILY_STEP:
+            return w
+    return None
+
+
 def _family_crossings(free, points, measures, A: float) -> list:
     """Every point of the family where the node's |a_1| is A: Newton at A from the interpolation between the
     curve's points that bracket it (in their order along the family); solutions met twice kept once."""
@@ -350,7 +430,7 @@ def _family_crossings(free, points, measures, A: float) -> list:
             m0 = A
         if (m0 - A) * (m1 - A) <= 0 and m0 != m1:
             guess = points[i] + (A - m0) / (m1 - m0) * (points[i + 1] - points[i])
-            if free.probe @ guess[:free.system.n] < 0:
+            if getattr(free, "symmetric", True) and free.probe @ guess[:free.system.n] < 0:
                 guess = guess.copy()
                 guess[:free.dimension] = -guess[:free.dimension]
             solved = free.solve(guess, A)
@@ -374,7 +454,8 @@ def _guess(free, shape, omega, xi, A) -> np.ndarray:
     """(s, omega, xi) of the linear mode ``shape`` at amplitude A: x = A shape at t = 0, at rest, every branch's
     spring stretched by its ends."""
     x = A * shape
-    s = np.concatenate((x, np.zeros(free.system.n), np.clip(free.brows @ x, -free.eta, free.eta)))
+    offset = free.belt_start(omega)[0] if hasattr(free, "belt_start") and not free.symmetric else 0.0
+    s = np.concatenate((x + offset, np.zeros(free.system.n), np.clip(free.brows @ x, -free.eta, free.eta)))
     # the states after them (series dashpots' u, a history's z) start at 0
     return np.concatenate((s, np.zeros(free.dimension - s.size), [omega, xi]))
 
@@ -411,6 +492,10 @@ def _linear_start(free, mode: int, A: float) -> tuple:
                 onset = min(onset, float(np.min(free.alpha / np.maximum(np.abs(force), 1e-300))))
             if free.brows.shape[0]:
                 onset = min(onset, float(np.min(free.eta / np.maximum(np.abs(free.brows @ shape), 1e-300))))
+            if hasattr(free, "belt_start") and not free.symmetric:  # slipping on its belt until |v| = |V|
+                _, slope, reach = free.belt_start(omega)
+                xi += slope / modal
+                onset = min(onset, reach)
         else:
             xi += float(np.sum(4.0 * free.alpha * np.abs(free.rows @ shape))) / (math.pi * omega * A * modal)
         start = (omega, shape, xi, onset)
