@@ -147,18 +147,16 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     from .shooting import ShootingSystem, prepared_network
     from .slider_modes import slider_backbone
 
-    extra = {}  # massless nodes named or loaded, held by springs alone: their x as weights over the nodes
+    extra = {}  # massless nodes named or loaded: their x as weights over the nodes
+    pulls = None  # the massless node named, with a slider or branch on it: weights over those levers' tensions
     if isinstance(scene, NetworkScene):
         # massless nodes condensed (series.condensed); the node named and the node loaded kept as weights
         scene, observed = prepared_network(scene, node, load_node, "the nonlinear modes", observe=True)
         nodes, mass = tuple(scene.network.nodes), np.array(scene.network.mass, float)
         for name, (weights, _, tensions) in observed.views.items():
-            if tensions:
-                raise FrequencyError(f"--node: {name} is massless, with slider or branch {', '.join(tensions)} "
-                                     "on it: the nonlinear modes take a massless node held by springs alone (its "
-                                     "motion would need that element's tension along the mode): name a node with a "
-                                     "mass, or one held by springs")
             extra[name] = np.array([weights.get(other, 0.0) for other in nodes])
+            if tensions:
+                pulls = dict(tensions)
         if load_node is not None and load_node not in nodes:  # its force passes on as its weights: x_p's
             extra[load_node] = np.array([observed.load.get(other, 0.0) for other in nodes])
     else:  # an element with friction on its Taylor orbit (_friction_taylor)
@@ -170,9 +168,11 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     else:
         where = ShootingSystem(scene.name, scene.source, nodes, mass).node_index(node)
         probe, name = np.eye(len(nodes))[where], nodes[where]
-    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, probe, name, tolerance)
-    # the massless nodes' columns: their weighted means of the shape (massless: no share of the modal mass)
-    shape = np.hstack([shape] + [(shape @ weights)[:, None] for weights in extra.values()])
+    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, probe, name, tolerance, pulls)
+    # the massless nodes' columns: their weighted means of the shape (massless: no share of the modal mass); the
+    # node named with a lever's tension in its motion: 1 (its first harmonic is A at phase 0, by the equations)
+    shape = np.hstack([shape] + [np.ones((shape.shape[0], 1)) if other == node and pulls else
+                                 (shape @ weights)[:, None] for other, weights in extra.items()])
     return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode, name, None,
                     change, shape, np.concatenate((mass, np.zeros(len(extra)))), nodes + tuple(extra))
 

@@ -72,8 +72,8 @@ class _Free:
 
     def equations(self, z: np.ndarray, A: float) -> np.ndarray:
         """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
-        residual, X = _family_equations(self, z)
-        return np.concatenate((residual[:-1], [(self.probe @ X).real - A], residual[-1:]))
+        residual, _, node = _family_equations(self, z)
+        return np.concatenate((residual[:-1], [node.real - A], residual[-1:]))
 
     def jacobian_of(self, z: np.ndarray, A: float, residual: np.ndarray) -> np.ndarray:
         """d equations / dz by forward differences (PERTURBATION of the orbit's size, of omega for omega and xi)."""
@@ -121,11 +121,21 @@ class _Free:
 class FreeShooting(_Free, NetworkShooting):
     """The free network with sliders (``network_orbit.py``)."""
 
-    def __init__(self, scene, steps: int, reference: float, probe: np.ndarray, name: str):
+    def __init__(self, scene, steps: int, reference: float, probe: np.ndarray, name: str, pulls=None):
         super().__init__(scene, 0.0, None, steps, 7, reference)
         self.viscous = self.damping.copy()
         self.probe = np.asarray(probe, dtype=float)  # the node's x as weights over the nodes (see _free_systems)
         self.name = name
+        # a massless node named with a slider or branch on it (series.Observed): its x takes weights of those
+        # levers' tensions k u too, {lever: weight}, here over the branches in the order of s
+        self.pulls = np.zeros(self.branches)
+        for lever, weight in (pulls or {}).items():
+            self.pulls[self.branch_names.index(lever)] = weight
+        n = self.system.n
+        self.state_probe = np.zeros(self.dimension)  # the node's x(0) from s, to first order
+        self.state_probe[:n] = self.probe
+        self.state_probe[2 * n:2 * n + self.branches] = self.pulls * self.bk
+        self.linear_probe = self.probe + (self.pulls * self.bk) @ self.brows  # ... along a mode with all stuck
 
 
 class FreeElement(_Free, ElementShooting):
@@ -138,7 +148,9 @@ class FreeElement(_Free, ElementShooting):
         super().__init__(scene, 0.0, None, steps, 7, reference)
         if not self.smooth:
             raise ValueError("FreeElement: an element whose orbit is the Taylor series (shooting.smooth)")
-        self.probe = np.ones(1)
+        self.probe = self.linear_probe = np.ones(1)
+        self.pulls = np.zeros(0)
+        self.state_probe = np.eye(self.dimension)[0]
         self.name = self.system.nodes[0]
         self.stiffness_matrix = np.array([[self.parameters[1]]])
         self.viscous = np.array([[self.parameters[2]]])
@@ -175,22 +187,23 @@ class FreeElement(_Free, ElementShooting):
                            *self.parameters[3:])
 
 
-def _free_systems(scene, probe: np.ndarray, name: str):
+def _free_systems(scene, probe: np.ndarray, name: str, pulls=None):
     """``(scene, make(steps, reference))``: the free system of ``scene`` at M = steps: the element with friction
     on its Taylor orbit (:class:`FreeElement`), else the network (massless nodes condensed: FreeShooting, the
-    amplitude that of x = probe . x over its nodes: a node's own, or a massless node's weighted mean)."""
+    amplitude that of x = probe . x over its nodes: a node's own, or a massless node's weighted mean, plus
+    ``pulls`` {lever: weight} of the levers' tensions where a slider or branch is on it)."""
     from ..network.model import NetworkScene
     from .shooting import prepared
 
     if isinstance(scene, NetworkScene):
         scene = prepared_network(scene)
-        return scene, lambda steps, reference: FreeShooting(scene, steps, reference, probe, name)
+        return scene, lambda steps, reference: FreeShooting(scene, steps, reference, probe, name, pulls)
     scene = prepared(scene)
     return scene, lambda steps, reference: FreeElement(scene, steps, reference)
 
 
 def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray, name: str,
-                    tolerance: float) -> tuple:
+                    tolerance: float, pulls=None) -> tuple:
     """The backbone at ``amplitudes`` (see the module): (rows, 2): omega and xi of every point of the backbone at
     each amplitude (the amplitudes in the order given; where the backbone turns back in amplitude, each of its
     points at that amplitude, in their order along it), (rows, n) complex: the first harmonic of every node per
@@ -201,7 +214,7 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray,
     the other mass's amplitude grows without bound), then each listed amplitude is solved for at every crossing
     of the node's a_1; an amplitude that the family's a_1 at the node never reaches is refused, with the largest
     it reaches."""
-    scene, make = _free_systems(scene, probe, name)
+    scene, make = _free_systems(scene, probe, name, pulls)
     free = make(FIRST_STEPS, 1.0)
     low, high = float(np.min(amplitudes)), float(np.max(amplitudes))
     omega0, shape, xi0, onset = _linear_start(free, mode, low)
@@ -281,8 +294,9 @@ FAMILY_BEYOND = 20.0     # follow until the largest node's a_1 is this many time
 
 
 def _family_equations(free, z):
-    """The half-period map's residual and the phase condition b_1 = 0 at the node (no amplitude condition), and
-    the first harmonic of every node."""
+    """The half-period map's residual and the phase condition b_1 = 0 at the node (no amplitude condition), the
+    first harmonic of every node, and the node's (a massless node's: its weights over the nodes and over the
+    levers' tensions, ``free.pulls``)."""
     N = free.dimension
     s, omega, xi = z[:N], float(z[N]), float(z[N + 1])
     if not omega > 0:
@@ -294,11 +308,20 @@ def _family_equations(free, z):
         whole = np.vstack((s[None, :free.system.n], xs[:-1]))
         free._centred(s, residual, np.concatenate(([s[0]], xs[:, 0])))
         X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ whole * 2.0 / free.M
-        return np.concatenate((residual, [-(free.probe @ X).imag])), X
-    end, xs = free.run(s, omega)
-    half = np.vstack((s[None, :free.system.n], xs[:-1]))
-    X = np.exp(-2j * math.pi * np.arange(free.M) / free.M) @ np.vstack((half, -half)) * 2.0 / free.M
-    return np.concatenate((-end - s, [-(free.probe @ X).imag])), X
+        node = complex(free.probe @ X)
+        return np.concatenate((residual, [-node.imag])), X, node
+    n, pulled = free.system.n, np.any(free.pulls)
+    end, xs = free.run(s, omega, with_u=True) if pulled else free.run(s, omega)
+    half = np.vstack((s[None, :n], xs[:-1, :n]))
+    turns = np.exp(-2j * math.pi * np.arange(free.M) / free.M)
+    X = turns @ np.vstack((half, -half)) * 2.0 / free.M
+    node = complex(free.probe @ X)
+    if pulled:  # the levers' tensions k u over the period (the second half the first's negative)
+        nb = free.branches
+        start = np.clip(np.asarray(s[2 * n:2 * n + nb], dtype=float), -free.eta, free.eta)
+        tension = np.vstack((start[None, :], xs[:-1, n:n + nb])) * free.bk
+        node += complex(free.pulls @ (turns @ np.vstack((tension, -tension)) * 2.0 / free.M))
+    return np.concatenate((-end - s, [-node.imag])), X, node
 
 
 def _family_jacobian(free, z, residual, scale):
@@ -323,7 +346,7 @@ def _follow_family(free, z, high):
         return np.concatenate((np.full(N, max(float(np.max(np.abs(z[:N]))), 1e-12)), [z[N], z[N]]))
 
     def tangent(z, scale, previous):
-        residual, _ = _family_equations(free, z)
+        residual = _family_equations(free, z)[0]
         _, _, vt = np.linalg.svd(_family_jacobian(free, z, residual, scale))
         t = vt[-1]
         return t if previous is None or t @ previous >= 0 else -t
@@ -331,15 +354,14 @@ def _follow_family(free, z, high):
     scale = scale_of(z)
     t = tangent(z, scale, None)
     n = free.system.n
-    first = _family_equations(free, z)[1]
+    _, first, node = _family_equations(free, z)
     if getattr(free, "symmetric", True):
-        if (free.probe @ t[:n]) * (free.probe @ z[:n]) < 0:  # the amplitude's way up
+        if (free.state_probe @ t[:N]) * (free.state_probe @ z[:N]) < 0:  # the amplitude's way up
             t = -t
     else:  # on a belt x(0) carries the drag's offset: the way up is where the node's |a_1| grows
-        ahead = _family_equations(free, z + FAMILY_STEP * 1e-3 * t * scale)[1]
-        if abs(free.probe @ ahead) < abs(free.probe @ first):
+        if abs(_family_equations(free, z + FAMILY_STEP * 1e-3 * t * scale)[2]) < abs(node):
             t = -t
-    points, measures, largest = [z.copy()], [abs(free.probe @ first)], [float(np.max(np.abs(first)))]
+    points, measures, largest = [z.copy()], [abs(node)], [max(float(np.max(np.abs(first))), abs(node))]
     step = FAMILY_STEP
     while len(points) < FAMILY_POINTS:
         y = z / scale
@@ -352,7 +374,7 @@ def _follow_family(free, z, high):
             # speed) plain Newton cycled between the Jacobians of its two sides, a step of 2e-5 each way
             kink = step <= FAMILY_KINK_STEP
             try:
-                residual, _ = _family_equations(free, w * scale)
+                residual = _family_equations(free, w * scale)[0]
                 for _ in range(FAMILY_KINK_ITERATIONS if kink else 12):
                     J = _family_jacobian(free, w * scale, residual, scale)
                     size = np.max(np.abs(residual))
@@ -361,7 +383,7 @@ def _follow_family(free, z, high):
                         break
                     for _ in range(HALVINGS + 1 if kink else 1):
                         trial = w + delta
-                        new_residual, _ = _family_equations(free, trial * scale)
+                        new_residual = _family_equations(free, trial * scale)[0]
                         if np.max(np.abs(new_residual)) <= size:
                             break
                         delta = 0.5 * delta
@@ -392,12 +414,12 @@ def _follow_family(free, z, high):
         if t_new @ secant < 0:
             t_new = -t_new
         z, t = new, t_new
-        _, X = _family_equations(free, z)
+        _, X, node = _family_equations(free, z)
         points.append(z.copy())
-        measures.append(abs(free.probe @ X))
-        largest.append(float(np.max(np.abs(X))))
+        measures.append(abs(node))
+        largest.append(max(float(np.max(np.abs(X))), abs(node)))
         step = min(FAMILY_STEP, 1.5 * step)
-        if float(np.max(np.abs(X))) > FAMILY_BEYOND * high:
+        if largest[-1] > FAMILY_BEYOND * high:
             break
     return points, np.array(measures), np.array(largest)
 
@@ -430,7 +452,7 @@ def _family_crossings(free, points, measures, A: float) -> list:
             m0 = A
         if (m0 - A) * (m1 - A) <= 0 and m0 != m1:
             guess = points[i] + (A - m0) / (m1 - m0) * (points[i + 1] - points[i])
-            if getattr(free, "symmetric", True) and free.probe @ guess[:free.system.n] < 0:
+            if getattr(free, "symmetric", True) and free.state_probe @ guess[:free.dimension] < 0:
                 guess = guess.copy()
                 guess[:free.dimension] = -guess[:free.dimension]
             solved = free.solve(guess, A)
@@ -479,10 +501,14 @@ def _linear_start(free, mode: int, A: float) -> tuple:
         if omega is None:
             continue
         shape = basis @ shape
-        if abs(free.probe @ shape) < 1e-9 * np.max(np.abs(shape)):
+        if abs(free.linear_probe @ shape) < 1e-9 * np.max(np.abs(shape)):
+            if np.any(free.pulls):  # a massless node on a rigid slider: it stands still while the slider sticks
+                raise FrequencyError(f"--node: mode {mode} does not move massless node {free.name} while the slider "
+                                     "on it sticks (it holds the node still, at every amplitude below its slip), so "
+                                     "its amplitude cannot set the mode's: name a node with a mass")
             raise FrequencyError(f"--node: mode {mode} does not move node {free.name}: its "
                                  "amplitude cannot set the mode's (choose another --node)")
-        shape = shape / (free.probe @ shape)
+        shape = shape / (free.linear_probe @ shape)
         modal = float(shape @ mass @ shape)
         xi = float(shape @ free.viscous @ shape) / modal
         onset = math.inf

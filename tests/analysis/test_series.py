@@ -556,3 +556,54 @@ def test_a_massless_node_on_a_slider_named_moves_as_written(tmp_path, case):
     assert list(observed.views["j"][2]) == ["slider_1" if case != "branch" else "branch_1"]
     implicit_agrees(scene, NetworkShooting(condensed, F, None, 1024, 7, omega, "a", observed), F, omega, 80,
                     nodes="abj")
+
+
+def test_the_backbone_at_a_massless_node_on_a_branch_is_its_motion_along_the_mode(tmp_path):
+    """--mode at massless j held by springs and a branch (refused before: j's motion needs that lever's tension
+    along the mode). j's first harmonic in the mode's equations is the forced response's at the
+    same state and damping (``NetworkShooting.coefficients`` with ``series.Observed``, which the test above
+    holds against the implicit stepper on the network as written); the backbone at j, at amplitudes where the
+    lever sticks and where it slips, is a's at a's amplitudes along it (one family, two parametrisations):
+    the same frequencies and damping ratios to 1e-6 (each refined until its samples change it by less than
+    the tolerance), j's column of the shape 1."""
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+    from prandtl_fmu.frequency.slider_modes import _family_equations, _free_systems
+
+    scene = _levered(tmp_path, "branch")
+    condensed, observed = prepared(scene, "j", None, observe=True)
+    weights, _, tensions = observed.views["j"]
+    assert tensions
+    nodes = condensed.network.nodes
+    probe = np.array([weights.get(node, 0.0) for node in nodes])
+    _, make = _free_systems(condensed, probe, "j", tensions)
+    free = make(128, 1.0)
+    forced = NetworkShooting(condensed, 0.0, None, 128, 7, 1.0, None, observed)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        s = rng.normal(0.0, 0.3, free.dimension)
+        omega, xi = rng.uniform(0.6, 1.4), rng.uniform(0.0, 0.1)
+        node = _family_equations(free, np.concatenate((s, [omega, xi])))[2]
+        forced.damping = free.viscous - xi * np.diag(free.system.mass)
+        row = forced.coefficients(s, omega)[forced.node_index("j")]
+        assert node == pytest.approx(complex(row[1], -row[2]), rel=1e-12, abs=1e-14)
+    amplitudes = np.array([0.02, 0.3, 1.0])
+    at_j = nonlinear_mode(scene, 1, amplitudes, node="j")
+    assert at_j.node == "j" and np.allclose(at_j.shape[:, at_j.nodes.index("j")], 1.0, rtol=1e-12)
+    assert np.ptp(at_j.damping_ratio) > 0.1 * np.max(np.abs(at_j.damping_ratio))  # the lever slips on some
+    at_a = nonlinear_mode(scene, 1, np.abs(at_j.shape[:, at_j.nodes.index("a")]) * at_j.amplitude, node="a")
+    assert np.allclose(at_a.frequency, at_j.frequency, rtol=1e-6, atol=0.0)  # (1e-7 measured)
+    assert np.allclose(at_a.damping_ratio, at_j.damping_ratio, rtol=1e-6, atol=0.0)
+
+
+@pytest.mark.parametrize("case", ["slider", "two nodes"])
+def test_the_backbone_at_a_massless_node_on_a_rigid_slider_is_refused_in_one_line(tmp_path, capsys, case):
+    """A rigid slider on massless j holds it still while it sticks: along the mode's start (every slider and
+    branch stuck) j does not move, so its amplitude cannot set the mode's: one line that says so, exit 2."""
+    out = tmp_path / "mode.csv"
+    _levered(tmp_path, case)
+    assert main(["describe", str(tmp_path / f"{case}.toml"), "--mode", "1", "--amplitudes", "0.5", "--node", "j",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "does not move massless node j while the slider on it sticks" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
