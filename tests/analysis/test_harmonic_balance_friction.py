@@ -280,12 +280,10 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
     # a belt is taken (test_belt_shooting.py) beside springs, a dashpot, branches, a history, a delay and a
     # Stribeck drop, under a force or base excitation
     # (the forced response and the modes beside [delay], [history] or a Stribeck drop are taken:
-    # test_delay_friction.py, test_friction_modes_taylor.py)
+    # test_delay_friction.py, test_friction_modes_taylor.py; the modes on a belt: test_belt_modes.py)
     (COULOMB, ["--node", "nowhere"], "'nowhere'"),
     # below alpha / k the friction holds the mass still: no periodic motion, no mode there
     (COULOMB, ["--mode", "1", "--amplitudes", "0.05"], "list larger amplitudes"),
-    (dict(COULOMB, friction={"alpha": 0.1, "belt_velocity": 0.1}), ["--mode", "1", "--amplitudes", "0.5"],
-     "moving belt"),
     # (a cubic spring or Stribeck's drop beside the friction, with series dashpots or not: the Taylor orbit,
     # test_element_orbit.py)
 ])
