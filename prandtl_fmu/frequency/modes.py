@@ -168,10 +168,10 @@ def _slider_mode(scene, mode: int, amplitudes: np.ndarray, node: Optional[str], 
     else:
         where = ShootingSystem(scene.name, scene.source, nodes, mass).node_index(node)
         probe, name = np.eye(len(nodes))[where], nodes[where]
-    values, shape, rows, change = slider_backbone(scene, mode, amplitudes, probe, name, tolerance, pulls)
+    values, shape, rows, change, at_node = slider_backbone(scene, mode, amplitudes, probe, name, tolerance, pulls)
     # the massless nodes' columns: their weighted means of the shape (massless: no share of the modal mass); the
-    # node named with a lever's tension in its motion: 1 (its first harmonic is A at phase 0, by the equations)
-    shape = np.hstack([shape] + [np.ones((shape.shape[0], 1)) if other == node and pulls else
+    # node named with a lever's tension in its motion: its first harmonic per unit amplitude, from the equations
+    shape = np.hstack([shape] + [at_node[:, None] if other == node and pulls else
                                  (shape @ weights)[:, None] for other, weights in extra.items()])
     return Backbone(rows, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode, name, None,
                     change, shape, np.concatenate((mass, np.zeros(len(extra)))), nodes + tuple(extra))

@@ -13,7 +13,11 @@ xi; the equations
     -Phi(s; omega, xi) - s = 0,     a_1 = A,     b_1 = 0,
 
 a_1, b_1 the first harmonic of x at the node (x_node = A cos(omega t) + higher harmonics: the amplitude sets
-the mode's size, b_1 = 0 its phase, which the free motion leaves open). The motion is the exact one between
+the mode's size, b_1 = 0 its phase, which the free motion leaves open). A massless node named with a slider or branch on it (a
+lever of ``series.condensed``) moves with its springs' weighted mean less the lever's tension k u; on a rigid
+slider it stands still while the slider sticks, where the family starts, so there the phase (and the start's
+amplitude) are those of the node with a mass that moves most, the anchor, and the named node's amplitude is
+|a_1 - i b_1|. The motion is the exact one between
 events whatever xi (the damping matrix C - xi M only changes the linear flow; which sliders hold is decided on
 the forces, as for c >= 0). The mode's frequency is omega / (2 pi), its damping ratio xi / (2 omega).
 
@@ -68,12 +72,23 @@ CONVERGED = 1e-11  # a Newton step below this (relative to the orbit, or to omeg
 
 class _Free:
     """The free system (no force) with damping C - xi M: :meth:`equations` of (s, omega, xi) at amplitude A, and
-    Newton's method on them; a shooting's ``run`` and ``coefficients``, and ``damping`` that the equations set."""
+    Newton's method on them; a shooting's ``run`` and ``coefficients``, and ``damping`` that the equations set.
+    ``anchor``: where the node named stands still along the mode's start (a massless node on a rigid slider),
+    the node with a mass whose phase the equations fix instead (:func:`_anchored`); ``at_anchor``: the amplitude
+    condition on the anchor's a_1 (the start) rather than on the node's |a_1|."""
+
+    anchor = None
+    at_anchor = False
 
     def equations(self, z: np.ndarray, A: float) -> np.ndarray:
         """The N + 2 residuals at z = (s, omega, xi) (m): the half-period map's, then a_1 - A and b_1."""
-        residual, _, node = _family_equations(self, z)
-        return np.concatenate((residual[:-1], [node.real - A], residual[-1:]))
+        residual, X, node = _family_equations(self, z)
+        if self.anchor is None:
+            return np.concatenate((residual[:-1], [node.real - A], residual[-1:]))
+        # anchored (the node stands still while its slider sticks): the phase is the anchor's, so the node's
+        # amplitude is |a_1 - i b_1|; at the start (``at_anchor``) the amplitude is the anchor's
+        measure = X[self.anchor].real if self.at_anchor else abs(node)
+        return np.concatenate((residual[:-1], [measure - A], residual[-1:]))
 
     def jacobian_of(self, z: np.ndarray, A: float, residual: np.ndarray) -> np.ndarray:
         """d equations / dz by forward differences (PERTURBATION of the orbit's size, of omega for omega and xi)."""
@@ -207,7 +222,8 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray,
     """The backbone at ``amplitudes`` (see the module): (rows, 2): omega and xi of every point of the backbone at
     each amplitude (the amplitudes in the order given; where the backbone turns back in amplitude, each of its
     points at that amplitude, in their order along it), (rows, n) complex: the first harmonic of every node per
-    unit amplitude, (rows,) the amplitudes, the last relative change of M's doubling.
+    unit amplitude, (rows,) the amplitudes, the last relative change of M's doubling, (rows,) complex: the node's
+    first harmonic per unit amplitude (1, but where its phase is the anchor's: see :class:`_Free`).
 
     The family is followed without an amplitude condition (:func:`_follow_family`: the node's a_1 need not grow
     along it; on two masses and a joint it saturates at 4 (alpha + k eta) / (pi |k_a - m_a omega_b^2|) while
@@ -218,9 +234,14 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray,
     free = make(FIRST_STEPS, 1.0)
     low, high = float(np.min(amplitudes)), float(np.max(amplitudes))
     omega0, shape, xi0, onset = _linear_start(free, mode, low)
+    anchor = free.anchor
+    if anchor is not None:  # the node named stands still at the start: the family starts at the anchor's amplitude
+        make = _anchored(make, anchor)
     free = make(FIRST_STEPS, omega0)
-    A0 = min(low, 0.5 * onset)
+    A0 = min(low, 0.5 * onset) if anchor is None else 0.5 * onset
+    free.at_anchor = anchor is not None
     z = free.solve(_guess(free, shape, omega0, xi0, A0), A0)
+    free.at_anchor = False
     if z is None and math.isinf(onset):  # started with the sliders slipping (stuck, they hold the mode still)
         raise FrequencyError(f"{scene.source}: the nonlinear mode {mode} was not found at A = {A0!r} m, the "
                              "smallest amplitude listed, with its sliders slipping: stuck they hold it still, and "
@@ -275,12 +296,24 @@ def slider_backbone(scene, mode: int, amplitudes: np.ndarray, probe: np.ndarray,
     N, n = free.dimension, free.system.n
     values = np.empty((len(rows), 2))
     shapes = np.empty((len(rows), n), dtype=complex)
+    nodes = np.empty(len(rows), dtype=complex)  # the node's first harmonic per unit amplitude (1 unless anchored)
     for row, (index, z) in enumerate(zip(rows, states)):
         values[row] = z[N], z[N + 1]
         free.damping = free.viscous - z[N + 1] * np.diag(free.system.mass)
         harmonics = free.coefficients(z[:N], z[N])
         shapes[row] = (harmonics[:, 1] - 1j * harmonics[:, 2]) / float(amplitudes[index])
-    return values, shapes, amplitudes[np.array(rows, dtype=np.int64)], change
+        nodes[row] = _family_equations(free, z)[2] / float(amplitudes[index])
+    return values, shapes, amplitudes[np.array(rows, dtype=np.int64)], change, nodes
+
+
+def _anchored(make, anchor: int):
+    """``make`` whose free systems fix the phase at node ``anchor`` (see :class:`_Free`)."""
+    def anchored(steps, reference):
+        free = make(steps, reference)
+        free.anchor = anchor
+        free.state_probe = np.eye(free.dimension)[anchor]
+        return free
+    return anchored
 
 
 FAMILY_STEP = 0.02       # the arc-length step's bound (unknowns scaled by the orbit's size and by omega)
@@ -321,7 +354,8 @@ def _family_equations(free, z):
         start = np.clip(np.asarray(s[2 * n:2 * n + nb], dtype=float), -free.eta, free.eta)
         tension = np.vstack((start[None, :], xs[:-1, n:n + nb])) * free.bk
         node += complex(free.pulls @ (turns @ np.vstack((tension, -tension)) * 2.0 / free.M))
-    return np.concatenate((-end - s, [-node.imag])), X, node
+    phase = node if free.anchor is None else complex(X[free.anchor])
+    return np.concatenate((-end - s, [-phase.imag])), X, node
 
 
 def _family_jacobian(free, z, residual, scale):
@@ -502,13 +536,16 @@ def _linear_start(free, mode: int, A: float) -> tuple:
             continue
         shape = basis @ shape
         if abs(free.linear_probe @ shape) < 1e-9 * np.max(np.abs(shape)):
-            if np.any(free.pulls):  # a massless node on a rigid slider: it stands still while the slider sticks
-                raise FrequencyError(f"--node: mode {mode} does not move massless node {free.name} while the slider "
-                                     "on it sticks (it holds the node still, at every amplitude below its slip), so "
-                                     "its amplitude cannot set the mode's: name a node with a mass")
-            raise FrequencyError(f"--node: mode {mode} does not move node {free.name}: its "
-                                 "amplitude cannot set the mode's (choose another --node)")
-        shape = shape / (free.linear_probe @ shape)
+            if not (held and np.any(free.pulls)):
+                raise FrequencyError(f"--node: mode {mode} does not move node {free.name}: its "
+                                     "amplitude cannot set the mode's (choose another --node)")
+            # a massless node on a rigid slider stands still while it sticks: the mode starts at the amplitude
+            # of the node with a mass that moves most (the anchor: its phase set, see _Free)
+            free.anchor = int(np.argmax(np.abs(shape) * np.sqrt(free.system.mass)))
+            free.state_probe = np.eye(free.dimension)[free.anchor]
+            shape = shape / shape[free.anchor]
+        else:
+            shape = shape / (free.linear_probe @ shape)
         modal = float(shape @ mass @ shape)
         xi = float(shape @ free.viscous @ shape) / modal
         onset = math.inf

@@ -558,19 +558,21 @@ def test_a_massless_node_on_a_slider_named_moves_as_written(tmp_path, case):
                     nodes="abj")
 
 
-def test_the_backbone_at_a_massless_node_on_a_branch_is_its_motion_along_the_mode(tmp_path):
-    """--mode at massless j held by springs and a branch (refused before: j's motion needs that lever's tension
-    along the mode). j's first harmonic in the mode's equations is the forced response's at the
-    same state and damping (``NetworkShooting.coefficients`` with ``series.Observed``, which the test above
-    holds against the implicit stepper on the network as written); the backbone at j, at amplitudes where the
-    lever sticks and where it slips, is a's at a's amplitudes along it (one family, two parametrisations):
-    the same frequencies and damping ratios to 1e-6 (each refined until its samples change it by less than
-    the tolerance), j's column of the shape 1."""
+@pytest.mark.parametrize("case", ["branch", pytest.param("slider", marks=pytest.mark.slow), "two nodes"])
+def test_the_backbone_at_a_massless_node_on_a_slider_is_its_motion_along_the_mode(tmp_path, case):
+    """--mode at massless j held by springs and a slider or a branch (refused before: j's motion needs that
+    lever's tension along the mode). j's first harmonic in the mode's equations is the forced response's at the
+    same state and damping (``NetworkShooting.coefficients`` with ``series.Observed``, which the tests above
+    hold against the implicit stepper on the network as written). The backbone at j is the one at a node with a
+    mass, at that node's amplitudes along it (one family, two parametrisations): the same frequencies and
+    damping ratios to 1e-5, j's column of the shape of modulus 1. On a rigid
+    slider j stands still while the slider sticks, where the mode starts: the family starts at the amplitude of
+    the node with a mass that moves most, and its phase is that node's (j's is not defined while it stands)."""
     from prandtl_fmu.frequency.modes import nonlinear_mode
     from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
     from prandtl_fmu.frequency.slider_modes import _family_equations, _free_systems
 
-    scene = _levered(tmp_path, "branch")
+    scene = _levered(tmp_path, case)
     condensed, observed = prepared(scene, "j", None, observe=True)
     weights, _, tensions = observed.views["j"]
     assert tensions
@@ -587,23 +589,13 @@ def test_the_backbone_at_a_massless_node_on_a_branch_is_its_motion_along_the_mod
         forced.damping = free.viscous - xi * np.diag(free.system.mass)
         row = forced.coefficients(s, omega)[forced.node_index("j")]
         assert node == pytest.approx(complex(row[1], -row[2]), rel=1e-12, abs=1e-14)
-    amplitudes = np.array([0.02, 0.3, 1.0])
+    amplitudes = np.array([0.05, 0.3, 1.0])
     at_j = nonlinear_mode(scene, 1, amplitudes, node="j")
-    assert at_j.node == "j" and np.allclose(at_j.shape[:, at_j.nodes.index("j")], 1.0, rtol=1e-12)
+    assert at_j.node == "j" and np.allclose(np.abs(at_j.shape[:, at_j.nodes.index("j")]), 1.0, rtol=1e-12)
     assert np.ptp(at_j.damping_ratio) > 0.1 * np.max(np.abs(at_j.damping_ratio))  # the lever slips on some
-    at_a = nonlinear_mode(scene, 1, np.abs(at_j.shape[:, at_j.nodes.index("a")]) * at_j.amplitude, node="a")
-    assert np.allclose(at_a.frequency, at_j.frequency, rtol=1e-6, atol=0.0)  # (1e-7 measured)
-    assert np.allclose(at_a.damping_ratio, at_j.damping_ratio, rtol=1e-6, atol=0.0)
-
-
-@pytest.mark.parametrize("case", ["slider", "two nodes"])
-def test_the_backbone_at_a_massless_node_on_a_rigid_slider_is_refused_in_one_line(tmp_path, capsys, case):
-    """A rigid slider on massless j holds it still while it sticks: along the mode's start (every slider and
-    branch stuck) j does not move, so its amplitude cannot set the mode's: one line that says so, exit 2."""
-    out = tmp_path / "mode.csv"
-    _levered(tmp_path, case)
-    assert main(["describe", str(tmp_path / f"{case}.toml"), "--mode", "1", "--amplitudes", "0.5", "--node", "j",
-                 "--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "does not move massless node j while the slider on it sticks" in err and len(err.strip().splitlines()) == 1
-    assert not out.exists()
+    other = max("ab", key=lambda name: abs(at_j.shape[0, at_j.nodes.index(name)]))
+    at_other = nonlinear_mode(scene, 1, np.abs(at_j.shape[:, at_j.nodes.index(other)]) * at_j.amplitude,
+                              node=other)
+    # (each refined by doubling its samples to the default tolerance: 1e-16 to 1.4e-6 apart, measured)
+    assert np.allclose(at_other.frequency, at_j.frequency, rtol=1e-5, atol=0.0)
+    assert np.allclose(at_other.damping_ratio, at_j.damping_ratio, rtol=1e-5, atol=0.0)
