@@ -18,6 +18,15 @@ def _pyplot():
     return plt
 
 
+def _log_ticks(axis) -> None:
+    """A log axis's minor ticks at 2 and 5 of each decade (labelled where fewer than two decades show): matplotlib's
+    default labels 2, 3, 4 and 6 there, which overlap on a narrow figure."""
+    from matplotlib.ticker import LogFormatterSciNotation, LogLocator
+
+    axis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
+    axis.set_minor_formatter(LogFormatterSciNotation(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+
+
 def draw_description(description, scene, axes, label: str = "computed", closed: bool = True) -> None:
     """Draw K(A) (log-log) on ``axes[0]`` and the loss factor against A (log A) on ``axes[1]``, with the closed
     forms (``closed_forms.py``) over them where the scene has them, on amplitudes between the computed ones."""
@@ -99,6 +108,7 @@ def draw_response(response, scene, axes, lines: bool = True) -> None:
         for name, values in linear_responses(scene, response.force_amplitude, fine).items():
             amplitude_axes.plot(fine, values, ":", lw=1, label=name)
     amplitude_axes.set_yscale("log")
+    _log_ticks(amplitude_axes.yaxis)
     amplitude_axes.set_xlabel("frequency f (Hz)")
     amplitude_axes.set_ylabel("amplitude of x (m)")
     amplitude_axes.set_title(f"first harmonic of x, F0 = {response.force_amplitude:g} N")
@@ -167,6 +177,7 @@ def draw_curve(curves, axes, backbone=None) -> None:
                 amplitude_axes.plot(f_s[inside], a_s[inside], ":", color="C2" if not several else "k", lw=1,
                                     label="single-mode synthesis" if curve is curves[0] else None)
     amplitude_axes.set_yscale("log")
+    _log_ticks(amplitude_axes.yaxis)
     amplitude_axes.set_xlabel("frequency f (Hz)")
     amplitude_axes.set_ylabel(f"amplitude of x_{first.node} (m)")
     amplitude_axes.set_title(_how(first) if several else f"{first.method}, {_excitation(first)}")
@@ -219,6 +230,8 @@ def plot_backbone(backbone, scene, path: str) -> None:
     axes[1].set_xlabel(f"amplitude of x_{backbone.node} (m)")
     axes[1].set_ylabel("damping ratio")
     axes[1].set_title("modal damping")
+    _log_ticks(axes[0].yaxis)
+    _log_ticks(axes[1].xaxis)
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
     fig.suptitle(f"{scene.name}: nonlinear mode by EPMC")
