@@ -13,11 +13,11 @@ xi; the equations
     -Phi(s; omega, xi) - s = 0,     a_1 = A,     b_1 = 0,
 
 a_1, b_1 the first harmonic of x at the node (x_node = A cos(omega t) + higher harmonics: the amplitude sets
-the mode's size, b_1 = 0 its phase, which the free motion leaves open). A massless node named with a slider or branch on it (a
-lever of ``series.condensed``) moves with its springs' weighted mean less the lever's tension k u; on a rigid
-slider it stands still while the slider sticks, where the family starts, so there the phase (and the start's
-amplitude) are those of the node with a mass that moves most, the anchor, and the named node's amplitude is
-|a_1 - i b_1|. The motion is the exact one between
+the mode's size, b_1 = 0 its phase, which the free motion leaves open). A massless node named with a slider or
+branch on it (a lever of ``series.condensed``) moves with its springs' weighted mean less the lever's tension
+k u; on a rigid slider it stands still while the slider sticks, where the family starts, so there the phase (and
+the start's amplitude) are those of the node with a mass that moves most, the anchor, and the named node's
+amplitude is |a_1 - i b_1|. The motion is the exact one between
 events whatever xi (the damping matrix C - xi M only changes the linear flow; which sliders hold is decided on
 the forces, as for c >= 0). The mode's frequency is omega / (2 pi), its damping ratio xi / (2 omega).
 
@@ -371,9 +371,10 @@ def _family_jacobian(free, z, residual, scale):
 def _follow_family(free, z, high):
     """Pseudo-arclength continuation of the family through z in (s, omega, xi) with the phase condition only:
     the points and the node's |a_1| at each, until the largest node's |a_1| passes FAMILY_BEYOND x high (the
-    node's own may turn back, so passing high is not the end), or FAMILY_POINTS points. Unknowns scaled by the orbit's size (so the steps grow with
-    the amplitude) and by omega; the tangent's sign kept by the secant where a kink (a slip starting or
-    stopping) flips the null vector."""
+    node's own may turn back, so passing high is not the end), or FAMILY_POINTS points. Unknowns scaled by the
+    orbit's size (so the steps grow with the amplitude) and by omega; the tangent's sign kept by the secant where
+    a kink (a slip starting or stopping) flips the null vector; past a kink that no step passes, see
+    :func:`_past_kink`."""
     N = free.dimension
 
     def scale_of(z):
