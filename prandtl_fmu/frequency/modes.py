@@ -67,7 +67,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
     amplitudes = positive_values(amplitudes, "amplitudes")
     tolerance = check_tolerance(tolerance)
     if getattr(scene, "friction", None) is not None:
-        if _friction_taylor(scene):  # a Stribeck drop, a history or a delay: the element on its Taylor orbit
+        if _friction_taylor(scene):  # a belt, a Stribeck drop, a history or a delay: the element's Taylor orbit
             return _slider_mode(scene, mode, amplitudes, node, tolerance, load_node)
         scene = _friction_network(scene, tolerance)
     scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
@@ -98,8 +98,9 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
 
 def _friction_taylor(scene) -> bool:
     """Whether the modes of an element with ``[friction]`` are solved for on its own Taylor orbit
-    (``slider_modes.FreeElement``): a Stribeck drop, a history or a delay beside the friction (the network of one
-    node, ``_friction_network``, takes a spring, a cubic spring, a dashpot, branches and Coulomb friction)."""
+    (``slider_modes.FreeElement``): a moving belt, a Stribeck drop, a history or a delay beside the friction (the
+    network of one node, ``_friction_network``, takes a spring, a cubic spring, a dashpot, branches and Coulomb
+    friction on a fixed ground)."""
     friction = scene.friction
     return scene.mass is not None and (friction.belt_velocity != 0.0 or friction.alpha_kinetic != friction.alpha
                                        or scene.history is not None or scene.delay is not None)
