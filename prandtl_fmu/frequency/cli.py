@@ -105,8 +105,12 @@ def add_parser(commands, scene_help: str) -> None:
                                "time sweep's response by sweep; closed forms drawn over")
 
 
-def _numbers(text, option: str) -> list:
-    """The comma-separated numbers of ``option``, each finite and > 0; ValueError naming the option."""
+def _numbers(text, option: str, bounded: bool = False) -> list:
+    """The comma-separated numbers of ``option``, each finite and > 0 (``bounded``: in a scene's range of
+    magnitudes, [1e-50, 1e50]: a frequency of 1e-300 Hz overflowed the stability's step count, a force of
+    1e-320 N lost its digits to subnormal numbers); ValueError naming the option."""
+    from ..scene_tables import LARGEST_MAGNITUDE, SMALLEST_MAGNITUDE
+
     values = []
     for item in str(text).split(","):
         item = item.strip()
@@ -116,6 +120,9 @@ def _numbers(text, option: str) -> list:
             raise ValueError(f"{option}: {item!r} is not a number") from None
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"{option}: every value must be a finite number > 0, got {item!r}")
+        if bounded and not SMALLEST_MAGNITUDE <= value <= LARGEST_MAGNITUDE:
+            raise ValueError(f"{option}: every value must lie in [{SMALLEST_MAGNITUDE:g}, {LARGEST_MAGNITUDE:g}] (a "
+                             f"scene's range of magnitudes), got {item!r}")
         values.append(value)
     return values
 
@@ -181,11 +188,11 @@ def _check(args) -> dict:
     else:
         values["base"] = args.base_amplitude is not None
         values["load_amplitudes"] = _numbers(args.base_amplitude if values["base"] else args.force_amplitude,
-                                             load_option)
+                                             load_option, bounded=True)
         if values["base"] and args.load_node is not None:
             raise ValueError("--load-node names where a force acts; --base-amplitude moves the support under every "
                              "node")
-        values["frequencies"] = _numbers(args.frequencies, "--frequencies")
+        values["frequencies"] = _numbers(args.frequencies, "--frequencies", bounded=True)
         values["method"] = args.method or "harmonic-balance"
         if values["method"] == "time" and len(values["load_amplitudes"]) > 1:
             raise ValueError("--force-amplitude: several amplitudes (one curve each) belong to --method "

@@ -73,16 +73,19 @@ DAMPED_ITERATIONS = 30  # of each corrector over a kink (its steps halved while 
 HALVINGS = 8  # of a step of those correctors
 DAMPED_REACH = 4.0  # their point is at most this many arc-length steps from the last point
 TURN = 0.5  # a point whose tangent turned by more than 60 degrees from the last is taken again at half the step
+MISSED = 0.2  # march_curve: a point whose prediction missed by more than this many steps is taken again at half
+RESOLUTION = 1e-2  # march_curve: a miss below this (scaled: 1 % of the curve drawn) is not chased
 FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
 
 
 def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None,
-                   node: Optional[int] = None) -> list:
+                   node: Optional[int] = None, start: Optional[np.ndarray] = None) -> list:
     """``[(omega, q_free, is_fold)]`` along the curve of ``balance`` (:class:`HarmonicBalance`) from
     ``omega_min`` to ``omega_max`` (rad/s) (see the module); ``count``: the frequencies listed; ``node``: the
-    index of the node whose amplitude a refusal names (the curve's ``amplitude``; default the load's node)."""
+    index of the node whose amplitude a refusal names (the curve's ``amplitude``; default the load's node);
+    ``start``: the point at ``omega_min`` where it is known (else solved for)."""
     span = omega_max - omega_min
-    q = balance.solve_at(omega_min)
+    q = balance.solve_at(omega_min) if start is None else np.array(start, dtype=float)
     _isolated(balance, q, omega_min)
     points = [(omega_min, q, False)]
     if span <= 0:
@@ -491,3 +494,148 @@ def _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step):
         else:
             high, f_high = s, point[2]
     return best[0], best[1]
+
+
+# ----------------------------------------------------------------- a curve that is a function of omega
+
+def march_curve(balance, omega_min: float, omega_max: float, count: int, progress=None,
+                node: Optional[int] = None) -> list:
+    """``[(omega, q_free, False)]`` as :func:`continue_curve`, for a shooting whose periodic states are a function
+    of the frequency (``balance.monotone``: a scene monotone in the sense of ``floquet.monotone`` has no fold):
+    stepped in omega, each point by Newton's method at its frequency from the last two points' secant (the first
+    step: the tangent). The steps are measured on the curve as drawn, the first harmonics of every node
+    (``balance.coefficients``) scaled by their largest norm met, and omega over the range: at most
+    ``ARC_ESTIMATE / max(count - 1, FEWEST_STEPS)`` of that arc, adapted to the corrector's iterations; a point
+    whose step went more than twice as far as asked, or turned the drawn curve by more than 60 degrees, is taken
+    again at half the step, down to CORNER of the largest (a kink of the curve is located to that), and so is a
+    point that missed its prediction by more than MISSED of the step on the drawn curve (about half its curvature
+    times the step squared: the wiggles of a friction damper's curve at low frequency, where a stick-slip pattern
+    changes, were stepped over) or one in motion after a point at rest (s = 0: the onset of slip, a kink the
+    drawn curve hardly shows). Why not the
+    arc length of the unknowns: on a chain on a support at 5 N near 0.1 Hz the nodes next to the load start and
+    stop micro-slipping every 4e-5 Hz or so; the velocities at t = 0 jump at each (their secant turned by 60 to
+    150 degrees from one point to the next) while the harmonics change by 1e-5 relative, and the arc length of
+    the unknowns, with the hyperplane's Newton cycling between the Jacobians on a kink's two sides, fell to 5e-4
+    of its bound (hours from 0.1 to 3 Hz). Where the corrector does not converge even at MIN_STEP, the whole
+    curve is :func:`continue_curve`'s (from a point of the march, its arc length turned back at such a kink:
+    one node on a spring and a slider just below Den Hartog's bound, at 0.1559 Hz)."""
+    span = omega_max - omega_min
+    q = balance.solve_at(omega_min)
+    _isolated(balance, q, omega_min)
+    points = [(omega_min, q, False)]
+    if span <= 0:
+        return points
+    drawn = _drawn(balance, q, omega_min)
+    floor = balance.length_scale(omega_min) if hasattr(balance, "length_scale") else 0.0
+    scale = max(float(np.linalg.norm(drawn)), floor, 1e-300)
+    max_step = ARC_ESTIMATE / max(count - 1, FEWEST_STEPS)
+    step = max_step
+    omega = omega_min
+    residual, chord, by_omega, _ = balance.evaluate(q, omega)
+    slope = solve_linear(chord, -by_omega)  # dq / d omega at the start; then the secant's
+    if slope is None or not np.all(np.isfinite(residual)):
+        return continue_curve(balance, omega_min, omega_max, count, progress, node, start=q)
+    ahead = 0.0  # the drawn curve's unit secant's omega component (0: not known yet, a first step of step * span)
+    heading = rate = None  # the drawn curve's unit secant (scaled) and its d drawn / d omega
+    while omega < omega_max:
+        if len(points) > MAX_POINTS:
+            raise FrequencyError(f"{balance.system.source}: the curve did not reach f = {_hz(omega_max)!r} Hz "
+                                 f"within {MAX_POINTS} points (at f = {_hz(omega)!r} Hz, "
+                                 f"{_where(balance, q, omega, node)})")
+        omega_new = min(omega + step * (ahead if ahead > 0.0 else 1.0) * span, omega_max)
+        guess = q + slope * (omega_new - omega)
+        found = _at_frequency(balance, guess, omega_new, scale, chord)
+        if found is None:
+            step *= 0.5
+            if step < MIN_STEP:  # a kink Newton's method at a fixed frequency does not pass: the arc length's
+                return continue_curve(balance, omega_min, omega_max, count, progress, node, start=points[0][1])
+            continue
+        q_new, iterations, chord_new = found
+        drawn_new = _drawn(balance, q_new, omega_new)
+        moved = np.concatenate(((drawn_new - drawn) / scale, [(omega_new - omega) / span]))
+        length = float(np.linalg.norm(moved))
+        secant = moved / max(length, 1e-300)
+        # the prediction's miss on the drawn curve, along its last secant (about half its curvature times the step
+        # squared); the first step's from the tangent's guess run (not a periodic state, but the tangent's)
+        predicted = _drawn(balance, guess, omega_new) if rate is None else drawn + rate * (omega_new - omega)
+        missed = float(np.linalg.norm(drawn_new - predicted)) / scale
+        # from rest (every node stuck all period: s = 0) into motion, the onset of slip is a kink the drawn curve
+        # hardly shows (the base-excited friction element: 2.4 % of its amplitude over 0.03 Hz past it, where
+        # one step from rest landed) and the curve's user reads: located to CORNER of the largest step
+        leaves_rest = not np.any(q) and np.any(q_new)
+        if step > CORNER * max_step and (length > 2.0 * step or missed > max(MISSED * step, RESOLUTION) or
+                                         leaves_rest or
+                                         (heading is not None and secant @ heading < TURN)):
+            step *= 0.5  # steeper than predicted, bent, a kink of the drawn curve: a shorter step shows it
+            continue
+        _isolated(balance, q_new, omega_new)
+        points.append((omega_new, q_new, False))
+        if progress is not None:
+            progress.update(1)
+        scale_new = max(scale, float(np.linalg.norm(drawn_new)))
+        heading = _rescaled(secant, scale, scale_new)
+        ahead = float(heading[-1])
+        slope = (q_new - q) / (omega_new - omega)
+        rate = (drawn_new - drawn) / (omega_new - omega)
+        q, omega, drawn, scale, chord = q_new, omega_new, drawn_new, scale_new, chord_new
+        # longer where the corrector converged within twice its target; never shorter for its iterations alone:
+        # they do not fall with the step where every step crosses kinks (their count shrank the step to 1 / 250
+        # of its bound on the chain, 2205 points from 0.1 to 0.5 Hz); the drawn curve's miss and turn above
+        # size the step
+        step = min(max_step, step * (2.0 if iterations <= TARGET_ITERATIONS // 2 else
+                                     1.5 if iterations <= 2 * TARGET_ITERATIONS else 1.0))
+    return points
+
+
+def _drawn(balance, q, omega) -> np.ndarray:
+    """The curve as drawn at a point: the first harmonic (a_1, b_1) of every node."""
+    return np.asarray(balance.coefficients(q, omega))[:, 1:3].ravel()
+
+
+def _unit(slope) -> np.ndarray:
+    """The unit vector along (slope, 1) (a scaled dq / d omega: ahead in omega)."""
+    out = np.concatenate((slope, [1.0]))
+    return out / np.linalg.norm(out)
+
+
+def _at_frequency(balance, guess, omega, scale, chord):
+    """The point at ``omega`` from ``guess``: where the balance's Jacobian is costly (``costly_jacobian``), the
+    chord method first with the last point's Jacobian ``chord`` (at most CHORD_ITERATIONS, converged and
+    contracting by half); then Newton's method, each step halved while max |R| grows (at most HALVINGS times,
+    at most CORRECTOR_ITERATIONS steps). ``(q, iterations as Newton's, the Jacobian to keep)`` or None."""
+    if getattr(balance, "costly_jacobian", False):
+        q = np.array(guess, dtype=float)
+        previous = math.inf
+        for iteration in range(1, CHORD_ITERATIONS + 1):
+            residual = _residual(balance, q, omega)
+            if not np.all(np.isfinite(residual)):
+                break
+            delta = solve_linear(chord, -residual)
+            if delta is None:
+                break
+            q = q + delta
+            size = float(np.max(np.abs(delta))) / scale
+            if _converged(balance, np.array([size]), residual, omega) and size <= 0.5 * previous:
+                return q, max(1, math.ceil(iteration * TARGET_ITERATIONS / CHORD_TARGET)), chord
+            previous = size
+    q = np.array(guess, dtype=float)
+    residual, jacobian, _, _ = balance.evaluate(q, omega)
+    for iteration in range(1, CORRECTOR_ITERATIONS + 1):
+        if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(jacobian))):
+            return None
+        delta = solve_linear(jacobian, -residual)
+        if delta is None:
+            return None
+        for _ in range(HALVINGS + 1):
+            moved = q + delta
+            residual_moved = _residual(balance, moved, omega)
+            if np.max(np.abs(residual_moved)) <= np.max(np.abs(residual)):
+                break
+            delta = 0.5 * delta
+        else:
+            return None
+        q = moved
+        if _converged(balance, delta / scale, residual, omega):
+            return q, iteration, jacobian
+        residual, jacobian, _, _ = balance.evaluate(q, omega)
+    return None

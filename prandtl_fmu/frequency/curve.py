@@ -3,9 +3,9 @@
 :func:`harmonic_response` joins ``harmonic_balance.py`` (the periodic state at one frequency), ``continuation.py``
 (the curve from the lowest listed frequency to the highest, through its folds) and ``floquet.py`` (stable or
 not). Without ``harmonics`` H is chosen by the tolerance: curves with H = 1, 3, 5, 7, ... (HARMONIC_STEPS) until
-the first harmonic of x at the node changes by at most ``tolerance`` relative from one H to the next, at the
-curve's peak and at both ends (the curve of the larger H is kept); past the last H of HARMONIC_STEPS it is
-refused with the change reached.
+the first harmonic of x at the node changes by at most ``tolerance`` relative from one H to the next twice in a
+row (once at the last H), at the curve's peak and at both ends (the curve of the larger H is kept); past the
+last H of HARMONIC_STEPS it is refused with the change reached.
 An element with ``[friction]`` on its mass takes ``shooting.py`` instead (the periodic state by shooting on its own
 stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`. A range that holds a
 resonance friction cannot hold (``unbounded.py``: Den Hartog's bound) is refused before either curve starts,
@@ -141,7 +141,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
                                             max(shooting.DEFAULT_HARMONICS, max(orders)),
                                             node=node, load_node=load_node, tolerance=tolerance, stability=stability,
                                             samples=samples)
-        return Curve(**fields, orders=orders)
+        return _listed(Curve(**fields, orders=orders), frequencies)
     system = periodic_system(scene, load_node, tolerance)
     where = system.node_index(node)
     low, high = 2.0 * math.pi * float(frequencies.min()), 2.0 * math.pi * float(frequencies.max())
@@ -155,7 +155,15 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     else:
         balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
                                                     where, tolerance, samples, max(orders, default=1))
-    return _curve(balance, points, where, stability, change, orders)
+    return _listed(_curve(balance, points, where, stability, change, orders), frequencies)
+
+
+def _listed(curve: Curve, frequencies) -> Curve:
+    """``curve`` with its ends at the lowest and highest frequencies listed, exactly: the points are taken in
+    omega, and 2 pi f / (2 pi) is f only to rounding (0.17 Hz came back as 0.17000000000000004)."""
+    for value in (float(np.min(frequencies)), float(np.max(frequencies))):
+        curve.frequency[np.abs(curve.frequency - value) <= 1e-13 * value] = value
+    return curve
 
 
 def _first_harmonic(balance, points, where) -> np.ndarray:
@@ -239,9 +247,11 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
             if found is None:  # not found at the same points: the two curves' summaries, as before
                 summary, last = _summary(balance, points, where), _summary(*previous, where)
                 found = float(np.max(np.abs(summary - last) / np.maximum(np.abs(summary), 1e-300)))
+            # twice in a row (or at the last H): one change within the tolerance can be a coincidence (a
+            # Duffing oscillator with branches at 0.12 Hz: 9.7e-4 from H = 1 to 3, where H = 3 was 2.4e-3 off)
+            if found <= tolerance and (change <= tolerance or H == HARMONIC_STEPS[-1]):
+                return balance, points, found
             change = found
-            if change <= tolerance:
-                return balance, points, change
         previous = (balance, points)
     raise FrequencyError(f"{system.source}: the first harmonic still changed by {change:.3g} relative from "
                          f"H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics (tolerance {tolerance:g}): "
@@ -384,8 +394,14 @@ def _on_cluster(scene, frequencies, tasks, client, scheduler, workers) -> list:
 
 def _curve_or_refusal(scene, frequencies, task):
     """A cluster's task: the curve, or its refusal returned as a value (raised there, a worker logs it as a failed
-    compute, with its traceback, on the user's terminal; the caller raises it, one line as without a cluster)."""
-    try:
-        return harmonic_response(scene, frequencies=frequencies, **task)
-    except FrequencyError as refusal:
-        return refusal
+    compute, with its traceback, on the user's terminal; the caller raises it, one line as without a cluster).
+    numpy's RuntimeWarnings (an overflow in a trial state the corrector then refuses) are not printed, as the
+    command line does not print them in its own process."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        try:
+            return harmonic_response(scene, frequencies=frequencies, **task)
+        except FrequencyError as refusal:
+            return refusal

@@ -390,6 +390,14 @@ class Shooting:
     def amplitude_at(self, s: np.ndarray, omega: float, node: Optional[int] = None) -> float:
         return abs(self.first_harmonic(s, omega, node))
 
+    @property
+    def monotone(self) -> bool:
+        """Whether the scene is monotone (``floquet.monotone``: linear springs and dashpots of positive
+        semi-definite matrices, branches, sliders and Coulomb friction on a fixed ground; no cubic spring, no
+        Stribeck drop, no belt, no effect with memory): then no periodic state is unstable and the curve has no
+        fold, a function of the frequency (``continuation.march_curve`` steps it in omega)."""
+        return False
+
     def multipliers(self, s: np.ndarray, omega: float) -> np.ndarray:
         """The Floquet multipliers of the whole period: the squares of the eigenvalues of dG/ds (without the
         symmetry: the eigenvalues of dPhi/ds over the period)."""
@@ -606,6 +614,12 @@ class ElementShooting(Shooting):
             return None
         return ("a branch never slides over the period, so its preload is free (every offset within its range is "
                 "as periodic), and beside [cubic] the amplitudes depend on it")
+
+    @property
+    def monotone(self) -> bool:
+        """As :meth:`Shooting.monotone`: the exact stepper's scenes (Coulomb friction on a fixed ground, linear
+        springs and dashpot, branches); not a cubic spring, Stribeck's drop, a belt, a history or a delay."""
+        return not self.smooth
 
     def multipliers(self, s: np.ndarray, omega: float):
         """As :meth:`Shooting.multipliers`; on a belt those of the plain monodromy dPhi_T/ds, less one 1 per branch
@@ -867,6 +881,18 @@ class NetworkShooting(Shooting):
             self.views.append((name, row, weights.get(None, 0.0), gain, pulls))
 
     @property
+    def monotone(self) -> bool:
+        """As :meth:`Shooting.monotone`: no cubic spring, stiffness and damping positive semi-definite."""
+        if self.smooth:
+            return False
+        for matrix in (self.stiffness_matrix, self.damping):
+            symmetric = 0.5 * (matrix + matrix.T)
+            size = float(np.max(np.abs(symmetric), initial=0.0))
+            if size > 0.0 and float(np.min(np.linalg.eigvalsh(symmetric))) < -1e-12 * size:
+                return False
+        return bool(np.all(self.bk >= 0.0))
+
+    @property
     def names(self) -> tuple:
         """The nodes of :meth:`coefficients`: those with a mass, then the massless one named (``views``)."""
         return tuple(self.system.nodes) + tuple(view[0] for view in self.views)
@@ -941,7 +967,7 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     the arguments are ``curve.harmonic_response``'s, checked there."""
     from ..network.model import NetworkScene
     from ..stepping import _progress_bar
-    from .continuation import continue_curve
+    from .continuation import continue_curve, march_curve
     from .unbounded import refuse_unbounded
 
     loaded = None
@@ -968,7 +994,8 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     # a network's curve can take minutes (a Jacobian is 2 n + 1 runs of its motion): a bar on a terminal
     bar = _progress_bar(None, total=None, label=f"{scene.name}: points of the curve")
     try:
-        points = continue_curve(shooting, low, high, int(np.unique(frequencies).size), progress=bar, node=where)
+        follow = march_curve if shooting.monotone else continue_curve
+        points = follow(shooting, low, high, int(np.unique(frequencies).size), progress=bar, node=where)
     finally:
         bar.close()
     # the quadrature of the harmonics: the orbit is the exact stepper's whatever M, so only the samples change

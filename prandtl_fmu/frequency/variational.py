@@ -67,7 +67,9 @@ def substeps(rate: float, period: float, samples: int) -> int:
     if turn <= 0.0:
         return 1
     theta = min(0.5, (144.0 * ACCURACY / turn) ** 0.2)
-    return max(1, math.ceil(turn / samples / theta))
+    # at most 2^62 (a period of 1e300 s, a frequency of 1e-300 Hz, overflowed the integer): the work's bound
+    # refuses far below that
+    return max(1, math.ceil(min(turn / samples / theta, 2.0**62)))
 
 
 def work(samples: int, steps: int, n: int, rows: int, columns: int, switches: int) -> float:

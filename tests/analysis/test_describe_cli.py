@@ -65,6 +65,9 @@ def test_a_frequency_response_to_standard_output(tmp_path, capsys):
     (["--force-amplitude", "1"], "--frequencies"),
     (["--force-amplitude", "1", "--frequencies", "0.1,-0.2"], "--frequencies"),
     (["--force-amplitude", "-1", "--frequencies", "0.1"], "--force-amplitude"),
+    # beyond a scene's range of magnitudes [1e-50, 1e50] (1e-300 Hz overflowed the stability's step count)
+    (["--force-amplitude", "1", "--frequencies", "1e-300"], "--frequencies"),
+    (["--force-amplitude", "1e-320", "--frequencies", "0.1"], "--force-amplitude"),
     (["--force-amplitude", "1", "--frequencies", "0.1", "--method", "time", "--workers", "0"], "--workers"),
     (["--amplitudes", "0.1", "--frequencies", "0.1"], "--frequencies"),
     (["--amplitudes", "0.1", "--tolerance", "2"], "--tolerance"),
@@ -189,3 +192,37 @@ def test_a_negative_delay_gain_with_a_short_tau_is_described_without_a_solver_ta
     w = 2 * math.pi * rows["frequency"]
     closed = 0.1 / np.abs(1.0 - 0.2 * np.exp(-1j * w * 1e-6) - w * w + 0.1j * w)
     assert np.allclose(rows["amplitude"], closed, rtol=1e-6)
+
+
+def test_a_single_frequency_is_written_as_listed(tmp_path):
+    """The points are taken in omega = 2 pi f; the ends come back as the frequencies listed, not 2 pi f / 2 pi
+    (0.17 was written 0.17000000000000004)."""
+    out = tmp_path / "one.csv"
+    assert main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.17",
+                 "--out", str(out)]) == 0
+    assert read_csv(out)["frequency"] == ["0.17"]
+    assert main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.19,0.17",
+                 "--out", str(out)]) == 0
+    frequencies = read_csv(out)["frequency"]
+    assert frequencies[0] == "0.17" and frequencies[-1] == "0.19"
+
+
+DUFFING_BRANCHES = {"mass": {"m": 0.5}, "spring": {"k0": 2.0}, "cubic": {"k3": 3.0}, "damper": {"c": 0.05},
+                    "branches": {"k": [1.0, 3.0], "alpha": [0.05, 0.3]}}
+
+
+@pytest.mark.parametrize("frequencies", [[0.12], [0.12, 0.15]])
+def test_the_harmonics_chosen_are_within_the_tolerance_of_many(frequencies):
+    """Without --harmonics, H grows until the first harmonic changes by at most the tolerance twice in a row:
+    here it changes by 9.7e-4 from H = 1 to 3 (within 1e-3), and H = 3 is 2.4e-3 off H = 63; the point at
+    0.12 Hz is within the tolerance of the balance with 63 harmonics, whatever else is listed."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from tests.analysis.test_harmonic_balance import element
+
+    scene = element(DUFFING_BRANCHES)
+    chosen = harmonic_response(scene, 0.3, frequencies, stability=False)
+    many = harmonic_response(scene, 0.3, [0.12], harmonics=63, stability=False)
+    assert chosen.harmonics > 3
+    X = chosen.amplitude[0] * np.exp(1j * chosen.phase[0])
+    X_many = many.amplitude[0] * np.exp(1j * many.phase[0])
+    assert abs(X - X_many) <= 1e-3 * abs(X_many)

@@ -376,3 +376,43 @@ def test_the_mode_of_friction_beside_series_dashpots_keeps_the_dashpots():
     without = nonlinear_mode(element(dict(tables, friction={"alpha": 1e-9},
                                           branches={"k": [1.0], "alpha": [0.05]})), 1, [0.5, 1.0])
     assert np.all(np.abs(without.damping_ratio / balance.damping_ratio - 1.0) > 0.01)
+
+
+FRICTION_DAMPER = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.02}, "friction": {"alpha": 0.1}}
+
+
+def test_a_monotone_curve_is_a_function_of_the_frequency_from_very_low_frequencies():
+    """A friction damper (monotone: no fold, every periodic state unique) from 0.002 Hz, where its stick-slip
+    pattern changes every few mHz: the arc-length continuation turned back there and refused the curve as a
+    fold below the range. Stepped in omega: the frequencies only grow, nothing folds, every point is the state
+    solved alone at its frequency from rest, and between two points the curve solved alone is within 2 % of the
+    line through them (the points the curve needs)."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene = element(FRICTION_DAMPER)
+    curve = harmonic_response(scene, 0.3, [0.002, 0.3], stability=False)
+    assert curve.method == "shooting" and curve.frequency[0] == 0.002 and curve.frequency[-1] == 0.3
+    assert np.all(np.diff(curve.frequency) > 0) and not np.any(curve.fold)
+    rng = np.random.default_rng(7)
+    for index in rng.choice(len(curve.frequency) - 1, 6, replace=False):
+        alone = harmonic_response(scene, 0.3, [float(curve.frequency[index])], stability=False)
+        assert alone.amplitude[0] == pytest.approx(curve.amplitude[index], rel=1e-6)
+        middle = 0.5 * (curve.frequency[index] + curve.frequency[index + 1])
+        between = harmonic_response(scene, 0.3, [float(middle)], stability=False)
+        line = 0.5 * (curve.amplitude[index] + curve.amplitude[index + 1])
+        assert between.amplitude[0] == pytest.approx(line, rel=0.02), middle
+
+
+@pytest.mark.slow
+def test_a_chain_on_a_support_with_micro_slips_everywhere_does_not_crawl():
+    """networks/chain-dynamic at 5 N from 0.1 to 0.5 Hz: the nodes next to the load start and stop
+    micro-slipping every 4e-5 Hz or so, where the arc-length continuation's step fell to 5e-4 of its bound
+    (hours from 0.1 to 3 Hz). Stepped in omega on the drawn curve: it reaches 0.5 Hz in a few dozen points,
+    the frequencies only growing."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("networks/chain-dynamic", networks=True)
+    curve = harmonic_response(scene, 5.0, [0.1, 0.5], stability=False)
+    assert curve.method == "shooting" and curve.frequency[-1] == 0.5
+    assert np.all(np.diff(curve.frequency) > 0) and len(curve.frequency) < 40

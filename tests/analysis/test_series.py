@@ -129,13 +129,16 @@ def test_a_jenkins_element_written_with_its_node_beside_a_rigid_slider_is_shot(t
         ("spring", ["a", "j"], {"k": 50.0}), ("slider", ["j", "b"], {"alpha": 1.0})], load_node="a")
     branch = network_text(["a", "b"], [1.0, 2.0], common + [("branch", ["a", "b"], {"k": 50.0, "eta": 0.02})],
                           load_node="a")
-    curves = [harmonic_response(network(tmp_path, text, f"{i}.toml"), 3.0, [1.0, 3.0], stability=False)
-              for i, text in enumerate((explicit, branch))]
-    assert curves[0].method == "shooting" and len(curves[0].frequency) == len(curves[1].frequency) > 10
-    # the same points up to the corrector's tolerance (the elements are summed in another order: the rounding
-    # moves the continuation's steps by 2e-8)
-    assert np.allclose(curves[0].frequency, curves[1].frequency, rtol=1e-6)
-    assert np.allclose(curves[0].amplitude, curves[1].amplitude, rtol=1e-6)
+    curve = harmonic_response(network(tmp_path, explicit, "explicit.toml"), 3.0, [1.0, 3.0], stability=False)
+    assert curve.method == "shooting" and len(curve.frequency) > 10
+    # the branch's periodic state at some of the curve's own frequencies, each solved alone (the elements are
+    # summed in another order: the rounding may move the stepping's choices, so not its points)
+    scene = network(tmp_path, branch, "branch.toml")
+    for index in np.linspace(0, len(curve.frequency) - 1, 6).astype(int):
+        frequency = float(curve.frequency[index])
+        alone = harmonic_response(scene, 3.0, [frequency], stability=False)
+        assert alone.amplitude[0] == pytest.approx(curve.amplitude[index], rel=1e-6), frequency
+        assert alone.amplitudes["b"][0] == pytest.approx(curve.amplitudes["b"][index], rel=1e-6), frequency
 
 
 def test_the_scene_s_load_node_is_joined_where_no_force_acts_on_it(tmp_path):
