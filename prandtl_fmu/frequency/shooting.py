@@ -628,8 +628,9 @@ class ElementShooting(Shooting):
         if self.symmetric:
             return super().multipliers(s, omega) if self.delay is None else self._delay_multipliers(s, omega)
         s = np.asarray(s, dtype=float)
+        stuck = self._stuck(s, omega)
         if self.delay is not None:
-            values = self._delay_multipliers(s, omega)
+            values = self._delay_multipliers(s, omega, stuck)
             if values is None:
                 return None
         else:
@@ -638,7 +639,7 @@ class ElementShooting(Shooting):
                 values = super().multipliers(s, omega)
             finally:
                 self._plain = False
-        for _ in range(self._stuck(s, omega)):
+        for _ in range(stuck):
             values = np.delete(values, int(np.argmin(np.abs(values - 1.0))))
         return values
 
@@ -670,11 +671,14 @@ class ElementShooting(Shooting):
             out = np.delete(out, 1)  # the mean's (a_0, no b_0)
         return out / self._delay_scale()
 
-    def _delay_multipliers(self, s: np.ndarray, omega: float):
+    def _delay_multipliers(self, s: np.ndarray, omega: float, neutral: int = 0):
         """With a delay (the map of s is not the delay equation's, whose state is the motion over the last tau)
-        the multipliers of :meth:`_delay_monodromy` at DELAY_STEPS steps per period, doubled while the verdict
-        is in doubt (the largest |mu| nearer 1 than four times its change), at most DELAY_REFINEMENTS times;
-        None where the buffer passes floquet.MAX_DELAY_STATES values (unknown)."""
+        the multipliers of :meth:`_delay_period_multipliers` at DELAY_STEPS steps per period (the LARGEST, and
+        ``neutral`` more: the stuck branches' 1s), doubled while the verdict is in doubt (the largest |mu| nearer
+        1 than four times its change), at most DELAY_REFINEMENTS times; None where the buffer passes
+        floquet.MAX_DELAY_STATES values or Arnoldi's iteration does not converge (unknown)."""
+        from .floquet import LARGEST
+
         s = np.asarray(s, dtype=float)
         period = 2.0 * math.pi / omega
         # steps of at most tau (the buffer's grid), and more than twice the delay's harmonics; past
@@ -686,30 +690,33 @@ class ElementShooting(Shooting):
         for _ in range(DELAY_REFINEMENTS + 1):
             if steps > DELAY_MAX_STEPS:
                 return values
-            monodromy = self._delay_monodromy(s, omega, steps)
-            if monodromy is None:
+            found = self._delay_period_multipliers(s, omega, steps, LARGEST + neutral)
+            if found is None:
                 return values
-            values = np.linalg.eigvals(monodromy)
+            values = found
             top = float(np.max(np.abs(values)))
             if previous is not None and abs(top - 1.0) > 4.0 * abs(top - previous):
                 return values
             previous, steps = top, 2 * steps
         return values
 
-    def _delay_monodromy(self, s: np.ndarray, omega: float, steps: int) -> Optional[np.ndarray]:
-        """The monodromy of the delay equation about the orbit of ``s`` (None past floquet.MAX_DELAY_STATES).
+    def _delay_period_multipliers(self, s: np.ndarray, omega: float, steps: int, count: int) -> Optional[np.ndarray]:
+        """The multipliers (``floquet.leading``: all of them for a short buffer, else the ``count`` largest) of the
+        monodromy of the delay equation about the orbit of ``s`` (None past floquet.MAX_DELAY_STATES, or where
+        Arnoldi's iteration does not converge).
 
         Its state is x, v, the branches' u, the history's z and the buffer: y at the grid points t_k = k h, k =
         -(N + 1) ... 0 (h = T / steps, tau = N h + delta), between which y is taken linear (the semi-discretisation
         of Insperger and Stepan: an error like h^2 in the delayed force), on ``element_orbit.run_forced``'s Taylor
         orbit, events exact. The buffer is first the orbit's y (v by the samples' spectral derivative), then two
         periods of that equation make the point its own; each component is perturbed in turn (PERTURBATION of
-        the motion), one period each: 2 + n + n_z + N + 2 runs. Measured on the friction damper with a delay: a
+        the motion), one period each: 2 + n + n_z + N + 2 runs (past floquet.DENSE_STATES, Arnoldi's products
+        in its place, a few tens of runs). Measured on the friction damper with a delay: a
         finite-difference monodromy on the implicit stepper, the buffer's values as states (``floquet.py``'s for
         a delay without friction) called a point unstable (|mu| = 1.27) whose time sweep settles in 8 periods:
         its stick and slip move by a step between perturbed runs. Here they move with the perturbation."""
         from .element_orbit import OK, explain, run_forced
-        from .floquet import MAX_DELAY_STATES, differences
+        from .floquet import MAX_DELAY_STATES, leading
 
         period = 2.0 * math.pi / omega
         h = period / steps
@@ -750,8 +757,8 @@ class ElementShooting(Shooting):
         scales[1] *= omega
         if on_v:
             scales[2 + nb + nz:] *= omega
-        monodromy = differences(run, base_state, scales)
-        return monodromy if np.all(np.isfinite(monodromy)) else None
+        values = leading(run, base_state, scales, count)
+        return values if values is not None and np.all(np.isfinite(values)) else None
 
     def delay_tail(self, s: np.ndarray) -> float:
         """The highest kept harmonic of the delay's force relative to its first, at ``s``."""

@@ -102,6 +102,23 @@ def test_the_multipliers_beside_a_delay_are_the_delay_equation_s_where_the_frict
     assert set(curve.stable.tolist()) == {root.real < 0}
 
 
+def test_a_delay_of_many_periods_beside_the_friction_has_the_delay_equation_s_multipliers():
+    """tau = 30 s (3 to 4 periods, a buffer of 2000 values and more: Arnoldi's iteration on the period map, not
+    a run per value) with a friction of 1e-9 N: the largest multiplier is exp(Re(lambda) T), lambda the rightmost
+    root found from a grid (``test_harmonic_balance_memory.rightmost_root``: Re = +0.0094, a second pair at
+    +0.0090), to 1e-3 at every point, and every point unstable."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from tests.analysis.test_harmonic_balance_memory import rightmost_root
+
+    scene = element(dict(DELAYED, friction={"alpha": 1e-9}, delay={"gain": 0.2, "tau": 30.0}))
+    curve = harmonic_response(scene, 1.0, [0.1, 0.14])
+    assert curve.method == "shooting" and len(curve.frequency) > 5
+    root = rightmost_root(0.2, 30.0)
+    assert root.real > 0.0
+    assert np.allclose(curve.multiplier, np.exp(root.real / curve.frequency), rtol=1e-3, atol=0)
+    assert not np.any(curve.stable)
+
+
 def test_a_point_the_delay_makes_unstable_is_not_where_the_time_sweep_goes(tmp_path):
     """A delay on x of gain +0.2 beside the friction: at 0.0898 Hz the symmetric orbit has a real multiplier
     1.19 (unstable), and the time sweep, from rest, settles on another motion (its first harmonic 0.6 % away,
@@ -160,14 +177,20 @@ def test_the_delay_s_force_is_the_orbit_s_and_its_harmonics_converge():
 def test_a_delay_too_short_for_the_stability_s_grid_leaves_it_unknown_and_says_so(tmp_path, capsys):
     """tau = 1e-6 s at 0.1 Hz: the semi-discretised delay would need 1e7 steps a period (its grid at most tau):
     past its bound (shooting.DELAY_MAX_STEPS) the stability is not computed, quickly: every `stable` empty, and
-    one warning line says so; the curve itself is the delay's."""
+    one warning line says so, and the plot draws it dotted ("stability not computed"); the curve itself is the
+    delay's."""
+    import importlib.util
     import time
 
-    out = tmp_path / "curve.csv"
+    out, plot = tmp_path / "curve.csv", tmp_path / "curve.png"
+    arguments = ["describe", write(tmp_path, dict(DELAYED, delay={"gain": 0.2, "tau": 1e-6})), "--force-amplitude",
+                 "0.3", "--frequencies", "0.1,0.2", "--out", str(out)]
+    if importlib.util.find_spec("matplotlib") is not None:
+        arguments += ["--plot", str(plot)]
     start = time.perf_counter()
-    assert main(["describe", write(tmp_path, dict(DELAYED, delay={"gain": 0.2, "tau": 1e-6})), "--force-amplitude",
-                 "0.3", "--frequencies", "0.1,0.2", "--out", str(out)]) == 0
+    assert main(arguments) == 0
     assert time.perf_counter() - start < 120.0
+    assert "--plot" not in arguments or plot.read_bytes()[:4] == b"\x89PNG"
     table = read_csv(out)
     assert set(table["stable"]) == {""} and set(table["multiplier"]) == {""}
     warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning:")]
