@@ -214,9 +214,16 @@ def _check(args) -> dict:
 def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
     """One ``warning:`` line on stderr for each harmonic balance curve whose first harmonic still changes by more
     than the tolerance at the next number of harmonics (``Curve.change``): the H given truncates it by about
-    that much. The curve is written all the same (it is the H-harmonic balance asked for)."""
+    that much. The curve is written all the same (it is the H-harmonic balance asked for). Where the curves
+    are by shooting (friction on a mass: the orbit is exact, H only the harmonics kept), one ``note:`` line
+    says so, so that --harmonics 1 is not read as the one-harmonic balance."""
     import sys
 
+    shot = [curve for curve in curves if curve.method == "shooting"]
+    if shot:
+        print(f"note: the periodic states are found by shooting on the {shot[0].orbit} (friction on a mass), exact "
+              f"whatever the harmonics: --harmonics {harmonics} sets only the harmonics kept (their columns and "
+              "--harmonic-amplitudes), not the accuracy", file=sys.stderr)
     for curve in curves:
         if curve.method == "harmonic balance" and curve.change is not None and curve.change > tolerance:
             load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else

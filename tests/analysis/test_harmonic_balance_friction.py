@@ -276,6 +276,26 @@ def test_the_command_line_writes_the_curve_of_friction_on_the_mass(tmp_path):
     assert all(math.isfinite(float(m)) for m in table["multiplier"])
 
 
+def test_harmonics_given_to_shooting_set_the_columns_not_the_accuracy(tmp_path, capsys):
+    """--harmonics 1 on friction on the mass is not the one-harmonic balance: shooting's orbit is exact, so the
+    curve is the same with H = 1 as with none given, each point the closed-form non-stop orbit's first harmonic
+    to the tolerance (1e-7); one note on stderr says that H sets only the harmonics kept."""
+    band = "0.25,0.4"
+    tables = {}
+    for harmonics in ([], ["--harmonics", "1"]):
+        out = tmp_path / f"curve{len(harmonics)}.csv"
+        assert main(["describe", write(tmp_path, COULOMB), "--force-amplitude", "1", "--frequencies", band,
+                     "--tolerance", "1e-7", *harmonics, "--out", str(out)]) == 0
+        notes = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
+        assert len(notes) == (1 if harmonics else 0) and ("shooting" in notes[0] if notes else True)
+        tables[len(harmonics)] = read_csv(out)
+    assert tables[0]["amplitude"] == tables[2]["amplitude"] and tables[0]["frequency"] == tables[2]["frequency"]
+    for f, amplitude in zip(tables[2]["frequency"], tables[2]["amplitude"]):
+        omega = 2 * math.pi * float(f)
+        _, _, x, t = non_stop_orbit(1.0, 1.0, 0.1, 1.0, omega)
+        assert float(amplitude) == pytest.approx(abs(x @ np.exp(-1j * omega * t)) * 2.0 / t.size, rel=1e-7)
+
+
 @pytest.mark.parametrize("tables, options, culprit", [
     # a belt is taken (test_belt_shooting.py) beside springs, a dashpot, branches, a history, a delay and a
     # Stribeck drop, under a force or base excitation
