@@ -235,8 +235,9 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
 
 def _warn_unknown_stability(curves) -> None:
     """One ``warning:`` line for each curve with points whose stability is not computed (``stable`` empty there:
-    a monodromy past its work bound on a scene not proven monotone, a delay's buffer past its bound), so that an
-    empty field is never read as a verdict."""
+    a monodromy past its work bound on a scene not proven monotone, a delay's buffer past its bound, a delay's
+    largest multipliers not converged within floquet.KRYLOV_RUNS runs), so that an empty field is never read as
+    a verdict."""
     import numpy as np
 
     for curve in curves:
@@ -245,8 +246,9 @@ def _warn_unknown_stability(curves) -> None:
             load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else
                     f"Y0 = {curve.base_amplitude:g} m")
             print(f"warning: ({load}) the stability of {unknown} of {len(curve.frequency)} points is not computed "
-                  "(their stable field is empty: a monodromy past its work bound, or a delay's buffer past its "
-                  "bound; docs/frequency.md)", file=sys.stderr)
+                  "(their stable field is empty: a monodromy past its work bound, a delay's buffer past its "
+                  "bound, or its largest multipliers not converged within the Arnoldi iteration's bound; "
+                  "docs/frequency.md)", file=sys.stderr)
 
 
 def _warn_friction_error(scene, stepper: str) -> None:

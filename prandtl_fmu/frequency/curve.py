@@ -39,7 +39,8 @@ class Curve:
 
     ``frequency`` (Hz), ``amplitude`` (m) and ``phase`` (rad) of the first harmonic of x at ``node``,
     ``stable`` (bool; None for a curve computed with ``stability=False``; a numpy masked array, masked where
-    a point's multipliers were not computed (``floquet.py``: a delay too long for its buffer), an empty field
+    a point's multipliers were not computed (``floquet.py``: past a work bound, a delay's buffer past its bound or its
+    Arnoldi iteration not converged), an empty field
     in the CSV), ``fold`` (bool: a located fold),
     ``multiplier`` the largest |Floquet multiplier| of each point (NaN where it was not computed: ``floquet.py``;
     an empty field in the CSV), ``amplitudes``: {node: first-harmonic amplitude (m)} for
