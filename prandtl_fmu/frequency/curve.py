@@ -28,7 +28,7 @@ import numpy as np
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
 from .harmonic_balance import HarmonicBalance, periodic_system
-from .series import joined
+from .series import check_named, joined
 from .unbounded import refuse_slip_limited, refuse_unbounded
 
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
@@ -137,6 +137,7 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
         loaded = network.nodes[network.load_node]
     # the named node kept for its motion; the stability from the scene without it where it is massless and joins
     # (:func:`_stability_balance`)
+    check_named(scene, node, load_node)
     plain = joined(scene, keep=(loaded,)) if node is not None else None
     scene = joined(scene, keep=(node, loaded))
     if shooting.takes(scene):  # friction on the mass: its periodic state by shooting (shooting.py says why)

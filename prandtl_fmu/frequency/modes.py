@@ -28,7 +28,7 @@ import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
 from .harmonic_balance import NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
-from .series import joined
+from .series import check_named, joined
 
 MAX_HALVINGS = 30
 HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
@@ -70,6 +70,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
         if _friction_taylor(scene):  # a belt, a Stribeck drop, a history or a delay: the element's Taylor orbit
             return _slider_mode(scene, mode, amplitudes, node, tolerance, load_node)
         scene = _friction_network(scene, tolerance)
+    check_named(scene, node, load_node)
     scene = joined(scene, keep=(node, load_node))  # a Jenkins element written with its massless node: a branch
     if any(e.kind == "slider" for e in getattr(getattr(scene, "network", None), "elements", ())):
         return _slider_mode(scene, mode, amplitudes, node, tolerance, load_node)

@@ -76,6 +76,17 @@ class Lever:
         return out
 
 
+def check_named(scene, node=None, load_node=None) -> None:
+    """FrequencyError, one line, where ``--node`` or ``--load-node`` names no node of the network as written
+    (listing its nodes: joined, the massless ones would be missing from the list)."""
+    network = getattr(scene, "network", None)
+    if network is None:
+        return
+    for flag, name in (("--node", node), ("--load-node", load_node)):
+        if name is not None and name not in network.nodes:
+            raise FrequencyError(f"{flag}: {name!r} is not a node of {scene.source} ({', '.join(network.nodes)})")
+
+
 def joined(scene, keep=()):
     """``scene`` with every massless node between two elements in series joined (see the module); a network
     scene only (an element scene is returned as is). ``keep``: node names not to join (the loaded node among

@@ -109,6 +109,23 @@ def test_a_massless_node_named_has_the_stability_of_the_scene_without_it(tmp_pat
     assert max(float(a) for a in kept["amplitude_a"]) > 0.15  # through the resonance: the branch slides
 
 
+@pytest.mark.parametrize("options", [["--force-amplitude", "0.01", "--frequencies", "0.1,0.3", "--node", "zzz"],
+                                     ["--force-amplitude", "0.01", "--frequencies", "0.1,0.3", "--load-node", "zzz"],
+                                     ["--mode", "1", "--amplitudes", "0.01", "--node", "zzz"]])
+def test_a_node_named_that_is_none_lists_the_nodes_as_written(tmp_path, capsys, options):
+    """The refusal of an unknown --node or --load-node lists the network's nodes as written, massless ones
+    too (it listed those left once the massless nodes were joined: a alone)."""
+    path = tmp_path / "series.toml"
+    path.write_text(network_text(["a", "p1", "p2"], [1.0, 0.0, 0.0], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["a", "p1"], {"k": 2.0}),
+        ("branch", ["p1", "p2"], {"k": 4.0, "eta": 0.05}), ("spring", ["p2", "ground"], {"k": 4.0})],
+        load_node="a"))
+    assert main(["describe", str(path), *options, "--out", str(tmp_path / "out.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "'zzz'" in err and "(a, p1, p2)" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out.csv").exists()
+
+
 IWAN_EXPLICIT = network_text(["a", "j1", "b", "j2"], [1.0, 0.0, 1.0, 0.0], [
     ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
     ("dashpot", ["a", "ground"], {"c": 0.02}), ("dashpot", ["b", "ground"], {"c": 0.02}),
