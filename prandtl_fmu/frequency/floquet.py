@@ -219,12 +219,14 @@ def monotone(system) -> bool:
         return False
     if np.any(system.branch_k < 0.0):
         return False
-    for matrix in (system.stiffness, system.damping):
-        symmetric = 0.5 * (matrix + matrix.T)
-        scale = float(np.max(np.abs(symmetric), initial=0.0))
-        if scale > 0.0 and float(np.min(np.linalg.eigvalsh(symmetric))) < -1e-12 * scale:
-            return False
-    return True
+    return positive_semidefinite(system.stiffness) and positive_semidefinite(system.damping)
+
+
+def positive_semidefinite(matrix: np.ndarray) -> bool:
+    """Whether the symmetric part of ``matrix`` has no eigenvalue below -1e-12 of its largest entry."""
+    symmetric = 0.5 * (matrix + matrix.T)
+    scale = float(np.max(np.abs(symmetric), initial=0.0))
+    return not (scale > 0.0 and float(np.min(np.linalg.eigvalsh(symmetric))) < -1e-12 * scale)
 
 
 def _memory_multipliers(balance, q_free, omega, steps):

@@ -890,14 +890,12 @@ class NetworkShooting(Shooting):
     @property
     def monotone(self) -> bool:
         """As :meth:`Shooting.monotone`: no cubic spring, stiffness and damping positive semi-definite."""
+        from .floquet import positive_semidefinite
+
         if self.smooth:
             return False
-        for matrix in (self.stiffness_matrix, self.damping):
-            symmetric = 0.5 * (matrix + matrix.T)
-            size = float(np.max(np.abs(symmetric), initial=0.0))
-            if size > 0.0 and float(np.min(np.linalg.eigvalsh(symmetric))) < -1e-12 * size:
-                return False
-        return bool(np.all(self.bk >= 0.0))
+        return positive_semidefinite(self.stiffness_matrix) and positive_semidefinite(self.damping) and \
+            bool(np.all(self.bk >= 0.0))
 
     @property
     def names(self) -> tuple:
