@@ -24,12 +24,15 @@ on a Jenkins element; the two discretize the base's motion differently and diffe
 
 Backward Euler damps: with M steps per period a multiplier is shrunk by about exp(-(2 pi)^2 / (2 M)
 (omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
-its multipliers extrapolated (Richardson, first order: 2 mu_2M - mu_M, each with the nearest at M:
-:func:`extrapolated`; not the matrices, whose structure can differ where a slip starts between steps), which
-leaves an error of order 1 / M^2; while the verdict is in doubt (the largest |mu| nearer 1 than 4 times its
-last change) the pair moves to 2 M and 4 M, and so on, at most REFINEMENTS times (:func:`refined`). At a
-lightly damped joint's resonance peak M = 256 and 512 give 0.938 where 4096 gives 0.946; the pair 512 and 1024
-gives 0.945. Every point of a curve gets its own (a few tens of ms a point).
+its multipliers extrapolated in their logarithm (Richardson, first order in the exponent: mu_2M^2 / mu_M, each
+with the nearest at M: :func:`extrapolated`; not the matrices, whose structure can differ where a slip starts
+between steps), which leaves an error of order 1 / M^2 in the exponent. While the
+verdict is in doubt (the largest |mu| nearer 1 than 4 times its last change), or while the largest's shrinking
+between the two is past SHRINK (far below the resonance: the value is not yet in the extrapolation's range,
+the verdict may be), the pair moves to 2 M and 4 M, and so on, at most REFINEMENTS times (:func:`refined`). At
+a lightly damped joint's resonance peak M = 256 and 512 give 0.878 and 0.913 and extrapolate to 0.94886, where
+the pair 4096 and 8192 gives 0.94890 (the extrapolation of the multipliers themselves, 2 mu_2M - mu_M, gave
+0.9475 from 256 and 512). Every point of a curve gets its own (a few tens of ms a point).
 
 An element scene with effects with memory (``[delay]``, ``[history]``, ``[dahl]``: the network stepper knows none
 of them) is integrated by the element's own ``implicit`` stepper instead (``memory/``: the delay from its
@@ -76,6 +79,8 @@ DENSE_STATES = 64  # past it the largest multipliers by Arnoldi's iteration (lea
 KRYLOV_RUNS = 400  # Arnoldi's products (a period's run each) one monodromy may take: the work bound
 KRYLOV_CHECK = 5  # the Ritz values are looked at every so many products
 RITZ_TOLERANCE = 1e-6  # a Ritz value's residual, relative: far below MARGIN
+NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: extrapolated linearly
+SHRINK = 0.3  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (a value off 1e-3)
 REFINEMENTS = 4  # of the steps per period of the finite differences: at most STEPS 2^4
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
 # the multiply-adds one point's monodromy may cost (a few seconds); past it the multipliers are not computed
@@ -129,10 +134,12 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
 def refined(at, steps: int):
     """The multipliers from ``at(M)`` (the eigenvalues of the monodromy at M steps per period, None where not
     computed), extrapolated from M and 2 M (:func:`extrapolated`: the LARGEST ones at 2 M), the pair moved to 2 M
-    and 4 M ... while the verdict is in doubt: until |mu| - 1 of the largest is more than 4 times its last change
-    (from the pair before, or for the first pair from its value at 2 M), or that change is below MARGIN / 2; at
-    most REFINEMENTS times (then the finest pair's). None where ``at`` gives none before a first pair (a delay's
-    buffer too long), else the finest pair's where a finer one has none."""
+    and 4 M ... while the verdict or the value is in doubt: until |mu| - 1 of the largest is more than 4 times
+    its last change (from the pair before, or for the first pair from its value at 2 M) and its shrinking
+    log(mu_2M / mu_M) is at most SHRINK (0.3: its value within about 1e-3, measured far below an oscillator's
+    resonance), or that change is below MARGIN / 2; at most REFINEMENTS times (then the finest pair's). None
+    where ``at`` gives none before a first pair (a delay's buffer too long), else the finest pair's where a finer
+    one has none."""
     fine = at(2 * steps)  # first: where the finer has none (a delay's buffer past its bound), nothing is run
     if fine is None:
         return None
@@ -145,22 +152,38 @@ def refined(at, steps: int):
             fine = at(steps * 2**level)
         if fine is None:
             return values
-        values = extrapolated(fine[np.argsort(-np.abs(fine))[:min(LARGEST, fine.size)]], coarse)
-        top = float(np.max(np.abs(values)))
+        kept = fine[np.argsort(-np.abs(fine))[:min(LARGEST, fine.size)]]
+        values = extrapolated(kept, coarse)
+        largest = int(np.argmax(np.abs(values)))
+        top = float(abs(values[largest]))
         change = abs(top - float(np.max(np.abs(fine)))) if previous is None else abs(top - previous)
-        if abs(top - 1.0) > 4.0 * change or (previous is not None and change <= 0.5 * MARGIN):
+        # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M): past SHRINK its value is
+        # not yet in the extrapolation's range (the verdict may be sure, the value is not)
+        shrink = abs(math.log(top / abs(kept[largest]))) if top > NOISE and abs(kept[largest]) > 0.0 else 0.0
+        if (abs(top - 1.0) > 4.0 * change and shrink <= SHRINK) or (previous is not None and change <= 0.5 * MARGIN):
             return values
         previous, coarse = top, fine
     return values
 
 
 def extrapolated(fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
-    """Richardson's first-order extrapolation of multipliers, 2 mu_2M - mu_M, each of ``fine`` (2 M steps) with
-    the nearest of ``coarse`` (M steps). On the multipliers, not on the matrices: where a slip starts between
-    two steps at one resolution and not at the other, the two monodromies differ in structure and 2 Phi_2M -
-    Phi_M can have an eigenvalue that neither has (|mu| = 1.12 at a resonance peak whose multipliers are 0.87
-    at M = 256 and 0.90 at 512, 0.946 at 4096: a stable point called unstable)."""
-    return np.array([2.0 * mu - coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()])
+    """Richardson's first-order extrapolation of multipliers in their logarithm, mu_2M^2 / mu_M, each of ``fine``
+    (2 M steps) with the nearest of ``coarse`` (M steps). In the logarithm because backward Euler's error is in
+    the exponent: with M steps a multiplier is shrunk by about exp(-a / M) (a = (2 pi omega_n / omega)^2 / 2 for
+    a motion of frequency omega_n), and mu_2M^2 / mu_M removes that term, where 2 mu_2M - mu_M (the same to
+    first order near |mu| = 1) is off by a factor once a / M nears 1: 0.30 for 0.54 on an oscillator at omega_n
+    / omega = 5.3 (256 and 512 steps), where this gives 0.539. A pair whose coarse value is below NOISE
+    (rounding in the finite differences, nothing a verdict needs) is extrapolated linearly.
+
+    On the multipliers, not on the matrices: where a slip starts between two steps at one resolution and not at
+    the other, the two monodromies differ in structure and 2 Phi_2M - Phi_M can have an eigenvalue that neither
+    has (|mu| = 1.12 at a resonance peak whose multipliers are 0.87 at M = 256 and 0.90 at 512, 0.946 at 4096:
+    a stable point called unstable)."""
+    partner = np.array([coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()], dtype=complex)
+    logarithmic = np.abs(partner) > NOISE
+    out = 2.0 * fine - partner
+    out[logarithmic] = fine[logarithmic] ** 2 / partner[logarithmic]
+    return out
 
 
 def variational_monodromy(balance, q_free, omega):

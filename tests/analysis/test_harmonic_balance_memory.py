@@ -220,6 +220,31 @@ def test_a_history_of_rate_0_is_refused_in_one_line(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("acts_on", ["x", "v"])
+def test_far_below_the_resonance_the_largest_multiplier_is_the_characteristic_root_s(acts_on):
+    """Far below the resonance backward Euler shrinks the oscillator's multiplier by about exp(-(2 pi omega_n /
+    omega)^2 / 2 M) a period (M steps): at omega_n / omega = 5.3 and 8, 256 steps shrink it by e^-2.2 and e^-4.9.
+    The extrapolation in the multipliers' logarithm and the refinement while that shrinking is large give the
+    value, not only the verdict: exp(Re(s) T), s the root of s^2 + c s + k + g s^j e^(-s tau) = 0 near i (a delay
+    of gain 0.02 on x, j = 0, or on v, j = 1), to 2e-3 (it was 0.30 and 0.064 for 0.54 and 0.39 on x, 0.19 and
+    0.031 for 0.33 and 0.19 on v)."""
+    from prandtl_fmu.frequency.floquet import multipliers
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    on_v = acts_on == "v"
+    balance = HarmonicBalance(periodic_system(element({**OSCILLATOR, "delay": {
+        "gain": 0.02, "tau": 0.7, "acts_on": acts_on}})), 3, 0.1)
+    s = 1j
+    for _ in range(50):
+        e = 0.02 * np.exp(-0.7 * s)
+        s -= ((s * s + 0.05 * s + 1 + e * s) / (2 * s + 0.05 + e * (1 - 0.7 * s)) if on_v else
+              (s * s + 0.05 * s + 1 + e) / (2 * s + 0.05 - 0.7 * e))
+    for ratio in (5.3, 8.0):
+        omega = 1.0 / ratio
+        largest = float(np.max(np.abs(multipliers(balance, balance.solve_at(omega), omega))))
+        assert largest == pytest.approx(math.exp(s.real * 2 * math.pi / omega), rel=2e-3)
+
+
 def rightmost_root(gain: float, tau: float) -> complex:
     """The rightmost root of l^2 + 0.05 l + 1 + g e^(-l tau) = 0 (the oscillator's perturbations under a delay
     on x), by Newton's method from every point of a grid over -0.3 <= Re l <= 0.3, 0 <= Im l <= 3: with a long
