@@ -47,7 +47,7 @@ vector one period's run from the state moved along it, a few tens of runs where 
 buffer value (Hill's method for the delay alone would need the branches' nonsmooth linearisation; the
 propagation of the linear part alone does not see the branches). Bounded: at most KRYLOV_RUNS runs (not
 converged by then: the point's stability is not computed, ``None``, an empty field, never a guess) and
-MAX_DELAY_STATES buffer values at the finer resolution (a delay longer than about 64 periods at M = 512), and
+MAX_DELAY_STATES buffer values at the finer resolution (a delay longer than about 256 periods at M = 512), and
 a refinement past either keeps the pair before. With a delay the two resolutions have monodromies of
 different sizes: the LARGEST multipliers at 2 M are extrapolated.
 
@@ -74,9 +74,10 @@ import numpy as np
 STEPS = 256
 MARGIN = 2e-3
 PERTURBATION = 1e-6
-MAX_DELAY_STATES = 2**15  # a delay's buffer values: Arnoldi's basis is KRYLOV_RUNS of them (at most 105 MB)
+MAX_DELAY_STATES = 2**17  # a delay's buffer values (about 256 periods at 512 steps)
 DENSE_STATES = 64  # past it the largest multipliers by Arnoldi's iteration (leading), not the whole monodromy
-KRYLOV_RUNS = 400  # Arnoldi's products (a period's run each) one monodromy may take: the work bound
+KRYLOV_RUNS = 2000  # Arnoldi's products (a period's run each) one monodromy may take: the work bound
+KRYLOV_BASIS = 80  # Arnoldi's vectors at most (restarted past it): 81 x MAX_DELAY_STATES values, 85 MB
 KRYLOV_CHECK = 5  # the Ritz values are looked at every so many products
 RITZ_TOLERANCE = 1e-6  # a Ritz value's residual, relative: far below MARGIN
 NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: extrapolated linearly
@@ -284,42 +285,73 @@ def leading(run, state: np.ndarray, scales: np.ndarray, count: int):
 
 
 def arnoldi(product, size: int, count: int):
-    """The ``count`` eigenvalues of largest modulus of the matrix whose products are ``product`` (size x size),
-    by Arnoldi's iteration from a fixed random start (Gram-Schmidt twice, no restart): every KRYLOV_CHECK
-    products the Ritz values of the Hessenberg matrix, returned once each of the ``count`` largest has a residual
-    |h_(m+1,m) y_m| of at most RITZ_TOLERANCE times the largest modulus (at least 1). A delay's monodromy suits
-    it: its multipliers gather at 0 (the buffer's shift) but for a few, and these converge within a few tens of
-    products (a delay of 30 s at 0.15 Hz, 2308 states: 35 products, 0.02 s, the dense matrix's largest
-    multipliers to 1e-7, the matrix itself 26 s). None where they have not within KRYLOV_RUNS products (the
-    work bound), or a product is not finite."""
-    runs = min(KRYLOV_RUNS, size)
-    basis = np.zeros((runs + 1, size))
-    hessenberg = np.zeros((runs + 1, runs))
+    """The ``count`` eigenvalues of largest modulus of the matrix A whose products are ``product`` (size x size),
+    by Arnoldi's iteration from a fixed random start (Gram-Schmidt twice), restarted as Stewart's Krylov-Schur
+    method keeps its basis at most KRYLOV_BASIS vectors: A V = V S + v b' with V orthonormal, grown a product
+    at a time; every KRYLOV_CHECK products, and when the basis is full, the Ritz values (eigenvalues of S) and
+    their residuals |b' y|; returned once each of the ``count`` largest has a residual of at most
+    RITZ_TOLERANCE times the largest modulus (at least 1); a full basis restarts from the span of the Ritz
+    vectors of the largest (:func:`_kept`: about half the basis, conjugate pairs whole, in real arithmetic) with S
+    their projection. A delay's monodromy suits it: its multipliers gather at 0 (the buffer's shift) but for a
+    few, and these converge within a few tens of products (a delay of 30 s at 0.15 Hz, 2308 states: 45
+    products, 0.01 s, the dense matrix's largest multipliers to 1e-7, the matrix itself 26 s); where they crowd
+    near 1 (a delay of 370 s, 30 315 states) 400 to 480 products and 1.2 to 1.4 s, where the basis unrestarted
+    (every product kept) took 350 to 400 and 4.4 to 5.7 s, its Gram-Schmidt over the whole basis dominating. None
+    where they have not within KRYLOV_RUNS products (the work bound), or a product is not finite."""
+    dimension = min(KRYLOV_BASIS, size)
+    basis = np.zeros((dimension + 1, size))
+    relation = np.zeros((dimension + 1, dimension))  # A basis[:m] = basis[:m + 1] relation[:m + 1, :m]
     start = np.random.default_rng(0).standard_normal(size)
     basis[0] = start / np.linalg.norm(start)
-    for j in range(runs):
-        w = product(basis[j])
+    m = 0
+    for run in range(1, KRYLOV_RUNS + 1):
+        w = product(basis[m])
         if not np.all(np.isfinite(w)):
             return None
         for _ in range(2):  # Gram-Schmidt twice: orthogonal to rounding
-            c = basis[:j + 1] @ w
-            w = w - c @ basis[:j + 1]
-            hessenberg[:j + 1, j] += c
+            c = basis[:m + 1] @ w
+            w = w - c @ basis[:m + 1]
+            relation[:m + 1, m] += c
         beta = float(np.linalg.norm(w))
-        hessenberg[j + 1, j] = beta
-        m = j + 1
-        scale = max(float(np.max(np.abs(hessenberg[:m + 1, :m]))), 1e-300)
+        relation[m + 1, m] = beta
+        m += 1
+        scale = max(float(np.max(np.abs(relation[:m + 1, :m]))), 1e-300)
         invariant = beta <= 1e-13 * scale  # the Krylov space is invariant: its Ritz values are eigenvalues
-        if invariant or (m >= count and (m % KRYLOV_CHECK == 0 or m == runs)):
-            theta, vectors = np.linalg.eig(hessenberg[:m, :m])
-            order = np.argsort(-np.abs(theta))[:count]
-            residual = beta * np.abs(vectors[m - 1, order])
-            if invariant or np.all(residual <= RITZ_TOLERANCE * max(1.0, float(np.abs(theta[order[0]])))):
-                return theta[order]
-        if invariant:
-            break
-        basis[j + 1] = w / beta
+        if not invariant:
+            basis[m] = w / beta
+        if invariant or m == dimension or (m >= count and run % KRYLOV_CHECK == 0):
+            theta, vectors = np.linalg.eig(relation[:m, :m])
+            order = np.argsort(-np.abs(theta))
+            wanted = order[:count]
+            residual = np.abs(relation[m, :m] @ vectors[:, wanted])
+            if invariant or np.all(residual <= RITZ_TOLERANCE * max(1.0, float(np.abs(theta[wanted[0]])))):
+                return theta[wanted]
+            if m == dimension:
+                q, _ = np.linalg.qr(_kept(theta, vectors, order, count + (dimension - count) // 2))
+                p = q.shape[1]
+                following = basis[m].copy()
+                basis[:p] = q.T @ basis[:m]
+                basis[p] = following
+                projected, residuals = q.T @ relation[:m, :m] @ q, relation[m, :m] @ q
+                relation[:] = 0.0
+                relation[:p, :p], relation[p, :p] = projected, residuals
+                m = p
     return None
+
+
+def _kept(theta: np.ndarray, vectors: np.ndarray, order: np.ndarray, keep: int) -> np.ndarray:
+    """A real basis of the span of the Ritz vectors ``vectors`` of the ``keep`` largest Ritz values ``theta``
+    (``order``: by modulus, largest first), conjugate pairs whole: each real one's vector, each complex pair's
+    real and imaginary parts (their span is invariant under the real matrix), taken once."""
+    chosen = order[:keep]
+    columns = []
+    for i in chosen.tolist():
+        partner = np.abs(theta[chosen] - np.conj(theta[i])) <= 1e-12 * abs(theta[i])
+        if theta[i].imag == 0.0:
+            columns.append(vectors[:, i].real)
+        elif theta[i].imag > 0.0 or not np.any(partner):  # a pair's parts, from whichever of the two is kept
+            columns += [vectors[:, i].real, vectors[:, i].imag]
+    return np.column_stack(columns)
 
 
 def differences(run, state: np.ndarray, scales: np.ndarray) -> np.ndarray:

@@ -245,6 +245,40 @@ def test_far_below_the_resonance_the_largest_multiplier_is_the_characteristic_ro
         assert largest == pytest.approx(math.exp(s.real * 2 * math.pi / omega), rel=2e-3)
 
 
+def test_the_restarted_arnoldi_finds_the_largest_of_a_crowded_spectrum(monkeypatch):
+    """floquet.arnoldi on a real matrix of 600 whose 200 largest eigenvalues crowd near 1 as a long delay's
+    multipliers do (complex pairs (0.999 - 2e-4 j) exp(+-0.03 i j), j = 1 ... 100; the rest below 0.3) in a
+    non-orthogonal basis: the 8 largest are numpy's dense eigenvalues' to 1e-7, found with more products than
+    its basis holds (740: the Krylov-Schur restarts at work); with a bound of 40 products it gives None, no
+    guess."""
+    from prandtl_fmu.frequency import floquet
+
+    rng = np.random.default_rng(3)
+    n = 600
+    blocks = np.zeros((n, n))
+    for j in range(1, 101):
+        radius, angle = 0.999 - 2e-4 * j, 0.03 * j
+        i = 2 * (j - 1)
+        blocks[i:i + 2, i:i + 2] = radius * np.array([[math.cos(angle), -math.sin(angle)],
+                                                      [math.sin(angle), math.cos(angle)]])
+    blocks[200:, 200:] = np.diag(rng.uniform(-0.3, 0.3, n - 200))
+    basis = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / math.sqrt(n)
+    matrix = basis @ blocks @ np.linalg.inv(basis)
+    products = []
+
+    def product(w):
+        products.append(1)
+        return matrix @ w
+
+    found = floquet.arnoldi(product, n, 8)
+    exact = np.linalg.eigvals(matrix)
+    exact = exact[np.argsort(-np.abs(exact))[:8]]
+    assert len(products) > 2 * floquet.KRYLOV_BASIS
+    assert np.sort_complex(found) == pytest.approx(np.sort_complex(exact), abs=1e-7)
+    monkeypatch.setattr(floquet, "KRYLOV_RUNS", 40)
+    assert floquet.arnoldi(product, n, 8) is None
+
+
 def rightmost_root(gain: float, tau: float) -> complex:
     """The rightmost root of l^2 + 0.05 l + 1 + g e^(-l tau) = 0 (the oscillator's perturbations under a delay
     on x), by Newton's method from every point of a grid over -0.3 <= Re l <= 0.3, 0 <= Im l <= 3: with a long
