@@ -752,7 +752,9 @@ class ElementShooting(Shooting):
             return np.concatenate((state, u, z, buffer[count:]))
 
         base_state = run(start, 2)
-        size = max(float(np.max(np.abs(half))), abs(float(base_state[1])) / omega, 1e-300)
+        # at least the force's static deflection: an orbit at rest (a mass held by its friction) has size 0, and
+        # a perturbation of 1e-306 m made the multipliers rounding over it (6e281: a point at rest called unstable)
+        size = max(float(np.max(np.abs(half))), abs(float(base_state[1])) / omega, self.size(s, omega))
         scales = np.full(base_state.size, PERTURBATION * size)
         scales[1] *= omega
         if on_v:

@@ -195,3 +195,21 @@ def test_a_delay_too_short_for_the_stability_s_grid_leaves_it_unknown_and_says_s
     assert set(table["stable"]) == {""} and set(table["multiplier"]) == {""}
     warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning:")]
     assert len(warnings) == 1 and "not computed" in warnings[0]
+
+
+def test_a_mass_held_at_rest_by_its_friction_beside_a_delay_is_stable(tmp_path):
+    """The delay-oscillator scene's element (its linear part unstable: s^2 + 0.1 s + 4 + e^(-0.6 s) has the
+    root 0.157 + 2.08 i) under F0 = 0.02 N, below its friction's 0.05 N: the mass stays at rest at every
+    frequency, and rest is stable (a perturbation within the friction's margin is held: the multipliers 1, the
+    stuck positions, and 0). The delay's finite differences were scaled by the orbit's size, 0 there: a
+    perturbation of 1e-306 m, the multipliers rounding over it (6e281, every point but the first unstable)."""
+    out = tmp_path / "curve.csv"
+    scene = write(tmp_path, {"mass": {"m": 1.0}, "spring": {"k0": 4.0}, "damper": {"c": 0.1},
+                             "branches": {"k": [1.0, 0.5], "eta": [0.2, 0.6]}, "friction": {"alpha": 0.05},
+                             "delay": {"gain": 1.0, "tau": 0.6}})
+    assert main(["describe", scene, "--force-amplitude", "0.02", "--frequencies", "0.05,0.6", "--out",
+                 str(out)]) == 0
+    table = read_csv(out)
+    assert len(table["frequency"]) >= 3 and {float(a) for a in table["amplitude"]} == {0.0}
+    assert set(table["stable"]) == {"true"}
+    assert np.array(table["multiplier"], dtype=float) == pytest.approx(1.0, abs=1e-6)
