@@ -109,6 +109,7 @@ def test_a_massless_node_named_has_the_stability_of_the_scene_without_it(tmp_pat
     assert max(float(a) for a in kept["amplitude_a"]) > 0.15  # through the resonance: the branch slides
 
 
+@pytest.mark.slow  # 5 s: the quick suite has the extrapolation on the delay (test_harmonic_balance_memory.py)
 def test_a_massless_node_that_cannot_join_has_the_linear_multiplier_where_its_branches_stick(tmp_path):
     """A massless node between two branches and a spring joins nothing: its multipliers come from the finite
     differences of the implicit stepper (backward Euler at 256 and 512 steps a period, extrapolated). Where
