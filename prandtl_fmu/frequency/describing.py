@@ -424,7 +424,7 @@ def steady_harmonic(element, amplitude: float, frequency: float, samples: int, t
                 return new, settling_remainder(changes)
         harmonic = new
     raise FrequencyError(f"{element.source}: at A = {amplitude!r} m the cycle did not settle within {MAX_CYCLES} "
-                         f"cycles (f = {frequency!r} Hz): the first harmonic still changed by {change:.3g} "
+                         f"cycles (f = {float(frequency)!r} Hz): the first harmonic still changed by {change:.3g} "
                          "relative per cycle")
 
 

@@ -88,4 +88,4 @@ def steady_cycle(group: SeriesBranches, elongation: np.ndarray, period: float, u
             u[:] = np.clip(u2 + second * ratio / (1.0 - ratio), -eta, eta)
             history.clear()
     raise FrequencyError(f"{source}: the branches with series dashpots did not reach a periodic cycle within "
-                         f"{MAX_PERIODS} periods (f = {1.0 / period!r} Hz)")
+                         f"{MAX_PERIODS} periods (f = {1.0 / float(period)!r} Hz)")

@@ -474,7 +474,7 @@ def _memory_period(balance, q_free, omega, steps):
         x, v, taken = integrate(loop, model, load, x, v, u, 0.0, first_step, h, 1, out, None, None, None)
         if taken < steps:
             raise ElementError(f"{system.source}: a step of the stability check failed at f = "
-                               f"{omega / (2 * math.pi)!r} Hz")
+                               f"{float(omega) / (2 * math.pi)!r} Hz")
         result = [x, v]
         if history_part is not None:
             (n, _), data = history_part
@@ -604,7 +604,7 @@ def _based_period(balance, omega, steps):
                 from ..stepping import ElementError
 
                 raise ElementError(f"{system.source}: a step of the stability check failed at f = "
-                                   f"{omega / (2 * math.pi)!r} Hz")
+                                   f"{float(omega) / (2 * math.pi)!r} Hz")
         return x_all[:base] - Y0, v_all[:base], u_all  # y(T) = Y0, y'(T) = 0
 
     return run
@@ -658,5 +658,5 @@ def run_periods(balance, omega, state, periods: int, steps: int) -> tuple:
         taken, _ = run_loop(loop_for("implicit"), runner.model, load, x, v, u, piece, 0.0, number * steps, h, 1,
                             out, None, runner.account, None, runner.dissipated, None, runner.work)
         if taken < steps:
-            raise ElementError(f"{system.source}: a step failed at f = {omega / (2 * math.pi)!r} Hz")
+            raise ElementError(f"{system.source}: a step failed at f = {float(omega) / (2 * math.pi)!r} Hz")
     return out[:, 0:2 * system.n:2].copy(), (x, v, u)

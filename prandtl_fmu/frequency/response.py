@@ -174,7 +174,7 @@ def _check_resolved(scene, force_amplitude: float, frequency: float) -> None:
     omega = 2.0 * math.pi * frequency
     motion = math.log10(force_amplitude) - math.log10(scene.mass.m) - 2.0 * math.log10(omega)
     if motion - 2.0 * math.log10(MAX_STEPS) < math.log10(SMALLEST_MOVE):
-        raise FrequencyError(f"{scene.source}: at f = {frequency!r} Hz the mass moves about F0 / (m (2 pi f)^2) = "
+        raise FrequencyError(f"{scene.source}: at f = {float(frequency)!r} Hz the mass moves about F0 / (m (2 pi f)^2) = "
                              f"1e{motion:.0f} m, too small for floating-point steps (x would underflow): lower "
                              "the frequency or raise --force-amplitude")
 
@@ -218,7 +218,7 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
             if error <= tolerance:
                 return harmonic, state, steps, periods, error
         if steps >= MAX_STEPS:
-            raise NotSettled(f"{scene.source}: at f = {frequency!r} Hz the first harmonic of x did not converge to "
+            raise NotSettled(f"{scene.source}: at f = {float(frequency)!r} Hz the first harmonic of x did not converge to "
                              f"{tolerance:g} relative by {MAX_STEPS} steps per period of {stepper!r} (the last "
                              f"two differ by {error:.3g} relative)")
         previous, steps = harmonic, 2 * steps
@@ -253,14 +253,14 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
         try:
             x, v, taken = integrate(loop, model, load, x, v, u, 0.0, number * steps, h, 1, out, None, None, None)
         except ElementError as exc:
-            raise NotSettled(f"at f = {frequency!r} Hz: {exc}") from None
+            raise NotSettled(f"at f = {float(frequency)!r} Hz: {exc}") from None
         if taken < steps:
             time = (number * steps + taken) * h
             where = (model, *(out[taken - 1, :2] if taken else start), u) if stepper == "exact" else None
-            raise NotSettled(f"at f = {frequency!r} Hz: {_failure(scene, stepper, load, time, h, where)}")
+            raise NotSettled(f"at f = {float(frequency)!r} Hz: {_failure(scene, stepper, load, time, h, where)}")
         xs = out[:, 0]
         if not np.all(np.isfinite(xs)):
-            raise NotSettled(f"{scene.source}: at f = {frequency!r} Hz x is not finite (an overflow)")
+            raise NotSettled(f"{scene.source}: at f = {float(frequency)!r} Hz x is not finite (an overflow)")
         new = complex(float(xs @ kernel_cos), -float(xs @ kernel_sin))
         drift = abs(x - start[0])  # a periodic motion comes back: a drift (a ratchet) has no steady harmonic
         if harmonic is not None:
@@ -271,7 +271,7 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
                 remainder = change if change <= 1e-12 else settling_remainder(changes)
                 return new, (x, v, None if u is None else u.copy()), number + 1, remainder
         harmonic = new
-    raise NotSettled(f"{forced.source}: at f = {frequency!r} Hz the response did not settle within {MAX_PERIODS} "
+    raise NotSettled(f"{forced.source}: at f = {float(frequency)!r} Hz the response did not settle within {MAX_PERIODS} "
                      f"periods ({stepper!r}, {steps} steps per period): X still changed by {change:.3g} relative "
                      "per period (a drift, a subharmonic or chaotic motion, or a transient slower than that)")
 
