@@ -25,14 +25,18 @@ on a Jenkins element; the two discretize the base's motion differently and diffe
 Backward Euler damps: with M steps per period a multiplier is shrunk by about exp(-(2 pi)^2 / (2 M)
 (omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
 its multipliers extrapolated in their logarithm (Richardson, first order in the exponent: mu_2M^2 / mu_M, each
-with the nearest at M: :func:`extrapolated`; not the matrices, whose structure can differ where a slip starts
-between steps), which leaves an error of order 1 / M^2 in the exponent. While the
-verdict is in doubt (the largest |mu| nearer 1 than 4 times its last change), or while the largest's shrinking
-between the two is past SHRINK (far below the resonance: the value is not yet in the extrapolation's range,
-the verdict may be), the pair moves to 2 M and 4 M, and so on, at most REFINEMENTS times (:func:`refined`). At
-a lightly damped joint's resonance peak M = 256 and 512 give 0.878 and 0.913 and extrapolate to 0.94886, where
-the pair 4096 and 8192 gives 0.94890 (the extrapolation of the multipliers themselves, 2 mu_2M - mu_M, gave
-0.9475 from 256 and 512). Every point of a curve gets its own (a few tens of ms a point).
+with the nearest at M where the two are each other's nearest and their ratio within e^GROWTH, else linearly:
+:func:`extrapolated`; not the matrices, whose structure can differ where a slip starts between steps), which
+leaves an error of order 1 / M^2 in the exponent. Until the largest's shrinking between the two is within
+SHRINK (far below the resonance the value is not yet in the extrapolation's range, nor the verdict: a
+multiplier above 1 can be shrunk below it) and the verdict is sure (the largest |mu| farther from 1 than 4 times
+its last change, or that change below MARGIN / 2), the pair moves to 2 M and 4 M, and so on, at most
+REFINEMENTS times (:func:`refined`); still shrinking past SHRINK there, the point's multipliers are not computed
+(unknown). At a lightly damped joint's resonance peak M = 256 and 512 give 0.878 and 0.913 and extrapolate to
+0.94886, where the pair 4096 and 8192 gives 0.94890 (the extrapolation of the multipliers themselves, 2 mu_2M -
+mu_M, gave 0.9475 from 256 and 512). Every point of a curve gets its own (a few tens of ms a point). What the
+shrinking hides is not seen: a motion much faster than the forcing (omega_n / omega past about 12 at 4096
+steps) whose multiplier falls below the largest one's at every resolution is not among those judged.
 
 An element scene with effects with memory (``[delay]``, ``[history]``, ``[dahl]``: the network stepper knows none
 of them) is integrated by the element's own ``implicit`` stepper instead (``memory/``: the delay from its
@@ -47,7 +51,7 @@ vector one period's run from the state moved along it, a few tens of runs where 
 buffer value (Hill's method for the delay alone would need the branches' nonsmooth linearisation; the
 propagation of the linear part alone does not see the branches). Bounded: at most KRYLOV_RUNS runs (not
 converged by then: the point's stability is not computed, ``None``, an empty field, never a guess) and
-MAX_DELAY_STATES buffer values at the finer resolution (a delay longer than about 256 periods at M = 512), and
+MAX_DELAY_STATES buffer values at the finer resolution (a delay longer than about 64 periods at M = 512), and
 a refinement past either keeps the pair before. With a delay the two resolutions have monodromies of
 different sizes: the LARGEST multipliers at 2 M are extrapolated.
 
@@ -62,26 +66,31 @@ Then the verdict comes from the scene where it can (:func:`monotone`): linear sp
 semi-definite matrices, branches (with or without series dashpots) and sliders are monotone, so the energy of
 the difference of two motions, 1/2 dv' M dv + 1/2 dx' K dx + 1/2 sum k_b du_b^2, never grows: every multiplier
 has |mu| <= 1, every point is stable, proven rather than measured (the curve's ``largest`` multiplier is NaN
-there). Elsewhere (a cubic spring, memory) the point's stability is unknown: an empty field, never a guess.
+there; and where the finite differences of such a scene say unstable, they are wrong: stable, the value NaN,
+``curve.py``). Elsewhere (a cubic spring, memory) the point's stability is unknown: an empty field, never a
+guess.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Optional
 
 import numpy as np
 
 STEPS = 256
 MARGIN = 2e-3
 PERTURBATION = 1e-6
-MAX_DELAY_STATES = 2**17  # a delay's buffer values (about 256 periods at 512 steps)
+MAX_DELAY_STATES = 2**15  # a delay's buffer values (about 64 periods at 512 steps)
 DENSE_STATES = 64  # past it the largest multipliers by Arnoldi's iteration (leading), not the whole monodromy
-KRYLOV_RUNS = 2000  # Arnoldi's products (a period's run each) one monodromy may take: the work bound
-KRYLOV_BASIS = 80  # Arnoldi's vectors at most (restarted past it): 81 x MAX_DELAY_STATES values, 85 MB
+KRYLOV_RUNS = 800  # Arnoldi's products (a period's run each) one monodromy may take: the work bound
+KRYLOV_BASIS = 80  # Arnoldi's vectors at most (restarted past it): 81 x MAX_DELAY_STATES values, 21 MB
+FULL_BASIS = 400  # up to this size the basis may hold the whole space (no restart: a spectrum on one circle)
 KRYLOV_CHECK = 5  # the Ritz values are looked at every so many products
 RITZ_TOLERANCE = 1e-6  # a Ritz value's residual, relative: far below MARGIN
 NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: extrapolated linearly
-SHRINK = 0.3  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (a value off 1e-3)
+SHRINK = 0.4  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (past it at the last: unknown)
+GROWTH = 1.5  # |log(mu_2M / mu_M)| past which a pair is not extrapolated in the logarithm (extrapolated)
 REFINEMENTS = 4  # of the steps per period of the finite differences: at most STEPS 2^4
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
 # the multiply-adds one point's monodromy may cost (a few seconds); past it the multipliers are not computed
@@ -135,53 +144,66 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
 def refined(at, steps: int):
     """The multipliers from ``at(M)`` (the eigenvalues of the monodromy at M steps per period, None where not
     computed), extrapolated from M and 2 M (:func:`extrapolated`: the LARGEST ones at 2 M), the pair moved to 2 M
-    and 4 M ... while the verdict or the value is in doubt: until |mu| - 1 of the largest is more than 4 times
-    its last change (from the pair before, or for the first pair from its value at 2 M) and its shrinking
-    log(mu_2M / mu_M) is at most SHRINK (0.3: its value within about 1e-3, measured far below an oscillator's
-    resonance), or that change is below MARGIN / 2; at most REFINEMENTS times (then the finest pair's). None
-    where ``at`` gives none before a first pair (a delay's buffer too long), else the finest pair's where a finer
-    one has none."""
+    and 4 M ... until the largest's shrinking from M to 2 M, |log(mu_2M / mu_M)| with its nearest at M, is at
+    most SHRINK (its value in the extrapolation's range: within about 1e-3, measured far below an oscillator's
+    resonance) and either |mu| - 1 of the largest is more than 4 times its last change (from the pair before,
+    or for the first pair from its value at 2 M) or that change is below MARGIN / 2; at most REFINEMENTS times.
+    None (unknown) where ``at`` gives none before a first pair (a delay's buffer too long), or where the last
+    pair reached (REFINEMENTS, or a finer one not computed) is still shrinking past SHRINK."""
     fine = at(2 * steps)  # first: where the finer has none (a delay's buffer past its bound), nothing is run
     if fine is None:
         return None
     coarse = at(steps)
     if coarse is None:
         return None
-    values, previous = None, None
+    values, previous, settled = None, None, False
     for level in range(1, REFINEMENTS + 1):
         if level > 1:
             fine = at(steps * 2**level)
         if fine is None:
-            return values
+            break
         kept = fine[np.argsort(-np.abs(fine))[:min(LARGEST, fine.size)]]
-        values = extrapolated(kept, coarse)
+        values = extrapolated(kept, coarse, fine)
         largest = int(np.argmax(np.abs(values)))
         top = float(abs(values[largest]))
         change = abs(top - float(np.max(np.abs(fine)))) if previous is None else abs(top - previous)
-        # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M): past SHRINK its value is
-        # not yet in the extrapolation's range (the verdict may be sure, the value is not)
-        shrink = abs(math.log(top / abs(kept[largest]))) if top > NOISE and abs(kept[largest]) > 0.0 else 0.0
-        if (abs(top - 1.0) > 4.0 * change and shrink <= SHRINK) or (previous is not None and change <= 0.5 * MARGIN):
+        # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M) with its nearest at M: past
+        # SHRINK its value is not yet in the extrapolation's range (nor is the verdict: a multiplier above 1 can
+        # be shrunk below it, down to rounding at M: 0.6 seen as 1e-15 and 6e-31 at 512 and 256 steps)
+        at_fine = abs(kept[largest])
+        at_coarse = abs(coarse[np.argmin(np.abs(coarse - kept[largest]))])
+        settled = at_fine == at_coarse or (min(at_fine, at_coarse) > 0.0 and
+                                           abs(math.log(at_fine / at_coarse)) <= SHRINK)
+        if settled and (abs(top - 1.0) > 4.0 * change or (previous is not None and change <= 0.5 * MARGIN)):
             return values
         previous, coarse = top, fine
-    return values
+    return values if settled else None
 
 
-def extrapolated(fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
+def extrapolated(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = None) -> np.ndarray:
     """Richardson's first-order extrapolation of multipliers in their logarithm, mu_2M^2 / mu_M, each of ``fine``
     (2 M steps) with the nearest of ``coarse`` (M steps). In the logarithm because backward Euler's error is in
     the exponent: with M steps a multiplier is shrunk by about exp(-a / M) (a = (2 pi omega_n / omega)^2 / 2 for
     a motion of frequency omega_n), and mu_2M^2 / mu_M removes that term, where 2 mu_2M - mu_M (the same to
     first order near |mu| = 1) is off by a factor once a / M nears 1: 0.30 for 0.54 on an oscillator at omega_n
-    / omega = 5.3 (256 and 512 steps), where this gives 0.539. A pair whose coarse value is below NOISE
-    (rounding in the finite differences, nothing a verdict needs) is extrapolated linearly.
+    / omega = 5.3 (256 and 512 steps), where this gives 0.539. Only where the two are each other's nearest (of
+    ``coarse`` and of ``among``, all the multipliers at 2 M: default ``fine``), the coarse one above NOISE and
+    their ratio within e^GROWTH: elsewhere the two are not one multiplier seen at two resolutions (where a slip
+    starts between steps at one and not at the other the monodromies differ in structure: 0.148 at 4096 steps
+    paired with 0.0005 at 2048 made 45, on a scene whose every multiplier is at most 1), and the extrapolation
+    is linear (the refinement goes on while the largest's shrinking is past SHRINK: :func:`refined`).
 
     On the multipliers, not on the matrices: where a slip starts between two steps at one resolution and not at
     the other, the two monodromies differ in structure and 2 Phi_2M - Phi_M can have an eigenvalue that neither
     has (|mu| = 1.12 at a resonance peak whose multipliers are 0.87 at M = 256 and 0.90 at 512, 0.946 at 4096:
     a stable point called unstable)."""
+    among = fine if among is None else among
     partner = np.array([coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()], dtype=complex)
-    logarithmic = np.abs(partner) > NOISE
+    back = np.array([among[np.argmin(np.abs(among - nu))] for nu in partner.tolist()], dtype=complex)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.abs(fine) / np.abs(partner)
+    logarithmic = (back == fine) & (np.abs(partner) > NOISE) & (ratio <= math.exp(GROWTH)) & \
+        (ratio >= math.exp(-GROWTH))
     out = 2.0 * fine - partner
     out[logarithmic] = fine[logarithmic] ** 2 / partner[logarithmic]
     return out
@@ -287,7 +309,8 @@ def leading(run, state: np.ndarray, scales: np.ndarray, count: int):
 def arnoldi(product, size: int, count: int):
     """The ``count`` eigenvalues of largest modulus of the matrix A whose products are ``product`` (size x size),
     by Arnoldi's iteration from a fixed random start (Gram-Schmidt twice), restarted as Stewart's Krylov-Schur
-    method keeps its basis at most KRYLOV_BASIS vectors: A V = V S + v b' with V orthonormal, grown a product
+    method keeps its basis at most KRYLOV_BASIS vectors past FULL_BASIS (below, the basis may fill the space: a
+    spectrum on one circle is found there, where a restart loses it): A V = V S + v b' with V orthonormal, grown a product
     at a time; every KRYLOV_CHECK products, and when the basis is full, the Ritz values (eigenvalues of S) and
     their residuals |b' y|; returned once each of the ``count`` largest has a residual of at most
     RITZ_TOLERANCE times the largest modulus (at least 1); a full basis restarts from the span of the Ritz
@@ -298,7 +321,7 @@ def arnoldi(product, size: int, count: int):
     near 1 (a delay of 370 s, 30 315 states) 400 to 480 products and 1.2 to 1.4 s, where the basis unrestarted
     (every product kept) took 350 to 400 and 4.4 to 5.7 s, its Gram-Schmidt over the whole basis dominating. None
     where they have not within KRYLOV_RUNS products (the work bound), or a product is not finite."""
-    dimension = min(KRYLOV_BASIS, size)
+    dimension = size if size <= FULL_BASIS else KRYLOV_BASIS
     basis = np.zeros((dimension + 1, size))
     relation = np.zeros((dimension + 1, dimension))  # A basis[:m] = basis[:m + 1] relation[:m + 1, :m]
     start = np.random.default_rng(0).standard_normal(size)

@@ -1,0 +1,112 @@
+"""The finite-difference multipliers' extrapolation and refinement, Arnoldi's iteration on small matrices, and the
+verdict of a monotone scene (``prandtl_fmu/frequency/floquet.py``, ``curve.py``): each against what it must
+give by construction, and a joint whose finite differences paired two different multipliers."""
+import math
+
+import numpy as np
+import pytest
+
+from prandtl_fmu.cli import main
+from prandtl_fmu.frequency import floquet
+
+from tests.analysis.test_describe_cli import read_csv
+from tests.analysis.test_harmonic_balance_network_friction import network_text
+
+
+def test_a_pair_that_is_one_multiplier_is_extrapolated_in_its_logarithm_and_others_linearly():
+    """0.070 at M and 0.207 at 2 M steps, each the other's nearest (backward Euler's e^-2.16 and e^-1.08 on
+    0.612): 0.207^2 / 0.070. 0.1481 at 2 M whose nearest at M is 0.0005, whose nearest at 2 M is 0.0003 (not one
+    multiplier: a slip between steps at one resolution): linear, 2 * 0.1481 - 0.0005, where the logarithm gave
+    44. A ratio past e^1.5 (0.5 and 0.05): linear too. A coarse value below NOISE: linear."""
+    assert floquet.extrapolated(np.array([0.207]), np.array([0.070])) == pytest.approx([0.207**2 / 0.070])
+    assert floquet.extrapolated(np.array([0.1481]), np.array([0.0005, -0.5]), np.array([0.1481, 0.0003])) == \
+        pytest.approx([2 * 0.1481 - 0.0005])
+    assert floquet.extrapolated(np.array([0.5]), np.array([0.05])) == pytest.approx([0.95])
+    assert floquet.extrapolated(np.array([1e-7]), np.array([1e-9])) == pytest.approx([2e-7 - 1e-9])
+    # a complex pair: each with its own conjugate's partner
+    fine, coarse = np.array([0.9 * np.exp(0.3j), 0.9 * np.exp(-0.3j)]), np.array([0.8 * np.exp(0.31j),
+                                                                                0.8 * np.exp(-0.31j)])
+    assert floquet.extrapolated(fine, coarse) == pytest.approx(fine**2 / coarse)
+
+
+@pytest.mark.parametrize("ratio, known", [(3.0, True), (30.0, False)])
+def test_the_refinement_gives_a_value_in_range_or_none(ratio, known):
+    """A multiplier mu = 0.6 e^(0.2 i) seen through backward Euler's shrinking exp(-a / M), a = (2 pi ratio)^2 / 2
+    (a motion ratio times the forcing's frequency): at ratio 3 the refinement reaches a pair whose shrinking is
+    within SHRINK and gives mu to 1e-3; at ratio 30 even 4096 steps shrink it by e^-2.2 a resolution: the
+    multipliers are not computed (None: unknown), where the verdict would have been "stable" for any mu (it
+    was, with the value off by a factor). (A multiplier that the shrinking hides below another one is not
+    seen at all: floquet.py says so.)"""
+    a = (2 * math.pi * ratio) ** 2 / 2
+    mu = 0.6 * np.exp(0.2j)
+
+    def at(steps):
+        return np.array([mu * math.exp(-a / steps)])
+
+    values = floquet.refined(at, floquet.STEPS)
+    if known:
+        assert abs(np.max(np.abs(values)) - abs(mu)) <= 1e-3
+    else:
+        assert values is None
+
+
+def test_arnoldi_fills_a_small_space_whose_spectrum_lies_on_one_circle():
+    """A cyclic shift of 300 (every eigenvalue a 300th root of unity: no largest to converge on) is within
+    FULL_BASIS: the basis fills the space, which is then invariant, and its Ritz values are eigenvalues:
+    |lambda| = 1 and lambda^300 = 1 to 1e-9 (a restarted basis of 80 reached no answer)."""
+    n = 300
+    assert n <= floquet.FULL_BASIS
+    found = floquet.arnoldi(lambda w: np.roll(w, 1), n, 8)
+    assert found is not None and len(found) == 8
+    assert np.abs(found) == pytest.approx(1.0, abs=1e-9)
+    assert np.abs(found**300 - 1.0) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_a_monotone_scene_s_points_are_stable_whatever_its_finite_differences_say(monkeypatch):
+    """Where every periodic state is stable by the energy (floquet.monotone) a point whose multipliers say
+    otherwise is the finite differences' artefact: stable, its multiplier not given (NaN), the others'
+    verdicts and values as computed."""
+    from prandtl_fmu.frequency import curve as curve_module
+    from prandtl_fmu.frequency import parse_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    from tests.analysis.test_harmonic_balance import MASSLESS_JOINT
+
+    scene = parse_scene(MASSLESS_JOINT, networks=True)[0]
+    calls = []
+    real = floquet.multipliers
+
+    def faked(balance, q, omega, steps=floquet.STEPS):
+        calls.append(omega)
+        return np.array([1.5]) if len(calls) == 2 else real(balance, q, omega, steps)
+
+    monkeypatch.setattr(floquet, "multipliers", faked)
+    assert curve_module  # the curve imports floquet's multipliers when it builds the curve
+    curve = harmonic_response(scene, 0.2, [0.05, 0.1], harmonics=3)
+    assert np.all(curve.stable)
+    assert math.isnan(curve.multiplier[1]) and np.all(np.isfinite(np.delete(curve.multiplier, 1)))
+    assert np.all(np.delete(curve.multiplier, 1) <= 1.0 + floquet.MARGIN)
+
+
+@pytest.mark.slow
+def test_a_joint_behind_a_massless_node_is_stable_everywhere(tmp_path):
+    """A joint behind a massless node, its far node a light mass (0.1 kg): monotone, so every point is stable.
+    Its finite differences at 2048 and 4096 steps paired 0.148 with 0.0005 (a slip between steps at one
+    resolution) and the logarithm's extrapolation said 45.3 (and 1.94, 1.65 at two more points): each point's
+    multiplier now at most 1 + MARGIN, every point stable; at 0.01 Hz (a sixteenth of the first resonance)
+    backward Euler still shrinks the largest past SHRINK at 4096 steps: its value is not given (the verdict is
+    the proof's)."""
+    path = tmp_path / "joint.toml"
+    path.write_text(network_text(["a", "j", "b"], [1.0, 0.0, 0.1], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+        ("spring", ["a", "j"], {"k": 5.0}), ("spring", ["j", "ground"], {"k": 0.5}),
+        ("branch", ["j", "b"], {"k": 2.0, "eta": 0.05}), ("dashpot", ["a", "ground"], {"c": 0.02}),
+        ("dashpot", ["b", "ground"], {"c": 0.02})], load_node="a"))
+    out = tmp_path / "curve.csv"
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.01,0.6", "--harmonics", "5",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert set(table["stable"]) == {"true"}
+    given = [(float(f), m) for f, m in zip(table["frequency"], table["multiplier"])]
+    assert all(f < 0.02 for f, m in given if m == "") and sum(m != "" for _, m in given) > 100
+    assert max(float(m) for _, m in given if m) <= 1.0 + floquet.MARGIN
