@@ -236,8 +236,9 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
 def _warn_unknown_stability(curves) -> None:
     """One ``warning:`` line for each curve with points whose stability is not computed (``stable`` empty there:
     a monodromy past its work bound on a scene not proven monotone, a delay's buffer past its bound, a delay's
-    largest multipliers not converged within floquet.KRYLOV_RUNS runs), so that an empty field is never read as
-    a verdict."""
+    largest multipliers not converged within floquet.KRYLOV_RUNS runs, backward Euler's shrinking past
+    floquet.SHRINK at the finest steps, a step of the check refused), so that an empty field is never read as a
+    verdict."""
     import numpy as np
 
     for curve in curves:
@@ -247,8 +248,9 @@ def _warn_unknown_stability(curves) -> None:
                     f"Y0 = {curve.base_amplitude:g} m")
             print(f"warning: ({load}) the stability of {unknown} of {len(curve.frequency)} points is not computed "
                   "(their stable field is empty: a monodromy past its work bound, a delay's buffer past its "
-                  "bound, or its largest multipliers not converged within the Arnoldi iteration's bound; "
-                  "docs/frequency.md)", file=sys.stderr)
+                  "bound, its largest multipliers not converged within the Arnoldi iteration's bound, backward "
+                  "Euler's damping still shrinking them at 4096 steps a period (far below a resonance), or a "
+                  "step of the check refused by its stepper; docs/frequency.md)", file=sys.stderr)
 
 
 def _warn_friction_error(scene, stepper: str) -> None:

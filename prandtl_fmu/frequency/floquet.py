@@ -122,7 +122,8 @@ def variational(system) -> bool:
 def multipliers(balance, q_free, omega, steps: int = STEPS):
     """The Floquet multipliers (complex; the LARGEST, extrapolated, where they come from finite differences: see
     :func:`refined`) of the orbit of ``balance`` at ``omega`` (rad/s); None where they are not computed (past the
-    work bound, a delay past MAX_DELAY_STATES, Arnoldi's iteration not converged)."""
+    work bound, a delay past MAX_DELAY_STATES, Arnoldi's iteration not converged, backward Euler's shrinking past
+    SHRINK at the finest steps, a step of the finite differences refused by the stepper)."""
     if variational(balance.system):
         monodromy = variational_monodromy(balance, q_free, omega)
         return None if monodromy is None else np.linalg.eigvals(monodromy)
@@ -138,7 +139,15 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
             if cost > WORK_LIMIT:
                 return None
             return np.linalg.eigvals(_monodromy(balance, q_free, omega, count))
-    return refined(at, steps)
+
+    def checked(count):
+        from ..stepping import ElementError
+
+        try:
+            return at(count)
+        except ElementError:  # a step of the check refused by its stepper (its own bound): not computed
+            return None
+    return refined(checked, steps)
 
 
 def refined(at, steps: int):
@@ -169,11 +178,11 @@ def refined(at, steps: int):
         change = abs(top - float(np.max(np.abs(fine)))) if previous is None else abs(top - previous)
         # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M) with its nearest at M: past
         # SHRINK its value is not yet in the extrapolation's range (nor is the verdict: a multiplier above 1 can
-        # be shrunk below it, down to rounding at M: 0.6 seen as 1e-15 and 6e-31 at 512 and 256 steps)
+        # be shrunk below it, down to rounding at M: 0.6 seen as 1e-15 and 6e-31 at 512 and 256 steps, and 5e5
+        # as 0 at both, far below a delay's unstable resonance)
         at_fine = abs(kept[largest])
         at_coarse = abs(coarse[np.argmin(np.abs(coarse - kept[largest]))])
-        settled = at_fine == at_coarse or (min(at_fine, at_coarse) > 0.0 and
-                                           abs(math.log(at_fine / at_coarse)) <= SHRINK)
+        settled = min(at_fine, at_coarse) > 0.0 and abs(math.log(at_fine / at_coarse)) <= SHRINK
         if settled and (abs(top - 1.0) > 4.0 * change or (previous is not None and change <= 0.5 * MARGIN)):
             return values
         previous, coarse = top, fine

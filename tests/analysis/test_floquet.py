@@ -110,3 +110,31 @@ def test_a_joint_behind_a_massless_node_is_stable_everywhere(tmp_path):
     given = [(float(f), m) for f, m in zip(table["frequency"], table["multiplier"])]
     assert all(f < 0.02 for f, m in given if m == "") and sum(m != "" for _, m in given) > 100
     assert max(float(m) for _, m in given if m) <= 1.0 + floquet.MARGIN
+
+
+def test_a_multiplier_shrunk_to_zero_is_unknown_not_stable():
+    """Far below a delay's unstable resonance backward Euler shrinks a multiplier of 5e5 to 0 at 256 and 512
+    steps (a review's find: written stable, its multiplier 0.0): the largest at both resolutions 0 is no value,
+    and one still shrinking at 4096 steps (7e-5 to 6.7 from 2048 to 4096) neither: unknown."""
+    assert floquet.refined(lambda steps: np.zeros(2), floquet.STEPS) is None
+    seen = {256: 0.0, 512: 0.0, 1024: 7e-5 * 1e-6, 2048: 7e-5, 4096: 6.7}
+    assert floquet.refined(lambda steps: np.array([seen[steps], 0.0]), floquet.STEPS) is None
+
+
+def test_a_step_the_check_s_stepper_refuses_leaves_the_point_unknown(monkeypatch):
+    """The finite differences' implicit stepper refusing a step (its active-set search past its budget, met on
+    a joint with a cubic spring at 1 N) ended the command on an internal error: the point's multipliers are
+    not computed now (None: an empty field and a warning line)."""
+    from prandtl_fmu.frequency import parse_scene
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+    from prandtl_fmu.stepping import ElementError
+
+    from tests.analysis.test_harmonic_balance import MASSLESS_JOINT
+
+    def refused(*args):
+        raise ElementError("the implicit step refused: the active-set search did not end within its budget")
+
+    monkeypatch.setattr(floquet, "_monodromy", refused)
+    balance = HarmonicBalance(periodic_system(parse_scene(MASSLESS_JOINT, networks=True)[0]), 3, 0.2)
+    omega = 2 * math.pi * 0.1
+    assert floquet.multipliers(balance, balance.solve_at(omega), omega) is None
