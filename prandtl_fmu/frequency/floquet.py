@@ -319,8 +319,8 @@ def arnoldi(product, size: int, count: int):
     """The ``count`` eigenvalues of largest modulus of the matrix A whose products are ``product`` (size x size),
     by Arnoldi's iteration from a fixed random start (Gram-Schmidt twice), restarted as Stewart's Krylov-Schur
     method keeps its basis at most KRYLOV_BASIS vectors past FULL_BASIS (below, the basis may fill the space: a
-    spectrum on one circle is found there, where a restart loses it): A V = V S + v b' with V orthonormal, grown a product
-    at a time; every KRYLOV_CHECK products, and when the basis is full, the Ritz values (eigenvalues of S) and
+    spectrum on one circle is found there, where a restart loses it): A V = V S + v b' with V orthonormal, grown
+    a product at a time; every KRYLOV_CHECK products, and when the basis is full, the Ritz values (eigenvalues of S) and
     their residuals |b' y|; returned once each of the ``count`` largest has a residual of at most
     RITZ_TOLERANCE times the largest modulus (at least 1); a full basis restarts from the span of the Ritz
     vectors of the largest (:func:`_kept`: about half the basis, conjugate pairs whole, in real arithmetic) with S

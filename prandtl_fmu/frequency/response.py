@@ -174,8 +174,9 @@ def _check_resolved(scene, force_amplitude: float, frequency: float) -> None:
     omega = 2.0 * math.pi * frequency
     motion = math.log10(force_amplitude) - math.log10(scene.mass.m) - 2.0 * math.log10(omega)
     if motion - 2.0 * math.log10(MAX_STEPS) < math.log10(SMALLEST_MOVE):
-        raise FrequencyError(f"{scene.source}: at f = {float(frequency)!r} Hz the mass moves about F0 / (m (2 pi f)^2) = "
-                             f"1e{motion:.0f} m, too small for floating-point steps (x would underflow): lower "
+        raise FrequencyError(f"{scene.source}: at f = {float(frequency)!r} Hz the mass moves about "
+                             f"F0 / (m (2 pi f)^2) = 1e{motion:.0f} m, too small for floating-point steps (x "
+                             "would underflow): lower "
                              "the frequency or raise --force-amplitude")
 
 
@@ -218,8 +219,9 @@ def settle(scene, stepper: str, force_amplitude: float, frequency: float, state,
             if error <= tolerance:
                 return harmonic, state, steps, periods, error
         if steps >= MAX_STEPS:
-            raise NotSettled(f"{scene.source}: at f = {float(frequency)!r} Hz the first harmonic of x did not converge to "
-                             f"{tolerance:g} relative by {MAX_STEPS} steps per period of {stepper!r} (the last "
+            raise NotSettled(f"{scene.source}: at f = {float(frequency)!r} Hz the first harmonic of x did not "
+                             f"converge to {tolerance:g} relative by {MAX_STEPS} steps per period of {stepper!r} "
+                             "(the last "
                              f"two differ by {error:.3g} relative)")
         previous, steps = harmonic, 2 * steps
 
@@ -271,8 +273,9 @@ def steady_period(forced, stepper: str, frequency: float, steps: int, state, tol
                 remainder = change if change <= 1e-12 else settling_remainder(changes)
                 return new, (x, v, None if u is None else u.copy()), number + 1, remainder
         harmonic = new
-    raise NotSettled(f"{forced.source}: at f = {float(frequency)!r} Hz the response did not settle within {MAX_PERIODS} "
-                     f"periods ({stepper!r}, {steps} steps per period): X still changed by {change:.3g} relative "
+    raise NotSettled(f"{forced.source}: at f = {float(frequency)!r} Hz the response did not settle within "
+                     f"{MAX_PERIODS} periods ({stepper!r}, {steps} steps per period): X still changed by "
+                     f"{change:.3g} relative "
                      "per period (a drift, a subharmonic or chaotic motion, or a transient slower than that)")
 
 

@@ -353,7 +353,8 @@ class Shooting:
                 return solved
             s = self.run(s, omega, 2 * 8 * 2**attempt)[0]
         periods = 8 * (2**START_ATTEMPTS - 1)
-        raise FrequencyError(f"{self.system.source}: the periodic state at f = {float(omega) / (2 * math.pi)!r} Hz was not "
+        raise FrequencyError(f"{self.system.source}: the periodic state at f = {float(omega) / (2 * math.pi)!r} Hz "
+                             f"was not "
                              f"found: Newton's method did not converge from rest nor after {periods} periods of the "
                              "motion (a subharmonic, chaotic or unsymmetric motion?): see --method time")
 
@@ -1038,7 +1039,8 @@ def _solved_again(shooting, guess, omega):
     the coarser one's ``guess``; FrequencyError where it does not converge."""
     solved = shooting._newton(omega, guess)
     if solved is None:
-        raise FrequencyError(f"{shooting.system.source}: at f = {float(omega) / (2 * math.pi)!r} Hz the periodic state with "
+        raise FrequencyError(f"{shooting.system.source}: at f = {float(omega) / (2 * math.pi)!r} Hz the periodic "
+                             f"state with "
                              f"{shooting.delay_harmonics} harmonics of the delay's force and {shooting.M} samples per "
                              "period was not found from the coarser one's: see --method time")
     return solved
