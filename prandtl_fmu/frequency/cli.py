@@ -249,8 +249,8 @@ def _warn_unknown_stability(curves) -> None:
             print(f"warning: ({load}) the stability of {unknown} of {len(curve.frequency)} points is not computed "
                   "(their stable field is empty: a monodromy past its work bound, a delay's buffer past its "
                   "bound, its largest multipliers not converged within the Arnoldi iteration's bound, backward "
-                  "Euler's damping still shrinking them at 4096 steps a period (far below a resonance), or a "
-                  "step of the check refused by its stepper; docs/frequency.md)", file=sys.stderr)
+                  "Euler's damping still shrinking them or the verdict still in doubt at 4096 steps a period, or "
+                  "a step of the check refused by its stepper; docs/frequency.md)", file=sys.stderr)
 
 
 def _warn_friction_error(scene, stepper: str) -> None:

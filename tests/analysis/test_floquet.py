@@ -93,9 +93,10 @@ def test_a_joint_behind_a_massless_node_is_stable_everywhere(tmp_path):
     """A joint behind a massless node, its far node a light mass (0.1 kg): monotone, so every point is stable.
     Its finite differences at 2048 and 4096 steps paired 0.148 with 0.0005 (a slip between steps at one
     resolution) and the logarithm's extrapolation said 45.3 (and 1.94, 1.65 at two more points): each point's
-    multiplier now at most 1 + MARGIN, every point stable; at 0.01 Hz (a sixteenth of the first resonance)
-    backward Euler still shrinks the largest past SHRINK at 4096 steps: its value is not given (the verdict is
-    the proof's)."""
+    multiplier now at most 1 + MARGIN where it is given, every point stable; not given at a few points (at
+    0.01 Hz, a sixteenth of the first resonance, backward Euler still shrinks the largest past SHRINK at 4096
+    steps; at three more the pairs' verdicts still move at 4096 steps, a slip starting between steps): there
+    the verdict is the proof's."""
     path = tmp_path / "joint.toml"
     path.write_text(network_text(["a", "j", "b"], [1.0, 0.0, 0.1], [
         ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
@@ -108,7 +109,7 @@ def test_a_joint_behind_a_massless_node_is_stable_everywhere(tmp_path):
     table = read_csv(out)
     assert set(table["stable"]) == {"true"}
     given = [(float(f), m) for f, m in zip(table["frequency"], table["multiplier"])]
-    assert all(f < 0.02 for f, m in given if m == "") and sum(m != "" for _, m in given) > 100
+    assert sum(m == "" for _, m in given) <= 6 and sum(m != "" for _, m in given) > 100
     assert max(float(m) for _, m in given if m) <= 1.0 + floquet.MARGIN
 
 
@@ -138,3 +139,15 @@ def test_a_step_the_check_s_stepper_refuses_leaves_the_point_unknown(monkeypatch
     balance = HarmonicBalance(periodic_system(parse_scene(MASSLESS_JOINT, networks=True)[0]), 3, 0.2)
     omega = 2 * math.pi * 0.1
     assert floquet.multipliers(balance, balance.solve_at(omega), omega) is None
+
+
+def test_a_verdict_still_in_doubt_at_4096_steps_is_unknown():
+    """Largest multipliers that keep moving about 1 from one resolution to the next (a slip starting between
+    steps at one and not at the next: on a joint with a cubic spring 0.760, 0.871, 0.936, 0.896 at 1024 ... 8192
+    steps) leave the verdict in doubt at the finest pair: unknown (None), where the finest pair's value (1.006,
+    "unstable") was taken; a pair that settles away from 1 is taken as before."""
+    seen = {256: 0.90, 512: 0.96, 1024: 0.93, 2048: 0.99, 4096: 0.95}
+    assert floquet.refined(lambda steps: np.array([seen[steps]]), floquet.STEPS) is None
+    steady = {256: 0.70, 512: 0.71, 1024: 0.715, 2048: 0.7175, 4096: 0.71875}
+    values = floquet.refined(lambda steps: np.array([steady[steps]]), floquet.STEPS)
+    assert values is not None and abs(abs(values[0]) - 0.72) <= 2e-3
