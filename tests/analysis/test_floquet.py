@@ -151,3 +151,37 @@ def test_a_verdict_still_in_doubt_at_4096_steps_is_unknown():
     steady = {256: 0.70, 512: 0.71, 1024: 0.715, 2048: 0.7175, 4096: 0.71875}
     values = floquet.refined(lambda steps: np.array([steady[steps]]), floquet.STEPS)
     assert values is not None and abs(abs(values[0]) - 0.72) <= 2e-3
+
+
+@pytest.mark.slow
+def test_a_point_that_stays_unstable_on_a_joint_with_a_cubic_spring_leaves_its_orbit():
+    """A joint behind a massless node with a cubic spring on a (not monotone: no proof), F0 = 1 N, H = 5: the
+    point near 0.1464 Hz keeps its largest multiplier about 1.08 at every resolution (unstable, not made
+    unknown by the doubt rule), and integrated from its orbit's state (4096 implicit steps a period) it leaves
+    it: the distance grows more than tenfold in 80 periods, where a stable neighbour's (0.131 Hz) does not."""
+    from prandtl_fmu.frequency import parse_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene = parse_scene(network_text(["a", "j", "b"], [1.0, 0.0, 1.0], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+        ("spring", ["a", "j"], {"k": 5.0}), ("branch", ["j", "b"], {"k": 2.0, "eta": 0.05}),
+        ("spring", ["j", "ground"], {"k": 0.5}), ("dashpot", ["a", "ground"], {"c": 0.02}),
+        ("dashpot", ["b", "ground"], {"c": 0.02}), ("cubic", ["a", "ground"], {"k3": 0.5})], load_node="a"),
+        networks=True)[0]
+    curve = harmonic_response(scene, 1.0, [0.1, 0.2], harmonics=5)
+    balance = HarmonicBalance(periodic_system(scene), 5, 1.0)
+    growth = {}
+    for target in (0.1464, 0.131):
+        index = int(np.argmin(np.abs(curve.frequency - target)))
+        omega = 2 * math.pi * curve.frequency[index]
+        state = floquet.orbit_start(balance, curve.coefficients[index].reshape(-1)[balance.free], omega)
+        distance = []
+        moved = state
+        for _ in range(8):
+            _, moved = floquet.run_periods(balance, omega, moved, 10, 4096)
+            distance.append(float(np.max(np.abs(np.array(moved[0]) - state[0]))))
+        growth[target] = (bool(curve.stable[index]), curve.multiplier[index], distance[-1] / distance[0])
+    unstable, stays = growth[0.1464], growth[0.131]
+    assert unstable[0] is False and unstable[1] > 1.05 and unstable[2] > 10.0, unstable
+    assert stays[0] is True and stays[2] < 2.0, stays
