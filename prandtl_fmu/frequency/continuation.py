@@ -116,7 +116,8 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
             if new is None and step < CORNER * max_step:  # a kink, then a corner (a fold on a kink)
                 new = _damped(balance, q, omega, tangent, scale, omega_min, span, step)
                 if new is None:
-                    new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step)
+                    new = _around_corner(balance, q, omega, tangent, scale, omega_min, span, step,
+                                         _behind(points, q, omega, scale, omega_min, span))
                     cornered = new is not None  # a fold met there is at this point (not located by the secant)
             if new is None:
                 step *= 0.5
@@ -416,35 +417,62 @@ def _damped_newton(balance, start, predicted, row, tangent, scale, omega_min, sp
     return None
 
 
-def _around_corner(balance, q, omega, tangent, scale, omega_min, span, step):
-    """The point at arc length ``step`` from (q, omega) on the sphere |y - y_0| = step, from the prediction
-    along ``tangent``: the way on past a corner of the curve (the sampled forces make the curve piecewise
-    smooth; where a fold falls on a kink, no hyperplane ahead meets the curve). Not the way back: the chord
-    must not point against the tangent by more than 135 degrees, and the point must not be where we came from.
-    (q, omega, iterations) or None."""
+def _around_corner(balance, q, omega, tangent, scale, omega_min, span, step, behind=None):
+    """The point at arc length ``step`` from (q, omega) on the sphere |y - y_0| = step: the way on past a corner
+    of the curve (the sampled forces make the curve piecewise smooth; where a fold falls on a kink, no
+    hyperplane ahead meets the curve). Newton on the sphere from the prediction along ``tangent``, along it with
+    its frequency component turned back, and against it: at a corner the tangent at the last point can be the
+    far side's, pointing where the curve does not go (the delay oscillator at 0.1 N: the first branch starts to
+    slip at 0.3705 Hz, the curve turns back by 131 degrees, and its way on is along minus that tangent). Not the
+    way back: ``behind`` (unit, scaled) points to the previous point; the sphere's point that way is solved for
+    too, and a point within a quarter of the step of it is refused (where it is not found, a chord within 45
+    degrees of ``behind``). (q, omega, iterations) or None."""
     start = _scaled(q, omega, scale, omega_min, span)
-    for turn in (0.0, 0.5, 1.0):
-        guess = start + step * (tangent if turn == 0 else _turned(tangent, turn))
-        y = guess.copy()
+    behind = -tangent if behind is None else behind
+
+    def on_sphere(direction):
+        y = start + step * direction
         for iteration in range(1, CORRECTOR_ITERATIONS + 1):
             q_y, omega_y = _unscaled(y, scale, omega_min, span)
             if omega_y <= 0:
-                break
+                return None
             residual, matrix = _augmented(balance, q_y, omega_y, scale, span)
             chord = y - start
-            system = np.vstack((matrix, 2.0 * chord))
-            right = -np.concatenate((residual, [chord @ chord - step * step]))
-            delta = solve_linear(system, right)
-            if delta is None:
-                break
+            delta = solve_linear(np.vstack((matrix, 2.0 * chord)),
+                                 -np.concatenate((residual, [chord @ chord - step * step])))
+            if delta is None or not np.all(np.isfinite(delta)):
+                return None
             y = y + delta
             if np.max(np.abs(delta)) <= CONVERGED:
-                chord = (y - start) / step
-                if chord @ tangent > -0.7:
-                    q_y, omega_y = _unscaled(y, scale, omega_min, span)
-                    return q_y, omega_y, iteration
-                break
+                return y, iteration
+        return None
+
+    back = None
+    for guess in (tangent, _turned(tangent, 0.5), _turned(tangent, 1.0), -tangent):
+        found = on_sphere(guess)
+        if found is None:
+            continue
+        y, iteration = found
+        if back is None:
+            back = on_sphere(behind) or (None,)
+        if back[0] is not None:
+            ahead = np.linalg.norm(y - back[0]) > 0.25 * step
+        else:
+            ahead = (y - start) @ behind < 0.7 * step
+        if ahead:
+            q_y, omega_y = _unscaled(y, scale, omega_min, span)
+            return q_y, omega_y, iteration
     return None
+
+
+def _behind(points, q, omega, scale, omega_min, span) -> Optional[np.ndarray]:
+    """The unit chord (scaled) from (q, omega) to the point before it on the curve, or None (none before)."""
+    if len(points) < 2:
+        return None
+    omega_0, q_0, _ = points[-2]
+    chord = _scaled(q_0, omega_0, scale, omega_min, span) - _scaled(q, omega, scale, omega_min, span)
+    size = np.linalg.norm(chord)
+    return chord / size if size > 0 else None
 
 
 def _turned(tangent, amount):

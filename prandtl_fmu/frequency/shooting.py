@@ -1022,7 +1022,8 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
             tail = max(shooting.delay_tail(s) for _, s, _ in points)
             grown = 2 * shooting.delay_harmonics + 1 if tail > 0.1 * tolerance else shooting.delay_harmonics
             finer = make(2 * shooting.M, grown)
-            points = [(w, _solved_again(finer, shooting.padded(s, finer), w), fold) for w, s, fold in points]
+            points, kept = _solved_again(shooting, finer, points, low, high, 0.1 * tolerance)
+            coefficients = coefficients[kept]
         else:
             finer = make(2 * shooting.M)
         refined = np.array([finer.coefficients(s, w) for w, s, _ in points])
@@ -1034,16 +1035,56 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
     return _curve(shooting, points, coefficients, where, stability, change)
 
 
-def _solved_again(shooting, guess, omega):
-    """The point at ``omega`` of a finer ``shooting`` (more samples, more of a delay's harmonics) by Newton from
-    the coarser one's ``guess``; FrequencyError where it does not converge."""
-    solved = shooting._newton(omega, guess)
-    if solved is None:
-        raise FrequencyError(f"{shooting.system.source}: at f = {float(omega) / (2 * math.pi)!r} Hz the periodic "
-                             f"state with "
-                             f"{shooting.delay_harmonics} harmonics of the delay's force and {shooting.M} samples per "
-                             "period was not found from the coarser one's: see --method time")
-    return solved
+def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
+    """The ``points`` (omega, s, fold) of ``shooting``'s curve as points of the ``finer`` one (more samples, more of
+    a delay's harmonics), and the indices of those kept: each by Newton at its frequency from the coarser state;
+    where that does not converge, on the normal to the coarser curve through it (``continuation.across``: a fold
+    the finer curve has moved past, where the state at the same frequency does not exist). At a fold on a corner
+    (a slip's onset where the curve turns back: the delay oscillator at 0.1 N at 0.3705 Hz) neither finds the
+    points the finer corner has moved past, by less than the spacing that the corner's search made tiny (there
+    the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a run of points not
+    found that holds a fold or lies next to one, whose points are all within ``spacing`` (relative, in frequency
+    and in the state; a tenth of the tolerance: the fold is located to it) of the points found on either side of
+    it, is left out, the point before it then marked the fold where the fold was in the run. FrequencyError for any other point not found."""
+    from .continuation import across
+
+    solved = []
+    for omega, s, fold in points:
+        state = finer._newton(omega, shooting.padded(s, finer))
+        if state is None:
+            found = across(shooting, finer, lambda v: shooting.padded(v, finer), s, omega, low, high)
+            if found is not None:
+                omega, state = found[1], found[0]
+        solved.append(None if state is None else (omega, state, fold))
+    out, kept = [], []
+    index = 0
+    while index < len(points):
+        if solved[index] is not None:
+            out.append(solved[index])
+            kept.append(index)
+            index += 1
+            continue
+        end = index
+        while end < len(points) and solved[end] is None:
+            end += 1
+        run = points[index:end]
+        beside = points[max(index - 1, 0):end + 1]
+        if not (0 < index and end < len(points) and any(fold for _, _, fold in beside)
+                and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing) for point in run)):
+            raise FrequencyError(f"{finer.system.source}: at f = {float(points[index][0]) / (2 * math.pi)!r} Hz the "
+                                 f"periodic state with {finer.delay_harmonics} harmonics of the delay's force and "
+                                 f"{finer.M} samples per period was not found from the coarser one's: see --method "
+                                 "time")
+        if any(fold for _, _, fold in run):
+            out[-1] = (out[-1][0], out[-1][1], True)
+        index = end
+    return out, np.array(kept, dtype=int)
+
+
+def _close(point, other, spacing: float) -> bool:
+    """Whether two points of a curve (omega, s, fold) are within ``spacing`` of each other (relative)."""
+    return (abs(point[0] - other[0]) <= spacing * other[0]
+            and np.max(np.abs(point[1] - other[1])) <= spacing * max(np.max(np.abs(other[1])), 1e-300))
 
 
 def _curve(shooting, points, coefficients, where, stability, change) -> dict:

@@ -213,3 +213,27 @@ def test_a_mass_held_at_rest_by_its_friction_beside_a_delay_is_stable(tmp_path):
     assert len(table["frequency"]) >= 3 and {float(a) for a in table["amplitude"]} == {0.0}
     assert set(table["stable"]) == {"true"}
     assert np.array(table["multiplier"], dtype=float) == pytest.approx(1.0, abs=1e-6)
+
+
+@pytest.mark.slow
+def test_the_delay_oscillator_s_curve_turns_back_at_each_slip_onset_and_goes_on():
+    """scenes/delay-oscillator at F0 = 0.1 N: the curve meets the first branch's slip onset (its range eta = 0.2
+    m: a centred branch slides once max |x| passes it) twice, at 0.3705 Hz going up and at 0.3854 Hz coming
+    down, and turns back there on a corner (by 131 degrees: the far side's tangent points where no curve is; the
+    corner's search takes its way on against it, ``continuation._around_corner``); the points past the finer
+    curve's corner are left out (``shooting._solved_again``). The whole curve is drawn, 0.05 to 0.6 Hz, with a
+    fold at each onset whose first harmonic is eta to its higher harmonics (1e-3), and a fold between them
+    where a multiplier crosses 1."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("delay-oscillator")
+    curve = harmonic_response(scene, 0.1, [0.05, 0.6])
+    assert curve.frequency[0] == pytest.approx(0.05) and curve.frequency[-1] == pytest.approx(0.6)
+    folds = curve.folds
+    onsets = [index for index in folds if abs(curve.amplitude[index] - 0.2) <= 2e-4]
+    assert len(onsets) == 2, (curve.frequency[folds], curve.amplitude[folds])
+    assert sorted(round(float(curve.frequency[index]), 4) for index in onsets) == [0.3705, 0.3854]
+    # past each onset the branch slides: the curve reaches far above eta between them
+    between = slice(min(onsets), max(onsets))
+    assert np.max(curve.amplitude[between]) > 1.5 * 0.2
