@@ -25,8 +25,8 @@ on a Jenkins element; the two discretize the base's motion differently and diffe
 Backward Euler damps: with M steps per period a multiplier is shrunk by about exp(-(2 pi)^2 / (2 M)
 (omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
 its multipliers extrapolated in their logarithm (Richardson, first order in the exponent: mu_2M^2 / mu_M, each
-with the nearest at M where the two are each other's nearest and their ratio within e^GROWTH, else linearly:
-:func:`extrapolated`; not the matrices, whose structure can differ where a slip starts between steps), which
+with its partner at M: each the other's nearest, of one kind, their ratio within e^GROWTH; one without a
+partner is not extrapolated: :func:`extrapolated`, :func:`pairs`; not the matrices, whose structure can differ where a slip starts between steps), which
 leaves an error of order 1 / M^2 in the exponent. Until the largest's shrinking between the two is within
 SHRINK (far below the resonance the value is not yet in the extrapolation's range, nor the verdict: a
 multiplier above 1 can be shrunk below it) and the verdict is sure (the largest |mu| farther from 1 than 4 times
@@ -35,7 +35,7 @@ REFINEMENTS times (:func:`refined`); still shrinking past SHRINK there, or the v
 point's multipliers are not computed (unknown). At a lightly damped joint's resonance peak M = 256 and 512 give 0.878 and 0.913 and extrapolate to
 0.94886, where the pair 4096 and 8192 gives 0.94890 (the extrapolation of the multipliers themselves, 2 mu_2M -
 mu_M, gave 0.9475 from 256 and 512). Every point of a curve gets its own (a few tens of ms a point). What the
-shrinking hides is not seen: a motion much faster than the forcing (omega_n / omega past about 12 at 4096
+shrinking hides is not seen: a motion much faster than the forcing (omega_n / omega past about 18 at 8192
 steps) whose multiplier falls below the largest one's at every resolution is not among those judged.
 
 An element scene with effects with memory (``[delay]``, ``[history]``, ``[dahl]``: the network stepper knows none
@@ -88,10 +88,10 @@ KRYLOV_BASIS = 80  # Arnoldi's vectors at most (restarted past it): 81 x MAX_DEL
 FULL_BASIS = 400  # up to this size the basis may hold the whole space (no restart: a spectrum on one circle)
 KRYLOV_CHECK = 5  # the Ritz values are looked at every so many products
 RITZ_TOLERANCE = 1e-6  # a Ritz value's residual, relative: far below MARGIN
-NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: extrapolated linearly
+NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: no partner (not extrapolated)
 SHRINK = 0.4  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (past it at the last: unknown)
 GROWTH = 1.5  # |log(mu_2M / mu_M)| past which a pair is not extrapolated in the logarithm (extrapolated)
-REFINEMENTS = 4  # of the steps per period of the finite differences: at most STEPS 2^4
+REFINEMENTS = 5  # of the steps per period of the finite differences: at most STEPS 2^5 (8192)
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
 # the multiply-adds one point's monodromy may cost (a few seconds); past it the multipliers are not computed
 WORK_LIMIT = 4e9
@@ -153,9 +153,10 @@ def multipliers(balance, q_free, omega, steps: int = STEPS):
 def refined(at, steps: int):
     """The multipliers from ``at(M)`` (the eigenvalues of the monodromy at M steps per period, None where not
     computed), extrapolated from M and 2 M (:func:`extrapolated`: the LARGEST ones at 2 M), the pair moved to 2 M
-    and 4 M ... until the largest's shrinking from M to 2 M, |log(mu_2M / mu_M)| with its nearest at M, is at
-    most SHRINK (its value in the extrapolation's range: within about 1e-3, measured far below an oscillator's
-    resonance) and either |mu| - 1 of the largest is more than 4 times its last change (from the pair before,
+    and 4 M ... until the largest has a partner at M (:func:`pairs`), its shrinking from M to 2 M, |log(mu_2M /
+    mu_M)|, is at most SHRINK (its value in the extrapolation's range: within about 1e-3, measured far below an
+    oscillator's resonance), every multiplier without a partner stays below 1 even moved 4 times as far as from
+    its nearest at M, and either |mu| - 1 of the largest is more than 4 times its last change (from the pair before,
     or for the first pair from its value at 2 M) or that change is below MARGIN / 2; at most REFINEMENTS times.
     None (unknown, never a guess) where ``at`` gives none before a first pair (a delay's buffer too long), or
     where the last pair reached (REFINEMENTS, or a finer one not computed) is still shrinking past SHRINK or its
@@ -175,16 +176,19 @@ def refined(at, steps: int):
             break
         kept = fine[np.argsort(-np.abs(fine))[:min(LARGEST, fine.size)]]
         values = extrapolated(kept, coarse, fine)
+        partner, paired = pairs(kept, coarse, fine)
         largest = int(np.argmax(np.abs(values)))
         top = float(abs(values[largest]))
         change = abs(top - float(np.max(np.abs(fine)))) if previous is None else abs(top - previous)
-        # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M) with its nearest at M: past
+        # backward Euler's shrinking of the largest over a period, log(mu_2M / mu_M) with its partner at M: past
         # SHRINK its value is not yet in the extrapolation's range (nor is the verdict: a multiplier above 1 can
         # be shrunk below it, down to rounding at M: 0.6 seen as 1e-15 and 6e-31 at 512 and 256 steps, and 5e5
-        # as 0 at both, far below a delay's unstable resonance)
-        at_fine = abs(kept[largest])
-        at_coarse = abs(coarse[np.argmin(np.abs(coarse - kept[largest]))])
-        settled = min(at_fine, at_coarse) > 0.0 and abs(math.log(at_fine / at_coarse)) <= SHRINK
+        # as 0 at both, far below a delay's unstable resonance); the largest must have a partner, and one
+        # without (not extrapolated) must stay below 1 even if it moved 4 times as far as from its nearest at M
+        at_fine, at_coarse = abs(kept[largest]), abs(partner[largest])
+        settled = bool(paired[largest]) and min(at_fine, at_coarse) > 0.0 and \
+            abs(math.log(at_fine / at_coarse)) <= SHRINK and \
+            not np.any(~paired & (np.abs(kept) >= 1.0 - 4.0 * np.abs(kept - partner)))
         if settled and (abs(top - 1.0) > 4.0 * change or (previous is not None and change <= 0.5 * MARGIN)):
             return values
         previous, coarse = top, fine
@@ -193,31 +197,43 @@ def refined(at, steps: int):
 
 def extrapolated(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = None) -> np.ndarray:
     """Richardson's first-order extrapolation of multipliers in their logarithm, mu_2M^2 / mu_M, each of ``fine``
-    (2 M steps) with the nearest of ``coarse`` (M steps). In the logarithm because backward Euler's error is in
-    the exponent: with M steps a multiplier is shrunk by about exp(-a / M) (a = (2 pi omega_n / omega)^2 / 2 for
-    a motion of frequency omega_n), and mu_2M^2 / mu_M removes that term, where 2 mu_2M - mu_M (the same to
-    first order near |mu| = 1) is off by a factor once a / M nears 1: 0.30 for 0.54 on an oscillator at omega_n
-    / omega = 5.3 (256 and 512 steps), where this gives 0.539. Only where the two are each other's nearest (of
-    ``coarse`` and of ``among``, all the multipliers at 2 M: default ``fine``), the coarse one above NOISE and
-    their ratio within e^GROWTH: elsewhere the two are not one multiplier seen at two resolutions (where a slip
-    starts between steps at one and not at the other the monodromies differ in structure: 0.148 at 4096 steps
-    paired with 0.0005 at 2048 made 45, on a scene whose every multiplier is at most 1), and the extrapolation
-    is linear (the refinement goes on while the largest's shrinking is past SHRINK: :func:`refined`).
+    (2 M steps) with its partner in ``coarse`` (M steps: :func:`pairs`). In the logarithm because backward
+    Euler's error is in the exponent: with M steps a multiplier is shrunk by about exp(-a / M) (a = (2 pi
+    omega_n / omega)^2 / 2 for a motion of frequency omega_n), and mu_2M^2 / mu_M removes that term, where 2
+    mu_2M - mu_M (the same to first order near |mu| = 1) is off by a factor once a / M nears 1: 0.30 for 0.54 on
+    an oscillator at omega_n / omega = 5.3 (256 and 512 steps), where this gives 0.539. A multiplier without a
+    partner is not extrapolated: its value at 2 M (:func:`refined` goes on to finer steps while the largest has
+    none, or one without a partner could reach 1).
 
     On the multipliers, not on the matrices: where a slip starts between two steps at one resolution and not at
     the other, the two monodromies differ in structure and 2 Phi_2M - Phi_M can have an eigenvalue that neither
     has (|mu| = 1.12 at a resonance peak whose multipliers are 0.87 at M = 256 and 0.90 at 512, 0.946 at 4096:
     a stable point called unstable)."""
+    partner, paired = pairs(fine, coarse, among)
+    out = np.array(fine, dtype=complex)
+    out[paired] = fine[paired] ** 2 / partner[paired]
+    return out
+
+
+def pairs(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = None) -> tuple:
+    """``(partner, paired)``: for each of ``fine`` (2 M steps) its nearest in ``coarse`` (M steps), and whether
+    the two are one multiplier seen at two resolutions: each the other's nearest (of ``coarse`` and of ``among``,
+    all the multipliers at 2 M: default ``fine``), of one kind (both real, or both complex in the same half
+    plane), the coarse one above NOISE, and their ratio within e^GROWTH. Elsewhere they are not one multiplier:
+    where a slip starts between steps at one resolution and not at the other the monodromies differ in structure
+    (0.148 at 4096 steps paired with 0.0005 at 2048 made 45 in the logarithm, on a scene whose every multiplier
+    is at most 1); and two real multipliers that become a complex pair (a joint with a cubic spring at 0.48 Hz:
+    1.136 and 0.783 at 1024 steps, 0.907 +- 0.314 i at 2048) made 1.21 (unstable) linearly and 1.18 in the
+    logarithm, where the pair at 4096 and 2048 steps gives 0.975."""
     among = fine if among is None else among
     partner = np.array([coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()], dtype=complex)
     back = np.array([among[np.argmin(np.abs(among - nu))] for nu in partner.tolist()], dtype=complex)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.abs(fine) / np.abs(partner)
-    logarithmic = (back == fine) & (np.abs(partner) > NOISE) & (ratio <= math.exp(GROWTH)) & \
+    same_kind = np.sign(np.asarray(fine, dtype=complex).imag) == np.sign(partner.imag)
+    paired = (back == fine) & same_kind & (np.abs(partner) > NOISE) & (ratio <= math.exp(GROWTH)) & \
         (ratio >= math.exp(-GROWTH))
-    out = 2.0 * fine - partner
-    out[logarithmic] = fine[logarithmic] ** 2 / partner[logarithmic]
-    return out
+    return partner, paired
 
 
 def variational_monodromy(balance, q_free, omega):

@@ -13,16 +13,20 @@ from tests.analysis.test_describe_cli import read_csv
 from tests.analysis.test_harmonic_balance_network_friction import network_text
 
 
-def test_a_pair_that_is_one_multiplier_is_extrapolated_in_its_logarithm_and_others_linearly():
+def test_a_pair_that_is_one_multiplier_is_extrapolated_in_its_logarithm_and_others_not():
     """0.070 at M and 0.207 at 2 M steps, each the other's nearest (backward Euler's e^-2.16 and e^-1.08 on
     0.612): 0.207^2 / 0.070. 0.1481 at 2 M whose nearest at M is 0.0005, whose nearest at 2 M is 0.0003 (not one
-    multiplier: a slip between steps at one resolution): linear, 2 * 0.1481 - 0.0005, where the logarithm gave
-    44. A ratio past e^1.5 (0.5 and 0.05): linear too. A coarse value below NOISE: linear."""
+    multiplier: a slip between steps at one resolution): kept as it is, where the logarithm gave 44. A ratio
+    past e^1.5 (0.5 and 0.05): kept. A coarse value below NOISE: kept. A complex pair at 2 M nearest to a real
+    one at M (two real multipliers that met): kept, where paired they made 1.21 and 1.18."""
     assert floquet.extrapolated(np.array([0.207]), np.array([0.070])) == pytest.approx([0.207**2 / 0.070])
     assert floquet.extrapolated(np.array([0.1481]), np.array([0.0005, -0.5]), np.array([0.1481, 0.0003])) == \
-        pytest.approx([2 * 0.1481 - 0.0005])
-    assert floquet.extrapolated(np.array([0.5]), np.array([0.05])) == pytest.approx([0.95])
-    assert floquet.extrapolated(np.array([1e-7]), np.array([1e-9])) == pytest.approx([2e-7 - 1e-9])
+        pytest.approx([0.1481])
+    assert floquet.extrapolated(np.array([0.5]), np.array([0.05])) == pytest.approx([0.5])
+    assert floquet.extrapolated(np.array([1e-7]), np.array([1e-9])) == pytest.approx([1e-7])
+    met = np.array([0.9067 - 0.3136j, 0.9067 + 0.3136j])
+    assert floquet.extrapolated(met, np.array([1.1357, 0.7834])) == pytest.approx(met)
+    assert not np.any(floquet.pairs(met, np.array([1.1357, 0.7834]))[1])
     # a complex pair: each with its own conjugate's partner
     fine, coarse = np.array([0.9 * np.exp(0.3j), 0.9 * np.exp(-0.3j)]), np.array([0.8 * np.exp(0.31j),
                                                                                 0.8 * np.exp(-0.31j)])
@@ -33,7 +37,7 @@ def test_a_pair_that_is_one_multiplier_is_extrapolated_in_its_logarithm_and_othe
 def test_the_refinement_gives_a_value_in_range_or_none(ratio, known):
     """A multiplier mu = 0.6 e^(0.2 i) seen through backward Euler's shrinking exp(-a / M), a = (2 pi ratio)^2 / 2
     (a motion ratio times the forcing's frequency): at ratio 3 the refinement reaches a pair whose shrinking is
-    within SHRINK and gives mu to 1e-3; at ratio 30 even 4096 steps shrink it by e^-2.2 a resolution: the
+    within SHRINK and gives mu to 1e-3; at ratio 30 even 8192 steps shrink it by e^-2.2 from 4096: the
     multipliers are not computed (None: unknown), where the verdict would have been "stable" for any mu (it
     was, with the value off by a factor). (A multiplier that the shrinking hides below another one is not
     seen at all: floquet.py says so.)"""
@@ -114,9 +118,9 @@ def test_a_joint_behind_a_massless_node_is_stable_everywhere(tmp_path):
 def test_a_multiplier_shrunk_to_zero_is_unknown_not_stable():
     """Far below a delay's unstable resonance backward Euler shrinks a multiplier of 5e5 to 0 at 256 and 512
     steps (a review's find: written stable, its multiplier 0.0): the largest at both resolutions 0 is no value,
-    and one still shrinking at 4096 steps (7e-5 to 6.7 from 2048 to 4096) neither: unknown."""
+    and one still shrinking at 8192 steps (7e-5 to 6.7 from 4096 to 8192) neither: unknown."""
     assert floquet.refined(lambda steps: np.zeros(2), floquet.STEPS) is None
-    seen = {256: 0.0, 512: 0.0, 1024: 7e-5 * 1e-6, 2048: 7e-5, 4096: 6.7}
+    seen = {256: 0.0, 512: 0.0, 1024: 0.0, 2048: 7e-5 * 1e-6, 4096: 7e-5, 8192: 6.7}
     assert floquet.refined(lambda steps: np.array([seen[steps], 0.0]), floquet.STEPS) is None
 
 
@@ -139,16 +143,37 @@ def test_a_step_the_check_s_stepper_refuses_leaves_the_point_unknown(monkeypatch
     assert floquet.multipliers(balance, balance.solve_at(omega), omega) is None
 
 
-def test_a_verdict_still_in_doubt_at_4096_steps_is_unknown():
+def test_a_verdict_still_in_doubt_at_8192_steps_is_unknown():
     """Largest multipliers that keep moving about 1 from one resolution to the next (a slip starting between
     steps at one and not at the next: on a joint with a cubic spring 0.760, 0.871, 0.936, 0.896 at 1024 ... 8192
-    steps) leave the verdict in doubt at the finest pair: unknown (None), where the finest pair's value (1.006,
-    "unstable") was taken; a pair that settles away from 1 is taken as before."""
-    seen = {256: 0.90, 512: 0.96, 1024: 0.93, 2048: 0.99, 4096: 0.95}
+    steps) leave the verdict in doubt at the finest pair: unknown (None), where the pair 4096 and 2048's value
+    (1.006, "unstable") was taken; a pair that settles away from 1 is taken as before."""
+    seen = {256: 0.90, 512: 0.96, 1024: 0.93, 2048: 0.99, 4096: 0.95, 8192: 1.01}
     assert floquet.refined(lambda steps: np.array([seen[steps]]), floquet.STEPS) is None
     steady = {256: 0.70, 512: 0.71, 1024: 0.715, 2048: 0.7175, 4096: 0.71875}
     values = floquet.refined(lambda steps: np.array([steady[steps]]), floquet.STEPS)
     assert values is not None and abs(abs(values[0]) - 0.72) <= 2e-3
+
+
+def test_two_real_multipliers_that_become_a_complex_pair_are_not_called_unstable():
+    """A joint with a cubic spring at 0.48 Hz, F0 = 1 N (its monodromies at 256 ... 4096 steps, measured: a real
+    multiplier of the coarse steps, 2.02, 1.58, 1.14, meets a real one and is a complex pair from 2048 on): the
+    pair at 2048 and 1024 steps has no partner for it, so the refinement goes on to 4096 and gives 0.976 (the
+    pair that met, 0.9594 and 0.9678 in modulus at 2048 and 4096 steps), stable, where it said 1.206, unstable."""
+    seen = {256: [2.0199, -0.4716 + 0.8446j, -0.4716 - 0.8446j, 0.3629],
+            512: [1.5760, -0.4737 + 0.8481j, -0.4737 - 0.8481j, 0.5282],
+            1024: [1.1357, -0.4748 + 0.8499j, -0.4748 - 0.8499j, 0.7834],
+            2048: [-0.4753 - 0.8507j, -0.4753 + 0.8507j, 0.9067 - 0.3136j, 0.9067 + 0.3136j],
+            4096: [-0.4756 - 0.8512j, -0.4756 + 0.8512j, 0.8787 - 0.4056j, 0.8787 + 0.4056j]}
+    asked = []
+
+    def at(steps):
+        asked.append(steps)
+        return np.array(seen[steps], dtype=complex)
+
+    values = floquet.refined(at, floquet.STEPS)
+    assert values is not None and 4096 in asked
+    assert floquet.is_stable(values) and abs(np.max(np.abs(values)) - 0.9763) <= 2e-4
 
 
 @pytest.mark.slow
