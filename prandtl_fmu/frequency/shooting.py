@@ -1045,7 +1045,8 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
     the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a run of points not
     found that holds a fold or lies next to one, whose points are all within ``spacing`` (relative, in frequency
     and in the state; a tenth of the tolerance: the fold is located to it) of the points found on either side of
-    it, is left out, the point before it then marked the fold where the fold was in the run. FrequencyError for any other point not found."""
+    it, is left out, the point before it then marked the fold where the fold was in the run. FrequencyError for
+    any other point not found."""
     from .continuation import across
 
     solved = []
@@ -1070,7 +1071,8 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
         run = points[index:end]
         beside = points[max(index - 1, 0):end + 1]
         if not (0 < index and end < len(points) and any(fold for _, _, fold in beside)
-                and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing) for point in run)):
+                and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
+                        for point in run)):
             raise FrequencyError(f"{finer.system.source}: at f = {float(points[index][0]) / (2 * math.pi)!r} Hz the "
                                  f"periodic state with {finer.delay_harmonics} harmonics of the delay's force and "
                                  f"{finer.M} samples per period was not found from the coarser one's: see --method "

@@ -9,10 +9,11 @@ The same holds for a scene of nodes
 
 K and C the linear springs and dashpots, g the forces of the elements whose force is bounded: a slider (alpha), a
 Prandtl branch (k eta: its spring's elongation stays within eta, also behind a series dashpot), Coulomb friction
-on the mass (its static threshold alpha). Let phi be a mode of the springs alone, K phi = omega_r^2 M phi, that
-no dashpot damps (C phi = 0). A periodic x at omega_r, projected on phi and weighed by cos(omega_r t) over a
-period, loses its linear part (phi' (M x'' + K x) = phi' M (x'' + omega_r^2 x) integrates to 0 against cos, and
-C phi = 0), so
+on the mass (its static threshold alpha), Dahl's friction (its level: where |F| > force, F' has the sign that
+shrinks |F| whichever way the mass moves, so a periodic F stays within it). Let phi be a mode of the springs
+alone, K phi = omega_r^2 M phi, that no dashpot damps (C phi = 0). A periodic x at omega_r, projected on phi and
+weighed by cos(omega_r t) over a period, loses its linear part (phi' (M x'' + K x) = phi' M (x'' + omega_r^2 x)
+integrates to 0 against cos, and C phi = 0), so
 
     phi' f T / 2 = integral of phi' g(t) cos(omega_r t) dt,   |right| <= sum_j b_j |d_j . phi| 2 T / pi,
 
@@ -25,7 +26,7 @@ is M 1 Y0 omega^2 in coordinates relative to the ground.
 The bound is a proof of refusal only: below it a periodic state may or may not exist, and the continuation
 answers (a resonance it climbs without bound is refused past its bound of points, saying where). The check
 applies where every force besides springs and dashpots is bounded and every node has a mass (a cubic spring,
-a delay, a history, Dahl's law or a spectrum of branches: not checked). Repeated modes: each of the mode's
+a delay, a history or a spectrum of branches: not checked). Repeated modes: each of the mode's
 vectors that no dashpot damps, and the one of them the force drives most, are checked.
 """
 from __future__ import annotations
@@ -47,7 +48,7 @@ def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
     apply (see the module); ``kinetic``: the friction's bound its sliding level at large speed (alpha_kinetic of
     Stribeck's drop), that of a large motion (:func:`refuse_unbounded`)."""
     if scene.mass is None or scene.cubic is not None or any(
-            getattr(scene, name) is not None for name in ("delay", "history", "dahl")):
+            getattr(scene, name) is not None for name in ("delay", "history")):
         return None
     rows, bounds = [], []
     if scene.branches is not None:
@@ -56,6 +57,9 @@ def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
         for k, eta in zip(scene.branches.stiffness.tolist(), scene.branches.yield_displacement.tolist()):
             rows.append([1.0])
             bounds.append(k * eta)
+    if getattr(scene, "dahl", None) is not None:  # its force never leaves [-force, force] on a periodic state
+        rows.append([1.0])
+        bounds.append(float(scene.dahl.force))
     if scene.friction is not None:
         rows.append([1.0])
         friction = scene.friction
@@ -205,8 +209,8 @@ def _refuse(scene, nodes, phi, omega, drive, hold, force_amplitude, base_amplitu
             "mode")
     raise FrequencyError(
         f"{scene.source}: no periodic state at f = {f:.6g} Hz: no dashpot acts on the springs' mode there (shape "
-        f"{shape}), and {what} drives it with {drive:.6g} N, more than the most its sliders and branches can "
-        f"hold, {hold:.6g} N (4 / pi of their forces along the mode: Den Hartog's bound), so its amplitude grows "
+        f"{shape}), and {what} drives it with {drive:.6g} N, more than the most its friction, sliders and branches "
+        f"can hold, {hold:.6g} N (4 / pi of their forces along the mode: Den Hartog's bound), so its amplitude grows "
         f"without bound: leave {f:.6g} Hz out of the frequencies, or give {cure}, or a dashpot on that mode")
 
 

@@ -358,3 +358,24 @@ def test_a_narrow_fold_pair_is_found_whatever_frequencies_are_listed():
     assert coarse.frequency[coarse.folds] == pytest.approx(fine.frequency[fine.folds], rel=1e-9)
     assert coarse.amplitude[coarse.folds] == pytest.approx(fine.amplitude[fine.folds], rel=1e-7)
     assert 0.0895 < coarse.frequency[coarse.folds[1]] < coarse.frequency[coarse.folds[0]] < 0.0902
+
+
+def test_dahl_s_friction_forced_beyond_den_hartog_s_bound_is_refused_before_the_curve_starts(tmp_path, capsys):
+    """Dahl's force stays within its level on a periodic state, so Den Hartog's bound holds with it: the belt
+    tensioner (2e-3 kg m^2 on 25 N m/rad, Dahl's level 1.5 N m, no dashpot) forced with 3 N m over its natural
+    17.794 Hz, beyond 4 / pi 1.5 = 1.90986, has no periodic state there (it was refused at 17.794 Hz as a
+    "branch point"): refused before it starts, in one line with the bound; 0.99 of the bound is not refused
+    there."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.unbounded import refuse_unbounded
+
+    natural = math.sqrt(25.0 / 2e-3) / (2 * math.pi)
+    bound = 4 / math.pi * 1.5
+    scene, _ = read_scene("belt-tensioner")
+    refuse_unbounded(scene, 0.99 * bound, None, 2 * math.pi * 5.0, 2 * math.pi * 40.0)  # no refusal
+    out = tmp_path / "curve.csv"
+    assert main(["describe", "belt-tensioner", "--force-amplitude", "3", "--frequencies", "5,40",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and not out.exists(), err
+    assert f"no periodic state at f = {natural:.6g} Hz" in err and f"below {bound:.6g} " in err, err
