@@ -25,8 +25,8 @@ on a Jenkins element; the two discretize the base's motion differently and diffe
 Backward Euler damps: with M steps per period a multiplier is shrunk by about exp(-(2 pi)^2 / (2 M)
 (omega_n / omega)^2) per period, omega_n the motion's frequency. The monodromy is taken at M and 2 M steps and
 its multipliers extrapolated in their logarithm (Richardson, first order in the exponent: mu_2M^2 / mu_M, each
-with its partner at M: each the other's nearest, of one kind, their ratio within e^GROWTH; one without a
-partner is not extrapolated: :func:`extrapolated`, :func:`pairs`; not the matrices, whose structure can differ where a slip starts between steps), which
+with its partner at M: each the other's nearest (a double multiplier's copies each with a copy), of one kind,
+their ratio within e^GROWTH; one without a partner is not extrapolated: :func:`extrapolated`, :func:`pairs`; not the matrices, whose structure can differ where a slip starts between steps), which
 leaves an error of order 1 / M^2 in the exponent. Until the largest's shrinking between the two is within
 SHRINK (far below the resonance the value is not yet in the extrapolation's range, nor the verdict: a
 multiplier above 1 can be shrunk below it) and the verdict is sure (the largest |mu| farther from 1 than 4 times
@@ -90,6 +90,7 @@ KRYLOV_CHECK = 5  # the Ritz values are looked at every so many products
 RITZ_TOLERANCE = 1e-6  # a Ritz value's residual, relative: far below MARGIN
 NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: no partner (not extrapolated)
 SHRINK = 0.4  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (past it at the last: unknown)
+DOUBLE = 1e-4  # two multipliers within this of each other (relative) are one double multiplier's copies (pairs)
 GROWTH = 1.5  # |log(mu_2M / mu_M)| past which a pair is not extrapolated in the logarithm (extrapolated)
 REFINEMENTS = 5  # of the steps per period of the finite differences: at most STEPS 2^5 (8192)
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
@@ -156,7 +157,7 @@ def refined(at, steps: int):
     and 4 M ... until the largest has a partner at M (:func:`pairs`), its shrinking from M to 2 M, |log(mu_2M /
     mu_M)|, is at most SHRINK (its value in the extrapolation's range: within about 1e-3, measured far below an
     oscillator's resonance), every multiplier without a partner stays below 1 even moved 4 times as far as from
-    its nearest at M, and either |mu| - 1 of the largest is more than 4 times its last change (from the pair before,
+    its partner at M, and either |mu| - 1 of the largest is more than 4 times its last change (from the pair before,
     or for the first pair from its value at 2 M) or that change is below MARGIN / 2; at most REFINEMENTS times.
     None (unknown, never a guess) where ``at`` gives none before a first pair (a delay's buffer too long), or
     where the last pair reached (REFINEMENTS, or a finer one not computed) is still shrinking past SHRINK or its
@@ -184,7 +185,7 @@ def refined(at, steps: int):
         # SHRINK its value is not yet in the extrapolation's range (nor is the verdict: a multiplier above 1 can
         # be shrunk below it, down to rounding at M: 0.6 seen as 1e-15 and 6e-31 at 512 and 256 steps, and 5e5
         # as 0 at both, far below a delay's unstable resonance); the largest must have a partner, and one
-        # without (not extrapolated) must stay below 1 even if it moved 4 times as far as from its nearest at M
+        # without (not extrapolated) must stay below 1 even if it moved 4 times as far as from its partner at M
         at_fine, at_coarse = abs(kept[largest]), abs(partner[largest])
         settled = bool(paired[largest]) and min(at_fine, at_coarse) > 0.0 and \
             abs(math.log(at_fine / at_coarse)) <= SHRINK and \
@@ -216,24 +217,49 @@ def extrapolated(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarra
 
 
 def pairs(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = None) -> tuple:
-    """``(partner, paired)``: for each of ``fine`` (2 M steps) its nearest in ``coarse`` (M steps), and whether
-    the two are one multiplier seen at two resolutions: each the other's nearest (of ``coarse`` and of ``among``,
-    all the multipliers at 2 M: default ``fine``), of one kind (both real, or both complex in the same half
-    plane), the coarse one above NOISE, and their ratio within e^GROWTH. Elsewhere they are not one multiplier:
-    where a slip starts between steps at one resolution and not at the other the monodromies differ in structure
-    (0.148 at 4096 steps paired with 0.0005 at 2048 made 45 in the logarithm, on a scene whose every multiplier
-    is at most 1); and two real multipliers that become a complex pair (a joint with a cubic spring at 0.48 Hz:
-    1.136 and 0.783 at 1024 steps, 0.907 +- 0.314 i at 2048) made 1.21 (unstable) linearly and 1.18 in the
-    logarithm, where the pair at 4096 and 2048 steps gives 0.975."""
-    among = fine if among is None else among
-    partner = np.array([coarse[np.argmin(np.abs(coarse - mu))] for mu in fine.tolist()], dtype=complex)
-    back = np.array([among[np.argmin(np.abs(among - nu))] for nu in partner.tolist()], dtype=complex)
+    """``(partner, paired)``: for each of ``fine`` (2 M steps, some of ``among``: all the multipliers at 2 M,
+    default ``fine``) its partner in ``coarse`` (M steps), and whether the two are one multiplier seen at two
+    resolutions: each the other's nearest (of ``coarse`` and of ``among``), of one kind (real of one sign, or
+    complex in the same half plane), the coarse one above NOISE, their ratio within e^GROWTH. A double
+    multiplier (two at 2 M within DOUBLE of each other, relative) has both its copies' nearest at M the same, so
+    the copy that is not that one's nearest takes its twin at M (another within DOUBLE of it, not yet taken):
+    without it one copy never had a partner, and three identical arms on a massless joint took 8192 steps a
+    point, 7 times the work (a review's find). Elsewhere they are not one multiplier: where a slip starts
+    between steps at one resolution and not at the other the monodromies differ in structure (0.148 at 4096
+    steps nearest to 0.0005 at 2048 made 45 in the logarithm, on a scene whose every multiplier is at most 1);
+    two real multipliers that become a complex pair (a joint with a cubic spring at 0.48 Hz: 1.136 and 0.783 at
+    1024 steps, 0.907 +- 0.314 i at 2048) made 1.21 (unstable) linearly and 1.18 in the logarithm, where the pair
+    at 4096 and 2048 steps gives 0.975. Not nearest first over all pairs: at 0.0587 Hz on that joint 0.7473 and
+    0.6180 at 1024 steps against 0.5861 and 0.4885 at 512 would pair 0.6180 with 0.5861 first, then 0.7473 with
+    0.4885, whose logarithm made 1.14 (and 1.17 at the next pair), unstable, where 8192 steps give 0.98."""
+    fine = np.asarray(fine, dtype=complex)
+    coarse = np.asarray(coarse, dtype=complex)
+    among = fine if among is None else np.asarray(among, dtype=complex)
+    nearest = np.array([int(np.argmin(np.abs(coarse - mu))) for mu in fine.tolist()], dtype=np.int64)
+    back = np.array([among[np.argmin(np.abs(among - coarse[j]))] for j in nearest.tolist()], dtype=complex)
+    mutual = back == fine
+    taken = {int(j) for j in nearest[mutual]}
+    for k in np.flatnonzero(~mutual).tolist():
+        j = int(nearest[k])
+        if abs(fine[k] - back[k]) > DOUBLE * abs(back[k]):
+            continue  # not a copy of the multiplier that took its nearest
+        twins = [i for i in range(coarse.size)
+                 if i not in taken and abs(coarse[i] - coarse[j]) <= DOUBLE * abs(coarse[j])]
+        if twins:
+            twin = min(twins, key=lambda i: abs(coarse[i] - fine[k]))
+            nearest[k], mutual[k] = twin, True
+            taken.add(twin)
+    partner = coarse[nearest]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.abs(fine) / np.abs(partner)
-    same_kind = np.sign(np.asarray(fine, dtype=complex).imag) == np.sign(partner.imag)
-    paired = (back == fine) & same_kind & (np.abs(partner) > NOISE) & (ratio <= math.exp(GROWTH)) & \
-        (ratio >= math.exp(-GROWTH))
+    paired = mutual & (_kind(fine) == _kind(partner)) & (np.abs(partner) > NOISE) & \
+        (ratio <= math.exp(GROWTH)) & (ratio >= math.exp(-GROWTH))
     return partner, paired
+
+
+def _kind(values: np.ndarray) -> np.ndarray:
+    """+-1: complex in the upper or lower half plane; +-2: real, positive or negative; 0: zero."""
+    return np.where(values.imag != 0, np.sign(values.imag), 2 * np.sign(values.real))
 
 
 def variational_monodromy(balance, q_free, omega):

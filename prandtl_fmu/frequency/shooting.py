@@ -1039,7 +1039,9 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
     """The ``points`` (omega, s, fold) of ``shooting``'s curve as points of the ``finer`` one (more samples, more of
     a delay's harmonics), and the indices of those kept: each by Newton at its frequency from the coarser state;
     where that does not converge, on the normal to the coarser curve through it (``continuation.across``: a fold
-    the finer curve has moved past, where the state at the same frequency does not exist). At a fold on a corner
+    the finer curve has moved past, where the state at the same frequency does not exist), kept only within
+    ``spacing`` of the coarser point (near a corner the normal can meet the finer curve on its far side, far
+    away: a review's find, a point moved by 1e-3 across a corner and kept out of order). At a fold on a corner
     (a slip's onset where the curve turns back: the delay oscillator at 0.1 N at 0.3705 Hz) neither finds the
     points the finer corner has moved past, by less than the spacing that the corner's search made tiny (there
     the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a run of points not
@@ -1054,7 +1056,7 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
         state = finer._newton(omega, shooting.padded(s, finer))
         if state is None:
             found = across(shooting, finer, lambda v: shooting.padded(v, finer), s, omega, low, high)
-            if found is not None:
+            if found is not None and _close((found[1], found[0][:s.size]), (omega, s), spacing):
                 omega, state = found[1], found[0]
         solved.append(None if state is None else (omega, state, fold))
     out, kept = [], []

@@ -596,6 +596,7 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
     moving = np.empty(elements, np.int64)  # the elements the direction moves (their force changes)
     single = np.bool_(False)  # release one constraint at a time (after a release of several met a kink at once)
     released_many = False
+    last_correction = np.inf  # the largest of Newton's last corrections (cubic springs)
     for iteration in range(budget):
         count = _clusters(n, kind, ends, piece, parent, cluster, fixed_node)
         while True:  # the gradient and the clusters' matrix in one pass (again, wider, if the band grew)
@@ -651,22 +652,31 @@ def active_set_step(model, x, v, u, piece, h, force, fixed_node, fixed_increment
         converged = False
         if has_cubic and top == 1.0:
             # Newton has converged when the forces balance to their rounding, or when its step no longer
-            # changes anything: below a few ulps of the increment or of the new position x + d (a node with a
-            # mass that nearly stops while the rest of the network moves fast: on a joint with a cubic spring
-            # at 5 m, a node at 0.012 m moving 1.8e-9 m in a step, Newton's corrections of 1e-19 m are the
-            # rounding of the forces, and the search ran out of its budget), or, at a massless node, below the
-            # rounding of its position (a massless node held by a cubic spring at rest: a triple root, where the
-            # force vanishes faster than the position can be resolved)
+            # changes anything: below a few ulps of the increment, or, at a massless node, below the rounding
+            # of its position (a massless node held by a cubic spring at rest: a triple root, where the force
+            # vanishes faster than the position can be resolved); or when its corrections have stopped
+            # shrinking at the rounding of the step as a whole (the coupled solve's: a node with a mass that
+            # nearly stops while the rest moves fast, on a joint with a cubic spring at 5 m, moved 1.8e-9 m in a
+            # step, and Newton's corrections there, 1e-19 m, came and went with the rounding of the others'
+            # forces: the search ran out of its budget)
             converged = balanced
             if not converged:
                 converged = True
                 for j in range(n):
-                    if abs(p[j]) <= 4.0 * np.finfo(np.float64).eps * max(abs(d[j]), abs(x[j] + d[j])):
+                    if abs(p[j]) <= 4.0 * np.finfo(np.float64).eps * abs(d[j]):
                         continue
                     if not mass[j] > 0.0 and abs(p[j]) <= ROUNDING * (abs(x[j]) + abs(d[j])):
                         continue
                     converged = False
                     break
+            if not converged:
+                largest_p = 0.0
+                largest_d = 0.0
+                for j in range(n):
+                    largest_p = max(largest_p, abs(p[j]))
+                    largest_d = max(largest_d, abs(d[j]))
+                converged = largest_p <= ROUNDING * largest_d and largest_p >= last_correction
+                last_correction = largest_p
         # the farthest the move may go: to the working set's minimiser (tau = 1), or, along a floppy direction
         # or a cubic spring's Newton direction (searched exactly: it may go past 1, where Newton falls short
         # of a triple root), as far as no kink stops it

@@ -117,3 +117,24 @@ def test_a_point_not_found_far_from_a_fold_or_its_neighbours_is_refused(monkeypa
         shooting._solved_again(_coarse(), Shifted(corner, 1.5e-6), no_fold, 1.0, 3.0, 1e-4)
     with pytest.raises(FrequencyError):  # the last point not found: no neighbour after it
         shooting._solved_again(_coarse(), Shifted(corner, 5e-6), points[:5], 1.0, 3.0, 1e-4)
+
+
+def test_a_point_the_normal_moves_far_is_not_kept(monkeypatch):
+    """The normal through a coarse point near a corner can meet the finer curve on its far side, far away (a
+    review's find: kept, out of order, the fold 1e-3 past the corner): a point ``across`` moves by more than the
+    spacing is not found; one it moves within the spacing is kept where it lands."""
+    corner = Corner()
+    points = points_near(corner, 1e-6)
+
+    def moved(by):
+        def across(balance, finer, lift, q, omega, low, high):
+            return q + by, omega * (1.0 - by)
+        return across
+
+    monkeypatch.setattr(continuation, "across", moved(1e-3))
+    with pytest.raises(FrequencyError, match="was not found from the coarser one's"):
+        shooting._solved_again(_coarse(), Shifted(corner, 1e-3), points, 1.0, 3.0, 1e-4)
+    monkeypatch.setattr(continuation, "across", moved(1e-7))
+    out, kept = shooting._solved_again(_coarse(), Shifted(corner, 1.5e-6), points, 1.0, 3.0, 1e-4)
+    assert list(kept) == list(range(len(points)))
+    assert out[3][0] == pytest.approx(points[3][0] * (1.0 - 1e-7), rel=1e-15)

@@ -176,6 +176,44 @@ def test_two_real_multipliers_that_become_a_complex_pair_are_not_called_unstable
     assert floquet.is_stable(values) and abs(np.max(np.abs(values)) - 0.9763) <= 2e-4
 
 
+def test_multipliers_are_not_paired_nearest_first_over_all_pairs():
+    """A joint with a cubic spring at 0.0587 Hz, F0 = 1 N (measured): two real multipliers growing with the steps,
+    0.5861 and 0.4885 at 512, 0.7473 and 0.6180 at 1024. Matched nearest first over all pairs, 0.6180 took
+    0.5861 and 0.7473 took 0.4885, whose logarithm made 1.14, then 1.17 at the next pair: unstable, where 8192
+    steps give 0.9795. Each with its nearest, 0.7473 has no partner until the values settle: stable, 0.98."""
+    seen = {256: [0.3439 + 0.0041j, 0.3439 - 0.0041j, 0.1796 - 0.1644j, 0.1796 + 0.1644j],
+            512: [0.5861, 0.4885, 0.3014 - 0.2671j, 0.3014 + 0.2671j],
+            1024: [0.7473, 0.6180, 0.3899 - 0.3161j, 0.3899 + 0.3161j],
+            2048: [0.8498, 0.7045, 0.4411 - 0.3295j, 0.4411 + 0.3295j],
+            4096: [0.9105, 0.7531, 0.4664 - 0.3287j, 0.4664 + 0.3287j],
+            8192: [0.9443, 0.7783, 0.4776 - 0.3224j, 0.4776 + 0.3224j]}
+    values = floquet.refined(lambda steps: np.array(seen[steps], dtype=complex), floquet.STEPS)
+    assert values is not None and floquet.is_stable(values)
+    assert abs(np.max(np.abs(values)) - 0.9443**2 / 0.9105) <= 1e-9
+
+
+@pytest.mark.parametrize("r, a", [(0.99, 50.0), (0.995, 20.0)])
+def test_a_double_multiplier_gets_both_its_partners(r, a):
+    """Three identical arms on a joint have double multipliers: with each multiplier paired to its nearest alone,
+    one of the two never had a partner (both nearest the same), and every point went to 8192 steps, 7 times the
+    work (a review's find). Matched nearest first, each used once, a double complex pair shrunk by backward Euler
+    (r e^(0.4 i) exp(-a / M)) is found as the single one is, within 1e-3, before the finest steps."""
+    asked = []
+
+    def at(steps, count=2):
+        asked.append(steps)
+        mu = r * np.exp(0.4j) * math.exp(-a / steps)
+        return np.array([mu, np.conj(mu)] * count)
+
+    single = floquet.refined(lambda steps: at(steps, 1), floquet.STEPS)
+    steps_single = max(asked)
+    asked.clear()
+    double = floquet.refined(at, floquet.STEPS)
+    assert single is not None and double is not None
+    assert abs(np.max(np.abs(double)) - r) <= 1e-3 and abs(np.max(np.abs(single)) - r) <= 1e-3
+    assert max(asked) == steps_single < floquet.STEPS * 2**floquet.REFINEMENTS
+
+
 @pytest.mark.slow
 def test_a_point_that_stays_unstable_on_a_joint_with_a_cubic_spring_leaves_its_orbit():
     """A joint behind a massless node with a cubic spring on a (not monotone: no proof), F0 = 1 N, H = 5: the
