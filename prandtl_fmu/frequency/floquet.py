@@ -222,9 +222,11 @@ def pairs(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = No
     resolutions: each the other's nearest (of ``coarse`` and of ``among``), of one kind (real of one sign, or
     complex in the same half plane), the coarse one above NOISE, their ratio within e^GROWTH. A double
     multiplier (two at 2 M within DOUBLE of each other, relative) has both its copies' nearest at M the same, so
-    the copy that is not that one's nearest takes its twin at M (another within DOUBLE of it, not yet taken):
-    without it one copy never had a partner, and three identical arms on a massless joint took 8192 steps a
-    point, 7 times the work (a review's find). Elsewhere they are not one multiplier: where a slip starts
+    the copy that is not that one's nearest takes its twin at M (another within DOUBLE of it, not yet taken),
+    where there are as many copies at M as at 2 M: without it one copy never had a partner, and three identical
+    arms on a massless joint took 8192 steps a point, 7 times the work (a review's find); without the count, an
+    unstable multiplier that crosses a double at 2 M took the double's spare copy at M and was called stable (a
+    second review's find). Elsewhere they are not one multiplier: where a slip starts
     between steps at one resolution and not at the other the monodromies differ in structure (0.148 at 4096
     steps nearest to 0.0005 at 2048 made 45 in the logarithm, on a scene whose every multiplier is at most 1);
     two real multipliers that become a complex pair (a joint with a cubic spring at 0.48 Hz: 1.136 and 0.783 at
@@ -243,6 +245,9 @@ def pairs(fine: np.ndarray, coarse: np.ndarray, among: Optional[np.ndarray] = No
         j = int(nearest[k])
         if abs(fine[k] - back[k]) > DOUBLE * abs(back[k]):
             continue  # not a copy of the multiplier that took its nearest
+        copies = int(np.count_nonzero(np.abs(among - back[k]) <= DOUBLE * abs(back[k])))
+        if copies != int(np.count_nonzero(np.abs(coarse - coarse[j]) <= DOUBLE * abs(coarse[j]))):
+            continue  # as many copies at 2 M as at M, else another multiplier crosses the double there
         twins = [i for i in range(coarse.size)
                  if i not in taken and abs(coarse[i] - coarse[j]) <= DOUBLE * abs(coarse[j])]
         if twins:

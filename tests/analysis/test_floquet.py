@@ -214,6 +214,23 @@ def test_a_double_multiplier_gets_both_its_partners(r, a):
     assert max(asked) == steps_single < floquet.STEPS * 2**floquet.REFINEMENTS
 
 
+@pytest.mark.parametrize("gap", [3e-5, 8e-5])
+def test_an_unstable_multiplier_crossing_a_double_is_not_given_its_spare_copy(gap):
+    """A double multiplier (0.9, two identical arms, barely shrunk) and an unstable one (1.1573, shrunk by
+    backward Euler as exp(-128.7 / M)) that crosses the double at 512 steps, within ``gap`` of it: the unstable
+    one took the double's spare copy at 256 steps as its partner (it is within DOUBLE of a copy at 512), was
+    extrapolated to 0.9 and the point called stable (a second review's find). Three copies at 512 against two
+    at 256 are not a double's: no spare copy is given, and the refinement goes on to find 1.1573."""
+    def at(steps):
+        double = 0.9 * math.exp(-0.005 / steps)
+        crossing = double + gap if steps == 512 else 1.1573 * math.exp(-128.7 / steps)
+        return np.array([crossing, double + 1e-9, double - 1e-9, 0.3 + 0.2j, 0.3 - 0.2j], dtype=complex)
+
+    values = floquet.refined(at, floquet.STEPS)
+    assert values is not None and not floquet.is_stable(values)
+    assert abs(np.max(np.abs(values)) - 1.1573) <= 1e-3
+
+
 @pytest.mark.slow
 def test_a_point_that_stays_unstable_on_a_joint_with_a_cubic_spring_leaves_its_orbit():
     """A joint behind a massless node with a cubic spring on a (not monotone: no proof), F0 = 1 N, H = 5: the
