@@ -249,7 +249,7 @@ def _warn_unknown_stability(curves) -> None:
             print(f"warning: ({load}) the stability of {unknown} of {len(curve.frequency)} points is not computed "
                   "(their stable field is empty: a monodromy past its work bound, a delay's buffer past its "
                   "bound, its largest multipliers not converged within the Arnoldi iteration's bound, backward "
-                  "Euler's damping still shrinking them or the verdict still in doubt at 8192 steps a period, or "
+                  "Euler's damping still shrinking them or the verdict still in doubt at 16384 steps a period, or "
                   "a step of the check refused by its stepper; docs/frequency.md)", file=sys.stderr)
 
 

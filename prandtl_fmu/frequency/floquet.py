@@ -35,7 +35,7 @@ REFINEMENTS times (:func:`refined`); still shrinking past SHRINK there, or the v
 point's multipliers are not computed (unknown). At a lightly damped joint's resonance peak M = 256 and 512 give 0.878 and 0.913 and extrapolate to
 0.94886, where the pair 4096 and 8192 gives 0.94890 (the extrapolation of the multipliers themselves, 2 mu_2M -
 mu_M, gave 0.9475 from 256 and 512). Every point of a curve gets its own (a few tens of ms a point). What the
-shrinking hides is not seen: a motion much faster than the forcing (omega_n / omega past about 18 at 8192
+shrinking hides is not seen: a motion much faster than the forcing (omega_n / omega past about 26 at 16384
 steps) whose multiplier falls below the largest one's at every resolution is not among those judged.
 
 An element scene with effects with memory (``[delay]``, ``[history]``, ``[dahl]``: the network stepper knows none
@@ -92,7 +92,7 @@ NOISE = 1e-6  # a multiplier below it is rounding in the finite differences: no 
 SHRINK = 0.4  # log(mu_2M / mu_M) of the largest: past it the pair moves to finer steps (past it at the last: unknown)
 DOUBLE = 1e-4  # two multipliers within this of each other (relative) are one double multiplier's copies (pairs)
 GROWTH = 1.5  # |log(mu_2M / mu_M)| past which a pair is not extrapolated in the logarithm (extrapolated)
-REFINEMENTS = 5  # of the steps per period of the finite differences: at most STEPS 2^5 (8192)
+REFINEMENTS = 6  # of the steps per period of the finite differences: at most STEPS 2^6 (16384)
 LARGEST = 8  # the multipliers extrapolated (with a delay the two resolutions have monodromies of different sizes)
 # the multiply-adds one point's monodromy may cost (a few seconds); past it the multipliers are not computed
 WORK_LIMIT = 4e9

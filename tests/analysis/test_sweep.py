@@ -269,6 +269,9 @@ def cluster():
 
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as local:
         with Client(local) as client:
+            # both workers known to the client before a test asks (under load the client's view of the
+            # scheduler lagged: one worker, so the first task did not run alone)
+            client.wait_for_workers(2)
             yield local, client
 
 
