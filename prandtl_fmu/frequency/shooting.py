@@ -1039,10 +1039,10 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
     """The ``points`` (omega, s, fold) of ``shooting``'s curve as points of the ``finer`` one (more samples, more of
     a delay's harmonics), and the indices of those kept: each by Newton at its frequency from the coarser state;
     where that does not converge, on the normal to the coarser curve through it (``continuation.across``: a fold
-    the finer curve has moved past, where the state at the same frequency does not exist), kept only within
-    ``spacing`` of the coarser point and within half the way to its neighbours (near a corner the normal can
-    meet the finer curve on its far side: a review's find, a point moved by 1e-3 across a corner and kept out of
-    order; a second review's, three points moved by 2e-5 onto the far side, within the spacing). At a fold on a corner
+    the finer curve has moved past, where the state at the same frequency does not exist: the delay oscillator
+    at 0.2 N, whose fold near 0.0912 Hz moves by 4e-4 of its frequency), kept only within half the way to its
+    neighbours (near a corner the normal can meet the finer curve on its far side: a review's find, a point
+    moved by 1e-3 across a corner and kept out of order; a second review's, three points moved by 2e-5). At a fold on a corner
     (a slip's onset where the curve turns back: the delay oscillator at 0.1 N at 0.3705 Hz) neither finds the
     points the finer corner has moved past, by less than the spacing that the corner's search made tiny (there
     the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a run of points not
@@ -1057,10 +1057,10 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
         state = finer._newton(omega, shooting.padded(s, finer))
         if state is None:
             found = across(shooting, finer, lambda v: shooting.padded(v, finer), s, omega, low, high)
-            # moved by less than the spacing, and by less than half the way to either neighbour (else it can pass
-            # it: near a corner the normal meets the finer curve on its far side, out of order)
-            reach = min([spacing] + [0.5 * _gap(points[other], points[index]) for other in (index - 1, index + 1)
-                                     if 0 <= other < len(points)])
+            # moved by less than half the way to either neighbour (else it can pass it: near a corner the normal
+            # meets the finer curve on its far side, out of order)
+            reach = min([math.inf] + [0.5 * _gap(points[other], points[index]) for other in (index - 1, index + 1)
+                                      if 0 <= other < len(points)])
             if found is not None and _gap((found[1], found[0][:s.size]), (omega, s)) <= reach:
                 omega, state = found[1], found[0]
         solved.append(None if state is None else (omega, state, fold))

@@ -237,3 +237,21 @@ def test_the_delay_oscillator_s_curve_turns_back_at_each_slip_onset_and_goes_on(
     # past each onset the branch slides: the curve reaches far above eta between them
     between = slice(min(onsets), max(onsets))
     assert np.max(curve.amplitude[between]) > 1.5 * 0.2
+
+
+@pytest.mark.slow
+def test_a_fold_that_a_finer_resolution_moves_is_found_on_the_normal_through_it():
+    """scenes/delay-oscillator at F0 = 0.2 N: a fold pair near 0.09 Hz (the mass starts to slide on its
+    friction). Doubling the delay's harmonics and the samples moves the first fold down by about 4e-4 of its
+    frequency, so the fold point and the one after it exist at no frequency of theirs on the finer curve; on
+    the normal through each (``continuation.across``) they are found, which a cap of a tenth of the tolerance
+    refused (the whole curve with it). The curve reaches 0.6 Hz; between the two folds a point is unstable."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("delay-oscillator")
+    curve = harmonic_response(scene, 0.2, [0.05, 0.6])
+    assert curve.frequency[-1] == pytest.approx(0.6)
+    low = [index for index in curve.folds if curve.frequency[index] < 0.1]
+    assert len(low) == 2 and 0.09 < curve.frequency[low[0]] < 0.092 and 0.088 < curve.frequency[low[1]] < 0.09
+    assert not np.all(curve.stable[low[0]:low[1] + 1])
