@@ -1042,14 +1042,14 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
     the finer curve has moved past, where the state at the same frequency does not exist: the delay oscillator
     at 0.2 N, whose fold near 0.0912 Hz moves by 4e-4 of its frequency), kept only within half the way to its
     neighbours (near a corner the normal can meet the finer curve on its far side: a review's find, a point
-    moved by 1e-3 across a corner and kept out of order; a second review's, three points moved by 2e-5). At a fold on a corner
-    (a slip's onset where the curve turns back: the delay oscillator at 0.1 N at 0.3705 Hz) neither finds the
-    points the finer corner has moved past, by less than the spacing that the corner's search made tiny (there
-    the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a run of points not
-    found that holds a fold or lies next to one, whose points are all within ``spacing`` (relative, in frequency
-    and in the state; a tenth of the tolerance: the fold is located to it) of the points found on either side of
-    it, is left out, the point before it then marked the fold where the fold was in the run. FrequencyError for
-    any other point not found."""
+    moved by 1e-3 across a corner and kept out of order; a second review's, three points moved by 2e-5). At a
+    fold on a corner (a slip's onset where the curve turns back: the delay oscillator at 0.1 N at 0.3705 Hz)
+    neither finds the points the finer corner has moved past, by less than the spacing that the corner's search
+    made tiny (there the finer corner is 4e-9 Hz lower and three points, within 1.1e-8 Hz of it, are past it): a
+    run of points not found that holds a fold or lies next to one, whose points are all within ``spacing``
+    (relative, in frequency and in the state; a tenth of the tolerance: the fold is located to it) of the points
+    found on either side of it, is left out, the point before it then marked the fold where the fold was in the
+    run. FrequencyError for any other point not found."""
     from .continuation import across
 
     solved = []
