@@ -15,6 +15,8 @@ from prandtl_fmu.network import NetworkElement
 from prandtl_fmu.scene import parse_scene
 from prandtl_fmu.stepping import ElementError
 
+from tests.analysis.test_harmonic_balance import MASSLESS_JOINT
+
 H = 1e-3
 SOLVER = f"""
 [solver]
@@ -150,34 +152,8 @@ k = 1e14
         assert abs(Fraction(x) - x_exact) <= 4 * 2.0 ** -53 * x_exact
 
 
-JOINT_WITH_A_CUBIC = """
-name = "joint-cubic"
-[network]
-nodes = ["a", "j", "b"]
-mass = [1.0, 0.0, 1.0]
-load_node = "a"
-[[network.spring]]
-between = ["a", "ground"]
-k = 1.0
-[[network.spring]]
-between = ["b", "ground"]
-k = 1.0
-[[network.spring]]
-between = ["a", "j"]
-k = 5.0
-[[network.branch]]
-between = ["j", "b"]
-k = 2.0
-eta = 0.05
-[[network.spring]]
-between = ["j", "ground"]
-k = 0.5
-[[network.dashpot]]
-between = ["a", "ground"]
-c = 0.02
-[[network.dashpot]]
-between = ["b", "ground"]
-c = 0.02
+# the tests' joint behind a massless node, with a cubic spring on a
+JOINT_WITH_A_CUBIC = MASSLESS_JOINT + """
 [[network.cubic]]
 between = ["a", "ground"]
 k3 = 0.5
