@@ -75,6 +75,7 @@ DAMPED_REACH = 4.0  # their point is at most this many arc-length steps from the
 TURN = 0.5  # a point whose tangent turned by more than 60 degrees from the last is taken again at half the step
 MISSED = 0.2  # march_curve: a point whose prediction missed by more than this many steps is taken again at half
 RESOLUTION = 1e-2  # march_curve: a miss below this (scaled: 1 % of the curve drawn) is not chased
+BRIDGE_STEPS = 64  # bridge: the most arc-length steps between two points of a curve
 FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
 
 
@@ -236,6 +237,53 @@ def across(balance, finer, lift, q, omega, omega_min: float, omega_max: float) -
         y = y + delta
         if _converged(finer, delta, residual, omega_y):
             return _unscaled(y, scale, omega_min, span)
+    return None
+
+
+def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: float, omega_max: float):
+    """The points of ``balance``'s curve from ``start`` to ``end`` (each (omega, q)), both on it, through what
+    lies between (a fold that a finer resolution moved past the coarser curve's points, which then exist at no
+    frequency of theirs): arc-length steps of an eighth of the chord from ``start`` along its tangent on the side
+    of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
+    the corrector fails, a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
+    until the point is within a step of ``end``. ``[(omega, q, is_fold)]`` without the ends, or None (a step
+    below 1e-6 of the chord, or more than BRIDGE_STEPS steps, or a point farther from ``end`` than twice the
+    chord: not the way there)."""
+    span = omega_max - omega_min
+    (omega, q), (omega_end, q_end) = start, end
+    scale = max(float(np.linalg.norm(q)), float(np.linalg.norm(q_end)), 1e-300)
+    target = _scaled(q_end, omega_end, scale, omega_min, span)
+    chord = float(np.linalg.norm(target - _scaled(q, omega, scale, omega_min, span)))
+    if chord == 0.0:
+        return []
+    tangent = _tangent(balance, q, omega, heading, scale, span)
+    if tangent is None:
+        return None
+    step = chord / 8.0
+    points = []
+    for _ in range(BRIDGE_STEPS):
+        y = _scaled(q, omega, scale, omega_min, span)
+        if np.linalg.norm(target - y) <= step:
+            return points
+        new = _correct(balance, y + step * tangent, tangent, scale, omega_min, span, step)
+        if new is None:
+            step *= 0.5
+            if step < 1e-6 * chord:
+                return None
+            continue
+        q_new, omega_new, _ = new
+        if np.linalg.norm(target - _scaled(q_new, omega_new, scale, omega_min, span)) > 2.0 * chord:
+            return None
+        turned = _tangent(balance, q_new, omega_new, tangent, scale, span)
+        if turned is None:
+            return None
+        if turned[-1] * tangent[-1] < 0:
+            fold = _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step)
+            if fold is None:
+                return None
+            points.append((fold[1], fold[0], True))
+        points.append((omega_new, q_new, False))
+        q, omega, tangent = q_new, omega_new, turned
     return None
 
 

@@ -1023,11 +1023,13 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
             grown = 2 * shooting.delay_harmonics + 1 if tail > 0.1 * tolerance else shooting.delay_harmonics
             finer = make(2 * shooting.M, grown)
             points, kept = _solved_again(shooting, finer, points, low, high, 0.1 * tolerance)
-            coefficients = coefficients[kept]
         else:
             finer = make(2 * shooting.M)
+            kept = np.arange(len(points))
         refined = np.array([finer.coefficients(s, w) for w, s, _ in points])
-        X, X_fine = (c[:, where, 1] - 1j * c[:, where, 2] for c in (coefficients, refined))
+        # the change at the points found again (a bridged one has no coarser twin: _solved_again)
+        found = kept >= 0
+        X, X_fine = (c[:, where, 1] - 1j * c[:, where, 2] for c in (coefficients[kept[found]], refined[found]))
         change = float(np.max(np.abs(X_fine - X) / np.maximum(np.abs(X_fine), 1e-300)))
         shooting, coefficients = finer, refined
         if change <= 0.5 * tolerance:  # the error at M is about 4/3 of the change (the trapezoid rule: 1 / M^2)
@@ -1049,8 +1051,12 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
     run of points not found that holds a fold or lies next to one, whose points are all within ``spacing``
     (relative, in frequency and in the state; a tenth of the tolerance: the fold is located to it) of the points
     found on either side of it, is left out, the point before it then marked the fold where the fold was in the
-    run. FrequencyError for any other point not found."""
-    from .continuation import across
+    run. A run next to a fold whose points are farther than that is bridged: the finer curve followed from the
+    point before it to the one after it, through its fold (``continuation.bridge``: the delay oscillator at 0.3
+    N, whose fold near 0.1063 Hz moves past the fold point and a point 3e-6 of it away, too close to each other
+    for the normal's guard); those points have no coarser twin (index -1). FrequencyError for any other point
+    not found, or a bridge that does not get there."""
+    from .continuation import across, bridge
 
     solved = []
     for index, (omega, s, fold) in enumerate(points):
@@ -1077,9 +1083,22 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
             end += 1
         run = points[index:end]
         beside = points[max(index - 1, 0):end + 1]
-        if not (0 < index and end < len(points) and any(fold for _, _, fold in beside)
-                and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
-                        for point in run)):
+        inside = 0 < index and end < len(points) and any(fold for _, _, fold in beside)
+        if inside and not all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
+                              for point in run):
+            # the finer curve from the point before the run to the one after it, through its fold
+            (omega_0, q_0, _), (omega_1, q_1, _) = out[-1], solved[end]
+            scale = max(float(np.linalg.norm(q_0)), float(np.linalg.norm(q_1)), 1e-300)
+            heading = np.concatenate((shooting.padded(run[0][1] - points[index - 1][1], finer) / scale,
+                                      [(run[0][0] - points[index - 1][0]) / (high - low)]))
+            between = bridge(finer, (omega_0, q_0), (omega_1, q_1), heading, low, high)
+            if between is not None:
+                out.extend(between)
+                kept.extend([-1] * len(between))
+                index = end
+                continue
+        if not (inside and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
+                               for point in run)):
             raise FrequencyError(f"{finer.system.source}: at f = {float(points[index][0]) / (2 * math.pi)!r} Hz the "
                                  f"periodic state with {finer.delay_harmonics} harmonics of the delay's force and "
                                  f"{finer.M} samples per period was not found from the coarser one's: see --method "

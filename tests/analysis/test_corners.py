@@ -80,6 +80,12 @@ class Shifted:
             return None
         return np.array(guess, dtype=float)
 
+    def evaluate(self, q, omega):
+        return self.corner.evaluate(q, omega + self.shift)
+
+    def force_scale(self, omega):
+        return 1.0
+
 
 def points_near(corner, spacing):
     """(omega, s, fold) up the near side to the corner and down the far side, ``spacing`` apart in q."""
@@ -138,3 +144,39 @@ def test_a_point_the_normal_moves_far_is_not_kept(monkeypatch):
     out, kept = shooting._solved_again(_coarse(), Shifted(corner, 1.5e-6), points, 1.0, 3.0, 1e-4)
     assert list(kept) == list(range(len(points)))
     assert out[3][0] == pytest.approx(points[3][0] * (1.0 - 1e-7), rel=1e-15)
+
+
+class Parabola:
+    """R(q, omega) = omega - omega_c + c (q - q_c)^2: a smooth fold at (q_c, omega_c), the curve turning back."""
+
+    def __init__(self, c=2.0, q_c=1.0, omega_c=2.0):
+        self.c, self.q_c, self.omega_c = c, q_c, omega_c
+        self.system = SimpleNamespace(source="parabola.toml", load_node=0, nodes=("mass",))
+
+    def evaluate(self, q, omega):
+        d = q[0] - self.q_c
+        return (np.array([omega - self.omega_c + self.c * d * d]), np.array([[2.0 * self.c * d]]), np.array([1.0]),
+                None)
+
+    def force_scale(self, omega):
+        return 1.0
+
+
+def test_a_bridge_follows_the_curve_through_its_fold_from_one_point_to_another():
+    """``continuation.bridge``: from a point before a fold to one after it (the delay oscillator at 0.3 N, whose
+    finer resolution moves a fold past the coarser fold point and its neighbour, so that neither exists at its
+    frequency), the points between are on the curve, in order along it, one of them the fold, marked, at the
+    parabola's vertex."""
+    balance = Parabola()
+    start = (balance.omega_c - balance.c * 0.01, np.array([balance.q_c - 0.1]))
+    end = (balance.omega_c - balance.c * 0.0225, np.array([balance.q_c + 0.15]))
+    heading = np.array([1.0, 1.0]) / math.sqrt(2.0)  # q and omega growing towards the fold
+    between = continuation.bridge(balance, start, end, heading, 1.0, 3.0)
+    assert between is not None and len(between) >= 4
+    q = np.array([p[1][0] for p in between])
+    assert np.all(np.diff(q) > 0) and start[1][0] < q[0] and q[-1] < end[1][0]
+    for omega, state, _ in between:
+        assert abs(balance.evaluate(state, omega)[0][0]) <= 1e-10
+    folds = [p for p in between if p[2]]
+    assert len(folds) == 1
+    assert folds[0][1][0] == pytest.approx(balance.q_c, abs=1e-6) and folds[0][0] == pytest.approx(balance.omega_c)

@@ -240,18 +240,24 @@ def test_the_delay_oscillator_s_curve_turns_back_at_each_slip_onset_and_goes_on(
 
 
 @pytest.mark.slow
-def test_a_fold_that_a_finer_resolution_moves_is_found_on_the_normal_through_it():
+@pytest.mark.parametrize("force, first, second", [(0.2, (0.09, 0.092), (0.088, 0.09)),
+                                                  (0.3, (0.105, 0.107), (0.099, 0.101))])
+def test_a_fold_that_a_finer_resolution_moves_is_found_on_the_normal_through_it(force, first, second):
     """scenes/delay-oscillator at F0 = 0.2 N: a fold pair near 0.09 Hz (the mass starts to slide on its
     friction). Doubling the delay's harmonics and the samples moves the first fold down by about 4e-4 of its
     frequency, so the fold point and the one after it exist at no frequency of theirs on the finer curve; on
     the normal through each (``continuation.across``) they are found, which a cap of a tenth of the tolerance
-    refused (the whole curve with it). The curve reaches 0.6 Hz; between the two folds a point is unstable."""
+    refused (the whole curve with it). At 0.3 N the fold near 0.1063 Hz moves past the fold point and a point
+    3e-6 of it away, too close together for the normal's guard: the finer curve is followed from the point
+    before them to the one after (``continuation.bridge``). The curve reaches 0.6 Hz; between the two folds a
+    point is unstable."""
     from prandtl_fmu.frequency import read_scene
     from prandtl_fmu.frequency.curve import harmonic_response
 
     scene, _ = read_scene("delay-oscillator")
-    curve = harmonic_response(scene, 0.2, [0.05, 0.6])
+    curve = harmonic_response(scene, force, [0.05, 0.6])
     assert curve.frequency[-1] == pytest.approx(0.6)
-    low = [index for index in curve.folds if curve.frequency[index] < 0.1]
-    assert len(low) == 2 and 0.09 < curve.frequency[low[0]] < 0.092 and 0.088 < curve.frequency[low[1]] < 0.09
+    low = [index for index in curve.folds if curve.frequency[index] < 0.11]
+    assert len(low) == 2, curve.frequency[curve.folds]
+    assert first[0] < curve.frequency[low[0]] < first[1] and second[0] < curve.frequency[low[1]] < second[1]
     assert not np.all(curve.stable[low[0]:low[1] + 1])
