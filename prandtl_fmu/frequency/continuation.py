@@ -246,7 +246,8 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     frequency of theirs): arc-length steps of an eighth of the chord from ``start`` along its tangent on the side
     of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
     the corrector fails, a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
-    until the point is within a step of ``end``. ``[(omega, q, is_fold)]`` without the ends, or None (a step
+    until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
+    just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation). ``[(omega, q, is_fold)]`` without the ends, or None (a step
     below 1e-6 of the chord, or more than BRIDGE_STEPS steps, or a point farther from ``end`` than twice the
     chord: not the way there)."""
     span = omega_max - omega_min
@@ -263,7 +264,16 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     points = []
     for _ in range(BRIDGE_STEPS):
         y = _scaled(q, omega, scale, omega_min, span)
-        if np.linalg.norm(target - y) <= step:
+        remaining = float(np.linalg.norm(target - y))
+        if remaining <= step:  # the last stretch, to ``end`` itself: a fold there too is located
+            arrived = _tangent(balance, q_end, omega_end, tangent, scale, span)
+            if arrived is None:
+                return None
+            if arrived[-1] * tangent[-1] < 0:
+                fold = _locate_fold(balance, q, omega, tangent, scale, omega_min, span, remaining)
+                if fold is None:
+                    return None
+                points.append((fold[1], fold[0], True))
             return points
         new = _correct(balance, y + step * tangent, tangent, scale, omega_min, span, step)
         if new is None:
