@@ -247,9 +247,9 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
     the corrector fails, a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
     until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
-    just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation). ``[(omega, q, is_fold)]`` without the ends, or None (a step
-    below 1e-6 of the chord, or more than BRIDGE_STEPS steps, or a point farther from ``end`` than twice the
-    chord: not the way there)."""
+    just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation).
+    ``[(omega, q, is_fold)]`` without the ends, or None (a step below 1e-6 of the chord, or more than
+    BRIDGE_STEPS steps, or a point farther from ``end`` than twice the chord: not the way there)."""
     span = omega_max - omega_min
     (omega, q), (omega_end, q_end) = start, end
     scale = max(float(np.linalg.norm(q)), float(np.linalg.norm(q_end)), 1e-300)
@@ -267,13 +267,9 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
         remaining = float(np.linalg.norm(target - y))
         if remaining <= step:  # the last stretch, to ``end`` itself: a fold there too is located
             arrived = _tangent(balance, q_end, omega_end, tangent, scale, span)
-            if arrived is None:
+            if arrived is None or not _folded(balance, q, omega, tangent, arrived, scale, omega_min, span,
+                                              remaining, points):
                 return None
-            if arrived[-1] * tangent[-1] < 0:
-                fold = _locate_fold(balance, q, omega, tangent, scale, omega_min, span, remaining)
-                if fold is None:
-                    return None
-                points.append((fold[1], fold[0], True))
             return points
         new = _correct(balance, y + step * tangent, tangent, scale, omega_min, span, step)
         if new is None:
@@ -285,16 +281,24 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
         if np.linalg.norm(target - _scaled(q_new, omega_new, scale, omega_min, span)) > 2.0 * chord:
             return None
         turned = _tangent(balance, q_new, omega_new, tangent, scale, span)
-        if turned is None:
+        if turned is None or not _folded(balance, q, omega, tangent, turned, scale, omega_min, span, step, points):
             return None
-        if turned[-1] * tangent[-1] < 0:
-            fold = _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step)
-            if fold is None:
-                return None
-            points.append((fold[1], fold[0], True))
         points.append((omega_new, q_new, False))
         q, omega, tangent = q_new, omega_new, turned
     return None
+
+
+def _folded(balance, q, omega, tangent, turned, scale, omega_min, span, step, points) -> bool:
+    """For :func:`bridge`: where the tangent's frequency component turns from ``tangent`` (at (q, omega)) to
+    ``turned`` (``step`` further), the fold between, located and appended to ``points``; False where it is not
+    found."""
+    if turned[-1] * tangent[-1] >= 0:
+        return True
+    fold = _locate_fold(balance, q, omega, tangent, scale, omega_min, span, step)
+    if fold is None:
+        return False
+    points.append((fold[1], fold[0], True))
+    return True
 
 
 def _hz(omega: float) -> float:
