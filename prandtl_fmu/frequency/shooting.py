@@ -354,8 +354,7 @@ class Shooting:
             s = self.run(s, omega, 2 * 8 * 2**attempt)[0]
         periods = 8 * (2**START_ATTEMPTS - 1)
         raise FrequencyError(f"{self.system.source}: the periodic state at f = {float(omega) / (2 * math.pi)!r} Hz "
-                             f"was not "
-                             f"found: Newton's method did not converge from rest nor after {periods} periods of the "
+                             f"was not found: Newton's method did not converge from rest nor after {periods} periods of the "
                              "motion (a subharmonic, chaotic or unsymmetric motion?): see --method time")
 
     # ------------------------------------------------------------- what a point says
@@ -1086,8 +1085,9 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
         run = points[index:end]
         beside = points[max(index - 1, 0):end + 1]
         inside = 0 < index and end < len(points) and any(fold for _, _, fold in beside)
-        if inside and not all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
-                              for point in run):
+        close = inside and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
+                               for point in run)
+        if inside and not close:
             # the finer curve from the point before the run to the one after it, through its fold
             (omega_0, q_0, _), (omega_1, q_1, _) = out[-1], solved[end]
             scale = max(float(np.linalg.norm(q_0)), float(np.linalg.norm(q_1)), 1e-300)
@@ -1099,8 +1099,7 @@ def _solved_again(shooting, finer, points, low, high, spacing: float) -> tuple:
                 kept.extend([-1] * len(between))
                 index = end
                 continue
-        if not (inside and all(_close(point, points[index - 1], spacing) and _close(point, points[end], spacing)
-                               for point in run)):
+        if not close:
             raise FrequencyError(f"{finer.system.source}: at f = {float(points[index][0]) / (2 * math.pi)!r} Hz the "
                                  f"periodic state with {finer.delay_harmonics} harmonics of the delay's force and "
                                  f"{finer.M} samples per period was not found from the coarser one's: see --method "
