@@ -186,3 +186,31 @@ def test_a_bridge_follows_the_curve_through_its_fold_from_one_point_to_another(p
         assert abs(balance.evaluate(state, omega)[0][0]) <= 1e-10
     folds = [p for p in between if p[2]]
     assert folds[0][1][0] == pytest.approx(balance.q_c, abs=1e-6) and folds[0][0] == pytest.approx(balance.omega_c)
+
+
+def test_a_resolution_that_bridged_points_is_never_the_last(monkeypatch):
+    """A bridged point has no coarser twin, so its change is not measured at the level that bridged it: that
+    level is never the last, whatever the change at the others (a review's find). On a delay with a vanishing
+    friction one level suffices (the linear closed form, 1e-9); the same curve with its last point marked bridged
+    at the first level goes on to a second, and its points are then the closed form's as before."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from tests.analysis.test_delay_friction import DELAYED
+    from tests.analysis.test_harmonic_balance import element
+
+    levels, solved_again = [], shooting._solved_again
+
+    def marked(coarse, finer, points, *args):
+        out, kept = solved_again(coarse, finer, points, *args)
+        if not levels:
+            kept = np.array(kept)
+            kept[-1] = -1
+        levels.append(finer.M)
+        return out, kept
+
+    tables = dict(DELAYED, friction={"alpha": 1e-9}, delay={"gain": -0.2, "tau": 0.5})
+    plain = harmonic_response(element(tables), 1.0, [0.05, 0.4], tolerance=1e-9)
+    monkeypatch.setattr(shooting, "_solved_again", marked)
+    curve = harmonic_response(element(tables), 1.0, [0.05, 0.4], tolerance=1e-9)
+    assert len(levels) == 2 and levels[1] == 2 * levels[0]
+    assert plain.frequency.size == curve.frequency.size
+    assert np.allclose(curve.amplitude, plain.amplitude, rtol=1e-8, atol=0)
