@@ -214,3 +214,26 @@ def test_a_resolution_that_bridged_points_is_never_the_last(monkeypatch):
     assert len(levels) == 2 and levels[1] == 2 * levels[0]
     assert plain.frequency.size == curve.frequency.size
     assert np.allclose(curve.amplitude, plain.amplitude, rtol=1e-8, atol=0)
+
+
+def test_a_deflated_newton_finds_the_sphere_s_other_point_from_beside_the_first():
+    """``continuation._deflated``: on the unit circle about the origin and the line y_1 = 1/2 (two points,
+    (+-sqrt(3)/2, 1/2)), Newton from (0.8, 0.6) goes to the near point; with that point deflated, from the same
+    guess, to the far one, as the corner's search goes from the way back to the way on."""
+    def newton(y, root=None):
+        for _ in range(continuation.DEFLATED_ITERATIONS):
+            residual = np.array([y[1] - 0.5, y @ y - 1.0])
+            jacobian = np.array([[0.0, 1.0], 2.0 * y])
+            delta = np.linalg.solve(jacobian, -residual)
+            if root is not None:
+                delta = continuation._deflated(delta, y, root, 1.0)
+            y = y + delta
+            if np.max(np.abs(delta)) <= 1e-14:
+                return y
+        return None
+
+    near = newton(np.array([0.8, 0.6]))
+    assert near == pytest.approx([math.sqrt(3.0) / 2.0, 0.5], abs=1e-14)
+    far = newton(np.array([0.8, 0.6]), near)
+    assert far is not None and far == pytest.approx([-math.sqrt(3.0) / 2.0, 0.5], abs=1e-14)
+    assert continuation._deflated(np.ones(2), near, near, 1.0) is None  # at the root itself: no step
