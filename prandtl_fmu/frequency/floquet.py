@@ -268,9 +268,12 @@ def _kind(values: np.ndarray) -> np.ndarray:
 
 
 def variational_monodromy(balance, q_free, omega):
-    """The monodromy over x, v and the u of the branches that slide on the orbit of ``balance`` at ``omega``
-    (a stuck branch's u moves with x: ``variational.py``), from its variational equation on the balance's N
-    samples; None where its work would pass WORK_LIMIT."""
+    """A matrix whose eigenvalues are the multipliers of the orbit of ``balance`` at ``omega``, from its
+    variational equation on the balance's N samples (``variational.py``); None where its work would pass
+    WORK_LIMIT. The monodromy over x, v and the u of the branches that slide on the orbit (a stuck branch's u
+    moves with x), or, where it is smaller, :func:`reduced`'s matrix: its nonzero eigenvalues are the
+    monodromy's, its size 2 n plus the instants at which the sliding branches last start to stick (a few per
+    pair of nodes however many branches it holds)."""
     from .variational import fastest_rate, monodromy, substeps, work
 
     system = balance.system
@@ -280,34 +283,101 @@ def variational_monodromy(balance, q_free, omega):
     v = omega * (coefficients @ balance.derivative.T) @ balance.basis.T
     balance.nonlinear(full, omega)  # the elongations of the branches at sample 0
 
-    def relative(values, ends):
-        return np.array([values[p] - (values[q] if q >= 0 else 0.0) for p, q in ends.tolist()]).reshape(
-            len(ends), values.shape[1])
+    ends = system.branch_ends
+
+    def relative(values, pairs):
+        if not len(pairs):
+            return np.zeros((0, values.shape[1]))
+        return values[pairs[:, 0]] - np.where(pairs[:, 1:] >= 0, values[np.maximum(pairs[:, 1], 0)], 0.0)
 
     n, nb = system.n, system.branch_k.shape[0]
-    e = relative(x, system.branch_ends)
+    e = relative(x, ends)
     sliding = np.flatnonzero(_slides(system, x))
     cubic_e = relative(x, system.cubic_ends)
     period = 2.0 * math.pi / omega
-    velocity = relative(v, system.branch_ends)
+    velocity = relative(v, ends)
     steps = substeps(fastest_rate(system, np.max(np.abs(cubic_e), axis=1, initial=0.0)), period, balance.N)
     # each reversal of a sliding branch: at most a turn and a threshold
     switches = 2 * int(np.sum(np.diff(np.sign(velocity[sliding]), axis=1) != 0)) + 2 * sliding.size
-    if work(balance.N, steps, n, 2 * n + nb, 2 * n + sliding.size, switches) > WORK_LIMIT:
+    since = np.empty(nb, dtype=np.int64)
+
+    def run(z):
+        monodromy(period, balance.N, 1.0 / system.mass, system.damping, system.stiffness, system.cubic_ends,
+                  system.cubic_k3, cubic_e, ends, system.branch_k, system.branch_eta, e, velocity,
+                  balance.elongations.copy(), steps, z, since)
+        return z
+
+    # the columns: unit x and v, a stuck branch's u moving with x (du = B dx)
+    stuck = np.ones(nb, dtype=bool)
+    stuck[sliding] = False
+    columns = 2 * n + sliding.size
+    if sliding.size > 1:  # the instants the sliding branches last start to stick (a run without columns)
+        if work(balance.N, steps, n, 2 * n + nb, 1, switches) > WORK_LIMIT:
+            return None
+        run(np.zeros((2 * n + nb, 0)))
+        plan = reduced(ends, sliding, since, n)
+        columns = min(columns, plan[0])
+    if work(balance.N, steps, n, 2 * n + nb, columns, switches) > WORK_LIMIT:
         return None
-    # the columns: unit x and v, a stuck branch's u moving with x (du = B dx); unit u of each sliding branch
+    if sliding.size > 1 and plan[0] < 2 * n + sliding.size:
+        return _reduced_monodromy(run, plan, ends, stuck, n, nb)
     z = np.zeros((2 * n + nb, 2 * n + sliding.size))
     z[np.arange(2 * n), np.arange(2 * n)] = 1.0
-    for b, (p, r) in enumerate(system.branch_ends.tolist()):
-        if b not in sliding:
-            z[2 * n + b, p] = 1.0
-            if r >= 0:
-                z[2 * n + b, r] = -1.0
+    _moving_with_x(z, ends, stuck, n)
     z[2 * n + sliding, 2 * n + np.arange(sliding.size)] = 1.0
-    monodromy(period, balance.N, 1.0 / system.mass, system.damping, system.stiffness, system.cubic_ends,
-              system.cubic_k3, cubic_e, system.branch_ends, system.branch_k, system.branch_eta, e, velocity,
-              balance.elongations.copy(), steps, z)
+    run(z)
     return z[np.concatenate((np.arange(2 * n), 2 * n + sliding))]
+
+
+def _moving_with_x(z, ends, which, n) -> None:
+    """The u of the branches ``which`` (a mask) moving with x in the first n columns of z: du = B dx."""
+    index = np.flatnonzero(which)
+    z[2 * n + index, ends[index, 0]] = 1.0
+    grounded = ends[index, 1] < 0
+    z[2 * n + index[~grounded], ends[index[~grounded], 1]] = -1.0
+
+
+def reduced(ends, sliding, since, n) -> tuple:
+    """How the monodromy P over (dx, dv, du of the ``sliding`` branches) factors, P = D C. A sliding branch
+    that ends the period stuck since an instant tau (``since``, from ``variational.monodromy``: it started to
+    stick there from du = 0, and du - B dx is constant while it sticks) ends it with du = B dx(T) - W, W = B
+    dx(tau) the same for every branch of its pair that started at tau: C maps the perturbation at t = 0 to
+    w = (dx(T), dv(T), the du(T) of the branches that never started again (``since`` -1, kept as they are),
+    the W of each group), D maps w back to the state (a branch sliding at T, ``since`` -2, has du = 0). The
+    nonzero eigenvalues of P = D C are those of C D, of size 2 n + kept + groups: ``(size, kept, groups)``, the
+    branch indices kept and one index array per group."""
+    kept = [int(b) for b in sliding if since[b] == -1]
+    groups = {}
+    for b in sliding:
+        if since[b] >= 0:
+            groups.setdefault((int(ends[b, 0]), int(ends[b, 1]), int(since[b])), []).append(int(b))
+    members = [np.array(group, dtype=np.int64) for group in groups.values()]
+    return 2 * n + len(kept) + len(members), np.array(kept, dtype=np.int64), members
+
+
+def _reduced_monodromy(run, plan, ends, stuck, n, nb) -> np.ndarray:
+    """C D of :func:`reduced`'s factorisation: each column of D (an x or v, a kept branch's u, a group's W = 1)
+    run over the period from the state it stands for, and C read off the end (a group's W from any of its
+    branches: B dx(T) - du(T))."""
+    size, kept, members = plan
+    z = np.zeros((2 * n + nb, size))
+    z[np.arange(2 * n), np.arange(2 * n)] = 1.0
+    grouped = np.zeros(nb, dtype=bool)
+    for group in members:
+        grouped[group] = True
+    _moving_with_x(z, ends, stuck | grouped, n)  # du = B dx - W with W = 0 in the x columns
+    z[2 * n + kept, 2 * n + np.arange(kept.size)] = 1.0
+    for g, group in enumerate(members):
+        z[2 * n + group, 2 * n + kept.size + g] = -1.0  # W = 1: du = -1
+    run(z)
+    out = np.empty((size, size))
+    out[:2 * n] = z[:2 * n]
+    out[2 * n:2 * n + kept.size] = z[2 * n + kept]
+    for g, group in enumerate(members):
+        b = group[0]
+        p, r = ends[b]
+        out[2 * n + kept.size + g] = z[p] - (z[r] if r >= 0 else 0.0) - z[2 * n + b]
+    return out
 
 
 def is_stable(values: np.ndarray) -> bool:

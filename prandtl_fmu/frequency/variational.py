@@ -157,12 +157,15 @@ def _step(out, z, slope, span, rows, columns):
 
 @kernel
 def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_samples, branch_ends, branch_k,
-              branch_eta, e, velocity, u0, steps, z):
+              branch_eta, e, velocity, u0, steps, z, since):
     """z (2 n + nb, columns), in place: the perturbations (x, v, u) at t = 0 in, at t = T out (see the module),
     over one period of ``samples`` intervals; ``e`` and ``velocity`` (nb, samples): the branches' elongations and
     their rates at the samples; ``u0`` (nb,): u at sample 0; ``cubic_samples`` (nc, samples): the cubic springs'
     elongations; ``steps``: RK4 steps per sample interval (:func:`substeps`), a piece of it cut at a switch
-    taking its share."""
+    taking its share. ``since`` (nb,) out: the instant each branch last started to stick from du = 0 (2 j + 1: a
+    turn inside interval j; 2 j: at sample j, 2 ``samples`` the period's end), -1 if it never did, -2 if it
+    slides at the period's end (its du is 0 there): the branches of one pair with the same instant end the
+    period with the same du - B dx (:func:`reduced`)."""
     n = inverse_mass.shape[0]
     nb = branch_k.shape[0]
     h = period / samples
@@ -172,10 +175,16 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
     u = u0.copy()
     sticking = np.ones(nb, dtype=np.int64)
     events = np.empty(nb)
+    due = np.empty(nb, dtype=np.int64)
+    for b in range(nb):
+        since[b] = -1
     for interval in range(samples + 1):
         j = interval if interval < samples else 0
-        _resynchronise(u, velocity, branch_eta, j, sticking, z, n)  # at sample j, as the orbit's u says
+        _resynchronise(u, velocity, branch_eta, j, sticking, z, n, since, 2 * interval)  # as the orbit's u says
         if interval == samples:  # (back at sample 0: the period's end)
+            for b in range(nb):
+                if not sticking[b]:
+                    since[b] = -2
             break
         nxt = j + 1 if j + 1 < samples else 0
         # each branch's switch inside this interval (fraction in [0, 1)), or 2 for none
@@ -189,12 +198,19 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
                     events[b] = (-branch_eta[b] - u[b]) / de
             elif velocity[b, j] * velocity[b, nxt] < 0.0:
                 events[b] = velocity[b, j] / (velocity[b, j] - velocity[b, nxt])
+        # the switches inside the interval in the order of their instants (each branch at most once here)
+        count = 0
+        for b in range(nb):
+            if events[b] < 1.0:
+                due[count] = b
+                count += 1
+        order = np.argsort(events[due[:count]])
         start = 0.0
-        for _ in range(nb + 1):  # each branch switches at most once per interval here
+        for k in range(count + 1):
             first, which = 1.0, -1
-            for b in range(nb):
-                if start <= events[b] < first:
-                    first, which = events[b], b
+            if k < count:
+                which = due[order[k]]
+                first = events[which]
             span = (first - start) * h
             if span > 0.0:
                 pieces = max(1, int(math.ceil(steps * (first - start))))
@@ -210,7 +226,7 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
                     z[2 * n + which, col] = 0.0
             else:  # turns: sticks from du = 0 (it was 0 while it slid)
                 sticking[which] = 1
-            events[which] = 2.0
+                since[which] = 2 * interval + 1
             start = first
         for b in range(nb):  # the orbit's u at the next sample (the play operator on the samples)
             moved = u[b] + e[b, nxt] - e[b, j]
@@ -222,13 +238,16 @@ def monodromy(period, samples, inverse_mass, C, K, cubic_ends, cubic_k3, cubic_s
 
 
 @kernel
-def _resynchronise(u, velocity, branch_eta, j, sticking, z, n):
+def _resynchronise(u, velocity, branch_eta, j, sticking, z, n, since, instant):
     """At sample j, each branch sticks or slides as the orbit's u and velocity say (a branch on its threshold
-    with the motion pushing on slides, its perturbation lost; any other sticks)."""
+    with the motion pushing on slides, its perturbation lost; any other sticks: from du = 0 if it slid, at
+    ``instant``)."""
     for b in range(u.shape[0]):
         sliding = (u[b] >= branch_eta[b] * (1.0 - 1e-12) and velocity[b, j] > 0.0) or \
             (u[b] <= -branch_eta[b] * (1.0 - 1e-12) and velocity[b, j] < 0.0)
         if sliding and sticking[b]:
             for col in range(z.shape[1]):
                 z[2 * n + b, col] = 0.0
+        if not sliding and not sticking[b]:
+            since[b] = instant
         sticking[b] = 0 if sliding else 1

@@ -235,7 +235,7 @@ def test_a_curve_that_cannot_continue_says_where_and_exits_2(tmp_path, capsys, m
     from prandtl_fmu.frequency import continuation
 
     monkeypatch.setattr(continuation, "_correct", lambda *args: None)
-    monkeypatch.setattr(continuation, "_around_corner", lambda *args: None)
+    monkeypatch.setattr(continuation, "_around_corner", lambda *args, **options: None)
     monkeypatch.setattr(continuation, "_damped", lambda *args: None)
     out = tmp_path / "out.csv"
     status = main(["describe", write(tmp_path, DAMPER), "--force-amplitude", "0.1", "--frequencies", "0.15,0.19",
@@ -283,7 +283,7 @@ def test_where_a_network_s_curve_stops_is_said_at_the_node_its_csv_reports(tmp_p
         expected = float(read_csv(out)["amplitude"][0])
         with monkeypatch.context() as patch:
             for name in ("_correct", "_around_corner", "_damped"):
-                patch.setattr(continuation, name, lambda *args: None)
+                patch.setattr(continuation, name, lambda *args, **options: None)
             capsys.readouterr()
             assert main(common + ["--frequencies", "0.5,1.0", "--out", str(tmp_path / "two.csv")]) == 2
         err = capsys.readouterr().err
