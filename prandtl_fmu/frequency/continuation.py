@@ -77,7 +77,7 @@ MISSED = 0.2  # march_curve: a point whose prediction missed by more than this m
 RESOLUTION = 1e-2  # march_curve: a miss below this (scaled: 1 % of the curve drawn) is not chased
 BRIDGE_STEPS = 64  # bridge: the most arc-length steps between two points of a curve
 DEFLATE_BELOW = 1e-5  # the corner's search deflates the way back at arc-length steps up to this (scaled)
-DEFLATED_ITERATIONS = 24  # of the sphere's Newton with the way back deflated (measured: 10 to 17 at a corner)
+DEFLATED_ITERATIONS = 64  # of the sphere's Newton with the way back deflated (measured: up to 37 at a corner)
 FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
 
 
@@ -554,10 +554,11 @@ def _around_corner(balance, q, omega, tangent, scale, omega_min, span, step, beh
 
 def _deflated(delta, y, root, size) -> Optional[np.ndarray]:
     """Newton's step ``delta`` at ``y`` for F turned into the deflated problem's, M(y) F(y) = 0 with M = 1 /
-    |y - root|^2 + 1 / size^2 (Farrell, Birkisson & Funke 2015): M grows without bound at ``root``, so that
-    Newton cannot converge to it, and tends to 1 / size^2 far from it (other roots are kept). By Sherman-Morrison
-    the deflated step is the plain one over 1 - grad M . delta / M; None at ``root`` itself (M undefined) or
-    where that divisor vanishes."""
+    |y - root|^2 + 1 / size^2 (Farrell, Birkisson & Funke 2015): M grows without bound at ``root`` and tends to
+    1 / size^2 far from it (other roots are kept). By Sherman-Morrison the deflated step is the plain one over
+    1 - grad M . delta / M; None at ``root`` itself (M undefined) or where that divisor vanishes. Very near
+    ``root`` the deflated step is about as small as y - root, so an iteration started there stops at once beside
+    it: the caller refuses a point within a quarter of the step of the way back whichever way it was found."""
     away = y - root
     distance = float(away @ away)
     if distance <= 0.0:

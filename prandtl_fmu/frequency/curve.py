@@ -233,12 +233,8 @@ def _change(balance, points, finer, where) -> Optional[float]:
     0.755 Hz, 0.0515 apart, the same point 1e-4). None where one is not found."""
     from .continuation import across
 
-    n, L, L_finer = balance.system.n, balance.L, finer.L
-
-    def lift(free_values):  # the same harmonics, the new ones 0
-        padded = np.zeros((n, L_finer))
-        padded[:, :L] = balance.full(free_values).reshape(n, L)
-        return padded.reshape(-1)[finer.free]
+    def lift(free_values):
+        return _lifted(balance, finer, free_values)
 
     X = _first_harmonic(balance, points, where)
     low, high = points[0][0], points[-1][0]
@@ -263,6 +259,25 @@ def _change(balance, points, finer, where) -> Optional[float]:
     return float(max(changes))
 
 
+def _lifted(balance, finer, free_values) -> np.ndarray:
+    """``balance``'s free unknowns as ``finer``'s (more harmonics): the same harmonics, the new ones 0."""
+    n, L = balance.system.n, balance.L
+    padded = np.zeros((n, finer.L))
+    padded[:, :L] = balance.full(free_values).reshape(n, L)
+    return padded.reshape(-1)[finer.free]
+
+
+def _started(coarser, finer, point) -> Optional[np.ndarray]:
+    """The first point of the coarser curve solved with ``finer``'s harmonics (Newton from it, full steps then
+    damped), or None: there the finer curve starts from the linear response (``solve_at``). From the linear
+    response alone, masing-bilinear at F0 = 3 N and 0.05 Hz was refused at H = 31 (Newton, damped or with the
+    force raised in steps, does not converge there), where H = 21's point converges."""
+    omega, q, _ = point
+    guess = _lifted(coarser, finer, q)
+    found = finer._newton(omega, guess)
+    return found if found is not None else finer._newton(omega, guess, damped=True)
+
+
 def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,
                       samples, lowest: int = 1) -> tuple:
     previous, change = None, math.inf
@@ -272,7 +287,8 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
     for H in [h for h in HARMONIC_STEPS if h >= lowest]:
         balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
                                   base_amplitude)
-        points = continue_curve(balance, low, high, count, node=where)
+        start = None if previous is None else _started(previous[0], balance, previous[1][0])
+        points = continue_curve(balance, low, high, count, node=where, start=start)
         if previous is not None:
             # the last curve's ends and peak against this H at the same points (not this curve's own peak)
             found = _change(*previous, balance, where)

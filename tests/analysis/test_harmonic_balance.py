@@ -796,3 +796,26 @@ def test_a_force_below_the_static_friction_leaves_a_stribeck_mass_at_rest(tmp_pa
     out = tmp_path / "curve.csv"
     assert main(["describe", path, "--force-amplitude", "0.5", "--frequencies", "0.1,0.3", "--out", str(out)]) == 0
     assert {float(a) for a in read_csv(out)["amplitude"]} == {0.0}
+
+
+def test_a_start_newton_misses_from_the_linear_response_is_found_from_fewer_harmonics(tmp_path):
+    """masing-bilinear (a stiff Jenkins element, k = 100 N/m) at F0 = 3 N and 0.05 Hz with 31 harmonics: Newton
+    from the linear response does not converge (full or damped steps, nor with the force raised in steps), and
+    the point was refused; from the state with fewer harmonics (1, 3, ... 21, each lifted to the next) it is
+    found, and its first harmonic is the one with 61 harmonics (where they have converged: 41, 61 and 91 agree
+    to 5e-4) to the change the command reports at 31 (2.8e-3)."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.harmonic_balance import HarmonicBalance, periodic_system
+
+    scene, _ = read_scene("masing-bilinear")
+    balance = HarmonicBalance(periodic_system(scene), 31, 3.0)
+    omega = 2 * math.pi * 0.05
+    guess = balance.linear_guess(omega)
+    assert balance._newton(omega, guess) is None and balance._newton(omega, guess, damped=True) is None
+    amplitudes = {}
+    for harmonics in ("31", "61"):
+        out = tmp_path / f"h{harmonics}.csv"
+        assert main(["describe", "masing-bilinear", "--force-amplitude", "3", "--frequencies", "0.05",
+                     "--harmonics", harmonics, "--out", str(out)]) == 0
+        amplitudes[harmonics] = float(read_csv(out)["amplitude"][0])
+    assert amplitudes["31"] == pytest.approx(amplitudes["61"], rel=3e-3)
