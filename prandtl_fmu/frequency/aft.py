@@ -113,7 +113,7 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
             if u > eta or u < -eta:
                 u = eta if u > eta else -eta
                 if run >= 0:
-                    _anchored(spread[pair], basis, k, anchor, top + run, step - run, samples)
+                    _anchored(spread[pair], basis[anchor], k, top + run, step - run, samples)
                     run = -1
                 anchor = j
             else:
@@ -126,7 +126,7 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
             if j == 0:
                 elongations[b] = u
         if run >= 0:
-            _anchored(spread[pair], basis, k, anchor, top + run, samples - run, samples)
+            _anchored(spread[pair], basis[anchor], k, top + run, samples - run, samples)
     for pair in range(tangent.shape[0]):
         for l in range(width):
             running = 0.0
@@ -136,14 +136,14 @@ def restoring_samples(x, basis, cubic_ends, cubic_k3, cubic_pair, branch_ends, b
 
 
 @kernel
-def _anchored(spread, basis, k, anchor, first, length, samples):
-    """-k basis[anchor] on the ``length`` samples from ``first`` (taken modulo ``samples``, wrapping round the
-    period) as differences in ``spread`` (samples + 1, L)."""
+def _anchored(spread, row, k, first, length, samples):
+    """-k ``row`` (the basis at a branch's anchor) on the ``length`` samples from ``first`` (taken modulo
+    ``samples``, wrapping round the period) as differences in ``spread`` (samples + 1, L)."""
     if first >= samples:
         first -= samples
     last = first + length
-    for l in range(basis.shape[1]):
-        value = k * basis[anchor, l]
+    for l in range(row.shape[0]):
+        value = k * row[l]
         spread[first, l] -= value
         if last <= samples:
             spread[last, l] += value

@@ -27,11 +27,10 @@ import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
-from .harmonic_balance import HarmonicBalance, periodic_system
+from .harmonic_balance import HARMONIC_STEPS, HarmonicBalance, lifted, periodic_system
 from .series import check_named, joined
 from .unbounded import refuse_slip_limited, refuse_unbounded
 
-HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
 
 @dataclass(frozen=True, eq=False)
 class Curve:
@@ -234,7 +233,7 @@ def _change(balance, points, finer, where) -> Optional[float]:
     from .continuation import across
 
     def lift(free_values):
-        return _lifted(balance, finer, free_values)
+        return lifted(balance, finer, free_values)
 
     X = _first_harmonic(balance, points, where)
     low, high = points[0][0], points[-1][0]
@@ -259,21 +258,13 @@ def _change(balance, points, finer, where) -> Optional[float]:
     return float(max(changes))
 
 
-def _lifted(balance, finer, free_values) -> np.ndarray:
-    """``balance``'s free unknowns as ``finer``'s (more harmonics): the same harmonics, the new ones 0."""
-    n, L = balance.system.n, balance.L
-    padded = np.zeros((n, finer.L))
-    padded[:, :L] = balance.full(free_values).reshape(n, L)
-    return padded.reshape(-1)[finer.free]
-
-
 def _started(coarser, finer, point) -> Optional[np.ndarray]:
     """The first point of the coarser curve solved with ``finer``'s harmonics (Newton from it, full steps then
     damped), or None: there the finer curve starts from the linear response (``solve_at``). From the linear
     response alone, masing-bilinear at F0 = 3 N and 0.05 Hz was refused at H = 31 (Newton, damped or with the
     force raised in steps, does not converge there), where H = 21's point converges."""
     omega, q, _ = point
-    guess = _lifted(coarser, finer, q)
+    guess = lifted(coarser, finer, q)
     found = finer._newton(omega, guess)
     return found if found is not None else finer._newton(omega, guess, damped=True)
 

@@ -69,6 +69,7 @@ from . import DEFAULT_TOLERANCE, FrequencyError
 MIN_SAMPLES = 256
 SAMPLES_PER_HARMONIC = 64
 NEWTON_ITERATIONS = 40
+HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)  # the numbers of harmonics the tolerance chooses among
 NEWTON_HALVINGS = 10  # of a damped Newton step while the residual would grow (:meth:`HarmonicBalance._newton`)
 # converged: the last Newton step moved q by at most this fraction of |q| (max norm), or R is at most this
 # fraction of F0
@@ -623,12 +624,10 @@ class HarmonicBalance:
 
     def _from_fewer_harmonics(self, omega: float) -> Optional[np.ndarray]:
         """The free unknowns at ``omega`` from the state with fewer harmonics: solved with one harmonic, then
-        with each number of ``curve.HARMONIC_STEPS`` below H and H itself, each by Newton from the last lifted
+        with each number of HARMONIC_STEPS below H and H itself, each by Newton from the last lifted
         (full steps, then damped); None where one is not found. From the linear response alone masing-bilinear
         at F0 = 3 N and 0.05 Hz is not found with 31 harmonics, from 21's it is. At most as many Newton solves
         as there are steps."""
-        from .curve import HARMONIC_STEPS, _lifted
-
         ladder = [h for h in HARMONIC_STEPS if h < self.H]
         if not ladder:
             return None
@@ -643,7 +642,7 @@ class HarmonicBalance:
                 except FrequencyError:
                     return None
             else:
-                guess = _lifted(coarser, balance, q)
+                guess = lifted(coarser, balance, q)
                 q = balance._newton(omega, guess)
                 if q is None:
                     q = balance._newton(omega, guess, damped=True)
@@ -678,6 +677,14 @@ class HarmonicBalance:
                 return None
             q = moved
         return None
+
+
+def lifted(balance, finer, free_values) -> np.ndarray:
+    """``balance``'s free unknowns as ``finer``'s (more harmonics): the same harmonics, the new ones 0."""
+    n, L = balance.system.n, balance.L
+    padded = np.zeros((n, finer.L))
+    padded[:, :L] = balance.full(free_values).reshape(n, L)
+    return padded.reshape(-1)[finer.free]
 
 
 def solve_linear(matrix: np.ndarray, right: np.ndarray) -> Optional[np.ndarray]:

@@ -27,11 +27,10 @@ from typing import Optional
 import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
-from .harmonic_balance import NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
+from .harmonic_balance import HARMONIC_STEPS, NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
 from .series import check_named, joined
 
 MAX_HALVINGS = 30
-HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)
 
 
 @dataclass(frozen=True, eq=False)
