@@ -251,7 +251,7 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     lies between (a fold that a finer resolution moved past the coarser curve's points, which then exist at no
     frequency of theirs): arc-length steps of an eighth of the chord from ``start`` along its tangent on the side
     of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
-    the corrector fails, a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
+    the corrector fails and doubled again after each point taken (up to an eighth), a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
     until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
     just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation).
     ``[(omega, q, is_fold)]`` without the ends, or None (a step below 1e-6 of the chord, or more than
@@ -291,6 +291,9 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
             return None
         points.append((omega_new, q_new, False))
         q, omega, tangent = q_new, omega_new, turned
+        # the step grows back after a short one, up to an eighth of the chord (a kink halved it to a 128th, and
+        # 64 steps went half way: the delay oscillator at 0.3 N from 0.05 to 1 Hz, refused near 0.1063 Hz)
+        step = min(chord / 8.0, 2.0 * step)
     return None
 
 

@@ -312,3 +312,18 @@ def test_the_delay_oscillator_s_corner_at_0_15_n_is_passed_by_a_longer_deflated_
     curve = harmonic_response(scene, 0.15, [0.05, 0.6])
     assert curve.frequency[-1] == pytest.approx(0.6)
     assert any(0.3590 < curve.frequency[index] < 0.3596 for index in curve.folds), curve.frequency[curve.folds]
+
+
+@pytest.mark.slow
+def test_a_bridge_whose_step_was_halved_grows_it_back_and_arrives():
+    """scenes/delay-oscillator at F0 = 0.3 N listed from 0.05 to 1 Hz (the points fall elsewhere than from 0.05
+    to 0.6): the finer resolution moves the fold near 0.1063 Hz past two points, and the bridge over them meets
+    a kink that halves its step to a 128th of its chord; the step never grew back, 64 steps went half way, and
+    the curve was refused there. Now it reaches 1 Hz, with the fold moved to about 0.10626 Hz."""
+    from prandtl_fmu.frequency import read_scene
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("delay-oscillator")
+    curve = harmonic_response(scene, 0.3, [0.05, 1.0])
+    assert curve.frequency[-1] == pytest.approx(1.0)
+    assert any(0.1060 < curve.frequency[index] < 0.1064 for index in curve.folds), curve.frequency[curve.folds]
