@@ -251,8 +251,8 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     lies between (a fold that a finer resolution moved past the coarser curve's points, which then exist at no
     frequency of theirs): arc-length steps of an eighth of the chord from ``start`` along its tangent on the side
     of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
-    the corrector fails and doubled again after each point taken (up to an eighth), a fold located where the tangent's frequency component turns (:func:`_locate_fold`),
-    until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
+    the corrector fails and doubled again after each point taken (up to an eighth), a fold located where the
+    tangent's frequency component turns (:func:`_locate_fold`), until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
     just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation).
     ``[(omega, q, is_fold)]`` without the ends, or None (a step below 1e-6 of the chord, or more than
     BRIDGE_STEPS steps, or a point farther from ``end`` than twice the chord: not the way there)."""
@@ -499,7 +499,7 @@ def _around_corner(balance, q, omega, tangent, scale, omega_min, span, step, beh
     too, and a point within a quarter of the step of it is refused (where it is not found, a chord within 45
     degrees of ``behind``). Where every guess lands on the way back and ``deflate``, the way on is sought from
     ``behind``, against the tangent and along it, with that point deflated (Newton's step scaled so that it
-    cannot converge to it, :func:`_deflated`): at a corner as sharp as the delay oscillator's at 0.5 N (the mass
+    is pushed away from it, :func:`_deflated`): at a corner as sharp as the delay oscillator's at 0.5 N (the mass
     starts to stick at 0.1190 Hz, the curve turns back by 153 degrees) the far side's point is nearer to the way
     back than to any of the guesses along the tangent. (q, omega, iterations) or None."""
     start = _scaled(q, omega, scale, omega_min, span)
