@@ -252,8 +252,9 @@ def bridge(balance, start: tuple, end: tuple, heading: np.ndarray, omega_min: fl
     frequency of theirs): arc-length steps of an eighth of the chord from ``start`` along its tangent on the side
     of ``heading`` (scaled as the chord: q over the larger |q| of the two, omega over the range), halved where
     the corrector fails and doubled again after each point taken (up to an eighth), a fold located where the
-    tangent's frequency component turns (:func:`_locate_fold`), until the point is within a step of ``end``, the stretch to ``end`` checked alike (a review's find: an end
-    just past the fold left it unmarked). A fold pair within one step is not seen (as in the continuation).
+    tangent's frequency component turns (:func:`_locate_fold`), until the point is within a step of ``end``,
+    the stretch to ``end`` checked alike (a review's find: an end just past the fold left it unmarked). A fold
+    pair within one step is not seen (as in the continuation).
     ``[(omega, q, is_fold)]`` without the ends, or None (a step below 1e-6 of the chord, or more than
     BRIDGE_STEPS steps, or a point farther from ``end`` than twice the chord: not the way there)."""
     span = omega_max - omega_min
