@@ -5,7 +5,8 @@
 not). Without ``harmonics`` H is chosen by the tolerance: curves with H = 1, 3, 5, 7, ... (HARMONIC_STEPS) until
 the first harmonic of x at the node changes by at most ``tolerance`` relative from one H to the next twice in a
 row (once at the last H), at the curve's peak and at both ends (the curve of the larger H is kept); past the
-last H of HARMONIC_STEPS it is refused with the change reached.
+last H (``harmonic_balance.harmonic_steps``: those past 31 only for a balance small enough) it is refused with
+the change reached.
 An element with ``[friction]`` on its mass takes ``shooting.py`` instead (the periodic state by shooting on its own
 stepper: harmonic balance cannot sample a rigid slider), into the same :class:`Curve`. A range that holds a
 resonance friction cannot hold (``unbounded.py``: Den Hartog's bound) is refused before either curve starts,
@@ -27,7 +28,8 @@ import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
-from .harmonic_balance import HARMONIC_STEPS, HarmonicBalance, lifted, periodic_system
+from .harmonic_balance import (HARMONIC_STEPS, MOST_CHOSEN_UNKNOWNS, HarmonicBalance, harmonic_steps, lifted,
+                               periodic_system)
 from .series import check_named, joined
 from .unbounded import refuse_slip_limited, refuse_unbounded
 
@@ -272,10 +274,11 @@ def _started(coarser, finer, point) -> Optional[np.ndarray]:
 def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,
                       samples, lowest: int = 1) -> tuple:
     previous, change = None, math.inf
-    if lowest > HARMONIC_STEPS[-1]:
-        raise FrequencyError(f"harmonic amplitudes: harmonic {lowest} is above the {HARMONIC_STEPS[-1]} harmonics "
-                             "--tolerance chooses from: give --harmonics")
-    for H in [h for h in HARMONIC_STEPS if h >= lowest]:
+    steps = harmonic_steps(system.n, lowest)
+    if not steps:
+        raise FrequencyError(f"harmonic amplitudes: harmonic {lowest} is above the "
+                             f"{harmonic_steps(system.n)[-1]} harmonics --tolerance chooses from: give --harmonics")
+    for H in steps:
         balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
                                   base_amplitude)
         start = None if previous is None else _started(previous[0], balance, previous[1][0])
@@ -288,13 +291,21 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
                 found = float(np.max(np.abs(summary - last) / np.maximum(np.abs(summary), 1e-300)))
             # twice in a row (or at the last H): one change within the tolerance can be a coincidence (a
             # Duffing oscillator with branches at 0.12 Hz: 9.7e-4 from H = 1 to 3, where H = 3 was 2.4e-3 off)
-            if found <= tolerance and (change <= tolerance or H == HARMONIC_STEPS[-1]):
+            if found <= tolerance and (change <= tolerance or H == steps[-1]):
                 return balance, points, found
             change = found
         previous = (balance, points)
     raise FrequencyError(f"{system.source}: the first harmonic still changed by {change:.3g} relative from "
-                         f"H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics (tolerance {tolerance:g}): "
+                         f"H = {steps[-2]} to {steps[-1]} harmonics (tolerance {tolerance:g}){_past(system.n, steps)}: "
                          "give --harmonics, or a larger --tolerance")
+
+
+def _past(nodes: int, steps: tuple) -> str:
+    """Why the tolerance's choice stopped at ``steps[-1]`` harmonics when HARMONIC_STEPS go on: the size."""
+    if steps[-1] == HARMONIC_STEPS[-1]:
+        return ""
+    return (f"; {nodes} nodes with more harmonics would be past {MOST_CHOSEN_UNKNOWNS} unknowns, the most the "
+            "tolerance chooses")
 
 
 def _curve(balance, points, where, stability, change, orders=(), judged=None) -> Curve:

@@ -69,7 +69,11 @@ from . import DEFAULT_TOLERANCE, FrequencyError
 MIN_SAMPLES = 256
 SAMPLES_PER_HARMONIC = 64
 NEWTON_ITERATIONS = 40
-HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31)  # the numbers of harmonics the tolerance chooses among
+HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31, 45, 63)  # the numbers of harmonics the tolerance chooses among
+# the tolerance climbs past H = 31 only while the balance has at most this many unknowns (n nodes times 2 H + 1):
+# a dense Jacobian of 2000 factors in about 0.1 s, a curve takes about a thousand
+DENSE_STEPS = 31
+MOST_CHOSEN_UNKNOWNS = 2000
 NEWTON_HALVINGS = 10  # of a damped Newton step while the residual would grow (:meth:`HarmonicBalance._newton`)
 # converged: the last Newton step moved q by at most this fraction of |q| (max norm), or R is at most this
 # fraction of F0
@@ -677,6 +681,15 @@ class HarmonicBalance:
                 return None
             q = moved
         return None
+
+
+def harmonic_steps(nodes: int, lowest: int = 1) -> tuple:
+    """The numbers of harmonics the tolerance climbs for a system of ``nodes`` nodes: HARMONIC_STEPS, those past
+    DENSE_STEPS only while n (2 H + 1) <= MOST_CHOSEN_UNKNOWNS; from the last one below ``lowest`` (the first
+    curve is only compared with, the curve chosen has at least ``lowest``), empty where none reaches ``lowest``."""
+    steps = [H for H in HARMONIC_STEPS if H <= DENSE_STEPS or nodes * (2 * H + 1) <= MOST_CHOSEN_UNKNOWNS]
+    first = next((i for i, H in enumerate(steps) if H >= lowest), None)
+    return () if first is None else tuple(steps[max(first - 1, 0):])
 
 
 def lifted(balance, finer, free_values) -> np.ndarray:

@@ -27,7 +27,7 @@ from typing import Optional
 import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values
-from .harmonic_balance import HARMONIC_STEPS, NEWTON_ITERATIONS, HarmonicBalance, periodic_system, solve_linear
+from .harmonic_balance import NEWTON_ITERATIONS, harmonic_steps, HarmonicBalance, periodic_system, solve_linear
 from .series import check_named, joined
 
 MAX_HALVINGS = 30
@@ -80,7 +80,8 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
         change = None
     else:
         previous, change = None, math.inf
-        for H in HARMONIC_STEPS:
+        steps = harmonic_steps(system.n)
+        for H in steps:
             values, shape = _backbone(system, mode, amplitudes, where, H, samples)
             if previous is not None:
                 change = float(np.max(np.abs(values - previous) / np.maximum(np.abs(values), 1e-300)))
@@ -90,7 +91,7 @@ def nonlinear_mode(scene, mode: int, amplitudes, *, harmonics: Optional[int] = N
             previous = values
         else:
             raise FrequencyError(f"{system.source}: the mode's frequency and damping still changed by {change:.3g} "
-                                 f"relative from H = {HARMONIC_STEPS[-2]} to {HARMONIC_STEPS[-1]} harmonics: give "
+                                 f"relative from H = {steps[-2]} to {steps[-1]} harmonics: give "
                                  "--harmonics, or a larger --tolerance")
     return Backbone(amplitudes, values[:, 0] / (2.0 * math.pi), values[:, 1] / (2.0 * values[:, 0]), mode,
                     system.nodes[where], harmonics, change, shape, system.mass.copy(), system.nodes)

@@ -819,3 +819,70 @@ def test_a_start_newton_misses_from_the_linear_response_is_found_from_fewer_harm
                      "--harmonics", harmonics, "--out", str(out)]) == 0
         amplitudes[harmonics] = float(read_csv(out)["amplitude"][0])
     assert amplitudes["31"] == pytest.approx(amplitudes["61"], rel=3e-3)
+
+
+def test_the_harmonics_the_tolerance_climbs_stop_at_31_only_where_the_balance_is_large():
+    """H = 45 and 63 are climbed while n (2 H + 1) stays within MOST_CHOSEN_UNKNOWNS; a harmonic asked for as a
+    column starts the climb one step below it (compared with, never chosen) and none past the last is refused."""
+    from prandtl_fmu.frequency.harmonic_balance import HARMONIC_STEPS, MOST_CHOSEN_UNKNOWNS, harmonic_steps
+
+    assert harmonic_steps(1) == HARMONIC_STEPS and HARMONIC_STEPS[-2:] == (45, 63)
+    for nodes in (1, 5, 15, 16, 21, 22, 40):
+        steps = harmonic_steps(nodes)
+        assert steps[:9] == (1, 3, 5, 7, 9, 11, 15, 21, 31)  # a large network keeps the steps it had
+        assert all(nodes * (2 * H + 1) <= MOST_CHOSEN_UNKNOWNS for H in steps[9:])
+        assert len(steps) == 9 + sum(nodes * (2 * H + 1) <= MOST_CHOSEN_UNKNOWNS for H in (45, 63))
+    assert harmonic_steps(1, lowest=25) == (21, 31, 45, 63)
+    assert harmonic_steps(1, lowest=3) == (1, 3, 5, 7, 9, 11, 15, 21, 31, 45, 63)
+    assert harmonic_steps(40, lowest=45) == ()
+
+
+def test_harmonic_amplitudes_above_the_steps_a_large_network_climbs_are_refused_in_one_line(tmp_path, capsys):
+    """A chain of 40 masses climbs to H = 31 only (40 x 91 unknowns would be past MOST_CHOSEN_UNKNOWNS): the
+    amplitude of harmonic 45 asked for without --harmonics is refused, naming the highest."""
+    nodes = [f"n{i}" for i in range(40)]
+    springs = [{"between": ["ground" if i == 0 else nodes[i - 1], nodes[i]], "k": 1.0} for i in range(40)]
+    path = write(tmp_path, {"name": "chain", "network": {"nodes": nodes, "mass": [1.0] * 40, "load_node": "n39",
+                                                         "spring": springs,
+                                                         "dashpot": [{"between": [node, "ground"], "c": 0.1}
+                                                                     for node in nodes],
+                                                         "branch": [{"between": ["n0", "ground"], "k": 1.0,
+                                                                     "eta": 0.1}]}})
+    assert main(["describe", path, "--force-amplitude", "1", "--frequencies", "0.1,0.2",
+                 "--harmonic-amplitudes", "45", "--out", str(tmp_path / "out.csv")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "harmonic 45 is above the 31 harmonics" in error
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.slow
+def test_a_curve_whose_first_harmonic_needs_more_than_31_harmonics_gets_them_and_agrees_with_time(tmp_path):
+    """masing-bilinear at F0 = 3 N from 0.05 Hz: after each yield the stuck mass rings at its elastic 1.59 Hz
+    (harmonic 32) with 1 % damping, and the first harmonic still changes by 1.3e-2 from H = 21 to 31 (it was
+    refused there). The tolerance now climbs to 45 and 63; the curve's first point agrees with the exact
+    stepper's time sweep to the tolerance."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("masing-bilinear")
+    curve = harmonic_response(scene, 3.0, [0.05, 0.1], stability=False)
+    assert curve.harmonics > 31 and curve.change <= 1e-3
+    out = tmp_path / "time.csv"
+    assert main(["describe", "masing-bilinear", "--force-amplitude", "3", "--frequencies", "0.05",
+                 "--method", "time", "--stepper", "exact", "--sweep", "up", "--out", str(out)]) == 0
+    swept = float(read_csv(out)["amplitude"][0])
+    assert curve.frequency[0] == pytest.approx(0.05, rel=1e-12)
+    assert curve.amplitude[0] == pytest.approx(swept, rel=1e-3)
+
+
+def test_a_harmonic_asked_for_between_two_steps_is_chosen_by_the_tolerance(tmp_path):
+    """--harmonic-amplitudes 25 without --harmonics: the climb starts at 21 (compared with only), and the curve
+    written has at least 25 harmonics (it was refused, "changed by inf from H = 21 to 31")."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = read_scene("networks/two-mass-joint", networks=True)
+    curve = harmonic_response(scene, 0.5, [0.1, 0.12], orders=(25,), stability=False)
+    assert curve.harmonics >= 31 and curve.change <= 1e-3
+    out = tmp_path / "curve.csv"
+    assert main(["describe", "networks/two-mass-joint", "--force-amplitude", "0.5", "--frequencies", "0.1,0.12",
+                 "--harmonic-amplitudes", "25", "--out", str(out)]) == 0
+    assert float(read_csv(out)["amplitude_a_h25"][0]) > 0.0
