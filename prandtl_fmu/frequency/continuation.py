@@ -42,6 +42,11 @@ one, for a curve that starts at rest):
   step) and kept as a point of its own, marked;
 * end: the point past omega_max is replaced by the point at omega_max (the corrector with omega fixed). At
   most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused;
+* loop: a curve whose points lie again, twice in a row, on a stretch it took before (within an eighth of that
+  stretch's length or of the step, whichever is larger; not the last LOOP_GAP points) going the same way has
+  closed on itself: it would go round for ever, and is refused at once, with where it came back (:class:`_Trail`).
+  The packaged delay oscillator at 0.6 N went round a loop between 0.113 and 0.131 Hz until MAX_POINTS (five
+  minutes); its second pass is seen after 30 points;
 * behind: a corrector that lands back in omega while both tangents point ahead (no fold between) has landed
   on another part of the curve (a linear oscillator from just above its resonance: the predictor overshot
   past q = 0 and the corrector found the curve below the resonance, which was refused as turned back): the
@@ -79,6 +84,9 @@ BRIDGE_STEPS = 64  # bridge: the most arc-length steps between two points of a c
 DEFLATE_BELOW = 1e-5  # the corner's search deflates the way back at arc-length steps up to this (scaled)
 DEFLATED_ITERATIONS = 64  # of the sphere's Newton with the way back deflated (measured: up to 37 at a corner)
 FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of the unit tangent is at least this
+LOOP_GAP = 4  # a loop: the stretches between the last this many points are not looked at
+LOOP_NEAR = 0.125  # a loop: within this fraction of a stretch's length (or of the step) of it
+LOOP_ALONG = 0.5  # a loop: the cosine between the new stretch and the old one, at least
 
 
 def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None,
@@ -102,6 +110,7 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
     omega = omega_min
     start = _oriented(balance, q, omega, None, scale, span)
     tangent, orientation, chord = (None, None, None) if start is None else start
+    trail = _Trail(omega_min, q)
     if tangent is None or orientation == 0:
         raise FrequencyError(f"{balance.system.source}: the curve cannot start at f = {_hz(omega)!r} Hz: the "
                              "Jacobian is singular there")
@@ -189,9 +198,62 @@ def continue_curve(balance, omega_min: float, omega_max: float, count: int, prog
         points.append((omega_new, q_new, False))
         if progress is not None:
             progress.update(1)
+        again = trail.add(omega_new, q_new, scale_new, omega_min, span, step)
+        if again is not None:
+            raise FrequencyError(f"{balance.system.source}: the curve closed on itself: at f = {_hz(omega_new)!r} "
+                                 f"Hz ({_where(balance, q_new, omega_new, node)}) it came back, going the same way, "
+                                 f"to the stretch it took at f = {_hz(again)!r} Hz, and goes round a loop from "
+                                 f"there without reaching f = {_hz(omega_max)!r} Hz (the way in, a corner or a "
+                                 "branch point, not found again)")
         tangent, scale, q, omega, chord = tangent_new, scale_new, q_new, omega_new, chord_new
         factor = min(2.0, max(0.5, TARGET_ITERATIONS / max(iterations, 1)))
         step = min(max_step, max(MIN_STEP, step * factor))
+
+
+class _Trail:
+    """The points a curve took (every one, the located folds left out), to see it come back on itself: a curve
+    that passes again along a stretch it took, the same way, goes round a loop."""
+
+    def __init__(self, omega, q):
+        self.omegas = [omega]
+        self.qs = [np.array(q, dtype=float)]
+        self.lengths = []  # of each stretch, scaled when it was taken: at least as long in any later scale
+        self.hits = 0
+
+    def add(self, omega, q, scale, omega_min, span, step) -> Optional[float]:
+        """Add the point; the frequency of the stretch it came back to (the second point in a row on an earlier
+        stretch, going the same way), else None. Work: one distance to each stretch whose frequencies are
+        within its reach, beside a vectorised look at all the frequencies."""
+        self.omegas.append(omega)
+        self.qs.append(np.array(q, dtype=float))
+        self.lengths.append(float(np.linalg.norm(_scaled(self.qs[-1], omega, scale, omega_min, span)
+                                                 - _scaled(self.qs[-2], self.omegas[-2], scale, omega_min, span))))
+        hit = self._on_earlier(scale, omega_min, span, step)
+        self.hits = self.hits + 1 if hit is not None else 0
+        return hit if self.hits >= 2 else None
+
+    def _on_earlier(self, scale, omega_min, span, step) -> Optional[float]:
+        count = len(self.omegas) - LOOP_GAP  # stretches i -> i + 1 for i + 1 < count
+        if count < 2:
+            return None
+        here = _scaled(self.qs[-1], self.omegas[-1], scale, omega_min, span)
+        came = here - _scaled(self.qs[-2], self.omegas[-2], scale, omega_min, span)
+        moved = float(np.linalg.norm(came))
+        if moved == 0.0:
+            return None
+        omegas = (np.asarray(self.omegas[:count]) - omega_min) / span
+        low, high = np.minimum(omegas[:-1], omegas[1:]), np.maximum(omegas[:-1], omegas[1:])
+        reach = LOOP_NEAR * np.maximum(step, np.asarray(self.lengths[:count - 1]))  # farther in omega alone: not near
+        for i in np.flatnonzero((low - reach <= here[-1]) & (here[-1] <= high + reach)):
+            a = _scaled(self.qs[i], self.omegas[i], scale, omega_min, span)
+            stretch = _scaled(self.qs[i + 1], self.omegas[i + 1], scale, omega_min, span) - a
+            length = float(np.linalg.norm(stretch))
+            if length == 0.0 or came @ stretch < LOOP_ALONG * moved * length:
+                continue
+            along = min(max(float((here - a) @ stretch) / length ** 2, 0.0), 1.0)
+            if np.linalg.norm(here - a - along * stretch) <= LOOP_NEAR * max(length, step):
+                return float(self.omegas[i])
+        return None
 
 
 def _isolated(balance, q, omega) -> None:
