@@ -43,8 +43,8 @@ one, for a curve that starts at rest):
 * end: the point past omega_max is replaced by the point at omega_max (the corrector with omega fixed). At
   most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused;
 * loop: a curve whose points lie again, twice in a row, on a stretch it took before (within an eighth of that
-  stretch's length or of the step, whichever is larger; not the last LOOP_GAP points) going the same way has
-  closed on itself: it would go round for ever, and is refused at once, with where it came back (:class:`_Trail`).
+  stretch's length or of the step, whichever is larger; not the last LOOP_GAP points, and an arc length of at
+  least LOOP_ROUND times that since it) going the same way has closed on itself: it would go round for ever, and is refused at once, with where it came back (:class:`_Trail`).
   The packaged delay oscillator at 0.6 N went round a loop between 0.113 and 0.131 Hz until MAX_POINTS (five
   minutes); its second pass is seen after 30 points;
 * behind: a corrector that lands back in omega while both tangents point ahead (no fold between) has landed
@@ -87,6 +87,7 @@ FIXED_SHARE = 0.05  # an unknown is fixed by those correctors if its share of th
 LOOP_GAP = 4  # a loop: the stretches between the last this many points are not looked at
 LOOP_NEAR = 0.125  # a loop: within this fraction of a stretch's length (or of the step) of it
 LOOP_ALONG = 0.5  # a loop: the cosine between the new stretch and the old one, at least
+LOOP_ROUND = 4.0  # a loop: the arc length since the old stretch, at least this many times its length (or the step)
 
 
 def continue_curve(balance, omega_min: float, omega_max: float, count: int, progress=None,
@@ -218,6 +219,7 @@ class _Trail:
         self.omegas = [omega]
         self.qs = [np.array(q, dtype=float)]
         self.lengths = []  # of each stretch, scaled when it was taken: at least as long in any later scale
+        self.arcs = [0.0]  # the arc length to each point, of those lengths
         self.hits = 0
 
     def add(self, omega, q, scale, omega_min, span, step) -> Optional[float]:
@@ -228,6 +230,7 @@ class _Trail:
         self.qs.append(np.array(q, dtype=float))
         self.lengths.append(float(np.linalg.norm(_scaled(self.qs[-1], omega, scale, omega_min, span)
                                                  - _scaled(self.qs[-2], self.omegas[-2], scale, omega_min, span))))
+        self.arcs.append(self.arcs[-1] + self.lengths[-1])
         hit = self._on_earlier(scale, omega_min, span, step)
         self.hits = self.hits + 1 if hit is not None else 0
         return hit if self.hits >= 2 else None
@@ -250,8 +253,13 @@ class _Trail:
             length = float(np.linalg.norm(stretch))
             if length == 0.0 or came @ stretch < LOOP_ALONG * moved * length:
                 continue
+            near = LOOP_NEAR * max(length, step)
+            # come back: round a way LOOP_ROUND times as long as the stretch, not just past its end (steps
+            # shrinking towards a corner put a point within an eighth of a stretch four points back)
+            if self.arcs[-1] - self.arcs[i + 1] < LOOP_ROUND * max(length, step):
+                continue
             along = min(max(float((here - a) @ stretch) / length ** 2, 0.0), 1.0)
-            if np.linalg.norm(here - a - along * stretch) <= LOOP_NEAR * max(length, step):
+            if np.linalg.norm(here - a - along * stretch) <= near:
                 return float(self.omegas[i])
         return None
 

@@ -55,6 +55,16 @@ def test_a_curve_that_comes_near_itself_crosses_itself_or_turns_back_is_no_loop(
     back = [(0.3 + 0.005 * i, 0.1 + 0.02 * (29 - i)) for i in range(30)]
     assert _walk(there + back) is None
     assert _walk(there + [(q, omega) for q, omega in reversed(there)]) is None  # exactly back: the other way
+    # steps shrinking fast towards a corner (the delay oscillator's slip onset at 0.1 N: 0.0117, 0.0058, 4e-4,
+    # 2e-4, 1e-4, 1e-5, 7e-7): a point past the end of a stretch four points back, within an eighth of its length,
+    # but only just past it; then the corner turns the curve back by 131 degrees
+    steps = [0.3, 0.17, 0.046, 0.0117, 0.0058, 3.7e-4, 1.8e-4, 9e-5, 1.1e-5, 7e-7]
+    line = [(0.0, 0.1)]
+    for length in steps:
+        line.append((line[-1][0] + 0.6 * length, line[-1][1] + 0.8 * length))
+    turn = math.radians(180 - 131)
+    out = [(line[-1][0] - 0.1 * i * math.cos(turn), line[-1][1] + 0.1 * i * math.sin(turn)) for i in range(1, 6)]
+    assert _walk(line + out, step=7e-7) is None
 
 
 def test_the_delay_oscillator_s_loop_is_refused_at_once_with_where(tmp_path, capsys, monkeypatch):
