@@ -219,15 +219,22 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
     says so, so that --harmonics 1 is not read as the one-harmonic balance."""
     import sys
 
+    from .harmonic_balance import MOST_HARMONICS
+
     shot = [curve for curve in curves if curve.method == "shooting"]
     if shot:
         print(f"note: the periodic states are found by shooting on the {shot[0].orbit} (friction on a mass), exact "
               f"whatever the harmonics: --harmonics {harmonics} sets only the harmonics kept (their columns and "
               "--harmonic-amplitudes), not the accuracy", file=sys.stderr)
     for curve in curves:
+        load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else
+                f"Y0 = {curve.base_amplitude:g} m")
+        if curve.method == "harmonic balance" and curve.change is None:
+            why = ("it is the most a balance takes" if harmonics >= MOST_HARMONICS else
+                   "the curve's ends or peak were not found with more")
+            print(f"warning: with --harmonics {harmonics} ({load}) the first harmonic's change at more harmonics is "
+                  f"not known ({why}): its truncation is not measured", file=sys.stderr)
         if curve.method == "harmonic balance" and curve.change is not None and curve.change > tolerance:
-            load = (f"F0 = {curve.force_amplitude:g} N" if curve.force_amplitude is not None else
-                    f"Y0 = {curve.base_amplitude:g} m")
             print(f"warning: with --harmonics {harmonics} ({load}) the first harmonic changes by {curve.change:.3g} "
                   f"relative at the next number of harmonics (--tolerance {tolerance:g}): more harmonics, or none "
                   "given (chosen by --tolerance)", file=sys.stderr)

@@ -28,8 +28,8 @@ import numpy as np
 
 from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_values, shooting
 from .continuation import continue_curve
-from .harmonic_balance import (HARMONIC_STEPS, MOST_CHOSEN_UNKNOWNS, HarmonicBalance, harmonic_steps, lifted,
-                               periodic_system)
+from .harmonic_balance import (HARMONIC_STEPS, MOST_CHOSEN_UNKNOWNS, MOST_HARMONICS, HarmonicBalance,
+                               harmonic_steps, lifted, periodic_system)
 from .series import check_named, joined
 from .unbounded import refuse_slip_limited, refuse_unbounded
 
@@ -215,12 +215,14 @@ def _summary(balance, points, where) -> np.ndarray:
 
 def _truncation(balance, points, where, samples) -> Optional[float]:
     """With H given: how much the first harmonic changes, relative, at the peak and at both ends, when H grows to
-    the next step of HARMONIC_STEPS (or 2 H + 1 past them): what the choice of H by the tolerance compares. The
+    the next step of HARMONIC_STEPS (or 2 H + 1 past them, at most MOST_HARMONICS): what the choice of H by the tolerance compares. The
     ends at their frequencies; the peak by the larger balance's point on the normal through the curve's
     (``continuation.across``: at a fold, where the peak may be, the point at the same frequency is ill-posed).
     None where one is not found (no estimate)."""
     H = balance.H
-    larger = next((h for h in HARMONIC_STEPS if h > H), 2 * H + 1)
+    larger = next((h for h in HARMONIC_STEPS if h > H), min(2 * H + 1, MOST_HARMONICS))
+    if larger <= H:  # the most harmonics a balance takes: nothing to compare with
+        return None
     finer = HarmonicBalance(balance.system, larger, balance.force_amplitude,
                             None if samples is None else max(samples, 4 * larger), balance.base_amplitude)
     return _change(balance, points, finer, where)

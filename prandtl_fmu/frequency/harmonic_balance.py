@@ -73,6 +73,7 @@ HARMONIC_STEPS = (1, 3, 5, 7, 9, 11, 15, 21, 31, 45, 63)  # the numbers of harmo
 # the tolerance climbs past H = 31 only while the balance has at most this many unknowns (n nodes times 2 H + 1):
 # a dense Jacobian of 2000 factors in about 0.1 s, a curve takes about a thousand
 DENSE_STEPS = 31
+MOST_HARMONICS = 256  # of a balance (--harmonics)
 MOST_CHOSEN_UNKNOWNS = 2000
 NEWTON_HALVINGS = 10  # of a damped Newton step while the residual would grow (:meth:`HarmonicBalance._newton`)
 # converged: the last Newton step moved q by at most this fraction of |q| (max norm), or R is at most this
@@ -382,8 +383,9 @@ class HarmonicBalance:
 
     def __init__(self, system: PeriodicSystem, harmonics: int, force_amplitude: Optional[float],
                  samples: Optional[int] = None, base_amplitude: Optional[float] = None):
-        if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or not 1 <= harmonics <= 256:
-            raise FrequencyError(f"--harmonics: must be a whole number in [1, 256], got {harmonics!r}")
+        if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or \
+                not 1 <= harmonics <= MOST_HARMONICS:
+            raise FrequencyError(f"--harmonics: must be a whole number in [1, {MOST_HARMONICS}], got {harmonics!r}")
         self.system = system
         self.H = H = int(harmonics)
         self.L = L = 2 * H + 1

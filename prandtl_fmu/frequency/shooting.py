@@ -1029,7 +1029,10 @@ def shooting_response(scene, force_amplitude, base_amplitude, frequencies, *, ha
         # the change at the points found again (a bridged one has no coarser twin: _solved_again)
         found = kept >= 0
         X, X_fine = (c[:, where, 1] - 1j * c[:, where, 2] for c in (coefficients[kept[found]], refined[found]))
-        change = float(np.max(np.abs(X_fine - X) / np.maximum(np.abs(X_fine), 1e-300)))
+        # relative to the node's first harmonic, or to 1e-9 of the whole motion's where that is 0 (a massless node
+        # held by a slider that sticks all along: its rounding against its rounding made 5e280 and a refusal)
+        floor = 1e-9 * np.max(np.abs(refined[found]).reshape(int(np.sum(found)), -1), axis=1, initial=1e-300)
+        change = float(np.max(np.abs(X_fine - X) / np.maximum(np.abs(X_fine), floor)))
         shooting, coefficients = finer, refined
         # the error at M is about 4/3 of the change (the trapezoid rule: 1 / M^2); not at a level that bridged
         # points (no coarser twin to measure them against: the next level finds them again, and measures them)

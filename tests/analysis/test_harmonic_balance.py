@@ -11,6 +11,7 @@ from prandtl_fmu.cli import main
 from prandtl_fmu.frequency import parse_scene, read_scene
 
 from tests.analysis.test_describe_cli import read_csv, write
+from tests.conftest import scene_text
 from tests.analysis.test_frequency import epp
 
 DUFFING = {"mass": {"m": 1.0}, "spring": {"k0": 1.0}, "cubic": {"k3": 0.5}, "damper": {"c": 0.05}}
@@ -886,3 +887,28 @@ def test_a_harmonic_asked_for_between_two_steps_is_chosen_by_the_tolerance(tmp_p
     assert main(["describe", "networks/two-mass-joint", "--force-amplitude", "0.5", "--frequencies", "0.1,0.12",
                  "--harmonic-amplitudes", "25", "--out", str(out)]) == 0
     assert float(read_csv(out)["amplitude_a_h25"][0]) > 0.0
+
+
+def test_the_most_harmonics_have_no_truncation_to_measure_and_say_so():
+    """H = MOST_HARMONICS (256) is compared with nothing (the next, 513, is past what a balance takes: every
+    --harmonics from 128 up was refused after its whole curve); its ``change`` is None."""
+    from prandtl_fmu.frequency.curve import _truncation
+    from prandtl_fmu.frequency.harmonic_balance import MOST_HARMONICS, HarmonicBalance, periodic_system
+
+    scene, _ = parse_scene(scene_text({"name": "jenkins", "mass": {"m": 1.0}, "spring": {"k0": 1.0},
+                                       "damper": {"c": 0.1}, "branches": {"k": [1.0], "eta": [0.1]}}))
+    balance = HarmonicBalance(periodic_system(scene), MOST_HARMONICS, 0.1)
+    assert _truncation(balance, [], 0, None) is None
+
+
+@pytest.mark.slow
+def test_harmonics_past_127_are_compared_with_the_most_and_written(tmp_path, capsys):
+    """--harmonics 128: its truncation is measured against 256 harmonics (2 H + 1 = 257 was refused after the
+    curve: "must be a whole number in [1, 256], got 257"); the point is written."""
+    path = write(tmp_path, {"name": "jenkins", "mass": {"m": 1.0}, "spring": {"k0": 1.0}, "damper": {"c": 0.1},
+                            "branches": {"k": [1.0], "eta": [0.1]}})
+    out = tmp_path / "curve.csv"
+    assert main(["describe", path, "--force-amplitude", "0.1", "--frequencies", "0.2", "--harmonics", "128",
+                 "--out", str(out)]) == 0
+    assert "warning" not in capsys.readouterr().err  # the change to 256 measured, within the tolerance
+    assert float(read_csv(out)["amplitude"][0]) > 0.0

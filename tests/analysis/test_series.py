@@ -675,3 +675,31 @@ def test_the_backbone_at_a_massless_node_on_a_slider_is_its_motion_along_the_mod
     # (each refined by doubling its samples to the default tolerance: 1e-16 to 1.4e-6 apart, measured)
     assert np.allclose(at_other.frequency, at_j.frequency, rtol=1e-5, atol=0.0)
     assert np.allclose(at_other.damping_ratio, at_j.damping_ratio, rtol=1e-5, atol=0.0)
+
+
+def test_a_massless_node_held_by_a_slider_that_sticks_stands_still_at_its_node(tmp_path):
+    """--node at a massless node p between a spring (2 N/m, to the mass) and a slider (0.1 N, to the ground): the
+    slider sticks while 2 |x_a| < 0.1, and p stands still. Its first harmonic is then rounding against rounding,
+    whose relative change between resolutions (5e280) refused the curve whatever the tolerance (a review's
+    find); now p's amplitude is 0 to rounding there, and the mass's is that of the same mass with the Jenkins
+    branch k = 2, eta = 0.05 the node and its slider make, at both ends."""
+    common = [("spring", ["ground", "a"], {"k": 1.0}), ("dashpot", ["ground", "a"], {"c": 0.02})]
+    written = network_text(["a", "p"], [1.0, 0.0], common + [
+        ("spring", ["a", "p"], {"k": 2.0}), ("slider", ["p", "ground"], {"alpha": 0.1})], load_node="a")
+    branch = network_text(["a"], [1.0], common + [("branch", ["a", "ground"], {"k": 2.0, "eta": 0.05})],
+                          load_node="a")
+    tables = {}
+    for name, text, options in (("written", written, ["--node", "p"]), ("branch", branch, [])):
+        path, out = tmp_path / f"{name}.toml", tmp_path / f"{name}.csv"
+        path.write_text(text)
+        assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.12,0.2",
+                     "--out", str(out)] + options) == 0
+        tables[name] = {column: np.array(values, float) for column, values in read_csv(out).items()
+                        if column not in ("stable", "fold")}
+    at_p, at_a = tables["written"]["amplitude"], tables["written"]["amplitude_a"]
+    stuck, slipping = at_a < 0.045, at_a > 0.055
+    assert np.any(stuck) and np.any(slipping)
+    assert np.all(at_p[stuck] <= 1e-12 * at_a[stuck]) and np.all(at_p[slipping] > 1e-4)
+    for end in (0, -1):
+        assert tables["written"]["frequency"][end] == pytest.approx(tables["branch"]["frequency"][end], rel=1e-12)
+        assert at_a[end] == pytest.approx(tables["branch"]["amplitude"][end], rel=2e-3)
