@@ -58,7 +58,7 @@ import warnings  # noqa: E402
 # Light imports only (the standard library and the package's base): `--help`, `--version`, `scenes` and a bad
 # option answer without loading numpy or numba; each command imports what it runs.
 from .catalog import SceneError  # noqa: E402
-from .outputs import AtomicFile, write_atomically  # noqa: E402
+from .outputs import AtomicFile, clash, write_atomically  # noqa: E402
 
 
 _SCENE_HELP = "scene file (TOML), or the name of a packaged scene (see: prandtl-fmu scenes)"
@@ -376,6 +376,9 @@ def _fit(args) -> int:
         for option in ("out", "fmu"):
             _check_output_path(getattr(args, option), f"--{option}")
         _check_image_path(args.plot, "--plot")
+        clashing = clash([("--out", args.out), ("--fmu", args.fmu), ("--plot", args.plot)], [("data", args.data)])
+        if clashing:
+            raise FitError(clashing)
         if args.branches < 1:
             raise FitError(f"--branches must be >= 1, got {args.branches}")
         data = read_columns(args.data, args.time, args.x, args.force, args.v)
@@ -483,6 +486,9 @@ def _run(args) -> int:
         if args.plot and _missing("matplotlib"):
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
         _check_image_path(args.plot, "--plot")
+        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", args.scene)])
+        if clashing:
+            raise SceneError(clashing)
         if args.out:
             columns = _column_count(scene, args)
             rows = scene.solver.stop_time / scene.solver.output_interval + 2

@@ -96,6 +96,30 @@ def write_output(path, data: bytes) -> None:
         fh.flush()
 
 
+def clash(outputs, inputs=()) -> str:
+    """The first clash among the files a command writes (``outputs``: (option, path), path None or empty where
+    not asked for) and those it reads (``inputs``: (what, path)), as one line; "" where there is none. Two
+    outputs that are one file would leave only the last (a CSV lost under its plot), and an output that is an
+    input would be written over what it was read from (a scene lost under its CSV)."""
+    def same(a, b) -> bool:
+        try:
+            if os.path.exists(a) and os.path.exists(b):
+                return os.path.samefile(a, b)
+        except OSError:
+            pass
+        return os.path.realpath(a) == os.path.realpath(b)
+
+    outputs = [(option, path) for option, path in outputs if path]
+    for index, (option, path) in enumerate(outputs):
+        for other, earlier in outputs[:index]:
+            if same(path, earlier):
+                return f"{option} {path}: the same file as {other}: give each its own"
+        for what, source in inputs:
+            if source and os.path.exists(source) and same(path, source):
+                return f"{option} {path}: the {what} it reads: it would be written over"
+    return ""
+
+
 def remove_partial_files() -> int:
     """Delete every temporary not yet renamed into place (a run being stopped by a signal); returns how many
     there were."""

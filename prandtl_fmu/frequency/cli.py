@@ -323,6 +323,11 @@ def run(args) -> int:
             raise ValueError("--scheduler and --workers need dask.distributed: pip install 'prandtl_fmu[sweep]'")
         _check_output_path(args.out, "--out")
         _check_output_path(args.plot, "--plot")
+        from ..outputs import clash
+
+        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", args.scene)])
+        if clashing:
+            raise ValueError(clashing)
         if args.plot:
             from ..plots import image_format
 

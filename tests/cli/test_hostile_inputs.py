@@ -360,3 +360,24 @@ def test_a_duration_of_more_than_2_to_the_53_steps_is_refused_in_words():
     with pytest.raises(ValueError, match="2\\^53"):
         element.advance(1e300, 0.5)
     assert element.time == 0.0 and element.x == 0.0
+
+
+@pytest.mark.parametrize("command", ["run", "fit", "describe"])
+def test_two_outputs_in_one_file_or_an_output_over_the_input_are_one_line(write_scene, tmp_path, capsys, command):
+    """--out and --plot naming one file left only the plot (exit 0, the CSV lost), and --out naming the scene
+    (or the fit's data) wrote over it: both refused in one line before any work, the input untouched (a
+    review's find)."""
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("scipy")
+    source = _loop_csv(tmp_path / "loop.csv") if command == "fit" else write_scene(base_tables())
+    before = open(source, "rb").read()
+    extra = ["--force-amplitude", "0.5", "--frequencies", "0.1,0.2"] if command == "describe" else []
+    same = tmp_path / "same.png"
+    status, lines, _ = run_cli([command, source, "--out", same, "--plot", same] + extra, capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "--plot" in lines[0] and "the same file as --out" in lines[0], lines
+    assert not same.exists()
+    status, lines, _ = run_cli([command, source, "--out", source] + extra, capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "it would be written over" in lines[0], lines
+    assert open(source, "rb").read() == before
