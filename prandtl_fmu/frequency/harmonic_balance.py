@@ -601,9 +601,10 @@ class HarmonicBalance:
         except np.linalg.LinAlgError:
             return np.linalg.lstsq(matrix[np.ix_(f, f)], self.force(omega)[f], rcond=None)[0]
 
-    def solve_at(self, omega: float, guess: Optional[np.ndarray] = None) -> np.ndarray:
+    def solve_at(self, omega: float, guess: Optional[np.ndarray] = None, fewer: bool = True) -> np.ndarray:
         """The free unknowns at ``omega`` by Newton's method from ``guess`` (default :meth:`linear_guess`; then
-        the force raised in steps if Newton does not converge at once); FrequencyError past the bounds."""
+        the force raised in steps if Newton does not converge at once; then, ``fewer``, from the state with
+        fewer harmonics); FrequencyError past the bounds."""
         start = self.linear_guess(omega) if guess is None else guess
         solved = self._newton(omega, start)
         if solved is None:  # full Newton steps cycling between two slip patterns: halved while R grows
@@ -619,21 +620,24 @@ class HarmonicBalance:
                     break
         finally:
             self.fraction = 1.0
-        if q is None:
+        if q is None and fewer:
             q = self._from_fewer_harmonics(omega)
         if q is None:
             raise FrequencyError(f"{self.system.source}: harmonic balance did not converge at f = "
                                  f"{float(omega) / (2 * math.pi)!r} Hz within {NEWTON_ITERATIONS} Newton iterations "
-                                 "(from the linear response, nor with the force raised in 10 steps, nor from the "
-                                 "state with fewer harmonics)")
+                                 "(from the linear response, nor with the force raised in 10 steps"
+                                 + (", nor from the state with fewer harmonics)" if fewer else ")"))
         return q
 
     def _from_fewer_harmonics(self, omega: float) -> Optional[np.ndarray]:
         """The free unknowns at ``omega`` from the state with fewer harmonics: solved with one harmonic, then
         with each number of HARMONIC_STEPS below H and H itself, each by Newton from the last lifted
-        (full steps, then damped); None where one is not found. From the linear response alone masing-bilinear
-        at F0 = 3 N and 0.05 Hz is not found with 31 harmonics, from 21's it is. At most as many Newton solves
-        as there are steps."""
+        (full steps, then damped), or where that fails from its own linear response (:meth:`solve_at` without
+        this ladder: the state of fewer harmonics can be on a branch that more do not have there, one
+        harmonic's resonance reaching past the folds of three); None where the last is not found. From the linear
+        response alone masing-bilinear at F0 = 3 N and 0.05 Hz is not found with 31 harmonics, from 21's it
+        is; a Duffing oscillator with branches at 0.2279 Hz, past its folds, was refused with 21: one harmonic
+        put it on its upper branch, which ends below with three. At most two solves a step."""
         ladder = [h for h in HARMONIC_STEPS if h < self.H]
         if not ladder:
             return None
@@ -642,18 +646,16 @@ class HarmonicBalance:
         for h in ladder + [self.H]:
             balance = self if h == self.H else HarmonicBalance(self.system, h, self.force_amplitude, None,
                                                                  self.base_amplitude)
-            if coarser is None:
-                try:
-                    q = balance.solve_at(omega)
-                except FrequencyError:
-                    return None
-            else:
+            if coarser is not None and q is not None:
                 guess = lifted(coarser, balance, q)
                 q = balance._newton(omega, guess)
                 if q is None:
                     q = balance._newton(omega, guess, damped=True)
-                if q is None:
-                    return None
+            if q is None:
+                try:
+                    q = balance.solve_at(omega, fewer=False)
+                except FrequencyError:
+                    q = None
             coarser = balance
         return q
 

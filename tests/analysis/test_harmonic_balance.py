@@ -912,3 +912,22 @@ def test_harmonics_past_127_are_compared_with_the_most_and_written(tmp_path, cap
                  "--out", str(out)]) == 0
     assert "warning" not in capsys.readouterr().err  # the change to 256 measured, within the tolerance
     assert float(read_csv(out)["amplitude"][0]) > 0.0
+
+
+def test_a_start_past_the_folds_of_more_harmonics_is_found_where_one_harmonic_is_on_a_branch_they_lack():
+    """A Duffing oscillator with three branches at F0 = 0.813 N: its folds are at 0.2060 and 0.2165 Hz, and
+    with one harmonic the upper branch reaches past 0.2279 Hz, where three harmonics have none: the ladder from
+    fewer harmonics, lifted from that branch, did not converge with 3, and 21 and 63 harmonics were refused at
+    the lowest frequency listed (a review's find). A rung that fails from its lift is solved from its own linear
+    response: the point is the curve's that starts below the folds, to the tolerance."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+
+    scene, _ = parse_scene(scene_text({"name": "duffing-branches", "mass": {"m": 1.467}, "spring": {"k0": 0.932},
+                                       "damper": {"c": 0.056}, "cubic": {"k3": 1.416},
+                                       "branches": {"k": [2.614, 1.427, 2.698], "alpha": [0.192, 0.252, 0.159]}}))
+    end = 0.2281
+    started = harmonic_response(scene, 0.813, [0.22787, end], harmonics=21, stability=False)
+    through = harmonic_response(scene, 0.813, [0.19, end], harmonics=21, stability=False)
+    assert np.sum(through.fold) == 2  # the curve from below passes both folds
+    assert started.frequency[-1] == through.frequency[-1] == pytest.approx(end, rel=1e-12)
+    assert started.amplitude[-1] == pytest.approx(through.amplitude[-1], rel=1e-9)
