@@ -25,8 +25,10 @@ is M 1 Y0 omega^2 in coordinates relative to the ground.
 
 The bound is a proof of refusal only: below it a periodic state may or may not exist, and the continuation
 answers (a resonance it climbs without bound is refused past its bound of points, saying where). The check
-applies where every force besides springs and dashpots is bounded and every node has a mass (a cubic spring,
-a delay, a history or a spectrum of branches: not checked). Repeated modes: each of the mode's
+applies where every force besides springs and dashpots is bounded and every node has a mass (a delay, a history
+or a spectrum of branches: not checked). A cubic spring is unbounded, but one whose direction the mode leaves
+alone (d . phi = 0: a joint between two nodes that move as one in the mode) projects to phi' d f = 0 whatever its
+force, so such a mode is checked as if it were not there; a mode that stretches a cubic spring is not checked. Repeated modes: each of the mode's
 vectors that no dashpot damps, and the one of them the force drives most, are checked.
 """
 from __future__ import annotations
@@ -41,6 +43,7 @@ from . import FrequencyError
 CLUSTER = 1e-9  # modes within this relative distance of omega_r^2 are one repeated mode
 UNDAMPED = 1e-12  # C phi below this share of |C| |phi|: no dashpot damps the mode
 MARGIN = 1e-9  # the bound exceeded by more than rounding
+STRETCHED = 1e-9  # a cubic spring is along the mode (phi scaled to max 1) where |d . phi| is above this
 
 
 def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
@@ -67,15 +70,16 @@ def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
     k0 = 0.0 if scene.spring is None else float(scene.spring.k0)
     c = float(scene.damper.c) if scene.has_dashpot else 0.0
     return (np.array([float(scene.mass.m)]), np.array([[k0]]), np.array([[c]]), np.array(rows).reshape(-1, 1),
-            np.array(bounds), ("mass",))
+            np.array(bounds), ("mass",), np.zeros((0, 1)))
 
 
 def _network_parts(network) -> Optional[tuple]:
-    """As :func:`_element_parts`, for a network."""
+    """As :func:`_element_parts`, for a network, with the directions of its cubic springs last (their force is
+    not bounded: a mode that stretches one is not checked)."""
     n = network.n
     if np.any(np.asarray(network.mass) <= 0):
         return None
-    K, C, rows, bounds = np.zeros((n, n)), np.zeros((n, n)), [], []
+    K, C, rows, bounds, cubic = np.zeros((n, n)), np.zeros((n, n)), [], [], []
     for element in network.elements:
         if element.kind == "lever":  # a massless node's slider or branch (series.condensed)
             rows.append(element.row(n))
@@ -96,10 +100,12 @@ def _network_parts(network) -> Optional[tuple]:
         elif element.kind == "branch":
             rows.append(d)
             bounds.append(element.value * element.eta)
-        else:  # a cubic spring: its force is not bounded
+        elif element.kind == "cubic":
+            cubic.append(d)
+        else:  # no other kind's force is known bounded
             return None
     return (np.array(network.mass, dtype=float), K, C, np.array(rows, dtype=float).reshape(-1, n),
-            np.array(bounds, dtype=float), tuple(network.nodes))
+            np.array(bounds, dtype=float), tuple(network.nodes), np.array(cubic, dtype=float).reshape(-1, n))
 
 
 def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Optional[float], low: float,
@@ -137,7 +143,7 @@ def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Op
 
 def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinetic) -> None:
     """:func:`refuse_unbounded` on ``parts`` (``kinetic``: the bounds of a large motion)."""
-    mass, K, C, rows, bounds, nodes = parts
+    mass, K, C, rows, bounds, nodes, cubic = parts
     scale = 1.0 / np.sqrt(mass)
     values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
     shapes = scale[:, None] * vectors  # K phi = lambda M phi
@@ -164,6 +170,8 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
             if not np.any(phi):
                 continue
             phi = phi / np.max(np.abs(phi))
+            if np.any(np.abs(cubic @ phi) > STRETCHED):  # a cubic spring along the mode: its force is not bounded
+                continue
             drive = abs(float(phi @ force))
             hold = 4.0 / math.pi * float(np.sum(bounds * np.abs(rows @ phi)))
             # a force orthogonal to the mode up to rounding does not drive it (its states are a family, not an

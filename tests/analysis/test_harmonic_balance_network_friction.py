@@ -169,6 +169,35 @@ def test_an_undamped_linear_resonance_is_refused_as_such(tmp_path, capsys):
         assert " 0 N" not in err and "f = 0.159155 Hz" in err, err
 
 
+def test_a_cubic_joint_the_mode_leaves_alone_does_not_stop_den_hartog_s_bound(tmp_path, capsys):
+    """Two equal masses on equal springs to the ground, joined by a cubic spring, a branch and a dashpot: the
+    in-phase mode (1, 1) at 1 / (2 pi) Hz stretches none of them (d . phi = 0), so their forces project to 0 on
+    it and only the branch to the ground (k eta = 0.02 N, |phi_a| = 1) holds it: the force 0.1 N > 4 / pi 0.02
+    drives it without bound. The cubic spring stopped the check (its force is not bounded), and the curve climbed
+    until its bound of points; now refused at once, where 0.99 of the bound passes. A cubic spring the mode
+    stretches (a to the ground) still stops the check: nothing refused."""
+    from prandtl_fmu.frequency import FrequencyError
+    from prandtl_fmu.frequency.unbounded import refuse_unbounded
+
+    joint = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+             ("cubic", ["a", "b"], {"k3": 4.0}), ("branch", ["a", "b"], {"k": 2.0, "eta": 0.1}),
+             ("dashpot", ["a", "b"], {"c": 0.1}), ("branch", ["a", "ground"], {"k": 0.2, "eta": 0.1})]
+    scene = network(tmp_path, network_text(["a", "b"], [1.0, 1.0], joint, load_node="a"))
+    band = (0.9, 1.1)  # rad/s: the in-phase mode at 1 alone (the other at sqrt(3) is far)
+    limit = 4 / math.pi * 0.02
+    refuse_unbounded(scene, 0.99 * limit, None, *band)
+    with pytest.raises(FrequencyError, match=f"below {limit:.6g} "):
+        refuse_unbounded(scene, 1.01 * limit, None, *band)
+    stretched = network(tmp_path, network_text(["a", "b"], [1.0, 1.0], joint + [
+        ("cubic", ["a", "ground"], {"k3": 1.0})], load_node="a"), name="stretched.toml")
+    refuse_unbounded(stretched, 10 * limit, None, *band)
+    path = tmp_path / "joint.toml"
+    path.write_text(network_text(["a", "b"], [1.0, 1.0], joint, load_node="a"))
+    assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.1,0.3"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "f = 0.159155 Hz" in err, err
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", ["one node", "two masses"])
 def test_just_below_den_hartog_s_bound_the_curve_passes_the_resonance(tmp_path, case):
