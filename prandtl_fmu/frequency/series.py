@@ -29,8 +29,10 @@ share is the springs' weighted mean of their far ends plus a compliance d_p^2 / 
 an element of threshold alpha on the elongation d' . x (a :class:`Lever`: a slider's play, now with a spring,
 between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of
 far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
-the motion. A massless node between two threshold elements (its position a play of two references), or with a
-dashpot (a first-order motion), is refused, one line; a massless node held by no spring carries no force
+the motion. A massless node held by one spring and one dashpot alone is the Maxwell element between their far ends
+(:func:`_maxwell`: a branch with that series dashpot and a range it never reaches, whose u shooting carries). A
+massless node between two threshold elements (its position a play of two references), or with a dashpot
+otherwise (a first-order motion), is refused, one line; a massless node held by no spring carries no force
 through it (its elements go). The node named and the node loaded, and each massless node their motion or
 force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
 slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
@@ -42,12 +44,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
 from . import FrequencyError
 
 JOINED = ("spring", "slider", "branch")
+NEVER = 1e300  # the range of a Maxwell element's branch (:func:`_maxwell`): never reached
 THRESHOLDS = ("slider", "branch", "lever")
 
 
@@ -334,6 +338,9 @@ def _lever(network, node, source, purpose):
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
+    maxwell = _maxwell(touching, node, name)
+    if maxwell is not None:
+        return _without(network, node, [e for e in network.elements if node not in e.between] + maxwell)
     for e in touching:
         if e.kind not in ("spring",) + THRESHOLDS or e.c > 0.0:
             why = "its position a root of a cubic" if e.kind == "cubic" else "a first-order motion"
@@ -357,6 +364,26 @@ def _lever(network, node, source, purpose):
     if thresholds:
         rest.extend(_levered(thresholds[0], node, name, ends, total))
     return _without(network, node, rest)
+
+
+def _maxwell(touching, node, name) -> Optional[list]:
+    """A massless node between one spring (k, to end i) and one dashpot (c, to end j), nothing else on it, as
+    the Maxwell element it is: its balance k (x_i - x_p) = c (x_p' - x_j') makes the spring's elongation u =
+    x_i - x_p obey u' = (x_i' - x_j') - (k / c) u, the force k u on both ends: a branch between i and j with
+    that series dashpot and a range it never reaches (NEVER: no motion of finite numbers gets there), whose u
+    shooting carries as a state (``network_orbit.py``). ``[that branch]``, ``[]`` where i and j are one end
+    (it acts on nothing), or None where the node is not such a node."""
+    from ..network.model import Element
+
+    if len(touching) != 2 or sorted(e.kind for e in touching) != ["dashpot", "spring"]:
+        return None
+    spring, dashpot = sorted(touching, key=lambda e: e.kind != "spring")
+    i = spring.between[1] if spring.between[0] == node else spring.between[0]
+    j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
+    if i == j:
+        return []
+    return [Element("branch", f"{name}({spring.name},{dashpot.name})", (max(i, j), min(i, j)), spring.value,
+                    eta=NEVER, c=dashpot.value)]
 
 
 def _spring_ends(touching, node) -> tuple:

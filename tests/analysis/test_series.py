@@ -703,3 +703,32 @@ def test_a_massless_node_held_by_a_slider_that_sticks_stands_still_at_its_node(t
     for end in (0, -1):
         assert tables["written"]["frequency"][end] == pytest.approx(tables["branch"]["frequency"][end], rel=1e-12)
         assert at_a[end] == pytest.approx(tables["branch"]["amplitude"][end], rel=2e-3)
+
+
+def test_a_maxwell_element_through_a_massless_node_beside_a_slider_moves_as_written(tmp_path, capsys):
+    """A massless node j between a spring (2 N/m, to a) and a dashpot (0.6 N s/m, to b), nothing else on it, in
+    a network that a slider between the masses sends to shooting: j was refused ("a first-order motion"). Its
+    balance makes the two a Maxwell element between a and b, a branch with that series dashpot and a range it
+    never reaches (``series._maxwell``). Shooting's periodic state against the implicit stepper on the network as
+    written, run to its steady state (order 1, Richardson within 5 % of its error), at a frequency where the slider
+    slips and the dashpot works; and the curve from the command line, every point stable (all of it dissipates)."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    elements = LEVERED + [("spring", ["a", "j"], {"k": 2.0}), ("dashpot", ["j", "b"], {"c": 0.6}),
+                          ("slider", ["a", "b"], {"alpha": 0.2})]
+    text = network_text(["a", "j", "b"], [1.0, 0.0, 2.0], elements, load_node="a")
+    scene = network(tmp_path, text, "maxwell.toml")
+    joined = condensed(scene, None, "a")
+    assert joined.network.nodes == ("a", "b")
+    (maxwell,) = [e for e in joined.network.elements if e.kind == "branch"]
+    assert (maxwell.value, maxwell.c, maxwell.eta) == (2.0, 0.6, 1e300)
+    F, omega = 1.0, 1.1
+    X = implicit_agrees(scene, NetworkShooting(joined, F, None, 1024, 7, omega), F, omega, 80)
+    assert np.min(np.abs(X)) > 0.2 and abs(X[0] - X[1]) > 0.05  # both move, and not as one: the slider slips
+    path, out = tmp_path / "maxwell-cli.toml", tmp_path / "maxwell.csv"
+    path.write_text(text)
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.1,0.3",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert len(table["frequency"]) > 10 and set(table["stable"]) == {"true"}
