@@ -29,10 +29,10 @@ share is the springs' weighted mean of their far ends plus a compliance d_p^2 / 
 an element of threshold alpha on the elongation d' . x (a :class:`Lever`: a slider's play, now with a spring,
 between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of
 far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
-the motion. A massless node held by one spring and one dashpot alone is the Maxwell element between their far ends
-(:func:`_maxwell`: a branch with that series dashpot and a range it never reaches, whose u shooting carries). A
-massless node between two threshold elements (its position a play of two references), or with a dashpot
-otherwise (a first-order motion), is refused, one line; a massless node held by no spring carries no force
+the motion. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
+lever with that series dashpot and a range it never reaches, whose u shooting carries (:func:`_maxwell`; one
+spring: the Maxwell element between the two far ends). A massless node between two threshold elements (its
+position a play of two references), or with a dashpot otherwise (a first-order motion), is refused, one line; a massless node held by no spring carries no force
 through it (its elements go). The node named and the node loaded, and each massless node their motion or
 force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
 slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
@@ -51,7 +51,7 @@ import numpy as np
 from . import FrequencyError
 
 JOINED = ("spring", "slider", "branch")
-NEVER = 1e300  # the range of a Maxwell element's branch (:func:`_maxwell`): never reached
+NEVER = 1e200  # the range (m) of a lever with a series dashpot (:func:`_maxwell`): never reached
 THRESHOLDS = ("slider", "branch", "lever")
 
 
@@ -59,7 +59,9 @@ THRESHOLDS = ("slider", "branch", "lever")
 class Lever:
     """A threshold element on the elongation sum_j weights_j x_{between_j} (ground terms dropped): a spring of
     stiffness ``value`` (finite: the node's compliance d_p^2 / S is in series) with a slider of threshold
-    ``alpha``; what :func:`condensed` leaves of a massless node between springs and one slider or branch.
+    ``alpha``; what :func:`condensed` leaves of a massless node between springs and one slider or branch. With
+    ``c`` > 0, a dashpot in series too, and a threshold never reached (:func:`_maxwell`: a massless node between
+    springs and one dashpot).
     Shooting's rows (``shooting.NetworkShooting``) and the bound on the forces (``unbounded.py``) read it;
     nothing else does."""
 
@@ -338,7 +340,7 @@ def _lever(network, node, source, purpose):
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
-    maxwell = _maxwell(touching, node, name)
+    maxwell = _maxwell(network, touching, node)
     if maxwell is not None:
         return _without(network, node, [e for e in network.elements if node not in e.between] + maxwell)
     for e in touching:
@@ -366,24 +368,42 @@ def _lever(network, node, source, purpose):
     return _without(network, node, rest)
 
 
-def _maxwell(touching, node, name) -> Optional[list]:
-    """A massless node between one spring (k, to end i) and one dashpot (c, to end j), nothing else on it, as
-    the Maxwell element it is: its balance k (x_i - x_p) = c (x_p' - x_j') makes the spring's elongation u =
-    x_i - x_p obey u' = (x_i' - x_j') - (k / c) u, the force k u on both ends: a branch between i and j with
-    that series dashpot and a range it never reaches (NEVER: no motion of finite numbers gets there), whose u
-    shooting carries as a state (``network_orbit.py``). ``[that branch]``, ``[]`` where i and j are one end
-    (it acts on nothing), or None where the node is not such a node."""
+def _maxwell(network, touching, node) -> Optional[list]:
+    """A massless node held by springs k_i (to far ends i, S = sum k_i > 0) and one dashpot c (to end j), nothing
+    else on it, as what it is: its balance sum_i k_i (x_i - x_p) = c (x_p' - x_j') makes w = xbar - x_p (xbar
+    = sum_i k_i x_i / S, the springs' weighted mean) obey w' = (xbar' - x_j') - (S / c) w, and the force on
+    each end i is k_i (xbar - x_i) - k_i w. So the springs are their Schur complement (k_i k_l / S between each
+    pair of far ends, as :func:`_lever`) and the rest a :class:`Lever` of stiffness S on the elongation xbar -
+    x_j, its u = w, with the series dashpot c and a range it never reaches (NEVER: no motion of finite numbers
+    gets there), whose u shooting carries as a state (``network_orbit.py``). One spring alone: the Maxwell
+    element between i and j. The elements it becomes (none where every far end is the ground), or None where
+    the node is not such a node."""
     from ..network.model import Element
 
-    if len(touching) != 2 or sorted(e.kind for e in touching) != ["dashpot", "spring"]:
+    name = network.nodes[node]
+    dashpots = [e for e in touching if e.kind == "dashpot"]
+    if len(dashpots) != 1 or any(e.kind not in ("spring", "dashpot") for e in touching):
         return None
-    spring, dashpot = sorted(touching, key=lambda e: e.kind != "spring")
-    i = spring.between[1] if spring.between[0] == node else spring.between[0]
+    ends, total = _spring_ends(touching, node)
+    if not total > 0.0:
+        return None
+    (dashpot,) = dashpots
     j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
-    if i == j:
-        return []
-    return [Element("branch", f"{name}({spring.name},{dashpot.name})", (max(i, j), min(i, j)), spring.value,
-                    eta=NEVER, c=dashpot.value)]
+    out = []
+    far = sorted(ends, reverse=True)  # the ground (-1) last
+    for index, p in enumerate(far):
+        for q in far[index + 1:]:
+            other = "ground" if q < 0 else network.nodes[q]
+            out.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+    weights = {i: k / total for i, k in ends.items() if i >= 0}
+    if j >= 0:
+        weights[j] = weights.get(j, 0.0) - 1.0
+    weights = {i: w for i, w in weights.items() if abs(w) > 1e-12}  # a weight that cancels is 0, not rounding
+    if weights:
+        ordered = sorted(weights)
+        out.append(Lever(f"{name}({dashpot.name})", tuple(ordered), tuple(weights[i] for i in ordered), total,
+                         total * NEVER, c=dashpot.value, through=(name,)))
+    return out
 
 
 def _spring_ends(touching, node) -> tuple:

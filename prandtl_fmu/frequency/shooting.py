@@ -858,6 +858,9 @@ class NetworkShooting(Shooting):
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
                 named.append(element.name)
+            elif element.kind == "lever" and element.c > 0.0:  # a massless node's springs and dashpot: its u relaxes
+                series.append(np.concatenate((d, [element.value, element.alpha / element.value,
+                                                  element.value / element.c])))
             elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
                 branches.append((d, element.value, element.alpha / element.value))
                 named.append(element.name)
