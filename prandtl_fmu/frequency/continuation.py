@@ -216,52 +216,65 @@ class _Trail:
     that passes again along a stretch it took, the same way, goes round a loop."""
 
     def __init__(self, omega, q):
-        self.omegas = [omega]
-        self.qs = [np.array(q, dtype=float)]
-        self.lengths = []  # of each stretch, scaled when it was taken: at least as long in any later scale
-        self.arcs = [0.0]  # the arc length to each point, of those lengths
+        self.count = 1
+        # (q, omega) of every point, grown by doubling: the stretches near a point are looked at in one pass
+        self.points = np.empty((64, np.size(q) + 1))
+        self.points[0] = np.append(q, omega)
+        # of each stretch (i to i + 1), scaled when it was taken: at least as long in any later scale
+        self.lengths = np.empty(64)
+        self.arcs = np.zeros(64)  # the arc length to each point, of those lengths
         self.hits = 0
 
     def add(self, omega, q, scale, omega_min, span, step) -> Optional[float]:
         """Add the point; the frequency of the stretch it came back to (the second point in a row on an earlier
-        stretch, going the same way), else None. Work: one distance to each stretch whose frequencies are
-        within its reach, beside a vectorised look at all the frequencies."""
-        self.omegas.append(omega)
-        self.qs.append(np.array(q, dtype=float))
-        self.lengths.append(float(np.linalg.norm(_scaled(self.qs[-1], omega, scale, omega_min, span)
-                                                 - _scaled(self.qs[-2], self.omegas[-2], scale, omega_min, span))))
-        self.arcs.append(self.arcs[-1] + self.lengths[-1])
+        stretch, going the same way), else None. Work: a vectorised pass over the points, then over the
+        stretches whose frequencies are within their reach."""
+        if self.count == self.lengths.size:
+            self.points = np.resize(self.points, (2 * self.lengths.size, self.points.shape[1]))
+            self.lengths, self.arcs = (np.resize(a, 2 * a.size) for a in (self.lengths, self.arcs))
+        last = self.count - 1
+        self.points[self.count] = np.append(q, omega)
+        scaled = self._scaled(slice(last, self.count + 1), scale, omega_min, span)
+        self.lengths[last] = float(np.linalg.norm(scaled[1] - scaled[0]))
+        self.arcs[self.count] = self.arcs[last] + self.lengths[last]
+        self.count += 1
         hit = self._on_earlier(scale, omega_min, span, step)
         self.hits = self.hits + 1 if hit is not None else 0
         return hit if self.hits >= 2 else None
 
+    def _scaled(self, which, scale, omega_min, span) -> np.ndarray:
+        out = self.points[which].copy()
+        out[..., :-1] /= scale
+        out[..., -1] = (out[..., -1] - omega_min) / span
+        return out
+
     def _on_earlier(self, scale, omega_min, span, step) -> Optional[float]:
-        count = len(self.omegas) - LOOP_GAP  # stretches i -> i + 1 for i + 1 < count
+        count = self.count - LOOP_GAP  # stretches i -> i + 1 for i + 1 < count
         if count < 2:
             return None
-        here = _scaled(self.qs[-1], self.omegas[-1], scale, omega_min, span)
-        came = here - _scaled(self.qs[-2], self.omegas[-2], scale, omega_min, span)
+        end, here = self._scaled(slice(self.count - 2, self.count), scale, omega_min, span)
+        came = here - end
         moved = float(np.linalg.norm(came))
         if moved == 0.0:
             return None
-        omegas = (np.asarray(self.omegas[:count]) - omega_min) / span
+        omegas = (self.points[:count, -1] - omega_min) / span
         low, high = np.minimum(omegas[:-1], omegas[1:]), np.maximum(omegas[:-1], omegas[1:])
-        reach = LOOP_NEAR * np.maximum(step, np.asarray(self.lengths[:count - 1]))  # farther in omega alone: not near
-        for i in np.flatnonzero((low - reach <= here[-1]) & (here[-1] <= high + reach)):
-            a = _scaled(self.qs[i], self.omegas[i], scale, omega_min, span)
-            stretch = _scaled(self.qs[i + 1], self.omegas[i + 1], scale, omega_min, span) - a
-            length = float(np.linalg.norm(stretch))
-            if length == 0.0 or came @ stretch < LOOP_ALONG * moved * length:
-                continue
-            near = LOOP_NEAR * max(length, step)
-            # come back: round a way LOOP_ROUND times as long as the stretch, not just past its end (steps
-            # shrinking towards a corner put a point within an eighth of a stretch four points back)
-            if self.arcs[-1] - self.arcs[i + 1] < LOOP_ROUND * max(length, step):
-                continue
-            along = min(max(float((here - a) @ stretch) / length ** 2, 0.0), 1.0)
-            if np.linalg.norm(here - a - along * stretch) <= near:
-                return float(self.omegas[i])
-        return None
+        reach = LOOP_NEAR * np.maximum(step, self.lengths[:count - 1])  # farther in omega alone: not near
+        near = np.flatnonzero((low - reach <= here[-1]) & (here[-1] <= high + reach))
+        if near.size == 0:
+            return None
+        a = self._scaled(near, scale, omega_min, span)
+        stretch = self._scaled(near + 1, scale, omega_min, span) - a
+        length = np.linalg.norm(stretch, axis=1)
+        size = np.maximum(length, step)
+        along = np.clip(np.einsum("ij,ij->i", here - a, stretch) / np.maximum(length, 1e-300) ** 2, 0.0, 1.0)
+        distance = np.linalg.norm(here - a - along[:, None] * stretch, axis=1)
+        # the same way, within an eighth of it, and come back to it: round a way LOOP_ROUND times as long as the
+        # stretch, not just past its end (steps shrinking towards a corner put a point within an eighth of a
+        # stretch four points back)
+        found = (length > 0.0) & (stretch @ came >= LOOP_ALONG * moved * length) & (distance <= LOOP_NEAR * size) \
+            & (self.arcs[self.count - 1] - self.arcs[near + 1] >= LOOP_ROUND * size)
+        return float(self.points[near[np.argmax(found)], -1]) if np.any(found) else None
 
 
 def _isolated(balance, q, omega) -> None:
