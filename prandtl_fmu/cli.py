@@ -57,7 +57,7 @@ import warnings  # noqa: E402
 
 # Light imports only (the standard library and the package's base): `--help`, `--version`, `scenes` and a bad
 # option answer without loading numpy or numba; each command imports what it runs.
-from .catalog import SceneError  # noqa: E402
+from .catalog import SceneError, scene_path  # noqa: E402
 from .outputs import AtomicFile, clash, write_atomically  # noqa: E402
 
 
@@ -486,7 +486,7 @@ def _run(args) -> int:
         if args.plot and _missing("matplotlib"):
             raise SceneError("--plot needs matplotlib: pip install 'prandtl_fmu[plot]'")
         _check_image_path(args.plot, "--plot")
-        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", args.scene)])
+        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", scene_path(args.scene))])
         if clashing:
             raise SceneError(clashing)
         if args.out:

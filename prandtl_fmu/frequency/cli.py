@@ -323,9 +323,10 @@ def run(args) -> int:
             raise ValueError("--scheduler and --workers need dask.distributed: pip install 'prandtl_fmu[sweep]'")
         _check_output_path(args.out, "--out")
         _check_output_path(args.plot, "--plot")
+        from ..catalog import scene_path
         from ..outputs import clash
 
-        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", args.scene)])
+        clashing = clash([("--out", args.out), ("--plot", args.plot)], [("scene", scene_path(args.scene))])
         if clashing:
             raise ValueError(clashing)
         if args.plot:

@@ -46,7 +46,7 @@ one, for a curve that starts at rest):
   stretch's length or of the step, whichever is larger; not the last LOOP_GAP points, and an arc length of at
   least LOOP_ROUND times that since it) going the same way has closed on itself: it would go round for ever, and is refused at once, with where it came back (:class:`_Trail`).
   The packaged delay oscillator at 0.6 N went round a loop between 0.113 and 0.131 Hz until MAX_POINTS (five
-  minutes); its second pass is seen after 30 points;
+  minutes); it is refused after 60 points, in about 2 s;
 * behind: a corrector that lands back in omega while both tangents point ahead (no fold between) has landed
   on another part of the curve (a linear oscillator from just above its resonance: the predictor overshot
   past q = 0 and the corrector found the curve below the resonance, which was refused as turned back): the
@@ -220,6 +220,8 @@ class _Trail:
         # (q, omega) of every point, grown by doubling: the stretches near a point are looked at in one pass
         self.points = np.empty((64, np.size(q) + 1))
         self.points[0] = np.append(q, omega)
+        self.sizes = np.empty(64)  # |q| of each point: a stretch too small to reach the point is not looked at
+        self.sizes[0] = float(np.linalg.norm(q))
         # of each stretch (i to i + 1), scaled when it was taken: at least as long in any later scale
         self.lengths = np.empty(64)
         self.arcs = np.zeros(64)  # the arc length to each point, of those lengths
@@ -231,9 +233,11 @@ class _Trail:
         stretches whose frequencies are within their reach."""
         if self.count == self.lengths.size:
             self.points = np.resize(self.points, (2 * self.lengths.size, self.points.shape[1]))
-            self.lengths, self.arcs = (np.resize(a, 2 * a.size) for a in (self.lengths, self.arcs))
+            self.lengths, self.arcs, self.sizes = (np.resize(a, 2 * a.size) for a in
+                                                   (self.lengths, self.arcs, self.sizes))
         last = self.count - 1
         self.points[self.count] = np.append(q, omega)
+        self.sizes[self.count] = float(np.linalg.norm(q))
         scaled = self._scaled(slice(last, self.count + 1), scale, omega_min, span)
         self.lengths[last] = float(np.linalg.norm(scaled[1] - scaled[0]))
         self.arcs[self.count] = self.arcs[last] + self.lengths[last]
@@ -260,7 +264,11 @@ class _Trail:
         omegas = (self.points[:count, -1] - omega_min) / span
         low, high = np.minimum(omegas[:-1], omegas[1:]), np.maximum(omegas[:-1], omegas[1:])
         reach = LOOP_NEAR * np.maximum(step, self.lengths[:count - 1])  # farther in omega alone: not near
-        near = np.flatnonzero((low - reach <= here[-1]) & (here[-1] <= high + reach))
+        # nor where the point is farther out than either end, past the reach (the norm along a stretch is at
+        # most its ends': a curve that climbs a resonance is past all its earlier stretches, looked at no more)
+        sizes = self.sizes[:count] / scale
+        beyond = self.sizes[self.count - 1] / scale - np.maximum(sizes[:-1], sizes[1:])
+        near = np.flatnonzero((low - reach <= here[-1]) & (here[-1] <= high + reach) & (beyond <= reach))
         if near.size == 0:
             return None
         a = self._scaled(near, scale, omega_min, span)

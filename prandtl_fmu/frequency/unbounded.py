@@ -26,9 +26,11 @@ is M 1 Y0 omega^2 in coordinates relative to the ground.
 The bound is a proof of refusal only: below it a periodic state may or may not exist, and the continuation
 answers (a resonance it climbs without bound is refused past its bound of points, saying where). The check
 applies where every force besides springs and dashpots is bounded and every node has a mass (a delay, a history
-or a spectrum of branches: not checked). A cubic spring is unbounded, but one whose direction the mode leaves
-alone (d . phi = 0: a joint between two nodes that move as one in the mode) projects to phi' d f = 0 whatever its
-force, so such a mode is checked as if it were not there; a mode that stretches a cubic spring is not checked. Repeated modes: each of the mode's
+or a spectrum of branches: not checked). A cubic spring is unbounded, and so is a massless node's lever with a
+series dashpot (``series._maxwell``: a Maxwell element written with its node), but one whose direction the mode
+leaves alone (d . phi = 0: a joint between two nodes that move as one in the mode) projects to phi' d f = 0
+whatever its force: of a mode's undamped vectors, those that stretch none of them (the null space of their rows,
+as of C) are checked; a mode all of whose vectors stretch one is not. Repeated modes: each of the mode's
 vectors that no dashpot damps, and the one of them the force drives most, are checked.
 """
 from __future__ import annotations
@@ -43,7 +45,6 @@ from . import FrequencyError
 CLUSTER = 1e-9  # modes within this relative distance of omega_r^2 are one repeated mode
 UNDAMPED = 1e-12  # C phi below this share of |C| |phi|: no dashpot damps the mode
 MARGIN = 1e-9  # the bound exceeded by more than rounding
-STRETCHED = 1e-9  # a cubic spring is along the mode (phi scaled to max 1) where |d . phi| is above this
 
 
 def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
@@ -74,13 +75,16 @@ def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
 
 
 def _network_parts(network) -> Optional[tuple]:
-    """As :func:`_element_parts`, for a network, with the directions of its cubic springs last (their force is
-    not bounded: a mode that stretches one is not checked)."""
+    """As :func:`_element_parts`, for a network, with the rows of its unbounded elements last (cubic springs, a
+    massless node's springs and dashpot: of a mode, the vectors that stretch one are not checked)."""
     n = network.n
     if np.any(np.asarray(network.mass) <= 0):
         return None
     K, C, rows, bounds, cubic = np.zeros((n, n)), np.zeros((n, n)), [], [], []
     for element in network.elements:
+        if element.kind == "lever" and element.c > 0.0:  # a massless node's springs and dashpot: not bounded
+            cubic.append(element.row(n))
+            continue
         if element.kind == "lever":  # a massless node's slider or branch (series.condensed)
             rows.append(element.row(n))
             bounds.append(element.alpha)
@@ -158,6 +162,8 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
         if value <= 0 or not low * low * (1 - CLUSTER) <= value <= high * high * (1 + CLUSTER):
             continue
         free = _undamped(cluster, C, damping)
+        if free.shape[1] and cubic.size:  # of those, the vectors that stretch no unbounded element
+            free = _undamped(free, cubic, 1.0)
         if free.shape[1] == 0:
             continue
         omega = math.sqrt(value)
@@ -170,8 +176,6 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
             if not np.any(phi):
                 continue
             phi = phi / np.max(np.abs(phi))
-            if np.any(np.abs(cubic @ phi) > STRETCHED):  # a cubic spring along the mode: its force is not bounded
-                continue
             drive = abs(float(phi @ force))
             hold = 4.0 / math.pi * float(np.sum(bounds * np.abs(rows @ phi)))
             # a force orthogonal to the mode up to rounding does not drive it (its states are a family, not an
@@ -184,7 +188,9 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
 
 
 def _undamped(cluster: np.ndarray, C: np.ndarray, damping: float) -> np.ndarray:
-    """The vectors of the mode (columns of ``cluster``) that no dashpot damps: a basis of those with C phi = 0."""
+    """The vectors of the mode (columns of ``cluster``) that no dashpot damps: a basis of those with C phi = 0
+    (to UNDAMPED of ``damping``, |C|'s size). With the rows of the unbounded elements for C (a cubic spring, a
+    massless node's springs and dashpot) and 1 for their size: those that stretch none of them."""
     if damping == 0.0:
         return cluster
     _, sigma, right = np.linalg.svd(C @ cluster)

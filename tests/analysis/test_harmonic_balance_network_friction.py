@@ -198,6 +198,31 @@ def test_a_cubic_joint_the_mode_leaves_alone_does_not_stop_den_hartog_s_bound(tm
     assert len(err.strip().splitlines()) == 1 and "f = 0.159155 Hz" in err, err
 
 
+@pytest.mark.parametrize("masses", [2, 3])
+def test_a_maxwell_node_the_mode_leaves_alone_does_not_hide_an_undamped_resonance(tmp_path, capsys, masses):
+    """Equal masses a and b on equal springs (and, with three, a third mass c coupled to both, loaded), a
+    slider and a Maxwell element written with its massless node p (a spring a-p, a dashpot p-b) between a and b,
+    no other dashpot: the springs' mode with a = b stretches neither, nothing damps or holds it, and there is no
+    periodic state at its frequency. Shooting takes p as a lever with a series dashpot (``series._maxwell``),
+    whose range 1e200 counted as a bound: with d . phi at rounding (1e-16 on three masses), or any vector of the
+    repeated mode of two, the check let the curve climb (past 5 minutes, a review's find). Now the lever counts
+    as unbounded, the mode's vectors that leave it alone are checked, and the curve is refused at once."""
+    nodes, mass = (["a", "b", "p"], [1.0, 1.0, 0.0]) if masses == 2 else (["a", "b", "c", "p"],
+                                                                          [1.3, 1.3, 0.7, 0.0])
+    elements = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+                ("slider", ["a", "b"], {"alpha": 0.05}), ("spring", ["a", "p"], {"k": 1.0}),
+                ("dashpot", ["p", "b"], {"c": 0.5})]
+    if masses == 3:
+        elements += [("spring", ["c", "ground"], {"k": 0.5}), ("spring", ["a", "c"], {"k": 0.37}),
+                     ("spring", ["b", "c"], {"k": 0.37})]
+    path = tmp_path / "maxwell.toml"
+    path.write_text(network_text(nodes, mass, elements, load_node="a" if masses == 2 else "c"))
+    assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.1,0.2"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "no periodic state at f = " in err, err
+    assert "no dashpot acts on the springs' mode" in err, err
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", ["one node", "two masses"])
 def test_just_below_den_hartog_s_bound_the_curve_passes_the_resonance(tmp_path, case):

@@ -381,3 +381,18 @@ def test_two_outputs_in_one_file_or_an_output_over_the_input_are_one_line(write_
     check(status, lines, tmp_path)
     assert status == 2 and "it would be written over" in lines[0], lines
     assert open(source, "rb").read() == before
+
+
+@pytest.mark.parametrize("command", ["run", "describe"])
+def test_an_output_over_a_packaged_scene_named_by_its_name_is_one_line(tmp_path, capsys, command):
+    """A packaged scene named by its name (``masing-bilinear``) is read from the package: --out naming that file
+    wrote the CSV over it (a review's find, where the package is writable); refused, the scene untouched."""
+    from prandtl_fmu.catalog import scene_path
+
+    packaged = scene_path("masing-bilinear")
+    before = open(packaged, "rb").read()
+    extra = ["--force-amplitude", "0.5", "--frequencies", "0.1,0.2"] if command == "describe" else []
+    status, lines, _ = run_cli([command, "masing-bilinear", "--out", packaged] + extra, capsys)
+    check(status, lines, tmp_path)
+    assert status == 2 and "it would be written over" in lines[0], lines
+    assert open(packaged, "rb").read() == before
