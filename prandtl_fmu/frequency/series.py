@@ -164,20 +164,27 @@ def _star(network, node):
     the springs' weighted mean, and the forces on the far ends are those of a spring k_i k_j / K between each pair
     of them (K = sum k_i: the Schur complement of the node in the stiffness), exactly; springs to one far end are
     summed first, pairs on one end (or both on the ground) act on nothing."""
-    from ..network.model import Element
-
     touching = [e for e in network.elements if node in e.between]
     ends, total = _spring_ends(touching, node)
     rest = [e for e in network.elements if node not in e.between]
     if total == 0.0:  # springs of zero stiffness: they carry no force
         return _without(network, node, rest)
+    return _without(network, node, rest + _complement(network, node, ends, total))
+
+
+def _complement(network, node, ends, total) -> list:
+    """The springs of massless ``node``'s Schur complement: k_i k_j / S between each pair of its springs' far ends
+    (``ends`` {far end: k_i}, ``total`` S > 0)."""
+    from ..network.model import Element
+
     far = sorted(ends, reverse=True)  # the ground (-1) last, only ever q: an element to the ground is (p, -1)
     name = network.nodes[node]
+    out = []
     for i, p in enumerate(far):
         for q in far[i + 1:]:
             other = "ground" if q < 0 else network.nodes[q]
-            rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
-    return _without(network, node, rest)
+            out.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+    return out
 
 
 def _dangling(network, node):
@@ -334,8 +341,6 @@ def _called(element) -> str:
 
 def _lever(network, node, source, purpose):
     """The network without massless ``node`` (see the module), or FrequencyError."""
-    from ..network.model import Element
-
     name = network.nodes[node]
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
@@ -358,11 +363,7 @@ def _lever(network, node, source, purpose):
     ends, total = _spring_ends(touching, node)
     if total == 0.0:  # nothing holds the node: its elements carry no force
         return _without(network, node, rest)
-    far = sorted(ends, reverse=True)  # the ground (-1) last
-    for i, p in enumerate(far):
-        for q in far[i + 1:]:
-            other = "ground" if q < 0 else network.nodes[q]
-            rest.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+    rest.extend(_complement(network, node, ends, total))
     if thresholds:
         rest.extend(_levered(thresholds[0], node, name, ends, total))
     return _without(network, node, rest)
@@ -378,8 +379,6 @@ def _maxwell(network, touching, node) -> Optional[list]:
     gets there), whose u shooting carries as a state (``network_orbit.py``). One spring alone: the Maxwell
     element between i and j. The elements it becomes (none where every far end is the ground), or None where
     the node is not such a node."""
-    from ..network.model import Element
-
     name = network.nodes[node]
     dashpots = [e for e in touching if e.kind == "dashpot"]
     if len(dashpots) != 1 or any(e.kind not in ("spring", "dashpot") for e in touching):
@@ -389,12 +388,7 @@ def _maxwell(network, touching, node) -> Optional[list]:
         return None
     (dashpot,) = dashpots
     j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
-    out = []
-    far = sorted(ends, reverse=True)  # the ground (-1) last
-    for index, p in enumerate(far):
-        for q in far[index + 1:]:
-            other = "ground" if q < 0 else network.nodes[q]
-            out.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+    out = _complement(network, node, ends, total)
     weights = {i: k / total for i, k in ends.items() if i >= 0}
     if j >= 0:
         weights[j] = weights.get(j, 0.0) - 1.0
