@@ -44,7 +44,8 @@ one, for a curve that starts at rest):
   most MAX_POINTS points; a curve that turns back below omega_min or takes more points is refused;
 * loop: a curve whose points lie again, twice in a row, on a stretch it took before (within an eighth of that
   stretch's length or of the step, whichever is larger; not the last LOOP_GAP points, and an arc length of at
-  least LOOP_ROUND times that since it) going the same way has closed on itself: it would go round for ever, and is refused at once, with where it came back (:class:`_Trail`).
+  least LOOP_ROUND times that since it) going the same way has closed on itself: it would go round for ever,
+  and is refused at once, with where it came back (:class:`_Trail`).
   The packaged delay oscillator at 0.6 N went round a loop between 0.113 and 0.131 Hz until MAX_POINTS (five
   minutes); it is refused after 60 points, in about 2 s;
 * behind: a corrector that lands back in omega while both tangents point ahead (no fold between) has landed

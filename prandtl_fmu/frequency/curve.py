@@ -215,7 +215,8 @@ def _summary(balance, points, where) -> np.ndarray:
 
 def _truncation(balance, points, where, samples) -> Optional[float]:
     """With H given: how much the first harmonic changes, relative, at the peak and at both ends, when H grows to
-    the next step of HARMONIC_STEPS (or 2 H + 1 past them, at most MOST_HARMONICS): what the choice of H by the tolerance compares. The
+    the next step of HARMONIC_STEPS (or 2 H + 1 past them, at most MOST_HARMONICS): what the choice of H by the
+    tolerance compares. The
     ends at their frequencies; the peak by the larger balance's point on the normal through the curve's
     (``continuation.across``: at a fold, where the peak may be, the point at the same frequency is ill-posed).
     None where one is not found (no estimate)."""

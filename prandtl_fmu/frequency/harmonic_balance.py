@@ -651,7 +651,7 @@ class HarmonicBalance:
                 q = balance._newton(omega, guess)
                 if q is None:
                     q = balance._newton(omega, guess, damped=True)
-            if q is None:
+            if q is None and balance is not self:  # H's own linear response: what solve_at tried before
                 try:
                     q = balance.solve_at(omega, fewer=False)
                 except FrequencyError:

@@ -32,8 +32,8 @@ far ends, as :func:`_star`): the force on every other node is the one the node p
 the motion. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
 lever with that series dashpot and a range it never reaches, whose u shooting carries (:func:`_maxwell`; one
 spring: the Maxwell element between the two far ends). A massless node between two threshold elements (its
-position a play of two references), or with a dashpot otherwise (a first-order motion), is refused, one line; a massless node held by no spring carries no force
-through it (its elements go). The node named and the node loaded, and each massless node their motion or
+position a play of two references), or with a dashpot otherwise (a first-order motion), is refused, one
+line; a massless node held by no spring carries no force through it (its elements go). The node named and the node loaded, and each massless node their motion or
 force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
 slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
 weighted mean plus F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance
