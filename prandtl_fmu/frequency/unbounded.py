@@ -80,10 +80,10 @@ def _network_parts(network) -> Optional[tuple]:
     n = network.n
     if np.any(np.asarray(network.mass) <= 0):
         return None
-    K, C, rows, bounds, cubic = np.zeros((n, n)), np.zeros((n, n)), [], [], []
+    K, C, rows, bounds, loose = np.zeros((n, n)), np.zeros((n, n)), [], [], []
     for element in network.elements:
         if element.kind == "lever" and element.c > 0.0:  # a massless node's springs and dashpot: not bounded
-            cubic.append(element.row(n))
+            loose.append(element.row(n))
             continue
         if element.kind == "lever":  # a massless node's slider or branch (series.condensed)
             rows.append(element.row(n))
@@ -105,11 +105,11 @@ def _network_parts(network) -> Optional[tuple]:
             rows.append(d)
             bounds.append(element.value * element.eta)
         elif element.kind == "cubic":
-            cubic.append(d)
+            loose.append(d)
         else:  # no other kind's force is known bounded
             return None
     return (np.array(network.mass, dtype=float), K, C, np.array(rows, dtype=float).reshape(-1, n),
-            np.array(bounds, dtype=float), tuple(network.nodes), np.array(cubic, dtype=float).reshape(-1, n))
+            np.array(bounds, dtype=float), tuple(network.nodes), np.array(loose, dtype=float).reshape(-1, n))
 
 
 def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Optional[float], low: float,
@@ -147,7 +147,7 @@ def refuse_unbounded(scene, force_amplitude: Optional[float], base_amplitude: Op
 
 def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinetic) -> None:
     """:func:`refuse_unbounded` on ``parts`` (``kinetic``: the bounds of a large motion)."""
-    mass, K, C, rows, bounds, nodes, cubic = parts
+    mass, K, C, rows, bounds, nodes, loose = parts
     scale = 1.0 / np.sqrt(mass)
     values, vectors = np.linalg.eigh(scale[:, None] * K * scale[None, :])
     shapes = scale[:, None] * vectors  # K phi = lambda M phi
@@ -162,8 +162,8 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
         if value <= 0 or not low * low * (1 - CLUSTER) <= value <= high * high * (1 + CLUSTER):
             continue
         free = _undamped(cluster, C, damping)
-        if free.shape[1] and cubic.size:  # of those, the vectors that stretch no unbounded element
-            free = _undamped(free, cubic, 1.0)
+        if free.shape[1] and loose.size:  # of those, the vectors that stretch no unbounded element
+            free = _undamped(free, loose, 1.0)
         if free.shape[1] == 0:
             continue
         omega = math.sqrt(value)
