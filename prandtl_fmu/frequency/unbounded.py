@@ -45,6 +45,7 @@ from . import FrequencyError
 CLUSTER = 1e-9  # modes within this relative distance of omega_r^2 are one repeated mode
 UNDAMPED = 1e-12  # C phi below this share of |C| |phi|: no dashpot damps the mode
 MARGIN = 1e-9  # the bound exceeded by more than rounding
+ROUNDING = 1e-12  # an element's stretch along a mode (|phi| <= 1) below this share of its row's size is 0
 
 
 def _element_parts(scene, kinetic: bool = False) -> Optional[tuple]:
@@ -177,7 +178,9 @@ def _check(scene, parts, load, force_amplitude, base_amplitude, low, high, kinet
                 continue
             phi = phi / np.max(np.abs(phi))
             drive = abs(float(phi @ force))
-            hold = 4.0 / math.pi * float(np.sum(bounds * np.abs(rows @ phi)))
+            stretch = np.abs(rows @ phi)  # of each bounded element along the mode (|phi| <= 1), rounding left out
+            stretch[stretch <= ROUNDING * np.sum(np.abs(rows), axis=1)] = 0.0
+            hold = 4.0 / math.pi * float(np.sum(bounds * stretch))
             # a force orthogonal to the mode up to rounding does not drive it (its states are a family, not an
             # unbounded growth): only a drive above the rounding of phi . f counts
             # at the kinetic level: a force that never passes the static level alpha (the element has one node)

@@ -198,6 +198,61 @@ def test_a_cubic_joint_the_mode_leaves_alone_does_not_stop_den_hartog_s_bound(tm
     assert len(err.strip().splitlines()) == 1 and "f = 0.159155 Hz" in err, err
 
 
+def test_a_mode_that_stretches_only_the_joint_s_elements_at_rounding_is_an_undamped_linear_resonance(tmp_path,
+                                                                                                      capsys):
+    """The cubic joint above with a slider in it and no branch to the ground: the in-phase mode stretches the
+    slider and the branch by rounding only (1e-16 of the shape, from the null space of the cubic spring's row),
+    which made a bound of 2e-16 N and offered 'a force amplitude below 2.12e-16 N'. Nothing bounded holds the
+    mode: refused as an undamped linear resonance, with no force offered."""
+    joint = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "ground"], {"k": 1.0}),
+             ("cubic", ["a", "b"], {"k3": 4.0}), ("branch", ["a", "b"], {"k": 2.0, "eta": 0.1}),
+             ("slider", ["a", "b"], {"alpha": 0.3}), ("dashpot", ["a", "b"], {"c": 0.1})]
+    path = tmp_path / "joint.toml"
+    path.write_text(network_text(["a", "b"], [1.0, 1.0], joint, load_node="a"))
+    assert main(["describe", str(path), "--force-amplitude", "0.1", "--frequencies", "0.1,0.3"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "an undamped linear resonance" in err, err
+    assert "f = 0.159155 Hz" in err and " N (4 / pi" not in err and "below" not in err, err
+
+
+def test_a_joint_whose_cubic_spring_holds_two_masses_together_at_large_amplitude_is_not_refused(tmp_path):
+    """Mass a on a spring (1 N/m) and a slider (0.15 N) to the ground, b joined to a by a spring, a branch, a
+    slider, a hardening cubic spring and a dashpot. At large amplitude the cubic spring holds the two together,
+    and the mode left, a = b at sqrt(1 / 2) rad/s, has no dashpot on it and only the ground's slider along it:
+    0.2 N drives it past Den Hartog's 4 / pi 0.15 = 0.19 N, and a motion that large grows without bound. That
+    does not make the curve climb: at that frequency, from rest, the implicit stepper settles on an orbit of
+    0.43 m, and the curve passes it near there. A check before the curve starts that refused this (tried: the
+    same two masses without the ground's slider do climb, from 0.05 Hz, past 300 m) would refuse a curve that
+    exists; the check refuses only where no periodic state exists at all."""
+    from prandtl_fmu.frequency.curve import harmonic_response
+    from prandtl_fmu.network.driver import simulate
+    from prandtl_fmu.scene import load_scene
+
+    joint = [("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["a", "b"], {"k": 0.5}),
+             ("branch", ["b", "a"], {"k": 2.0, "eta": 0.1}), ("slider", ["a", "b"], {"alpha": 0.3}),
+             ("cubic", ["a", "b"], {"k3": 4.0}), ("slider", ["ground", "a"], {"alpha": 0.15}),
+             ("dashpot", ["a", "b"], {"c": 0.1})]
+    text = network_text(["a", "b"], [1.0, 1.0], joint, load_node="a")
+    omega = math.sqrt(0.5)
+    curve = harmonic_response(network(tmp_path, text), 0.2, [0.05, 0.2], stability=False)
+    assert curve.frequency[0] < omega / (2 * math.pi) < curve.frequency[-1]
+    near = np.abs(curve.frequency - omega / (2 * math.pi)) < 0.01
+    assert np.any(near) and np.all(curve.amplitude < 1.0), np.max(curve.amplitude)
+    solver = (f'[load]\nkind = "harmonic"\namplitude = 0.2\nomega = {omega!r}\n[solver]\nstepper = "implicit"\n'
+              'step = 0.01\noutput_interval = 0.05\nstop_time = 1800.0\n')
+    run = simulate(load_scene(str(_written(tmp_path / "run.toml", text.replace(SOLVER, solver)))))
+    period = 2 * math.pi / omega
+    late = [float(np.max(np.abs(run.x[(run.time > (k - 1) * period) & (run.time <= k * period), 0])))
+            for k in (100, 200)]
+    assert late[1] == pytest.approx(late[0], rel=1e-3) and 0.3 < late[1] < 0.6, late
+    assert np.max(curve.amplitude[near]) > 0.5 * late[1]
+
+
+def _written(path, text):
+    path.write_text(text)
+    return path
+
+
 @pytest.mark.parametrize("masses", [2, 3])
 def test_a_maxwell_node_the_mode_leaves_alone_does_not_hide_an_undamped_resonance(tmp_path, capsys, masses):
     """Equal masses a and b on equal springs (and, with three, a third mass c coupled to both, loaded), a
