@@ -24,10 +24,16 @@ Cauchy products, through Q into the velocities' rows, and R of it into the stuck
 interval's length is Jorba and Zou's (the last two terms below TRUNCATION of the state), the rest estimated by
 those terms: the truncation at rounding, not a proven bound (the element's ``element_orbit.py`` does the same).
 
-**Branches with series dashpots** (``series``: rows (d, k, eta, lambda = k / c)) carry their u as states of
+**Branches with series dashpots** (``series``: rows (d, k, eta, lambda = k / c, 0)) carry their u as states of
 the phase (y grows by one each): sticking, u' = d . v - lambda u; sliding, u = +-eta while the inflow
 d . v - lambda u pushes outwards. Their events: a sticking one's u reaching +-eta, a sliding one's inflow
-reaching 0 (``exact_series.py``'s for the element).
+reaching 0 (``exact_series.py``'s for the element). **A spring in series with a slider and a dashpot side by
+side** (a Bingham element: rows (d, k, eta = alpha / k, lambda = k / c, 1); ``series._bingham``, a massless node
+held by springs and by a slider and a dashpot to one node) carries its u alike: stuck, u' = d . v within
+[-eta, eta]; slipping (sigma u > eta: the spring's tension past alpha, the excess the dashpot's), u' = d . v -
+lambda (u - sigma eta), the constant through the phase's constant state q0. Its events: a stuck one's u
+reaching +-eta (it slips where d . v pushes outwards), a slipping one's sigma u coming back to eta (it sticks
+where d . v pulls inwards).
 
 **No event is missed.** The events are: a sliding slider's relative velocity reaching 0 (it may stick), a stuck
 one's tension reaching +-alpha (it slides), a sticking branch's u reaching +-eta (it slides), a sliding
@@ -87,7 +93,7 @@ LEVEL_DOWN = 4  # eta + u_i
 PLASTIC = 5    # sigma e'_i: a sliding branch's elongation rate reaches 0
 SERIES_UP = 6  # eta - u_i: a sticking branch with a series dashpot reaches +eta
 SERIES_DOWN = 7
-INFLOW = 8     # sigma (e'_i - lambda_i u_i): a sliding one's inflow reaches 0
+INFLOW = 8     # sigma (e'_i - lambda_i u_i): a sliding one's inflow reaches 0 (a Bingham one's sigma u_i - eta_i)
 
 
 def explain(status: int) -> str:
@@ -300,6 +306,16 @@ def _settle(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode,
     # whose inflow turned stick (u stays at the level)
     for i in range(series.shape[0]):
         eta = series[i, n + 1]
+        if series[i, n + 3] != 0.0:  # a Bingham element: past its range it slips; at it, where d . v pushes out
+            rate = _dot(series[i, :n], v)
+            sigma = 1.0 if su[i] > 0.0 else -1.0
+            if abs(su[i]) > eta:
+                smode[i] = int(sigma)
+            elif abs(su[i]) == eta:
+                smode[i] = int(sigma) if sigma * rate > 0.0 else 0
+            else:
+                smode[i] = 0
+            continue
         inflow = _dot(series[i, :n], v) - series[i, n + 2] * su[i]
         if smode[i] == 0 and abs(su[i]) >= eta:
             sigma = 1.0 if su[i] > 0.0 else -1.0
@@ -569,6 +585,9 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
         # the harmonic force's scale whatever holds the nodes (the stuck sliders' tensions carry it too)
         size_force = max(size_force, abs(force[a] / mass[a]) * abs(amplitude))
     q0 = size_const / (rho * rho)
+    for i in range(ms):  # a slipping Bingham element's constant lambda sigma eta: through q0 (a length)
+        if series[i, n + 3] != 0.0 and smode[i] != 0:
+            q0 = max(q0, series[i, n + 1])
     qf = size_force / (rho * rho)
     for a in range(n):
         y[a] = x[a]
@@ -592,7 +611,13 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
         # its tension k u on the nodes, through Q: d(v / rho)/d tau = -Q row k u / rho^2
         for a in range(n):
             a_matrix[n + a, at] = -_dot(q[a], series[i, :n]) * series[i, n] / (rho * rho)
-        if smode[i] == 0:  # sticking: u' = e' - lambda u, in tau: d u / d tau = row . (v / rho) - (lambda / rho) u
+        if series[i, n + 3] != 0.0:  # a Bingham element: u' = e', slipping less lambda (u - sigma eta)
+            for b in range(n):
+                a_matrix[at, n + b] = series[i, b]
+            if smode[i] != 0:
+                a_matrix[at, at] = -series[i, n + 2] / rho
+                a_matrix[at, 2 * n] = series[i, n + 2] * smode[i] * series[i, n + 1] / (rho * q0)
+        elif smode[i] == 0:  # sticking: u' = e' - lambda u, in tau: d u / d tau = row . (v / rho) - (lambda / rho) u
             for b in range(n):
                 a_matrix[at, n + b] = series[i, b]
             a_matrix[at, at] = -series[i, n + 2] / rho
@@ -657,6 +682,12 @@ def _phase(mass, stiffness, damping, rows, alpha, mode, brows, bk, beta, bmode, 
                 kinds[index] = SERIES_UP if sign > 0.0 else SERIES_DOWN
                 which[index] = i
                 index += 1
+        elif series[i, n + 3] != 0.0:  # a slipping Bingham element: sigma u - eta reaching 0, it may stick
+            w[index, at] = smode[i]
+            offset[index] = -series[i, n + 1]
+            kinds[index] = INFLOW
+            which[index] = i
+            index += 1
         else:  # sigma (row . v - lambda u), u = sigma eta
             for b in range(n):
                 w[index, n + b] = smode[i] * rho * series[i, b]
@@ -809,7 +840,8 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, seri
     dim = 2 * n + 3 + ms
     smode = np.zeros(ms, dtype=np.int64)
     for i in range(ms):
-        su[i] = min(max(su[i], -series[i, n + 1]), series[i, n + 1])
+        if series[i, n + 3] == 0.0:  # a Bingham element's u may be past its range (slipping): _settle says
+            su[i] = min(max(su[i], -series[i, n + 1]), series[i, n + 1])
     mode = np.zeros(ns, dtype=np.int64)
     for j in range(ns):
         rate = _dot(rows[j], v)

@@ -31,13 +31,16 @@ between weighted means of nodes), and the springs are their Schur complement (k_
 far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
 the motion. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
 lever with that series dashpot and a range it never reaches, whose u shooting carries (:func:`_maxwell`; one
-spring: the Maxwell element between the two far ends). A massless node between two threshold elements (its
-position a play of two references), or with a dashpot otherwise (a first-order motion), is refused, one
-line; a massless node held by no spring carries no force through it (its elements go). The node named and the node loaded, and each massless node their motion or
-force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
-slider or branch (:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs'
-weighted mean plus F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance
-takes massless nodes as they are (their balance is one of its equations): it never sees a lever.
+spring: the Maxwell element between the two far ends). One held by springs and by a slider and a dashpot side
+by side to one end (a Bingham element in series with the springs) is their Schur complement and a lever whose
+u sticks within alpha / S and relaxes back at S / c past it (:func:`_bingham`). A massless node between two
+threshold elements (its position a play of two references), or with a dashpot otherwise (a first-order
+motion), is refused, one line; a massless node held by no spring carries no force through it (its elements
+go). The node named and the node loaded, and each massless node their motion or force passes through, are
+condensed where springs alone hold them, or (named, no force on it) springs and one slider or branch
+(:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs' weighted mean plus
+F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance takes massless nodes
+as they are (their balance is one of its equations): it never sees a lever.
 """
 from __future__ import annotations
 
@@ -61,7 +64,7 @@ class Lever:
     stiffness ``value`` (finite: the node's compliance d_p^2 / S is in series) with a slider of threshold
     ``alpha``; what :func:`condensed` leaves of a massless node between springs and one slider or branch. With
     ``c`` > 0, a dashpot in series too, and a threshold never reached (:func:`_maxwell`: a massless node between
-    springs and one dashpot).
+    springs and one dashpot); with ``bingham``, the dashpot beside the slider instead (:func:`_bingham`).
     Shooting's rows (``shooting.NetworkShooting``) and the bound on the forces (``unbounded.py``) read it;
     nothing else does."""
 
@@ -73,6 +76,7 @@ class Lever:
     kind: str = "lever"
     c: float = 0.0
     through: tuple = ()  # the massless nodes it was passed through, in order (for the refusals)
+    bingham: bool = False  # with ``c``: the dashpot beside the slider, not in series (:func:`_bingham`)
 
     def row(self, n: int) -> np.ndarray:
         """Its elongation's row over the ``n`` nodes."""
@@ -345,9 +349,11 @@ def _lever(network, node, source, purpose):
     tail = "give it a mass, or integrate the network with prandtl-fmu run"
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
-    maxwell = _maxwell(network, touching, node)
-    if maxwell is not None:
-        return _without(network, node, [e for e in network.elements if node not in e.between] + maxwell)
+    viscous = _maxwell(network, touching, node)
+    if viscous is None:
+        viscous = _bingham(network, touching, node)
+    if viscous is not None:
+        return _without(network, node, [e for e in network.elements if node not in e.between] + viscous)
     for e in touching:
         if e.kind not in ("spring",) + THRESHOLDS or e.c > 0.0:
             why = "its position a root of a cubic" if e.kind == "cubic" else "a first-order motion"
@@ -397,6 +403,40 @@ def _maxwell(network, touching, node) -> Optional[list]:
         ordered = sorted(weights)
         out.append(Lever(f"{name}({dashpot.name})", tuple(ordered), tuple(weights[i] for i in ordered), total,
                          total * NEVER, c=dashpot.value, through=(name,)))
+    return out
+
+
+def _bingham(network, touching, node) -> Optional[list]:
+    """A massless node held by springs k_i (to far ends i, S = sum k_i > 0), and by a slider (alpha) and a dashpot
+    (c) side by side to one end j, nothing else on it, as what it is: its balance sum_i k_i (x_i - x_p) = T +
+    c (x_p' - x_j'), T the slider's force (within alpha while it sticks, alpha sigma while it slips), with w =
+    xbar - x_p (as :func:`_maxwell`) and e = xbar - x_j: stuck, w' = e' while |S w| <= alpha; slipping,
+    c (e' - w') = S w - alpha sigma, so w' = e' - (S / c) (w - sigma alpha / S). The forces on the ends are
+    :func:`_maxwell`'s: the springs' Schur complement and a :class:`Lever` of stiffness S on e, its u = w, of
+    range alpha / S, with the dashpot beside its slider (``bingham``: ``network_orbit.py`` carries its u). The
+    elements it becomes, or None where the node is not such a node (sliders to one end in parallel are one)."""
+    name = network.nodes[node]
+    dashpots = [e for e in touching if e.kind == "dashpot"]
+    sliders = _parallel([e for e in touching if e.kind == "slider"])
+    if len(dashpots) != 1 or len(sliders) != 1 or any(e.kind not in ("spring", "dashpot", "slider") for e in touching):
+        return None
+    (dashpot,), (slider,) = dashpots, sliders
+    j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
+    if j != (slider.between[1] if slider.between[0] == node else slider.between[0]):
+        return None
+    ends, total = _spring_ends(touching, node)
+    if not total > 0.0:
+        return None
+    out = _complement(network, node, ends, total)
+    weights = {i: k / total for i, k in ends.items() if i >= 0}
+    if j >= 0:
+        weights[j] = weights.get(j, 0.0) - 1.0
+    weights = {i: w for i, w in weights.items() if abs(w) > 1e-12}  # a weight that cancels is 0, not rounding
+    if weights:
+        ordered = sorted(weights)
+        out.append(Lever(f"{name}({slider.name}, {dashpot.name})", tuple(ordered),
+                         tuple(weights[i] for i in ordered), total, slider.value, c=dashpot.value, through=(name,),
+                         bingham=True))
     return out
 
 

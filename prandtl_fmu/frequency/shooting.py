@@ -854,13 +854,14 @@ class NetworkShooting(Shooting):
             elif element.kind == "slider" and element.value > 0.0:  # alpha = 0 carries nothing
                 sliders.append((d, element.value))
             elif element.kind == "branch" and element.c > 0.0:  # a series dashpot: its u relaxes (network_orbit)
-                series.append(np.concatenate((d, [element.value, element.eta, element.value / element.c])))
+                series.append(np.concatenate((d, [element.value, element.eta, element.value / element.c, 0.0])))
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
                 named.append(element.name)
-            elif element.kind == "lever" and element.c > 0.0:  # a massless node's springs and dashpot: its u relaxes
+            elif element.kind == "lever" and element.c > 0.0:  # a massless node's springs and dashpot (and a slider
+                # beside the dashpot: a Bingham element): its u relaxes
                 series.append(np.concatenate((d, [element.value, element.alpha / element.value,
-                                                  element.value / element.c])))
+                                                  element.value / element.c, 1.0 if element.bingham else 0.0])))
             elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
                 branches.append((d, element.value, element.alpha / element.value))
                 named.append(element.name)
@@ -870,7 +871,7 @@ class NetworkShooting(Shooting):
         self.bk = np.array([b[1] for b in branches], dtype=float)
         self.eta = np.array([b[2] for b in branches], dtype=float)
         self.smooth = bool(cubic)  # its phases by their recurrence (network_orbit.py), as the figures say
-        self.series = np.array(series, dtype=float).reshape(len(series), n + 3)
+        self.series = np.array(series, dtype=float).reshape(len(series), n + 4)
         self.crows = np.array([d for d, _ in cubic], dtype=float).reshape(len(cubic), n)
         self.ck3 = np.array([k3 for _, k3 in cubic], dtype=float)
         holding = self.stiffness_matrix + sum((k * np.outer(d, d) for d, k, _ in branches), np.zeros((n, n))) + \

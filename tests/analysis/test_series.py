@@ -757,3 +757,57 @@ def test_a_massless_node_between_springs_and_a_dashpot_beside_a_slider_is_the_li
                  "--out", str(out)]) == 0
     table = read_csv(out)
     assert len(table["frequency"]) > 10 and set(table["stable"]) == {"true"}
+
+
+BINGHAM_J = {"to the ground": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "b"], {"k": 0.7}),
+                               ("slider", ["j", "ground"], {"alpha": 0.15}), ("dashpot", ["ground", "j"], {"c": 0.6})],
+             "between the masses": [("spring", ["a", "j"], {"k": 2.0}), ("slider", ["j", "b"], {"alpha": 0.15}),
+                                    ("dashpot", ["b", "j"], {"c": 0.6})]}
+
+
+@pytest.mark.parametrize("case", list(BINGHAM_J))
+def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_node_s_limit(tmp_path, case):
+    """A massless node j held by springs and by a slider and a dashpot side by side to one end (a Bingham element
+    in series with the springs), in a network that a slider between the masses sends to shooting: j was refused
+    ("a first-order motion"). Its balance makes the springs their Schur complement and a lever of stiffness S =
+    sum k_i whose u sticks within alpha / S and, past it, relaxes back at S / c (``series._bingham``). Against
+    the same network with a light mass mu on j, solved as written (j a node of the orbit, its slider and dashpot
+    ordinary ones): the first harmonics of a and b move by O(mu) (halved with mu, to 5 %), and 2 X(mu) - X(2 mu)
+    lands within 2 % of that move on the massless node's (measured 0.08 to 0.4 %). The slider both sticks and
+    slips on the orbit: held (alpha = 100) or let go (alpha = 1e-9) it moves a and b by 0.04 to 1.3. And the
+    curve from the command line, every point stable (all of it dissipates)."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    F, omega = 1.0, 1.1
+
+    def first_harmonics(mu, alpha=None):
+        elements = LEVERED + [(kind, between, {"alpha": alpha} if kind == "slider" and alpha else values)
+                              for kind, between, values in BINGHAM_J[case]] + [("slider", ["a", "b"], {"alpha": 0.2})]
+        scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
+                        f"bingham-{mu!r}-{alpha!r}.toml")
+        joined = condensed(scene, None, "a")
+        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
+        state = shooting.solve_at(omega)
+        assert state is not None
+        coefficients = shooting.coefficients(state, omega)
+        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+
+    joined, X = first_harmonics(0.0)
+    assert joined.network.nodes == ("a", "b")
+    (lever,) = [e for e in joined.network.elements if e.kind == "lever"]
+    springs = sum(values["k"] for kind, _, values in BINGHAM_J[case] if kind == "spring")
+    assert (lever.value, lever.alpha, lever.c, lever.bingham) == (springs, 0.15, 0.6, True)
+    for alpha in (100.0, 1e-9):  # held, let go: the orbit's slips and sticks both count
+        assert np.max(np.abs(first_harmonics(0.0, alpha)[1] - X)) > 0.04
+    (_, heavier), (_, light) = first_harmonics(2e-3), first_harmonics(1e-3)
+    moved = np.abs(light - X)
+    assert np.all(moved > 1e-5) and np.all(np.abs(np.abs(heavier - X) / moved - 2.0) < 0.1), (heavier, light, X)
+    assert np.all(np.abs(2.0 * light - heavier - X) < 0.02 * moved), (heavier, light, X)
+    path, out = tmp_path / "bingham-cli.toml", tmp_path / "bingham.csv"
+    path.write_text(network_text(["a", "j", "b"], [1.0, 0.0, 2.0], LEVERED + BINGHAM_J[case] + [
+        ("slider", ["a", "b"], {"alpha": 0.2})], load_node="a"))
+    assert main(["describe", str(path), "--force-amplitude", "1", "--frequencies", "0.1,0.3",
+                 "--out", str(out)]) == 0
+    table = read_csv(out)
+    assert len(table["frequency"]) > 10 and set(table["stable"]) == {"true"}
