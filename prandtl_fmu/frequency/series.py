@@ -29,7 +29,8 @@ share is the springs' weighted mean of their far ends plus a compliance d_p^2 / 
 an element of threshold alpha on the elongation d' . x (a :class:`Lever`: a slider's play, now with a spring,
 between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of
 far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
-the motion. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
+the motion. A dashpot on the element stays where it is (a branch's series dashpot in series with all of it; a
+Bingham lever's beside its slider, below): with u = T / k', the same rows with k' for k. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
 lever with that series dashpot and a range it never reaches, whose u shooting carries (:func:`_maxwell`; one
 spring: the Maxwell element between the two far ends). One held by springs and by a slider and a dashpot side
 by side to one end (a Bingham element in series with the springs) is their Schur complement and a lever whose
@@ -77,6 +78,13 @@ class Lever:
     c: float = 0.0
     through: tuple = ()  # the massless nodes it was passed through, in order (for the refusals)
     bingham: bool = False  # with ``c``: the dashpot beside the slider, not in series (:func:`_bingham`)
+
+    @property
+    def unbounded(self) -> bool:
+        """Its force has no bound: the dashpot's lever (its range NEVER) and the Bingham lever (past the slider's
+        alpha, the dashpot's share); a lever with its slider in series (a branch's series dashpot) stays within
+        alpha."""
+        return self.c > 0.0 and (self.bingham or self.alpha >= 0.5 * NEVER * self.value)
 
     def row(self, n: int) -> np.ndarray:
         """Its elongation's row over the ``n`` nodes."""
@@ -355,7 +363,7 @@ def _lever(network, node, source, purpose):
     if viscous is not None:
         return _without(network, node, [e for e in network.elements if node not in e.between] + viscous)
     for e in touching:
-        if e.kind not in ("spring",) + THRESHOLDS or e.c > 0.0:
+        if e.kind not in ("spring",) + THRESHOLDS:
             why = "its position a root of a cubic" if e.kind == "cubic" else "a first-order motion"
             raise FrequencyError(f"{source}: node {name} is massless, with {e.kind} {e.name} on it ({why}): {how}, "
                                  f"which takes a massless node held by linear springs and one slider or branch: "
@@ -473,7 +481,7 @@ def _levered(element, node, name, ends, total) -> list:
     ({far end: stiffness}, ``total`` their sum > 0) (see the module); none where it carries nothing."""
     if element.kind == "slider":
         k, alpha = math.inf, element.value
-    elif element.kind == "branch":
+    elif element.kind == "branch":  # with its series dashpot, if any (all in series: it stays in series)
         k, alpha = element.value, element.value * element.eta
     else:
         k, alpha = element.value, element.alpha
@@ -497,4 +505,4 @@ def _levered(element, node, name, ends, total) -> list:
     ordered = sorted(weights)
     through = (element.through if element.kind == "lever" else ()) + (name,)
     return [Lever(element.name, tuple(ordered), tuple(weights[i] for i in ordered), 1.0 / compliance, alpha,
-                  through=through)]
+                  c=element.c, through=through, bingham=element.kind == "lever" and element.bingham)]

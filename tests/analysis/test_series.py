@@ -763,6 +763,12 @@ BINGHAM_J = {"to the ground": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["
                                ("slider", ["j", "ground"], {"alpha": 0.15}), ("dashpot", ["ground", "j"], {"c": 0.6})],
              "between the masses": [("spring", ["a", "j"], {"k": 2.0}), ("slider", ["j", "b"], {"alpha": 0.15}),
                                     ("dashpot", ["b", "j"], {"c": 0.6})]}
+# a lever with a dashpot passed on through a second massless node (k its springs: compliances in series add)
+PASSED_ON = {"bingham": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "i"], {"k": 1.5}),
+                         ("spring", ["i", "b"], {"k": 3.0}), ("slider", ["i", "ground"], {"alpha": 0.15}),
+                         ("dashpot", ["ground", "i"], {"c": 0.6})],
+             "series dashpot": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "b"], {"k": 0.7}),
+                                ("branch", ["j", "ground"], {"k": 4.0, "eta": 0.05, "c": 0.6})]}
 
 
 @pytest.mark.parametrize("case", list(BINGHAM_J))
@@ -811,3 +817,42 @@ def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_nod
                  "--out", str(out)]) == 0
     table = read_csv(out)
     assert len(table["frequency"]) > 10 and set(table["stable"]) == {"true"}
+
+
+@pytest.mark.parametrize("case", list(PASSED_ON))
+def test_a_lever_with_a_dashpot_passed_on_is_the_light_nodes_limit(tmp_path, case):
+    """A Bingham element on massless node i held by springs to j and b, j massless too (between a and i), and a
+    branch with a series dashpot on massless node j: all in series, the compliances add and the dashpot stays
+    where it is (beside the slider, or in series with it), so each is one lever with its dashpot
+    (``series._levered``). Both were refused ("a first-order motion"). Against the same network with light
+    masses mu on the massless nodes, solved as written: the first harmonics move by O(mu) (halved with mu, to 5 %)
+    and 2 X(mu) - X(2 mu) lands within 5 % of that move on the massless nodes' (measured 0.5 to 1 % for the
+    Bingham element at mu = 1e-3; 1.9 to 2.6 % for the series dashpot at 2.5e-4, whose move at 1e-3 is 10 % off
+    linear; a lever whose stiffness or rate were wrong leaves a gap that does not shrink with mu)."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.frequency.shooting import NetworkShooting
+
+    nodes = ["a", "j", "i", "b"] if case == "bingham" else ["a", "j", "b"]
+    elements = LEVERED + PASSED_ON[case] + [("slider", ["a", "b"], {"alpha": 0.2})]
+    F, omega = 1.0, 1.1
+
+    def first_harmonics(mu):
+        mass = [mu if name in "ij" else (1.0 if name == "a" else 2.0) for name in nodes]
+        scene = network(tmp_path, network_text(nodes, mass, elements, load_node="a"), f"passed-{mu!r}.toml")
+        joined = condensed(scene, None, "a")
+        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
+        state = shooting.solve_at(omega)
+        assert state is not None
+        coefficients = shooting.coefficients(state, omega)
+        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+
+    joined, X = first_harmonics(0.0)
+    assert joined.network.nodes == ("a", "b")
+    (lever,) = [e for e in joined.network.elements if e.kind == "lever"]
+    assert lever.c == 0.6 and lever.bingham == (case == "bingham")
+    assert np.min(np.abs(X)) > 0.2
+    mu = 1e-3 if case == "bingham" else 2.5e-4  # (the series dashpot's O(mu^2) is 10 % of the move at 1e-3)
+    (_, heavier), (_, light) = first_harmonics(2 * mu), first_harmonics(mu)
+    moved = np.abs(light - X)
+    assert np.all(moved > 1e-5) and np.all(np.abs(np.abs(heavier - X) / moved - 2.0) < 0.1), (heavier, light, X)
+    assert np.all(np.abs(2.0 * light - heavier - X) < 0.05 * moved), (heavier, light, X)
