@@ -830,7 +830,8 @@ def _cubic_order(crows, ck3, vectors, k, n, e_series, square, cube, cubic):
 def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, series, force, amplitude, omega, x, v, u,
         su, h, steps, out):
     """``steps`` steps of h from (x, v, u) at t = 0 (arrays updated in place to the end), x at each step's end
-    in ``out`` (steps, n), or x and the branches' u (steps, n + branches); returns (status, steps taken).
+    in ``out`` (steps, n), or x, the branches' u and the series rows' (steps, n + branches + series rows);
+    returns (status, steps taken).
     ``crows`` (cubic springs, n), ``ck3``: the cubic springs (none: the linear phases' proven remainder; some:
     their recurrence and Jorba and Zou's step)."""
     n = x.shape[0]
@@ -1014,6 +1015,8 @@ def run(mass, stiffness, damping, rows, alpha, brows, bk, beta, crows, ck3, seri
                     for a in range(n):
                         elongation += brows[i, a] * (y[a] - x_phase[a])
                     out[step, n + i] = u[i] + elongation
+            for i in range(ms):  # then the series rows'
+                out[step, n + nb + i] = y[2 * n + 3 + i]
     # the end state
     for a in range(n):
         x[a] = y[a]

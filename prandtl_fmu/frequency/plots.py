@@ -101,7 +101,7 @@ def draw_response(response, scene, axes, lines: bool = True) -> None:
         f = response.frequency[rows][order]
         amplitude_axes.plot(f, response.amplitude[rows][order], marker + style, ms=4, lw=1,
                             label=f"sweep {direction}")
-        phase_axes.plot(f, np.degrees(response.phase[rows][order]), marker + style, ms=4, lw=1,
+        phase_axes.plot(f, np.degrees(_unwrapped(response.phase[rows][order])), marker + style, ms=4, lw=1,
                         label=f"sweep {direction}")
     if lines:
         fine = np.linspace(float(response.frequency.min()), float(response.frequency.max()), 400)
@@ -129,6 +129,15 @@ def plot_response(response, scene, path: str) -> None:
     save_figure(fig, path)
 
 
+def _unwrapped(phase: np.ndarray) -> np.ndarray:
+    """``phase`` (radians, in order along a curve) without its jumps of 2 pi across +-pi; a point without a
+    phase (NaN) stays one and does not break the rest."""
+    out = np.array(phase, dtype=float)
+    finite = np.isfinite(out)
+    out[finite] = np.unwrap(out[finite])
+    return out
+
+
 def draw_curve(curves, axes, backbone=None) -> None:
     """Draw the harmonic balance's curve (a :class:`curve.Curve`, or several: one colour each, labelled by its
     amplitude) on ``axes`` (two: amplitude, phase against the frequency): stable parts solid, unstable parts
@@ -141,7 +150,8 @@ def draw_curve(curves, axes, backbone=None) -> None:
         color = f"C{index % 10}" if several else "C0"
         f, stable = curve.frequency, curve.stable.tolist()  # (None where not computed: a masked entry)
         style = {True: "-", False: "--", None: ":"}
-        for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(curve.phase))):
+        # the phase along the curve without its jumps of 360 degrees across +-180 (as a Bode plot draws it)
+        for ax, values in ((amplitude_axes, curve.amplitude), (phase_axes, np.degrees(_unwrapped(curve.phase)))):
             start = 0
             for end in range(1, f.size + 1):
                 if end == f.size or stable[end] != stable[start]:

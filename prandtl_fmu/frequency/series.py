@@ -27,21 +27,22 @@ share is the springs' weighted mean of their far ends plus a compliance d_p^2 / 
     d'_i = d_i + d_p k_i / S,    1 / k' = 1 / k + d_p^2 / S,    alpha' = alpha,
 
 an element of threshold alpha on the elongation d' . x (a :class:`Lever`: a slider's play, now with a spring,
-between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of
-far ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever
-the motion. A dashpot on the element stays where it is (a branch's series dashpot in series with all of it; a
-Bingham lever's beside its slider, below): with u = T / k', the same rows with k' for k. A massless node held by springs and one dashpot, nothing else, is their Schur complement and a
-lever with that series dashpot and a range it never reaches, whose u shooting carries (:func:`_maxwell`; one
-spring: the Maxwell element between the two far ends). One held by springs and by a slider and a dashpot side
-by side to one end (a Bingham element in series with the springs) is their Schur complement and a lever whose
-u sticks within alpha / S and relaxes back at S / c past it (:func:`_bingham`). A massless node between two
-threshold elements (its position a play of two references), or with a dashpot otherwise (a first-order
-motion), is refused, one line; a massless node held by no spring carries no force through it (its elements
-go). The node named and the node loaded, and each massless node their motion or force passes through, are
-condensed where springs alone hold them, or (named, no force on it) springs and one slider or branch
-(:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs' weighted mean plus
-F / S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance takes massless nodes
-as they are (their balance is one of its equations): it never sees a lever.
+between weighted means of nodes), and the springs are their Schur complement (k_i k_j / S between each pair of far
+ends, as :func:`_star`): the force on every other node is the one the node passed on, exactly, whatever the
+motion. A dashpot on the element stays where it is (a branch's series dashpot in series with all of it; a Bingham
+lever's beside its slider, below): with u = T / k', the same rows with k' for k. A massless node held by springs
+and one dashpot, nothing else, is their Schur complement and a lever with that series dashpot and a range it never
+reaches, whose u shooting carries (:func:`_maxwell`; one spring: the Maxwell element between the two far ends).
+One held by springs and by a slider and a dashpot side by side to one end (a Bingham element in series with the
+springs) is their Schur complement and a lever whose u sticks within alpha / S and relaxes back at S / c past it
+(:func:`_bingham`). A massless node between two threshold elements (its position a play of two references), or
+with a dashpot otherwise (a first-order motion), is refused, one line; a massless node held by no spring carries
+no force through it (its elements go). The node named and the node loaded, and each massless node their motion or
+force passes through, are condensed where springs alone hold them, or (named, no force on it) springs and one
+slider or branch, with its series dashpot or not, or springs and a dashpot, a slider beside it or not
+(:class:`Observed` says how: the force passed on as k_i / S of it, the motion the springs' weighted mean plus F /
+S, less the lever's tension times d_p / S); else refused, one line. Harmonic balance takes massless nodes as they
+are (their balance is one of its equations): it never sees a lever.
 """
 from __future__ import annotations
 
@@ -263,15 +264,22 @@ def condensed(scene, named=None, loaded=None, purpose="the forced response", obs
 
 def _pass_through(network, node, load, views, source, named, loaded, purpose) -> None:
     """``load`` and ``views`` (see :class:`Observed`) with massless ``node`` condensed, held by springs alone
-    (and, where no force acts on it, by one slider or branch, which becomes a lever of tension T): its balance
-    sum_i k_i (x_i - x_p) - d_p T + share F = 0 puts it at x_p = (sum_i k_i x_i - d_p T + share F) / S, and its
-    share of the force goes to its far ends as k_i / S of it; else FrequencyError (:func:`_refuse_observed`)."""
+    (and, where no force acts on it, by one slider or branch, with its series dashpot or not, which becomes a
+    lever of tension T; or by a dashpot, a slider beside it or not, which becomes a lever of tension T = S u):
+    its balance sum_i k_i (x_i - x_p) - d_p T + share F = 0 puts it at x_p = (sum_i k_i x_i - d_p T + share F)
+    / S (d_p = 1 for the dashpot's lever), and its share of the force goes to its far ends as k_i / S of it;
+    else FrequencyError (:func:`_refuse_observed`)."""
     name = network.nodes[node]
     forced = name in load
     touching = [e for e in network.elements if node in e.between and not _carries_nothing(e)]
-    thresholds = _parallel([e for e in touching if e.kind in THRESHOLDS])
     ends, total = _spring_ends(touching, node)
-    others = [e for e in touching if e.kind != "spring" and (e.kind not in THRESHOLDS or e.c > 0.0)]
+    viscous = None  # springs and a dashpot (a slider beside it): x_p = xbar - u, the lever's u = T / S
+    if not forced:
+        viscous = _maxwell(network, touching, node)
+        if viscous is None:
+            viscous = _bingham(network, touching, node)
+    thresholds = [] if viscous is not None else _parallel([e for e in touching if e.kind in THRESHOLDS])
+    others = [] if viscous is not None else [e for e in touching if e.kind not in ("spring",) + THRESHOLDS]
     why = None
     if others or (thresholds and forced):
         holding = (others + thresholds)[0]
@@ -285,6 +293,9 @@ def _pass_through(network, node, load, views, source, named, loaded, purpose) ->
     tension = {}  # the lever p's threshold becomes (none where it carries nothing: T = 0)
     if thresholds and _levered(thresholds[0], node, name, ends, total):
         tension[thresholds[0].name] = -_weights(thresholds[0])[node] / total
+    for lever in viscous or ():
+        if lever.kind == "lever":  # (none where every far end is the ground: u decays, x_p = xbar)
+            tension[lever.name] = -1.0 / total
     share = load.pop(name, 0.0)
     for view, (weights, gain, tensions) in list(views.items()):
         weight = weights.pop(name, 0.0)
@@ -320,7 +331,8 @@ def _refuse_observed(network, node, source, named, loaded, purpose, why, forced)
     name = network.nodes[node]
     how = f"{purpose} of a network with sliders is solved for by shooting on the motion of the nodes with a mass"
     taken = ("(a massless node is taken there where springs alone hold it)" if forced else
-             "(a massless node is taken there where springs hold it, and one slider or branch at most)")
+             "(a massless node is taken there where springs hold it, and one slider or branch at most, or a "
+             "dashpot with a slider beside it or not)")
     if forced:
         raise FrequencyError(f"{source}: node {name} is massless, {why}, and the force acts on it"
                              f"{'' if name == loaded else f' (through it from {loaded})'}: {how} {taken}: load a "

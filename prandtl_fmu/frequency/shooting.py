@@ -842,7 +842,7 @@ class NetworkShooting(Shooting):
 
         self.stiffness_matrix = np.zeros((n, n))
         self.damping = np.zeros((n, n))
-        sliders, branches, cubic, series, named = [], [], [], [], []
+        sliders, branches, cubic, series, named, relaxing = [], [], [], [], [], []
         for element in network.elements:
             d = row(element)
             if element.kind == "cubic":  # its force k3 (d . x)^3 along d (network_orbit.py: by its recurrence)
@@ -855,6 +855,7 @@ class NetworkShooting(Shooting):
                 sliders.append((d, element.value))
             elif element.kind == "branch" and element.c > 0.0:  # a series dashpot: its u relaxes (network_orbit)
                 series.append(np.concatenate((d, [element.value, element.eta, element.value / element.c, 0.0])))
+                relaxing.append(element.name)
             elif element.kind == "branch":
                 branches.append((d, element.value, element.eta))
                 named.append(element.name)
@@ -862,6 +863,7 @@ class NetworkShooting(Shooting):
                 # beside the dashpot: a Bingham element): its u relaxes
                 series.append(np.concatenate((d, [element.value, element.alpha / element.value,
                                                   element.value / element.c, 1.0 if element.bingham else 0.0])))
+                relaxing.append(element.name)
             elif element.kind == "lever":  # a massless node's slider or branch (series.condensed): a branch
                 branches.append((d, element.value, element.alpha / element.value))
                 named.append(element.name)
@@ -881,16 +883,17 @@ class NetworkShooting(Shooting):
         self.force = shares if base_amplitude is None else np.array(system.mass, float)
         self.branches = len(branches)
         self.branch_names = tuple(named)  # the branches' (and levers') names, in the order of their u in s
+        pulled = list(named) + relaxing  # the tensions a view reads: the branches', then the series rows' 
         # the massless node named: (name, weights over the nodes, weight of the ground's motion, gain of the
         # force, weights over the branches' tensions k u) (series.Observed)
         self.views = []
         for name, (weights, gain, tensions) in ({} if observed is None else observed.views).items():
-            row, pulls = np.zeros(n), np.zeros(len(branches))
+            row, pulls = np.zeros(n), np.zeros(len(pulled))
             for node, weight in weights.items():
                 if node is not None:
                     row[network.nodes.index(node)] = weight
             for lever, weight in tensions.items():
-                pulls[named.index(lever)] = weight
+                pulls[pulled.index(lever)] = weight
             self.views.append((name, row, weights.get(None, 0.0), gain, pulls))
 
     @property
@@ -933,12 +936,17 @@ class NetworkShooting(Shooting):
         return np.vstack([out] + rows) if rows else out
 
     def _tensions(self, s: np.ndarray, omega: float) -> np.ndarray:
-        """The branches' tensions k u over one period at t_j = j T / M, (branches, M): a run that writes u too
-        (``network_orbit.run``), the second half period the first's negative (the symmetry)."""
+        """The tensions k u of the branches, then of the series rows, over one period at t_j = j T / M,
+        (branches + series rows, M): a run that writes u too (``network_orbit.run``), the second half period the
+        first's negative (the symmetry)."""
         n, nb = self.system.n, self.branches
         _, out = self.run(s, omega, with_u=True)
         start = np.clip(np.array(s[2 * n:2 * n + nb], dtype=float), -self.eta, self.eta)
-        half = np.concatenate((start[None, :], out[:-1, n:]), axis=0).T * self.bk[:, None]
+        series = np.array(s[2 * n + nb:], dtype=float)
+        eta, bingham = self.series[:, n + 1], self.series[:, n + 3] != 0.0
+        series = np.where(bingham, series, np.clip(series, -eta, eta))  # as the run starts them
+        stiffness = np.concatenate((self.bk, self.series[:, n]))
+        half = np.concatenate((np.concatenate((start, series))[None, :], out[:-1, n:]), axis=0).T * stiffness[:, None]
         return np.concatenate((half, -half), axis=1)
 
     def amplitude_of_force(self, omega: float) -> float:
@@ -947,7 +955,8 @@ class NetworkShooting(Shooting):
         return float(np.max(self.system.mass)) * self.base_amplitude * omega * omega
 
     def run(self, s: np.ndarray, omega: float, half_periods: int = 1, with_u: bool = False) -> tuple:
-        """As :meth:`Shooting.run`; ``with_u``: the branches' u at the step ends too, after x's columns."""
+        """As :meth:`Shooting.run`; ``with_u``: the branches' u, then the series rows', at the step ends too,
+        after x's columns."""
         from .network_orbit import OK, explain, run
 
         n = self.system.n
@@ -959,7 +968,7 @@ class NetworkShooting(Shooting):
         amplitude = self.force_amplitude if self.force_amplitude is not None else \
             self.base_amplitude * omega * omega
         steps = self.M // 2 * half_periods
-        out = np.empty((steps, n + (self.branches if with_u else 0)))
+        out = np.empty((steps, n + (self.branches + self.series.shape[0] if with_u else 0)))
         status, taken = run(self.system.mass, self.stiffness_matrix, self.damping, self.rows, self.alpha,
                             self.brows, self.bk, self.eta, self.crows, self.ck3, self.series, self.force,
                             float(amplitude), float(omega), x, v, u, su, h, steps, out)

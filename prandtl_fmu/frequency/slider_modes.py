@@ -145,6 +145,10 @@ class FreeShooting(_Free, NetworkShooting):
         # levers' tensions k u too, {lever: weight}, here over the branches in the order of s
         self.pulls = np.zeros(self.branches)
         for lever, weight in (pulls or {}).items():
+            if lever not in self.branch_names:  # a lever with a dashpot: its u relaxes, no state of the mode's start
+                raise FrequencyError(f"--node: {name} is massless, on the lever {lever} with a dashpot: the nonlinear "
+                                     "modes do not take its motion (the forced response does): name a node with a "
+                                     "mass")
             self.pulls[self.branch_names.index(lever)] = weight
         n = self.system.n
         self.state_probe = np.zeros(self.dimension)  # the node's x(0) from s, to first order
