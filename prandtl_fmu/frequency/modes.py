@@ -11,9 +11,15 @@ its damping ratio xi / (2 omega): the viscous damping xi M that the motion needs
 own damping. With one harmonic, a mass m on an element whose describing function is K(A), D(A) has
 m omega^2 = K(A) and damping ratio D(A) / (2 pi K(A) A^2) (c / (2 m omega) more with a dashpot c).
 
-The first amplitude starts from the linear mode with every branch sticking (the massless nodes condensed);
-each next one from the last solution scaled by the ratio of the amplitudes, with the step halved (at most
-MAX_HALVINGS times) where Newton does not converge within NEWTON_ITERATIONS.
+The family starts from the linear mode with every branch sticking (the massless nodes condensed), at the
+lowest amplitude where Newton from it stays on its family (below), else at SMALL of it, and is stepped in ln A to each amplitude in turn, each step from the last solution scaled
+by the ratio of the amplitudes, halved where Newton does not converge within NEWTON_ITERATIONS or lands off
+the family (at most MAX_HALVINGS times in a row; doubled after each success; at most MAX_MODE_STEPS solves
+between two amplitudes). On the family means the mass-weighted MAC of the first harmonics of the two points is
+at least CONTINUES: another mode's shape is M-orthogonal to it. Where a family turns back in the node's
+amplitude (its motion moving to another node as it grows) no step past the turn converges on it, and the
+backbone is refused there, saying how far it was followed; stepping A alone, Newton went on along another
+mode's family past such a turn (the packaged two-mass joint's first mode at node a, past 0.853 m).
 
 :func:`synthesis`: the forced response near the mode's resonance from the backbone alone (single nonlinear
 mode synthesis).
@@ -30,7 +36,10 @@ from . import DEFAULT_TOLERANCE, FrequencyError, check_tolerance, positive_value
 from .harmonic_balance import NEWTON_ITERATIONS, harmonic_steps, HarmonicBalance, periodic_system, solve_linear
 from .series import check_named, joined
 
-MAX_HALVINGS = 30
+MAX_HALVINGS = 30  # of a step in a row, where Newton does not converge or finds another motion
+MAX_MODE_STEPS = 4000  # Newton solves from one amplitude to the next
+SMALL = 1e-6  # the first amplitude: this share of the lowest, where the mode is the linear one
+CONTINUES = 0.5  # the mass-weighted MAC of two points of one family, at least
 
 
 @dataclass(frozen=True, eq=False)
@@ -271,20 +280,28 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
     last = None
     for index in order.tolist():
         A = float(amplitudes[index])
-        if state is None:
+        if state is None:  # from the linear mode: at A where Newton stays on its family, else from SMALL A up
             q = np.zeros(len(free))
             for i in range(system.n):
                 if i * L + 1 in free:
                     q[free.index(i * L + 1)] = shape[i] / shape[where] * A
-            state = _newton(balance, q, omega0, xi0, fixed, keep, A)
+            state, last = _newton(balance, q, omega0, xi0, fixed, keep, A), A
+            if state is None or not _continues(balance, system, (q, omega0, xi0), state, A, A):
+                state, last = _newton(balance, q * SMALL, omega0, xi0, fixed, keep, SMALL * A), SMALL * A
             if state is None:
-                state = _from_small(balance, q, omega0, xi0, fixed, keep, A)
-        else:
-            state = _stepped(balance, state, last, A, fixed, keep)
+                raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = "
+                                     f"{float(A)!r} m, nor at {SMALL * A!r} m where it is the linear mode (H = "
+                                     f"{harmonics})")
+        state, reached, left = _stepped(balance, system, state, last, A, fixed, keep)
         if state is None:
-            raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = {float(A)!r} m "
-                                 f"(H = {harmonics}) within {NEWTON_ITERATIONS} Newton iterations per step, "
-                                 f"with the amplitude step halved {MAX_HALVINGS} times")
+            found = ("finds only another motion (its shape's MAC against the family's last point below "
+                     f"{CONTINUES}) or does not converge" if left else
+                     f"does not converge within {NEWTON_ITERATIONS} iterations")
+            raise FrequencyError(
+                f"{system.source}: mode {mode} does not reach A = {float(A)!r} m at node {system.nodes[where]} "
+                f"(H = {harmonics}): its family was followed to {reached:.6g} m there, and past it Newton {found}, "
+                f"the step halved {MAX_HALVINGS} times: the family turns back in that node's amplitude (while "
+                "another node's grows) or ends there: choose amplitudes below it, or another --node")
         last = A
         out[index] = state[1], state[2]
         full = balance.full(state[0]).reshape(system.n, L)
@@ -292,33 +309,49 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
     return out, shapes
 
 
-def _from_small(balance, q, omega, xi, fixed, keep, A):
-    """From the linear mode at an amplitude small enough that nothing slips, up to A."""
-    small = A * 1e-6
-    state = _newton(balance, q * 1e-6, omega, xi, fixed, keep, small)
-    return None if state is None else _stepped(balance, state, small, A, fixed, keep)
+def _shape(balance, system, q) -> np.ndarray:
+    """The first harmonic of every node (complex), of the balance's unknowns ``q``."""
+    full = balance.full(q).reshape(system.n, balance.L)
+    return full[:, 1] - 1j * full[:, 2]
 
 
-def _stepped(balance, state, A_from, A_to, fixed, keep):
-    """From the solution at A_from to A_to, halving the ratio where Newton fails."""
+def _continues(balance, system, before, after, A_before, A_after) -> bool:
+    """Whether ``after`` (at A_after) is on the family of ``before`` (at A_before): the mass-weighted MAC of
+    their first harmonics at least CONTINUES (another mode's shape is M-orthogonal to it: near 0)."""
+    first, second = _shape(balance, system, before[0]), _shape(balance, system, after[0])
+    weights = np.asarray(system.mass, dtype=float)
+    inner = abs(np.sum(weights * np.conj(first) * second)) ** 2
+    size = float(np.sum(weights * np.abs(first) ** 2) * np.sum(weights * np.abs(second) ** 2))
+    return size > 0.0 and inner >= CONTINUES * size
+
+
+def _stepped(balance, system, state, A_from, A_to, fixed, keep) -> tuple:
+    """From the solution at A_from to A_to in steps of ln A, each point on the family of the last
+    (:func:`_continues`): halved where Newton does not converge or lands on another motion (at most MAX_HALVINGS
+    times in a row), doubled after each success, at most MAX_MODE_STEPS Newton solves. ``(state or None,
+    the amplitude reached, whether the last failures found another motion)``."""
     q, omega, xi = state
     current = A_from
-    target = A_to
-    halvings = 0
-    while True:
-        ratio = target / current
-        trial = _newton(balance, q * ratio, omega, xi, fixed, keep, target)
-        if trial is not None:
+    step = math.log(A_to / A_from)
+    halvings = left = 0
+    for _ in range(MAX_MODE_STEPS):
+        if current == A_to:
+            return (q, omega, xi), current, False
+        remaining = math.log(A_to / current)
+        target = A_to if abs(step) >= abs(remaining) else current * math.exp(step)
+        trial = _newton(balance, q * (target / current), omega, xi, fixed, keep, target)
+        if trial is not None and _continues(balance, system, (q, omega, xi), trial, current, target):
             q, omega, xi = trial
             current = target
-            if current == A_to:
-                return trial
-            target = A_to
+            halvings, left = 0, 0
+            step = math.copysign(min(2.0 * abs(step), abs(math.log(A_to / A_from))), remaining)
             continue
+        left += trial is not None
         halvings += 1
         if halvings > MAX_HALVINGS:
-            return None
-        target = math.sqrt(current * target)
+            return None, current, left > 0
+        step *= 0.5
+    return None, current, False
 
 
 def _newton(balance, q, omega, xi, fixed, keep, A):

@@ -86,6 +86,38 @@ def test_one_harmonic_nonlinear_mode_of_a_jenkins_element_is_its_describing_func
     assert errors[1] <= 1e-4 and errors[1] < errors[0] / 4  # the trapezoid rule over a kinked cycle: ~ 1 / N^2
 
 
+def test_a_backbone_whose_family_turns_back_at_the_node_is_refused_not_continued_on_another_mode(tmp_path):
+    """The packaged two-mass joint's first mode (in phase) at node a: as the joint slips and the cubic spring
+    on a stiffens, the family's motion moves to b, and a's first harmonic turns back at about 0.853 m. The
+    backbone stepped the amplitude at a and, past the turn, Newton landed on the second mode's family: from
+    0.885 m mode 1 and mode 2 gave the same rows to 4 digits, silently (a review's find). Now each step must
+    stay on the family (the mass-weighted MAC of the first harmonics of two points at least 0.5), and past the
+    turn the backbone is refused in one line that says how far the family was followed: to within 1e-3 of the
+    turn that shooting on the exact motion finds (a slider of 1e-6 N in the joint sends the scene there: it
+    follows the family by arc length). At node b the same family goes on (rows unlike those of mode 2 at a, the
+    family the old backbone went on along)."""
+    from prandtl_fmu.frequency import FrequencyError
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+    import re
+
+    joint, _ = read_scene("networks/two-mass-joint", networks=True)
+    with pytest.raises(FrequencyError, match="does not reach A = 1.0 m at node a") as refusal:
+        nonlinear_mode(joint, 1, [0.3, 1.0], harmonics=5)
+    reached = float(re.search(r"followed to ([0-9.e+-]+) m", str(refusal.value)).group(1))
+    path = tmp_path / "slider.toml"
+    with open(joint.source) as written:
+        path.write_text(written.read() + '\n[[network.slider]]\nbetween = ["a", "b"]\nalpha = 1e-6\n')
+    slider, _ = read_scene(str(path), networks=True)
+    with pytest.raises(FrequencyError, match="does not reach A = 1.0 m at node a") as exact:
+        nonlinear_mode(slider, 1, [0.3, 1.0])
+    top = float(re.search(r"at most ([0-9.e+-]+) m", str(exact.value)).group(1))
+    assert reached == pytest.approx(top, rel=1e-3) and reached < 0.9
+    first = nonlinear_mode(joint, 1, [0.5, 1.0, 2.0], harmonics=5, node="b")
+    second = nonlinear_mode(joint, 2, [1.0, 2.0], harmonics=5)  # the family the old backbone went on along
+    assert np.all(np.isfinite(first.frequency)) and np.all(np.isfinite(first.damping_ratio))
+    assert np.all(np.abs(first.frequency[1:] - second.frequency) > 1e-3 * second.frequency)
+
+
 def test_the_mode_of_branches_without_a_spring_starts_from_one_harmonic(tmp_path):
     """Branches alone (k0 = 0, as the paper's section 8: no mean among the unknowns) at one harmonic, where the
     amplitude fixes both of the node's unknowns: Newton's step over the others is empty (it stopped on numpy's
@@ -154,8 +186,8 @@ def test_a_network_with_a_joint_end_to_end_from_the_command_line(tmp_path):
     out = tmp_path / "curve.csv"
     plot = tmp_path / "curve.png"
     assert main(["describe", "networks/two-mass-joint", "--force-amplitude", "0.2", "--frequencies", "0.1,0.4",
-                 "--harmonics", "3", "--out", str(out), "--plot", str(plot), "--mode", "1", "--amplitudes",
-                 "0.1,0.5,1,2"]) == 0
+                 "--harmonics", "3", "--out", str(out), "--plot", str(plot), "--mode", "2", "--amplitudes",
+                 "0.1,0.5,1,2"]) == 0  # (the second mode's family carries a's large motion; the first turns back)
     table = read_csv(out)
     assert list(table)[:6] == ["frequency", "amplitude", "phase", "stable", "amplitude_a", "amplitude_b"]
     f = np.array(table["frequency"], dtype=float)
