@@ -223,7 +223,8 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
 
     shot = [curve for curve in curves if curve.method == "shooting"]
     if shot:
-        print(f"note: the periodic states are found by shooting on the {shot[0].orbit} (friction on a mass), exact "
+        what = "friction on a mass" if tuple(shot[0].node_names) in ((), ("mass",)) else "a network's rigid sliders"
+        print(f"note: the periodic states are found by shooting on the {shot[0].orbit} ({what}), exact "
               f"whatever the harmonics: --harmonics {harmonics} sets only the harmonics kept (their columns and "
               "--harmonic-amplitudes), not the accuracy", file=sys.stderr)
     for curve in curves:
@@ -400,19 +401,27 @@ def run(args) -> int:
     if args.out:
         from ..outputs import write_output
 
-        write_output(args.out, text.encode())
+        try:
+            write_output(args.out, text.encode())
+        except OSError as exc:  # a full disk, a device that refuses: as `run` says it
+            print(f"error: cannot write {args.out}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
     else:
         sys.stdout.write(text)
         sys.stdout.flush()
     if args.plot:
         from . import plots
 
-        if "mode" in values:
-            plots.plot_backbone(result, scene, args.plot)
-        elif balance:
-            plots.plot_curve(curves.curves, scene, args.plot, backbone)
-        else:
-            (plots.plot_description if "amplitudes" in values else plots.plot_response)(result, scene, args.plot)
+        try:
+            if "mode" in values:
+                plots.plot_backbone(result, scene, args.plot)
+            elif balance:
+                plots.plot_curve(curves.curves, scene, args.plot, backbone)
+            else:
+                (plots.plot_description if "amplitudes" in values else plots.plot_response)(result, scene, args.plot)
+        except OSError as exc:
+            print(f"error: --plot {args.plot}: cannot write: {exc.strerror or exc}", file=sys.stderr)
+            return 2
     return 0
 
 

@@ -243,8 +243,8 @@ def condensed(scene, named=None, loaded=None, purpose="the forced response", obs
     "the nonlinear modes") for the refusals."""
     network = scene.network
     if not np.any(np.asarray(network.mass) > 0):
-        raise FrequencyError(f"{scene.source}: no node has a mass: {purpose} needs one (a network of massless "
-                             "nodes is quasi-static: integrate it with prandtl-fmu run)")
+        raise FrequencyError(f"{scene.source}: no node has a mass (for {purpose}, one at least must have one: a "
+                             "network of massless nodes is quasi-static: integrate it with prandtl-fmu run)")
     load = {} if loaded is None else {loaded: 1.0}
     views = {} if named is None else {named: ({named: 1.0}, 0.0, {})}
     while True:

@@ -99,6 +99,20 @@ def test_a_full_disk_leaves_no_file(write_scene, capsys):
     assert os.path.exists("/dev/full") and not os.path.isfile("/dev/full")
 
 
+@pytest.mark.parametrize("option", ["--out", "--plot"])
+def test_a_full_disk_under_describe_is_said_as_such(write_scene, tmp_path, capsys, option):
+    """describe's CSV or figure on /dev/full: "cannot write", exit 2 (it said "internal error (OSError ...);
+    please report it", a review's find)."""
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    other = ["--out", str(tmp_path / "curve.csv")] if option == "--plot" else []
+    status, lines, _ = run_cli(["describe", "networks/two-mass-joint", "--force-amplitude", "0.1", "--frequencies",
+                                "0.1,0.2", "--harmonics", "1", "--tolerance", "0.1", option, "/dev/full"] + other,
+                               capsys)
+    check(status, lines)
+    assert status == 2 and "cannot write" in lines[0] and "/dev/full" in lines[0] and "internal" not in lines[0]
+
+
 def test_an_existing_output_is_untouched_by_a_failed_run(write_scene, tmp_path, capsys):
     out = tmp_path / "out.csv"
     out.write_text("precious\n")
