@@ -291,6 +291,9 @@ class _NoBar:
     def update(self, count):
         pass
 
+    def set_description(self, text):
+        pass
+
     def close(self):
         pass
 

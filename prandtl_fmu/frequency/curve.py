@@ -154,15 +154,23 @@ def harmonic_response(scene, force_amplitude: Optional[float] = None, frequencie
     refuse_unbounded(scene, force_amplitude, base_amplitude, low, high, load_node)
     refuse_slip_limited(system, force_amplitude, base_amplitude, low, high)
     count = int(np.unique(frequencies).size)
-    if harmonics is not None:
-        balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
-        points = continue_curve(balance, low, high, count, node=where)
-        change = _truncation(balance, points, where, samples)
-    else:
-        balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
-                                                    where, tolerance, samples, max(orders, default=1))
-    judged = _stability_balance(balance, plain, load_node, tolerance) if stability else None
-    return _listed(_curve(balance, points, where, stability, change, orders, judged), frequencies)
+    from ..stepping import _progress_bar
+
+    bar = _progress_bar(None, None, "harmonic balance")  # on a terminal: the points taken, H, the stability
+    try:
+        if harmonics is not None:
+            balance = HarmonicBalance(system, harmonics, force_amplitude, samples, base_amplitude)
+            bar.set_description(f"harmonic balance, H = {harmonics}")
+            points = continue_curve(balance, low, high, count, progress=bar, node=where)
+            change = _truncation(balance, points, where, samples)
+        else:
+            balance, points, change = _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
+                                                        where, tolerance, samples, max(orders, default=1), bar)
+        judged = _stability_balance(balance, plain, load_node, tolerance) if stability else None
+        bar.set_description(f"stability of each point, H = {balance.H}")
+        return _listed(_curve(balance, points, where, stability, change, orders, judged, bar), frequencies)
+    finally:
+        bar.close()
 
 
 def _stability_balance(balance, plain, load_node, tolerance):
@@ -275,7 +283,7 @@ def _started(coarser, finer, point) -> Optional[np.ndarray]:
 
 
 def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count, where, tolerance,
-                      samples, lowest: int = 1) -> tuple:
+                      samples, lowest: int = 1, bar=None) -> tuple:
     previous, change = None, math.inf
     steps = harmonic_steps(system.n, lowest)
     if not steps:
@@ -285,7 +293,9 @@ def _chosen_harmonics(system, force_amplitude, base_amplitude, low, high, count,
         balance = HarmonicBalance(system, H, force_amplitude, None if samples is None else max(samples, 4 * H),
                                   base_amplitude)
         start = None if previous is None else _started(previous[0], balance, previous[1][0])
-        points = continue_curve(balance, low, high, count, node=where, start=start)
+        if bar is not None:
+            bar.set_description(f"harmonic balance, H = {H} (chosen by the tolerance)")
+        points = continue_curve(balance, low, high, count, progress=bar, node=where, start=start)
         if previous is not None:
             # the last curve's ends and peak against this H at the same points (not this curve's own peak)
             found = _change(*previous, balance, where)
@@ -311,7 +321,7 @@ def _past(nodes: int, steps: tuple) -> str:
             "tolerance chooses")
 
 
-def _curve(balance, points, where, stability, change, orders=(), judged=None) -> Curve:
+def _curve(balance, points, where, stability, change, orders=(), judged=None, bar=None) -> Curve:
     """The curve of ``balance``'s ``points``, each point's multipliers those of ``judged``
     (:func:`_stability_balance`) where it is given."""
     from .floquet import is_stable, monotone, multipliers
@@ -331,6 +341,8 @@ def _curve(balance, points, where, stability, change, orders=(), judged=None) ->
         for index, (w, q, _) in enumerate(points):
             values = multipliers(balance, q, w) if judged is None else \
                 multipliers(judged, _restricted(balance, judged, q), w)
+            if bar is not None:
+                bar.update(1)
             if values is None:  # not computed (floquet.py says where): unknown, never a guess, unless the
                 known[index] = proven  # scene is monotone: every periodic state stable, by the energy
                 continue

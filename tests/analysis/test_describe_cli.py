@@ -226,3 +226,22 @@ def test_the_harmonics_chosen_are_within_the_tolerance_of_many(frequencies):
     X = chosen.amplitude[0] * np.exp(1j * chosen.phase[0])
     X_many = many.amplitude[0] * np.exp(1j * many.phase[0])
     assert abs(X - X_many) <= 1e-3 * abs(X_many)
+
+
+def test_a_harmonic_balance_curve_shows_its_progress_on_a_terminal(tmp_path, capsys, monkeypatch):
+    """On a terminal (stderr a tty, not CI) the curve says how far it is: the points taken under the number of
+    harmonics being tried, then the stability of each point; the CSV is the one written without it. Off a
+    terminal nothing is printed (the same run in a pipe, as every other test runs)."""
+    import sys
+
+    args = ["describe", "networks/two-mass-joint", "--force-amplitude", "0.2", "--frequencies", "0.1,0.4"]
+    quiet = tmp_path / "quiet.csv"
+    assert main(args + ["--out", str(quiet)]) == 0
+    assert capsys.readouterr().err == ""
+    monkeypatch.delenv("CI", raising=False)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    shown = tmp_path / "shown.csv"
+    assert main(args + ["--out", str(shown)]) == 0
+    err = capsys.readouterr().err
+    assert "harmonic balance, H = 1 (chosen by the tolerance)" in err and "stability of each point, H = " in err
+    assert shown.read_text() == quiet.read_text()
