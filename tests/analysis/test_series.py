@@ -899,3 +899,56 @@ def test_a_lever_with_a_dashpot_passed_on_is_the_light_nodes_limit(tmp_path, cas
     moved = np.abs(light - X)
     assert np.all(moved > 1e-5) and np.all(np.abs(np.abs(heavier - X) / moved - 2.0) < 0.1), (heavier, light, X)
     assert np.all(np.abs(2.0 * light - heavier - X) < 0.05 * moved), (heavier, light, X)
+
+
+def _random_dashpot_node(rng) -> list:
+    """Two masses on springs and dashpots to the ground, a slider between them, and massless j: springs to one
+    or two of a, b and the ground, and on it a dashpot, a slider and a dashpot side by side, or a branch with a
+    series dashpot, to one of them."""
+    ends = ["a", "b", "ground"]
+    elements = [("spring", ["a", "ground"], {"k": float(rng.uniform(0.5, 2))}),
+                ("spring", ["b", "ground"], {"k": float(rng.uniform(0.5, 2))}),
+                ("dashpot", ["a", "ground"], {"c": 0.05}), ("dashpot", ["b", "ground"], {"c": 0.08}),
+                ("slider", ["a", "b"], {"alpha": float(rng.uniform(0.1, 0.4))})]
+    for end in rng.choice(3, size=int(rng.integers(1, 3)), replace=False).tolist():
+        elements.append(("spring", ["j", ends[end]], {"k": float(rng.uniform(0.5, 3))}))
+    far, kind = ends[int(rng.integers(3))], int(rng.integers(3))
+    if kind == 1:
+        elements.append(("slider", ["j", far], {"alpha": float(rng.uniform(0.05, 0.3))}))
+    if kind < 2:
+        elements.append(("dashpot", [far, "j"], {"c": float(rng.uniform(0.2, 1))}))
+    else:
+        elements.append(("branch", ["j", far], {"k": float(rng.uniform(1, 4)), "eta": float(rng.uniform(0.02, 0.1)),
+                                                "c": float(rng.uniform(0.2, 1))}))
+    return elements
+
+
+@pytest.mark.slow
+def test_random_massless_nodes_on_dashpots_are_the_light_node_s_limit(tmp_path):
+    """Random networks whose massless node j is held by springs and a dashpot, a slider and a dashpot side by
+    side, or a branch with a series dashpot (levers of ``series._maxwell``, ``series._bingham``,
+    ``series._levered``), to random far ends among the masses and the ground, j named: solved as written with a
+    light mass mu on j (j an ordinary node of the orbit), the first harmonics of a, b and j come to the massless
+    solution's as mu: the distance at mu / 8 is an eighth of that at mu (measured 0.123 to 0.131), where a lever
+    with a wrong stiffness, rate or weight would leave a distance that does not shrink."""
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+
+    rng = np.random.default_rng(2026)
+    F, omega = 1.0, 1.1
+    for case in range(6):
+        elements = _random_dashpot_node(rng)
+
+        def first_harmonics(mu):
+            scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
+                            f"random-{case}-{mu!r}.toml")
+            joined, observed = prepared(scene, "j", "a", observe=True)
+            shooting = NetworkShooting(joined, F, None, 1024, 7, omega, "a", observed)
+            state = shooting.solve_at(omega)
+            assert state is not None
+            coefficients = shooting.coefficients(state, omega)
+            rows = [shooting.node_index(name) for name in "abj"]
+            return coefficients[rows, 1] - 1j * coefficients[rows, 2]
+
+        X = first_harmonics(0.0)
+        far, near = (float(np.max(np.abs(first_harmonics(mu) - X))) for mu in (2.5e-4, 3.125e-5))
+        assert far > 1e-7 and 0.1 < near / far < 0.16, (case, elements, far, near)
