@@ -11,15 +11,16 @@ its damping ratio xi / (2 omega): the viscous damping xi M that the motion needs
 own damping. With one harmonic, a mass m on an element whose describing function is K(A), D(A) has
 m omega^2 = K(A) and damping ratio D(A) / (2 pi K(A) A^2) (c / (2 m omega) more with a dashpot c).
 
-The family starts from the linear mode with every branch sticking (the massless nodes condensed), at the
-lowest amplitude where Newton from it stays on its family (below), else at SMALL of it, and is stepped in ln A to each amplitude in turn, each step from the last solution scaled
-by the ratio of the amplitudes, halved where Newton does not converge within NEWTON_ITERATIONS or lands off
-the family (at most MAX_HALVINGS times in a row; doubled after each success; at most MAX_MODE_STEPS solves
-between two amplitudes). On the family means the mass-weighted MAC of the first harmonics of the two points is
-at least CONTINUES: another mode's shape is M-orthogonal to it. Where a family turns back in the node's
-amplitude (its motion moving to another node as it grows) no step past the turn converges on it, and the
-backbone is refused there, saying how far it was followed; stepping A alone, Newton went on along another
-mode's family past such a turn (the packaged two-mass joint's first mode at node a, past 0.853 m).
+The family starts from the linear mode with every branch sticking (the massless nodes condensed), at the lowest
+amplitude where Newton from it stays on its family (below), else at SMALL of it, and is stepped in ln A to each
+amplitude in turn, each step from the last solution scaled by the ratio of the amplitudes, halved where Newton
+does not converge within NEWTON_ITERATIONS or lands off the family (at most MAX_HALVINGS times in a row; doubled
+after each success; at most MAX_MODE_STEPS solves between two amplitudes). On the family means the mass-weighted
+MAC of the first harmonics of the two points is at least CONTINUES: another mode's shape is M-orthogonal to it.
+Where a family turns back in the node's amplitude (its motion moving to another node as it grows) no step past the
+turn converges on it, and the backbone is refused there, saying how far it was followed; stepping A alone, Newton
+went on along another mode's family past such a turn (the packaged two-mass joint's first mode at node a, past
+0.853 m).
 
 :func:`synthesis`: the forced response near the mode's resonance from the backbone alone (single nonlinear
 mode synthesis).

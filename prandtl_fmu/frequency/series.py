@@ -406,13 +406,12 @@ def _maxwell(network, touching, node) -> Optional[list]:
     element between i and j. The elements it becomes (none where every far end is the ground), or None where
     the node is not such a node."""
     name = network.nodes[node]
-    dashpots = [e for e in touching if e.kind == "dashpot"]
-    if len(dashpots) != 1 or any(e.kind not in ("spring", "dashpot") for e in touching):
+    dashpot = _dashpot(touching, node)
+    if dashpot is None or any(e.kind not in ("spring", "dashpot") for e in touching):
         return None
     ends, total = _spring_ends(touching, node)
     if not total > 0.0:
         return None
-    (dashpot,) = dashpots
     j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
     out = _complement(network, node, ends, total)
     weights = {i: k / total for i, k in ends.items() if i >= 0}
@@ -436,11 +435,10 @@ def _bingham(network, touching, node) -> Optional[list]:
     range alpha / S, with the dashpot beside its slider (``bingham``: ``network_orbit.py`` carries its u). The
     elements it becomes, or None where the node is not such a node (sliders to one end in parallel are one)."""
     name = network.nodes[node]
-    dashpots = [e for e in touching if e.kind == "dashpot"]
-    sliders = _parallel([e for e in touching if e.kind == "slider"])
-    if len(dashpots) != 1 or len(sliders) != 1 or any(e.kind not in ("spring", "dashpot", "slider") for e in touching):
+    dashpot, sliders = _dashpot(touching, node), _parallel([e for e in touching if e.kind == "slider"])
+    if dashpot is None or len(sliders) != 1 or any(e.kind not in ("spring", "dashpot", "slider") for e in touching):
         return None
-    (dashpot,), (slider,) = dashpots, sliders
+    (slider,) = sliders
     j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
     if j != (slider.between[1] if slider.between[0] == node else slider.between[0]):
         return None
@@ -458,6 +456,19 @@ def _bingham(network, touching, node) -> Optional[list]:
                          tuple(weights[i] for i in ordered), total, slider.value, c=dashpot.value, through=(name,),
                          bingham=True))
     return out
+
+
+def _dashpot(touching, node):
+    """The dashpots among ``touching`` on ``node`` as one where they all go to one far end (in parallel their c
+    add), else None (none, or to two ends)."""
+    dashpots = [e for e in touching if e.kind == "dashpot"]
+    far = {e.between[1] if e.between[0] == node else e.between[0] for e in dashpots}
+    if len(far) != 1:
+        return None
+    if len(dashpots) == 1:
+        return dashpots[0]
+    return dataclasses.replace(dashpots[0], name="+".join(e.name for e in dashpots),
+                               value=sum(e.value for e in dashpots))
 
 
 def _spring_ends(touching, node) -> tuple:

@@ -780,8 +780,9 @@ def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_nod
     the same network with a light mass mu on j, solved as written (j a node of the orbit, its slider and dashpot
     ordinary ones): the first harmonics of a and b move by O(mu) (halved with mu, to 5 %), and 2 X(mu) - X(2 mu)
     lands within 2 % of that move on the massless node's (measured 0.08 to 0.4 %). The slider both sticks and
-    slips on the orbit: held (alpha = 100) or let go (alpha = 1e-9) it moves a and b by 0.04 to 1.3. And the
-    curve from the command line, every point stable (all of it dissipates)."""
+    slips on the orbit: held (alpha = 100) or let go (alpha = 1e-9) it moves a and b by 0.04 to 1.3. Two
+    dashpots of c / 2 side by side are the one of c. And the curve from the command line, every point stable
+    (all of it dissipates)."""
     from prandtl_fmu.frequency.series import condensed
     from prandtl_fmu.frequency.shooting import NetworkShooting
 
@@ -806,6 +807,15 @@ def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_nod
     assert (lever.value, lever.alpha, lever.c, lever.bingham) == (springs, 0.15, 0.6, True)
     for alpha in (100.0, 1e-9):  # held, let go: the orbit's slips and sticks both count
         assert np.max(np.abs(first_harmonics(0.0, alpha)[1] - X)) > 0.04
+    halves = [(kind, between, {"c": 0.3}) if kind == "dashpot" else (kind, between, values)
+              for kind, between, values in BINGHAM_J[case]]
+    halves += [(kind, list(reversed(between)), values) for kind, between, values in halves if kind == "dashpot"]
+    split = network(tmp_path, network_text(["a", "j", "b"], [1.0, 0.0, 2.0], LEVERED + halves + [
+        ("slider", ["a", "b"], {"alpha": 0.2})], load_node="a"), "halves.toml")
+    shooting = NetworkShooting(condensed(split, None, "a"), F, None, 1024, 7, omega)
+    coefficients = shooting.coefficients(shooting.solve_at(omega), omega)
+    halved = (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+    assert np.max(np.abs(halved - X)) < 1e-12  # two dashpots of c / 2 side by side are one of c
     (_, heavier), (_, light) = first_harmonics(2e-3), first_harmonics(1e-3)
     moved = np.abs(light - X)
     assert np.all(moved > 1e-5) and np.all(np.abs(np.abs(heavier - X) / moved - 2.0) < 0.1), (heavier, light, X)
