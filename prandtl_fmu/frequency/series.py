@@ -185,9 +185,9 @@ def _star(network, node):
     return _without(network, node, rest + _complement(network, node, ends, total))
 
 
-def _complement(network, node, ends, total) -> list:
+def _complement(network, node, ends, total, kind="spring") -> list:
     """The springs of massless ``node``'s Schur complement: k_i k_j / S between each pair of its springs' far ends
-    (``ends`` {far end: k_i}, ``total`` S > 0)."""
+    (``ends`` {far end: k_i}, ``total`` S > 0); ``kind`` "dashpot": of its dashpots, c_i c_j / C."""
     from ..network.model import Element
 
     far = sorted(ends, reverse=True)  # the ground (-1) last, only ever q: an element to the ground is (p, -1)
@@ -196,7 +196,8 @@ def _complement(network, node, ends, total) -> list:
     for i, p in enumerate(far):
         for q in far[i + 1:]:
             other = "ground" if q < 0 else network.nodes[q]
-            out.append(Element("spring", f"{name}({network.nodes[p]},{other})", (p, q), ends[p] * ends[q] / total))
+            called = f"{name}({network.nodes[p]},{other})" + ("" if kind == "spring" else f" {kind}")
+            out.append(Element(kind, called, (p, q), ends[p] * ends[q] / total))
     return out
 
 
@@ -396,32 +397,37 @@ def _lever(network, node, source, purpose):
 
 
 def _maxwell(network, touching, node) -> Optional[list]:
-    """A massless node held by springs k_i (to far ends i, S = sum k_i > 0) and one dashpot c (to end j), nothing
-    else on it, as what it is: its balance sum_i k_i (x_i - x_p) = c (x_p' - x_j') makes w = xbar - x_p (xbar
-    = sum_i k_i x_i / S, the springs' weighted mean) obey w' = (xbar' - x_j') - (S / c) w, and the force on
-    each end i is k_i (xbar - x_i) - k_i w. So the springs are their Schur complement (k_i k_l / S between each
-    pair of far ends, as :func:`_lever`) and the rest a :class:`Lever` of stiffness S on the elongation xbar -
-    x_j, its u = w, with the series dashpot c and a range it never reaches (NEVER: no motion of finite numbers
-    gets there), whose u shooting carries as a state (``network_orbit.py``). One spring alone: the Maxwell
-    element between i and j. The elements it becomes (none where every far end is the ground), or None where
-    the node is not such a node."""
+    """A massless node held by springs k_i (to far ends i, S = sum k_i) and dashpots c_j (to far ends j, C = sum
+    c_j > 0), nothing else on it, as what it is: its balance sum_i k_i (x_i - x_p) = sum_j c_j (x_p' - x_j')
+    makes w = xbar - x_p (xbar = sum_i k_i x_i / S, the springs' weighted mean; jbar = sum_j c_j x_j / C, the
+    dashpots') obey w' = (xbar' - jbar') - (S / C) w, and the force on each spring's end i is k_i (xbar - x_i) -
+    k_i w, on each dashpot's end j c_j (jbar' - x_j') + (c_j / C) S w. So the springs are their Schur complement
+    (k_i k_l / S between each pair of far ends, as :func:`_lever`), the dashpots theirs (c_j c_l / C), and the
+    rest a :class:`Lever` of stiffness S on the elongation xbar - jbar, its u = w, with the series dashpot C and
+    a range it never reaches (NEVER: no motion of finite numbers gets there), whose u shooting carries as a state
+    (``network_orbit.py``). One spring and one dashpot: the Maxwell element between i and j; dashpots alone (S =
+    0): the node follows jbar, and only their Schur complement is left. The elements it becomes (none where every
+    far end is the ground), or None where the node is not such a node."""
     name = network.nodes[node]
-    dashpot = _dashpot(touching, node)
-    if dashpot is None or any(e.kind not in ("spring", "dashpot") for e in touching):
+    if any(e.kind not in ("spring", "dashpot") for e in touching):
         return None
     ends, total = _spring_ends(touching, node)
-    if not total > 0.0:
+    dampers, damping = _spring_ends(touching, node, "dashpot")
+    if not damping > 0.0:
         return None
-    j = dashpot.between[1] if dashpot.between[0] == node else dashpot.between[0]
-    out = _complement(network, node, ends, total)
+    out = _complement(network, node, ends, total) + _complement(network, node, dampers, damping, "dashpot")
+    if not total > 0.0:
+        return out
     weights = {i: k / total for i, k in ends.items() if i >= 0}
-    if j >= 0:
-        weights[j] = weights.get(j, 0.0) - 1.0
+    for j, c in dampers.items():
+        if j >= 0:
+            weights[j] = weights.get(j, 0.0) - c / damping
     weights = {i: w for i, w in weights.items() if abs(w) > 1e-12}  # a weight that cancels is 0, not rounding
     if weights:
         ordered = sorted(weights)
-        out.append(Lever(f"{name}({dashpot.name})", tuple(ordered), tuple(weights[i] for i in ordered), total,
-                         total * NEVER, c=dashpot.value, through=(name,)))
+        called = "+".join(e.name for e in touching if e.kind == "dashpot")
+        out.append(Lever(f"{name}({called})", tuple(ordered), tuple(weights[i] for i in ordered), total,
+                         total * NEVER, c=damping, through=(name,)))
     return out
 
 
@@ -471,12 +477,12 @@ def _dashpot(touching, node):
                                value=sum(e.value for e in dashpots))
 
 
-def _spring_ends(touching, node) -> tuple:
+def _spring_ends(touching, node, kind="spring") -> tuple:
     """``({far end: stiffness}, their sum)`` of the springs among ``touching`` on ``node`` (the ground -1;
-    springs to one far end summed)."""
+    springs to one far end summed); ``kind`` "dashpot": of the dashpots, {far end: c}."""
     ends = {}
     for e in touching:
-        if e.kind == "spring":
+        if e.kind == kind:
             end = e.between[1] if e.between[0] == node else e.between[0]
             ends[end] = ends.get(end, 0.0) + e.value
     return ends, sum(ends.values())
