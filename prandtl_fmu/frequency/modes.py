@@ -11,16 +11,19 @@ its damping ratio xi / (2 omega): the viscous damping xi M that the motion needs
 own damping. With one harmonic, a mass m on an element whose describing function is K(A), D(A) has
 m omega^2 = K(A) and damping ratio D(A) / (2 pi K(A) A^2) (c / (2 m omega) more with a dashpot c).
 
-The family starts from the linear mode with every branch sticking (the massless nodes condensed), at the lowest
-amplitude where Newton from it stays on its family (below), else at SMALL of it, and is stepped in ln A to each
-amplitude in turn, each step from the last solution scaled by the ratio of the amplitudes, halved where Newton
-does not converge within NEWTON_ITERATIONS or lands off the family (at most MAX_HALVINGS times in a row; doubled
-after each success; at most MAX_MODE_STEPS solves between two amplitudes). On the family means the mass-weighted
-MAC of the first harmonics of the two points is at least CONTINUES: another mode's shape is M-orthogonal to it.
-Where a family turns back in the node's amplitude (its motion moving to another node as it grows) no step past the
-turn converges on it, and the backbone is refused there, saying how far it was followed; stepping A alone, Newton
-went on along another mode's family past such a turn (the packaged two-mass joint's first mode at node a, past
-0.853 m).
+The family starts from the linear mode with every branch sticking (the massless nodes condensed), at the first of
+STARTS (shares of the lowest amplitude) where Newton from it converges with its shape (the MAC below), and is
+stepped in ln A to each amplitude in turn, each step from the last solution scaled by the ratio of the amplitudes,
+halved where Newton does not converge within NEWTON_ITERATIONS or does not land next to it (at most MAX_HALVINGS
+times in a row; doubled after each success; at most MAX_MODE_STEPS solves between two amplitudes). Next to it
+means the mass-weighted MAC of the first harmonics of the two points at least CONTINUES (another mode's shape is
+M-orthogonal to it), their frequencies within STEP_FREQUENCY relative and their damping ratios within
+STEP_DAMPING. Where a family turns back in the node's amplitude (its motion moving to another node as it grows, or
+a fold of the backbone) no step past the turn lands next to it, and the backbone is refused there, saying how far
+it was followed. Stepping A alone, Newton went on along another mode's family past such a turn (the packaged
+two-mass joint's first mode at node a, past 0.853 m), and, with the shape's MAC alone, one long step past a fold
+landed on the family's way back, whose shape is alike: the value at an amplitude depended on the amplitudes listed
+(three masses and three branches, 0.2918 or 0.2981 Hz at 0.05 m).
 
 :func:`synthesis`: the forced response near the mode's resonance from the backbone alone (single nonlinear
 mode synthesis).
@@ -39,8 +42,10 @@ from .series import check_named, joined
 
 MAX_HALVINGS = 30  # of a step in a row, where Newton does not converge or finds another motion
 MAX_MODE_STEPS = 4000  # Newton solves from one amplitude to the next
-SMALL = 1e-6  # the first amplitude: this share of the lowest, where the mode is the linear one
-CONTINUES = 0.5  # the mass-weighted MAC of two points of one family, at least
+STARTS = (1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # the first amplitude's tries: these shares of the lowest
+CONTINUES = 0.9  # the mass-weighted MAC of the first harmonics of two neighbouring points of one family, at least
+STEP_FREQUENCY = 0.05  # ... their frequencies' relative change, at most
+STEP_DAMPING = 0.02  # ... their damping ratios' change, at most
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,17 +286,18 @@ def _backbone(system, mode: int, amplitudes: np.ndarray, where: int, harmonics: 
     last = None
     for index in order.tolist():
         A = float(amplitudes[index])
-        if state is None:  # from the linear mode: at A where Newton stays on its family, else from SMALL A up
+        if state is None:  # from the linear mode, at the smallest of STARTS where Newton converges with its shape
             q = np.zeros(len(free))
             for i in range(system.n):
                 if i * L + 1 in free:
                     q[free.index(i * L + 1)] = shape[i] / shape[where] * A
-            state, last = _newton(balance, q, omega0, xi0, fixed, keep, A), A
-            if state is None or not _continues(balance, system, (q, omega0, xi0), state, A, A):
-                state, last = _newton(balance, q * SMALL, omega0, xi0, fixed, keep, SMALL * A), SMALL * A
-            if state is None:
-                raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge at A = "
-                                     f"{float(A)!r} m, nor at {SMALL * A!r} m where it is the linear mode (H = "
+            for share in STARTS:
+                state, last = _newton(balance, q * share, omega0, xi0, fixed, keep, share * A), share * A
+                if state is not None and _alike(balance, system, q, state[0]):
+                    break
+            else:
+                raise FrequencyError(f"{system.source}: the nonlinear mode {mode} did not converge with the linear "
+                                     f"mode's shape at any amplitude from {STARTS[0] * A!r} to {float(A)!r} m (H = "
                                      f"{harmonics})")
         state, reached, left = _stepped(balance, system, state, last, A, fixed, keep)
         if state is None:
@@ -316,14 +322,25 @@ def _shape(balance, system, q) -> np.ndarray:
     return full[:, 1] - 1j * full[:, 2]
 
 
-def _continues(balance, system, before, after, A_before, A_after) -> bool:
-    """Whether ``after`` (at A_after) is on the family of ``before`` (at A_before): the mass-weighted MAC of
-    their first harmonics at least CONTINUES (another mode's shape is M-orthogonal to it: near 0)."""
-    first, second = _shape(balance, system, before[0]), _shape(balance, system, after[0])
+def _alike(balance, system, first, second) -> bool:
+    """Whether the first harmonics of unknowns ``first`` and ``second`` have a mass-weighted MAC of at least
+    CONTINUES (another mode's shape is M-orthogonal: near 0)."""
+    first, second = _shape(balance, system, first), _shape(balance, system, second)
     weights = np.asarray(system.mass, dtype=float)
     inner = abs(np.sum(weights * np.conj(first) * second)) ** 2
     size = float(np.sum(weights * np.abs(first) ** 2) * np.sum(weights * np.abs(second) ** 2))
     return size > 0.0 and inner >= CONTINUES * size
+
+
+def _continues(balance, system, before, after, A_before, A_after) -> bool:
+    """Whether ``after`` (at A_after) is the neighbour of ``before`` (at A_before) on its family: the
+    mass-weighted MAC of their first harmonics at least CONTINUES (another mode's shape is M-orthogonal to it:
+    near 0), their frequencies within STEP_FREQUENCY relative and their damping ratios within STEP_DAMPING (a
+    step that changes more is halved: so a family that passes an amplitude twice, up to a turn and back, is
+    not entered on its way back by one long step past the turn, whose shape can be alike)."""
+    (_, omega, xi), (_, omega_after, xi_after) = before, after
+    return _alike(balance, system, before[0], after[0]) and abs(omega_after / omega - 1.0) <= STEP_FREQUENCY and \
+        abs(xi_after / (2.0 * omega_after) - xi / (2.0 * omega)) <= STEP_DAMPING
 
 
 def _stepped(balance, system, state, A_from, A_to, fixed, keep) -> tuple:

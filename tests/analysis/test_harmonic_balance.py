@@ -118,6 +118,32 @@ def test_a_backbone_whose_family_turns_back_at_the_node_is_refused_not_continued
     assert np.all(np.abs(first.frequency[1:] - second.frequency) > 1e-3 * second.frequency)
 
 
+def test_a_backbone_s_value_does_not_depend_on_the_amplitudes_listed(tmp_path):
+    """Three unit masses, springs and three branches (no slider: harmonic balance): mode 2's family at node a
+    rises to 0.0594 m and turns back (a fold of the backbone). At 0.05 m it passes twice, with alike shapes:
+    one step from the linear mode, or from 0.005 m, landed on the way back (0.2918 Hz, damping ratio 0.1005),
+    a listing from 0.01 m on the way up (0.2981 Hz, 0.0517): the value depended on the amplitudes listed (a
+    review's find). Each step must now also keep the frequency within 5 % and the damping ratio within 0.02 of
+    the last point's, halved where it does not: every listing gives the way up, and past the fold the backbone
+    is refused in one line."""
+    from prandtl_fmu.frequency import FrequencyError
+    from prandtl_fmu.frequency.modes import nonlinear_mode
+    from tests.analysis.test_harmonic_balance_network_friction import network, network_text
+
+    scene = network(tmp_path, network_text(["a", "b", "c"], [1.0, 1.0, 1.0], [
+        ("spring", ["a", "ground"], {"k": 1.0}), ("spring", ["b", "a"], {"k": 1.0}), ("spring", ["b", "c"], {"k": 1.0}),
+        ("branch", ["a", "b"], {"k": 2.0, "eta": 0.01}), ("branch", ["c", "ground"], {"k": 5.0, "eta": 0.03}),
+        ("branch", ["b", "ground"], {"k": 1.0, "eta": 0.1})], load_node="a"))
+    values = []
+    # the last listing steps up the family by 3 % a time from where nothing slips: the way up by construction
+    for listed in ([0.05], [0.005, 0.05], [0.01, 0.05], list(np.geomspace(1e-4, 0.05, 200))):
+        backbone = nonlinear_mode(scene, 2, listed, harmonics=3, node="a")
+        values.append((backbone.frequency[-1], backbone.damping_ratio[-1]))
+    assert np.allclose(values, values[-1], rtol=1e-8, atol=0), values
+    with pytest.raises(FrequencyError, match="does not reach A = 0.07 m at node a"):
+        nonlinear_mode(scene, 2, [0.07], harmonics=3, node="a")
+
+
 def test_the_mode_of_branches_without_a_spring_starts_from_one_harmonic(tmp_path):
     """Branches alone (k0 = 0, as the paper's section 8: no mean among the unknowns) at one harmonic, where the
     amplitude fixes both of the node's unknowns: Newton's step over the others is empty (it stopped on numpy's
