@@ -211,7 +211,7 @@ def _check(args) -> dict:
     return values
 
 
-def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
+def _warn_truncation(curves, harmonics: int, tolerance: float, network: bool = False) -> None:
     """One ``warning:`` line on stderr for each harmonic balance curve whose first harmonic still changes by more
     than the tolerance at the next number of harmonics (``Curve.change``): the H given truncates it by about
     that much. The curve is written all the same (it is the H-harmonic balance asked for). Where the curves
@@ -223,7 +223,7 @@ def _warn_truncation(curves, harmonics: int, tolerance: float) -> None:
 
     shot = [curve for curve in curves if curve.method == "shooting"]
     if shot:
-        what = "friction on a mass" if tuple(shot[0].node_names) in ((), ("mass",)) else "a network's rigid sliders"
+        what = "a network's rigid sliders" if network else "friction on a mass"
         print(f"note: the periodic states are found by shooting on the {shot[0].orbit} ({what}), exact "
               f"whatever the harmonics: --harmonics {harmonics} sets only the harmonics kept (their columns and "
               "--harmonic-amplitudes), not the accuracy", file=sys.stderr)
@@ -369,7 +369,7 @@ def run(args) -> int:
                                         workers=values.get("workers"))
             result = curves.curves[0] if len(curves.curves) == 1 else curves
             if "harmonics" in values:
-                _warn_truncation(curves.curves, values["harmonics"], values["tolerance"])
+                _warn_truncation(curves.curves, values["harmonics"], values["tolerance"], hasattr(scene, "network"))
             _warn_unknown_stability(curves.curves)
             if "backbone" in values:
                 from .modes import nonlinear_mode

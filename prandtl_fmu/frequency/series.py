@@ -288,7 +288,7 @@ def _pass_through(network, node, load, views, source, named, loaded, purpose) ->
     elif len(thresholds) > 1:
         why = f"between {_called(thresholds[0])} and {_called(thresholds[1])}"
     elif total == 0.0:
-        why = "held by no spring"
+        why = "held by dashpots alone (its position set only up to a constant)" if viscous else "held by no spring"
     if why is not None:
         _refuse_observed(network, node, source, named, loaded, purpose, why, forced)
     tension = {}  # the lever p's threshold becomes (none where it carries nothing: T = 0)
