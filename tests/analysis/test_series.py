@@ -707,6 +707,27 @@ def test_a_massless_node_held_by_a_slider_that_sticks_stands_still_at_its_node(t
 
 # a massless node j held by springs and one dashpot, in a network that a slider between the masses sends to
 # shooting (series._maxwell)
+def _shot(tmp_path, nodes, mass, elements, name, named=None, F=1.0, omega=1.1):
+    """``(the network with its massless nodes condensed, the first harmonics of x at a and b, and at ``named``
+    too)``: the network of ``elements`` loaded at a by F cos(omega t), by shooting on its exact motion (``named``:
+    a massless node kept for its motion, ``series.Observed``)."""
+    from prandtl_fmu.frequency.series import condensed
+    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+
+    scene = network(tmp_path, network_text(nodes, mass, elements, load_node="a"), name)
+    if named is None:
+        joined = condensed(scene, None, "a")
+        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
+    else:
+        joined, observed = prepared(scene, named, "a", observe=True)
+        shooting = NetworkShooting(joined, F, None, 1024, 7, omega, "a", observed)
+    state = shooting.solve_at(omega)
+    assert state is not None
+    coefficients = shooting.coefficients(state, omega)
+    rows = [shooting.node_index(node) for node in ("a", "b") + ((named,) if named else ())]
+    return joined, coefficients[rows, 1] - 1j * coefficients[rows, 2]
+
+
 VISCOUS_J = {"maxwell": [("spring", ["a", "j"], {"k": 2.0}), ("dashpot", ["j", "b"], {"c": 0.6})],
              "zener": [("spring", ["a", "j"], {"k": 2.0}), ("spring", ["j", "ground"], {"k": 1.0}),
                        ("dashpot", ["j", "b"], {"c": 0.6})],
@@ -725,21 +746,12 @@ def test_a_massless_node_between_springs_and_a_dashpot_beside_a_slider_is_the_li
     O(mu) (halved with mu, to 5 %), and the extrapolation 2 X(mu) - X(2 mu) lands within 2 % of that move on the
     massless node's (measured 0.02 to 0.4 %; with the dashpot 17 % off, the gap stays as large as the move).
     And the curve from the command line, every point stable (all of it dissipates)."""
-    from prandtl_fmu.frequency.series import NEVER, condensed
-    from prandtl_fmu.frequency.shooting import NetworkShooting
+    from prandtl_fmu.frequency.series import NEVER
 
     elements = LEVERED + VISCOUS_J[case] + [("slider", ["a", "b"], {"alpha": 0.2})]
-    F, omega = 1.0, 1.1
 
     def first_harmonics(mu):
-        scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
-                        f"viscous-{mu!r}.toml")
-        joined = condensed(scene, None, "a")
-        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
-        state = shooting.solve_at(omega)
-        assert state is not None
-        coefficients = shooting.coefficients(state, omega)
-        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+        return _shot(tmp_path, ["a", "j", "b"], [1.0, mu, 2.0], elements, f"viscous-{mu!r}.toml")
 
     joined, X = first_harmonics(0.0)
     assert joined.network.nodes == ("a", "b")
@@ -783,22 +795,10 @@ def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_nod
     slips on the orbit: held (alpha = 100) or let go (alpha = 1e-9) it moves a and b by 0.04 to 1.3. Two
     dashpots of c / 2 side by side are the one of c. And the curve from the command line, every point stable
     (all of it dissipates)."""
-    from prandtl_fmu.frequency.series import condensed
-    from prandtl_fmu.frequency.shooting import NetworkShooting
-
-    F, omega = 1.0, 1.1
-
-    def first_harmonics(mu, alpha=None):
+    def first_harmonics(mu, alpha=None, joint=BINGHAM_J[case]):
         elements = LEVERED + [(kind, between, {"alpha": alpha} if kind == "slider" and alpha else values)
-                              for kind, between, values in BINGHAM_J[case]] + [("slider", ["a", "b"], {"alpha": 0.2})]
-        scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
-                        f"bingham-{mu!r}-{alpha!r}.toml")
-        joined = condensed(scene, None, "a")
-        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
-        state = shooting.solve_at(omega)
-        assert state is not None
-        coefficients = shooting.coefficients(state, omega)
-        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+                              for kind, between, values in joint] + [("slider", ["a", "b"], {"alpha": 0.2})]
+        return _shot(tmp_path, ["a", "j", "b"], [1.0, mu, 2.0], elements, f"bingham-{mu!r}-{alpha!r}-{len(joint)}.toml")
 
     joined, X = first_harmonics(0.0)
     assert joined.network.nodes == ("a", "b")
@@ -810,11 +810,7 @@ def test_a_massless_node_on_a_slider_and_a_dashpot_side_by_side_is_the_light_nod
     halves = [(kind, between, {"c": 0.3}) if kind == "dashpot" else (kind, between, values)
               for kind, between, values in BINGHAM_J[case]]
     halves += [(kind, list(reversed(between)), values) for kind, between, values in halves if kind == "dashpot"]
-    split = network(tmp_path, network_text(["a", "j", "b"], [1.0, 0.0, 2.0], LEVERED + halves + [
-        ("slider", ["a", "b"], {"alpha": 0.2})], load_node="a"), "halves.toml")
-    shooting = NetworkShooting(condensed(split, None, "a"), F, None, 1024, 7, omega)
-    coefficients = shooting.coefficients(shooting.solve_at(omega), omega)
-    halved = (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+    halved = first_harmonics(0.0, joint=halves)[1]
     assert np.max(np.abs(halved - X)) < 1e-12  # two dashpots of c / 2 side by side are one of c
     (_, heavier), (_, light) = first_harmonics(2e-3), first_harmonics(1e-3)
     moved = np.abs(light - X)
@@ -842,23 +838,17 @@ def test_a_massless_node_named_on_a_dashpot_moves_as_the_light_node(tmp_path, ca
     mass mu on j, where j is a node of the orbit: j's first harmonic moves by O(mu) (halved, to 10 %) and 2
     X(mu) - X(2 mu) lands within 5 % of that move on the massless node's. The nonlinear modes refuse such a
     node in one line (their start has no state for the lever's u)."""
-    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
+    from prandtl_fmu.frequency.shooting import prepared
 
     elements = LEVERED + NAMED_ON_A_DASHPOT[case] + [("slider", ["a", "b"], {"alpha": 0.2})]
-    F, omega = 1.0, 1.1
 
     def first_harmonic(mu):
-        scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
-                        f"named-{mu!r}.toml")
-        joined, observed = prepared(scene, "j", "a", observe=True)
-        shooting = NetworkShooting(joined, F, None, 1024, 7, omega, "a", observed)
-        state = shooting.solve_at(omega)
-        assert state is not None
-        coefficients = shooting.coefficients(state, omega)
-        j = shooting.node_index("j")
-        return observed, complex(coefficients[j, 1] - 1j * coefficients[j, 2])
+        return None, complex(_shot(tmp_path, ["a", "j", "b"], [1.0, mu, 2.0], elements, f"named-{mu!r}.toml",
+                                   named="j")[1][2])
 
-    observed, X = first_harmonic(0.0)
+    _, observed = prepared(network(tmp_path, network_text(["a", "j", "b"], [1.0, 0.0, 2.0], elements,
+                                                          load_node="a"), "named.toml"), "j", "a", observe=True)
+    _, X = first_harmonic(0.0)
     assert len(observed.views["j"][2]) == 1 and abs(X) > 0.1  # one lever's tension moves j
     mu = 2.5e-4 if case == "series dashpot" else 1e-3
     (_, heavier), (_, light) = first_harmonic(2 * mu), first_harmonic(mu)
@@ -882,22 +872,12 @@ def test_a_lever_with_a_dashpot_passed_on_is_the_light_nodes_limit(tmp_path, cas
     and 2 X(mu) - X(2 mu) lands within 5 % of that move on the massless nodes' (measured 0.5 to 1 % for the
     Bingham element at mu = 1e-3; 1.9 to 2.6 % for the series dashpot at 2.5e-4, whose move at 1e-3 is 10 % off
     linear; a lever whose stiffness or rate were wrong leaves a gap that does not shrink with mu)."""
-    from prandtl_fmu.frequency.series import condensed
-    from prandtl_fmu.frequency.shooting import NetworkShooting
-
     nodes = ["a", "j", "i", "b"] if case == "bingham" else ["a", "j", "b"]
     elements = LEVERED + PASSED_ON[case] + [("slider", ["a", "b"], {"alpha": 0.2})]
-    F, omega = 1.0, 1.1
 
     def first_harmonics(mu):
         mass = [mu if name in "ij" else (1.0 if name == "a" else 2.0) for name in nodes]
-        scene = network(tmp_path, network_text(nodes, mass, elements, load_node="a"), f"passed-{mu!r}.toml")
-        joined = condensed(scene, None, "a")
-        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
-        state = shooting.solve_at(omega)
-        assert state is not None
-        coefficients = shooting.coefficients(state, omega)
-        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+        return _shot(tmp_path, nodes, mass, elements, f"passed-{mu!r}.toml")
 
     joined, X = first_harmonics(0.0)
     assert joined.network.nodes == ("a", "b")
@@ -944,23 +924,13 @@ def test_random_massless_nodes_on_dashpots_are_the_light_node_s_limit(tmp_path):
     light mass mu on j (j an ordinary node of the orbit), the first harmonics of a, b and j come to the massless
     solution's as mu: the distance at mu / 8 is an eighth of that at mu (measured 0.123 to 0.131), where a lever
     with a wrong stiffness, rate or weight would leave a distance that does not shrink."""
-    from prandtl_fmu.frequency.shooting import NetworkShooting, prepared
-
     rng = np.random.default_rng(2026)
-    F, omega = 1.0, 1.1
     for case in range(8):
         elements = _random_dashpot_node(rng)
 
         def first_harmonics(mu):
-            scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
-                            f"random-{case}-{mu!r}.toml")
-            joined, observed = prepared(scene, "j", "a", observe=True)
-            shooting = NetworkShooting(joined, F, None, 1024, 7, omega, "a", observed)
-            state = shooting.solve_at(omega)
-            assert state is not None
-            coefficients = shooting.coefficients(state, omega)
-            rows = [shooting.node_index(name) for name in "abj"]
-            return coefficients[rows, 1] - 1j * coefficients[rows, 2]
+            return _shot(tmp_path, ["a", "j", "b"], [1.0, mu, 2.0], elements, f"random-{case}-{mu!r}.toml",
+                         named="j")[1]
 
         X = first_harmonics(0.0)
         far, near = (float(np.max(np.abs(first_harmonics(mu) - X))) for mu in (2.5e-4, 3.125e-5))
@@ -976,21 +946,12 @@ def test_a_massless_node_between_dashpots_alone_is_their_schur_complement(tmp_pa
     between the masses: j follows the dashpots' weighted mean of its ends' velocities, and the three are the
     dashpots c_i c_l / C between each pair of their far ends (refused before: "a first-order motion").
     Against the light-node limit: the distance at mu / 8 is an eighth of that at mu."""
-    from prandtl_fmu.frequency.series import condensed
-    from prandtl_fmu.frequency.shooting import NetworkShooting
-
     c = {"a": 0.5, "b": 0.4, "ground": 0.3}
     elements = LEVERED + [("dashpot", [end, "j"], {"c": value}) for end, value in c.items()] + [
         ("slider", ["a", "b"], {"alpha": 0.2})]
-    F, omega = 1.0, 1.1
 
     def first_harmonics(mu):
-        scene = network(tmp_path, network_text(["a", "j", "b"], [1.0, mu, 2.0], elements, load_node="a"),
-                        f"dashpots-{mu!r}.toml")
-        joined = condensed(scene, None, "a")
-        shooting = NetworkShooting(joined, F, None, 1024, 7, omega)
-        coefficients = shooting.coefficients(shooting.solve_at(omega), omega)
-        return joined, (coefficients[:, 1] - 1j * coefficients[:, 2])[[shooting.node_index(n) for n in "ab"]]
+        return _shot(tmp_path, ["a", "j", "b"], [1.0, mu, 2.0], elements, f"dashpots-{mu!r}.toml")
 
     joined, X = first_harmonics(0.0)
     total = sum(c.values())
