@@ -883,7 +883,7 @@ class NetworkShooting(Shooting):
         self.force = shares if base_amplitude is None else np.array(system.mass, float)
         self.branches = len(branches)
         self.branch_names = tuple(named)  # the branches' (and levers') names, in the order of their u in s
-        pulled = list(named) + relaxing  # the tensions a view reads: the branches', then the series rows' 
+        pulled = list(named) + relaxing  # the tensions a view reads: the branches', then the series rows'
         # the massless node named: (name, weights over the nodes, weight of the ground's motion, gain of the
         # force, weights over the branches' tensions k u) (series.Observed)
         self.views = []

@@ -83,7 +83,7 @@ def _network_parts(network) -> Optional[tuple]:
         return None
     K, C, rows, bounds, loose = np.zeros((n, n)), np.zeros((n, n)), [], [], []
     for element in network.elements:
-        if element.kind == "lever" and element.unbounded:  # a massless node's springs and dashpot: not bounded
+        if element.kind == "lever" and element.unbounded:  # a dashpot lever (Maxwell, Bingham): not bounded
             loose.append(element.row(n))
             continue
         if element.kind == "lever":  # a massless node's slider or branch (series.condensed)
